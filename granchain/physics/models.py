@@ -1,0 +1,172 @@
+"""The paper's analytic models, one function per equation (all SI).
+
+Where the printed paper and a careful derivation disagree, the derivation is implemented and
+the disagreement is stated in the docstring (and in docs/paper-discrepancies.md). No constant
+here was tuned to reproduce a printed number.
+
+Notation: m bead mass, D = 2R bead diameter, k contact stiffness (Hertz: F = k alpha^1.5,
+bilinear: plastic loading slope), k_u = k/(1-beta) the unloading slope, A load amplitude,
+T load duration, I = A T impulse.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+#: Eq. 8's constant, fitted by the paper's authors from numerical experiments.
+EQ8_CONSTANT = 0.719
+
+#: Appendix constants for a linear spring chain (mass m, stiffness k) hit by an impulse I,
+#: fitted by the authors: v_m = A1 I/m, F_p = A2 sqrt(k/m) I, F_2 = A3 sqrt(k/m) I,
+#: v_t = v_m - A4 sqrt(1-beta) I/m.
+APPENDIX_A1 = 0.482
+APPENDIX_A2 = 0.721
+APPENDIX_A3 = 0.199
+APPENDIX_A4 = 0.599
+
+
+# ---------------------------------------------------------------- elastic chains (Sec. II)
+
+def short_load_peak_force(impulse: float, mass: float, e_star: float, r_star: float) -> float:
+    """Eq. 8: peak force of the solitary wave formed by a short load of impulse I.
+
+    F_p = 0.719 (E*^2 R* I^6 / m^3)^(1/5), the same as an initial velocity v_0 = I/m given to
+    bead 1 (the zero-duration limit). Valid when the load is shorter than the solitary wave's own
+    contact time (single-solitary-wave regime, Fig. 1), and far enough down the chain for the
+    wave to have formed.
+    """
+    return EQ8_CONSTANT * (e_star**2 * r_star * impulse**6 / mass**3) ** 0.2
+
+
+def constant_regime_bead_velocity(amplitude: float, front_speed: float, mass: float, diameter: float) -> float:
+    """Eq. 12: m v = 2 R A / c, velocity of the beads behind the front of a long load."""
+    return diameter * amplitude / (mass * front_speed)
+
+
+def front_speed_upper(amplitude: float, k: float, mass: float, diameter: float) -> float:
+    """Eq. 15: c^u = sqrt(10 A^(1/3) k^(2/3) D^2 / (9 m)), upper bound of the long-load front speed."""
+    return math.sqrt(10.0 * amplitude ** (1 / 3) * k ** (2 / 3) * diameter**2 / (9.0 * mass))
+
+
+def front_speed_lower(amplitude: float, k: float, mass: float, diameter: float) -> float:
+    """Eq. 19: c^l = sqrt(A^(1/3) k^(2/3) D^2 / m), lower bound of the long-load front speed.
+
+    With the paper's brass beads and A = 40 N this gives 455.3 m/s (and Eq. 15 gives 479.9 m/s);
+    the paper prints 668.0 and 704.0 m/s, which do not follow from its own Eqs. 15 and 19 with the
+    parameters of Sec. II A. Its printed forces (78.15 N and 107.2 N) do follow from ours through
+    Nesterenko's relation below.
+    """
+    return math.sqrt(amplitude ** (1 / 3) * k ** (2 / 3) * diameter**2 / mass)
+
+
+#: Nesterenko's long-wavelength solitary wave: V_s = (2/sqrt(5)) c_0 xi_m^(1/4), with
+#: c_0^2 = (k/m) D^(5/2) the chain's sound-speed parameter and xi_m = alpha_m / D the peak strain
+#: (Nesterenko 1983, ref. 9; Nesterenko 2001, ref. 3, Ch. 1). With F = k alpha^(3/2) it reads
+#: V_s = (2/sqrt(5)) D k^(1/3) F_m^(1/6) / sqrt(m).
+NESTERENKO_SPEED_CONSTANT = 2.0 / math.sqrt(5.0)
+
+
+def solitary_wave_speed(peak_force: float, k: float, mass: float, diameter: float) -> float:
+    """Nesterenko's relation (ref. 9), speed of a solitary wave of peak force F_m.
+
+    The long-wavelength approximation; the discrete chain's constant differs slightly (our
+    reference solver measures it: see the tests).
+    """
+    return NESTERENKO_SPEED_CONSTANT * diameter * k ** (1 / 3) * peak_force ** (1 / 6) / math.sqrt(mass)
+
+
+def solitary_wave_peak_force(speed: float, k: float, mass: float, diameter: float) -> float:
+    """Inverse of :func:`solitary_wave_speed`: F_m = m^3 V_s^6 / ((2/sqrt5)^6 D^6 k^2)."""
+    return mass**3 * speed**6 / (NESTERENKO_SPEED_CONSTANT**6 * diameter**6 * k**2)
+
+
+# ---------------------------------------------------------- elastoplastic chains (Sec. III)
+
+def linear_chain_impulse_response(impulse: float, k: float, mass: float, beta: float = 0.0) -> dict[str, float]:
+    """Appendix Eqs. A1-A4 for a linear chain hit by an impulse I.
+
+    v_m: velocity of beads 1 and 2 when contact 1 reaches its peak (A1);
+    F_p: peak force of contact 1 (A2); F_2: force of contact 2 at that instant (A3);
+    v_t: trailing (residual) velocity of bead 1 after contact 1 unloads with coefficient beta (A4).
+    """
+    s = math.sqrt(k / mass) * impulse
+    return {
+        "v_m": APPENDIX_A1 * impulse / mass,
+        "F_p": APPENDIX_A2 * s,
+        "F_2": APPENDIX_A3 * s,
+        "v_t": (APPENDIX_A1 - APPENDIX_A4 * math.sqrt(1.0 - beta)) * impulse / mass,
+    }
+
+
+@dataclass(frozen=True)
+class LeadingWaveCoefficients:
+    """Eq. 22: F_a = eta F, v_m = gamma F, v_r = omega F, from the Appendix relations A1-A4."""
+
+    gamma: float  # (m/s)/N
+    eta: float  # -
+    omega: float  # (m/s)/N
+
+
+def leading_wave_coefficients(k: float, mass: float, beta: float) -> LeadingWaveCoefficients:
+    """gamma, eta, omega of Eq. 22, eliminating I between A1-A4 and A2."""
+    r = linear_chain_impulse_response(1.0, k, mass, beta)
+    return LeadingWaveCoefficients(gamma=r["v_m"] / r["F_p"], eta=r["F_2"] / r["F_p"], omega=r["v_t"] / r["F_p"])
+
+
+def exponential_decay_rate(k: float, mass: float, beta: float) -> float:
+    """Decay per contact, lambda, of the leading peak force in the exponential regime (Eqs. 25-27).
+
+    F_{i+1} = F_i exp(-lambda). Solving Eq. 26 as a quadratic in D dF/dx gives
+    D dF/dx = F (-1 + sqrt(1 - C/B)), with C = 1/k - 1/k_u + m omega^2 and
+    B = (1 + eta^2)/k + 2 m gamma^2, so lambda = 1 - sqrt(1 - C/B). The printed Eq. 27 has the
+    product D C B under the root (not dimensionless) and no prefactor F_1; we use the ratio,
+    which is what Eq. 26 gives.
+    """
+    ku = k / (1.0 - beta)
+    c = leading_wave_coefficients(k, mass, beta)
+    big_c = 1.0 / k - 1.0 / ku + mass * c.omega**2
+    big_b = (1.0 + c.eta**2) / k + 2.0 * mass * c.gamma**2
+    return 1.0 - math.sqrt(1.0 - big_c / big_b)
+
+
+def collision_peak_force(relative_velocity: float, k_u: float, mass: float) -> float:
+    """Eq. 29: F_s = sqrt(k_u m / 2) dv, peak force of two equal beads colliding on the reloading line."""
+    return math.sqrt(k_u * mass / 2.0) * relative_velocity
+
+
+def secondary_wave_peak_force(delta_peak_force: float, k_u: float, mass: float, omega: float) -> float:
+    """Eq. 30: secondary-wave peak force at contact i+1, dF^i = F_1 - F_{i+1} (leading peaks).
+
+    The residual velocities are v = omega F (Eq. 22), so the colliding beads' relative velocity is
+    omega dF. The paper prints dF/omega, which is not a force; we use omega dF.
+    """
+    return collision_peak_force(abs(omega) * delta_peak_force, k_u, mass)
+
+
+def inverse_decay_exponent(beta: float) -> float:
+    """Eq. 34: F = (a/x)^((1+beta)/2) in the second (inverse) decay regime."""
+    return (1.0 + beta) / 2.0
+
+
+def long_load_bilinear(amplitude: float, duration: float, k: float, beta: float, mass: float, diameter: float) -> dict[str, float]:
+    """Eqs. 35-38: loading and unloading fronts of a bilinear chain under a long step load.
+
+    Returns c (leading front, plastic loading), c_u (trailing front, unloading), F_1 = A,
+    v_1 (Eq. 35), v_t, x_t and T_t (Eq. 36), F_2 and v_2 (Eq. 38).
+
+    Notes on the printed paper: v_t = v_1 - 2 F_1 R/(m c_u) (the printed form lacks m); Eq. 37's
+    second relation must read m v_2 = F_2 2R/c for Eq. 38 to follow; with the paper's Table I
+    case this gives v_2 = 10.0 m/s where Table I prints 14.84 m/s, and x_t = 3.42 m where Table I
+    prints 0.342 m (x_t = 0.342 m would put the merge at T_t = 0.45 ms, before the load ends).
+    """
+    ku = k / (1.0 - beta)
+    c = diameter * math.sqrt(k / mass)
+    cu = diameter * math.sqrt(ku / mass)
+    f1 = amplitude
+    v1 = f1 * diameter / (mass * c)
+    vt = v1 - f1 * diameter / (mass * cu)
+    xt = duration / (1.0 / c - 1.0 / cu)
+    f2 = mass * vt / diameter / (1.0 / c + 1.0 / cu)
+    v2 = vt / (1.0 + c / cu)
+    return {"c": c, "c_u": cu, "F_1": f1, "v_1": v1, "v_t": vt, "x_t": xt, "T_t": xt / c, "F_2": f2, "v_2": v2}

@@ -1,0 +1,380 @@
+"""Pure-Python (numpy) solvers of the chain equations (Eqs. 1-4): classical RK4 and velocity Verlet.
+
+    m_i u_i'' = F_{i-1,i}(alpha_{i-1,i}) - F_{i,i+1}(alpha_{i,i+1}),   alpha_{i,i+1} = u_i - u_{i+1}
+    m_1 u_1'' = -F_{1,2} + f(t),   f(t) = A for 0 < t <= T (Eq. 4)
+
+Design choices (each tested in tests/test_reference.py):
+
+* The step load is exact: T, every snapshot time and the end time are step boundaries (the step
+  before a boundary is shortened to land on it), and f is constant over every step. The impulse
+  delivered is then sum(f h) = A T to round-off, for both methods. For velocity Verlet this is
+  what LAMMPS does when the run is split at T (both half-kicks of a step see that step's load).
+* Bilinear history (alpha_max) is frozen during a step and updated once per accepted step.
+  Stage values of a multi-stage method are trial points, not states of the trajectory, so
+  letting them raise alpha_max would write non-physical history. Freezing costs nothing at
+  loading (the loading line F = k alpha does not depend on alpha_max) and only perturbs the step
+  in which a contact turns from loading to unloading.
+  - RK4: after the step alpha_max is raised to the maximum of the cubic Hermite interpolant of
+    alpha over the step (alpha and d(alpha)/dt at both ends), so the history misses the true
+    maximum by O(h^4), not O(h^2).
+  - Verlet: alpha_max is raised to alpha at the step's end, which is what a LAMMPS pair style
+    does at each force evaluation, so the two agree step for step.
+* Peaks are tracked while running: a running maximum of every contact's overlap with its time,
+  refined inside a step by the same Hermite interpolant. Both laws are monotone in alpha on the
+  loading path, so the peak force is F(alpha_peak). No step is stored for this.
+* Energies: kinetic, stored (elastic), dissipated (bilinear, Eq. 20) and the work of f(t), which
+  for a step load is exactly A times the displacement of bead 1 while the load acts.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from granchain.physics.contact import BilinearLaw, HertzLaw
+
+METHODS = ("rk4", "verlet")
+
+
+@dataclass(frozen=True)
+class ChainProblem:
+    """A chain of point masses joined by contact springs, loaded at bead 1."""
+
+    mass: np.ndarray  # (N,) kg
+    law: HertzLaw | BilinearLaw
+    amplitude: float = 0.0  # A, N
+    duration: float = 0.0  # T, s
+    initial_velocity: float = 0.0  # m/s of bead 1 at t = 0
+
+    @property
+    def beads(self) -> int:
+        return int(self.mass.shape[0])
+
+    @classmethod
+    def from_scene(cls, scene) -> ChainProblem:
+        n = scene.chain.beads
+        mass = np.full(n, scene.mass)
+        if scene.contact.law == "hertz":
+            law: HertzLaw | BilinearLaw = HertzLaw(k=scene.stiffness)
+        else:
+            law = BilinearLaw(k=scene.stiffness, beta=scene.contact.unloading_coeff)
+        ld = scene.loading
+        if ld.is_force:
+            return cls(mass=mass, law=law, amplitude=ld.amplitude, duration=ld.duration)
+        return cls(mass=mass, law=law, initial_velocity=ld.velocity)
+
+
+@dataclass
+class ChainSolution:
+    """What a solver run returns. Contacts are 0-based here (contact i joins beads i and i+1)."""
+
+    method: str
+    timestep: float
+    steps: int
+    wall_time: float
+    end_time: float
+    peak_overlap: np.ndarray  # (N-1,) m, 0 for contacts never compressed
+    peak_force: np.ndarray  # (N-1,) N
+    time_of_peak: np.ndarray  # (N-1,) s, nan for contacts never compressed
+    history_contacts: tuple[int, ...] = ()
+    history_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    history_force: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (samples, contacts)
+    history_velocity: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # bead i of contact i
+    snapshot_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    snapshot_displacement: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (snaps, N)
+    snapshot_velocity: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    snapshot_force: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (snaps, N-1)
+    energy_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    kinetic: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    potential: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    dissipated: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    work: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    displacement: np.ndarray = field(default_factory=lambda: np.zeros(0))  # final state
+    velocity: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    alpha_max: np.ndarray = field(default_factory=lambda: np.zeros(0))  # final bilinear history
+    impulse_delivered: float = 0.0  # A * min(T, end_time)
+    momentum: float = 0.0  # total momentum sum(m v) at the end
+
+    @property
+    def energy_balance_error(self) -> np.ndarray:
+        """kinetic + stored + dissipated - work, at every energy sample."""
+        return self.kinetic + self.potential + self.dissipated - self.work
+
+
+def _steps_in(length: float, dt: float) -> tuple[int, float]:
+    """Number of steps covering a segment, and the length of its last (possibly short) step."""
+    n = max(1, math.ceil(length / dt * (1.0 - 1e-12)))
+    return n, length - (n - 1) * dt
+
+
+def _breakpoints(problem: ChainProblem, end_time: float, snapshots) -> list[float]:
+    pts = {float(end_time)}
+    if problem.amplitude and 0.0 < problem.duration < end_time:
+        pts.add(float(problem.duration))
+    pts.update(float(s) for s in snapshots if 0.0 < s < end_time)
+    return sorted(pts)
+
+
+def _hermite_max(t0, t1, a0, a1, d0, d1):
+    """Maximum over [t0, t1] of the cubic Hermite interpolant of alpha, where d0 > 0 >= d1.
+
+    Returns (alpha_max, t_max) arrays. p(s) = a s^3 + b s^2 + c s + d on s in [0, 1].
+    """
+    h = t1 - t0
+    c = h * d0
+    b = 3.0 * (a1 - a0) - 2.0 * h * d0 - h * d1
+    a = 2.0 * (a0 - a1) + h * d0 + h * d1
+    # p'(s) = 3a s^2 + 2b s + c falls through zero at s = (-b - sqrt(b^2 - 3ac)) / (3a), written
+    # as c / (sqrt(b^2 - 3ac) - b), which also holds for a -> 0 (no cancellation, p'' = -2 disc).
+    disc = np.sqrt(np.maximum(b * b - 3.0 * a * c, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = c / (disc - b)
+    s = np.clip(np.nan_to_num(s, nan=1.0, posinf=1.0), 0.0, 1.0)
+    p = ((a * s + b) * s + c) * s + a0
+    return p, t0 + s * h
+
+
+def solve_chain(
+    problem: ChainProblem,
+    end_time: float,
+    timestep: float,
+    method: str = "rk4",
+    *,
+    histories: tuple[int, ...] = (),
+    history_stride: int = 1,
+    snapshots: tuple[float, ...] = (),
+    energy_samples: int = 200,
+) -> ChainSolution:
+    """Integrate the chain from rest (bead 1 possibly moving) to end_time.
+
+    histories: 0-based contacts whose force (and the velocity of their left bead) is recorded
+    every history_stride steps. snapshots: times (exact step boundaries) of whole-chain profiles.
+    """
+    if method not in METHODS:
+        raise ValueError(f"method = {method!r} is not known; choose one of {', '.join(METHODS)}")
+    if not (timestep > 0 and end_time > 0):
+        raise ValueError("timestep and end_time must be positive")
+    t_wall = time.perf_counter()
+    n = problem.beads
+    law = problem.law
+    bilinear = isinstance(law, BilinearLaw)
+    inv_m = 1.0 / problem.mass
+    inv_m0 = float(inv_m[0])
+
+    u = np.zeros(n)
+    v = np.zeros(n)
+    v[0] = problem.initial_velocity
+    alpha_hist = np.zeros(n - 1)  # bilinear history alpha_max (frozen within a step)
+
+    # ---- contact force into a padded buffer: fp[0] = 0 (external force added separately),
+    # fp[1:n] = contact forces, fp[n] = 0 (free far end); a_int = (fp[:-1] - fp[1:]) / m.
+    fp = np.zeros(n + 1)
+    fc = fp[1:n]
+    alpha = np.empty(n - 1)
+    tmp = np.empty(n - 1)
+    if bilinear:
+        kk, beta, ku = law.k, law.beta, law.k_unloading
+    else:
+        kk = law.k
+
+    def accel(uu: np.ndarray, out: np.ndarray) -> np.ndarray:
+        np.subtract(uu[:-1], uu[1:], out=alpha)
+        np.maximum(alpha, 0.0, out=alpha)
+        if bilinear:
+            # F = max(k_u (alpha - beta max(alpha_max, alpha)), 0); with alpha_max frozen this is
+            # the loading line k alpha wherever alpha >= alpha_max.
+            np.maximum(alpha_hist, alpha, out=tmp)
+            np.multiply(tmp, beta, out=tmp)
+            np.subtract(alpha, tmp, out=fc)
+            np.multiply(fc, ku, out=fc)
+            np.maximum(fc, 0.0, out=fc)
+        else:
+            np.sqrt(alpha, out=tmp)
+            np.multiply(alpha, tmp, out=fc)
+            np.multiply(fc, kk, out=fc)
+        np.subtract(fp[:-1], fp[1:], out=out)
+        out *= inv_m
+        return out
+
+    # ---- bookkeeping
+    breakpoints = _breakpoints(problem, end_time, snapshots)
+    plan = []
+    seg_start = 0.0
+    for bp in breakpoints:
+        nseg, last = _steps_in(bp - seg_start, timestep)
+        f_ext = problem.amplitude if (problem.amplitude and seg_start < problem.duration) else 0.0
+        plan.append((seg_start, bp, nseg, last, f_ext))
+        seg_start = bp
+    total_steps = sum(p[2] for p in plan)
+    hist_idx = np.asarray(histories, dtype=int)
+    nh = (total_steps // history_stride + 2) if len(hist_idx) else 0
+    h_t = np.empty(nh)
+    h_f = np.empty((nh, len(hist_idx)))
+    h_v = np.empty((nh, len(hist_idx)))
+    nrec = 0
+    energy_every = max(1, total_steps // max(1, energy_samples))
+    e_rows: list[tuple[float, float, float, float, float]] = []
+    snaps: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+    snapshot_set = {float(s) for s in snapshots}
+    u0_at_load_end: float | None = None
+
+    amax = np.zeros(n - 1)  # running peak overlap (refined)
+    tmax = np.full(n - 1, np.nan)
+    a_int = np.empty(n)
+    accel(u, a_int)
+
+    def forces_now() -> np.ndarray:
+        return law.force(u[:-1] - u[1:], alpha_hist)
+
+    def work_now(t: float) -> float:
+        if problem.amplitude:
+            u0 = u[0] if u0_at_load_end is None else u0_at_load_end
+            return problem.amplitude * u0
+        return 0.5 * problem.mass[0] * problem.initial_velocity**2
+
+    def energy_row(t: float):
+        a_now = u[:-1] - u[1:]
+        ke = 0.5 * float(np.dot(problem.mass, v * v))
+        pe = float(np.sum(law.energy(a_now, alpha_hist)))
+        de = float(np.sum(law.dissipated(alpha_hist))) if bilinear else 0.0
+        e_rows.append((t, ke, pe, de, work_now(t)))
+
+    def record_history(t: float):
+        nonlocal nrec
+        if len(hist_idx):
+            h_t[nrec] = t
+            h_f[nrec] = forces_now()[hist_idx]
+            h_v[nrec] = v[hist_idx]
+            nrec += 1
+
+    record_history(0.0)
+    energy_row(0.0)
+
+    # RK4 work arrays
+    if method == "rk4":
+        k1v, k2v, k3v, k4v = (np.empty(n) for _ in range(4))
+        ut = np.empty(n)
+
+    step = 0
+    t = 0.0
+    alpha_old = u[:-1] - u[1:]
+    adot_old = v[:-1] - v[1:]
+    for seg_start, seg_end, nseg, last, f_ext in plan:
+        a_ext = f_ext * inv_m0
+        for j in range(nseg):
+            h = timestep if j < nseg - 1 else last
+            t_new = seg_start + (j + 1) * timestep if j < nseg - 1 else seg_end
+            if method == "verlet":
+                v += 0.5 * h * a_int
+                v[0] += 0.5 * h * a_ext
+                u += h * v
+                accel(u, a_int)
+                v += 0.5 * h * a_int
+                v[0] += 0.5 * h * a_ext
+                if bilinear:
+                    np.maximum(alpha_hist, u[:-1] - u[1:], out=alpha_hist)
+            else:
+                # classical RK4 on (u, v); the external load is constant over the step
+                accel(u, k1v)
+                k1v[0] += a_ext
+                np.multiply(v, 0.5 * h, out=ut)
+                ut += u
+                accel(ut, k2v)
+                k2v[0] += a_ext
+                # stage 3 position: u + h/2 (v + h/2 k1v)
+                np.multiply(k1v, 0.25 * h * h, out=ut)
+                ut += u
+                ut += 0.5 * h * v
+                accel(ut, k3v)
+                k3v[0] += a_ext
+                # stage 4 position: u + h (v + h/2 k2v)
+                np.multiply(k2v, 0.5 * h * h, out=ut)
+                ut += u
+                ut += h * v
+                accel(ut, k4v)
+                k4v[0] += a_ext
+                # u += h/6 (k1u + 2 k2u + 2 k3u + k4u) with k1u = v, k2u = v + h/2 k1v,
+                # k3u = v + h/2 k2v, k4u = v + h k3v  =>  u += h v + h^2/6 (k1v + k2v + k3v)
+                ut[:] = k1v
+                ut += k2v
+                ut += k3v
+                u += h * v
+                u += (h * h / 6.0) * ut
+                # v += h/6 (k1v + 2 k2v + 2 k3v + k4v)
+                ut += k2v
+                ut += k3v
+                ut += k4v
+                v += (h / 6.0) * ut
+            step += 1
+            # ---- running peak of every contact's overlap, refined inside the step
+            alpha_new = u[:-1] - u[1:]
+            adot_new = v[:-1] - v[1:]
+            rising = alpha_new > amax
+            if rising.any():
+                amax[rising] = alpha_new[rising]
+                tmax[rising] = t_new
+            turning = np.flatnonzero((adot_old > 0.0) & (adot_new <= 0.0) & (alpha_new > 0.0))
+            if turning.size:
+                p, tp = _hermite_max(t, t_new, alpha_old[turning], alpha_new[turning],
+                                     adot_old[turning], adot_new[turning])
+                better = p > amax[turning]
+                idx = turning[better]
+                amax[idx] = p[better]
+                tmax[idx] = tp[better]
+            if bilinear and method == "rk4":
+                np.maximum(alpha_hist, amax, out=alpha_hist)
+            alpha_old, adot_old = alpha_new, adot_new
+            t = t_new
+            if len(hist_idx) and step % history_stride == 0:
+                record_history(t)
+            if step % energy_every == 0 and t < seg_end:
+                energy_row(t)
+        # ---- breakpoint reached exactly
+        t = seg_end
+        if problem.amplitude and seg_end == problem.duration:
+            u0_at_load_end = float(u[0])
+        if seg_end in snapshot_set:
+            snaps[seg_end] = (u.copy(), v.copy(), forces_now())
+        energy_row(t)
+
+    if len(hist_idx) and (nrec == 0 or h_t[nrec - 1] != t):
+        record_history(t)
+
+    peak_force = np.asarray(law.force_at_peak_overlap(amax), dtype=float)
+    e = np.asarray(e_rows)
+    # remove duplicate times (a breakpoint may coincide with a periodic sample)
+    _, keep = np.unique(e[:, 0], return_index=True)
+    e = e[np.sort(keep)]
+    snap_t = np.asarray(sorted(snaps))
+    sol = ChainSolution(
+        method=method,
+        timestep=timestep,
+        steps=step,
+        wall_time=time.perf_counter() - t_wall,
+        end_time=end_time,
+        peak_overlap=amax,
+        peak_force=peak_force,
+        time_of_peak=tmax,
+        history_contacts=tuple(int(i) for i in hist_idx),
+        history_time=h_t[:nrec].copy(),
+        history_force=h_f[:nrec].copy(),
+        history_velocity=h_v[:nrec].copy(),
+        snapshot_time=snap_t,
+        snapshot_displacement=np.array([snaps[s][0] for s in snap_t]).reshape(len(snap_t), n),
+        snapshot_velocity=np.array([snaps[s][1] for s in snap_t]).reshape(len(snap_t), n),
+        snapshot_force=np.array([snaps[s][2] for s in snap_t]).reshape(len(snap_t), n - 1),
+        energy_time=e[:, 0],
+        kinetic=e[:, 1],
+        potential=e[:, 2],
+        dissipated=e[:, 3],
+        work=e[:, 4],
+        displacement=u,
+        velocity=v,
+        alpha_max=alpha_hist,
+        impulse_delivered=problem.amplitude * min(problem.duration, end_time),
+        momentum=float(np.dot(problem.mass, v)),
+    )
+    return sol

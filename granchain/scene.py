@@ -1,0 +1,500 @@
+"""One validated description of a simulation: a TOML scene file read into frozen dataclasses.
+
+Every problem with a scene is reported as a :class:`SceneError` that names the file, the key,
+the value and what is allowed, before anything runs. Contact i is the contact between bead i
+and bead i+1 (the paper's F_{i,i+1}); beads and contacts are numbered from 1 in scene files
+and output tables.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from granchain.physics import materials as mat
+from granchain.physics.contact import unloading_stiffness
+
+LAWS = ("hertz", "bilinear")
+LOADING_KINDS = ("step", "impulse", "velocity")
+
+
+class SceneError(ValueError):
+    """A scene file is invalid. The message names the file, the key, the value and the fix."""
+
+
+@dataclass(frozen=True)
+class Chain:
+    beads: int
+    radius: float  # m
+    material: mat.Material
+    material_name: str | None = None  # built-in name, or None for an inline [chain.material]
+
+
+@dataclass(frozen=True)
+class Contact:
+    law: str  # "hertz" | "bilinear"
+    unloading_coeff: float | None = None  # beta, bilinear only
+    plastic_stiffness: float | None = None  # k in N/m, bilinear only (explicit or from yield)
+
+
+@dataclass(frozen=True)
+class Loading:
+    """f(t) = amplitude for 0 < t <= duration (Eq. 4), or an initial velocity of bead 1."""
+
+    kind: str  # "step" | "impulse" | "velocity"
+    amplitude: float = 0.0  # N (step, impulse)
+    duration: float = 0.0  # s (step, impulse)
+    velocity: float = 0.0  # m/s (velocity)
+
+    @property
+    def impulse(self) -> float:
+        """I = A T (Eq. 4); for a velocity load, the momentum per unit mass is the velocity."""
+        return self.amplitude * self.duration
+
+    @property
+    def is_force(self) -> bool:
+        return self.kind in ("step", "impulse")
+
+
+@dataclass(frozen=True)
+class Run:
+    end_time: float  # s
+    timestep: float  # s
+
+
+@dataclass(frozen=True)
+class Outputs:
+    peak_force: bool | tuple[int, ...] = True  # True: every contact; or a tuple of contacts
+    histories: tuple[int, ...] = ()  # contacts whose force (and bead velocity) vs time is kept
+    snapshots: tuple[float, ...] = ()  # times of force/velocity profiles along the chain
+    window: tuple[int, int] | None = None  # contacts used for leading peak and wave speed
+    history_interval: float | None = None  # s between history samples (default: every step)
+
+
+@dataclass(frozen=True)
+class Scene:
+    chain: Chain
+    contact: Contact
+    loading: Loading
+    run: Run
+    outputs: Outputs = field(default_factory=Outputs)
+    title: str = ""
+    source: str | None = None  # path of the scene file, if it came from one
+    source_text: str | None = None  # the file's text, copied into run directories
+
+    # ---- derived quantities (definitions live in granchain.physics) ----
+    @property
+    def n_contacts(self) -> int:
+        return self.chain.beads - 1
+
+    @property
+    def mass(self) -> float:
+        return mat.bead_mass(self.chain.material, self.chain.radius)
+
+    @property
+    def diameter(self) -> float:
+        return 2.0 * self.chain.radius
+
+    @property
+    def e_star(self) -> float:
+        return mat.effective_modulus(self.chain.material)
+
+    @property
+    def r_star(self) -> float:
+        return mat.effective_radius(self.chain.radius)
+
+    @property
+    def tau(self) -> float:
+        return mat.time_scale(self.chain.material, self.chain.radius)
+
+    @property
+    def force_scale(self) -> float:
+        return mat.force_scale(self.chain.material, self.chain.radius)
+
+    @property
+    def impulse_scale(self) -> float:
+        return mat.impulse_scale(self.chain.material, self.chain.radius)
+
+    @property
+    def stiffness(self) -> float:
+        """Contact stiffness k: Hertz k = 4 E* sqrt(R*)/3, or the bilinear plastic slope."""
+        if self.contact.law == "hertz":
+            return mat.hertz_stiffness(self.chain.material, self.chain.radius)
+        return float(self.contact.plastic_stiffness)
+
+    @property
+    def unloading_stiffness(self) -> float | None:
+        if self.contact.law != "bilinear":
+            return None
+        return float(unloading_stiffness(self.stiffness, self.contact.unloading_coeff))
+
+    @property
+    def peak_contacts(self) -> tuple[int, ...]:
+        """Contacts (1-based) in the peak-force table."""
+        if self.outputs.peak_force is True:
+            return tuple(range(1, self.n_contacts + 1))
+        if self.outputs.peak_force is False:
+            return ()
+        return tuple(self.outputs.peak_force)
+
+    @property
+    def window(self) -> tuple[int, int]:
+        """Contacts over which the leading peak and wave speed are measured.
+
+        Default: the second and third quarters of the chain, away from the loaded end (where the
+        wave forms) and from the free far end (where it reflects).
+        """
+        if self.outputs.window is not None:
+            return self.outputs.window
+        n = self.n_contacts
+        a = max(1, n // 4)
+        b = max(a + 1, (3 * n) // 4)
+        return (a, min(b, n))
+
+    def to_toml(self) -> str:
+        """The scene as TOML text; read back by :func:`parse_scene` to an equal scene."""
+        return _dump_toml(scene_to_dict(self))
+
+
+# ------------------------------------------------------------------------------- reading
+
+class _Section:
+    """Reads keys from one TOML table, remembering which were used, and raises clear errors."""
+
+    def __init__(self, file: str, name: str, table: Any):
+        self.file, self.name = file, name
+        if not isinstance(table, dict):
+            raise SceneError(f"{file}: [{name}] must be a table, got {table!r}; write it as a [{name}] section")
+        self.table = dict(table)
+        self.used: set[str] = set()
+
+    def fail(self, key: str, value: Any, allowed: str) -> SceneError:
+        return SceneError(f"{self.file}: [{self.name}] {key} = {value!r} is invalid: {allowed}")
+
+    def has(self, key: str) -> bool:
+        return key in self.table
+
+    def raw(self, key: str, default: Any = None) -> Any:
+        self.used.add(key)
+        return self.table.get(key, default)
+
+    def required(self, key: str, allowed: str) -> Any:
+        if key not in self.table:
+            raise SceneError(f"{self.file}: [{self.name}] is missing {key!r}: {allowed}")
+        return self.raw(key)
+
+    def number(self, key: str, *, required: bool = True, default: float | None = None,
+               low: float | None = None, low_open: bool = True, high: float | None = None,
+               high_open: bool = True, what: str = "") -> float | None:
+        allowed = _range_text(low, low_open, high, high_open, what)
+        if key not in self.table:
+            if required:
+                raise SceneError(f"{self.file}: [{self.name}] is missing {key!r}: {allowed}")
+            return default
+        v = self.raw(key)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise self.fail(key, v, allowed)
+        v = float(v)
+        if low is not None and (v <= low if low_open else v < low):
+            raise self.fail(key, v, allowed)
+        if high is not None and (v >= high if high_open else v > high):
+            raise self.fail(key, v, allowed)
+        return v
+
+    def integer(self, key: str, *, low: int, what: str = "") -> int:
+        allowed = f"an integer >= {low}" + (f" ({what})" if what else "")
+        v = self.required(key, allowed)
+        if isinstance(v, bool) or not isinstance(v, int) or v < low:
+            raise self.fail(key, v, allowed)
+        return v
+
+    def choice(self, key: str, choices: tuple[str, ...]) -> str:
+        allowed = "one of " + ", ".join(repr(c) for c in choices)
+        v = self.required(key, allowed)
+        if v not in choices:
+            raise self.fail(key, v, allowed)
+        return v
+
+    def forbid(self, keys: tuple[str, ...], reason: str) -> None:
+        for key in keys:
+            if key in self.table:
+                raise SceneError(f"{self.file}: [{self.name}] {key} = {self.table[key]!r} is not allowed here: {reason}")
+
+    def finish(self, known: tuple[str, ...]) -> None:
+        for key in self.table:
+            if key not in self.used:
+                raise SceneError(
+                    f"{self.file}: [{self.name}] has unknown key {key!r} = {self.table[key]!r}; "
+                    f"allowed keys: {', '.join(known)}"
+                )
+
+
+def _range_text(low, low_open, high, high_open, what) -> str:
+    parts = []
+    if low is not None:
+        parts.append(f"{'>' if low_open else '>='} {low:g}")
+    if high is not None:
+        parts.append(f"{'<' if high_open else '<='} {high:g}")
+    text = "a finite number" + (" " + " and ".join(parts) if parts else "")
+    return text + (f" ({what})" if what else "")
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a scene file."""
+    p = Path(path)
+    if not p.exists():
+        raise SceneError(f"{p}: no such scene file; give the path of a .toml scene (see 'granchain scenes')")
+    if not p.is_file():
+        raise SceneError(f"{p}: is not a file; give the path of a .toml scene (see 'granchain scenes')")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise SceneError(f"{p}: cannot be read as UTF-8 text ({e})") from None
+    return parse_scene(text, source=str(p))
+
+
+def parse_scene(text: str, source: str = "<scene>") -> Scene:
+    """Parse and validate scene TOML text."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise SceneError(f"{source}: is not valid TOML: {e}") from None
+    scene = scene_from_dict(data, source=source)
+    return _with_source(scene, source, text)
+
+
+def _with_source(scene: Scene, source: str, text: str) -> Scene:
+    from dataclasses import replace
+
+    return replace(scene, source=source, source_text=text)
+
+
+SECTIONS = ("title", "chain", "contact", "loading", "run", "outputs")
+
+
+def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
+    for key in data:
+        if key not in SECTIONS:
+            raise SceneError(f"{source}: unknown section or key {key!r}; allowed: {', '.join(SECTIONS)}")
+    for sec in ("chain", "contact", "loading", "run"):
+        if sec not in data:
+            raise SceneError(f"{source}: missing section [{sec}]; every scene needs [chain], [contact], [loading] and [run]")
+    title = data.get("title", "")
+    if not isinstance(title, str):
+        raise SceneError(f"{source}: title = {title!r} is invalid: a string")
+
+    chain = _read_chain(_Section(source, "chain", data["chain"]), source)
+    contact = _read_contact(_Section(source, "contact", data["contact"]), chain)
+    loading = _read_loading(_Section(source, "loading", data["loading"]))
+    run = _read_run(_Section(source, "run", data["run"]), loading)
+    outputs = _read_outputs(_Section(source, "outputs", data.get("outputs", {})), chain, run)
+    return Scene(chain=chain, contact=contact, loading=loading, run=run, outputs=outputs, title=title, source=source)
+
+
+def _read_chain(s: _Section, source: str) -> Chain:
+    beads = s.integer("beads", low=2, what="number of beads; bead 1 is the loaded end")
+    radius = s.number("radius", low=0.0, what="bead radius in m")
+    m = s.required("material", f"a built-in name ({', '.join(mat.MATERIALS)}) or a [chain.material] table")
+    if isinstance(m, str):
+        if m not in mat.MATERIALS:
+            raise s.fail("material", m, f"a built-in name ({', '.join(mat.MATERIALS)}) or a [chain.material] table")
+        material, name = mat.MATERIALS[m], m
+    elif isinstance(m, dict):
+        ms = _Section(source, "chain.material", m)
+        material = mat.Material(
+            density=ms.number("density", low=0.0, what="kg/m^3"),
+            youngs_modulus=ms.number("youngs_modulus", low=0.0, what="Pa"),
+            poisson_ratio=ms.number("poisson_ratio", low=-1.0, high=0.5, what="-1 < nu < 0.5"),
+            yield_strength=ms.number("yield_strength", required=False, low=0.0, what="Pa"),
+        )
+        ms.finish(("density", "youngs_modulus", "poisson_ratio", "yield_strength"))
+        name = None
+    else:
+        raise s.fail("material", m, f"a built-in name ({', '.join(mat.MATERIALS)}) or a [chain.material] table")
+    s.finish(("beads", "radius", "material"))
+    return Chain(beads=beads, radius=radius, material=material, material_name=name)
+
+
+def _read_contact(s: _Section, chain: Chain) -> Contact:
+    law = s.choice("law", LAWS)
+    if law == "hertz":
+        s.forbid(("unloading_coeff", "plastic_stiffness"), "only the bilinear law has them; set law = \"bilinear\" or remove them")
+        s.finish(("law",))
+        return Contact(law=law)
+    beta = s.number("unloading_coeff", low=0.0, low_open=False, high=1.0,
+                    what="beta, the residual-to-maximum overlap ratio: 0 <= beta < 1")
+    k = s.number("plastic_stiffness", required=False, low=0.0, what="plastic loading stiffness k in N/m")
+    ys = chain.material.yield_strength
+    if k is None and ys is None:
+        raise SceneError(
+            f"{s.file}: [contact] law = 'bilinear' needs a stiffness: give plastic_stiffness (N/m) or "
+            f"the material's yield_strength (Pa) in [chain.material], from which k = 18.5 sigma_y R*"
+        )
+    if k is not None and ys is not None:
+        raise SceneError(
+            f"{s.file}: [contact] plastic_stiffness = {k!r} and [chain.material] yield_strength = {ys!r} "
+            f"both set k; give only one"
+        )
+    if k is None:
+        k = mat.plastic_stiffness_from_yield(ys, chain.radius)
+    s.finish(("law", "unloading_coeff", "plastic_stiffness"))
+    return Contact(law=law, unloading_coeff=beta, plastic_stiffness=k)
+
+
+def _read_loading(s: _Section) -> Loading:
+    kind = s.choice("kind", LOADING_KINDS)
+    if kind == "step":
+        s.forbid(("impulse", "velocity"), "a step load is given by amplitude (N) and duration (s)")
+        a = s.number("amplitude", low=0.0, what="force A in N")
+        t = s.number("duration", low=0.0, what="loading time T in s")
+        s.finish(("kind", "amplitude", "duration"))
+        return Loading(kind=kind, amplitude=a, duration=t)
+    if kind == "impulse":
+        s.forbid(("amplitude", "velocity"), "an impulse load is given by impulse (N s) and duration (s); amplitude = impulse/duration")
+        i = s.number("impulse", low=0.0, what="impulse I in N s")
+        t = s.number("duration", low=0.0, what="loading time T in s")
+        s.finish(("kind", "impulse", "duration"))
+        return Loading(kind=kind, amplitude=i / t, duration=t)
+    s.forbid(("amplitude", "duration", "impulse"), "a velocity load is given by velocity (m/s) of bead 1 at t = 0")
+    v = s.number("velocity", low=0.0, what="initial velocity of bead 1 in m/s, towards the chain")
+    s.finish(("kind", "velocity"))
+    return Loading(kind=kind, velocity=v)
+
+
+def _read_run(s: _Section, loading: Loading) -> Run:
+    end = s.number("end_time", low=0.0, what="s")
+    dt = s.number("timestep", low=0.0, what="s")
+    if dt > end:
+        raise s.fail("timestep", dt, f"a time step no longer than end_time = {end:g} s")
+    if loading.kind == "impulse" and end < loading.duration:
+        raise s.fail("end_time", end, f"at least the impulse's duration {loading.duration:g} s, or the impulse is never fully delivered")
+    s.finish(("end_time", "timestep"))
+    return Run(end_time=end, timestep=dt)
+
+
+def _int_list(s: _Section, key: str, low: int, high: int, what: str) -> tuple[int, ...]:
+    allowed = f"a list of integers from {low} to {high} ({what})"
+    v = s.raw(key)
+    if not isinstance(v, list) or any(isinstance(x, bool) or not isinstance(x, int) for x in v):
+        raise s.fail(key, v, allowed)
+    bad = [x for x in v if not low <= x <= high]
+    if bad:
+        raise s.fail(key, v, allowed + f"; {bad[0]} is out of range")
+    if len(set(v)) != len(v):
+        raise s.fail(key, v, allowed + "; without repeats")
+    return tuple(sorted(v))
+
+
+def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
+    nc = chain.beads - 1
+    contacts = f"contact i is between bead i and i+1; this chain has contacts 1..{nc}"
+    peak: bool | tuple[int, ...] = True
+    if s.has("peak_force"):
+        v = s.table["peak_force"]
+        if isinstance(v, bool):
+            peak = s.raw("peak_force")
+        elif isinstance(v, list):
+            peak = _int_list(s, "peak_force", 1, nc, contacts)
+        else:
+            raise s.fail("peak_force", v, f"true, false, or a list of contacts ({contacts})")
+    histories = _int_list(s, "histories", 1, nc, contacts) if s.has("histories") else ()
+    snapshots: tuple[float, ...] = ()
+    if s.has("snapshots"):
+        v = s.raw("snapshots")
+        allowed = f"a list of times in s with 0 < t <= end_time = {run.end_time:g}"
+        if not isinstance(v, list) or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v):
+            raise s.fail("snapshots", v, allowed)
+        if any(not (0.0 < x <= run.end_time) for x in v):
+            raise s.fail("snapshots", v, allowed)
+        snapshots = tuple(sorted({float(x) for x in v}))
+    window = None
+    if s.has("window"):
+        v = s.raw("window")
+        allowed = f"[first, last] contacts with 1 <= first < last <= {nc}"
+        if (not isinstance(v, list) or len(v) != 2 or any(isinstance(x, bool) or not isinstance(x, int) for x in v)
+                or not 1 <= v[0] < v[1] <= nc):
+            raise s.fail("window", v, allowed)
+        window = (v[0], v[1])
+    interval = s.number("history_interval", required=False, low=0.0, what="s between history samples, at least the time step")
+    if interval is not None and interval < run.timestep:
+        raise s.fail("history_interval", interval, f"at least the time step {run.timestep:g} s")
+    s.finish(("peak_force", "histories", "snapshots", "window", "history_interval"))
+    return Outputs(peak_force=peak, histories=histories, snapshots=snapshots, window=window, history_interval=interval)
+
+
+# ------------------------------------------------------------------------------- writing
+
+def scene_to_dict(scene: Scene) -> dict:
+    c = scene.chain
+    material: Any = c.material_name
+    if material is None:
+        material = {"density": c.material.density, "youngs_modulus": c.material.youngs_modulus,
+                    "poisson_ratio": c.material.poisson_ratio}
+        if c.material.yield_strength is not None and scene.contact.law != "bilinear":
+            material["yield_strength"] = c.material.yield_strength
+    d: dict[str, Any] = {}
+    if scene.title:
+        d["title"] = scene.title
+    d["chain"] = {"beads": c.beads, "radius": c.radius, "material": material}
+    contact: dict[str, Any] = {"law": scene.contact.law}
+    if scene.contact.law == "bilinear":
+        contact["unloading_coeff"] = scene.contact.unloading_coeff
+        contact["plastic_stiffness"] = scene.contact.plastic_stiffness
+    d["contact"] = contact
+    ld = scene.loading
+    if ld.kind == "step":
+        d["loading"] = {"kind": "step", "amplitude": ld.amplitude, "duration": ld.duration}
+    elif ld.kind == "impulse":
+        d["loading"] = {"kind": "impulse", "impulse": ld.impulse, "duration": ld.duration}
+    else:
+        d["loading"] = {"kind": "velocity", "velocity": ld.velocity}
+    d["run"] = {"end_time": scene.run.end_time, "timestep": scene.run.timestep}
+    o = scene.outputs
+    out: dict[str, Any] = {"peak_force": o.peak_force if isinstance(o.peak_force, bool) else list(o.peak_force)}
+    if o.histories:
+        out["histories"] = list(o.histories)
+    if o.snapshots:
+        out["snapshots"] = list(o.snapshots)
+    if o.window is not None:
+        out["window"] = list(o.window)
+    if o.history_interval is not None:
+        out["history_interval"] = o.history_interval
+    d["outputs"] = out
+    return d
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return repr(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"cannot write {v!r} as TOML")
+
+
+def _dump_toml(d: dict) -> str:
+    lines: list[str] = []
+    for key, value in d.items():
+        if not isinstance(value, dict):
+            lines.append(f"{key} = {_toml_value(value)}")
+    for key, value in d.items():
+        if isinstance(value, dict):
+            lines.append(f"\n[{key}]")
+            subtables = []
+            for k, v in value.items():
+                if isinstance(v, dict):
+                    subtables.append((k, v))
+                else:
+                    lines.append(f"{k} = {_toml_value(v)}")
+            for k, v in subtables:
+                lines.append(f"\n[{key}.{k}]")
+                lines.extend(f"{kk} = {_toml_value(vv)}" for kk, vv in v.items())
+    return "\n".join(lines).lstrip("\n") + "\n"
