@@ -30,11 +30,12 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from granchain.physics.contact import BilinearLaw, HertzLaw
+from granchain.results import ChainSolution
 
 METHODS = ("rk4", "verlet")
 
@@ -65,43 +66,6 @@ class ChainProblem:
         if ld.is_force:
             return cls(mass=mass, law=law, amplitude=ld.amplitude, duration=ld.duration)
         return cls(mass=mass, law=law, initial_velocity=ld.velocity)
-
-
-@dataclass
-class ChainSolution:
-    """What a solver run returns. Contacts are 0-based here (contact i joins beads i and i+1)."""
-
-    method: str
-    timestep: float
-    steps: int
-    wall_time: float
-    end_time: float
-    peak_overlap: np.ndarray  # (N-1,) m, 0 for contacts never compressed
-    peak_force: np.ndarray  # (N-1,) N
-    time_of_peak: np.ndarray  # (N-1,) s, nan for contacts never compressed
-    history_contacts: tuple[int, ...] = ()
-    history_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    history_force: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (samples, contacts)
-    history_velocity: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # bead i of contact i
-    snapshot_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    snapshot_displacement: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (snaps, N)
-    snapshot_velocity: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
-    snapshot_force: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (snaps, N-1)
-    energy_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    kinetic: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    potential: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    dissipated: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    work: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    displacement: np.ndarray = field(default_factory=lambda: np.zeros(0))  # final state
-    velocity: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    alpha_max: np.ndarray = field(default_factory=lambda: np.zeros(0))  # final bilinear history
-    impulse_delivered: float = 0.0  # A * min(T, end_time)
-    momentum: float = 0.0  # total momentum sum(m v) at the end
-
-    @property
-    def energy_balance_error(self) -> np.ndarray:
-        """kinetic + stored + dissipated - work, at every energy sample."""
-        return self.kinetic + self.potential + self.dissipated - self.work
 
 
 def _steps_in(length: float, dt: float) -> tuple[int, float]:

@@ -1,0 +1,129 @@
+"""granchain command line: run, predict, scenes."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from importlib import resources
+from pathlib import Path
+
+from granchain.scene import Scene, SceneError, load_scene, parse_scene
+
+DEFAULT_SCENE = "default"
+
+
+def bundled_scenes() -> dict[str, str]:
+    """Bundled example scenes: name -> TOML text."""
+    root = resources.files("granchain") / "scenes"
+    return {p.name.removesuffix(".toml"): p.read_text() for p in sorted(root.iterdir(), key=lambda p: p.name)
+            if p.name.endswith(".toml")}
+
+
+def resolve_scene(arg: str | None) -> Scene:
+    """A scene from a path, or from the name of a bundled scene."""
+    arg = arg or DEFAULT_SCENE
+    p = Path(arg)
+    if p.exists() or p.suffix == ".toml" or "/" in arg:
+        return load_scene(p)
+    scenes = bundled_scenes()
+    if arg in scenes:
+        return parse_scene(scenes[arg], source=f"<bundled scene {arg}>")
+    raise SceneError(f"{arg}: is neither a scene file nor a bundled scene; bundled: {', '.join(scenes)}")
+
+
+def _fmt(v) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+def cmd_run(args) -> int:
+    from granchain.workflows.run import run_scene
+
+    scene = resolve_scene(args.scene)
+    name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
+    out = args.out or f"runs/{name}-{args.backend}"
+    result = run_scene(scene, backend=args.backend, method=args.method, out=out, overwrite=args.overwrite)
+    s = result.summary()
+    print(f"scene      {scene.title or scene.source}")
+    print(f"backend    {s['backend']} ({s['method']}), dt = {s['timestep']:g} s, {s['steps']} steps, "
+          f"{s['wall_time']:.3g} s wall")
+    for k, v in s["observables"].items():
+        print(f"  {k:28s} {_fmt(v)}")
+    c = s["conservation"]
+    print(f"  {'impulse delivered (N s)':28s} {_fmt(c['impulse_delivered'])}   momentum {_fmt(c['momentum'])}")
+    print(f"  {'energy balance error (rel)':28s} {_fmt(c['energy_balance_error_relative'])}")
+    print(f"run directory: {out}")
+    return 0
+
+
+def cmd_predict(args) -> int:
+    from granchain.physics.predictions import predict
+
+    scene = resolve_scene(args.scene)
+    preds = predict(scene)
+    if args.json:
+        print(json.dumps([p.as_dict() for p in preds], indent=2))
+        return 0
+    print(f"{'quantity':34s} {'value':>12s} {'unit':8s} {'nondim':>10s}  source; valid when")
+    for p in preds:
+        nd = f"{p.nondim:.4g}" if p.nondim is not None else ""
+        print(f"{p.name:34s} {p.value:12.5g} {p.unit:8s} {nd:>10s}  {p.equation}; {p.valid}")
+    return 0
+
+
+def cmd_scenes(args) -> int:
+    scenes = bundled_scenes()
+    if args.name:
+        if args.name not in scenes:
+            raise SceneError(f"{args.name}: no bundled scene of that name; bundled: {', '.join(scenes)}")
+        print(scenes[args.name], end="")
+        return 0
+    for name, text in scenes.items():
+        title = parse_scene(text, source=name).title
+        print(f"{name:28s} {title}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="granchain", description="Stress waves in 1D granular chains.")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("run", help="run a scene and write a run directory")
+    r.add_argument("scene", nargs="?", help=f"scene file or bundled scene name (default: {DEFAULT_SCENE})")
+    r.add_argument("--backend", default="reference", choices=["reference"], help="solver backend")
+    r.add_argument("--method", default=None, choices=["rk4", "verlet"], help="reference integrator (default rk4)")
+    r.add_argument("--out", help="run directory (default runs/<scene>-<backend>)")
+    r.add_argument("--overwrite", action="store_true", help="replace an existing run directory")
+    r.set_defaults(func=cmd_run)
+
+    q = sub.add_parser("predict", help="print the paper's analytic predictions for a scene")
+    q.add_argument("scene", nargs="?", help="scene file or bundled scene name")
+    q.add_argument("--json", action="store_true", help="JSON output")
+    q.set_defaults(func=cmd_predict)
+
+    s = sub.add_parser("scenes", help="list the bundled example scenes, or print one")
+    s.add_argument("name", nargs="?", help="print this scene's TOML")
+    s.set_defaults(func=cmd_scenes)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    from granchain.results import RunDirError
+
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except (SceneError, RunDirError) as e:
+        print(f"granchain: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("granchain: interrupted; no run directory was written", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
