@@ -1,0 +1,201 @@
+"""Scene files: the documented shape parses; every invalid input gets one clear error."""
+
+import re
+import tomllib
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from granchain.cli import bundled_scenes
+from granchain.physics import materials as mat
+from granchain.scene import SceneError, load_scene, parse_scene, scene_from_dict
+
+from .conftest import ISSUE_SCENE
+
+
+def test_issue_scene_shape_parses():
+    sc = parse_scene(ISSUE_SCENE, source="issue.toml")
+    assert sc.chain.beads == 200 and sc.chain.radius == 4.76e-3
+    assert sc.chain.material == mat.MATERIALS["brass"]
+    assert sc.loading.amplitude == 40.0 and sc.loading.duration == 1e-2
+    assert sc.outputs.histories == (1, 2, 3) and sc.outputs.snapshots == (2e-3,)
+    assert sc.peak_contacts == tuple(range(1, 200))
+
+
+def test_bundled_scenes_parse_and_roundtrip():
+    scenes = bundled_scenes()
+    assert "default" in scenes and len(scenes) >= 6
+    for name, text in scenes.items():
+        sc = parse_scene(text, source=name)
+        back = parse_scene(sc.to_toml(), source=name)
+        assert back.chain == sc.chain and back.contact == sc.contact and back.loading == sc.loading
+        assert back.run == sc.run and back.outputs == sc.outputs
+
+
+def test_impulse_kind_is_a_step_with_amplitude_impulse_over_duration():
+    data = tomllib.loads(ISSUE_SCENE)
+    data["loading"] = {"kind": "impulse", "impulse": 0.4, "duration": 1e-3}
+    sc = scene_from_dict(data, source="x")
+    assert sc.loading.amplitude == pytest.approx(0.4 / 1e-3) and sc.loading.impulse == pytest.approx(0.4)
+
+
+def test_bilinear_stiffness_from_yield_strength():
+    data = tomllib.loads(ISSUE_SCENE)
+    data["chain"]["material"] = {"density": 8500.0, "youngs_modulus": 115e9, "poisson_ratio": 0.3,
+                                 "yield_strength": 5.52e8}
+    data["contact"] = {"law": "bilinear", "unloading_coeff": 0.8}
+    sc = scene_from_dict(data, source="x")
+    assert sc.stiffness == pytest.approx(18.5 * 5.52e8 * 4.76e-3 / 2)
+
+
+# ---- one test per rule: (mutation of the issue scene, key named in the message, words of the fix)
+
+def mutate(path, value):
+    data = tomllib.loads(ISSUE_SCENE)
+    d = data
+    for k in path[:-1]:
+        d = d.setdefault(k, {})
+    if value is DELETE:
+        del d[path[-1]]
+    else:
+        d[path[-1]] = value
+    return data
+
+
+DELETE = object()
+
+RULES = [
+    ("unknown key", ("chain", "bead_count"), 5, "bead_count", "allowed keys"),
+    ("unknown section", ("solver",), {"x": 1}, "solver", "allowed"),
+    ("missing section", ("run",), DELETE, "[run]", "needs"),
+    ("beads wrong type", ("chain", "beads"), "200", "beads", "integer"),
+    ("beads float", ("chain", "beads"), 200.0, "beads", "integer"),
+    ("beads too few", ("chain", "beads"), 1, "beads", ">= 2"),
+    ("negative radius", ("chain", "radius"), -4.76e-3, "radius", "> 0"),
+    ("zero radius", ("chain", "radius"), 0.0, "radius", "> 0"),
+    ("radius bool", ("chain", "radius"), True, "radius", "number"),
+    ("unknown material", ("chain", "material"), "unobtainium", "material", "brass"),
+    ("bad poisson", ("chain", "material"), {"density": 1.0, "youngs_modulus": 1.0, "poisson_ratio": 0.5},
+     "poisson_ratio", "< 0.5"),
+    ("material unknown key", ("chain", "material"), {"density": 1.0, "youngs_modulus": 1.0, "poisson_ratio": 0.3,
+                                                      "colour": "gold"}, "colour", "allowed keys"),
+    ("unknown law", ("contact", "law"), "hooke", "law", "'hertz', 'bilinear'"),
+    ("hertz with beta", ("contact", "unloading_coeff"), 0.5, "unloading_coeff", "only the bilinear"),
+    ("negative time", ("run", "end_time"), -1.0, "end_time", "> 0"),
+    ("zero timestep", ("run", "timestep"), 0.0, "timestep", "> 0"),
+    ("timestep over end", ("run", "timestep"), 1.0, "timestep", "no longer than end_time"),
+    ("nan amplitude", ("loading", "amplitude"), float("nan"), "amplitude", "finite"),
+    ("loading key of other kind", ("loading", "velocity"), 3.0, "velocity", "amplitude (N) and duration"),
+    ("unknown loading kind", ("loading", "kind"), "ramp", "kind", "'step', 'impulse', 'velocity'"),
+    ("missing amplitude", ("loading", "amplitude"), DELETE, "amplitude", "force A"),
+    ("history out of range", ("outputs", "histories"), [0, 3], "histories", "contacts 1..199"),
+    ("history beyond chain", ("outputs", "histories"), [200], "histories", "out of range"),
+    ("peak list wrong type", ("outputs", "peak_force"), "all", "peak_force", "true, false, or a list"),
+    ("snapshot after end", ("outputs", "snapshots"), [6e-3], "snapshots", "end_time"),
+    ("window reversed", ("outputs", "window"), [50, 10], "window", "first < last"),
+    ("history interval below dt", ("outputs", "history_interval"), 1e-9, "history_interval", "time step"),
+]
+
+
+@pytest.mark.parametrize("what,path,value,key,fix", RULES, ids=[r[0] for r in RULES])
+def test_invalid_scene_rule(what, path, value, key, fix):
+    with pytest.raises(SceneError) as e:
+        scene_from_dict(mutate(path, value), source="bad.toml")
+    msg = str(e.value)
+    assert msg.startswith("bad.toml:"), msg
+    assert key in msg, msg
+    assert fix in msg, msg
+    if value is not DELETE and not isinstance(value, dict) and key not in ("solver",):
+        assert repr(value) in msg or repr(float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else value) in msg or str(value) in msg, msg
+
+
+BETA_CASES = [(-0.1, ">= 0"), (1.0, "< 1"), (1.5, "< 1")]
+
+
+@pytest.mark.parametrize("beta,fix", BETA_CASES)
+def test_beta_outside_unit_interval(beta, fix):
+    data = mutate(("contact", "law"), "bilinear")
+    data["contact"].update(unloading_coeff=beta, plastic_stiffness=2.43e7)
+    with pytest.raises(SceneError, match=re.escape("unloading_coeff")) as e:
+        scene_from_dict(data, source="b.toml")
+    assert fix in str(e.value) and repr(float(beta)) in str(e.value)
+
+
+def test_bilinear_without_stiffness():
+    data = mutate(("contact", "law"), "bilinear")
+    data["contact"]["unloading_coeff"] = 0.8
+    with pytest.raises(SceneError, match="plastic_stiffness .* yield_strength"):
+        scene_from_dict(data, source="b.toml")
+
+
+def test_bilinear_with_two_stiffnesses():
+    data = mutate(("contact", "law"), "bilinear")
+    data["contact"].update(unloading_coeff=0.8, plastic_stiffness=2.43e7)
+    data["chain"]["material"] = {"density": 8500.0, "youngs_modulus": 115e9, "poisson_ratio": 0.3,
+                                 "yield_strength": 5e8}
+    with pytest.raises(SceneError, match="only one"):
+        scene_from_dict(data, source="b.toml")
+
+
+def test_impulse_needs_end_time_after_duration():
+    data = tomllib.loads(ISSUE_SCENE)
+    data["loading"] = {"kind": "impulse", "impulse": 0.4, "duration": 1e-2}
+    with pytest.raises(SceneError, match="end_time.*never fully delivered"):
+        scene_from_dict(data, source="b.toml")
+
+
+def test_step_may_outlast_the_run():
+    # a step load longer than the run is a valid request: the loading phase itself (Fig. 2, Fig. 9)
+    assert parse_scene(ISSUE_SCENE).loading.duration > parse_scene(ISSUE_SCENE).run.end_time
+
+
+def test_malformed_toml(tmp_path):
+    p = tmp_path / "bad.toml"
+    p.write_text("[chain\nbeads = 3\n")
+    with pytest.raises(SceneError, match="bad.toml: is not valid TOML"):
+        load_scene(p)
+
+
+def test_not_a_file(tmp_path):
+    with pytest.raises(SceneError, match="is not a file"):
+        load_scene(tmp_path)
+    with pytest.raises(SceneError, match="no such scene file"):
+        load_scene(tmp_path / "missing.toml")
+
+
+# ---- property-based: any mutation of a valid scene is either valid or refused with a SceneError
+
+scalars = st.one_of(st.integers(-5, 300), st.floats(allow_nan=True, allow_infinity=True, width=64),
+                    st.booleans(), st.text(max_size=5), st.lists(st.integers(-2, 250), max_size=4))
+paths = st.sampled_from([
+    ("chain", "beads"), ("chain", "radius"), ("chain", "material"), ("contact", "law"),
+    ("contact", "unloading_coeff"), ("contact", "plastic_stiffness"), ("loading", "kind"),
+    ("loading", "amplitude"), ("loading", "duration"), ("loading", "impulse"), ("run", "end_time"),
+    ("run", "timestep"), ("outputs", "peak_force"), ("outputs", "histories"), ("outputs", "snapshots"),
+    ("outputs", "window"), ("outputs", "history_interval"), ("outputs", "extra"), ("chain", "colour"),
+])
+
+
+@settings(max_examples=300, suppress_health_check=[HealthCheck.too_slow], deadline=None)
+@given(st.lists(st.tuples(paths, scalars), min_size=1, max_size=3))
+def test_mutated_scenes_are_valid_or_refused_clearly(mutations):
+    data = tomllib.loads(ISSUE_SCENE)
+    for path, value in mutations:
+        data.setdefault(path[0], {})[path[1]] = value
+    try:
+        sc = scene_from_dict(data, source="gen.toml")
+    except SceneError as e:
+        assert str(e).startswith("gen.toml:")
+        return
+    # a scene accepted is physically sensible
+    assert sc.chain.beads >= 2 and sc.chain.radius > 0 and sc.run.timestep > 0
+    assert sc.run.timestep <= sc.run.end_time
+    if sc.contact.law == "bilinear":
+        assert 0 <= sc.contact.unloading_coeff < 1 and sc.stiffness > 0
+
+
+def test_bundled_scene_files_exist_on_disk():
+    root = Path(__file__).parents[1] / "granchain" / "scenes"
+    assert {p.stem for p in root.glob("*.toml")} == set(bundled_scenes())
