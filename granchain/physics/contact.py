@@ -10,7 +10,7 @@ Bilinear, Walton-Braun (Sec. III, Fig. 4), with alpha_max the largest overlap so
     un/reloading (alpha <  alpha_max):  F = k_u (alpha - beta alpha_max), never negative,
     k_u = k / (1 - beta).  The residual overlap after full unloading is beta alpha_max.
     Stored (recoverable) energy:  k_u/2 (alpha - beta alpha_max)^2 where positive.
-    Dissipated energy:            beta k alpha_max^2 / 2 = F^2/2 (1/k - 1/k_u)   (Eq. 20).
+    Dissipated energy:            beta k alpha_max^2 / 2 = F^2/2 (1/k - 1/k_u)   (Eq. 20, first form).
     These two add up to the work done on the contact, whatever path led to (alpha, alpha_max).
 """
 
@@ -76,8 +76,15 @@ def bilinear_dissipated(alpha_max: ArrayLike, k: ArrayLike, beta: ArrayLike) -> 
 
 
 def dissipation_per_cycle(peak_force: ArrayLike, k: ArrayLike, beta: ArrayLike) -> np.ndarray:
-    """Eq. 20: E_dis = beta / (2 k (1 - beta)) F^2 for a contact loaded to peak force F."""
-    return np.asarray(beta) / (2.0 * np.asarray(k) * (1.0 - np.asarray(beta))) * np.asarray(peak_force) ** 2
+    """Eq. 20: energy dissipated at a contact loaded to peak force F, F^2/2 (1/k - 1/k_u) = beta F^2 / (2k).
+
+    The paper prints the last form of Eq. 20 as beta F^2 / (2k (1 - beta)), which does not follow
+    from its own first form (1/k - 1/k_u = beta/k) and disagrees with the area of the
+    load-unload loop; we use the first form (checked against the loop's area in the tests).
+    """
+    k = np.asarray(k)
+    ku = unloading_stiffness(k, beta)
+    return 0.5 * np.asarray(peak_force) ** 2 * (1.0 / k - 1.0 / ku)
 
 
 @dataclass(frozen=True)
