@@ -57,6 +57,7 @@ class ChainSolution:
     alpha_max: np.ndarray = field(default_factory=lambda: np.zeros(0))  # final bilinear history
     impulse_delivered: float = 0.0  # A * min(T, end_time)
     momentum: float = 0.0  # total momentum sum(m v) at the end
+    extra_steps: int = 0  # steps beyond the grid's (RK4 event location: rejected and split steps)
 
     @property
     def energy_balance_error(self) -> np.ndarray:

@@ -111,11 +111,13 @@ def solve_chain(
     history_stride: int = 1,
     snapshots: tuple[float, ...] = (),
     energy_samples: int = 200,
+    event_location: bool = True,
 ) -> ChainSolution:
     """Integrate the chain from rest (bead 1 possibly moving) to end_time.
 
     histories: 0-based contacts whose force (and the velocity of their left bead) is recorded
     every history_stride steps. snapshots: times (exact step boundaries) of whole-chain profiles.
+    event_location (RK4 only): split steps where a contact's force law has a kink (see module doc).
     """
     if method not in METHODS:
         raise ValueError(f"method = {method!r} is not known; choose one of {', '.join(METHODS)}")
@@ -221,8 +223,116 @@ def solve_chain(
     if method == "rk4":
         k1v, k2v, k3v, k4v = (np.empty(n) for _ in range(4))
         ut = np.empty(n)
+        u_save, v_save = np.empty(n), np.empty(n)
+
+    def rk4_step(h: float, a_ext: float) -> None:
+        """Classical RK4 on (u, v); the external load is constant over the step."""
+        nonlocal u, v, ut  # updated in place (augmented assignment on arrays)
+        accel(u, k1v)
+        k1v[0] += a_ext
+        np.multiply(v, 0.5 * h, out=ut)
+        ut += u
+        accel(ut, k2v)
+        k2v[0] += a_ext
+        # stage 3 position: u + h/2 (v + h/2 k1v)
+        np.multiply(k1v, 0.25 * h * h, out=ut)
+        ut += u
+        ut += 0.5 * h * v
+        accel(ut, k3v)
+        k3v[0] += a_ext
+        # stage 4 position: u + h (v + h/2 k2v)
+        np.multiply(k2v, 0.5 * h * h, out=ut)
+        ut += u
+        ut += h * v
+        accel(ut, k4v)
+        k4v[0] += a_ext
+        # u += h/6 (k1u + 2 k2u + 2 k3u + k4u) with k1u = v, k2u = v + h/2 k1v,
+        # k3u = v + h/2 k2v, k4u = v + h k3v  =>  u += h v + h^2/6 (k1v + k2v + k3v)
+        ut[:] = k1v
+        ut += k2v
+        ut += k3v
+        u += h * v
+        u += (h * h / 6.0) * ut
+        # v += h/6 (k1v + 2 k2v + 2 k3v + k4v)
+        ut += k2v
+        ut += k3v
+        ut += k4v
+        v += (h / 6.0) * ut
+
+    def first_kink_crossing(h: float) -> float | None:
+        """Fraction of the step at which the first contact meets a kink of its force law.
+
+        Kinks: the overlap where the force reaches zero, 0 (Hertz: F'' is infinite there) or
+        beta alpha_max (bilinear: F' jumps); and, bilinear only, the turn from loading to
+        unloading at a new alpha_max and the return of reloading to the loading line at alpha_max
+        (the slope changes between k and k_u). Located on the cubic
+        Hermite interpolant of alpha over the tentative step.
+        """
+        a_new = u[:-1] - u[1:]
+        adot_new = v[:-1] - v[1:]
+        candidates = []
+
+        def first_root(idx: np.ndarray, level) -> None:
+            a0, a1 = alpha_old[idx] - level, a_new[idx] - level
+            d0, d1 = h * adot_old[idx], h * adot_new[idx]
+            lo, hi = np.zeros(idx.size), np.ones(idx.size)
+            for _ in range(40):  # bisection on the Hermite cubic, which brackets a root
+                mid = 0.5 * (lo + hi)
+                m2 = mid * mid
+                p = (2 * m2 * mid - 3 * m2 + 1) * a0 + (m2 * mid - 2 * m2 + mid) * d0 \
+                    + (-2 * m2 * mid + 3 * m2) * a1 + (m2 * mid - m2) * d1
+                left = np.sign(p) == np.sign(a0)
+                lo = np.where(left, mid, lo)
+                hi = np.where(left, hi, mid)
+            candidates.append(np.min(0.5 * (lo + hi)))
+
+        # the force reaches zero: overlap 0 (Hertz) or beta alpha_max (bilinear), either way
+        level = beta * alpha_hist if bilinear else 0.0
+        idx = np.flatnonzero((alpha_old - level) * (a_new - level) < 0.0)
+        if idx.size:
+            first_root(idx, level[idx] if bilinear else 0.0)
+        if bilinear:
+            # reloading meets the loading line again at alpha_max (slope k_u -> k)
+            idx = np.flatnonzero((alpha_old < alpha_hist) & (a_new > alpha_hist) & (alpha_hist > 0.0))
+            if idx.size:
+                first_root(idx, alpha_hist[idx])
+        if bilinear:
+            turn = np.flatnonzero((adot_old > 0.0) & (adot_new < 0.0) & (a_new > 0.0))
+            if turn.size:
+                p, sp = _hermite_max(0.0, 1.0, alpha_old[turn], a_new[turn], adot_old[turn] * h, adot_new[turn] * h)
+                loading = p > alpha_hist[turn]
+                if loading.any():
+                    candidates.append(np.min(sp[loading]))
+        if not candidates:
+            return None
+        s = float(min(candidates))
+        if s * h < 1e-6 * timestep or s > 1.0 - 1e-6:
+            return None
+        return s
+
+    def track_peaks(t0: float, t1: float) -> None:
+        """Running peak of every contact's overlap, refined inside the step [t0, t1]."""
+        nonlocal alpha_old, adot_old
+        alpha_new = u[:-1] - u[1:]
+        adot_new = v[:-1] - v[1:]
+        rising = alpha_new > amax
+        if rising.any():
+            amax[rising] = alpha_new[rising]
+            tmax[rising] = t1
+        turning = np.flatnonzero((adot_old > 0.0) & (adot_new <= 0.0) & (alpha_new > 0.0))
+        if turning.size:
+            p, tp = _hermite_max(t0, t1, alpha_old[turning], alpha_new[turning],
+                                 adot_old[turning], adot_new[turning])
+            better = p > amax[turning]
+            ix = turning[better]
+            amax[ix] = p[better]
+            tmax[ix] = tp[better]
+        if bilinear and method == "rk4":
+            np.maximum(alpha_hist, amax, out=alpha_hist)
+        alpha_old, adot_old = alpha_new, adot_new
 
     step = 0
+    extra_steps = 0
     t = 0.0
     alpha_old = u[:-1] - u[1:]
     adot_old = v[:-1] - v[1:]
@@ -240,57 +350,27 @@ def solve_chain(
                 v[0] += 0.5 * h * a_ext
                 if bilinear:
                     np.maximum(alpha_hist, u[:-1] - u[1:], out=alpha_hist)
+            elif event_location:
+                # RK4 with the step split where a contact crosses a kink of its law, so that no
+                # step integrates across a discontinuity of the force's derivative
+                while True:
+                    h_sub = t_new - t
+                    u_save[:] = u
+                    v_save[:] = v
+                    rk4_step(h_sub, a_ext)
+                    s_ev = first_kink_crossing(h_sub)
+                    if s_ev is None:
+                        break
+                    u[:] = u_save
+                    v[:] = v_save
+                    rk4_step(s_ev * h_sub, a_ext)
+                    extra_steps += 2
+                    track_peaks(t, t + s_ev * h_sub)
+                    t = t + s_ev * h_sub
             else:
-                # classical RK4 on (u, v); the external load is constant over the step
-                accel(u, k1v)
-                k1v[0] += a_ext
-                np.multiply(v, 0.5 * h, out=ut)
-                ut += u
-                accel(ut, k2v)
-                k2v[0] += a_ext
-                # stage 3 position: u + h/2 (v + h/2 k1v)
-                np.multiply(k1v, 0.25 * h * h, out=ut)
-                ut += u
-                ut += 0.5 * h * v
-                accel(ut, k3v)
-                k3v[0] += a_ext
-                # stage 4 position: u + h (v + h/2 k2v)
-                np.multiply(k2v, 0.5 * h * h, out=ut)
-                ut += u
-                ut += h * v
-                accel(ut, k4v)
-                k4v[0] += a_ext
-                # u += h/6 (k1u + 2 k2u + 2 k3u + k4u) with k1u = v, k2u = v + h/2 k1v,
-                # k3u = v + h/2 k2v, k4u = v + h k3v  =>  u += h v + h^2/6 (k1v + k2v + k3v)
-                ut[:] = k1v
-                ut += k2v
-                ut += k3v
-                u += h * v
-                u += (h * h / 6.0) * ut
-                # v += h/6 (k1v + 2 k2v + 2 k3v + k4v)
-                ut += k2v
-                ut += k3v
-                ut += k4v
-                v += (h / 6.0) * ut
+                rk4_step(h, a_ext)
             step += 1
-            # ---- running peak of every contact's overlap, refined inside the step
-            alpha_new = u[:-1] - u[1:]
-            adot_new = v[:-1] - v[1:]
-            rising = alpha_new > amax
-            if rising.any():
-                amax[rising] = alpha_new[rising]
-                tmax[rising] = t_new
-            turning = np.flatnonzero((adot_old > 0.0) & (adot_new <= 0.0) & (alpha_new > 0.0))
-            if turning.size:
-                p, tp = _hermite_max(t, t_new, alpha_old[turning], alpha_new[turning],
-                                     adot_old[turning], adot_new[turning])
-                better = p > amax[turning]
-                idx = turning[better]
-                amax[idx] = p[better]
-                tmax[idx] = tp[better]
-            if bilinear and method == "rk4":
-                np.maximum(alpha_hist, amax, out=alpha_hist)
-            alpha_old, adot_old = alpha_new, adot_new
+            track_peaks(t, t_new)
             t = t_new
             if len(hist_idx) and step % history_stride == 0:
                 record_history(t)
@@ -317,6 +397,7 @@ def solve_chain(
         method=method,
         timestep=timestep,
         steps=step,
+        extra_steps=extra_steps,
         wall_time=time.perf_counter() - t_wall,
         end_time=end_time,
         peak_overlap=amax,
