@@ -16,8 +16,11 @@ DEFAULT_SCENE = "default"
 def bundled_scenes() -> dict[str, str]:
     """Bundled example scenes: name -> TOML text."""
     root = resources.files("granchain") / "scenes"
-    return {p.name.removesuffix(".toml"): p.read_text() for p in sorted(root.iterdir(), key=lambda p: p.name)
-            if p.name.endswith(".toml")}
+    return {
+        p.name.removesuffix(".toml"): p.read_text()
+        for p in sorted(root.iterdir(), key=lambda p: p.name)
+        if p.name.endswith(".toml")
+    }
 
 
 def resolve_scene(arg: str | None) -> Scene:
@@ -49,8 +52,10 @@ def cmd_run(args) -> int:
     result = run_scene(scene, backend=args.backend, method=args.method, out=out, overwrite=args.overwrite)
     s = result.summary()
     print(f"scene      {scene.title or scene.source}")
-    print(f"backend    {s['backend']} ({s['method']}), dt = {s['timestep']:g} s, {s['steps']} steps, "
-          f"{s['wall_time']:.3g} s wall")
+    print(
+        f"backend    {s['backend']} ({s['method']}), dt = {s['timestep']:g} s, {s['steps']} steps, "
+        f"{s['wall_time']:.3g} s wall"
+    )
     for k, v in s["observables"].items():
         print(f"  {k:28s} {_fmt(v)}")
     c = s["conservation"]

@@ -27,6 +27,7 @@ import numpy as np
 
 from granchain.postprocess.observables import measure_observables
 
+
 @dataclass
 class ChainSolution:
     """What a solver run returns. Contacts are 0-based here (contact i joins beads i and i+1)."""
@@ -63,7 +64,6 @@ class ChainSolution:
     def energy_balance_error(self) -> np.ndarray:
         """kinetic + stored + dissipated - work, at every energy sample."""
         return self.kinetic + self.potential + self.dissipated - self.work
-
 
 
 @dataclass
@@ -125,7 +125,9 @@ def check_output_dir(out: str | Path, overwrite: bool = False) -> Path:
     try:
         parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
-        raise RunDirError(f"{parent}: cannot create the parent directory of the run ({e.strerror}); choose another --out") from None
+        raise RunDirError(
+            f"{parent}: cannot create the parent directory of the run ({e.strerror}); choose another --out"
+        ) from None
     if not os.access(parent, os.W_OK):
         raise RunDirError(f"{parent}: is not writable; choose another --out")
     return out
@@ -180,12 +182,21 @@ def _write_contents(result: RunResult, d: Path, extra_files: dict) -> None:
     (d / "scene.toml").write_text(sc.source_text if sc.source_text else sc.to_toml())
     contacts = np.asarray(sc.peak_contacts, dtype=int)
     idx = contacts - 1
-    _write_csv(d / "peaks.csv", ["contact", "peak_force", "time_of_peak", "peak_force_nondim"],
-               zip(contacts, s.peak_force[idx], s.time_of_peak[idx], s.peak_force[idx] / sc.force_scale, strict=True))
+    _write_csv(
+        d / "peaks.csv",
+        ["contact", "peak_force", "time_of_peak", "peak_force_nondim"],
+        zip(contacts, s.peak_force[idx], s.time_of_peak[idx], s.peak_force[idx] / sc.force_scale, strict=True),
+    )
     if s.history_contacts:
         cols = [f"force_{i + 1}" for i in s.history_contacts] + [f"velocity_{i + 1}" for i in s.history_contacts]
-        _write_csv(d / "histories.csv", ["time", *cols],
-                   (np.concatenate(([t], f, v)) for t, f, v in zip(s.history_time, s.history_force, s.history_velocity, strict=True)))
+        _write_csv(
+            d / "histories.csv",
+            ["time", *cols],
+            (
+                np.concatenate(([t], f, v))
+                for t, f, v in zip(s.history_time, s.history_force, s.history_velocity, strict=True)
+            ),
+        )
     if s.snapshot_time.size:
         n = sc.chain.beads
 
@@ -196,8 +207,11 @@ def _write_contents(result: RunResult, d: Path, extra_files: dict) -> None:
                     yield (t, b + 1, s.snapshot_displacement[k, b], s.snapshot_velocity[k, b], f[b])
 
         _write_csv(d / "snapshots.csv", ["time", "bead", "displacement", "velocity", "contact_force"], rows())
-    _write_csv(d / "energy.csv", ["time", "kinetic", "potential", "dissipated", "work"],
-               zip(s.energy_time, s.kinetic, s.potential, s.dissipated, s.work, strict=True))
+    _write_csv(
+        d / "energy.csv",
+        ["time", "kinetic", "potential", "dissipated", "work"],
+        zip(s.energy_time, s.kinetic, s.potential, s.dissipated, s.work, strict=True),
+    )
     for name, content in extra_files.items():
         if isinstance(content, Path):
             shutil.copyfile(content, d / name)

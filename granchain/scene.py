@@ -161,6 +161,7 @@ class Scene:
 
 # ------------------------------------------------------------------------------- reading
 
+
 class _Section:
     """Reads keys from one TOML table, remembering which were used, and raises clear errors."""
 
@@ -186,9 +187,18 @@ class _Section:
             raise SceneError(f"{self.file}: [{self.name}] is missing {key!r}: {allowed}")
         return self.raw(key)
 
-    def number(self, key: str, *, required: bool = True, default: float | None = None,
-               low: float | None = None, low_open: bool = True, high: float | None = None,
-               high_open: bool = True, what: str = "") -> float | None:
+    def number(
+        self,
+        key: str,
+        *,
+        required: bool = True,
+        default: float | None = None,
+        low: float | None = None,
+        low_open: bool = True,
+        high: float | None = None,
+        high_open: bool = True,
+        what: str = "",
+    ) -> float | None:
         allowed = _range_text(low, low_open, high, high_open, what)
         if key not in self.table:
             if required:
@@ -221,7 +231,9 @@ class _Section:
     def forbid(self, keys: tuple[str, ...], reason: str) -> None:
         for key in keys:
             if key in self.table:
-                raise SceneError(f"{self.file}: [{self.name}] {key} = {self.table[key]!r} is not allowed here: {reason}")
+                raise SceneError(
+                    f"{self.file}: [{self.name}] {key} = {self.table[key]!r} is not allowed here: {reason}"
+                )
 
     def finish(self, known: tuple[str, ...]) -> None:
         for key in self.table:
@@ -281,7 +293,9 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
             raise SceneError(f"{source}: unknown section or key {key!r}; allowed: {', '.join(SECTIONS)}")
     for sec in ("chain", "contact", "loading", "run"):
         if sec not in data:
-            raise SceneError(f"{source}: missing section [{sec}]; every scene needs [chain], [contact], [loading] and [run]")
+            raise SceneError(
+                f"{source}: missing section [{sec}]; every scene needs [chain], [contact], [loading] and [run]"
+            )
     title = data.get("title", "")
     if not isinstance(title, str):
         raise SceneError(f"{source}: title = {title!r} is invalid: a string")
@@ -321,11 +335,19 @@ def _read_chain(s: _Section, source: str) -> Chain:
 def _read_contact(s: _Section, chain: Chain) -> Contact:
     law = s.choice("law", LAWS)
     if law == "hertz":
-        s.forbid(("unloading_coeff", "plastic_stiffness"), "only the bilinear law has them; set law = \"bilinear\" or remove them")
+        s.forbid(
+            ("unloading_coeff", "plastic_stiffness"),
+            'only the bilinear law has them; set law = "bilinear" or remove them',
+        )
         s.finish(("law",))
         return Contact(law=law)
-    beta = s.number("unloading_coeff", low=0.0, low_open=False, high=1.0,
-                    what="beta, the residual-to-maximum overlap ratio: 0 <= beta < 1")
+    beta = s.number(
+        "unloading_coeff",
+        low=0.0,
+        low_open=False,
+        high=1.0,
+        what="beta, the residual-to-maximum overlap ratio: 0 <= beta < 1",
+    )
     k = s.number("plastic_stiffness", required=False, low=0.0, what="plastic loading stiffness k in N/m")
     ys = chain.material.yield_strength
     if k is None and ys is None:
@@ -353,7 +375,10 @@ def _read_loading(s: _Section) -> Loading:
         s.finish(("kind", "amplitude", "duration"))
         return Loading(kind=kind, amplitude=a, duration=t)
     if kind == "impulse":
-        s.forbid(("amplitude", "velocity"), "an impulse load is given by impulse (N s) and duration (s); amplitude = impulse/duration")
+        s.forbid(
+            ("amplitude", "velocity"),
+            "an impulse load is given by impulse (N s) and duration (s); amplitude = impulse/duration",
+        )
         i = s.number("impulse", low=0.0, what="impulse I in N s")
         t = s.number("duration", low=0.0, what="loading time T in s")
         s.finish(("kind", "impulse", "duration"))
@@ -370,7 +395,11 @@ def _read_run(s: _Section, loading: Loading) -> Run:
     if dt > end:
         raise s.fail("timestep", dt, f"a time step no longer than end_time = {end:g} s")
     if loading.kind == "impulse" and end < loading.duration:
-        raise s.fail("end_time", end, f"at least the impulse's duration {loading.duration:g} s, or the impulse is never fully delivered")
+        raise s.fail(
+            "end_time",
+            end,
+            f"at least the impulse's duration {loading.duration:g} s, or the impulse is never fully delivered",
+        )
     s.finish(("end_time", "timestep"))
     return Run(end_time=end, timestep=dt)
 
@@ -414,11 +443,17 @@ def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
     if s.has("window"):
         v = s.raw("window")
         allowed = f"[first, last] contacts with 1 <= first < last <= {nc}"
-        if (not isinstance(v, list) or len(v) != 2 or any(isinstance(x, bool) or not isinstance(x, int) for x in v)
-                or not 1 <= v[0] < v[1] <= nc):
+        if (
+            not isinstance(v, list)
+            or len(v) != 2
+            or any(isinstance(x, bool) or not isinstance(x, int) for x in v)
+            or not 1 <= v[0] < v[1] <= nc
+        ):
             raise s.fail("window", v, allowed)
         window = (v[0], v[1])
-    interval = s.number("history_interval", required=False, low=0.0, what="s between history samples, at least the time step")
+    interval = s.number(
+        "history_interval", required=False, low=0.0, what="s between history samples, at least the time step"
+    )
     if interval is not None and interval < run.timestep:
         raise s.fail("history_interval", interval, f"at least the time step {run.timestep:g} s")
     s.finish(("peak_force", "histories", "snapshots", "window", "history_interval"))
@@ -427,12 +462,16 @@ def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
 
 # ------------------------------------------------------------------------------- writing
 
+
 def scene_to_dict(scene: Scene) -> dict:
     c = scene.chain
     material: Any = c.material_name
     if material is None:
-        material = {"density": c.material.density, "youngs_modulus": c.material.youngs_modulus,
-                    "poisson_ratio": c.material.poisson_ratio}
+        material = {
+            "density": c.material.density,
+            "youngs_modulus": c.material.youngs_modulus,
+            "poisson_ratio": c.material.poisson_ratio,
+        }
         if c.material.yield_strength is not None and scene.contact.law != "bilinear":
             material["yield_strength"] = c.material.yield_strength
     d: dict[str, Any] = {}

@@ -29,29 +29,38 @@ snapshots = [2e-3]
 """
 
 
-def make_scene_text(*, beads=30, law="hertz", contact_extra="", loading=None, end_time=2e-4,
-                    timestep=1e-8, outputs="") -> str:
+def make_scene_text(
+    *, beads=30, law="hertz", contact_extra="", loading=None, end_time=2e-4, timestep=1e-8, outputs=""
+) -> str:
     loading = loading or 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
-    return textwrap.dedent(f"""
+    return (
+        textwrap.dedent(f"""
         [chain]
         beads = {beads}
         radius = 4.76e-3
         material = "brass"
         [contact]
         law = "{law}"
-        """) + contact_extra + "\n[loading]\n" + loading + f"""
+        """)
+        + contact_extra
+        + "\n[loading]\n"
+        + loading
+        + f"""
 [run]
 end_time = {end_time!r}
 timestep = {timestep!r}
 [outputs]
-""" + outputs + "\n"
+"""
+        + outputs
+        + "\n"
+    )
 
 
 def make_scene(**kw):
     return parse_scene(make_scene_text(**kw), source="test.toml")
 
 
-BILINEAR = 'unloading_coeff = 0.8\nplastic_stiffness = 2.43e7\n'
+BILINEAR = "unloading_coeff = 0.8\nplastic_stiffness = 2.43e7\n"
 
 
 @pytest.fixture

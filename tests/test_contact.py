@@ -81,7 +81,7 @@ def test_beta_zero_is_a_linear_elastic_spring(a, amax, k):
 def test_vectorized_per_contact_stiffness():
     a = np.array([1e-6, -1e-6, 2e-6])
     k = np.array([1e9, 2e9, 3e9])
-    assert np.allclose(hertz_force(a, k), [k[0] * 1e-9, 0.0, k[2] * 2e-6 ** 1.5])
+    assert np.allclose(hertz_force(a, k), [k[0] * 1e-9, 0.0, k[2] * 2e-6**1.5])
     am = np.array([2e-6, 0.0, 2e-6])
     f = bilinear_force(a, am, k, 0.5)
     assert np.allclose(f, [k[0] * 2 * (1e-6 - 1e-6), 0.0, k[2] * 2e-6])

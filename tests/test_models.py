@@ -25,7 +25,7 @@ def test_tau_matches_paper_ratio():
 def test_eq8_scales_as_impulse_to_six_fifths():
     f1 = models.short_load_peak_force(0.1, M, mat.effective_modulus(BRASS), R / 2)
     f2 = models.short_load_peak_force(0.2, M, mat.effective_modulus(BRASS), R / 2)
-    assert f2 / f1 == pytest.approx(2 ** 1.2, rel=1e-12)
+    assert f2 / f1 == pytest.approx(2**1.2, rel=1e-12)
 
 
 def test_front_speed_bounds_ratio_and_nesterenko_inverse():
@@ -80,7 +80,15 @@ def test_predictions_cover_the_scene():
     names = {p.name for p in predict(make_scene())}
     assert {"short_load_peak_force", "front_speed_lower", "front_speed_upper", "peak_force_envelope"} <= names
     names_b = {p.name for p in predict(make_scene(law="bilinear", contact_extra=BILINEAR))}
-    assert {"first_contact_peak_force", "exponential_decay_per_contact", "inverse_decay_exponent",
-            "long_load_v_1", "long_load_F_2", "gamma", "eta", "omega"} <= names_b
+    assert {
+        "first_contact_peak_force",
+        "exponential_decay_per_contact",
+        "inverse_decay_exponent",
+        "long_load_v_1",
+        "long_load_F_2",
+        "gamma",
+        "eta",
+        "omega",
+    } <= names_b
     for p in predict(make_scene(law="bilinear", contact_extra=BILINEAR)):
         assert math.isfinite(p.value) and p.valid and p.equation

@@ -31,8 +31,9 @@ def test_momentum_after_loading_equals_impulse(scene, method):
 
 def test_step_load_ends_exactly_at_T():
     # bead 1's velocity history: the load's impulse A*T enters in exactly the steps inside (0, T]
-    sc = make_scene(beads=3, loading='kind = "step"\namplitude = 10.0\nduration = 1.05e-6', end_time=2e-6,
-                    timestep=1e-7)
+    sc = make_scene(
+        beads=3, loading='kind = "step"\namplitude = 10.0\nduration = 1.05e-6', end_time=2e-6, timestep=1e-7
+    )
     p = ChainProblem.from_scene(sc)
     s1 = solve_chain(p, 1.05e-6, 1e-7, "verlet")
     s2 = solve_chain(p, 2e-6, 1e-7, "verlet")
@@ -81,8 +82,10 @@ def test_convergence_orders(scene):
             e_pk.append(np.max(np.abs(s.peak_force - ref.peak_force)) / np.max(ref.peak_force))
             e_u.append(np.max(np.abs(s.displacement - ref.displacement)) / np.max(np.abs(ref.displacement)))
         report[method] = (fitted_order(dts, e_pk), fitted_order(dts, e_u), e_pk[-1])
-    print(scene.contact.law, {m: tuple(round(x, 2) if i < 2 else float(f"{x:.2e}") for i, x in enumerate(v))
-                              for m, v in report.items()})
+    print(
+        scene.contact.law,
+        {m: tuple(round(x, 2) if i < 2 else float(f"{x:.2e}") for i, x in enumerate(v)) for m, v in report.items()},
+    )
     pk_v, u_v, _ = report["verlet"]
     assert 1.8 < pk_v < 2.6 and 1.8 < u_v < 2.6
     pk_r, u_r, finest = report["rk4"]
@@ -125,16 +128,21 @@ def test_snapshots_at_exact_times_and_history_stride():
 def test_short_pulse_solitary_wave_matches_eq8(loading):
     """Eq. 8 within 1% far down a long elastic chain; prints the constant our solver implies."""
     m = HERTZ.mass
-    text = ('kind = "velocity"\nvelocity = ' + repr(0.4 / m)) if loading == "velocity" else \
-        'kind = "impulse"\nimpulse = 0.4\nduration = 1e-6'
+    text = (
+        ('kind = "velocity"\nvelocity = ' + repr(0.4 / m))
+        if loading == "velocity"
+        else 'kind = "impulse"\nimpulse = 0.4\nduration = 1e-6'
+    )
     sc = make_scene(beads=120, loading=text, end_time=7e-4, timestep=2.5e-8)
     sol = solve_chain(ChainProblem.from_scene(sc), 7e-4, 2.5e-8, "rk4")
     measured = sol.peak_force[59:90]  # contacts 60..90: formed, far from both ends
     assert np.all(np.isfinite(sol.time_of_peak[59:90]))
     eq8 = models.short_load_peak_force(0.4, m, sc.e_star, sc.r_star)
     constant = models.EQ8_CONSTANT * measured.mean() / eq8
-    print(f"{loading}: leading peak {measured.mean():.1f} N (spread {np.ptp(measured) / measured.mean():.1e}), "
-          f"Eq. 8 {eq8:.1f} N, implied constant {constant:.4f}")
+    print(
+        f"{loading}: leading peak {measured.mean():.1f} N (spread {np.ptp(measured) / measured.mean():.1e}), "
+        f"Eq. 8 {eq8:.1f} N, implied constant {constant:.4f}"
+    )
     assert abs(measured.mean() / eq8 - 1) < 0.01
     assert np.ptp(measured) / measured.mean() < 1e-3  # a steady solitary wave
 
@@ -147,8 +155,14 @@ def test_linear_chain_appendix_constants():
     and 2 share v_m). Printed, with the paper's values, for the note.
     """
     k, impulse = 2.43e7, 0.1
-    sc = make_scene(beads=40, law="bilinear", contact_extra=f"unloading_coeff = 0.0\nplastic_stiffness = {k!r}\n",
-                    loading=f'kind = "velocity"\nvelocity = {impulse / HERTZ.mass!r}', end_time=2e-4, timestep=5e-9)
+    sc = make_scene(
+        beads=40,
+        law="bilinear",
+        contact_extra=f"unloading_coeff = 0.0\nplastic_stiffness = {k!r}\n",
+        loading=f'kind = "velocity"\nvelocity = {impulse / HERTZ.mass!r}',
+        end_time=2e-4,
+        timestep=5e-9,
+    )
     m = sc.mass
     sol = solve_chain(ChainProblem.from_scene(sc), 2e-4, 5e-9, "rk4", histories=(0, 1))
     s = math.sqrt(k / m) * impulse
@@ -157,6 +171,8 @@ def test_linear_chain_appendix_constants():
     a1 = sol.history_velocity[i, 0] * m / impulse
     v2 = sol.history_velocity[i, 1] * m / impulse
     a3 = sol.history_force[i, 1] / s
-    print(f"A1 measured {a1:.4f} (bead 2: {v2:.4f}) paper 0.482; A2 measured {a2:.4f} paper 0.721; "
-          f"A3 measured {a3:.4f} paper 0.199")
+    print(
+        f"A1 measured {a1:.4f} (bead 2: {v2:.4f}) paper 0.482; A2 measured {a2:.4f} paper 0.721; "
+        f"A3 measured {a3:.4f} paper 0.199"
+    )
     assert abs(a2 / models.APPENDIX_A2 - 1) < 0.01

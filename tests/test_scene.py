@@ -43,14 +43,19 @@ def test_impulse_kind_is_a_step_with_amplitude_impulse_over_duration():
 
 def test_bilinear_stiffness_from_yield_strength():
     data = tomllib.loads(ISSUE_SCENE)
-    data["chain"]["material"] = {"density": 8500.0, "youngs_modulus": 115e9, "poisson_ratio": 0.3,
-                                 "yield_strength": 5.52e8}
+    data["chain"]["material"] = {
+        "density": 8500.0,
+        "youngs_modulus": 115e9,
+        "poisson_ratio": 0.3,
+        "yield_strength": 5.52e8,
+    }
     data["contact"] = {"law": "bilinear", "unloading_coeff": 0.8}
     sc = scene_from_dict(data, source="x")
     assert sc.stiffness == pytest.approx(18.5 * 5.52e8 * 4.76e-3 / 2)
 
 
 # ---- one test per rule: (mutation of the issue scene, key named in the message, words of the fix)
+
 
 def mutate(path, value):
     data = tomllib.loads(ISSUE_SCENE)
@@ -77,10 +82,20 @@ RULES = [
     ("zero radius", ("chain", "radius"), 0.0, "radius", "> 0"),
     ("radius bool", ("chain", "radius"), True, "radius", "number"),
     ("unknown material", ("chain", "material"), "unobtainium", "material", "brass"),
-    ("bad poisson", ("chain", "material"), {"density": 1.0, "youngs_modulus": 1.0, "poisson_ratio": 0.5},
-     "poisson_ratio", "< 0.5"),
-    ("material unknown key", ("chain", "material"), {"density": 1.0, "youngs_modulus": 1.0, "poisson_ratio": 0.3,
-                                                      "colour": "gold"}, "colour", "allowed keys"),
+    (
+        "bad poisson",
+        ("chain", "material"),
+        {"density": 1.0, "youngs_modulus": 1.0, "poisson_ratio": 0.5},
+        "poisson_ratio",
+        "< 0.5",
+    ),
+    (
+        "material unknown key",
+        ("chain", "material"),
+        {"density": 1.0, "youngs_modulus": 1.0, "poisson_ratio": 0.3, "colour": "gold"},
+        "colour",
+        "allowed keys",
+    ),
     ("unknown law", ("contact", "law"), "hooke", "law", "'hertz', 'bilinear'"),
     ("hertz with beta", ("contact", "unloading_coeff"), 0.5, "unloading_coeff", "only the bilinear"),
     ("negative time", ("run", "end_time"), -1.0, "end_time", "> 0"),
@@ -108,7 +123,11 @@ def test_invalid_scene_rule(what, path, value, key, fix):
     assert key in msg, msg
     assert fix in msg, msg
     if value is not DELETE and not isinstance(value, dict) and key not in ("solver",):
-        assert repr(value) in msg or repr(float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else value) in msg or str(value) in msg, msg
+        assert (
+            repr(value) in msg
+            or repr(float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else value) in msg
+            or str(value) in msg
+        ), msg
 
 
 BETA_CASES = [(-0.1, ">= 0"), (1.0, "< 1"), (1.5, "< 1")]
@@ -133,8 +152,12 @@ def test_bilinear_without_stiffness():
 def test_bilinear_with_two_stiffnesses():
     data = mutate(("contact", "law"), "bilinear")
     data["contact"].update(unloading_coeff=0.8, plastic_stiffness=2.43e7)
-    data["chain"]["material"] = {"density": 8500.0, "youngs_modulus": 115e9, "poisson_ratio": 0.3,
-                                 "yield_strength": 5e8}
+    data["chain"]["material"] = {
+        "density": 8500.0,
+        "youngs_modulus": 115e9,
+        "poisson_ratio": 0.3,
+        "yield_strength": 5e8,
+    }
     with pytest.raises(SceneError, match="only one"):
         scene_from_dict(data, source="b.toml")
 
@@ -167,15 +190,36 @@ def test_not_a_file(tmp_path):
 
 # ---- property-based: any mutation of a valid scene is either valid or refused with a SceneError
 
-scalars = st.one_of(st.integers(-5, 300), st.floats(allow_nan=True, allow_infinity=True, width=64),
-                    st.booleans(), st.text(max_size=5), st.lists(st.integers(-2, 250), max_size=4))
-paths = st.sampled_from([
-    ("chain", "beads"), ("chain", "radius"), ("chain", "material"), ("contact", "law"),
-    ("contact", "unloading_coeff"), ("contact", "plastic_stiffness"), ("loading", "kind"),
-    ("loading", "amplitude"), ("loading", "duration"), ("loading", "impulse"), ("run", "end_time"),
-    ("run", "timestep"), ("outputs", "peak_force"), ("outputs", "histories"), ("outputs", "snapshots"),
-    ("outputs", "window"), ("outputs", "history_interval"), ("outputs", "extra"), ("chain", "colour"),
-])
+scalars = st.one_of(
+    st.integers(-5, 300),
+    st.floats(allow_nan=True, allow_infinity=True, width=64),
+    st.booleans(),
+    st.text(max_size=5),
+    st.lists(st.integers(-2, 250), max_size=4),
+)
+paths = st.sampled_from(
+    [
+        ("chain", "beads"),
+        ("chain", "radius"),
+        ("chain", "material"),
+        ("contact", "law"),
+        ("contact", "unloading_coeff"),
+        ("contact", "plastic_stiffness"),
+        ("loading", "kind"),
+        ("loading", "amplitude"),
+        ("loading", "duration"),
+        ("loading", "impulse"),
+        ("run", "end_time"),
+        ("run", "timestep"),
+        ("outputs", "peak_force"),
+        ("outputs", "histories"),
+        ("outputs", "snapshots"),
+        ("outputs", "window"),
+        ("outputs", "history_interval"),
+        ("outputs", "extra"),
+        ("chain", "colour"),
+    ]
+)
 
 
 @settings(max_examples=300, suppress_health_check=[HealthCheck.too_slow], deadline=None)

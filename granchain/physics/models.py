@@ -28,6 +28,7 @@ APPENDIX_A4 = 0.599
 
 # ---------------------------------------------------------------- elastic chains (Sec. II)
 
+
 def short_load_peak_force(impulse: float, mass: float, e_star: float, r_star: float) -> float:
     """Eq. 8: peak force of the solitary wave formed by a short load of impulse I.
 
@@ -82,6 +83,7 @@ def solitary_wave_peak_force(speed: float, k: float, mass: float, diameter: floa
 
 
 # ---------------------------------------------------------- elastoplastic chains (Sec. III)
+
 
 def linear_chain_impulse_response(impulse: float, k: float, mass: float, beta: float = 0.0) -> dict[str, float]:
     """Appendix Eqs. A1-A4 for a linear chain hit by an impulse I.
@@ -149,7 +151,9 @@ def inverse_decay_exponent(beta: float) -> float:
     return (1.0 + beta) / 2.0
 
 
-def long_load_bilinear(amplitude: float, duration: float, k: float, beta: float, mass: float, diameter: float) -> dict[str, float]:
+def long_load_bilinear(
+    amplitude: float, duration: float, k: float, beta: float, mass: float, diameter: float
+) -> dict[str, float]:
     """Eqs. 35-38: loading and unloading fronts of a bilinear chain under a long step load.
 
     Returns c (leading front, plastic loading), c_u (trailing front, unloading), F_1 = A,

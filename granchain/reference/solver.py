@@ -279,8 +279,12 @@ def solve_chain(
             for _ in range(40):  # bisection on the Hermite cubic, which brackets a root
                 mid = 0.5 * (lo + hi)
                 m2 = mid * mid
-                p = (2 * m2 * mid - 3 * m2 + 1) * a0 + (m2 * mid - 2 * m2 + mid) * d0 \
-                    + (-2 * m2 * mid + 3 * m2) * a1 + (m2 * mid - m2) * d1
+                p = (
+                    (2 * m2 * mid - 3 * m2 + 1) * a0
+                    + (m2 * mid - 2 * m2 + mid) * d0
+                    + (-2 * m2 * mid + 3 * m2) * a1
+                    + (m2 * mid - m2) * d1
+                )
                 left = np.sign(p) == np.sign(a0)
                 lo = np.where(left, mid, lo)
                 hi = np.where(left, hi, mid)
@@ -321,8 +325,7 @@ def solve_chain(
             tmax[rising] = t1
         turning = np.flatnonzero((adot_old > 0.0) & (adot_new <= 0.0) & (alpha_new > 0.0))
         if turning.size:
-            p, tp = _hermite_max(t0, t1, alpha_old[turning], alpha_new[turning],
-                                 adot_old[turning], adot_new[turning])
+            p, tp = _hermite_max(t0, t1, alpha_old[turning], alpha_new[turning], adot_old[turning], adot_new[turning])
             better = p > amax[turning]
             ix = turning[better]
             amax[ix] = p[better]

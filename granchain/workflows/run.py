@@ -31,8 +31,9 @@ def run_reference(scene, method: str = "rk4") -> RunResult:
     return RunResult(scene=scene, backend="reference", solution=sol)
 
 
-def run_scene(scene, backend: str = "reference", method: str | None = None,
-              out: str | Path | None = None, overwrite: bool = False) -> RunResult:
+def run_scene(
+    scene, backend: str = "reference", method: str | None = None, out: str | Path | None = None, overwrite: bool = False
+) -> RunResult:
     """Run a scene on a backend; if out is given, write the run directory (checked before the run)."""
     if backend not in BACKENDS:
         raise ValueError(f"backend = {backend!r} is not available; choose one of {', '.join(BACKENDS)}")
