@@ -68,18 +68,37 @@ class ChainProblem:
         return cls(mass=mass, law=law, initial_velocity=ld.velocity)
 
 
-def _steps_in(length: float, dt: float) -> tuple[int, float]:
-    """Number of steps covering a segment, and the length of its last (possibly short) step."""
-    n = max(1, math.ceil(length / dt * (1.0 - 1e-12)))
-    return n, length - (n - 1) * dt
+@dataclass(frozen=True)
+class Segment:
+    """A stretch of the run between two breakpoints (load end, snapshot, end), in equal steps.
+
+    ``steps`` steps: all of length dt except the last, of length ``last`` (<= dt), which lands
+    exactly on ``end``. ``loaded``: the step load acts over the whole segment.
+    """
+
+    start: float
+    end: float
+    steps: int
+    last: float
+    loaded: bool
 
 
-def _breakpoints(problem: ChainProblem, end_time: float, snapshots) -> list[float]:
+def step_plan(end_time: float, dt: float, load_duration: float = 0.0, snapshots=()) -> list[Segment]:
+    """Split a run into segments so that T (if a load ends inside the run), every snapshot time and
+    the end time are step boundaries. Used by every backend, so their steps coincide."""
     pts = {float(end_time)}
-    if problem.amplitude and 0.0 < problem.duration < end_time:
-        pts.add(float(problem.duration))
+    if 0.0 < load_duration < end_time:
+        pts.add(float(load_duration))
     pts.update(float(s) for s in snapshots if 0.0 < s < end_time)
-    return sorted(pts)
+    plan, start = [], 0.0
+    for bp in sorted(pts):
+        n = max(1, math.ceil((bp - start) / dt * (1.0 - 1e-12)))
+        last = (bp - start) - (n - 1) * dt
+        if abs(last - dt) <= 1e-9 * dt:  # a whole number of steps up to round-off: keep dt exactly
+            last = dt
+        plan.append(Segment(start, bp, n, last, load_duration > 0.0 and start < load_duration))
+        start = bp
+    return plan
 
 
 def _hermite_max(t0, t1, a0, a1, d0, d1):
@@ -166,14 +185,10 @@ def solve_chain(
         return out
 
     # ---- bookkeeping
-    breakpoints = _breakpoints(problem, end_time, snapshots)
-    plan = []
-    seg_start = 0.0
-    for bp in breakpoints:
-        nseg, last = _steps_in(bp - seg_start, timestep)
-        f_ext = problem.amplitude if (problem.amplitude and seg_start < problem.duration) else 0.0
-        plan.append((seg_start, bp, nseg, last, f_ext))
-        seg_start = bp
+    plan = [
+        (g.start, g.end, g.steps, g.last, problem.amplitude if g.loaded else 0.0)
+        for g in step_plan(end_time, timestep, problem.duration if problem.amplitude else 0.0, snapshots)
+    ]
     total_steps = sum(p[2] for p in plan)
     hist_idx = np.asarray(histories, dtype=int)
     nh = (total_steps // history_stride + 2) if len(hist_idx) else 0
@@ -334,6 +349,41 @@ def solve_chain(
             np.maximum(alpha_hist, amax, out=alpha_hist)
         alpha_old, adot_old = alpha_new, adot_new
 
+    # Verlet: the peak tracking of granchain's LAMMPS pair styles, so that the two agree step for
+    # step: running maximum of the force samples at step ends, refined by the vertex of the
+    # parabola through three consecutive samples where the middle one is a local maximum.
+    f_now = fc.copy()
+    f_prev, f_prev2 = np.zeros(n - 1), np.zeros(n - 1)
+    t_now, t_prev, t_prev2 = 0.0, -math.inf, -math.inf
+    fpk = np.zeros(n - 1)
+    tpk = np.full(n - 1, np.nan)
+
+    def sample_forces(t1: float) -> None:
+        nonlocal f_now, f_prev, f_prev2, t_now, t_prev, t_prev2
+        f_prev2, f_prev, f_now = f_prev, f_now, fc.copy()
+        t_prev2, t_prev, t_now = t_prev, t_now, t1
+        np.maximum(amax, u[:-1] - u[1:], out=amax)
+        rising = f_now > fpk
+        fpk[rising] = f_now[rising]
+        tpk[rising] = t1
+        if not math.isfinite(t_prev2):
+            return
+        ix = np.flatnonzero((f_prev > f_now) & (f_prev >= f_prev2) & (f_prev > 0.0))
+        if ix.size == 0:
+            return
+        a, b = t_prev2 - t_prev, t_now - t_prev
+        det = a * b * (b - a)
+        fa, fb = f_prev2[ix] - f_prev[ix], f_now[ix] - f_prev[ix]
+        c1 = (fa * b * b - fb * a * a) / det
+        c2 = (a * fb - b * fa) / det
+        ok = c2 < 0.0
+        ix, c1, c2 = ix[ok], c1[ok], c2[ok]
+        sv = np.clip(-c1 / (2.0 * c2), a, b)
+        val = f_prev[ix] + (c1 + c2 * sv) * sv
+        better = val > fpk[ix]
+        fpk[ix[better]] = val[better]
+        tpk[ix[better]] = t_prev + sv[better]
+
     step = 0
     extra_steps = 0
     t = 0.0
@@ -373,7 +423,10 @@ def solve_chain(
             else:
                 rk4_step(h, a_ext)
             step += 1
-            track_peaks(t, t_new)
+            if method == "verlet":
+                sample_forces(t_new)
+            else:
+                track_peaks(t, t_new)
             t = t_new
             if len(hist_idx) and step % history_stride == 0:
                 record_history(t)
@@ -390,7 +443,10 @@ def solve_chain(
     if len(hist_idx) and (nrec == 0 or h_t[nrec - 1] != t):
         record_history(t)
 
-    peak_force = np.asarray(law.force_at_peak_overlap(amax), dtype=float)
+    if method == "verlet":
+        peak_force, tmax = fpk, tpk
+    else:
+        peak_force = np.asarray(law.force_at_peak_overlap(amax), dtype=float)
     e = np.asarray(e_rows)
     # remove duplicate times (a breakpoint may coincide with a periodic sample)
     _, keep = np.unique(e[:, 0], return_index=True)

@@ -6,15 +6,9 @@ from pathlib import Path
 
 from granchain.reference.solver import ChainProblem, solve_chain
 from granchain.results import RunResult, check_output_dir, write_run_dir
+from granchain.templates import history_stride
 
-BACKENDS = ("reference",)
-
-
-def history_stride(scene) -> int:
-    """Steps between history samples: history_interval / timestep, at least 1."""
-    if scene.outputs.history_interval is None:
-        return 1
-    return max(1, round(scene.outputs.history_interval / scene.run.timestep))
+BACKENDS = ("reference", "lammps")
 
 
 def run_reference(scene, method: str = "rk4") -> RunResult:
@@ -32,14 +26,35 @@ def run_reference(scene, method: str = "rk4") -> RunResult:
 
 
 def run_scene(
-    scene, backend: str = "reference", method: str | None = None, out: str | Path | None = None, overwrite: bool = False
+    scene,
+    backend: str = "reference",
+    method: str | None = None,
+    out: str | Path | None = None,
+    overwrite: bool = False,
+    np_: int = 1,
 ) -> RunResult:
-    """Run a scene on a backend; if out is given, write the run directory (checked before the run)."""
+    """Run a scene on a backend; if out is given, write the run directory (checked before the run).
+
+    reference: method rk4 (default) or verlet. lammps: velocity Verlet with granchain's pair
+    styles, np_ MPI ranks; the run directory also gets the deck, data file, log and dumps.
+    """
     if backend not in BACKENDS:
-        raise ValueError(f"backend = {backend!r} is not available; choose one of {', '.join(BACKENDS)}")
+        raise ValueError(f"backend = {backend!r} is not known; choose one of {', '.join(BACKENDS)}")
     if out is not None:
         check_output_dir(out, overwrite)
-    result = run_reference(scene, method or "rk4")
-    if out is not None:
-        write_run_dir(result, out, overwrite=overwrite)
+    if backend == "reference":
+        result = run_reference(scene, method or "rk4")
+        if out is not None:
+            write_run_dir(result, out, overwrite=overwrite)
+        return result
+    if method not in (None, "verlet"):
+        raise ValueError(f"method = {method!r}: the LAMMPS backend integrates with velocity Verlet only")
+    from granchain.lammps.runner import cleanup, output_files, run_lammps
+
+    result, work = run_lammps(scene, np_=np_)
+    try:
+        if out is not None:
+            write_run_dir(result, out, overwrite=overwrite, extra_files=output_files(work))
+    finally:
+        cleanup(work)
     return result

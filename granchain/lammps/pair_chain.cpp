@@ -1,0 +1,257 @@
+/* granchain: chain/hertz and chain/bilinear pair styles. See pair_chain.h. */
+
+#include "pair_chain.h"
+
+#include "atom.h"
+#include "comm.h"
+#include "error.h"
+#include "force.h"
+#include "memory.h"
+#include "neigh_list.h"
+#include "neighbor.h"
+#include "update.h"
+#include "utils.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+using namespace LAMMPS_NS;
+
+PairChain::PairChain(LAMMPS *lmp, bool is_bilinear) :
+    Pair(lmp), bilinear(is_bilinear), kcoeff(nullptr), d0(nullptr), beta(nullptr),
+    t_fc(-std::numeric_limits<double>::infinity()), t_fprev(-std::numeric_limits<double>::infinity()),
+    t_fprev2(-std::numeric_limits<double>::infinity()), amax_comm(nullptr)
+{
+  single_enable = 0;
+  restartinfo = 0;
+  writedata = 0;
+  comm_forward = 1;    // alpha_max of owned beads to their ghost copies
+}
+
+PairChain::~PairChain()
+{
+  if (allocated) {
+    memory->destroy(setflag);
+    memory->destroy(cutsq);
+    memory->destroy(kcoeff);
+    memory->destroy(d0);
+    memory->destroy(beta);
+  }
+}
+
+void PairChain::allocate()
+{
+  allocated = 1;
+  int n = atom->ntypes + 1;
+  memory->create(setflag, n, n, "pair:setflag");
+  for (int i = 0; i < n; i++)
+    for (int j = 0; j < n; j++) setflag[i][j] = 0;
+  memory->create(cutsq, n, n, "pair:cutsq");
+  memory->create(kcoeff, n, n, "pair:k");
+  memory->create(d0, n, n, "pair:d0");
+  memory->create(beta, n, n, "pair:beta");
+}
+
+void PairChain::settings(int narg, char **)
+{
+  if (narg != 0) error->all(FLERR, "Illegal pair_style {} command: it takes no arguments", force->pair_style);
+}
+
+void PairChain::coeff(int narg, char **arg)
+{
+  const int want = bilinear ? 5 : 4;
+  if (narg != want)
+    error->all(FLERR, "pair_coeff for {} needs: I J k d0{}", force->pair_style, bilinear ? " beta" : "");
+  if (!allocated) allocate();
+  int ilo, ihi, jlo, jhi;
+  utils::bounds(FLERR, arg[0], 1, atom->ntypes, ilo, ihi, error);
+  utils::bounds(FLERR, arg[1], 1, atom->ntypes, jlo, jhi, error);
+  double k = utils::numeric(FLERR, arg[2], false, lmp);
+  double d = utils::numeric(FLERR, arg[3], false, lmp);
+  double b = bilinear ? utils::numeric(FLERR, arg[4], false, lmp) : 0.0;
+  if (k <= 0.0) error->all(FLERR, "pair_coeff k must be > 0, got {}", k);
+  if (d <= 0.0) error->all(FLERR, "pair_coeff d0 must be > 0, got {}", d);
+  if (b < 0.0 || b >= 1.0) error->all(FLERR, "pair_coeff beta must be in [0, 1), got {}", b);
+  int count = 0;
+  for (int i = ilo; i <= ihi; i++)
+    for (int j = MAX(jlo, i); j <= jhi; j++) {
+      kcoeff[i][j] = k;
+      d0[i][j] = d;
+      beta[i][j] = b;
+      setflag[i][j] = 1;
+      count++;
+    }
+  if (count == 0) error->all(FLERR, "Incorrect args for pair coefficients");
+}
+
+double *PairChain::custom(const char *name)
+{
+  int flag, cols;
+  int idx = atom->find_custom(name, flag, cols);
+  if (idx < 0 || flag != 1 || cols != 0)
+    error->all(FLERR,
+               "pair {} needs the per-atom vector d_{}: add 'fix ID all property/atom d_fc d_fprev d_fprev2 "
+               "d_fpeak d_tpeak{} ghost yes' before the run (granchain's decks do)",
+               force->pair_style, name, bilinear ? " d_amax d_edis" : "");
+  return atom->dvector[idx];
+}
+
+void PairChain::init_style()
+{
+  if (force->newton_pair)
+    error->all(FLERR, "pair {} requires 'newton off' (contact data live on the left bead of each pair)",
+               force->pair_style);
+  if (!atom->tag_enable) error->all(FLERR, "pair {} requires atom IDs", force->pair_style);
+  custom("fc");
+  if (bilinear) custom("amax");
+  neighbor->add_request(this);
+}
+
+double PairChain::init_one(int i, int j)
+{
+  if (setflag[i][j] == 0) error->all(FLERR, "All pair coeffs are not set (pair {} {})", i, j);
+  kcoeff[j][i] = kcoeff[i][j];
+  d0[j][i] = d0[i][j];
+  beta[j][i] = beta[i][j];
+  return d0[i][j];
+}
+
+void PairChain::compute(int eflag, int vflag)
+{
+  ev_init(eflag, vflag);
+  double **x = atom->x;
+  double **f = atom->f;
+  const int *type = atom->type;
+  const tagint *tag = atom->tag;
+  const int nlocal = atom->nlocal;
+  const int newton_pair = force->newton_pair;
+
+  double *fc = custom("fc");
+  double *fprev = custom("fprev");
+  double *fprev2 = custom("fprev2");
+  double *fpeak = custom("fpeak");
+  double *tpeak = custom("tpeak");
+  double *amax = bilinear ? custom("amax") : nullptr;
+  double *edis = bilinear ? custom("edis") : nullptr;
+
+  if (bilinear) {
+    amax_comm = amax;
+    comm->forward_comm(this);    // ghosts get the owners' alpha_max of the previous step
+  }
+
+  // elapsed time of this force evaluation; a run's setup recomputes the forces of the state the
+  // previous run ended in, which is not a new sample
+  const double t = update->atime + (update->ntimestep - update->atimestep) * update->dt;
+  const bool new_sample = t > t_fc;
+  if (new_sample) {
+    for (int i = 0; i < nlocal; i++) {
+      fprev2[i] = fprev[i];
+      fprev[i] = fc[i];
+    }
+    t_fprev2 = t_fprev;
+    t_fprev = t_fc;
+    t_fc = t;
+  }
+  for (int i = 0; i < nlocal; i++) fc[i] = 0.0;
+
+  const int inum = list->inum;
+  const int *ilist = list->ilist;
+  const int *numneigh = list->numneigh;
+  int **firstneigh = list->firstneigh;
+
+  for (int ii = 0; ii < inum; ii++) {
+    const int i = ilist[ii];
+    const int *jlist = firstneigh[i];
+    const int jnum = numneigh[i];
+    for (int jj = 0; jj < jnum; jj++) {
+      const int j = jlist[jj] & NEIGHMASK;
+      const int itype = type[i], jtype = type[j];
+      const double delx = x[i][0] - x[j][0];
+      const double dely = x[i][1] - x[j][1];
+      const double delz = x[i][2] - x[j][2];
+      const double rsq = delx * delx + dely * dely + delz * delz;
+      if (rsq >= cutsq[itype][jtype]) continue;
+      const double r = sqrt(rsq);
+      const double alpha = d0[itype][jtype] - r;
+      const tagint ti = tag[i], tj = tag[j];
+      if (ti - tj != 1 && tj - ti != 1)
+        error->one(FLERR, "beads {} and {} overlap but are not neighbours in the chain: beads passed through "
+                   "each other (time step too large for this load?)", ti, tj);
+      const int left = ti < tj ? i : j;
+      const double k = kcoeff[itype][jtype];
+      double fmag, energy = 0.0;
+      if (bilinear) {
+        const double b = beta[itype][jtype];
+        const double ku = k / (1.0 - b);
+        const double am = MAX(amax[left], alpha);
+        const double d = alpha - b * am;
+        fmag = d > 0.0 ? ku * d : 0.0;
+        if (eflag) energy = d > 0.0 ? 0.5 * ku * d * d : 0.0;
+        if (left < nlocal) {
+          amax[left] = am;
+          edis[left] = 0.5 * b * k * am * am;
+        }
+      } else {
+        const double sa = sqrt(alpha);
+        fmag = k * alpha * sa;
+        if (eflag) energy = 0.4 * k * alpha * alpha * sa;
+      }
+      if (left < nlocal) fc[left] = fmag;
+      const double fpair = fmag / r;    // repulsive: pushes i away from j
+      f[i][0] += delx * fpair;
+      f[i][1] += dely * fpair;
+      f[i][2] += delz * fpair;
+      if (newton_pair || j < nlocal) {
+        f[j][0] -= delx * fpair;
+        f[j][1] -= dely * fpair;
+        f[j][2] -= delz * fpair;
+      }
+      if (evflag) ev_tally(i, j, nlocal, newton_pair, energy, 0.0, fpair, delx, dely, delz);
+    }
+  }
+
+  // running peak of every owned contact: the largest sample, refined by the vertex of the parabola
+  // through the last three samples when the middle one is a local maximum
+  const bool refine = new_sample && std::isfinite(t_fprev2);
+  const double a = t_fprev2 - t_fprev, b = t_fc - t_fprev;    // sample times relative to the middle one
+  const double det = a * b * (b - a);
+  for (int i = 0; i < nlocal; i++) {
+    if (fc[i] > fpeak[i]) {
+      fpeak[i] = fc[i];
+      tpeak[i] = t;
+    }
+    if (!refine || !(fprev[i] > fc[i]) || !(fprev[i] >= fprev2[i]) || !(fprev[i] > 0.0)) continue;
+    const double fa = fprev2[i] - fprev[i], fb = fc[i] - fprev[i];
+    const double c1 = (fa * b * b - fb * a * a) / det;
+    const double c2 = (a * fb - b * fa) / det;
+    if (!(c2 < 0.0)) continue;
+    const double s = MIN(MAX(-c1 / (2.0 * c2), a), b);
+    const double val = fprev[i] + (c1 + c2 * s) * s;
+    if (val > fpeak[i]) {
+      fpeak[i] = val;
+      tpeak[i] = t_fprev + s;
+    }
+  }
+  if (vflag_fdotr) virial_fdotr_compute();
+}
+
+int PairChain::pack_forward_comm(int n, int *list_, double *buf, int, int *)
+{
+  for (int i = 0; i < n; i++) buf[i] = amax_comm[list_[i]];
+  return n;
+}
+
+void PairChain::unpack_forward_comm(int n, int first, double *buf)
+{
+  for (int i = 0; i < n; i++) amax_comm[first + i] = buf[i];
+}
+
+void *PairChain::extract(const char *str, int &dim)
+{
+  dim = 2;
+  if (strcmp(str, "k") == 0) return (void *) kcoeff;
+  if (strcmp(str, "d0") == 0) return (void *) d0;
+  if (bilinear && strcmp(str, "beta") == 0) return (void *) beta;
+  return nullptr;
+}

