@@ -49,7 +49,7 @@ def cmd_run(args) -> int:
     scene = resolve_scene(args.scene)
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
     out = args.out or f"runs/{name}-{args.backend}"
-    result = run_scene(scene, backend=args.backend, method=args.method, out=out, overwrite=args.overwrite)
+    result = run_scene(scene, backend=args.backend, method=args.method, out=out, overwrite=args.overwrite, np_=args.np)
     s = result.summary()
     print(f"scene      {scene.title or scene.source}")
     print(
@@ -80,6 +80,24 @@ def cmd_predict(args) -> int:
     return 0
 
 
+def cmd_render(args) -> int:
+    from granchain.templates import render_deck
+
+    deck = render_deck(resolve_scene(args.scene))
+    print(deck.data if args.data else deck.deck, end="")
+    return 0
+
+
+def cmd_doctor(args) -> int:
+    from granchain.lammps.doctor import doctor
+
+    ok = True
+    for name, good, text in doctor():
+        ok &= good
+        print(f"{'ok ' if good else 'BAD'} {name:16s} {text}")
+    return 0 if ok else 1
+
+
 def cmd_scenes(args) -> int:
     scenes = bundled_scenes()
     if args.name:
@@ -99,8 +117,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     r = sub.add_parser("run", help="run a scene and write a run directory")
     r.add_argument("scene", nargs="?", help=f"scene file or bundled scene name (default: {DEFAULT_SCENE})")
-    r.add_argument("--backend", default="reference", choices=["reference"], help="solver backend")
-    r.add_argument("--method", default=None, choices=["rk4", "verlet"], help="reference integrator (default rk4)")
+    r.add_argument("--backend", default="reference", choices=["reference", "lammps"], help="solver backend")
+    r.add_argument(
+        "--method",
+        default=None,
+        choices=["rk4", "verlet"],
+        help="integrator: reference rk4 (default) or verlet; LAMMPS is always verlet",
+    )
+    r.add_argument("--np", type=int, default=1, help="MPI ranks for the LAMMPS backend (default 1)")
     r.add_argument("--out", help="run directory (default runs/<scene>-<backend>)")
     r.add_argument("--overwrite", action="store_true", help="replace an existing run directory")
     r.set_defaults(func=cmd_run)
@@ -110,6 +134,14 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--json", action="store_true", help="JSON output")
     q.set_defaults(func=cmd_predict)
 
+    d = sub.add_parser("render", help="print the LAMMPS deck of a scene")
+    d.add_argument("scene", nargs="?", help="scene file or bundled scene name")
+    d.add_argument("--data", action="store_true", help="print the data file (chain.data) instead")
+    d.set_defaults(func=cmd_render)
+
+    doc = sub.add_parser("doctor", help="report LAMMPS, MPI and plugin status")
+    doc.set_defaults(func=cmd_doctor)
+
     s = sub.add_parser("scenes", help="list the bundled example scenes, or print one")
     s.add_argument("name", nargs="?", help="print this scene's TOML")
     s.set_defaults(func=cmd_scenes)
@@ -117,12 +149,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from granchain.lammps.build import PluginError
+    from granchain.lammps.runner import LammpsError
     from granchain.results import RunDirError
 
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (SceneError, RunDirError) as e:
+    except (SceneError, RunDirError, PluginError, LammpsError, ValueError) as e:
         print(f"granchain: error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -24,7 +24,7 @@ from granchain.results import ChainSolution, RunResult
 from granchain.templates import render_deck
 
 #: files of a LAMMPS work directory that are copied into the run directory
-OUTPUT_GLOBS = ("deck.lmp", "chain.data", "log.lammps", "*.dump", "energy.txt", "load_end.txt")
+OUTPUT_GLOBS = ("deck.lmp", "chain.data", "log.lammps", "*.dump", "energy.txt", "load_end.txt", "results.npz")
 
 
 class LammpsError(RuntimeError):
@@ -125,16 +125,12 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
 def read_solution(scene, work: Path, total_steps: int, wall_time: float) -> ChainSolution:
     n, d, m = scene.chain.beads, scene.diameter, scene.mass
     ld = scene.loading
-    peaks = read_dump(work / "peaks.dump")[-1]
-    order = np.argsort(peaks["id"])
-    fpeak = peaks["d_fpeak"][order][: n - 1]
-    tpeak = np.where(fpeak > 0.0, peaks["d_tpeak"][order][: n - 1], np.nan)
-    final = read_dump(work / "final.dump")[-1]
-    order = np.argsort(final["id"])
-    ids = final["id"][order]
-    u = final["x"][order] - (ids - 1) * d
-    v = final["vx"][order]
-    amax = final["d_amax"][order][: n - 1] if "d_amax" in final else np.zeros(n - 1)
+    res = np.load(work / "results.npz")  # gathered by atom ID by the worker
+    fpeak = res["fpeak"][: n - 1]
+    tpeak = np.where(fpeak > 0.0, res["tpeak"][: n - 1], np.nan)
+    u = res["x"] - np.arange(n) * d
+    v = res["vx"]
+    amax = res["amax"][: n - 1] if "amax" in res else np.zeros(n - 1)
 
     e = np.loadtxt(work / "energy.txt", comments="#", ndmin=2)
     et, ke, pe, ed, x1 = (e[:, k] for k in range(5))
