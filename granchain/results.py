@@ -27,6 +27,17 @@ import numpy as np
 
 from granchain.postprocess.observables import measure_observables
 
+#: A contact counts as reached by the wave when its peak force exceeds this fraction of the largest
+#: peak in the chain. Below it a "peak" is round-off: LAMMPS places bead i at x = (i-1) D, and the
+#: difference of two such positions misses D by an ulp, a spurious overlap of ~1e-18 m.
+REACHED_FRACTION = 1e-9
+
+
+def unreached_as_nan(peak_force: np.ndarray, time_of_peak: np.ndarray) -> np.ndarray:
+    """time_of_peak with nan where the contact was not reached (see REACHED_FRACTION)."""
+    floor = REACHED_FRACTION * float(np.max(peak_force, initial=0.0))
+    return np.where(peak_force > floor, time_of_peak, np.nan)
+
 
 @dataclass
 class ChainSolution:

@@ -86,13 +86,13 @@ def plugin_dir() -> Path:
 
 
 def compiler() -> str:
-    cxx = os.environ.get("CXX") or shutil.which("g++") or shutil.which("c++") or shutil.which("clang++")
+    cxx = next((c for c in (os.environ.get("CXX"), "g++", "c++", "clang++") if c and shutil.which(c)), None)
     if not cxx:
         raise PluginError(
             "no C++ compiler found to build the granchain LAMMPS plugin: install g++ "
             "(Debian/Ubuntu: apt-get install g++) or set CXX"
         )
-    return cxx
+    return shutil.which(cxx)
 
 
 def build_plugin(force: bool = False) -> Path:

