@@ -224,9 +224,13 @@ def test_lammps_error_is_an_exception_with_the_deck_line(tmp_path):
 
 
 def test_missing_plugin_is_reported(tmp_path, monkeypatch):
+    # a LAMMPS process that cannot find the plugin: empty plugin path, an empty cache, and a compiler
+    # that fails, so granchain's lammps.plugins entry point cannot build one either
     empty = tmp_path / "empty"
     empty.mkdir()
-    monkeypatch.setattr("granchain.lammps.runner.plugin_env", lambda: {**os.environ, "LAMMPS_PLUGIN_PATH": str(empty)})
+    env = {**os.environ, "LAMMPS_PLUGIN_PATH": str(empty), "GRANCHAIN_CACHE": str(empty), "CXX": "false"}
+    monkeypatch.setattr("granchain.lammps.runner.plugin_env", lambda: env)
+    monkeypatch.setattr("granchain.lammps.runner.build_plugin", lambda: None)
     deck = render_deck(make_scene())
     with pytest.raises(LammpsError, match="did not load the granchain plugin.*granchain doctor"):
         run_deck(deck.deck, deck.data, work_dir=tmp_path / "w")
