@@ -72,6 +72,7 @@ class Outputs:
     snapshots: tuple[float, ...] = ()  # times of force/velocity profiles along the chain
     window: tuple[int, int] | None = None  # contacts used for leading peak and wave speed
     history_interval: float | None = None  # s between history samples (default: every step)
+    dump_interval: float | None = None  # s between whole-chain LAMMPS dump frames (default: none)
 
 
 @dataclass(frozen=True)
@@ -456,8 +457,18 @@ def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
     )
     if interval is not None and interval < run.timestep:
         raise s.fail("history_interval", interval, f"at least the time step {run.timestep:g} s")
-    s.finish(("peak_force", "histories", "snapshots", "window", "history_interval"))
-    return Outputs(peak_force=peak, histories=histories, snapshots=snapshots, window=window, history_interval=interval)
+    dump = s.number("dump_interval", required=False, low=0.0, what="s between whole-chain dump frames (LAMMPS)")
+    if dump is not None and dump < run.timestep:
+        raise s.fail("dump_interval", dump, f"at least the time step {run.timestep:g} s")
+    s.finish(("peak_force", "histories", "snapshots", "window", "history_interval", "dump_interval"))
+    return Outputs(
+        peak_force=peak,
+        histories=histories,
+        snapshots=snapshots,
+        window=window,
+        history_interval=interval,
+        dump_interval=dump,
+    )
 
 
 # ------------------------------------------------------------------------------- writing
@@ -501,6 +512,8 @@ def scene_to_dict(scene: Scene) -> dict:
         out["window"] = list(o.window)
     if o.history_interval is not None:
         out["history_interval"] = o.history_interval
+    if o.dump_interval is not None:
+        out["dump_interval"] = o.dump_interval
     d["outputs"] = out
     return d
 

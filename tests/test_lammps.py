@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from granchain.lammps import build
-from granchain.lammps.runner import LammpsError, read_dump, run_deck, run_lammps
+from granchain.lammps.runner import LammpsError, run_deck, run_lammps
+from granchain.postprocess.dumps import read_dump
 from granchain.reference.solver import ChainProblem, solve_chain
 from granchain.templates import render_deck
 from granchain.workflows.run import run_reference
@@ -53,10 +54,9 @@ def test_hertz_matches_builtin_granular(tmp_path):
     )
     _, w2 = run_deck(builtin, deck.data, work_dir=tmp_path / "builtin")
     a, b = read_dump(w1 / "histories.dump"), read_dump(w2 / "histories.dump")
-    assert len(a) == len(b) == 5001
-    xa = np.array([f["x"] for f in a]) - np.array([0, 4, 9, 19]) * sc.diameter
-    xb = np.array([f["x"] for f in b]) - np.array([0, 4, 9, 19]) * sc.diameter
-    va, vb = np.array([f["vx"] for f in a]), np.array([f["vx"] for f in b])
+    assert len(a.step) == len(b.step) == 5001
+    xa, xb = a.columns["v_ux"], b.columns["v_ux"]
+    va, vb = a.columns["v_vel"], b.columns["v_vel"]
     print(f"trajectory difference: displacement {rel(xa, xb):.1e}, velocity {rel(va, vb):.1e}")
     assert rel(xa, xb) < 1e-10 and rel(va, vb) < 1e-10
     ra, rb = np.load(w1 / "results.npz"), np.load(w2 / "results.npz")
@@ -133,15 +133,15 @@ def test_mpi_two_ranks_equals_serial(law, tmp_path):
     # record which rank owns each bead at the start and the end (test only)
     text = deck.deck.replace(
         "fix             integrate all nve",
-        "fix             integrate all nve\nwrite_dump all custom owner_start.dump id proc",
+        "fix             integrate all nve\nwrite_dump all custom owner_start.dump id x y z proc",
     )
-    text += "write_dump all custom owner_end.dump id proc\n"
+    text += "write_dump all custom owner_end.dump id x y z proc\n"
     serial, w1 = run_deck(text, deck.data, 1, tmp_path / "np1")
     par, w2 = run_deck(text, deck.data, 2, tmp_path / "np2")
     assert par["ranks"] == 2
-    s0, s1 = read_dump(w2 / "owner_start.dump")[0], read_dump(w2 / "owner_end.dump")[0]
-    own0 = dict(zip(s0["id"], s0["proc"], strict=True))
-    own1 = dict(zip(s1["id"], s1["proc"], strict=True))
+    s0, s1 = read_dump(w2 / "owner_start.dump", columns=("proc",)), read_dump(w2 / "owner_end.dump", columns=("proc",))
+    own0 = dict(zip(s0.ids, s0.columns["proc"][0], strict=True))
+    own1 = dict(zip(s1.ids, s1.columns["proc"][0], strict=True))
     moved = [i for i in own0 if own0[i] != own1[i]]
     assert set(own0.values()) == {0, 1} and moved, "beads must cross the sub-domain boundary"
     a, b = np.load(w1 / "results.npz"), np.load(w2 / "results.npz")
@@ -208,8 +208,13 @@ def test_rendered_deck_runs_with_plain_lmp(tmp_path):
     # the environment's own `lmp` command needs nothing set: granchain's lammps.plugins entry point
     venv_lmp = Path(sys.executable).parent / "lmp"
     (tmp_path / "energy.txt").unlink()
-    r = subprocess.run([str(venv_lmp), "-in", "deck.lmp", "-screen", "none"], cwd=tmp_path, capture_output=True,
-                       text=True, env={k: v for k, v in os.environ.items() if k != "LAMMPS_PLUGIN_PATH"})
+    r = subprocess.run(
+        [str(venv_lmp), "-in", "deck.lmp", "-screen", "none"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        env={k: v for k, v in os.environ.items() if k != "LAMMPS_PLUGIN_PATH"},
+    )
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     assert np.allclose(np.loadtxt(tmp_path / "energy.txt", ndmin=2)[-1, 1], ref.kinetic[-1], rtol=1e-12)
 

@@ -20,6 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from granchain.lammps.build import build_plugin, mpich_file, plugin_env
+from granchain.postprocess.dumps import read_dump
+from granchain.reference.solver import step_plan, step_times
 from granchain.results import ChainSolution, RunResult, unreached_as_nan
 from granchain.templates import render_deck
 
@@ -34,40 +36,6 @@ class LammpsError(RuntimeError):
         super().__init__(message)
         self.lammps_message = lammps_message
         self.deck_line = deck_line
-
-
-def read_dump(path: Path) -> list[dict]:
-    """Frames of a LAMMPS text dump: {'timestep', 'time' (if written), column name -> array}."""
-    frames: list[dict] = []
-    with open(path) as fh:
-        lines = iter(fh.read().splitlines())
-    frame: dict = {}
-    for line in lines:
-        if line.startswith("ITEM: TIMESTEP"):
-            frame = {"timestep": int(next(lines))}
-            frames.append(frame)
-        elif line.startswith("ITEM: TIME"):
-            t = float(next(lines))
-            frame = {"time": t}
-            frames.append(frame)
-        elif line.startswith("ITEM: NUMBER OF ATOMS"):
-            frame["natoms"] = int(next(lines))
-        elif line.startswith("ITEM: BOX BOUNDS"):
-            for _ in range(3):
-                next(lines)
-        elif line.startswith("ITEM: ATOMS"):
-            cols = line.split()[2:]
-            rows = np.array([next(lines).split() for _ in range(frame["natoms"])], dtype=float).reshape(-1, len(cols))
-            for k, c in enumerate(cols):
-                frame[c] = rows[:, k]
-    # 'ITEM: TIME' comes before 'ITEM: TIMESTEP' in LAMMPS dumps: merge the pairs
-    merged: list[dict] = []
-    for f in frames:
-        if merged and "time" in merged[-1] and "timestep" not in merged[-1] and "timestep" in f and "time" not in f:
-            merged[-1].update(f)
-        else:
-            merged.append(f)
-    return merged
 
 
 def _deck_line(message: str) -> str | None:
@@ -151,22 +119,23 @@ def read_solution(scene, work: Path, total_steps: int, wall_time: float) -> Chai
     else:
         work_done = np.full(et.shape, 0.5 * m * ld.velocity**2)
 
+    plan = step_plan(
+        scene.run.end_time, scene.run.timestep, ld.duration if ld.is_force else 0.0, scene.outputs.snapshots
+    )
+    times = step_times(plan, scene.run.timestep)
     hist = tuple(i - 1 for i in scene.outputs.histories)
     h_t = np.zeros(0)
     h_f = h_v = np.zeros((0, len(hist)))
     if hist:
-        frames = read_dump(work / "histories.dump")
-        h_t = np.array([f["time"] for f in frames])
-        h_f = np.array([f["d_fc"][np.argsort(f["id"])] for f in frames])
-        h_v = np.array([f["vx"][np.argsort(f["id"])] for f in frames])
+        dd = read_dump(work / "histories.dump", times)
+        h_t, h_f, h_v = dd.time, dd.columns["d_fc"], dd.columns["v_vel"]
     snaps = scene.outputs.snapshots
     s_u, s_v, s_f = [], [], []
     for k in range(len(snaps)):
-        f = read_dump(work / f"snapshot_{k}.dump")[-1]
-        o = np.argsort(f["id"])
-        s_u.append(f["x"][o] - (f["id"][o] - 1) * d)
-        s_v.append(f["vx"][o])
-        s_f.append(f["d_fc"][o][: n - 1])
+        dd = read_dump(work / f"snapshot_{k}.dump", times)
+        s_u.append(dd.columns["v_ux"][-1])
+        s_v.append(dd.columns["v_vel"][-1])
+        s_f.append(dd.columns["d_fc"][-1][: n - 1])
     return ChainSolution(
         method="verlet",
         timestep=scene.run.timestep,
@@ -209,4 +178,4 @@ def cleanup(work: Path) -> None:
     shutil.rmtree(work, ignore_errors=True)
 
 
-__all__ = ["LammpsError", "run_lammps", "read_dump", "output_files", "cleanup"]
+__all__ = ["LammpsError", "run_lammps", "run_deck", "output_files", "cleanup"]

@@ -101,6 +101,15 @@ def step_plan(end_time: float, dt: float, load_duration: float = 0.0, snapshots=
     return plan
 
 
+def step_times(plan: list[Segment], dt: float) -> np.ndarray:
+    """Time after every step of a plan, index = step number (0 = start): maps dump steps to times."""
+    times = [0.0]
+    for g in plan:
+        times.extend(g.start + (j + 1) * dt for j in range(g.steps - 1))
+        times.append(g.end)
+    return np.asarray(times)
+
+
 def _hermite_max(t0, t1, a0, a1, d0, d1):
     """Maximum over [t0, t1] of the cubic Hermite interpolant of alpha, where d0 > 0 >= d1.
 

@@ -49,6 +49,13 @@ def history_stride(scene) -> int:
     return max(1, round(scene.outputs.history_interval / scene.run.timestep))
 
 
+def dump_stride(scene) -> int:
+    """Steps between whole-chain dump frames (0: no whole-chain dump)."""
+    if scene.outputs.dump_interval is None:
+        return 0
+    return max(1, round(scene.outputs.dump_interval / scene.run.timestep))
+
+
 def render_data(scene) -> str:
     n, d = scene.chain.beads, scene.diameter
     w = 2.0 * d  # periodic y/z sides wider than cutoff + skin, so no bead sees its own image
@@ -109,6 +116,8 @@ def render_deck(scene) -> Deck:
         "energy_every": max(1, total // 200),
         "thermo_every": max(1, total // 20),
         "histories": list(scene.outputs.histories),
+        "snapshots": list(scene.outputs.snapshots),
+        "dump_stride": dump_stride(scene),
         "history_stride": history_stride(scene),
         "segments": segments,
     }
