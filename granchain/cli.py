@@ -80,6 +80,45 @@ def cmd_predict(args) -> int:
     return 0
 
 
+def cmd_compare(args) -> int:
+    from granchain.postprocess.compare import format_table
+    from granchain.workflows.compare import compare_scene
+
+    scene = resolve_scene(args.scene)
+    name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
+    out = args.out or f"runs/{name}-compare"
+    rows, lam, ref = compare_scene(
+        scene, rtol=args.rtol, out=out, overwrite=args.overwrite, method=args.method, np_=args.np
+    )
+    print(f"scene      {scene.title or scene.source}")
+    print(
+        f"lammps     verlet, dt = {scene.run.timestep:g} s, {lam.solution.wall_time:.3g} s; "
+        f"reference {args.method}, {ref.solution.wall_time:.3g} s; rtol = {args.rtol:g}"
+    )
+    print(format_table(rows))
+    bad = [r.quantity for r in rows if not r.ok]
+    print(f"compare directory: {out}")
+    if bad:
+        print(
+            f"granchain: {len(bad)} quantities differ by more than rtol = {args.rtol:g}: {', '.join(bad)}",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+def cmd_plot(args) -> int:
+    from granchain.postprocess.plots import plot_run
+
+    try:
+        for p in plot_run(args.run_dir, log=not args.linear):
+            print(p)
+    except FileNotFoundError as e:
+        print(f"granchain: error: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
 def cmd_render(args) -> int:
     from granchain.templates import render_deck
 
@@ -133,6 +172,20 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("scene", nargs="?", help="scene file or bundled scene name")
     q.add_argument("--json", action="store_true", help="JSON output")
     q.set_defaults(func=cmd_predict)
+
+    c = sub.add_parser("compare", help="run LAMMPS and the reference on a scene and compare them")
+    c.add_argument("scene", nargs="?", help="scene file or bundled scene name")
+    c.add_argument("--rtol", type=float, default=1e-3, help="tolerance between the two solvers (default 1e-3)")
+    c.add_argument("--method", default="rk4", choices=["rk4", "verlet"], help="reference integrator")
+    c.add_argument("--np", type=int, default=1, help="MPI ranks for LAMMPS")
+    c.add_argument("--out", help="output directory (default runs/<scene>-compare)")
+    c.add_argument("--overwrite", action="store_true", help="replace an existing output directory")
+    c.set_defaults(func=cmd_compare)
+
+    pl = sub.add_parser("plot", help="make the plots of a finished run directory")
+    pl.add_argument("run_dir", help="a run directory written by granchain run")
+    pl.add_argument("--linear", action="store_true", help="linear axes for the peak-force plot")
+    pl.set_defaults(func=cmd_plot)
 
     d = sub.add_parser("render", help="print the LAMMPS deck of a scene")
     d.add_argument("scene", nargs="?", help="scene file or bundled scene name")

@@ -32,11 +32,14 @@ def run_scene(
     out: str | Path | None = None,
     overwrite: bool = False,
     np_: int = 1,
+    keep_files: bool = False,
 ) -> RunResult:
     """Run a scene on a backend; if out is given, write the run directory (checked before the run).
 
     reference: method rk4 (default) or verlet. lammps: velocity Verlet with granchain's pair
     styles, np_ MPI ranks; the run directory also gets the deck, data file, log and dumps.
+    keep_files (lammps): keep LAMMPS's work directory and list its files in result.extra["_files"]
+    and ["_work"], for a caller that writes the run directory itself and then removes "_work".
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend = {backend!r} is not known; choose one of {', '.join(BACKENDS)}")
@@ -52,6 +55,10 @@ def run_scene(
     from granchain.lammps.runner import cleanup, output_files, run_lammps
 
     result, work = run_lammps(scene, np_=np_)
+    if keep_files:  # the caller writes the run directory later and removes the work directory
+        result.extra["_files"] = output_files(work)
+        result.extra["_work"] = work
+        return result
     try:
         if out is not None:
             write_run_dir(result, out, overwrite=overwrite, extra_files=output_files(work))

@@ -1,0 +1,85 @@
+"""Response regimes: single solitary wave vs wave train (Sec. II B), and the two force-decay regimes
+of elastoplastic chains (exponential, then inverse power law; Sec. III A)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: A pulse counts when it rises at least this fraction of the leading pulse above the dip before it.
+PULSE_FRACTION = 0.1
+
+
+def count_pulses(force: np.ndarray, fraction: float = PULSE_FRACTION) -> int:
+    """Distinct pulses in a contact-force history.
+
+    A pulse rises at least `fraction` of the largest force above the lowest value since the previous
+    pulse, and then falls at least as much below its own top (or the record ends on it). A wave
+    train shows several; a single solitary wave one. The constant-force plateau behind the front of
+    a long load is not a pulse: it neither rises nor falls.
+    """
+    f = np.asarray(force, dtype=float)
+    if f.size == 0 or f.max() <= 0:
+        return 0
+    threshold = fraction * f.max()
+    pulses, rising = 0, False
+    low = high = f[0]
+    for x in f:
+        if not rising:
+            low = min(low, x)
+            if x - low >= threshold:
+                rising, high = True, x
+        else:
+            high = max(high, x)
+            if high - x >= threshold:
+                pulses, rising, low = pulses + 1, False, x
+    return pulses + int(rising)
+
+
+def classify_wave(force: np.ndarray, fraction: float = PULSE_FRACTION) -> str:
+    """'single solitary wave' or 'wave train' from a contact's force history (0: 'no wave')."""
+    n = count_pulses(force, fraction)
+    return "no wave" if n == 0 else "single solitary wave" if n == 1 else "wave train"
+
+
+@dataclass(frozen=True)
+class DecayFit:
+    """Peak force vs contact index i (1-based): F = F_1 exp(-lambda (i-1)) for i < transition,
+    F = a i^(-p) from the transition on."""
+
+    transition_contact: int
+    decay_per_contact: float  # lambda, exponential regime
+    power: float  # p, inverse regime
+    rms_log_residual: float
+
+
+def _line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
+    slope, icpt = np.polyfit(x, y, 1)
+    return float(slope), float(icpt), float(np.sum((y - (icpt + slope * x)) ** 2))
+
+
+def fit_decay(peak_force: np.ndarray, last_contact: int | None = None, min_points: int = 3) -> DecayFit:
+    """Split the peak-force curve into an exponential and an inverse power-law part.
+
+    The transition contact is the split that minimises the summed squared residuals of log F, with an
+    exponential (log F linear in i) before it and a power law (log F linear in log i) from it on.
+    """
+    f = np.asarray(peak_force, dtype=float)
+    n = len(f) if last_contact is None else last_contact
+    i = np.arange(1, n + 1, dtype=float)
+    y = np.log(f[:n])
+    best = None
+    for c in range(min_points + 1, n - min_points + 2):
+        s1, _, r1 = _line(i[: c - 1], y[: c - 1])
+        s2, _, r2 = _line(np.log(i[c - 1 :]), y[c - 1 :])
+        if best is None or r1 + r2 < best[0]:
+            best = (r1 + r2, c, -s1, -s2)
+    if best is None:
+        raise ValueError(f"need at least {2 * min_points} contacts to fit two decay regimes, got {n}")
+    return DecayFit(
+        transition_contact=best[1],
+        decay_per_contact=best[2],
+        power=best[3],
+        rms_log_residual=float(np.sqrt(best[0] / n)),
+    )
