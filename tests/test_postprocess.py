@@ -1,0 +1,172 @@
+"""Postprocess on real runs: MDAnalysis dumps vs in-run peaks, wave speed, regimes, compare, plots."""
+
+import numpy as np
+import pytest
+
+from granchain.cli import bundled_scenes, main, resolve_scene
+from granchain.lammps.runner import run_lammps
+from granchain.postprocess.compare import compare_runs, format_table
+from granchain.postprocess.dumps import peaks_from_samples, read_dump
+from granchain.postprocess.plots import plot_run
+from granchain.postprocess.regimes import classify_wave, count_pulses, fit_decay
+from granchain.reference.solver import step_plan, step_times
+from granchain.scene import parse_scene
+from granchain.workflows.compare import compare_scene
+from granchain.workflows.run import run_scene
+
+from .conftest import BILINEAR, make_scene
+
+SHORT = 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
+
+
+def test_dump_peaks_vs_in_run_peaks(tmp_path):
+    """Whole-chain dump every step, read through MDAnalysis, subsampled to coarser intervals."""
+    sc = make_scene(beads=40, loading=SHORT, end_time=2e-4, timestep=1e-8, outputs="dump_interval = 1e-8")
+    res, work = run_lammps(sc, work_dir=tmp_path)
+    times = step_times(step_plan(sc.run.end_time, sc.run.timestep, sc.loading.duration), sc.run.timestep)
+    dd = read_dump(work / "chain.dump", times)
+    force = dd.columns["d_fc"][:, :-1]  # contact i lives on bead i; bead N has none
+    inrun = res.solution.peak_force
+    lines, errs = [], {}
+    for stride in (1, 2, 5, 10, 20, 50):
+        t, f = dd.time[::stride], force[::stride]
+        raw, _ = peaks_from_samples(t, f, refine=False)
+        ref, _ = peaks_from_samples(t, f, refine=True)
+        e_raw = np.max(np.abs(raw - inrun) / inrun.max())
+        e_ref = np.max(np.abs(ref - inrun) / inrun.max())
+        errs[stride] = (e_raw, e_ref)
+        lines.append(f"dump every {stride:3d} steps: max error raw {e_raw:.1e}, refined {e_ref:.1e}")
+    print("\n".join(lines))
+    assert errs[1][1] < 1e-12  # every step + the same three-point rule: the in-run peaks exactly
+    for s in (5, 10, 20, 50):
+        assert errs[s][1] < errs[s][0]  # refinement helps
+    raws = [errs[s][0] for s in (2, 5, 10, 20, 50)]
+    assert all(b > a for a, b in zip(raws, raws[1:], strict=False))  # coarser dumps, larger error
+    # histories through MDAnalysis carry full precision: equal to the in-run reader's values
+    assert dd.columns["d_fc"].dtype == np.float64
+
+
+def test_wave_speeds_of_both_backends_agree():
+    sc = resolve_scene("default")
+    lam, _ = run_lammps(sc)
+    ref = run_scene(sc)
+    a, b = lam.observables()["wave_speed"], ref.observables()["wave_speed"]
+    assert a and b and abs(a - b) / b < 1e-3
+    assert lam.observables()["wave_speed_stderr"] < 1e-3 * a
+
+
+def test_count_pulses_on_synthetic_signals():
+    t = np.linspace(0, 1, 2001)
+    one = np.exp(-(((t - 0.3) / 0.02) ** 2))
+    assert count_pulses(one) == 1
+    train = sum(a * np.exp(-(((t - c) / 0.02) ** 2)) for a, c in ((1.0, 0.2), (0.7, 0.4), (0.5, 0.6)))
+    assert count_pulses(train) == 3
+    plateau = np.clip(t * 10, 0, 1) * 0.4 + one  # a wave followed by a constant force: one pulse
+    assert count_pulses(plateau) == 1
+    assert count_pulses(np.zeros(10)) == 0
+
+
+def test_regime_single_wave_vs_wave_train():
+    short = make_scene(
+        beads=80,
+        loading='kind = "impulse"\nimpulse = 0.4\nduration = 1e-6',
+        end_time=7e-4,
+        timestep=2e-8,
+        outputs="histories = [60]",
+    )
+    long_ = make_scene(
+        beads=80,
+        loading='kind = "impulse"\nimpulse = 0.4\nduration = 1e-4',
+        end_time=9e-4,
+        timestep=2e-8,
+        outputs="histories = [60]",
+    )
+    s = run_scene(short).solution
+    ll = run_scene(long_).solution
+    print(
+        f"pulses at contact 60: short {count_pulses(s.history_force[:, 0])}, long {count_pulses(ll.history_force[:, 0])}"
+    )
+    assert classify_wave(s.history_force[:, 0]) == "single solitary wave"
+    assert classify_wave(ll.history_force[:, 0]) == "wave train"
+
+
+def test_plastic_decay_exponential_then_inverse():
+    sc = resolve_scene("plastic-short-impulse")
+    sol = run_scene(sc).solution
+    fit = fit_decay(sol.peak_force, last_contact=45)
+    print(
+        f"beta = 0.8: transition at contact {fit.transition_contact}, exponential decay {fit.decay_per_contact:.3f} "
+        f"per contact, inverse power {fit.power:.3f} (Eq. 34: 0.9), rms log residual {fit.rms_log_residual:.3f}"
+    )
+    assert 2 < fit.transition_contact < 20
+    assert fit.decay_per_contact > 0 and fit.power > 0
+    assert fit.rms_log_residual < 0.1
+
+
+def test_compare_passes_on_default_scene_and_writes_tables(tmp_path, capsys):
+    assert main(["compare", "default", "--out", str(tmp_path / "c")]) == 0
+    out = capsys.readouterr().out
+    assert "leading_peak_force" in out and "FAIL" not in out
+    assert (tmp_path / "c" / "compare.csv").exists() and (tmp_path / "c" / "compare.md").exists()
+    assert (tmp_path / "c" / "lammps" / "deck.lmp").exists() and (tmp_path / "c" / "reference" / "peaks.csv").exists()
+
+
+def test_compare_fails_when_the_solvers_get_different_physics(tmp_path, monkeypatch, capsys):
+    sc = make_scene(beads=30, law="bilinear", contact_extra=BILINEAR, loading=SHORT, end_time=1e-4, timestep=1e-8)
+    other = make_scene(
+        beads=30,
+        law="bilinear",
+        contact_extra=BILINEAR.replace("0.8", "0.7"),
+        loading=SHORT,
+        end_time=1e-4,
+        timestep=1e-8,
+    )
+    rows, _, _ = compare_scene(sc, reference_scene=other)
+    bad = [r.quantity for r in rows if not r.ok]
+    assert "max_peak_force" in bad or "peak_force_contact_1" in bad or "dissipated_energy" in bad
+    assert "FAIL" in format_table(rows)
+
+    import granchain.workflows.compare as wc
+
+    real = wc.compare_scene
+    monkeypatch.setattr(wc, "compare_scene", lambda s, **kw: real(s, reference_scene=other, **kw))
+    p = tmp_path / "s.toml"
+    p.write_text(sc.source_text)
+    assert main(["compare", str(p), "--out", str(tmp_path / "c")]) == 1
+    captured = capsys.readouterr()
+    assert "FAIL" in captured.out and "differ by more than rtol" in captured.err
+    assert "**FAIL**" in (tmp_path / "c" / "compare.md").read_text()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(set(bundled_scenes()) - {"default"}))
+def test_compare_passes_on_bundled_scenes(name):
+    sc = parse_scene(bundled_scenes()[name], source=name)
+    rows, _, _ = compare_scene(sc)
+    print(format_table(rows))
+    assert all(r.ok for r in rows), [r.quantity for r in rows if not r.ok]
+
+
+def test_compare_runs_is_backend_agnostic():
+    # the one comparison function also compares two reference methods
+    sc = make_scene(end_time=1e-4, timestep=1e-8)
+    rows = compare_runs(run_scene(sc, method="verlet"), run_scene(sc, method="rk4"), rtol=1e-3)
+    assert all(r.ok for r in rows)
+
+
+def test_plots_for_a_run(tmp_path):
+    sc = make_scene(
+        beads=30,
+        law="bilinear",
+        contact_extra=BILINEAR,
+        loading=SHORT,
+        end_time=1e-4,
+        timestep=2e-8,
+        outputs="histories = [1, 2, 3]\nsnapshots = [5e-5]",
+    )
+    run_scene(sc, out=tmp_path / "r")
+    made = plot_run(tmp_path / "r")
+    assert {p.name for p in made} == {"peaks.png", "histories.png", "snapshots.png"}
+    for p in made:
+        assert p.stat().st_size > 10_000
+        assert p.with_name(p.stem + "_plot.csv").exists()
