@@ -84,7 +84,8 @@ def test_regime_single_wave_vs_wave_train():
     s = run_scene(short).solution
     ll = run_scene(long_).solution
     print(
-        f"pulses at contact 60: short {count_pulses(s.history_force[:, 0])}, long {count_pulses(ll.history_force[:, 0])}"
+        f"pulses at contact 60: short {count_pulses(s.history_force[:, 0])}, "
+        f"long {count_pulses(ll.history_force[:, 0])}"
     )
     assert classify_wave(s.history_force[:, 0]) == "single solitary wave"
     assert classify_wave(ll.history_force[:, 0]) == "wave train"
