@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from importlib import resources
 from pathlib import Path
@@ -43,10 +44,44 @@ def _fmt(v) -> str:
     return str(v)
 
 
+def planned(scene: Scene, rtol: float | None, method: str | None):
+    """The scene with its "auto" values (and, given rtol, its time step) chosen by the planner."""
+    if not scene.needs_plan and rtol is None:
+        return scene, None
+    from granchain.workflows.plan import plan_scene
+
+    plan = plan_scene(scene, rtol=rtol, method=method or "rk4")
+    for c in plan.choices:
+        print(f"plan: {c.name} = {c.value:.6g}  ({c.reason})")
+    return plan.scene, plan
+
+
+def cmd_plan(args) -> int:
+    from granchain.workflows.plan import plan_scene
+
+    scene = resolve_scene(args.scene)
+    plan = plan_scene(scene, rtol=args.rtol, method=args.method)
+    s = plan.scene
+    print(f"scene       {scene.title or scene.source}")
+    print(
+        f"method      {plan.method}, rtol {plan.rtol:g}; stability limit {plan.stable_timestep:.4g} s "
+        f"(omega_max = {plan.omega_max:.4g} rad/s)"
+    )
+    for c in plan.choices:
+        print(f"{c.name:11s} {c.value:.6g}  because {c.reason}")
+    kept = [("beads", s.chain.beads), ("end_time", s.run.end_time), ("timestep", s.run.timestep)]
+    for name, v in kept:
+        if name not in {c.name for c in plan.choices}:
+            print(f"{name:11s} {v:.6g}  as given in the scene")
+    steps = math.ceil(s.run.end_time / s.run.timestep)
+    print(f"cost        about {steps} steps x {s.chain.beads} beads = {steps * s.chain.beads:.3g} bead-steps")
+    return 0
+
+
 def cmd_run(args) -> int:
     from granchain.workflows.run import run_scene
 
-    scene = resolve_scene(args.scene)
+    scene, _ = planned(resolve_scene(args.scene), args.rtol, args.method)
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
     out = args.out or f"runs/{name}-{args.backend}"
     result = run_scene(scene, backend=args.backend, method=args.method, out=out, overwrite=args.overwrite, np_=args.np)
@@ -84,7 +119,7 @@ def cmd_compare(args) -> int:
     from granchain.postprocess.compare import format_table
     from granchain.workflows.compare import compare_scene
 
-    scene = resolve_scene(args.scene)
+    scene, _ = planned(resolve_scene(args.scene), None, args.method)
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
     out = args.out or f"runs/{name}-compare"
     rows, lam, ref = compare_scene(
@@ -122,7 +157,8 @@ def cmd_plot(args) -> int:
 def cmd_render(args) -> int:
     from granchain.templates import render_deck
 
-    deck = render_deck(resolve_scene(args.scene))
+    scene, _ = planned(resolve_scene(args.scene), None, "verlet")
+    deck = render_deck(scene)
     print(deck.data if args.data else deck.deck, end="")
     return 0
 
@@ -164,6 +200,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="integrator: reference rk4 (default) or verlet; LAMMPS is always verlet",
     )
     r.add_argument("--np", type=int, default=1, help="MPI ranks for the LAMMPS backend (default 1)")
+    r.add_argument(
+        "--rtol",
+        type=float,
+        default=None,
+        help="let the planner choose the cheapest time step for this relative tolerance",
+    )
     r.add_argument("--out", help="run directory (default runs/<scene>-<backend>)")
     r.add_argument("--overwrite", action="store_true", help="replace an existing run directory")
     r.set_defaults(func=cmd_run)
@@ -172,6 +214,12 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("scene", nargs="?", help="scene file or bundled scene name")
     q.add_argument("--json", action="store_true", help="JSON output")
     q.set_defaults(func=cmd_predict)
+
+    pp = sub.add_parser("plan", help="print the planner's choices (time step, beads, end time) with reasons")
+    pp.add_argument("scene", nargs="?", help="scene file or bundled scene name")
+    pp.add_argument("--rtol", type=float, default=None, help="relative tolerance (default 1e-3; sets the time step)")
+    pp.add_argument("--method", default="rk4", choices=["rk4", "verlet"], help="integrator the plan is for")
+    pp.set_defaults(func=cmd_plan)
 
     c = sub.add_parser("compare", help="run LAMMPS and the reference on a scene and compare them")
     c.add_argument("scene", nargs="?", help="scene file or bundled scene name")

@@ -25,9 +25,12 @@ class SceneError(ValueError):
     """A scene file is invalid. The message names the file, the key, the value and the fix."""
 
 
+AUTO = "auto"  # a value the planner chooses (granchain.workflows.plan)
+
+
 @dataclass(frozen=True)
 class Chain:
-    beads: int
+    beads: int | None  # None: "auto"
     radius: float  # m
     material: mat.Material
     material_name: str | None = None  # built-in name, or None for an inline [chain.material]
@@ -61,8 +64,9 @@ class Loading:
 
 @dataclass(frozen=True)
 class Run:
-    end_time: float  # s
-    timestep: float  # s
+    end_time: float | None  # s; None: "auto"
+    timestep: float | None  # s; None: "auto"
+    stop_after_contact: int | None = None  # stop once the leading wave has passed this contact
 
 
 @dataclass(frozen=True)
@@ -85,6 +89,11 @@ class Scene:
     title: str = ""
     source: str | None = None  # path of the scene file, if it came from one
     source_text: str | None = None  # the file's text, copied into run directories
+
+    @property
+    def needs_plan(self) -> bool:
+        """Some value is "auto": run granchain.workflows.plan.plan_scene first."""
+        return self.chain.beads is None or self.run.end_time is None or self.run.timestep is None
 
     # ---- derived quantities (definitions live in granchain.physics) ----
     @property
@@ -150,6 +159,8 @@ class Scene:
         """
         if self.outputs.window is not None:
             return self.outputs.window
+        if isinstance(self.outputs.peak_force, tuple) and len(self.outputs.peak_force) >= 2:
+            return (min(self.outputs.peak_force), max(self.outputs.peak_force))
         n = self.n_contacts
         a = max(1, n // 4)
         b = max(a + 1, (3 * n) // 4)
@@ -310,7 +321,10 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
 
 
 def _read_chain(s: _Section, source: str) -> Chain:
-    beads = s.integer("beads", low=2, what="number of beads; bead 1 is the loaded end")
+    if s.table.get("beads") == AUTO:
+        beads = s.raw("beads") and None  # the planner chooses (granchain plan)
+    else:
+        beads = s.integer("beads", low=2, what='number of beads; bead 1 is the loaded end, or "auto"')
     radius = s.number("radius", low=0.0, what="bead radius in m")
     m = s.required("material", f"a built-in name ({', '.join(mat.MATERIALS)}) or a [chain.material] table")
     if isinstance(m, str):
@@ -391,18 +405,34 @@ def _read_loading(s: _Section) -> Loading:
 
 
 def _read_run(s: _Section, loading: Loading) -> Run:
-    end = s.number("end_time", low=0.0, what="s")
-    dt = s.number("timestep", low=0.0, what="s")
-    if dt > end:
+    def num_or_auto(key: str) -> float | None:
+        if s.table.get(key) == AUTO:
+            s.raw(key)
+            return None
+        return s.number(key, low=0.0, what='s, or "auto" for the planner to choose')
+
+    end = num_or_auto("end_time")
+    dt = num_or_auto("timestep")
+    if dt is not None and end is not None and dt > end:
         raise s.fail("timestep", dt, f"a time step no longer than end_time = {end:g} s")
-    if loading.kind == "impulse" and end < loading.duration:
+    if end is not None and loading.kind == "impulse" and end < loading.duration:
         raise s.fail(
             "end_time",
             end,
             f"at least the impulse's duration {loading.duration:g} s, or the impulse is never fully delivered",
         )
-    s.finish(("end_time", "timestep"))
-    return Run(end_time=end, timestep=dt)
+    stop = None
+    if s.has("stop_after_contact"):
+        stop = s.raw("stop_after_contact")
+        if isinstance(stop, bool) or not isinstance(stop, int) or stop < 1:
+            raise s.fail(
+                "stop_after_contact",
+                stop,
+                "a contact number >= 1: the run stops once its force has "
+                "fallen below half its peak (the leading wave has passed it)",
+            )
+    s.finish(("end_time", "timestep", "stop_after_contact"))
+    return Run(end_time=end, timestep=dt, stop_after_contact=stop)
 
 
 def _int_list(s: _Section, key: str, low: int, high: int, what: str) -> tuple[int, ...]:
@@ -419,7 +449,7 @@ def _int_list(s: _Section, key: str, low: int, high: int, what: str) -> tuple[in
 
 
 def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
-    nc = chain.beads - 1
+    nc = chain.beads - 1 if chain.beads is not None else 10**9  # beads = "auto": the planner checks
     contacts = f"contact i is between bead i and i+1; this chain has contacts 1..{nc}"
     peak: bool | tuple[int, ...] = True
     if s.has("peak_force"):
@@ -434,10 +464,11 @@ def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
     snapshots: tuple[float, ...] = ()
     if s.has("snapshots"):
         v = s.raw("snapshots")
-        allowed = f"a list of times in s with 0 < t <= end_time = {run.end_time:g}"
+        end = run.end_time if run.end_time is not None else math.inf
+        allowed = f"a list of times in s with 0 < t <= end_time = {end:g}"
         if not isinstance(v, list) or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v):
             raise s.fail("snapshots", v, allowed)
-        if any(not (0.0 < x <= run.end_time) for x in v):
+        if any(not (0.0 < x <= end) for x in v):
             raise s.fail("snapshots", v, allowed)
         snapshots = tuple(sorted({float(x) for x in v}))
     window = None
@@ -455,11 +486,22 @@ def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
     interval = s.number(
         "history_interval", required=False, low=0.0, what="s between history samples, at least the time step"
     )
-    if interval is not None and interval < run.timestep:
+    if interval is not None and run.timestep is not None and interval < run.timestep:
         raise s.fail("history_interval", interval, f"at least the time step {run.timestep:g} s")
     dump = s.number("dump_interval", required=False, low=0.0, what="s between whole-chain dump frames (LAMMPS)")
-    if dump is not None and dump < run.timestep:
+    if dump is not None and run.timestep is not None and dump < run.timestep:
         raise s.fail("dump_interval", dump, f"at least the time step {run.timestep:g} s")
+    if run.stop_after_contact is not None:
+        if run.stop_after_contact > nc:
+            raise SceneError(
+                f"{s.file}: [run] stop_after_contact = {run.stop_after_contact} is invalid: "
+                f"a contact of this chain, 1..{nc}"
+            )
+        if snapshots:
+            raise SceneError(
+                f"{s.file}: [run] stop_after_contact = {run.stop_after_contact} and [outputs] snapshots "
+                "do not go together: snapshots need the run to reach their times; remove one"
+            )
     s.finish(("peak_force", "histories", "snapshots", "window", "history_interval", "dump_interval"))
     return Outputs(
         peak_force=peak,
@@ -488,7 +530,7 @@ def scene_to_dict(scene: Scene) -> dict:
     d: dict[str, Any] = {}
     if scene.title:
         d["title"] = scene.title
-    d["chain"] = {"beads": c.beads, "radius": c.radius, "material": material}
+    d["chain"] = {"beads": AUTO if c.beads is None else c.beads, "radius": c.radius, "material": material}
     contact: dict[str, Any] = {"law": scene.contact.law}
     if scene.contact.law == "bilinear":
         contact["unloading_coeff"] = scene.contact.unloading_coeff
@@ -501,7 +543,11 @@ def scene_to_dict(scene: Scene) -> dict:
         d["loading"] = {"kind": "impulse", "impulse": ld.impulse, "duration": ld.duration}
     else:
         d["loading"] = {"kind": "velocity", "velocity": ld.velocity}
-    d["run"] = {"end_time": scene.run.end_time, "timestep": scene.run.timestep}
+    d["run"] = {
+        k: AUTO if v is None else v for k, v in (("end_time", scene.run.end_time), ("timestep", scene.run.timestep))
+    }
+    if scene.run.stop_after_contact is not None:
+        d["run"]["stop_after_contact"] = scene.run.stop_after_contact
     o = scene.outputs
     out: dict[str, Any] = {"peak_force": o.peak_force if isinstance(o.peak_force, bool) else list(o.peak_force)}
     if o.histories:

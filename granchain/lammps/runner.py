@@ -86,7 +86,7 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
     t_build = time.perf_counter() - t_build
     deck = render_deck(scene)
     info, work = run_deck(deck.deck, deck.data, np_, work_dir)
-    sol = read_solution(scene, work, deck.total_steps, info["wall_time"])
+    sol = read_solution(scene, work, info.get("steps", deck.total_steps), info["wall_time"], info.get("time"))
     extra = {
         "lammps_version": info.get("lammps_version"),
         "ranks": info.get("ranks"),
@@ -97,7 +97,9 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
     return RunResult(scene=scene, backend="lammps", solution=sol, extra=extra), work
 
 
-def read_solution(scene, work: Path, total_steps: int, wall_time: float) -> ChainSolution:
+def read_solution(
+    scene, work: Path, total_steps: int, wall_time: float, end_time: float | None = None
+) -> ChainSolution:
     n, d, m = scene.chain.beads, scene.diameter, scene.mass
     ld = scene.loading
     res = np.load(work / "results.npz")  # gathered by atom ID by the worker
@@ -141,7 +143,7 @@ def read_solution(scene, work: Path, total_steps: int, wall_time: float) -> Chai
         timestep=scene.run.timestep,
         steps=total_steps,
         wall_time=wall_time,
-        end_time=scene.run.end_time,
+        end_time=scene.run.end_time if end_time is None else end_time,
         peak_overlap=np.zeros(n - 1),
         peak_force=fpeak,
         time_of_peak=tpeak,
@@ -161,7 +163,9 @@ def read_solution(scene, work: Path, total_steps: int, wall_time: float) -> Chai
         displacement=u,
         velocity=v,
         alpha_max=amax,
-        impulse_delivered=ld.amplitude * min(ld.duration, scene.run.end_time) if ld.is_force else 0.0,
+        impulse_delivered=ld.amplitude * min(ld.duration, scene.run.end_time if end_time is None else end_time)
+        if ld.is_force
+        else 0.0,
         momentum=float(np.sum(m * v)),
     )
 

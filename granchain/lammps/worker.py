@@ -74,7 +74,15 @@ def main(run_dir: str) -> int:
     if rank == 0:
         np.savez(d / "results.npz", **arrays)
     report(
-        {"ok": True, "wall_time": t2 - t1, "startup_time": t1 - t0, "ranks": nprocs, "lammps_version": lmp.version()}
+        {
+            "ok": True,
+            "wall_time": t2 - t1,
+            "startup_time": t1 - t0,
+            "ranks": nprocs,
+            "lammps_version": lmp.version(),
+            "time": lmp.get_thermo("time"),
+            "steps": int(lmp.get_thermo("step")),
+        }
     )
     lmp.close()
     return 0

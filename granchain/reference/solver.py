@@ -38,6 +38,7 @@ from granchain.physics.contact import BilinearLaw, HertzLaw
 from granchain.results import ChainSolution, unreached_as_nan
 
 METHODS = ("rk4", "verlet")
+STOP_CHECK_EVERY = 10  # steps between checks of a stop condition (the decks' fix halt uses the same)
 
 
 @dataclass(frozen=True)
@@ -140,12 +141,15 @@ def solve_chain(
     snapshots: tuple[float, ...] = (),
     energy_samples: int = 200,
     event_location: bool = True,
+    stop_after: int | None = None,
 ) -> ChainSolution:
     """Integrate the chain from rest (bead 1 possibly moving) to end_time.
 
     histories: 0-based contacts whose force (and the velocity of their left bead) is recorded
     every history_stride steps. snapshots: times (exact step boundaries) of whole-chain profiles.
     event_location (RK4 only): split steps where a contact's force law has a kink (see module doc).
+    stop_after: 0-based contact; stop (checked every STOP_CHECK_EVERY steps, as LAMMPS's fix halt
+    does) once its force has fallen below half its peak: the leading wave has passed it.
     """
     if method not in METHODS:
         raise ValueError(f"method = {method!r} is not known; choose one of {', '.join(METHODS)}")
@@ -393,6 +397,15 @@ def solve_chain(
         fpk[ix[better]] = val[better]
         tpk[ix[better]] = t_prev + sv[better]
 
+    def wave_passed(c: int) -> bool:
+        if method == "verlet":
+            now, peak = fc[c], fpk[c]
+        else:
+            now = float(law.force(u[c] - u[c + 1], alpha_hist[c]))
+            peak = float(law.force_at_peak_overlap(amax[c : c + 1])[0])
+        return peak > 0.0 and now < 0.5 * peak
+
+    stopped = False
     step = 0
     extra_steps = 0
     t = 0.0
@@ -441,6 +454,12 @@ def solve_chain(
                 record_history(t)
             if step % energy_every == 0 and t < seg_end:
                 energy_row(t)
+            if stop_after is not None and step % STOP_CHECK_EVERY == 0 and wave_passed(stop_after):
+                stopped = True
+                break
+        if stopped:
+            energy_row(t)
+            break
         # ---- breakpoint reached exactly
         t = seg_end
         if problem.amplitude and seg_end == problem.duration:
@@ -467,7 +486,7 @@ def solve_chain(
         steps=step,
         extra_steps=extra_steps,
         wall_time=time.perf_counter() - t_wall,
-        end_time=end_time,
+        end_time=t,
         peak_overlap=amax,
         peak_force=peak_force,
         time_of_peak=unreached_as_nan(peak_force, tmax),
@@ -487,7 +506,7 @@ def solve_chain(
         displacement=u,
         velocity=v,
         alpha_max=alpha_hist,
-        impulse_delivered=problem.amplitude * min(problem.duration, end_time),
+        impulse_delivered=problem.amplitude * min(problem.duration, t),
         momentum=float(np.dot(problem.mass, v)),
     )
     return sol

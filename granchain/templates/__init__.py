@@ -13,7 +13,7 @@ from importlib import resources
 
 import jinja2
 
-from granchain.reference.solver import step_plan
+from granchain.reference.solver import STOP_CHECK_EVERY, step_plan
 
 LAMMPS_FILES = ("deck.lmp", "chain.data")
 
@@ -120,6 +120,8 @@ def render_deck(scene) -> Deck:
         "dump_stride": dump_stride(scene),
         "history_stride": history_stride(scene),
         "segments": segments,
+        "stop_after": scene.run.stop_after_contact,
+        "stop_every": STOP_CHECK_EVERY,
     }
     deck = _env().get_template("chain.lmp.j2").render(**ctx)
     return Deck(deck=deck, data=render_data(scene), total_steps=total)

@@ -21,6 +21,7 @@ def run_reference(scene, method: str = "rk4") -> RunResult:
         histories=tuple(i - 1 for i in scene.outputs.histories),
         history_stride=history_stride(scene),
         snapshots=scene.outputs.snapshots,
+        stop_after=None if scene.run.stop_after_contact is None else scene.run.stop_after_contact - 1,
     )
     return RunResult(scene=scene, backend="reference", solution=sol)
 

@@ -1,0 +1,183 @@
+"""The planner: as short, as coarse and as small a run as the requested outputs allow.
+
+plan_scene(scene, rtol) fills every "auto" value (and, with a tolerance, the time step) and says why:
+
+time step   the stiffest contact the run will see sets the highest chain frequency
+            omega_max = 2 sqrt(k_t / m), with k_t the Hertz tangent stiffness 3/2 k^(2/3) F^(1/3) at
+            the largest expected force (from the paper's peak-force models) or k_u (bilinear).
+            The step is the largest one whose error model C (omega_max dt)^p stays below rtol
+            (p = 4 for RK4, 2 for Verlet; C calibrated on the reference solver, see CALIBRATION),
+            below the stability limit, and short enough to resolve the load (T/4).
+beads       just enough that nothing reflected from the far end reaches the last measured contact
+            before the end: N > (L + c_max t_end / D) / 2, with c_max the fastest wave expected.
+end time    long enough for the leading wave to pass the last measured contact L, at the slowest
+            leading speed expected, plus the load duration (long loads).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+from granchain.physics import models
+from granchain.physics.contact import hertz_tangent_stiffness
+from granchain.scene import Scene, SceneError, scene_from_dict, scene_to_dict
+
+#: Error model constants C in  rel. error of peak forces ~ C (omega_max dt)^p. Measured C (planned
+#: runs against runs at dt/16, bundled scenes): RK4 0.2-0.54 (elastic long loads), Verlet 0.1-0.6;
+#: 1.0 keeps a safety factor of about 2.
+CALIBRATION = {"rk4": (1.0, 4), "verlet": (1.0, 2)}
+#: omega_max dt limits of stability: velocity Verlet 2; classical RK4 2.83 on the imaginary axis.
+STABILITY = {"rk4": 2.8, "verlet": 2.0}
+
+
+@dataclass(frozen=True)
+class PlanChoice:
+    name: str
+    value: float
+    reason: str
+
+
+@dataclass
+class Plan:
+    scene: Scene  # concrete: no "auto" left
+    rtol: float
+    method: str
+    choices: list[PlanChoice] = field(default_factory=list)
+    omega_max: float = 0.0
+    stable_timestep: float = 0.0
+
+
+def expected_peak_force(scene) -> float:
+    """An upper estimate of the largest contact force of the run (N), from the paper's models."""
+    m, d, k = scene.mass, scene.diameter, scene.stiffness
+    ld = scene.loading
+    impulse = ld.impulse if ld.is_force else m * ld.velocity
+    if scene.contact.law == "hertz":
+        f = models.short_load_peak_force(impulse, m, scene.e_star, scene.r_star)  # Eq. 8
+        if ld.is_force:
+            fu = models.solitary_wave_peak_force(models.front_speed_upper(ld.amplitude, k, m, d), k, m, d)
+            f = min(f, max(fu, ld.amplitude))  # Fig. 3: the smaller of the two regimes' peaks
+        return 1.5 * f  # the first contacts peak above the formed wave (up to ~1.2x measured)
+    beta = scene.contact.unloading_coeff
+    f = models.linear_chain_impulse_response(impulse, k, m, beta)["F_p"]  # Eq. A2
+    if ld.is_force:
+        f = min(f, 2.0 * ld.amplitude)  # a long load cannot push a linear contact past 2 A
+    return 1.5 * f
+
+
+def max_stiffness(scene) -> float:
+    if scene.contact.law == "hertz":
+        return float(hertz_tangent_stiffness(expected_peak_force(scene), scene.stiffness))
+    return float(scene.unloading_stiffness)
+
+
+def wave_speeds(scene) -> tuple[float, float]:
+    """(slowest leading-wave speed, fastest wave speed) expected, m/s."""
+    m, d, k = scene.mass, scene.diameter, scene.stiffness
+    if scene.contact.law == "hertz":
+        fast = models.solitary_wave_speed(expected_peak_force(scene), k, m, d)
+        ld = scene.loading
+        if ld.is_force:
+            slow = min(
+                models.front_speed_lower(ld.amplitude, k, m, d),
+                models.solitary_wave_speed(expected_peak_force(scene) / 1.5, k, m, d),
+            )
+        else:
+            slow = models.solitary_wave_speed(expected_peak_force(scene) / 1.5, k, m, d)
+        # leading waves decay while they form; allow the slower speed of a wave at a tenth the force
+        return slow * 0.1 ** (1 / 6), fast
+    return d * math.sqrt(k / m), d * math.sqrt(scene.unloading_stiffness / m)
+
+
+def last_measured_contact(scene) -> int | None:
+    o = scene.outputs
+    cands = list(o.histories)
+    if isinstance(o.peak_force, tuple) and o.peak_force:
+        cands.append(max(o.peak_force))
+    if o.window is not None:
+        cands.append(o.window[1])
+    return max(cands) if cands else None
+
+
+def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4") -> Plan:
+    """Fill "auto" values (and the time step, when rtol is given) with the reasons."""
+    if rtol is not None and not (0 < rtol < 1):
+        raise ValueError(f"--rtol = {rtol!r}: a relative tolerance must be between 0 and 1")
+    rtol_eff = 1e-3 if rtol is None else rtol
+    choices: list[PlanChoice] = []
+    k_t = max_stiffness(scene)
+    omega = 2.0 * math.sqrt(k_t / scene.mass)
+    stable = STABILITY[method] / omega
+    dt = scene.run.timestep
+    if dt is None or rtol is not None:
+        c, p = CALIBRATION[method]
+        dt_acc = (rtol_eff / c) ** (1.0 / p) / omega
+        dt_new = min(dt_acc, 0.5 * stable)
+        why = (
+            f"{method}: error model {c:g} (omega_max dt)^{p} <= rtol {rtol_eff:g} with omega_max = "
+            f"{omega:.4g} rad/s (stiffest contact {k_t:.4g} N/m at the expected peak force"
+            f"{'' if scene.contact.law == 'bilinear' else f' {expected_peak_force(scene):.4g} N'}); "
+            f"stability limit {stable:.3g} s"
+        )
+        ld = scene.loading
+        if ld.is_force and ld.duration < dt_new * 4:
+            dt_new = ld.duration / 4
+            why += f"; resolves the load (T/4 = {dt_new:.3g} s)"
+        dt = dt_new
+        choices.append(PlanChoice("timestep", dt, why))
+    last = last_measured_contact(scene)
+    slow, fast = wave_speeds(scene)
+    end = scene.run.end_time
+    if end is None:
+        if last is None:
+            raise SceneError(
+                f'{scene.source}: end_time = "auto" needs the contacts you measure: give [outputs] '
+                "window, histories or a peak_force list"
+            )
+        ld = scene.loading
+        load = ld.duration if ld.is_force and ld.duration < 1e3 else 0.0
+        travel = last * scene.diameter / slow
+        end = travel + min(load, travel)
+        choices.append(
+            PlanChoice(
+                "end_time",
+                end,
+                f"the leading wave (no slower than {slow:.4g} m/s) passes contact "
+                f"{last} by {travel:.3g} s, after a load of {load:.3g} s",
+            )
+        )
+    beads = scene.chain.beads
+    if beads is None:
+        if last is None:
+            last = 1
+        n = math.ceil(1.1 * (last + fast * end / scene.diameter) / 2.0) + 5
+        n = max(n, last + 5)
+        choices.append(
+            PlanChoice(
+                "beads",
+                n,
+                f"a reflection from bead N (waves up to {fast:.4g} m/s) reaches contact "
+                f"{last} after t_end = {end:.3g} s: N > (L + c t_end / D) / 2, +10% and 5 beads",
+            )
+        )
+        beads = n
+    d = scene_to_dict(scene)
+    d["chain"]["beads"] = beads
+    d["run"] = {"end_time": end, "timestep": min(dt, end)}
+    stop = scene.run.stop_after_contact
+    if scene.run.end_time is None and stop is None and last is not None and not scene.outputs.snapshots:
+        stop = last
+        choices.append(
+            PlanChoice(
+                "stop_after_contact",
+                stop,
+                f"stop as soon as the leading wave has passed contact "
+                f"{stop} (its force below half its peak), both backends",
+            )
+        )
+    if stop is not None:
+        d["run"]["stop_after_contact"] = stop
+    planned = scene_from_dict(d, source=scene.source or "<scene>")
+    planned = replace(planned, source=scene.source, source_text=None)
+    return Plan(scene=planned, rtol=rtol_eff, method=method, choices=choices, omega_max=omega, stable_timestep=stable)
