@@ -154,6 +154,19 @@ def cmd_plot(args) -> int:
     return 0
 
 
+def cmd_accuracy(args) -> int:
+    from granchain.workflows.accuracy import accuracy_study, summary_text, write_study
+
+    scene, _ = planned(resolve_scene(args.scene), None, "rk4")
+    name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
+    out = args.out or f"runs/{name}-accuracy"
+    study = accuracy_study(scene, methods=tuple(args.methods.split(",")), levels=args.levels, repeats=args.repeats)
+    for p in write_study(study, out):
+        print(p)
+    print(summary_text(study))
+    return 0
+
+
 def cmd_render(args) -> int:
     from granchain.templates import render_deck
 
@@ -234,6 +247,14 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("run_dir", help="a run directory written by granchain run")
     pl.add_argument("--linear", action="store_true", help="linear axes for the peak-force plot")
     pl.set_defaults(func=cmd_plot)
+
+    acc = sub.add_parser("accuracy", help="work-precision study: error vs wall time per method")
+    acc.add_argument("scene", nargs="?", help="scene file or bundled scene name")
+    acc.add_argument("--methods", default="lammps,rk4,verlet,dop853", help="comma-separated methods")
+    acc.add_argument("--levels", type=int, default=7, help="time steps (tolerances) per method")
+    acc.add_argument("--repeats", type=int, default=3, help="repeats per run (median wall time)")
+    acc.add_argument("--out", help="output directory (default runs/<scene>-accuracy)")
+    acc.set_defaults(func=cmd_accuracy)
 
     d = sub.add_parser("render", help="print the LAMMPS deck of a scene")
     d.add_argument("scene", nargs="?", help="scene file or bundled scene name")

@@ -1,0 +1,241 @@
+"""granchain accuracy: a work-precision study of one scene — what each level of accuracy costs.
+
+Methods: LAMMPS velocity Verlet (granchain's pair styles), reference RK4, reference Verlet, and
+SciPy's DOP853 (Hertz only) as an outside yardstick. For each, a range of time steps (tolerances for
+DOP853); for each run, the error of the scene's observables (peak force of the measured contacts,
+wave speed) against a converged RK4 run, whose own error is estimated by Richardson extrapolation,
+and the wall time (median of repeats; LAMMPS's start-up and the plugin build are one-time costs,
+reported apart). Also the error of dump-derived peaks against the dump interval.
+"""
+
+from __future__ import annotations
+
+import csv
+import statistics
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from granchain.postprocess.observables import fit_wave_speed
+from granchain.reference.scipy_solver import solve_chain_dop853
+from granchain.reference.solver import ChainProblem, solve_chain
+from granchain.workflows.plan import plan_scene
+
+TARGETS = (1e-2, 1e-3, 1e-4)
+
+
+@dataclass
+class Point:
+    method: str
+    setting: float  # time step (s) or, for dop853, rtol
+    steps: int
+    wall_time: float  # s, median of repeats
+    error_peak: float  # max relative error of the measured contacts' peak forces
+    error_speed: float | None
+
+
+@dataclass
+class AccuracyStudy:
+    scene: object
+    contacts: np.ndarray  # 1-based measured contacts
+    reference_timestep: float
+    reference_error: float  # Richardson estimate of the converged run's own peak error
+    points: list[Point] = field(default_factory=list)
+    one_time: dict = field(default_factory=dict)
+    dump_errors: list[tuple[int, float, float]] = field(default_factory=list)  # (stride, raw, refined)
+
+    def orders(self) -> dict[str, float]:
+        out = {}
+        for m in sorted({p.method for p in self.points} - {"dop853"}):
+            pts = [p for p in self.points if p.method == m and p.error_peak > 10 * self.reference_error]
+            if len(pts) >= 2:
+                out[m] = float(np.polyfit(np.log([p.setting for p in pts]), np.log([p.error_peak for p in pts]), 1)[0])
+        return out
+
+    def cheapest(self, target: float) -> Point | None:
+        ok = [p for p in self.points if p.error_peak <= target]
+        return min(ok, key=lambda p: p.wall_time) if ok else None
+
+
+def _errors(scene, sol, ref, idx) -> tuple[float, float | None]:
+    e = float(np.max(np.abs(sol.peak_force[idx] - ref.peak_force[idx]) / ref.peak_force[idx]))
+    cs = idx + 1
+    a = fit_wave_speed(cs, sol.time_of_peak[idx], scene.diameter)
+    b = fit_wave_speed(cs, ref.time_of_peak[idx], scene.diameter)
+    es = abs(a[0] - b[0]) / b[0] if a and b else None
+    return e, es
+
+
+def accuracy_study(
+    scene, methods=("lammps", "rk4", "verlet", "dop853"), levels: int = 5, repeats: int = 3, dump_intervals: bool = True
+) -> AccuracyStudy:
+    if scene.needs_plan:
+        scene = plan_scene(scene).scene
+    a, b = scene.window
+    contacts = np.asarray(scene.peak_contacts if isinstance(scene.outputs.peak_force, tuple) else range(a, b + 1))
+    idx = contacts - 1
+    problem = ChainProblem.from_scene(scene)
+    end = scene.run.end_time
+    # time-step ladders: from half the stability limit down by factors of 2 (the planner's own
+    # choice lies inside; starting coarser shows where each method stops being usable)
+    ladders = {
+        m: 0.5 * plan_scene(scene, method="verlet" if m in ("lammps", "verlet") else "rk4").stable_timestep
+        for m in ("lammps", "rk4", "verlet")
+    }
+    finest = min(ladders["rk4"] / 2 ** (levels - 1), ladders["verlet"] / 2 ** (levels - 1)) / 4
+    ref = solve_chain(problem, end, finest, "rk4")
+    ref2 = solve_chain(problem, end, finest / 2, "rk4")
+    ref_err = float(np.max(np.abs(ref.peak_force[idx] - ref2.peak_force[idx]) / ref2.peak_force[idx])) / 15.0
+    study = AccuracyStudy(scene=scene, contacts=contacts, reference_timestep=finest / 2, reference_error=ref_err)
+    ref = ref2
+
+    for m in methods:
+        if m == "dop853":
+            if scene.contact.law != "hertz":
+                continue
+            settings = [10.0**-e for e in range(4, 4 + 2 * levels, 2)]
+        else:
+            settings = [ladders[m] / 2**j for j in range(levels)]
+        for s in settings:
+            walls, sol = [], None
+            for _ in range(repeats):
+                if m == "lammps":
+                    from granchain.lammps.runner import cleanup, run_lammps
+
+                    res, work = run_lammps(replace(scene, run=replace(scene.run, timestep=s)))
+                    cleanup(work)
+                    sol = res.solution
+                    study.one_time.setdefault("lammps_startup_time", res.extra.get("startup_time"))
+                    study.one_time.setdefault("plugin_build_time", res.extra.get("plugin_build_time"))
+                elif m == "dop853":
+                    sol = solve_chain_dop853(problem, end, s)
+                else:
+                    sol = solve_chain(problem, end, s, m)
+                walls.append(sol.wall_time)
+            e, es = _errors(scene, sol, ref, idx)
+            study.points.append(Point(m, s, sol.steps, statistics.median(walls), e, es))
+    if dump_intervals and "lammps" in methods:
+        study.dump_errors = _dump_interval_errors(scene, ladders["lammps"] / 4)
+    return study
+
+
+def _dump_interval_errors(scene, dt: float) -> list[tuple[int, float, float]]:
+    """Error of dump-derived peaks (raw and parabola-refined) against the in-run peaks, by interval."""
+    from granchain.lammps.runner import cleanup, run_lammps
+    from granchain.postprocess.dumps import peaks_from_samples, read_dump
+    from granchain.reference.solver import step_plan, step_times
+
+    sc = replace(
+        scene,
+        run=replace(scene.run, timestep=dt, stop_after_contact=None),
+        outputs=replace(scene.outputs, dump_interval=dt, snapshots=()),
+    )
+    res, work = run_lammps(sc)
+    try:
+        times = step_times(step_plan(sc.run.end_time, dt, sc.loading.duration if sc.loading.is_force else 0.0), dt)
+        dd = read_dump(work / "chain.dump", times)
+    finally:
+        cleanup(work)
+    force = dd.columns["d_fc"][:, :-1]
+    inrun = res.solution.peak_force
+    out = []
+    for stride in (1, 2, 5, 10, 20, 50):
+        raw, _ = peaks_from_samples(dd.time[::stride], force[::stride], refine=False)
+        fine, _ = peaks_from_samples(dd.time[::stride], force[::stride], refine=True)
+        out.append(
+            (
+                stride,
+                float(np.max(np.abs(raw - inrun)) / inrun.max()),
+                float(np.max(np.abs(fine - inrun)) / inrun.max()),
+            )
+        )
+    return out
+
+
+def write_study(study: AccuracyStudy, out: str | Path) -> list[Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "accuracy.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["method", "setting", "steps", "wall_time", "error_peak_force", "error_wave_speed"])
+        for p in study.points:
+            w.writerow(
+                [
+                    p.method,
+                    repr(p.setting),
+                    p.steps,
+                    repr(p.wall_time),
+                    repr(p.error_peak),
+                    "" if p.error_speed is None else repr(p.error_speed),
+                ]
+            )
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for m in dict.fromkeys(p.method for p in study.points):
+        pts = [p for p in study.points if p.method == m]
+        label = {
+            "lammps": "LAMMPS Verlet (chain pair styles)",
+            "rk4": "reference RK4",
+            "verlet": "reference Verlet",
+            "dop853": "SciPy DOP853 (rtol ladder)",
+        }[m]
+        ax.loglog([p.wall_time for p in pts], [max(p.error_peak, 1e-16) for p in pts], "o-", label=label)
+    ax.axhline(study.reference_error, color="gray", ls=":", label="converged reference's own error (Richardson)")
+    ax.set_xlabel("wall time (s, median of repeats; LAMMPS start-up excluded)")
+    ax.set_ylabel("max relative error of peak forces")
+    import textwrap
+
+    ax.set_title("\n".join(textwrap.wrap(f"Work-precision: {study.scene.title or study.scene.source}", 80)), fontsize=9)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out / "accuracy.png", dpi=120)
+    plt.close(fig)
+    (out / "accuracy.md").write_text(summary_text(study))
+    return [out / "accuracy.csv", out / "accuracy.png", out / "accuracy.md"]
+
+
+def summary_text(study: AccuracyStudy) -> str:
+    lines = [
+        f"# Work-precision: {study.scene.title or study.scene.source}",
+        "",
+        f"Measured contacts: {study.contacts.min()}..{study.contacts.max()} ({len(study.contacts)}); "
+        f"converged reference RK4 at dt = {study.reference_timestep:.3g} s, its own error "
+        f"(Richardson) {study.reference_error:.1e}.",
+        "",
+    ]
+    lines.append("Observed orders (fit of log error vs log dt, points above 10x the reference's error):")
+    for m, o in study.orders().items():
+        lines.append(f"- {m}: {o:.2f}")
+    lines += ["", "| target | cheapest method | setting | wall time (s) | error |", "|---|---|---|---|---|"]
+    for t in TARGETS:
+        p = study.cheapest(t)
+        if p is None:
+            lines.append(f"| {t:g} | none reached it | | | |")
+        else:
+            setting = f"rtol {p.setting:g}" if p.method == "dop853" else f"dt {p.setting:.3g} s"
+            lines.append(f"| {t:g} | {p.method} | {setting} | {p.wall_time:.3g} | {p.error_peak:.1e} |")
+    if study.one_time:
+        lines += [
+            "",
+            "One-time costs (not in the wall times): "
+            + ", ".join(f"{k} {v:.3g} s" for k, v in study.one_time.items() if v is not None),
+        ]
+    if study.dump_errors:
+        lines += [
+            "",
+            "Dump-derived peaks vs in-run peaks (LAMMPS), max relative error:",
+            "",
+            "| dump every (steps) | raw samples | parabola-refined |",
+            "|---|---|---|",
+        ]
+        lines += [f"| {s} | {r:.1e} | {f:.1e} |" for s, r, f in study.dump_errors]
+    return "\n".join(lines) + "\n"
+
+
+__all__ = ["accuracy_study", "write_study", "summary_text", "AccuracyStudy", "Point"]
