@@ -37,12 +37,15 @@ peak_force = true
 def builtin(deck: str, scene) -> str:
     m = scene.chain.material
     start, end = deck.index("# ---- contact law"), deck.index("neighbor")
-    return (deck[:start]
-            + "fix             contact all property/atom d_fc d_fprev d_fprev2 d_fpeak d_tpeak ghost yes\n"
-            + "pair_style      granular\n"
-            + f"pair_coeff      * * hertz/material {m.youngs_modulus!r} 0.0 {m.poisson_ratio!r} "
-            + "tangential linear_nohistory 0.0 0.0 damping viscoelastic\n"
-            + "comm_modify     vel yes\n\n" + deck[end:])
+    return (
+        deck[:start]
+        + "fix             contact all property/atom d_fc d_fprev d_fprev2 d_fpeak d_tpeak ghost yes\n"
+        + "pair_style      granular\n"
+        + f"pair_coeff      * * hertz/material {m.youngs_modulus!r} 0.0 {m.poisson_ratio!r} "
+        + "tangential linear_nohistory 0.0 0.0 damping viscoelastic\n"
+        + "comm_modify     vel yes\n\n"
+        + deck[end:]
+    )
 
 
 def loop_time(work: Path) -> float:
