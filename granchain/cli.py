@@ -84,7 +84,15 @@ def cmd_run(args) -> int:
     scene, _ = planned(resolve_scene(args.scene), args.rtol, args.method)
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
     out = args.out or f"runs/{name}-{args.backend}"
-    result = run_scene(scene, backend=args.backend, method=args.method, out=out, overwrite=args.overwrite, np_=args.np)
+    result = run_scene(
+        scene,
+        backend=args.backend,
+        method=args.method,
+        out=out,
+        overwrite=args.overwrite,
+        np_=args.np,
+        force=args.force,
+    )
     s = result.summary()
     print(f"scene      {scene.title or scene.source}")
     print(
@@ -213,6 +221,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="integrator: reference rk4 (default) or verlet; LAMMPS is always verlet",
     )
     r.add_argument("--np", type=int, default=1, help="MPI ranks for the LAMMPS backend (default 1)")
+    r.add_argument("--force", action="store_true", help="run even above the predicted stability limit")
     r.add_argument(
         "--rtol",
         type=float,
@@ -278,7 +287,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (SceneError, RunDirError, PluginError, LammpsError, ValueError) as e:
+    except (SceneError, RunDirError, PluginError, LammpsError, ValueError) as e:  # incl. UnstableTimestepError
         print(f"granchain: error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

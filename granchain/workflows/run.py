@@ -26,6 +26,25 @@ def run_reference(scene, method: str = "rk4") -> RunResult:
     return RunResult(scene=scene, backend="reference", solution=sol)
 
 
+class UnstableTimestepError(ValueError):
+    """The scene's time step is above the stability limit the planner predicts."""
+
+
+def check_timestep(scene, method: str) -> None:
+    """Refuse a time step above the predicted stability limit (before anything runs)."""
+    from granchain.workflows.plan import plan_scene
+
+    plan = plan_scene(scene, method=method)
+    if scene.run.timestep > plan.stable_timestep:
+        safe = plan_scene(scene, rtol=1e-3, method=method).scene.run.timestep
+        raise UnstableTimestepError(
+            f"{scene.source}: [run] timestep = {scene.run.timestep:g} s is above the stability limit "
+            f"{plan.stable_timestep:.3g} s that {method} has for the stiffest contact this run will see "
+            f"(omega_max = {plan.omega_max:.3g} rad/s); use timestep <= {plan.stable_timestep:.3g} s (the planner "
+            f'would choose {safe:.3g} s for rtol 1e-3, or set timestep = "auto"), or pass --force'
+        )
+
+
 def run_scene(
     scene,
     backend: str = "reference",
@@ -34,6 +53,7 @@ def run_scene(
     overwrite: bool = False,
     np_: int = 1,
     keep_files: bool = False,
+    force: bool = False,
 ) -> RunResult:
     """Run a scene on a backend; if out is given, write the run directory (checked before the run).
 
@@ -46,6 +66,8 @@ def run_scene(
         raise ValueError(f"backend = {backend!r} is not known; choose one of {', '.join(BACKENDS)}")
     if out is not None:
         check_output_dir(out, overwrite)
+    if not force:
+        check_timestep(scene, "rk4" if backend == "reference" and method in (None, "rk4") else "verlet")
     if backend == "reference":
         result = run_reference(scene, method or "rk4")
         if out is not None:
