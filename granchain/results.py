@@ -70,6 +70,8 @@ class ChainSolution:
     impulse_delivered: float = 0.0  # A * min(T, end_time)
     momentum: float = 0.0  # total momentum sum(m v) at the end
     extra_steps: int = 0  # steps beyond the grid's (RK4 event location: rejected and split steps)
+    wall_peak_force: float | None = None  # far-end wall contact (only with a wall)
+    wall_time_of_peak: float | None = None
 
     @property
     def energy_balance_error(self) -> np.ndarray:

@@ -79,6 +79,17 @@ class Outputs:
     dump_interval: float | None = None  # s between whole-chain LAMMPS dump frames (default: none)
 
 
+FAR_ENDS = ("free", "wall")
+
+
+@dataclass(frozen=True)
+class Effects:
+    """Effects beyond the paper's bare chain; each is absent unless the scene declares it."""
+
+    far_end: str = "free"  # "free" or "wall": a fixed rigid flat touching bead N at t = 0
+    dashpot: float = 0.0  # N s/m: gamma * relative velocity added while beads overlap ([damping])
+
+
 @dataclass(frozen=True)
 class Scene:
     chain: Chain
@@ -86,6 +97,7 @@ class Scene:
     loading: Loading
     run: Run
     outputs: Outputs = field(default_factory=Outputs)
+    effects: Effects = field(default_factory=Effects)
     title: str = ""
     source: str | None = None  # path of the scene file, if it came from one
     source_text: str | None = None  # the file's text, copied into run directories
@@ -134,6 +146,15 @@ class Scene:
         if self.contact.law == "hertz":
             return mat.hertz_stiffness(self.chain.material, self.chain.radius)
         return float(self.contact.plastic_stiffness)
+
+    @property
+    def wall_stiffness(self) -> float:
+        """Stiffness of bead N on the rigid flat: Hertz, R* = R and E* = E/(1-nu^2) (a rigid flat);
+        bilinear, k = 18.5 sigma_y R* with R* = R, i.e. twice the bead-bead k."""
+        if self.contact.law == "hertz":
+            m = self.chain.material
+            return 4.0 / 3.0 * m.youngs_modulus / (1.0 - m.poisson_ratio**2) * math.sqrt(self.chain.radius)
+        return 2.0 * self.stiffness
 
     @property
     def unloading_stiffness(self) -> float | None:
@@ -296,7 +317,7 @@ def _with_source(scene: Scene, source: str, text: str) -> Scene:
     return replace(scene, source=source, source_text=text)
 
 
-SECTIONS = ("title", "chain", "contact", "loading", "run", "outputs")
+SECTIONS = ("title", "chain", "contact", "loading", "run", "outputs", "boundary", "damping")
 
 
 def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
@@ -317,7 +338,32 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
     loading = _read_loading(_Section(source, "loading", data["loading"]))
     run = _read_run(_Section(source, "run", data["run"]), loading)
     outputs = _read_outputs(_Section(source, "outputs", data.get("outputs", {})), chain, run)
-    return Scene(chain=chain, contact=contact, loading=loading, run=run, outputs=outputs, title=title, source=source)
+    effects = _read_effects(source, data)
+    return Scene(
+        effects=effects,
+        chain=chain,
+        contact=contact,
+        loading=loading,
+        run=run,
+        outputs=outputs,
+        title=title,
+        source=source,
+    )
+
+
+def _read_effects(source: str, data: dict) -> Effects:
+    far_end, dashpot = "free", 0.0
+    if "boundary" in data:
+        b = _Section(source, "boundary", data["boundary"])
+        far_end = b.choice("far_end", FAR_ENDS)
+        b.finish(("far_end",))
+    if "damping" in data:
+        d = _Section(source, "damping", data["damping"])
+        dashpot = d.number(
+            "dashpot", low=0.0, what="gamma in N s/m: force gamma x relative velocity while beads overlap"
+        )
+        d.finish(("dashpot",))
+    return Effects(far_end=far_end, dashpot=dashpot)
 
 
 def _read_chain(s: _Section, source: str) -> Chain:
@@ -561,6 +607,10 @@ def scene_to_dict(scene: Scene) -> dict:
     if o.dump_interval is not None:
         out["dump_interval"] = o.dump_interval
     d["outputs"] = out
+    if scene.effects.far_end != "free":
+        d["boundary"] = {"far_end": scene.effects.far_end}
+    if scene.effects.dashpot:
+        d["damping"] = {"dashpot": scene.effects.dashpot}
     return d
 
 

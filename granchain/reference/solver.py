@@ -50,6 +50,8 @@ class ChainProblem:
     amplitude: float = 0.0  # A, N
     duration: float = 0.0  # T, s
     initial_velocity: float = 0.0  # m/s of bead 1 at t = 0
+    wall_stiffness: float | None = None  # far end: None free, else bead N on a rigid flat (same law)
+    dashpot: float = 0.0  # gamma, N s/m, while beads overlap; the total force never pulls
 
     @property
     def beads(self) -> int:
@@ -64,9 +66,11 @@ class ChainProblem:
         else:
             law = BilinearLaw(k=scene.stiffness, beta=scene.contact.unloading_coeff)
         ld = scene.loading
+        fx = scene.effects
+        extra = {"wall_stiffness": scene.wall_stiffness if fx.far_end == "wall" else None, "dashpot": fx.dashpot}
         if ld.is_force:
-            return cls(mass=mass, law=law, amplitude=ld.amplitude, duration=ld.duration)
-        return cls(mass=mass, law=law, initial_velocity=ld.velocity)
+            return cls(mass=mass, law=law, amplitude=ld.amplitude, duration=ld.duration, **extra)
+        return cls(mass=mass, law=law, initial_velocity=ld.velocity, **extra)
 
 
 @dataclass(frozen=True)
@@ -130,7 +134,40 @@ def _hermite_max(t0, t1, a0, a1, d0, d1):
     return p, t0 + s * h
 
 
-def solve_chain(
+def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method: str = "rk4", **kw) -> ChainSolution:
+    """Integrate the chain from rest (bead 1 possibly moving) to end_time.
+
+    A far-end wall is an immovable extra bead (zero inverse mass) whose contact with bead N has the
+    wall's stiffness; its peak is reported as wall_peak_force. Keywords: see _solve.
+    """
+    if problem.wall_stiffness is None:
+        return _solve(problem, end_time, timestep, method, **kw)
+    n = problem.beads
+    law = problem.law
+    k = np.append(np.broadcast_to(np.asarray(law.k, dtype=float), (n - 1,)), problem.wall_stiffness)
+    law_w = HertzLaw(k=k) if isinstance(law, HertzLaw) else BilinearLaw(k=k, beta=law.beta)
+    inner = ChainProblem(
+        mass=np.append(problem.mass, np.inf),
+        law=law_w,
+        amplitude=problem.amplitude,
+        duration=problem.duration,
+        initial_velocity=problem.initial_velocity,
+        dashpot=problem.dashpot,
+    )
+    sol = _solve(inner, end_time, timestep, method, **kw)
+    sol.wall_peak_force = float(sol.peak_force[-1])
+    sol.wall_time_of_peak = float(sol.time_of_peak[-1])
+    for name in ("peak_overlap", "peak_force", "time_of_peak", "alpha_max"):
+        setattr(sol, name, getattr(sol, name)[: n - 1])
+    sol.time_of_peak = unreached_as_nan(sol.peak_force, sol.time_of_peak)
+    sol.displacement, sol.velocity = sol.displacement[:n], sol.velocity[:n]
+    sol.snapshot_displacement = sol.snapshot_displacement[:, :n]
+    sol.snapshot_velocity = sol.snapshot_velocity[:, :n]
+    sol.snapshot_force = sol.snapshot_force[:, : n - 1]
+    return sol
+
+
+def _solve(
     problem: ChainProblem,
     end_time: float,
     timestep: float,
@@ -159,8 +196,11 @@ def solve_chain(
     n = problem.beads
     law = problem.law
     bilinear = isinstance(law, BilinearLaw)
-    inv_m = 1.0 / problem.mass
+    inv_m = 1.0 / problem.mass  # 0 for an immovable wall bead
     inv_m0 = float(inv_m[0])
+    mass_ke = np.where(np.isfinite(problem.mass), problem.mass, 0.0)  # the wall neither moves nor counts
+    gamma = float(problem.dashpot)
+    dash = {"power": 0.0, "energy": 0.0}  # dashpot power at the last force evaluation, energy so far
 
     u = np.zeros(n)
     v = np.zeros(n)
@@ -178,7 +218,9 @@ def solve_chain(
     else:
         kk = law.k
 
-    def accel(uu: np.ndarray, out: np.ndarray) -> np.ndarray:
+    fe = np.empty(n - 1) if gamma else None
+
+    def accel(uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None) -> np.ndarray:
         np.subtract(uu[:-1], uu[1:], out=alpha)
         np.maximum(alpha, 0.0, out=alpha)
         if bilinear:
@@ -193,6 +235,12 @@ def solve_chain(
             np.sqrt(alpha, out=tmp)
             np.multiply(alpha, tmp, out=fc)
             np.multiply(fc, kk, out=fc)
+        if gamma:
+            # dashpot gamma * d(alpha)/dt while the beads overlap; the total never pulls
+            rate = vv[:-1] - vv[1:]
+            fe[:] = fc
+            fc[:] = np.where(uu[:-1] - uu[1:] > 0.0, np.maximum(fc + gamma * rate, 0.0), fc)
+            dash["power"] = float(np.dot(fc - fe, rate))
         np.subtract(fp[:-1], fp[1:], out=out)
         out *= inv_m
         return out
@@ -218,7 +266,7 @@ def solve_chain(
     amax = np.zeros(n - 1)  # running peak overlap (refined)
     tmax = np.full(n - 1, np.nan)
     a_int = np.empty(n)
-    accel(u, a_int)
+    accel(u, a_int, v)
 
     def forces_now() -> np.ndarray:
         return law.force(u[:-1] - u[1:], alpha_hist)
@@ -231,9 +279,9 @@ def solve_chain(
 
     def energy_row(t: float):
         a_now = u[:-1] - u[1:]
-        ke = 0.5 * float(np.dot(problem.mass, v * v))
+        ke = 0.5 * float(np.dot(mass_ke, v * v))
         pe = float(np.sum(law.energy(a_now, alpha_hist)))
-        de = float(np.sum(law.dissipated(alpha_hist))) if bilinear else 0.0
+        de = (float(np.sum(law.dissipated(alpha_hist))) if bilinear else 0.0) + dash["energy"]
         e_rows.append((t, ke, pe, de, work_now(t)))
 
     def record_history(t: float):
@@ -253,27 +301,45 @@ def solve_chain(
         ut = np.empty(n)
         u_save, v_save = np.empty(n), np.empty(n)
 
+    vt = np.empty(n) if gamma else None  # stage velocities, needed only by the dashpot
+
     def rk4_step(h: float, a_ext: float) -> None:
         """Classical RK4 on (u, v); the external load is constant over the step."""
-        nonlocal u, v, ut  # updated in place (augmented assignment on arrays)
-        accel(u, k1v)
+        nonlocal u, v, ut, vt  # updated in place (augmented assignment on arrays)
+        power = 0.0
+        accel(u, k1v, v)
+        power += dash["power"]
         k1v[0] += a_ext
         np.multiply(v, 0.5 * h, out=ut)
         ut += u
-        accel(ut, k2v)
+        if gamma:
+            np.multiply(k1v, 0.5 * h, out=vt)
+            vt += v
+        accel(ut, k2v, vt)
+        power += 2.0 * dash["power"]
         k2v[0] += a_ext
         # stage 3 position: u + h/2 (v + h/2 k1v)
         np.multiply(k1v, 0.25 * h * h, out=ut)
         ut += u
         ut += 0.5 * h * v
-        accel(ut, k3v)
+        if gamma:
+            np.multiply(k2v, 0.5 * h, out=vt)
+            vt += v
+        accel(ut, k3v, vt)
+        power += 2.0 * dash["power"]
         k3v[0] += a_ext
         # stage 4 position: u + h (v + h/2 k2v)
         np.multiply(k2v, 0.5 * h * h, out=ut)
         ut += u
         ut += h * v
-        accel(ut, k4v)
+        if gamma:
+            np.multiply(k3v, h, out=vt)
+            vt += v
+        accel(ut, k4v, vt)
+        power += dash["power"]
         k4v[0] += a_ext
+        if gamma:
+            dash["energy"] += h / 6.0 * power  # dashpot energy with the method's own weights
         # u += h/6 (k1u + 2 k2u + 2 k3u + k4u) with k1u = v, k2u = v + h/2 k1v,
         # k3u = v + h/2 k2v, k4u = v + h k3v  =>  u += h v + h^2/6 (k1v + k2v + k3v)
         ut[:] = k1v
@@ -420,7 +486,8 @@ def solve_chain(
                 v += 0.5 * h * a_int
                 v[0] += 0.5 * h * a_ext
                 u += h * v
-                accel(u, a_int)
+                accel(u, a_int, v)  # the dashpot sees the half-step velocity, as in LAMMPS
+                dash["energy"] += h * dash["power"]
                 v += 0.5 * h * a_int
                 v[0] += 0.5 * h * a_ext
                 if bilinear:
@@ -432,12 +499,14 @@ def solve_chain(
                     h_sub = t_new - t
                     u_save[:] = u
                     v_save[:] = v
+                    e_save = dash["energy"]
                     rk4_step(h_sub, a_ext)
                     s_ev = first_kink_crossing(h_sub)
                     if s_ev is None:
                         break
                     u[:] = u_save
                     v[:] = v_save
+                    dash["energy"] = e_save
                     rk4_step(s_ev * h_sub, a_ext)
                     extra_steps += 2
                     track_peaks(t, t + s_ev * h_sub)
@@ -507,6 +576,6 @@ def solve_chain(
         velocity=v,
         alpha_max=alpha_hist,
         impulse_delivered=problem.amplitude * min(problem.duration, t),
-        momentum=float(np.dot(problem.mass, v)),
+        momentum=float(np.dot(mass_ke, v)),
     )
     return sol
