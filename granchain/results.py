@@ -119,6 +119,7 @@ class RunResult:
                 "energy_balance_error_relative": (float(np.max(np.abs(eb))) / work_scale) if work_scale else 0.0,
             },
             "scales": {"force_scale": sc.force_scale, "impulse_scale": sc.impulse_scale, "tau": sc.tau},
+            **({"wall_peak_force": s.wall_peak_force} if s.wall_peak_force is not None else {}),
             **({"extra": self.extra} if self.extra else {}),
         }
 

@@ -19,7 +19,7 @@
 using namespace LAMMPS_NS;
 
 PairChain::PairChain(LAMMPS *lmp, bool is_bilinear) :
-    Pair(lmp), bilinear(is_bilinear), kcoeff(nullptr), d0(nullptr), beta(nullptr),
+    Pair(lmp), bilinear(is_bilinear), gamma(0.0), kcoeff(nullptr), d0(nullptr), beta(nullptr),
     t_fc(-std::numeric_limits<double>::infinity()), t_fprev(-std::numeric_limits<double>::infinity()),
     t_fprev2(-std::numeric_limits<double>::infinity()), amax_comm(nullptr)
 {
@@ -53,9 +53,15 @@ void PairChain::allocate()
   memory->create(beta, n, n, "pair:beta");
 }
 
-void PairChain::settings(int narg, char **)
+void PairChain::settings(int narg, char **arg)
 {
-  if (narg != 0) error->all(FLERR, "Illegal pair_style {} command: it takes no arguments", force->pair_style);
+  gamma = 0.0;
+  if (narg == 2 && strcmp(arg[0], "dashpot") == 0) {
+    gamma = utils::numeric(FLERR, arg[1], false, lmp);
+    if (gamma < 0.0) error->all(FLERR, "pair_style {} dashpot gamma must be >= 0, got {}", force->pair_style, gamma);
+  } else if (narg != 0) {
+    error->all(FLERR, "Illegal pair_style {} command: expected no arguments or 'dashpot gamma'", force->pair_style);
+  }
 }
 
 void PairChain::coeff(int narg, char **arg)
@@ -105,6 +111,11 @@ void PairChain::init_style()
   if (!atom->tag_enable) error->all(FLERR, "pair {} requires atom IDs", force->pair_style);
   custom("fc");
   if (bilinear) custom("amax");
+  if (gamma > 0.0) {
+    custom("edash");
+    if (!comm->ghost_velocity)
+      error->all(FLERR, "pair {} dashpot needs 'comm_modify vel yes' (velocities of ghost beads)", force->pair_style);
+  }
   neighbor->add_request(this);
 }
 
@@ -134,6 +145,8 @@ void PairChain::compute(int eflag, int vflag)
   double *tpeak = custom("tpeak");
   double *amax = bilinear ? custom("amax") : nullptr;
   double *edis = bilinear ? custom("edis") : nullptr;
+  double *edash = gamma > 0.0 ? custom("edash") : nullptr;
+  double **v = atom->v;
 
   if (bilinear) {
     amax_comm = amax;
@@ -196,6 +209,14 @@ void PairChain::compute(int eflag, int vflag)
         const double sa = sqrt(alpha);
         fmag = k * alpha * sa;
         if (eflag) energy = 0.4 * k * alpha * alpha * sa;
+      }
+      if (gamma > 0.0) {
+        // dashpot on the overlap rate: d(alpha)/dt = -dr/dt; the total force never pulls
+        const double rate =
+            -(delx * (v[i][0] - v[j][0]) + dely * (v[i][1] - v[j][1]) + delz * (v[i][2] - v[j][2])) / r;
+        const double felastic = fmag;
+        fmag = MAX(felastic + gamma * rate, 0.0);
+        if (new_sample && left < nlocal) edash[left] += (fmag - felastic) * rate * update->dt;
       }
       if (left < nlocal) fc[left] = fmag;
       const double fpair = fmag / r;    // repulsive: pushes i away from j

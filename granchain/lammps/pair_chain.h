@@ -5,6 +5,9 @@
  *                                loading F = k alpha, un/reloading F = k_u (alpha - beta alpha_max) >= 0,
  *                                k_u = k / (1 - beta); stored E = k_u/2 (alpha - beta alpha_max)^2,
  *                                dissipated beta k alpha_max^2 / 2 (paper Eq. 20).
+ *   pair_style chain/<law> dashpot gamma   adds gamma * d(alpha)/dt while beads overlap (the total
+ *                                never pulls); needs 'comm_modify vel yes' and the vector d_edash,
+ *                                the dashpot energy of each contact so far
  *   pair_coeff I J k d0 [beta]   k in N/m^1.5 (hertz) or N/m (bilinear), d0 = contact distance
  *                                (R_I + R_J), beta the unloading coefficient (bilinear only).
  *
@@ -41,6 +44,7 @@ class PairChain : public Pair {
 
  protected:
   bool bilinear;
+  double gamma;    // dashpot coefficient, 0: none
   double **kcoeff, **d0, **beta;
   double t_fc, t_fprev, t_fprev2;    // times of the current and the two previous samples
   double *amax_comm;         // the d_amax vector during forward comm

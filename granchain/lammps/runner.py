@@ -105,8 +105,9 @@ def read_solution(
     res = np.load(work / "results.npz")  # gathered by atom ID by the worker
     fpeak = res["fpeak"][: n - 1]
     tpeak = unreached_as_nan(fpeak, res["tpeak"][: n - 1])
-    u = res["x"] - np.arange(n) * d
-    v = res["vx"]
+    u = res["x"][:n] - np.arange(n) * d
+    v = res["vx"][:n]
+    wall = scene.effects.far_end == "wall"  # bead N's contact is the wall's
     amax = res["amax"][: n - 1] if "amax" in res else np.zeros(n - 1)
 
     e = np.loadtxt(work / "energy.txt", comments="#", ndmin=2)
@@ -135,8 +136,8 @@ def read_solution(
     s_u, s_v, s_f = [], [], []
     for k in range(len(snaps)):
         dd = read_dump(work / f"snapshot_{k}.dump", times)
-        s_u.append(dd.columns["v_ux"][-1])
-        s_v.append(dd.columns["v_vel"][-1])
+        s_u.append(dd.columns["v_ux"][-1][:n])
+        s_v.append(dd.columns["v_vel"][-1][:n])
         s_f.append(dd.columns["d_fc"][-1][: n - 1])
     return ChainSolution(
         method="verlet",
@@ -167,6 +168,8 @@ def read_solution(
         if ld.is_force
         else 0.0,
         momentum=float(np.sum(m * v)),
+        wall_peak_force=float(res["fpeak"][n - 1]) if wall else None,
+        wall_time_of_peak=float(res["tpeak"][n - 1]) if wall else None,
     )
 
 

@@ -94,8 +94,10 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
         ("final_kinetic_energy", "J", float(sa.kinetic[-1]), float(sb.kinetic[-1])),
         ("momentum", "N s", sa.momentum, sb.momentum),
     ]
-    if scene.contact.law == "bilinear":
+    if scene.contact.law == "bilinear" or scene.effects.dashpot:
         rows.append(("dissipated_energy", "J", float(sa.dissipated[-1]), float(sb.dissipated[-1])))
+    if scene.effects.far_end == "wall":
+        rows.append(("wall_peak_force", "N", sa.wall_peak_force, sb.wall_peak_force))
     out = []
     for q, unit, va, vb in rows:
         mv, msrc = modl.get(q, (None, ""))

@@ -479,6 +479,10 @@ def _solve(
     adot_old = v[:-1] - v[1:]
     for seg_start, seg_end, nseg, last, f_ext in plan:
         a_ext = f_ext * inv_m0
+        if method == "verlet" and gamma and seg_start > 0.0:
+            # LAMMPS starts each run by recomputing forces with the full-step velocities; the dashpot
+            # is the only force that notices, and the reference does the same to stay step for step
+            accel(u, a_int, v)
         for j in range(nseg):
             h = timestep if j < nseg - 1 else last
             t_new = seg_start + (j + 1) * timestep if j < nseg - 1 else seg_end

@@ -58,12 +58,13 @@ def dump_stride(scene) -> int:
 
 def render_data(scene) -> str:
     n, d = scene.chain.beads, scene.diameter
+    wall = scene.effects.far_end == "wall"
     w = 2.0 * d  # periodic y/z sides wider than cutoff + skin, so no bead sees its own image
     lines = [
         "granchain chain: bead i at x = (i-1) D, in contact with zero force",
         "",
-        f"{n} atoms",
-        "1 atom types",
+        f"{n + wall} atoms",
+        f"{1 + wall} atom types",
         "",
         f"{_g(-d)} {_g(n * d)} xlo xhi",
         f"{_g(-w)} {_g(w)} ylo yhi",
@@ -74,6 +75,8 @@ def render_data(scene) -> str:
     ]
     rho = scene.chain.material.density
     lines += [f"{i + 1} 1 {_g(d)} {_g(rho)} {_g(i * d)} 0.0 0.0" for i in range(n)]
+    if wall:  # the rigid flat: an atom at bead N's surface, never integrated
+        lines.append(f"{n + 1} 2 {_g(d)} {_g(rho)} {_g((n - 1) * d + scene.chain.radius)} 0.0 0.0")
     return "\n".join(lines) + "\n"
 
 
@@ -99,7 +102,28 @@ def render_deck(scene) -> Deck:
         for g in plan
     ]
     total = sum(g.steps for g in plan)
+    fx = scene.effects
+    wall = fx.far_end == "wall"
+    bilinear = scene.contact.law == "bilinear"
+    peratom = ["d_fc", "d_fprev", "d_fprev2", "d_fpeak", "d_tpeak"]
+    peratom += ["d_amax", "d_edis"] if bilinear else []
+    peratom += ["d_edash"] if fx.dashpot else []
+    r = scene.chain.radius
+    coeffs = [{"i": 1, "j": 1, "k": scene.stiffness, "d0": scene.diameter}]
+    if wall:  # bead-wall contact: distance from the bead's centre to the flat, R
+        coeffs += [
+            {"i": 1, "j": 2, "k": scene.wall_stiffness, "d0": r},
+            {"i": 2, "j": 2, "k": scene.wall_stiffness, "d0": r},
+        ]
     ctx = {
+        "peratom": peratom,
+        "pair_args": f" dashpot {fx.dashpot!r}" if fx.dashpot else "",
+        "pair_coeffs": coeffs,
+        "dashpot": fx.dashpot,
+        "dissipation_terms": (["d_edis"] if bilinear else []) + (["d_edash"] if fx.dashpot else []),
+        "wall": wall,
+        "wall_k": scene.wall_stiffness if wall else 0.0,
+        "beads": scene.chain.beads,
         "title": scene.title or "(untitled scene)",
         "source": scene.source or "<scene>",
         "version": __version__,

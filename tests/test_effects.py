@@ -1,0 +1,81 @@
+"""Opt-in effects (far-end wall, dashpot): both backends agree, energy balances, and an undeclared
+effect leaves no trace in the deck or in the solver."""
+
+import numpy as np
+import pytest
+
+from granchain.lammps.runner import run_lammps
+from granchain.reference.solver import ChainProblem
+from granchain.templates import render_deck
+from granchain.workflows.run import run_reference
+
+from .conftest import BILINEAR, make_scene
+
+SHORT = 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
+EFFECTS = {
+    "wall": '[boundary]\nfar_end = "wall"\n',
+    "dashpot": "[damping]\ndashpot = 3.0\n",
+    "wall+dashpot": '[boundary]\nfar_end = "wall"\n[damping]\ndashpot = 3.0\n',
+}
+
+
+def rel(a, b):
+    return np.nanmax(np.abs(a - b)) / np.nanmax(np.abs(b))
+
+
+def scene(law, effect, **kw):
+    return make_scene(
+        beads=30,
+        law=law,
+        contact_extra=BILINEAR if law == "bilinear" else "",
+        loading=SHORT,
+        outputs="histories = [1, 29]\nsnapshots = [2e-4]\n" + EFFECTS[effect],
+        **kw,
+    )
+
+
+@pytest.mark.parametrize("effect", list(EFFECTS))
+@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+def test_effect_lammps_equals_reference_verlet(law, effect):
+    sc = scene(law, effect, end_time=4e-4, timestep=1e-8)
+    lam = run_lammps(sc)[0].solution
+    ref = run_reference(sc, "verlet").solution
+    print(
+        f"{law} {effect}: peaks {rel(lam.peak_force, ref.peak_force):.1e}, velocities "
+        f"{rel(lam.velocity, ref.velocity):.1e}, wall peak {lam.wall_peak_force}, dissipated {lam.dissipated[-1]:.4g} J"
+    )
+    assert rel(lam.peak_force, ref.peak_force) < 1e-9
+    assert rel(lam.velocity, ref.velocity) < 1e-8
+    assert rel(lam.snapshot_velocity, ref.snapshot_velocity) < 1e-8
+    if "wall" in effect:
+        assert lam.wall_peak_force == pytest.approx(ref.wall_peak_force, rel=1e-9)
+        assert lam.wall_peak_force > 0
+        assert ref.momentum < 0.1  # the wall took momentum: the chain rebounds
+    if "dashpot" in effect:
+        assert lam.dissipated[-1] == pytest.approx(ref.dissipated[-1], rel=1e-9)
+
+
+@pytest.mark.parametrize("effect", list(EFFECTS))
+@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+def test_effect_energy_balance_rk4(law, effect):
+    sc = scene(law, effect, end_time=4e-4, timestep=1e-8)
+    sol = run_reference(sc, "rk4").solution
+    err = np.max(np.abs(sol.energy_balance_error)) / sol.work[-1]
+    assert err < 1e-6
+    if "dashpot" in effect:
+        assert sol.dissipated[-1] > 0
+
+
+def test_undeclared_effects_leave_no_trace():
+    plain = make_scene()
+    deck = render_deck(plain).deck
+    for word in ("dashpot", "comm_modify", "wall", "type 2", "edash"):
+        assert word not in deck, word
+    assert "2 atom types" not in render_deck(plain).data
+    p = ChainProblem.from_scene(plain)
+    assert p.wall_stiffness is None and p.dashpot == 0.0
+    sol = run_reference(plain, "rk4").solution
+    assert sol.wall_peak_force is None and sol.dissipated[-1] == 0.0
+    walled = render_deck(scene("hertz", "wall", end_time=4e-4, timestep=1e-8))
+    assert "group           wall type 2" in walled.deck and "2 atom types" in walled.data
+    assert "dashpot" not in walled.deck
