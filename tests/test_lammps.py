@@ -221,7 +221,8 @@ def test_rendered_deck_runs_with_plain_lmp(tmp_path):
 
 def test_lammps_error_is_an_exception_with_the_deck_line(tmp_path):
     deck = render_deck(make_scene())
-    bad = deck.deck.replace("pair_coeff      * * ", "pair_coeff      * * -")
+    bad = deck.deck.replace("pair_coeff      1 1 ", "pair_coeff      1 1 -")
+    assert bad != deck.deck
     with pytest.raises(LammpsError) as e:
         run_deck(bad, deck.data, work_dir=tmp_path)
     assert "k must be > 0" in str(e.value)
