@@ -72,6 +72,9 @@ class ChainSolution:
     extra_steps: int = 0  # steps beyond the grid's (RK4 event location: rejected and split steps)
     wall_peak_force: float | None = None  # far-end wall contact (only with a wall)
     wall_time_of_peak: float | None = None
+    striker_peak_force: float | None = None  # striker-bead 1 contact (only with a striker)
+    striker_time_of_peak: float | None = None
+    striker_velocity: float | None = None  # at the end
 
     @property
     def energy_balance_error(self) -> np.ndarray:
@@ -120,6 +123,11 @@ class RunResult:
             },
             "scales": {"force_scale": sc.force_scale, "impulse_scale": sc.impulse_scale, "tau": sc.tau},
             **({"wall_peak_force": s.wall_peak_force} if s.wall_peak_force is not None else {}),
+            **(
+                {"striker_peak_force": s.striker_peak_force, "striker_velocity": s.striker_velocity}
+                if s.striker_peak_force is not None
+                else {}
+            ),
             **({"extra": self.extra} if self.extra else {}),
         }
 

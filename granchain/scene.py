@@ -18,7 +18,7 @@ from granchain.physics import materials as mat
 from granchain.physics.contact import unloading_stiffness
 
 LAWS = ("hertz", "bilinear")
-LOADING_KINDS = ("step", "impulse", "velocity")
+LOADING_KINDS = ("step", "impulse", "velocity", "striker")
 
 
 class SceneError(ValueError):
@@ -47,10 +47,14 @@ class Contact:
 class Loading:
     """f(t) = amplitude for 0 < t <= duration (Eq. 4), or an initial velocity of bead 1."""
 
-    kind: str  # "step" | "impulse" | "velocity"
+    kind: str  # "step" | "impulse" | "velocity" | "striker"
     amplitude: float = 0.0  # N (step, impulse)
     duration: float = 0.0  # s (step, impulse)
-    velocity: float = 0.0  # m/s (velocity)
+    velocity: float = 0.0  # m/s (velocity: of bead 1; striker: of the striker)
+    striker_radius: float = 0.0  # m (striker)
+    striker_material: mat.Material | None = None  # (striker) default: the chain's
+    striker_material_name: str | None = None
+    striker_mass: float | None = None  # kg (striker) default: from radius and density
 
     @property
     def impulse(self) -> float:
@@ -146,6 +150,37 @@ class Scene:
         if self.contact.law == "hertz":
             return mat.hertz_stiffness(self.chain.material, self.chain.radius)
         return float(self.contact.plastic_stiffness)
+
+    @property
+    def input_impulse(self) -> float:
+        """Momentum put into the chain: A T (force loads), m v (bead 1), M V (striker)."""
+        ld = self.loading
+        if ld.is_force:
+            return ld.impulse
+        return (self.striker_mass if ld.kind == "striker" else self.mass) * ld.velocity
+
+    @property
+    def input_energy(self) -> float | None:
+        """Kinetic energy put in by a velocity or striker load (None for force loads)."""
+        ld = self.loading
+        if ld.is_force:
+            return None
+        return 0.5 * (self.striker_mass if ld.kind == "striker" else self.mass) * ld.velocity**2
+
+    @property
+    def striker_mass(self) -> float:
+        ld = self.loading
+        return ld.striker_mass if ld.striker_mass is not None else mat.bead_mass(ld.striker_material, ld.striker_radius)
+
+    @property
+    def striker_stiffness(self) -> float:
+        """Striker on bead 1: Hertz with the pair's E* and R* (Johnson); bilinear: the chain's plastic k
+        scaled by R*_pair / R*_beads (k = 18.5 sigma_y R*)."""
+        ld, c = self.loading, self.chain
+        rs = mat.pair_effective_radius(ld.striker_radius, c.radius)
+        if self.contact.law == "hertz":
+            return 4.0 / 3.0 * mat.pair_effective_modulus(ld.striker_material, c.material) * math.sqrt(rs)
+        return self.stiffness * rs / self.r_star
 
     @property
     def wall_stiffness(self) -> float:
@@ -335,7 +370,7 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
 
     chain = _read_chain(_Section(source, "chain", data["chain"]), source)
     contact = _read_contact(_Section(source, "contact", data["contact"]), chain)
-    loading = _read_loading(_Section(source, "loading", data["loading"]))
+    loading = _read_loading(_Section(source, "loading", data["loading"]), chain, source)
     run = _read_run(_Section(source, "run", data["run"]), loading)
     outputs = _read_outputs(_Section(source, "outputs", data.get("outputs", {})), chain, run)
     effects = _read_effects(source, data)
@@ -366,19 +401,18 @@ def _read_effects(source: str, data: dict) -> Effects:
     return Effects(far_end=far_end, dashpot=dashpot)
 
 
-def _read_chain(s: _Section, source: str) -> Chain:
-    if s.table.get("beads") == AUTO:
-        beads = s.raw("beads") and None  # the planner chooses (granchain plan)
-    else:
-        beads = s.integer("beads", low=2, what='number of beads; bead 1 is the loaded end, or "auto"')
-    radius = s.number("radius", low=0.0, what="bead radius in m")
-    m = s.required("material", f"a built-in name ({', '.join(mat.MATERIALS)}) or a [chain.material] table")
+def _read_material(s: _Section, source: str, required: bool = True) -> tuple[mat.Material | None, str | None]:
+    """`material` of a section: a built-in name or an inline table."""
+    allowed = f"a built-in name ({', '.join(mat.MATERIALS)}) or a [{s.name}.material] table"
+    if not required and not s.has("material"):
+        return None, None
+    m = s.required("material", allowed)
     if isinstance(m, str):
         if m not in mat.MATERIALS:
-            raise s.fail("material", m, f"a built-in name ({', '.join(mat.MATERIALS)}) or a [chain.material] table")
-        material, name = mat.MATERIALS[m], m
-    elif isinstance(m, dict):
-        ms = _Section(source, "chain.material", m)
+            raise s.fail("material", m, allowed)
+        return mat.MATERIALS[m], m
+    if isinstance(m, dict):
+        ms = _Section(source, f"{s.name}.material", m)
         material = mat.Material(
             density=ms.number("density", low=0.0, what="kg/m^3"),
             youngs_modulus=ms.number("youngs_modulus", low=0.0, what="Pa"),
@@ -386,9 +420,17 @@ def _read_chain(s: _Section, source: str) -> Chain:
             yield_strength=ms.number("yield_strength", required=False, low=0.0, what="Pa"),
         )
         ms.finish(("density", "youngs_modulus", "poisson_ratio", "yield_strength"))
-        name = None
+        return material, None
+    raise s.fail("material", m, allowed)
+
+
+def _read_chain(s: _Section, source: str) -> Chain:
+    if s.table.get("beads") == AUTO:
+        beads = s.raw("beads") and None  # the planner chooses (granchain plan)
     else:
-        raise s.fail("material", m, f"a built-in name ({', '.join(mat.MATERIALS)}) or a [chain.material] table")
+        beads = s.integer("beads", low=2, what='number of beads; bead 1 is the loaded end, or "auto"')
+    radius = s.number("radius", low=0.0, what="bead radius in m")
+    material, name = _read_material(s, source)
     s.finish(("beads", "radius", "material"))
     return Chain(beads=beads, radius=radius, material=material, material_name=name)
 
@@ -427,7 +469,7 @@ def _read_contact(s: _Section, chain: Chain) -> Contact:
     return Contact(law=law, unloading_coeff=beta, plastic_stiffness=k)
 
 
-def _read_loading(s: _Section) -> Loading:
+def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
     kind = s.choice("kind", LOADING_KINDS)
     if kind == "step":
         s.forbid(("impulse", "velocity"), "a step load is given by amplitude (N) and duration (s)")
@@ -444,7 +486,32 @@ def _read_loading(s: _Section) -> Loading:
         t = s.number("duration", low=0.0, what="loading time T in s")
         s.finish(("kind", "impulse", "duration"))
         return Loading(kind=kind, amplitude=i / t, duration=t)
-    s.forbid(("amplitude", "duration", "impulse"), "a velocity load is given by velocity (m/s) of bead 1 at t = 0")
+    if kind == "striker":
+        s.forbid(
+            ("amplitude", "duration", "impulse"),
+            "a striker is given by velocity (m/s), radius (m), material and mass (kg, optional)",
+        )
+        v = s.number("velocity", low=0.0, what="the striker's velocity in m/s when it touches bead 1")
+        r = s.number("radius", required=False, default=chain.radius, low=0.0, what="the striker's radius in m")
+        material, name = _read_material(s, source, required=False)
+        if material is None:
+            material, name = chain.material, chain.material_name
+        m = s.number(
+            "mass", required=False, low=0.0, what="the striker's mass in kg (default: from radius and density)"
+        )
+        s.finish(("kind", "velocity", "radius", "material", "mass"))
+        return Loading(
+            kind=kind,
+            velocity=v,
+            striker_radius=r,
+            striker_material=material,
+            striker_material_name=name,
+            striker_mass=m,
+        )
+    s.forbid(
+        ("amplitude", "duration", "impulse", "radius", "material", "mass"),
+        "a velocity load is given by velocity (m/s) of bead 1 at t = 0",
+    )
     v = s.number("velocity", low=0.0, what="initial velocity of bead 1 in m/s, towards the chain")
     s.finish(("kind", "velocity"))
     return Loading(kind=kind, velocity=v)
@@ -587,6 +654,16 @@ def scene_to_dict(scene: Scene) -> dict:
         d["loading"] = {"kind": "step", "amplitude": ld.amplitude, "duration": ld.duration}
     elif ld.kind == "impulse":
         d["loading"] = {"kind": "impulse", "impulse": ld.impulse, "duration": ld.duration}
+    elif ld.kind == "striker":
+        st: dict[str, Any] = {"kind": "striker", "velocity": ld.velocity, "radius": ld.striker_radius}
+        st["material"] = ld.striker_material_name or {
+            "density": ld.striker_material.density,
+            "youngs_modulus": ld.striker_material.youngs_modulus,
+            "poisson_ratio": ld.striker_material.poisson_ratio,
+        }
+        if ld.striker_mass is not None:
+            st["mass"] = ld.striker_mass
+        d["loading"] = st
     else:
         d["loading"] = {"kind": "velocity", "velocity": ld.velocity}
     d["run"] = {

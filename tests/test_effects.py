@@ -79,3 +79,43 @@ def test_undeclared_effects_leave_no_trace():
     walled = render_deck(scene("hertz", "wall", end_time=4e-4, timestep=1e-8))
     assert "group           wall type 2" in walled.deck and "2 atom types" in walled.data
     assert "dashpot" not in walled.deck
+
+
+STRIKERS = {
+    "bead-like striker": 'kind = "striker"\nvelocity = 20.0',
+    "heavy striker": 'kind = "striker"\nvelocity = 20.0\nradius = 6e-3\nmass = 0.03',
+}
+
+
+@pytest.mark.parametrize("striker", list(STRIKERS))
+@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+def test_striker_both_backends(law, striker):
+    sc = make_scene(
+        beads=30,
+        law=law,
+        contact_extra=BILINEAR if law == "bilinear" else "",
+        loading=STRIKERS[striker],
+        end_time=4e-4,
+        timestep=1e-8,
+        outputs="histories = [1, 29]\nsnapshots = [2e-4]\n",
+    )
+    lam = run_lammps(sc)[0].solution
+    ref = run_reference(sc, "verlet").solution
+    print(
+        f"{law} {striker}: striker peak {lam.striker_peak_force:.6g} N, striker velocity after "
+        f"{lam.striker_velocity:.4g} m/s; peaks {rel(lam.peak_force, ref.peak_force):.1e}"
+    )
+    assert rel(lam.peak_force, ref.peak_force) < 1e-9 and rel(lam.velocity, ref.velocity) < 1e-8
+    assert rel(lam.history_force, ref.history_force) < 1e-8
+    assert lam.striker_peak_force == pytest.approx(ref.striker_peak_force, rel=1e-9)
+    assert lam.striker_velocity == pytest.approx(ref.striker_velocity, rel=1e-8, abs=1e-9)
+    # the striker's momentum M V went into the chain + striker: conserved to round-off (free far end)
+    assert lam.momentum == pytest.approx(sc.input_impulse, rel=1e-12)
+    rk4 = run_reference(sc, "rk4").solution
+    assert np.max(np.abs(rk4.energy_balance_error)) / rk4.work[-1] < 1e-6
+
+
+def test_no_striker_no_trace():
+    deck = render_deck(make_scene())
+    assert "striker" not in deck.deck and "1 atom types" in deck.data
+    assert ChainProblem.from_scene(make_scene()).striker_mass is None

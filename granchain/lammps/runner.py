@@ -23,7 +23,7 @@ from granchain.lammps.build import build_plugin, mpich_file, plugin_env
 from granchain.postprocess.dumps import read_dump
 from granchain.reference.solver import step_plan, step_times
 from granchain.results import ChainSolution, RunResult, unreached_as_nan
-from granchain.templates import render_deck
+from granchain.templates import atom_layout, render_deck
 
 #: files of a LAMMPS work directory that are copied into the run directory
 OUTPUT_GLOBS = ("deck.lmp", "chain.data", "log.lammps", "*.dump", "energy.txt", "load_end.txt", "results.npz")
@@ -103,12 +103,14 @@ def read_solution(
     n, d, m = scene.chain.beads, scene.diameter, scene.mass
     ld = scene.loading
     res = np.load(work / "results.npz")  # gathered by atom ID by the worker
-    fpeak = res["fpeak"][: n - 1]
-    tpeak = unreached_as_nan(fpeak, res["tpeak"][: n - 1])
-    u = res["x"][:n] - np.arange(n) * d
-    v = res["vx"][:n]
-    wall = scene.effects.far_end == "wall"  # bead N's contact is the wall's
-    amax = res["amax"][: n - 1] if "amax" in res else np.zeros(n - 1)
+    lay = atom_layout(scene)
+    o = lay["offset"]  # a striker is atom 1; bead i is atom i + o; contact i lives on atom i + o
+    fpeak = res["fpeak"][o : o + n - 1]
+    tpeak = unreached_as_nan(fpeak, res["tpeak"][o : o + n - 1])
+    u = res["x"][o : o + n] - np.arange(n) * d
+    v = res["vx"][o : o + n]
+    wall = lay["wall"]  # bead N's contact is the wall's
+    amax = res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1)
 
     e = np.loadtxt(work / "energy.txt", comments="#", ndmin=2)
     if e.shape[1] == 4:  # no dissipation column: an elastic law
@@ -120,7 +122,7 @@ def read_solution(
             x1_end = float(np.loadtxt(work / "load_end.txt", ndmin=1)[1])
             work_done = np.where(et > ld.duration, ld.amplitude * x1_end, work_done)
     else:
-        work_done = np.full(et.shape, 0.5 * m * ld.velocity**2)
+        work_done = np.full(et.shape, scene.input_energy)
 
     plan = step_plan(
         scene.run.end_time, scene.run.timestep, ld.duration if ld.is_force else 0.0, scene.outputs.snapshots
@@ -136,9 +138,9 @@ def read_solution(
     s_u, s_v, s_f = [], [], []
     for k in range(len(snaps)):
         dd = read_dump(work / f"snapshot_{k}.dump", times)
-        s_u.append(dd.columns["v_ux"][-1][:n])
-        s_v.append(dd.columns["v_vel"][-1][:n])
-        s_f.append(dd.columns["d_fc"][-1][: n - 1])
+        s_u.append(dd.columns["v_ux"][-1][o : o + n])
+        s_v.append(dd.columns["v_vel"][-1][o : o + n])
+        s_f.append(dd.columns["d_fc"][-1][o : o + n - 1])
     return ChainSolution(
         method="verlet",
         timestep=scene.run.timestep,
@@ -167,9 +169,12 @@ def read_solution(
         impulse_delivered=ld.amplitude * min(ld.duration, scene.run.end_time if end_time is None else end_time)
         if ld.is_force
         else 0.0,
-        momentum=float(np.sum(m * v)),
-        wall_peak_force=float(res["fpeak"][n - 1]) if wall else None,
-        wall_time_of_peak=float(res["tpeak"][n - 1]) if wall else None,
+        momentum=float(np.sum(m * v)) + (scene.striker_mass * float(res["vx"][0]) if o else 0.0),
+        wall_peak_force=float(res["fpeak"][o + n - 1]) if wall else None,
+        wall_time_of_peak=float(res["tpeak"][o + n - 1]) if wall else None,
+        striker_peak_force=float(res["fpeak"][0]) if o else None,
+        striker_time_of_peak=float(res["tpeak"][0]) if o else None,
+        striker_velocity=float(res["vx"][0]) if o else None,
     )
 
 

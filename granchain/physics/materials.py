@@ -67,3 +67,14 @@ def force_scale(m: Material, radius: float) -> float:
 def impulse_scale(m: Material, radius: float) -> float:
     """E* R*^2 tau: I~ = I / (E* R*^2 tau) (Eq. 6)."""
     return force_scale(m, radius) * time_scale(m, radius)
+
+
+def pair_effective_modulus(a: Material, b: Material) -> float:
+    """E* of two spheres of different materials: 1/E* = (1-nu_a^2)/E_a + (1-nu_b^2)/E_b (Johnson);
+    for identical spheres it is E/(2(1-nu^2)), the paper's E*."""
+    return 1.0 / ((1.0 - a.poisson_ratio**2) / a.youngs_modulus + (1.0 - b.poisson_ratio**2) / b.youngs_modulus)
+
+
+def pair_effective_radius(r1: float, r2: float) -> float:
+    """R* = R1 R2 / (R1 + R2); R/2 for identical spheres."""
+    return r1 * r2 / (r1 + r2)

@@ -22,17 +22,12 @@ class Prediction:
         return asdict(self)
 
 
-def _impulse(scene) -> float:
-    ld = scene.loading
-    return ld.impulse if ld.is_force else scene.mass * ld.velocity
-
-
 def predict(scene) -> list[Prediction]:
     """Predictions for this scene (SI), nondimensional forms where the paper gives them."""
     m, d, k = scene.mass, scene.diameter, scene.stiffness
     fs, isc = scene.force_scale, scene.impulse_scale
     ld = scene.loading
-    impulse = _impulse(scene)
+    impulse = scene.input_impulse
     out: list[Prediction] = [
         Prediction("tau", scene.tau, "s", "Eq. 7", "intrinsic time scale of the bead pair"),
         Prediction(

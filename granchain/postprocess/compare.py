@@ -49,7 +49,7 @@ def _model_rows(scene, ref_obs: dict) -> dict[str, tuple[float, str]]:
     out: dict[str, tuple[float, str]] = {}
     m, d, k = scene.mass, scene.diameter, scene.stiffness
     ld = scene.loading
-    impulse = ld.impulse if ld.is_force else m * ld.velocity
+    impulse = scene.input_impulse
     if scene.contact.law == "hertz":
         fp = models.short_load_peak_force(impulse, m, scene.e_star, scene.r_star)
         src = "Eq. 8"

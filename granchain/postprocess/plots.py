@@ -78,7 +78,7 @@ def model_curves(scene, contacts: np.ndarray) -> dict[str, np.ndarray]:
     """Model peak force vs contact that applies to the scene (for the peak plot)."""
     m, d, k = scene.mass, scene.diameter, scene.stiffness
     ld = scene.loading
-    impulse = ld.impulse if ld.is_force else m * ld.velocity
+    impulse = scene.input_impulse
     curves: dict[str, np.ndarray] = {}
     if scene.contact.law == "hertz":
         curves["Eq. 8 (short load)"] = np.full(

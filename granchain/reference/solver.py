@@ -51,6 +51,8 @@ class ChainProblem:
     duration: float = 0.0  # T, s
     initial_velocity: float = 0.0  # m/s of bead 1 at t = 0
     wall_stiffness: float | None = None  # far end: None free, else bead N on a rigid flat (same law)
+    striker_mass: float | None = None  # a striker before bead 1 (moving at initial_velocity), or None
+    striker_stiffness: float | None = None  # its contact with bead 1
     dashpot: float = 0.0  # gamma, N s/m, while beads overlap; the total force never pulls
 
     @property
@@ -68,6 +70,8 @@ class ChainProblem:
         ld = scene.loading
         fx = scene.effects
         extra = {"wall_stiffness": scene.wall_stiffness if fx.far_end == "wall" else None, "dashpot": fx.dashpot}
+        if ld.kind == "striker":
+            extra.update(striker_mass=scene.striker_mass, striker_stiffness=scene.striker_stiffness)
         if ld.is_force:
             return cls(mass=mass, law=law, amplitude=ld.amplitude, duration=ld.duration, **extra)
         return cls(mass=mass, law=law, initial_velocity=ld.velocity, **extra)
@@ -140,30 +144,45 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
     A far-end wall is an immovable extra bead (zero inverse mass) whose contact with bead N has the
     wall's stiffness; its peak is reported as wall_peak_force. Keywords: see _solve.
     """
-    if problem.wall_stiffness is None:
+    wall, striker = problem.wall_stiffness is not None, problem.striker_mass is not None
+    if not (wall or striker):
         return _solve(problem, end_time, timestep, method, **kw)
     n = problem.beads
     law = problem.law
-    k = np.append(np.broadcast_to(np.asarray(law.k, dtype=float), (n - 1,)), problem.wall_stiffness)
-    law_w = HertzLaw(k=k) if isinstance(law, HertzLaw) else BilinearLaw(k=k, beta=law.beta)
+    k = np.broadcast_to(np.asarray(law.k, dtype=float), (n - 1,))
+    mass = problem.mass
+    if striker:  # an extra bead in front, moving; its contact has the striker-bead stiffness
+        k, mass = np.concatenate(([problem.striker_stiffness], k)), np.concatenate(([problem.striker_mass], mass))
+    if wall:  # an immovable extra bead at the end (zero inverse mass)
+        k, mass = np.append(k, problem.wall_stiffness), np.append(mass, np.inf)
+    law_x = HertzLaw(k=k) if isinstance(law, HertzLaw) else BilinearLaw(k=k, beta=law.beta)
     inner = ChainProblem(
-        mass=np.append(problem.mass, np.inf),
-        law=law_w,
+        mass=mass,
+        law=law_x,
         amplitude=problem.amplitude,
         duration=problem.duration,
         initial_velocity=problem.initial_velocity,
         dashpot=problem.dashpot,
     )
+    s0 = 1 if striker else 0  # index of bead 1 inside
+    if "histories" in kw:
+        kw["histories"] = tuple(i + s0 for i in kw["histories"])
     sol = _solve(inner, end_time, timestep, method, **kw)
-    sol.wall_peak_force = float(sol.peak_force[-1])
-    sol.wall_time_of_peak = float(sol.time_of_peak[-1])
+    if wall:
+        sol.wall_peak_force = float(sol.peak_force[-1])
+        sol.wall_time_of_peak = float(sol.time_of_peak[-1])
+    if striker:
+        sol.striker_peak_force = float(sol.peak_force[0])
+        sol.striker_time_of_peak = float(sol.time_of_peak[0])
+        sol.striker_velocity = float(sol.velocity[0])
     for name in ("peak_overlap", "peak_force", "time_of_peak", "alpha_max"):
-        setattr(sol, name, getattr(sol, name)[: n - 1])
+        setattr(sol, name, getattr(sol, name)[s0 : s0 + n - 1])
     sol.time_of_peak = unreached_as_nan(sol.peak_force, sol.time_of_peak)
-    sol.displacement, sol.velocity = sol.displacement[:n], sol.velocity[:n]
-    sol.snapshot_displacement = sol.snapshot_displacement[:, :n]
-    sol.snapshot_velocity = sol.snapshot_velocity[:, :n]
-    sol.snapshot_force = sol.snapshot_force[:, : n - 1]
+    sol.history_contacts = tuple(i - s0 for i in sol.history_contacts)
+    sol.displacement, sol.velocity = sol.displacement[s0 : s0 + n], sol.velocity[s0 : s0 + n]
+    sol.snapshot_displacement = sol.snapshot_displacement[:, s0 : s0 + n]
+    sol.snapshot_velocity = sol.snapshot_velocity[:, s0 : s0 + n]
+    sol.snapshot_force = sol.snapshot_force[:, s0 : s0 + n - 1]
     return sol
 
 
@@ -269,7 +288,13 @@ def _solve(
     accel(u, a_int, v)
 
     def forces_now() -> np.ndarray:
-        return law.force(u[:-1] - u[1:], alpha_hist)
+        """Contact forces of the current state (what histories and snapshots record)."""
+        if method == "verlet":
+            return fc.copy()  # the last force evaluation, at this step's end: what LAMMPS dumps
+        f = law.force(u[:-1] - u[1:], alpha_hist)
+        if gamma:
+            f = np.where(u[:-1] - u[1:] > 0.0, np.maximum(f + gamma * (v[:-1] - v[1:]), 0.0), f)
+        return f
 
     def work_now(t: float) -> float:
         if problem.amplitude:

@@ -8,6 +8,7 @@ shortest text that reads back to the same double. StrictUndefined: a missing val
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from importlib import resources
 
@@ -56,27 +57,56 @@ def dump_stride(scene) -> int:
     return max(1, round(scene.outputs.dump_interval / scene.run.timestep))
 
 
+def atom_layout(scene) -> dict:
+    """Atom IDs and types: an optional striker first (ID 1), beads, an optional wall last.
+
+    Contact i (beads i and i+1) lives on the atom of bead i, ID i + offset.
+    """
+    striker = scene.loading.kind == "striker"
+    wall = scene.effects.far_end == "wall"
+    types = {"bead": 1}
+    if wall:
+        types["wall"] = len(types) + 1
+    if striker:
+        types["striker"] = len(types) + 1
+    return {
+        "offset": int(striker),
+        "striker": striker,
+        "wall": wall,
+        "types": types,
+        "natoms": scene.chain.beads + striker + wall,
+    }
+
+
 def render_data(scene) -> str:
     n, d = scene.chain.beads, scene.diameter
-    wall = scene.effects.far_end == "wall"
+    lay = atom_layout(scene)
     w = 2.0 * d  # periodic y/z sides wider than cutoff + skin, so no bead sees its own image
+    rho = scene.chain.material.density
+    atoms = []
+    if lay["striker"]:  # touching bead 1 from the left
+        ld = scene.loading
+        ds = 2.0 * ld.striker_radius
+        rho_s = scene.striker_mass / (math.pi * ds**3 / 6.0)  # the requested mass exactly
+        atoms.append((lay["types"]["striker"], ds, rho_s, -(ld.striker_radius + scene.chain.radius)))
+    atoms += [(1, d, rho, i * d) for i in range(n)]
+    if lay["wall"]:  # the rigid flat: an atom at bead N's surface, never integrated
+        atoms.append((lay["types"]["wall"], d, rho, (n - 1) * d + scene.chain.radius))
+    xlo = min(a[3] for a in atoms) - d
     lines = [
         "granchain chain: bead i at x = (i-1) D, in contact with zero force",
         "",
-        f"{n + wall} atoms",
-        f"{1 + wall} atom types",
+        f"{len(atoms)} atoms",
+        f"{len(lay['types'])} atom types",
         "",
-        f"{_g(-d)} {_g(n * d)} xlo xhi",
+        f"{_g(xlo)} {_g(n * d)} xlo xhi",
         f"{_g(-w)} {_g(w)} ylo yhi",
         f"{_g(-w)} {_g(w)} zlo zhi",
         "",
         "Atoms # sphere",
         "",
     ]
-    rho = scene.chain.material.density
-    lines += [f"{i + 1} 1 {_g(d)} {_g(rho)} {_g(i * d)} 0.0 0.0" for i in range(n)]
-    if wall:  # the rigid flat: an atom at bead N's surface, never integrated
-        lines.append(f"{n + 1} 2 {_g(d)} {_g(rho)} {_g((n - 1) * d + scene.chain.radius)} 0.0 0.0")
+    lines += [f"{i + 1} {t} {_g(dd)} {_g(rr)} {_g(x)} 0.0 0.0" for i, (t, dd, rr, x) in enumerate(atoms)]
     return "\n".join(lines) + "\n"
 
 
@@ -109,12 +139,22 @@ def render_deck(scene) -> Deck:
     peratom += ["d_amax", "d_edis"] if bilinear else []
     peratom += ["d_edash"] if fx.dashpot else []
     r = scene.chain.radius
+    lay = atom_layout(scene)
+    tw, ts = lay["types"].get("wall"), lay["types"].get("striker")
     coeffs = [{"i": 1, "j": 1, "k": scene.stiffness, "d0": scene.diameter}]
     if wall:  # bead-wall contact: distance from the bead's centre to the flat, R
         coeffs += [
-            {"i": 1, "j": 2, "k": scene.wall_stiffness, "d0": r},
-            {"i": 2, "j": 2, "k": scene.wall_stiffness, "d0": r},
+            {"i": 1, "j": tw, "k": scene.wall_stiffness, "d0": r},
+            {"i": tw, "j": tw, "k": scene.wall_stiffness, "d0": r},
         ]
+    if ts:  # striker-bead contact at R_s + R; striker-wall never meet (coefficients are required)
+        rs = scene.loading.striker_radius
+        coeffs += [
+            {"i": 1, "j": ts, "k": scene.striker_stiffness, "d0": rs + r},
+            {"i": ts, "j": ts, "k": scene.striker_stiffness, "d0": 2 * rs},
+        ]
+        if wall:
+            coeffs.append({"i": tw, "j": ts, "k": scene.striker_stiffness, "d0": rs})
     ctx = {
         "peratom": peratom,
         "pair_args": f" dashpot {fx.dashpot!r}" if fx.dashpot else "",
@@ -133,18 +173,24 @@ def render_deck(scene) -> Deck:
         "beta": scene.contact.unloading_coeff if scene.contact.law == "bilinear" else 0.0,
         "skin": 0.2 * scene.diameter,
         "dt": dt,
-        "loading": "force" if ld.is_force else "velocity",
+        "loading": "force" if ld.is_force else ld.kind,
         "amplitude": ld.amplitude,
         "duration": ld.duration,
         "velocity": ld.velocity,
         "energy_every": max(1, total // 200),
         "thermo_every": max(1, total // 20),
         "histories": list(scene.outputs.histories),
+        "history_ids": [i + lay["offset"] for i in scene.outputs.histories],
+        "offset": lay["offset"],
+        "striker": lay["striker"],
+        "striker_mass": scene.striker_mass if lay["striker"] else 0.0,
+        "wall_id": scene.chain.beads + lay["offset"] + 1,
         "snapshots": list(scene.outputs.snapshots),
         "dump_stride": dump_stride(scene),
         "history_stride": history_stride(scene),
         "segments": segments,
         "stop_after": scene.run.stop_after_contact,
+        "stop_id": (scene.run.stop_after_contact or 0) + lay["offset"],
         "stop_every": STOP_CHECK_EVERY,
     }
     deck = _env().get_template("chain.lmp.j2").render(**ctx)

@@ -52,7 +52,7 @@ def expected_peak_force(scene) -> float:
     """An upper estimate of the largest contact force of the run (N), from the paper's models."""
     m, d, k = scene.mass, scene.diameter, scene.stiffness
     ld = scene.loading
-    impulse = ld.impulse if ld.is_force else m * ld.velocity
+    impulse = scene.input_impulse
     if scene.contact.law == "hertz":
         f = models.short_load_peak_force(impulse, m, scene.e_star, scene.r_star)  # Eq. 8
         if ld.is_force:
