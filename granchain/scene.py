@@ -92,6 +92,7 @@ class Effects:
 
     far_end: str = "free"  # "free" or "wall": a fixed rigid flat touching bead N at t = 0
     dashpot: float = 0.0  # N s/m: gamma * relative velocity added while beads overlap ([damping])
+    precompression: float = 0.0  # N: static force F0 on every contact, equilibrated before the load
 
 
 @dataclass(frozen=True)
@@ -352,7 +353,7 @@ def _with_source(scene: Scene, source: str, text: str) -> Scene:
     return replace(scene, source=source, source_text=text)
 
 
-SECTIONS = ("title", "chain", "contact", "loading", "run", "outputs", "boundary", "damping")
+SECTIONS = ("title", "chain", "contact", "loading", "run", "outputs", "boundary", "damping", "precompression")
 
 
 def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
@@ -398,7 +399,22 @@ def _read_effects(source: str, data: dict) -> Effects:
             "dashpot", low=0.0, what="gamma in N s/m: force gamma x relative velocity while beads overlap"
         )
         d.finish(("dashpot",))
-    return Effects(far_end=far_end, dashpot=dashpot)
+    pre = 0.0
+    if "precompression" in data:
+        p = _Section(source, "precompression", data["precompression"])
+        pre = p.number(
+            "force",
+            low=0.0,
+            what="static force F0 in N on every contact, pushing bead 1 and held at the "
+            "far end by the wall or by an equal force on bead N",
+        )
+        p.finish(("force",))
+        if data.get("loading", {}).get("kind") == "striker":
+            raise SceneError(
+                f"{source}: [precompression] with a striker is not available yet; use a force or "
+                "velocity load, or remove [precompression]"
+            )
+    return Effects(far_end=far_end, dashpot=dashpot, precompression=pre)
 
 
 def _read_material(s: _Section, source: str, required: bool = True) -> tuple[mat.Material | None, str | None]:
@@ -688,6 +704,8 @@ def scene_to_dict(scene: Scene) -> dict:
         d["boundary"] = {"far_end": scene.effects.far_end}
     if scene.effects.dashpot:
         d["damping"] = {"dashpot": scene.effects.dashpot}
+    if scene.effects.precompression:
+        d["precompression"] = {"force": scene.effects.precompression}
     return d
 
 

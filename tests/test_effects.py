@@ -16,6 +16,10 @@ EFFECTS = {
     "wall": '[boundary]\nfar_end = "wall"\n',
     "dashpot": "[damping]\ndashpot = 3.0\n",
     "wall+dashpot": '[boundary]\nfar_end = "wall"\n[damping]\ndashpot = 3.0\n',
+    "precompression": "[precompression]\nforce = 50.0\n",
+    "precompression+wall+dashpot": (
+        '[precompression]\nforce = 50.0\n[boundary]\nfar_end = "wall"\n[damping]\ndashpot = 2.0\n'
+    ),
 }
 
 
@@ -50,9 +54,12 @@ def test_effect_lammps_equals_reference_verlet(law, effect):
     if "wall" in effect:
         assert lam.wall_peak_force == pytest.approx(ref.wall_peak_force, rel=1e-9)
         assert lam.wall_peak_force > 0
-        assert ref.momentum < 0.1  # the wall took momentum: the chain rebounds
+        assert ref.momentum < 0.1  # the wall took momentum
     if "dashpot" in effect:
         assert lam.dissipated[-1] == pytest.approx(ref.dissipated[-1], rel=1e-9)
+    if "precompression" in effect:
+        assert np.all(lam.peak_force >= 50.0 * (1 - 1e-12))  # every contact starts at F0
+        assert rel(lam.displacement, ref.displacement) < 1e-9
 
 
 @pytest.mark.parametrize("effect", list(EFFECTS))
@@ -119,3 +126,21 @@ def test_no_striker_no_trace():
     deck = render_deck(make_scene())
     assert "striker" not in deck.deck and "1 atom types" in deck.data
     assert ChainProblem.from_scene(make_scene()).striker_mass is None
+
+
+@pytest.mark.parametrize("far_end", ["free", "wall"])
+@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+def test_precompressed_chain_is_in_static_equilibrium(law, far_end):
+    """Without a load nothing moves: the initial overlaps balance F0 in both backends."""
+    sc = make_scene(
+        beads=20,
+        law=law,
+        contact_extra=BILINEAR if law == "bilinear" else "",
+        loading='kind = "velocity"\nvelocity = 1e-12',
+        end_time=2e-5,
+        timestep=1e-8,
+        outputs=f'[precompression]\nforce = 80.0\n[boundary]\nfar_end = "{far_end}"\n',
+    )
+    for sol in (run_lammps(sc)[0].solution, run_reference(sc, "rk4").solution):
+        assert np.max(np.abs(sol.velocity)) < 1e-9  # m/s: only round-off moves
+        assert np.allclose(sol.peak_force, 80.0, rtol=1e-9)

@@ -97,6 +97,15 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
     return RunResult(scene=scene, backend="lammps", solution=sol, extra=extra), work
 
 
+def x1_static(scene) -> float:
+    """x of bead 1 at t = 0 (its static precompression displacement)."""
+    if not scene.effects.precompression:
+        return 0.0
+    from granchain.reference.solver import precompressed_displacements
+
+    return float(precompressed_displacements(scene)[0][0])
+
+
 def read_solution(
     scene, work: Path, total_steps: int, wall_time: float, end_time: float | None = None
 ) -> ChainSolution:
@@ -113,16 +122,26 @@ def read_solution(
     amax = res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1)
 
     e = np.loadtxt(work / "energy.txt", comments="#", ndmin=2)
-    if e.shape[1] == 4:  # no dissipation column: an elastic law
+    f0 = scene.effects.precompression
+    dis_col = "d_edis" in (work / "deck.lmp").read_text() or scene.effects.dashpot > 0
+    if not dis_col:  # no dissipation column: an elastic law without a dashpot
         e = np.insert(e, 3, 0.0, axis=1)
     et, ke, pe, ed, x1 = (e[:, k] for k in range(5))
+    x1_0 = x1[0] if et[0] == 0.0 else float(x1_static(scene))
+    # energy put in: the initial kinetic + stored + dissipated energy, the work of f(t) (A times bead
+    # 1's displacement while it acts), and the work of the static precompression forces
+    work_done = np.full(et.shape, ke[0] + pe[0] + ed[0]) if et[0] == 0.0 else np.zeros(et.shape)
     if ld.is_force:
-        work_done = ld.amplitude * x1  # W = A (x_1(t) - x_1(0)) while the load acts, x_1(0) = 0
+        dx = x1 - x1_0
         if (work / "load_end.txt").exists():
             x1_end = float(np.loadtxt(work / "load_end.txt", ndmin=1)[1])
-            work_done = np.where(et > ld.duration, ld.amplitude * x1_end, work_done)
-    else:
-        work_done = np.full(et.shape, scene.input_energy)
+            dx = np.where(et > ld.duration, x1_end - x1_0, dx)
+        work_done = work_done + ld.amplitude * dx
+    if f0:
+        xn = e[:, 5]
+        work_done = work_done + f0 * (x1 - x1_0)
+        if scene.effects.far_end != "wall":
+            work_done = work_done - f0 * (xn - xn[0])
 
     plan = step_plan(
         scene.run.end_time, scene.run.timestep, ld.duration if ld.is_force else 0.0, scene.outputs.snapshots
@@ -136,9 +155,14 @@ def read_solution(
         h_t, h_f, h_v = dd.time, dd.columns["d_fc"], dd.columns["v_vel"]
     snaps = scene.outputs.snapshots
     s_u, s_v, s_f = [], [], []
+    u_static = np.zeros(n)
+    if f0:
+        from granchain.reference.solver import precompressed_displacements
+
+        u_static = precompressed_displacements(scene)[0]
     for k in range(len(snaps)):
         dd = read_dump(work / f"snapshot_{k}.dump", times)
-        s_u.append(dd.columns["v_ux"][-1][o : o + n])
+        s_u.append(dd.columns["v_ux"][-1][o : o + n] + u_static)  # displace/atom counts from t = 0
         s_v.append(dd.columns["v_vel"][-1][o : o + n])
         s_f.append(dd.columns["d_fc"][-1][o : o + n - 1])
     return ChainSolution(

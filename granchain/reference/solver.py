@@ -54,6 +54,8 @@ class ChainProblem:
     striker_mass: float | None = None  # a striker before bead 1 (moving at initial_velocity), or None
     striker_stiffness: float | None = None  # its contact with bead 1
     dashpot: float = 0.0  # gamma, N s/m, while beads overlap; the total force never pulls
+    precompression: float = 0.0  # F0, N: every contact starts in equilibrium at F0 (bead 1 pushed
+    # by F0; the far end held by the wall, or pulled by F0 on bead N when free)
 
     @property
     def beads(self) -> int:
@@ -69,12 +71,39 @@ class ChainProblem:
             law = BilinearLaw(k=scene.stiffness, beta=scene.contact.unloading_coeff)
         ld = scene.loading
         fx = scene.effects
-        extra = {"wall_stiffness": scene.wall_stiffness if fx.far_end == "wall" else None, "dashpot": fx.dashpot}
+        extra = {
+            "wall_stiffness": scene.wall_stiffness if fx.far_end == "wall" else None,
+            "dashpot": fx.dashpot,
+            "precompression": fx.precompression,
+        }
         if ld.kind == "striker":
             extra.update(striker_mass=scene.striker_mass, striker_stiffness=scene.striker_stiffness)
         if ld.is_force:
             return cls(mass=mass, law=law, amplitude=ld.amplitude, duration=ld.duration, **extra)
         return cls(mass=mass, law=law, initial_velocity=ld.velocity, **extra)
+
+
+def static_state(law, force: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Displacements (n,) and overlaps (n-1,) of a chain whose every contact carries `force` in static
+    equilibrium, the last bead (or wall) at u = 0: Hertz alpha0 = (F0/k)^(2/3), bilinear F0/k."""
+    k_c = np.broadcast_to(np.asarray(law.k, dtype=float), (n - 1,))
+    alpha0 = force / k_c if isinstance(law, BilinearLaw) else (force / k_c) ** (2.0 / 3.0)
+    u = np.zeros(n)
+    u[:-1] = np.cumsum(alpha0[::-1])[::-1]
+    return u, alpha0
+
+
+def precompressed_displacements(scene) -> tuple[np.ndarray, np.ndarray]:
+    """Static displacements of the scene's beads and overlaps of its contacts (the wall's last)."""
+    p = ChainProblem.from_scene(scene)
+    n = p.beads
+    k = np.broadcast_to(np.asarray(p.law.k, dtype=float), (n - 1,))
+    if p.wall_stiffness is not None:
+        k = np.append(k, p.wall_stiffness)
+        n += 1
+    law = HertzLaw(k=k) if isinstance(p.law, HertzLaw) else BilinearLaw(k=k, beta=p.law.beta)
+    u, alpha0 = static_state(law, p.precompression, n)
+    return u[: p.beads], alpha0
 
 
 @dataclass(frozen=True)
@@ -163,6 +192,7 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
         duration=problem.duration,
         initial_velocity=problem.initial_velocity,
         dashpot=problem.dashpot,
+        precompression=problem.precompression,
     )
     s0 = 1 if striker else 0  # index of bead 1 inside
     if "histories" in kw:
@@ -225,11 +255,22 @@ def _solve(
     v = np.zeros(n)
     v[0] = problem.initial_velocity
     alpha_hist = np.zeros(n - 1)  # bilinear history alpha_max (frozen within a step)
+    f0 = float(problem.precompression)
+    if f0:
+        u[:], alpha0 = static_state(law, f0, n)
+        if bilinear:
+            alpha_hist[:] = alpha0  # the precompression loaded every contact plastically
+    free_end = bool(np.isfinite(problem.mass[-1]))
+    u_init = u.copy()
 
     # ---- contact force into a padded buffer: fp[0] = 0 (external force added separately),
     # fp[1:n] = contact forces, fp[n] = 0 (free far end); a_int = (fp[:-1] - fp[1:]) / m.
     fp = np.zeros(n + 1)
     fc = fp[1:n]
+    if f0:
+        fp[0] = f0  # the static push on bead 1
+        if free_end:
+            fp[n] = f0  # ... held by an equal pull on bead N when there is no wall
     alpha = np.empty(n - 1)
     tmp = np.empty(n - 1)
     if bilinear:
@@ -282,8 +323,8 @@ def _solve(
     snapshot_set = {float(s) for s in snapshots}
     u0_at_load_end: float | None = None
 
-    amax = np.zeros(n - 1)  # running peak overlap (refined)
-    tmax = np.full(n - 1, np.nan)
+    amax = u[:-1] - u[1:]  # running peak overlap (refined): the static overlap at t = 0
+    tmax = np.where(amax > 0.0, 0.0, np.nan)
     a_int = np.empty(n)
     accel(u, a_int, v)
 
@@ -297,10 +338,14 @@ def _solve(
         return f
 
     def work_now(t: float) -> float:
+        """Energy put in: work of f(t), of the static forces, the initial kinetic and stored energy."""
+        w = e_initial
         if problem.amplitude:
             u0 = u[0] if u0_at_load_end is None else u0_at_load_end
-            return problem.amplitude * u0
-        return 0.5 * problem.mass[0] * problem.initial_velocity**2
+            w += problem.amplitude * (u0 - u_init[0])
+        if f0:
+            w += f0 * (u[0] - u_init[0]) - (f0 * (u[-1] - u_init[-1]) if free_end else 0.0)
+        return w
 
     def energy_row(t: float):
         a_now = u[:-1] - u[1:]
@@ -317,6 +362,11 @@ def _solve(
             h_v[nrec] = v[hist_idx]
             nrec += 1
 
+    e_initial = (
+        0.5 * float(np.dot(mass_ke, v * v))
+        + float(np.sum(law.energy(u[:-1] - u[1:], alpha_hist)))
+        + (float(np.sum(law.dissipated(alpha_hist))) if bilinear else 0.0)
+    )
     record_history(0.0)
     energy_row(0.0)
 
@@ -459,8 +509,8 @@ def _solve(
     f_now = fc.copy()
     f_prev, f_prev2 = np.zeros(n - 1), np.zeros(n - 1)
     t_now, t_prev, t_prev2 = 0.0, -math.inf, -math.inf
-    fpk = np.zeros(n - 1)
-    tpk = np.full(n - 1, np.nan)
+    fpk = f_now.copy()  # the t = 0 sample (nonzero only with precompression)
+    tpk = np.where(fpk > 0.0, 0.0, np.nan)
 
     def sample_forces(t1: float) -> None:
         nonlocal f_now, f_prev, f_prev2, t_now, t_prev, t_prev2

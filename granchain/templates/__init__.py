@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from importlib import resources
 
 import jinja2
+import numpy as np
 
 from granchain.reference.solver import STOP_CHECK_EVERY, step_plan
 
@@ -78,6 +79,17 @@ def atom_layout(scene) -> dict:
     }
 
 
+def precompression_overlaps(scene) -> dict:
+    """Static overlaps for the deck: bead-bead contacts, and the wall's (0 without precompression)."""
+    if not scene.effects.precompression:
+        return {"beads": 0.0, "wall": 0.0}
+    from granchain.reference.solver import precompressed_displacements
+
+    alpha0 = precompressed_displacements(scene)[1]
+    wall = scene.effects.far_end == "wall"
+    return {"beads": float(alpha0[0]), "wall": float(alpha0[-1]) if wall else 0.0}
+
+
 def render_data(scene) -> str:
     n, d = scene.chain.beads, scene.diameter
     lay = atom_layout(scene)
@@ -89,7 +101,12 @@ def render_data(scene) -> str:
         ds = 2.0 * ld.striker_radius
         rho_s = scene.striker_mass / (math.pi * ds**3 / 6.0)  # the requested mass exactly
         atoms.append((lay["types"]["striker"], ds, rho_s, -(ld.striker_radius + scene.chain.radius)))
-    atoms += [(1, d, rho, i * d) for i in range(n)]
+    u0 = np.zeros(n)
+    if scene.effects.precompression:
+        from granchain.reference.solver import precompressed_displacements
+
+        u0 = precompressed_displacements(scene)[0]
+    atoms += [(1, d, rho, i * d + u0[i]) for i in range(n)]
     if lay["wall"]:  # the rigid flat: an atom at bead N's surface, never integrated
         atoms.append((lay["types"]["wall"], d, rho, (n - 1) * d + scene.chain.radius))
     xlo = min(a[3] for a in atoms) - d
@@ -189,6 +206,10 @@ def render_deck(scene) -> Deck:
         "dump_stride": dump_stride(scene),
         "history_stride": history_stride(scene),
         "segments": segments,
+        "precompression": fx.precompression,
+        "pre_alpha": precompression_overlaps(scene),
+        "first_id": 1 + lay["offset"],
+        "last_id": scene.chain.beads + lay["offset"],
         "stop_after": scene.run.stop_after_contact,
         "stop_id": (scene.run.stop_after_contact or 0) + lay["offset"],
         "stop_every": STOP_CHECK_EVERY,
