@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from granchain.physics import materials as mat
 from granchain.physics.contact import unloading_stiffness
 
@@ -31,9 +33,11 @@ AUTO = "auto"  # a value the planner chooses (granchain.workflows.plan)
 @dataclass(frozen=True)
 class Chain:
     beads: int | None  # None: "auto"
-    radius: float  # m
-    material: mat.Material
+    radius: float  # m; with per-bead radii, bead 1's (the nominal one)
+    material: mat.Material  # with per-bead materials, bead 1's
     material_name: str | None = None  # built-in name, or None for an inline [chain.material]
+    radii: tuple[float, ...] | None = None  # per-bead radii (a list or the taper rule), or None
+    materials: tuple[str, ...] | None = None  # per-bead built-in material names, or None
 
 
 @dataclass(frozen=True)
@@ -151,6 +155,46 @@ class Scene:
         if self.contact.law == "hertz":
             return mat.hertz_stiffness(self.chain.material, self.chain.radius)
         return float(self.contact.plastic_stiffness)
+
+    @property
+    def per_bead(self) -> bool:
+        """Beads differ in radius or material (tapered, decorated, impurity)."""
+        return self.chain.radii is not None or self.chain.materials is not None
+
+    @property
+    def bead_radii(self) -> np.ndarray:
+        n = self.chain.beads
+        return np.asarray(self.chain.radii) if self.chain.radii else np.full(n, self.chain.radius)
+
+    @property
+    def bead_materials(self) -> list:
+        n = self.chain.beads
+        if self.chain.materials:
+            return [mat.MATERIALS[name] for name in self.chain.materials]
+        return [self.chain.material] * n
+
+    @property
+    def bead_masses(self) -> np.ndarray:
+        return np.array([mat.bead_mass(m, r) for m, r in zip(self.bead_materials, self.bead_radii, strict=True)])
+
+    @property
+    def bead_positions(self) -> np.ndarray:
+        """Centres of the beads in contact with zero force: x_1 = 0, x_(i+1) = x_i + R_i + R_(i+1)."""
+        r = self.bead_radii
+        return np.concatenate(([0.0], np.cumsum(r[:-1] + r[1:])))
+
+    def pair_stiffness(self, r1: float, m1, r2: float, m2) -> float:
+        """k of two beads: Hertz 4/3 E*_pair sqrt(R*_pair) (Johnson); bilinear: the plastic k scaled by
+        R*_pair / R* of the nominal beads (k = 18.5 sigma_y R*, same material)."""
+        rs = mat.pair_effective_radius(r1, r2)
+        if self.contact.law == "hertz":
+            return 4.0 / 3.0 * mat.pair_effective_modulus(m1, m2) * math.sqrt(rs)
+        return self.stiffness * rs / self.r_star
+
+    @property
+    def contact_stiffnesses(self) -> np.ndarray:
+        r, m = self.bead_radii, self.bead_materials
+        return np.array([self.pair_stiffness(r[i], m[i], r[i + 1], m[i + 1]) for i in range(len(r) - 1)])
 
     @property
     def input_impulse(self) -> float:
@@ -375,6 +419,23 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
     run = _read_run(_Section(source, "run", data["run"]), loading)
     outputs = _read_outputs(_Section(source, "outputs", data.get("outputs", {})), chain, run)
     effects = _read_effects(source, data)
+    if chain.radii is not None or chain.materials is not None:
+        others = [
+            n
+            for n, on in (
+                ('[boundary] far_end = "wall"', effects.far_end == "wall"),
+                ("[precompression]", bool(effects.precompression)),
+                ("a striker", loading.kind == "striker"),
+            )
+            if on
+        ]
+        if others:
+            raise SceneError(f"{source}: per-bead radius or material with {', '.join(others)} is not available yet")
+        if chain.materials is not None and contact.law == "bilinear":
+            raise SceneError(
+                f"{source}: [chain] material as a list with the bilinear law is not available yet "
+                "(the plastic stiffness is scaled by radius only); use one material"
+            )
     return Scene(
         effects=effects,
         chain=chain,
@@ -445,10 +506,40 @@ def _read_chain(s: _Section, source: str) -> Chain:
         beads = s.raw("beads") and None  # the planner chooses (granchain plan)
     else:
         beads = s.integer("beads", low=2, what='number of beads; bead 1 is the loaded end, or "auto"')
-    radius = s.number("radius", low=0.0, what="bead radius in m")
-    material, name = _read_material(s, source)
-    s.finish(("beads", "radius", "material"))
-    return Chain(beads=beads, radius=radius, material=material, material_name=name)
+    radii = materials = None
+    if isinstance(s.table.get("radius"), list):
+        v = s.raw("radius")
+        allowed = f"a list of {beads} radii in m, all > 0 (one per bead)"
+        if (
+            beads is None
+            or len(v) != beads
+            or any(isinstance(x, bool) or not isinstance(x, (int, float)) or not x > 0 for x in v)
+        ):
+            raise s.fail("radius", v, allowed)
+        radii = tuple(float(x) for x in v)
+        radius = radii[0]
+    else:
+        radius = s.number("radius", low=0.0, what="bead radius in m, or a list of one radius per bead")
+    taper = s.number(
+        "taper", required=False, low=0.0, what="radius ratio of neighbouring beads: R_i = radius taper^(i-1)"
+    )
+    if taper is not None:
+        if radii is not None or beads is None:
+            raise s.fail("taper", taper, "a rule for a single nominal radius and a given number of beads")
+        radii = tuple(radius * taper**i for i in range(beads))
+    if isinstance(s.table.get("material"), list):
+        v = s.raw("material")
+        allowed = f"a list of {beads} built-in material names ({', '.join(mat.MATERIALS)}), one per bead"
+        if beads is None or len(v) != beads or any(x not in mat.MATERIALS for x in v):
+            raise s.fail("material", v, allowed)
+        materials = tuple(v)
+        material, name = mat.MATERIALS[v[0]], v[0]
+    else:
+        material, name = _read_material(s, source)
+    s.finish(("beads", "radius", "material", "taper"))
+    if len(set(radii or ())) <= 1 and len(set(materials or ())) <= 1:
+        radii = materials = None  # a uniform list is the plain chain
+    return Chain(beads=beads, radius=radius, material=material, material_name=name, radii=radii, materials=materials)
 
 
 def _read_contact(s: _Section, chain: Chain) -> Contact:
@@ -659,7 +750,11 @@ def scene_to_dict(scene: Scene) -> dict:
     d: dict[str, Any] = {}
     if scene.title:
         d["title"] = scene.title
-    d["chain"] = {"beads": AUTO if c.beads is None else c.beads, "radius": c.radius, "material": material}
+    d["chain"] = {
+        "beads": AUTO if c.beads is None else c.beads,
+        "radius": list(c.radii) if c.radii else c.radius,
+        "material": list(c.materials) if c.materials else material,
+    }
     contact: dict[str, Any] = {"law": scene.contact.law}
     if scene.contact.law == "bilinear":
         contact["unloading_coeff"] = scene.contact.unloading_coeff

@@ -144,3 +144,53 @@ def test_precompressed_chain_is_in_static_equilibrium(law, far_end):
     for sol in (run_lammps(sc)[0].solution, run_reference(sc, "rk4").solution):
         assert np.max(np.abs(sol.velocity)) < 1e-9  # m/s: only round-off moves
         assert np.allclose(sol.peak_force, 80.0, rtol=1e-9)
+
+
+def _per_bead_scene(kind, law="hertz"):
+    base = make_scene(
+        beads=30,
+        law=law,
+        contact_extra=BILINEAR if law == "bilinear" else "",
+        loading=SHORT,
+        end_time=4e-4,
+        timestep=1e-8,
+        outputs="histories = [1, 15]\nsnapshots = [2e-4]",
+    ).source_text
+    if kind == "taper":
+        text = base.replace("radius = 4.76e-3", "radius = 4.76e-3\ntaper = 0.97")
+    else:  # a small impurity at bead 15
+        text = base.replace(
+            "radius = 4.76e-3", "radius = [" + ", ".join("2.5e-3" if i == 14 else "4.76e-3" for i in range(30)) + "]"
+        )
+    from granchain.scene import parse_scene
+
+    return parse_scene(text, source=f"{kind}.toml")
+
+
+@pytest.mark.parametrize("kind,law", [("taper", "hertz"), ("impurity", "hertz"), ("taper", "bilinear")])
+def test_per_bead_radius_both_backends(kind, law):
+    sc = _per_bead_scene(kind, law)
+    assert sc.per_bead
+    p = ChainProblem.from_scene(sc)
+    assert np.ptp(p.mass) > 0 and np.ptp(np.asarray(p.law.k)) > 0  # masses and stiffnesses follow the beads
+    lam = run_lammps(sc)[0].solution
+    ref = run_reference(sc, "verlet").solution
+    assert rel(lam.peak_force, ref.peak_force) < 1e-9 and rel(lam.velocity, ref.velocity) < 1e-8
+    assert rel(lam.history_force, ref.history_force) < 1e-8
+    assert lam.momentum == pytest.approx(0.1, rel=1e-12)
+    rk4 = run_reference(sc, "rk4").solution
+    assert np.max(np.abs(rk4.energy_balance_error)) / rk4.work[-1] < 1e-6
+    if kind == "impurity":
+        # the light impurity's contacts are softer and its neighbours see a lower peak than the plain chain's
+        plain = run_reference(make_scene(beads=30, loading=SHORT, end_time=4e-4, timestep=1e-8), "rk4").solution
+        assert rk4.peak_force[14] < plain.peak_force[14]
+
+
+def test_per_bead_material_list_and_uniform_lists():
+    from granchain.scene import parse_scene
+
+    base = make_scene(beads=4).source_text
+    sc = parse_scene(base.replace('material = "brass"', 'material = ["brass", "brass", "brass", "brass"]'))
+    assert not sc.per_bead  # a uniform list is the plain chain
+    deck = render_deck(make_scene())
+    assert "taper" not in deck.deck and "1 atom types" in deck.data

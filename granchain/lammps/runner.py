@@ -116,7 +116,7 @@ def read_solution(
     o = lay["offset"]  # a striker is atom 1; bead i is atom i + o; contact i lives on atom i + o
     fpeak = res["fpeak"][o : o + n - 1]
     tpeak = unreached_as_nan(fpeak, res["tpeak"][o : o + n - 1])
-    u = res["x"][o : o + n] - np.arange(n) * d
+    u = res["x"][o : o + n] - (scene.bead_positions if scene.per_bead else np.arange(n) * d)
     v = res["vx"][o : o + n]
     wall = lay["wall"]  # bead N's contact is the wall's
     amax = res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1)
@@ -193,7 +193,8 @@ def read_solution(
         impulse_delivered=ld.amplitude * min(ld.duration, scene.run.end_time if end_time is None else end_time)
         if ld.is_force
         else 0.0,
-        momentum=float(np.sum(m * v)) + (scene.striker_mass * float(res["vx"][0]) if o else 0.0),
+        momentum=float(np.sum((scene.bead_masses if scene.per_bead else m) * v))
+        + (scene.striker_mass * float(res["vx"][0]) if o else 0.0),
         wall_peak_force=float(res["fpeak"][o + n - 1]) if wall else None,
         wall_time_of_peak=float(res["tpeak"][o + n - 1]) if wall else None,
         striker_peak_force=float(res["fpeak"][0]) if o else None,

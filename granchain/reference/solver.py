@@ -64,11 +64,12 @@ class ChainProblem:
     @classmethod
     def from_scene(cls, scene) -> ChainProblem:
         n = scene.chain.beads
-        mass = np.full(n, scene.mass)
+        mass = scene.bead_masses if scene.per_bead else np.full(n, scene.mass)
+        k = scene.contact_stiffnesses if scene.per_bead else scene.stiffness
         if scene.contact.law == "hertz":
-            law: HertzLaw | BilinearLaw = HertzLaw(k=scene.stiffness)
+            law: HertzLaw | BilinearLaw = HertzLaw(k=k)
         else:
-            law = BilinearLaw(k=scene.stiffness, beta=scene.contact.unloading_coeff)
+            law = BilinearLaw(k=k, beta=scene.contact.unloading_coeff)
         ld = scene.loading
         fx = scene.effects
         extra = {

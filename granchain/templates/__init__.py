@@ -90,10 +90,35 @@ def precompression_overlaps(scene) -> dict:
     return {"beads": float(alpha0[0]), "wall": float(alpha0[-1]) if wall else 0.0}
 
 
+MAX_BEAD_KINDS = 200  # pair_coeff lines grow as kinds^2 / 2
+
+
+def bead_kinds(scene) -> tuple[list[tuple[float, object]], list[int]]:
+    """Distinct (radius, material) kinds of a per-bead chain and each bead's kind; atom type = kind + 1."""
+    kinds: list[tuple[float, object]] = []
+    index: dict = {}
+    kind_of = []
+    for r, m in zip(scene.bead_radii, scene.bead_materials, strict=True):
+        key = (float(r), m)
+        if key not in index:
+            index[key] = len(kinds)
+            kinds.append(key)
+        kind_of.append(index[key])
+    if len(kinds) > MAX_BEAD_KINDS:
+        from granchain.scene import SceneError
+
+        raise SceneError(
+            f"{scene.source}: the chain has {len(kinds)} distinct bead kinds (radius, material); the LAMMPS "
+            f"backend takes at most {MAX_BEAD_KINDS} (one atom type each); use the reference backend"
+        )
+    return kinds, kind_of
+
+
 def render_data(scene) -> str:
     n, d = scene.chain.beads, scene.diameter
     lay = atom_layout(scene)
-    w = 2.0 * d  # periodic y/z sides wider than cutoff + skin, so no bead sees its own image
+    rmax = float(max(scene.bead_radii)) if scene.per_bead else scene.chain.radius
+    w = 4.0 * rmax  # periodic y/z sides wider than cutoff + skin, so no bead sees its own image
     rho = scene.chain.material.density
     atoms = []
     if lay["striker"]:  # touching bead 1 from the left
@@ -106,17 +131,23 @@ def render_data(scene) -> str:
         from granchain.reference.solver import precompressed_displacements
 
         u0 = precompressed_displacements(scene)[0]
-    atoms += [(1, d, rho, i * d + u0[i]) for i in range(n)]
+    if scene.per_bead:  # one atom type per distinct (radius, material): see bead_kinds
+        kinds, kind_of = bead_kinds(scene)
+        x0 = scene.bead_positions
+        atoms += [(kind_of[i] + 1, 2.0 * kinds[kind_of[i]][0], kinds[kind_of[i]][1].density, x0[i]) for i in range(n)]
+    else:
+        atoms += [(1, d, rho, i * d + u0[i]) for i in range(n)]
     if lay["wall"]:  # the rigid flat: an atom at bead N's surface, never integrated
         atoms.append((lay["types"]["wall"], d, rho, (n - 1) * d + scene.chain.radius))
-    xlo = min(a[3] for a in atoms) - d
+    xlo = min(a[3] for a in atoms) - 2.0 * rmax
+    xhi = max(a[3] for a in atoms) + 2.0 * rmax
     lines = [
         "granchain chain: bead i at x = (i-1) D, in contact with zero force",
         "",
         f"{len(atoms)} atoms",
-        f"{len(lay['types'])} atom types",
+        f"{max(a[0] for a in atoms)} atom types",
         "",
-        f"{_g(xlo)} {_g(n * d)} xlo xhi",
+        f"{_g(xlo)} {_g(xhi)} xlo xhi",
         f"{_g(-w)} {_g(w)} ylo yhi",
         f"{_g(-w)} {_g(w)} zlo zhi",
         "",
@@ -159,6 +190,18 @@ def render_deck(scene) -> Deck:
     lay = atom_layout(scene)
     tw, ts = lay["types"].get("wall"), lay["types"].get("striker")
     coeffs = [{"i": 1, "j": 1, "k": scene.stiffness, "d0": scene.diameter}]
+    if scene.per_bead:
+        kinds, _ = bead_kinds(scene)
+        coeffs = [
+            {
+                "i": a + 1,
+                "j": b + 1,
+                "k": scene.pair_stiffness(kinds[a][0], kinds[a][1], kinds[b][0], kinds[b][1]),
+                "d0": kinds[a][0] + kinds[b][0],
+            }
+            for a in range(len(kinds))
+            for b in range(a, len(kinds))
+        ]
     if wall:  # bead-wall contact: distance from the bead's centre to the flat, R
         coeffs += [
             {"i": 1, "j": tw, "k": scene.wall_stiffness, "d0": r},
@@ -188,7 +231,7 @@ def render_deck(scene) -> Deck:
         "k": scene.stiffness,
         "d0": scene.diameter,
         "beta": scene.contact.unloading_coeff if scene.contact.law == "bilinear" else 0.0,
-        "skin": 0.2 * scene.diameter,
+        "skin": 0.2 * 2.0 * float(min(scene.bead_radii)) if scene.per_bead else 0.2 * scene.diameter,
         "dt": dt,
         "loading": "force" if ld.is_force else ld.kind,
         "amplitude": ld.amplitude,
