@@ -105,3 +105,17 @@ def test_rtol_sets_the_timestep_of_a_given_scene(capsys, tmp_path):
     assert plan_scene(sc, rtol=1e-2).scene.run.timestep >= plan_scene(sc, rtol=1e-4).scene.run.timestep
     assert main(["run", "default", "--rtol", "1e-3", "--out", str(tmp_path / "r")]) == 0
     assert "plan: timestep" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["elastic-long-pulse", "plastic-long-load-table1"])
+def test_planner_on_paper_cases_reaches_converged_peaks(name):
+    """Sec. II B long load and Table I: the planned time step (rtol 1e-3) reaches the converged peaks."""
+    sc = plan_scene(resolve_scene(name), rtol=1e-3).scene
+    got = run_scene(sc).solution
+    ref = converged(sc).solution
+    idx = np.asarray(sc.peak_contacts) - 1
+    ok = np.isfinite(ref.time_of_peak[idx])
+    err = np.max(np.abs(got.peak_force[idx][ok] - ref.peak_force[idx][ok]) / ref.peak_force[idx][ok])
+    print(f"{name}: dt {sc.run.timestep:.3g} s, error {err:.1e}")
+    assert err <= 1e-3
