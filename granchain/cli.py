@@ -282,12 +282,20 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from granchain.lammps.build import PluginError
     from granchain.lammps.runner import LammpsError
+    from granchain.reference.solver import InvariantError
     from granchain.results import RunDirError
 
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (SceneError, RunDirError, PluginError, LammpsError, ValueError) as e:  # incl. UnstableTimestepError
+    except (
+        SceneError,
+        RunDirError,
+        PluginError,
+        LammpsError,
+        InvariantError,
+        ValueError,
+    ) as e:  # incl. UnstableTimestepError
         print(f"granchain: error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -84,6 +84,15 @@ class ChainProblem:
         return cls(mass=mass, law=law, initial_velocity=ld.velocity, **extra)
 
 
+class InvariantError(RuntimeError):
+    """A run broke an invariant; says which, when, where, and (from the workflow) the fix."""
+
+    def __init__(self, invariant: str, time: float, step: int, contact: int, detail: str, fix: str = ""):
+        self.invariant, self.time, self.step, self.contact, self.detail = invariant, time, step, contact, detail
+        msg = f"invariant '{invariant}' broken at t = {time:.6g} s (step {step}), contact {contact}: {detail}"
+        super().__init__(msg + (f"; {fix}" if fix else ""))
+
+
 def static_state(law, force: float, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Displacements (n,) and overlaps (n-1,) of a chain whose every contact carries `force` in static
     equilibrium, the last bead (or wall) at u = 0: Hertz alpha0 = (F0/k)^(2/3), bilinear F0/k."""
@@ -229,6 +238,8 @@ def _solve(
     energy_samples: int = 200,
     event_location: bool = True,
     stop_after: int | None = None,
+    max_overlap: float | None = None,
+    watch_every: int = 20,
 ) -> ChainSolution:
     """Integrate the chain from rest (bead 1 possibly moving) to end_time.
 
@@ -547,6 +558,29 @@ def _solve(
             peak = float(law.force_at_peak_overlap(amax[c : c + 1])[0])
         return peak > 0.0 and now < 0.5 * peak
 
+    def watch(step: int, t: float) -> None:
+        """Cheap invariants, every watch_every steps: a finite state, overlaps far below the radius."""
+        if not np.isfinite(u.sum() + v.sum()):
+            bad = int(np.flatnonzero(~(np.isfinite(u) & np.isfinite(v)))[0])
+            raise InvariantError(
+                "finite state",
+                t,
+                step,
+                min(bad, n - 2) + 1,
+                f"displacement or velocity of bead {bad + 1} is not finite",
+            )
+        if max_overlap is not None:
+            a = u[:-1] - u[1:]
+            i = int(np.argmax(a))
+            if a[i] > max_overlap:
+                raise InvariantError(
+                    "overlap far below the radius",
+                    t,
+                    step,
+                    i + 1,
+                    f"overlap {a[i]:.3g} m exceeds {max_overlap:.3g} m (10% of the radius)",
+                )
+
     stopped = False
     step = 0
     extra_steps = 0
@@ -603,12 +637,16 @@ def _solve(
                 record_history(t)
             if step % energy_every == 0 and t < seg_end:
                 energy_row(t)
+            if step % watch_every == 0:
+                watch(step, t)
             if stop_after is not None and step % STOP_CHECK_EVERY == 0 and wave_passed(stop_after):
                 stopped = True
                 break
         if stopped:
+            watch(step, t)
             energy_row(t)
             break
+        watch(step, t)  # also at every breakpoint, so a short run is watched too
         # ---- breakpoint reached exactly
         t = seg_end
         if problem.amplitude and seg_end == problem.duration:

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from granchain.reference.solver import ChainProblem, solve_chain
+import numpy as np
+
+from granchain.reference.solver import ChainProblem, InvariantError, solve_chain
 from granchain.results import RunResult, check_output_dir, write_run_dir
 from granchain.templates import history_stride
 
@@ -12,8 +14,28 @@ BACKENDS = ("reference", "lammps")
 
 
 def run_reference(scene, method: str = "rk4") -> RunResult:
-    """Run the pure-Python reference solver on a scene."""
-    sol = solve_chain(
+    """Run the pure-Python reference solver on a scene; a broken invariant stops it with the fix."""
+    try:
+        with np.errstate(over="ignore", invalid="ignore"):  # a blow-up is reported by the invariant watch
+            sol = _solve_scene(scene, method)
+    except InvariantError as e:
+        from granchain.workflows.plan import plan_scene
+
+        safe = plan_scene(scene, rtol=1e-3, method=method).scene.run.timestep
+        raise InvariantError(
+            e.invariant,
+            e.time,
+            e.step,
+            e.contact,
+            e.detail,
+            f"the time step {scene.run.timestep:g} s is too large for this run: the planner would "
+            f'choose {safe:.3g} s (set timestep = "auto" or use --rtol)',
+        ) from None
+    return RunResult(scene=scene, backend="reference", solution=sol)
+
+
+def _solve_scene(scene, method: str):
+    return solve_chain(
         ChainProblem.from_scene(scene),
         scene.run.end_time,
         scene.run.timestep,
@@ -22,8 +44,8 @@ def run_reference(scene, method: str = "rk4") -> RunResult:
         history_stride=history_stride(scene),
         snapshots=scene.outputs.snapshots,
         stop_after=None if scene.run.stop_after_contact is None else scene.run.stop_after_contact - 1,
+        max_overlap=0.1 * float(min(scene.bead_radii)),
     )
-    return RunResult(scene=scene, backend="reference", solution=sol)
 
 
 class UnstableTimestepError(ValueError):

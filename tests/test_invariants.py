@@ -1,0 +1,45 @@
+"""Runs watch their invariants and stop with a clear error naming the invariant, time, step and contact,
+and the fix; a time step above the predicted stability limit is refused before the run."""
+
+import pytest
+
+from granchain.cli import main
+from granchain.reference.solver import InvariantError
+from granchain.workflows.run import UnstableTimestepError, run_scene
+
+from .conftest import make_scene
+
+PULSE = 'kind = "impulse"\nimpulse = 0.4\nduration = 1e-6'
+
+
+def test_unstable_timestep_refused_before_the_run():
+    sc = make_scene(beads=60, loading=PULSE, end_time=5e-4, timestep=1e-5)
+    with pytest.raises(UnstableTimestepError, match="above the stability limit.*--force"):
+        run_scene(sc)
+
+
+def test_blow_up_stops_with_the_invariant_and_the_fix(tmp_path, capsys):
+    sc = make_scene(beads=60, loading=PULSE, end_time=5e-4, timestep=1e-5)
+    with pytest.raises(InvariantError) as e:
+        run_scene(sc, force=True)
+    err = e.value
+    assert err.invariant in ("finite state", "overlap far below the radius")
+    assert err.step > 0 and err.time > 0 and 1 <= err.contact <= 59
+    assert "the planner would choose" in str(err)
+    p = tmp_path / "s.toml"
+    p.write_text(sc.source_text)
+    assert main(["run", str(p), "--force", "--out", str(tmp_path / "o")]) == 2
+    assert "invariant" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_beads_passing_through_each_other_are_caught():
+    # 3 km/s into a chain, at a step the planner would allow for a gentle load: overlaps beyond 10% of R
+    sc = make_scene(beads=20, loading='kind = "velocity"\nvelocity = 3000.0', end_time=2e-5, timestep=2e-7)
+    with pytest.raises(InvariantError, match="overlap|finite"):
+        run_scene(sc, force=True)
+
+
+def test_a_sound_run_is_not_stopped():
+    sol = run_scene(make_scene(end_time=1e-4, timestep=1e-8)).solution
+    assert sol.steps > 0
