@@ -559,7 +559,7 @@ def _solve(
         return peak > 0.0 and now < 0.5 * peak
 
     def watch(step: int, t: float) -> None:
-        """Cheap invariants, every watch_every steps: a finite state, overlaps far below the radius."""
+        """Cheap invariants, every watch_every steps: a finite state, overlaps below max_overlap."""
         if not np.isfinite(u.sum() + v.sum()):
             bad = int(np.flatnonzero(~(np.isfinite(u) & np.isfinite(v)))[0])
             raise InvariantError(
