@@ -578,7 +578,7 @@ def _solve(
                     t,
                     step,
                     i + 1,
-                    f"overlap {a[i]:.3g} m exceeds {max_overlap:.3g} m (10% of the radius)",
+                    f"overlap {a[i]:.3g} m exceeds {max_overlap:.3g} m (half the radius)",
                 )
 
     stopped = False
