@@ -19,7 +19,7 @@ def test_unstable_timestep_refused_before_the_run():
 
 
 def test_blow_up_stops_with_the_invariant_and_the_fix(tmp_path, capsys):
-    sc = make_scene(beads=100, loading=PULSE, end_time=7e-4, timestep=1e-5)
+    sc = make_scene(beads=100, loading=PULSE, end_time=7e-4, timestep=2e-5)  # 3x the stability limit
     with pytest.raises(InvariantError) as e:
         run_scene(sc, force=True)
     err = e.value
