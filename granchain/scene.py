@@ -188,7 +188,7 @@ class Scene:
         R*_pair / R* of the nominal beads (k = 18.5 sigma_y R*, same material)."""
         rs = mat.pair_effective_radius(r1, r2)
         if self.contact.law == "hertz":
-            return 4.0 / 3.0 * mat.pair_effective_modulus(m1, m2) * math.sqrt(rs)
+            return mat.hertz_contact_stiffness(mat.pair_effective_modulus(m1, m2), rs)
         return self.stiffness * rs / self.r_star
 
     @property
@@ -219,21 +219,16 @@ class Scene:
 
     @property
     def striker_stiffness(self) -> float:
-        """Striker on bead 1: Hertz with the pair's E* and R* (Johnson); bilinear: the chain's plastic k
-        scaled by R*_pair / R*_beads (k = 18.5 sigma_y R*)."""
+        """Striker on bead 1: the pair stiffness of the striker and a bead (see pair_stiffness)."""
         ld, c = self.loading, self.chain
-        rs = mat.pair_effective_radius(ld.striker_radius, c.radius)
-        if self.contact.law == "hertz":
-            return 4.0 / 3.0 * mat.pair_effective_modulus(ld.striker_material, c.material) * math.sqrt(rs)
-        return self.stiffness * rs / self.r_star
+        return self.pair_stiffness(ld.striker_radius, ld.striker_material, c.radius, c.material)
 
     @property
     def wall_stiffness(self) -> float:
         """Stiffness of bead N on the rigid flat: Hertz, R* = R and E* = E/(1-nu^2) (a rigid flat);
         bilinear, k = 18.5 sigma_y R* with R* = R, i.e. twice the bead-bead k."""
         if self.contact.law == "hertz":
-            m = self.chain.material
-            return 4.0 / 3.0 * m.youngs_modulus / (1.0 - m.poisson_ratio**2) * math.sqrt(self.chain.radius)
+            return mat.hertz_contact_stiffness(mat.flat_effective_modulus(self.chain.material), self.chain.radius)
         return 2.0 * self.stiffness
 
     @property

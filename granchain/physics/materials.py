@@ -43,9 +43,19 @@ def bead_mass(m: Material, radius: float) -> float:
     return m.density * 4.0 / 3.0 * math.pi * radius**3
 
 
+def hertz_contact_stiffness(e_star: float, r_star: float) -> float:
+    """k = 4 E* sqrt(R*) / 3, so that F = k alpha^(3/2) (text after Eq. 14; Johnson for any pair)."""
+    return 4.0 * e_star * math.sqrt(r_star) / 3.0
+
+
 def hertz_stiffness(m: Material, radius: float) -> float:
-    """k = 4 E* sqrt(R*) / 3, so that F = k alpha^(3/2) (text after Eq. 14)."""
-    return 4.0 * effective_modulus(m) * math.sqrt(effective_radius(radius)) / 3.0
+    """k of two identical beads (the paper's chain)."""
+    return hertz_contact_stiffness(effective_modulus(m), effective_radius(radius))
+
+
+def flat_effective_modulus(m: Material) -> float:
+    """E* of a sphere on a rigid flat: E / (1 - nu^2) (the flat's compliance is zero)."""
+    return m.youngs_modulus / (1.0 - m.poisson_ratio**2)
 
 
 def plastic_stiffness_from_yield(yield_strength: float, radius: float) -> float:
