@@ -33,10 +33,14 @@ from granchain.postprocess.observables import measure_observables
 REACHED_FRACTION = 1e-9
 
 
-def unreached_as_nan(peak_force: np.ndarray, time_of_peak: np.ndarray) -> np.ndarray:
-    """time_of_peak with nan where the contact was not reached (see REACHED_FRACTION)."""
-    floor = REACHED_FRACTION * float(np.max(peak_force, initial=0.0))
-    return np.where(peak_force > floor, time_of_peak, np.nan)
+def unreached_as_nan(peak_force: np.ndarray, time_of_peak: np.ndarray, static_force: float = 0.0) -> np.ndarray:
+    """time_of_peak with nan where the contact was not reached (see REACHED_FRACTION).
+
+    static_force: a precompression F0 every contact starts at; reached means rising above it.
+    """
+    rise = np.asarray(peak_force) - static_force
+    floor = REACHED_FRACTION * float(np.max(rise, initial=0.0))
+    return np.where(rise > floor, time_of_peak, np.nan)
 
 
 @dataclass

@@ -115,7 +115,7 @@ def read_solution(
     lay = atom_layout(scene)
     o = lay["offset"]  # a striker is atom 1; bead i is atom i + o; contact i lives on atom i + o
     fpeak = res["fpeak"][o : o + n - 1]
-    tpeak = unreached_as_nan(fpeak, res["tpeak"][o : o + n - 1])
+    tpeak = unreached_as_nan(fpeak, res["tpeak"][o : o + n - 1], scene.effects.precompression)
     u = res["x"][o : o + n] - (scene.bead_positions if scene.per_bead else np.arange(n) * d)
     v = res["vx"][o : o + n]
     wall = lay["wall"]  # bead N's contact is the wall's

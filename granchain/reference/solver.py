@@ -217,7 +217,7 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
         sol.striker_velocity = float(sol.velocity[0])
     for name in ("peak_overlap", "peak_force", "time_of_peak", "alpha_max"):
         setattr(sol, name, getattr(sol, name)[s0 : s0 + n - 1])
-    sol.time_of_peak = unreached_as_nan(sol.peak_force, sol.time_of_peak)
+    sol.time_of_peak = unreached_as_nan(sol.peak_force, sol.time_of_peak, problem.precompression)
     sol.history_contacts = tuple(i - s0 for i in sol.history_contacts)
     sol.displacement, sol.velocity = sol.displacement[s0 : s0 + n], sol.velocity[s0 : s0 + n]
     sol.snapshot_displacement = sol.snapshot_displacement[:, s0 : s0 + n]
@@ -676,7 +676,7 @@ def _solve(
         end_time=t,
         peak_overlap=amax,
         peak_force=peak_force,
-        time_of_peak=unreached_as_nan(peak_force, tmax),
+        time_of_peak=unreached_as_nan(peak_force, tmax, f0),
         history_contacts=tuple(int(i) for i in hist_idx),
         history_time=h_t[:nrec].copy(),
         history_force=h_f[:nrec].copy(),
