@@ -498,7 +498,8 @@ def _read_material(s: _Section, source: str, required: bool = True) -> tuple[mat
 
 def _read_chain(s: _Section, source: str) -> Chain:
     if s.table.get("beads") == AUTO:
-        beads = s.raw("beads") and None  # the planner chooses (granchain plan)
+        s.raw("beads")  # mark the key as read
+        beads = None  # "auto": the planner chooses (granchain plan)
     else:
         beads = s.integer("beads", low=2, what='number of beads; bead 1 is the loaded end, or "auto"')
     radii = materials = None
