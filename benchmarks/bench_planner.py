@@ -6,7 +6,7 @@ and time step chosen by granchain for the rtol that the paper setup achieves (an
 case, for rtol = 1e-3), early stop. Errors of the measured contacts' peak forces are measured
 against a converged RK4 run (dt = 2.5e-9 s) on the planner's chain. Run by hand:
 
-    python benchmarks/bench_planner.py
+    python benchmarks/bench_planner.py [SUBSTRING]   # only the cases whose name contains SUBSTRING
 """
 
 from __future__ import annotations
@@ -56,9 +56,11 @@ CASES = {
 PAPER_DT, PAPER_BEADS = 5e-9, 1000
 
 
-def main() -> None:
+def main(only: str = "") -> None:
     rows = []
     for name, (contact, loading, contacts) in CASES.items():
+        if only not in name:
+            continue
         auto = parse_scene(BASE.format(contact=contact, loading=loading, contacts=contacts), source=name)
         planned = plan_scene(auto, rtol=1e-3).scene
         idx = np.asarray(planned.peak_contacts) - 1
@@ -104,4 +106,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    main(sys.argv[1] if len(sys.argv) > 1 else "")

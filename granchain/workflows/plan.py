@@ -9,7 +9,12 @@ time step   the stiffest contact the run will see sets the highest chain frequen
             (p = 4 for RK4, 2 for Verlet; C calibrated on the reference solver, see CALIBRATION),
             below the stability limit, and short enough to resolve the load (T/4).
 beads       just enough that nothing reflected from the far end reaches the last measured contact
-            before the end: N > (L + c_max t_end / D) / 2, with c_max the fastest wave expected.
+            before the end: the disturbance reaches bead N no sooner than N D / c_lead and comes back
+            to contact L no sooner than (N - L) D / c_max, so N > (t_end + L D / c_max) /
+            (D / c_lead + D / c_max); c_max is the fastest wave expected anywhere, c_lead the fastest
+            that can enter the undisturbed chain (Hertz: c_max; bilinear: the loading line's sound
+            speed D sqrt(k/m), the largest group velocity of a linear chain; the faster unloading
+            speed D sqrt(k_u/m) only exists behind the front).
 end time    long enough for the leading wave to pass the last measured contact L, at the slowest
             leading speed expected, plus the load duration (long loads).
 """
@@ -70,6 +75,13 @@ def max_stiffness(scene) -> float:
     if scene.contact.law == "hertz":
         return float(hertz_tangent_stiffness(expected_peak_force(scene), scene.stiffness))
     return float(scene.unloading_stiffness)
+
+
+def leading_edge_speed(scene) -> float:
+    """The fastest a disturbance can enter the undisturbed chain, m/s (see the module docstring)."""
+    if scene.contact.law == "hertz":
+        return wave_speeds(scene)[1]
+    return scene.diameter * math.sqrt(scene.stiffness / scene.mass)
 
 
 def wave_speeds(scene) -> tuple[float, float]:
@@ -153,14 +165,16 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4") -> 
     if beads is None:
         if last is None:
             last = 1
-        n = math.ceil(1.1 * (last + fast * end / scene.diameter) / 2.0) + 5
+        lead, d = leading_edge_speed(scene), scene.diameter
+        n = math.ceil(1.1 * (end + last * d / fast) / (d / lead + d / fast)) + 5
         n = max(n, last + 5)
         choices.append(
             PlanChoice(
                 "beads",
                 n,
-                f"a reflection from bead N (waves up to {fast:.4g} m/s) reaches contact "
-                f"{last} after t_end = {end:.3g} s: N > (L + c t_end / D) / 2, +10% and 5 beads",
+                f"a reflection from bead N (into the chain at up to {lead:.4g} m/s, back at up to "
+                f"{fast:.4g} m/s) reaches contact {last} after t_end = {end:.3g} s: "
+                "N > (t_end + L D / c_back) / (D / c_lead + D / c_back), +10% and 5 beads",
             )
         )
         beads = n
