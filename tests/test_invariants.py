@@ -23,7 +23,7 @@ def test_blow_up_stops_with_the_invariant_and_the_fix(tmp_path, capsys):
     with pytest.raises(InvariantError) as e:
         run_scene(sc, force=True)
     err = e.value
-    assert err.invariant in ("finite state", "overlap far below the radius")
+    assert err.invariant in ("finite state", "overlap far below the radius", "energy balance")
     assert err.step > 0 and err.time > 0 and 1 <= err.contact <= 99
     assert "would choose" in str(err)
     p = tmp_path / "s.toml"
@@ -43,3 +43,46 @@ def test_beads_passing_through_each_other_are_caught():
 def test_a_sound_run_is_not_stopped():
     sol = run_scene(make_scene(end_time=1e-4, timestep=1e-8)).solution
     assert sol.steps > 0
+
+
+# ---- both backends watch the same invariants and stop at the same place
+
+
+@pytest.mark.parametrize("backend", ["reference", "lammps"])
+def test_energy_created_by_a_coarse_verlet_step_stops_the_run(backend):
+    # below the Verlet stability limit LAMMPS and the reference stay finite, but the first collision
+    # at this step creates 28% of the energy put in: both stop on the energy balance, at the same time
+    sc = make_scene(beads=100, loading=PULSE, end_time=7e-4, timestep=6e-6)
+    with pytest.raises(InvariantError) as e:
+        run_scene(sc, backend=backend, method="verlet", force=True)
+    assert e.value.invariant == "energy balance"
+    assert e.value.time == pytest.approx(7e-6) and e.value.step == 2
+    assert "created by the integrator" in str(e.value) and "would choose" in str(e.value)
+
+
+@pytest.mark.parametrize("backend", ["reference", "lammps"])
+def test_overlap_watch_names_step_and_contact_in_both_backends(backend):
+    sc = make_scene(beads=20, loading='kind = "velocity"\nvelocity = 1000.0', end_time=2e-5, timestep=1e-7)
+    with pytest.raises(InvariantError) as e:
+        run_scene(sc, backend=backend, method="verlet", force=True)
+    assert e.value.invariant == "overlap far below the radius"
+    assert (e.value.step, e.value.contact) == (40, 1)
+    assert "reduce the load" in str(e.value)
+
+
+def test_momentum_and_energy_checks_can_fail():
+    from granchain.invariants import check_solution
+
+    sc = make_scene(beads=30, loading=PULSE, end_time=1e-4, timestep=1e-8)
+    sol = run_scene(sc).solution
+    check_solution(sc, sol)  # a sound run passes the post-run check
+    sol.momentum *= 1 + 1e-5
+    with pytest.raises(InvariantError, match="momentum"):
+        check_solution(sc, sol)
+    sol.momentum /= 1 + 1e-5
+    sol.kinetic = sol.kinetic * 1.1
+    with pytest.raises(InvariantError, match="energy balance"):
+        check_solution(sc, sol)
+    sol.velocity[3] = float("nan")
+    with pytest.raises(InvariantError, match="finite state"):
+        check_solution(sc, sol)

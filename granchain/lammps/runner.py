@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from granchain.invariants import InvariantError, check_solution
 from granchain.lammps.build import build_plugin, mpich_file, plugin_env
 from granchain.postprocess.dumps import read_dump
 from granchain.reference.solver import step_plan, step_times
@@ -85,8 +86,19 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
     build_plugin()
     t_build = time.perf_counter() - t_build
     deck = render_deck(scene)
-    info, work = run_deck(deck.deck, deck.data, np_, work_dir)
+    try:
+        info, work = run_deck(deck.deck, deck.data, np_, work_dir)
+    except LammpsError as e:
+        broken = invariant_from_lammps(e, scene)
+        if broken is None:
+            raise
+        raise broken from None
     sol = read_solution(scene, work, info.get("steps", deck.total_steps), info["wall_time"], info.get("time"))
+    try:
+        check_solution(scene, sol)
+    except InvariantError:
+        cleanup(work)
+        raise
     extra = {
         "lammps_version": info.get("lammps_version"),
         "ranks": info.get("ranks"),
@@ -95,6 +107,30 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
         "plugin_build_time": t_build,
     }
     return RunResult(scene=scene, backend="lammps", solution=sol, extra=extra), work
+
+
+def invariant_from_lammps(err: LammpsError, scene) -> InvariantError | None:
+    """The run watch's stops (and LAMMPS's own instability errors) as InvariantErrors, else None."""
+    msg = err.lammps_message or str(err)
+    dt = scene.run.timestep
+    m = re.search(r"[Ff]ix halt condition for fix-id watch met on step (\d+) with value (\S+)", msg)
+    if m:
+        step, atom = int(m.group(1)), int(float(m.group(2)))
+        return InvariantError(
+            "overlap far below the radius",
+            step * dt,
+            step,
+            atom - atom_layout(scene)["offset"],
+            "a contact force beyond the force at half the radius (the run watch's bound)",
+        )
+    m = re.search(r"beads (\d+) and (\d+) overlap but are not neighbours", msg)
+    if m:
+        return InvariantError(
+            "overlap far below the radius", float("nan"), 0, int(m.group(1)), "beads passed through each other"
+        )
+    if "Non-numeric atom coords" in msg or "Non-numeric" in msg:
+        return InvariantError("finite state", float("nan"), 0, 0, "LAMMPS found non-numeric atom coordinates")
+    return None
 
 
 def x1_static(scene) -> float:

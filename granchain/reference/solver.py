@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from granchain.invariants import InvariantError, energy_violation, momentum_violation
 from granchain.physics.contact import BilinearLaw, HertzLaw
 from granchain.results import ChainSolution, unreached_as_nan
 
@@ -82,15 +83,6 @@ class ChainProblem:
         if ld.is_force:
             return cls(mass=mass, law=law, amplitude=ld.amplitude, duration=ld.duration, **extra)
         return cls(mass=mass, law=law, initial_velocity=ld.velocity, **extra)
-
-
-class InvariantError(RuntimeError):
-    """A run broke an invariant; says which, when, where, and (from the workflow) the fix."""
-
-    def __init__(self, invariant: str, time: float, step: int, contact: int, detail: str, fix: str = ""):
-        self.invariant, self.time, self.step, self.contact, self.detail = invariant, time, step, contact, detail
-        msg = f"invariant '{invariant}' broken at t = {time:.6g} s (step {step}), contact {contact}: {detail}"
-        super().__init__(msg + (f"; {fix}" if fix else ""))
 
 
 def static_state(law, force: float, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -239,6 +231,8 @@ def _solve(
     event_location: bool = True,
     stop_after: int | None = None,
     max_overlap: float | None = None,
+    energy_watch: float | None = None,
+    momentum_watch: float | None = None,
     watch_every: int = 20,
 ) -> ChainSolution:
     """Integrate the chain from rest (bead 1 possibly moving) to end_time.
@@ -248,6 +242,9 @@ def _solve(
     event_location (RK4 only): split steps where a contact's force law has a kink (see module doc).
     stop_after: 0-based contact; stop (checked every STOP_CHECK_EVERY steps, as LAMMPS's fix halt
     does) once its force has fallen below half its peak: the leading wave has passed it.
+    max_overlap, energy_watch, momentum_watch: the run watch (granchain.invariants); None = off.
+    Overlaps and a finite state are checked every watch_every steps and at breakpoints, the energy
+    balance at every energy sample, the momentum of a free chain with the overlaps.
     """
     if method not in METHODS:
         raise ValueError(f"method = {method!r} is not known; choose one of {', '.join(METHODS)}")
@@ -273,6 +270,7 @@ def _solve(
         if bilinear:
             alpha_hist[:] = alpha0  # the precompression loaded every contact plastically
     free_end = bool(np.isfinite(problem.mass[-1]))
+    p_initial = float(np.dot(np.where(np.isfinite(problem.mass), problem.mass, 0.0), v))
     u_init = u.copy()
 
     # ---- contact force into a padded buffer: fp[0] = 0 (external force added separately),
@@ -359,12 +357,21 @@ def _solve(
             w += f0 * (u[0] - u_init[0]) - (f0 * (u[-1] - u_init[-1]) if free_end else 0.0)
         return w
 
+    put_in = {"max": 0.0}  # the largest energy put in so far (the energy watch's scale)
+    step = 0  # steps taken (named by the watch)
+
     def energy_row(t: float):
         a_now = u[:-1] - u[1:]
         ke = 0.5 * float(np.dot(mass_ke, v * v))
         pe = float(np.sum(law.energy(a_now, alpha_hist)))
         de = (float(np.sum(law.dissipated(alpha_hist))) if bilinear else 0.0) + dash["energy"]
-        e_rows.append((t, ke, pe, de, work_now(t)))
+        w = work_now(t)
+        e_rows.append((t, ke, pe, de, w))
+        if energy_watch is not None:
+            put_in["max"] = max(put_in["max"], abs(w), ke + pe)
+            detail = energy_violation(ke + pe + de - w, put_in["max"], energy_watch)
+            if detail:
+                raise InvariantError("energy balance", t, step, int(np.argmax(a_now)) + 1, detail)
 
     def record_history(t: float):
         nonlocal nrec
@@ -580,6 +587,11 @@ def _solve(
                     i + 1,
                     f"overlap {a[i]:.3g} m exceeds {max_overlap:.3g} m (half the radius)",
                 )
+        if momentum_watch is not None and free_end and not f0:
+            delivered = problem.amplitude * min(problem.duration, t)
+            detail = momentum_violation(float(np.dot(mass_ke, v)), p_initial + delivered, momentum_watch)
+            if detail:
+                raise InvariantError("momentum", t, step, int(np.argmax(u[:-1] - u[1:])) + 1, detail)
 
     stopped = False
     step = 0

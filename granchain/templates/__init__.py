@@ -15,7 +15,11 @@ from importlib import resources
 import jinja2
 import numpy as np
 
+from granchain.invariants import OVERLAP_WATCH
 from granchain.reference.solver import STOP_CHECK_EVERY, step_plan
+
+#: steps between two checks of the LAMMPS run watch (the reference checks every 20 steps as well)
+WATCH_EVERY = 20
 
 LAMMPS_FILES = ("deck.lmp", "chain.data")
 
@@ -215,7 +219,13 @@ def render_deck(scene) -> Deck:
         ]
         if wall:
             coeffs.append({"i": tw, "j": ts, "k": scene.striker_stiffness, "d0": rs})
+    # the run watch's force bound: the largest force any contact can have at OVERLAP_WATCH x the
+    # smallest radius (Hertz k a^1.5; bilinear: its loading line k a)
+    a_watch = OVERLAP_WATCH * float(min(scene.bead_radii))
+    watch_force = max(c["k"] for c in coeffs) * a_watch ** (1.0 if bilinear else 1.5)
     ctx = {
+        "watch_force": watch_force,
+        "watch_every": WATCH_EVERY,
         "peratom": peratom,
         "pair_args": f" dashpot {fx.dashpot!r}" if fx.dashpot else "",
         "pair_coeffs": coeffs,
