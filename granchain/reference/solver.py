@@ -230,6 +230,7 @@ def _solve(
     energy_samples: int = 200,
     event_location: bool = True,
     stop_after: int | None = None,
+    stop_floor: float = 0.0,
     max_overlap: float | None = None,
     energy_watch: float | None = None,
     momentum_watch: float | None = None,
@@ -241,7 +242,8 @@ def _solve(
     every history_stride steps. snapshots: times (exact step boundaries) of whole-chain profiles.
     event_location (RK4 only): split steps where a contact's force law has a kink (see module doc).
     stop_after: 0-based contact; stop (checked every STOP_CHECK_EVERY steps, as LAMMPS's fix halt
-    does) once its force has fallen below half its peak: the leading wave has passed it.
+    does) once its force has fallen below half its peak: the leading wave has passed it. Only a
+    peak above stop_floor counts (round-off forces ahead of the wave must not stop the run).
     max_overlap, energy_watch, momentum_watch: the run watch (granchain.invariants); None = off.
     Overlaps and a finite state are checked every watch_every steps and at breakpoints, the energy
     balance at every energy sample, the momentum of a free chain with the overlaps.
@@ -563,7 +565,7 @@ def _solve(
         else:
             now = float(law.force(u[c] - u[c + 1], alpha_hist[c]))
             peak = float(law.force_at_peak_overlap(amax[c : c + 1])[0])
-        return peak > 0.0 and now < 0.5 * peak
+        return peak > stop_floor and now < 0.5 * peak
 
     def watch(step: int, t: float) -> None:
         """Cheap invariants, every watch_every steps: a finite state, overlaps below max_overlap."""

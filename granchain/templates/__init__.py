@@ -17,6 +17,7 @@ import numpy as np
 
 from granchain.invariants import OVERLAP_WATCH
 from granchain.reference.solver import STOP_CHECK_EVERY, step_plan
+from granchain.results import REACHED_FRACTION
 
 #: steps between two checks of the LAMMPS run watch (the reference checks every 20 steps as well)
 WATCH_EVERY = 20
@@ -162,6 +163,15 @@ def render_data(scene) -> str:
     return "\n".join(lines) + "\n"
 
 
+def stop_force_floor(scene) -> float:
+    """The smallest peak that counts as the leading wave for [run] stop_after_contact (both backends):
+    the static force plus REACHED_FRACTION of the largest expected force. Round-off forces ahead of
+    the wave (LAMMPS's positions miss D by an ulp: ~1e-11 N on a linear contact) stay far below."""
+    from granchain.workflows.plan import expected_peak_force
+
+    return float(scene.effects.precompression) + REACHED_FRACTION * expected_peak_force(scene)
+
+
 def render_deck(scene) -> Deck:
     from granchain import __version__
 
@@ -266,6 +276,7 @@ def render_deck(scene) -> Deck:
         "stop_after": scene.run.stop_after_contact,
         "stop_id": (scene.run.stop_after_contact or 0) + lay["offset"],
         "stop_every": STOP_CHECK_EVERY,
+        "stop_floor": stop_force_floor(scene) if scene.run.stop_after_contact else 0.0,
     }
     deck = _env().get_template("chain.lmp.j2").render(**ctx)
     return Deck(deck=deck, data=render_data(scene), total_steps=total)

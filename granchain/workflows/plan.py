@@ -7,7 +7,8 @@ time step   the stiffest contact the run will see sets the highest chain frequen
             the largest expected force (from the paper's peak-force models) or k_u (bilinear).
             The step is the largest one whose error model C (omega_max dt)^p stays below rtol
             (p = 4 for RK4, 2 for Verlet; C calibrated on the reference solver, see CALIBRATION),
-            below the stability limit, and short enough to resolve the load (T/4).
+            below the stability limit, and short enough to resolve the load (T/4; a pulse shorter than
+            one step is a step of its own, the step plan ends a step at T).
 beads       just enough that nothing reflected from the far end reaches the last measured contact
             before the end: the disturbance reaches bead N no sooner than N D / c_lead and comes back
             to contact L no sooner than (N - L) D / c_max, so N > (t_end + L D / c_max) /
@@ -135,7 +136,11 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4") -> 
             f"stability limit {stable:.3g} s"
         )
         ld = scene.loading
-        if ld.is_force and ld.duration < dt_new * 4:
+        if ld.is_force and ld.duration < dt_new:
+            # the step plan ends a step at T exactly and f is constant within it: one step is the
+            # whole pulse, integrated like any other (a 1e-10 s pulse does not force 1e-11 s steps)
+            why += f"; the pulse (T = {ld.duration:.3g} s) is one step of its own"
+        elif ld.is_force and ld.duration < dt_new * 4:
             dt_new = ld.duration / 4
             why += f"; resolves the load (T/4 = {dt_new:.3g} s)"
         dt = dt_new
