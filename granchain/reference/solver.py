@@ -199,6 +199,8 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
     s0 = 1 if striker else 0  # index of bead 1 inside
     if "histories" in kw:
         kw["histories"] = tuple(i + s0 for i in kw["histories"])
+    if kw.get("stop_after") is not None:
+        kw["stop_after"] += s0  # contact numbers inside count the striker's contact first
     sol = _solve(inner, end_time, timestep, method, **kw)
     if wall:
         sol.wall_peak_force = float(sol.peak_force[-1])
@@ -563,8 +565,10 @@ def _solve(
         if method == "verlet":
             now, peak = fc[c], fpk[c]
         else:
-            now = float(law.force(u[c] - u[c + 1], alpha_hist[c]))
-            peak = float(law.force_at_peak_overlap(amax[c : c + 1])[0])
+            # whole-chain evaluation (every STOP_CHECK_EVERY steps): per-contact stiffness arrays
+            # (striker, wall, per-bead chains) only broadcast against whole-chain arrays
+            now = float(law.force(u[:-1] - u[1:], alpha_hist)[c])
+            peak = float(law.force_at_peak_overlap(amax)[c])
         return peak > stop_floor and now < 0.5 * peak
 
     def watch(step: int, t: float) -> None:

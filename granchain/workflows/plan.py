@@ -54,21 +54,45 @@ class Plan:
     stable_timestep: float = 0.0
 
 
+def step_equivalent(scene) -> tuple[float, float] | None:
+    """(A, T) of the step load a scene's loading acts like, or None for a velocity kick of bead 1.
+
+    Force loads: their own A and T. A striker of mass M at speed V pushes like a piston at V for as
+    long as it carries momentum: behind a long-load front the beads move at v = D A / (m c) (Eq. 12)
+    with c the front speed (Eq. 19, c^2 = A^(1/3) k^(2/3) D^2 / m); v = V gives
+    c = ((m V / D)^(1/3) k^(2/3) D^2 / m)^(3/5) and A = m V c / D, for T = M V / A. A light striker
+    gives a short T, and the short-pulse model (Eq. 8 with I = M V) takes over through the min below.
+    """
+    ld = scene.loading
+    if ld.is_force:
+        return ld.amplitude, ld.duration
+    if ld.kind != "striker":
+        return None
+    m, d = scene.mass, scene.diameter
+    if scene.contact.law == "hertz":
+        c = ((m * ld.velocity / d) ** (1 / 3) * scene.stiffness ** (2 / 3) * d**2 / m) ** 0.6
+    else:
+        c = d * math.sqrt(scene.stiffness / m)  # the bilinear loading line's sound speed
+    a = m * ld.velocity * c / d
+    return a, scene.striker_mass * ld.velocity / a
+
+
 def expected_peak_force(scene) -> float:
     """An upper estimate of the largest contact force of the run (N), from the paper's models."""
     m, d, k = scene.mass, scene.diameter, scene.stiffness
-    ld = scene.loading
     impulse = scene.input_impulse
+    step = step_equivalent(scene)
     if scene.contact.law == "hertz":
         f = models.short_load_peak_force(impulse, m, scene.e_star, scene.r_star)  # Eq. 8
-        if ld.is_force:
-            fu = models.solitary_wave_peak_force(models.front_speed_upper(ld.amplitude, k, m, d), k, m, d)
-            f = min(f, max(fu, ld.amplitude))  # Fig. 3: the smaller of the two regimes' peaks
+        if step is not None:
+            amp = step[0]
+            fu = models.solitary_wave_peak_force(models.front_speed_upper(amp, k, m, d), k, m, d)
+            f = min(f, max(fu, amp))  # Fig. 3: the smaller of the two regimes' peaks
         return 1.5 * f  # the first contacts peak above the formed wave (up to ~1.2x measured)
     beta = scene.contact.unloading_coeff
     f = models.linear_chain_impulse_response(impulse, k, m, beta)["F_p"]  # Eq. A2
-    if ld.is_force:
-        f = min(f, 2.0 * ld.amplitude)  # a long load cannot push a linear contact past 2 A
+    if step is not None:
+        f = min(f, 2.0 * step[0])  # a long load cannot push a linear contact past 2 A
     return 1.5 * f
 
 
@@ -90,10 +114,10 @@ def wave_speeds(scene) -> tuple[float, float]:
     m, d, k = scene.mass, scene.diameter, scene.stiffness
     if scene.contact.law == "hertz":
         fast = models.solitary_wave_speed(expected_peak_force(scene), k, m, d)
-        ld = scene.loading
-        if ld.is_force:
+        step = step_equivalent(scene)
+        if step is not None:
             slow = min(
-                models.front_speed_lower(ld.amplitude, k, m, d),
+                models.front_speed_lower(step[0], k, m, d),
                 models.solitary_wave_speed(expected_peak_force(scene) / 1.5, k, m, d),
             )
         else:
@@ -155,9 +179,12 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4") -> 
                 "window, histories or a peak_force list"
             )
         ld = scene.loading
-        load = ld.duration if ld.is_force and ld.duration < 1e3 else 0.0
+        step = step_equivalent(scene)
+        load = step[1] if step is not None and step[1] < 1e3 else 0.0
         travel = last * scene.diameter / slow
         end = travel + min(load, travel)
+        if ld.kind == "impulse" and end < ld.duration:
+            end = ld.duration  # an impulse is measured whole: the run lasts at least the pulse
         choices.append(
             PlanChoice(
                 "end_time",
