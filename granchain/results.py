@@ -182,8 +182,10 @@ def write_run_dir(result: RunResult, out: str | Path, overwrite: bool = False, e
     out = check_output_dir(out, overwrite)
     parent = out.resolve().parent
     tmp = parent / f".{out.name}.partial-{os.getpid()}"
-    if tmp.exists():
-        shutil.rmtree(tmp)
+    for stale in parent.glob(f".{out.name}.partial-*"):  # left by a killed writer (or this pid's past)
+        pid = stale.name.rsplit("-", 1)[-1]
+        if stale == tmp or (pid.isdigit() and not _pid_alive(int(pid))):
+            shutil.rmtree(stale, ignore_errors=True)
     try:
         tmp.mkdir()
         _write_contents(result, tmp, extra_files or {})
@@ -201,6 +203,16 @@ def write_run_dir(result: RunResult, out: str | Path, overwrite: bool = False, e
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return out
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 def _write_contents(result: RunResult, d: Path, extra_files: dict) -> None:

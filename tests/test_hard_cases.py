@@ -15,8 +15,6 @@ omega_max, the stiffest contact's angular frequency, h = the time step, W = the 
       differences grow (beta = 0.99 contacts rattle at 10x the loading frequency)
 """
 
-import os
-
 import numpy as np
 import pytest
 
@@ -282,7 +280,7 @@ def test_hundred_thousand_beads():
 def test_ten_million_steps_energy_stays_bounded(backend):
     # a pulse trapped between the precompression push and a wall bounces for ever: 10 beads,
     # 1e7 Verlet steps; the energy error must oscillate inside its bound, not grow
-    steps = 10_000_000 if backend == "lammps" or os.environ.get("GRANCHAIN_FULL_LONG") else 2_000_000
+    steps = 10_000_000
     dt = 2e-8
     sc = parse_scene(
         text(

@@ -9,6 +9,7 @@ LAMMPS's message and the failing deck line; the calling process is never taken d
 from __future__ import annotations
 
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -39,6 +40,28 @@ class LammpsError(RuntimeError):
         self.deck_line = deck_line
 
 
+#: LAMMPS work directories are made in the temporary directory as granchain-lammps-<pid>-XXXX
+WORK_PREFIX = "granchain-lammps-"
+
+
+def sweep_stale_work_dirs() -> None:
+    """Remove work directories left by granchain processes that no longer exist (killed runs)."""
+    for d in Path(tempfile.gettempdir()).glob(f"{WORK_PREFIX}*-*"):
+        pid = d.name[len(WORK_PREFIX) :].split("-")[0]
+        if pid.isdigit() and not _alive(int(pid)):
+            shutil.rmtree(d, ignore_errors=True)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
 def _deck_line(message: str) -> str | None:
     m = re.search(r"Last (?:input )?(?:line|command):\s*(.*)", message)
     return m.group(1).strip() if m else None
@@ -56,15 +79,24 @@ def run_deck(deck: str, data: str, np_: int = 1, work_dir: str | Path | None = N
     if np_ < 1:
         raise ValueError(f"--np = {np_}: the number of MPI ranks must be at least 1")
     build_plugin()
-    work = Path(work_dir) if work_dir else Path(tempfile.mkdtemp(prefix="granchain-lammps-"))
-    work.mkdir(parents=True, exist_ok=True)
-    (work / "deck.lmp").write_text(deck)
-    (work / "chain.data").write_text(data)
+    if work_dir is None:
+        sweep_stale_work_dirs()
+        work = Path(tempfile.mkdtemp(prefix=f"{WORK_PREFIX}{os.getpid()}-"))
+    else:
+        work = Path(work_dir)
+        work.mkdir(parents=True, exist_ok=True)
     cmd = [sys.executable, "-m", "granchain.lammps.worker", str(work)]
     if np_ > 1:
         cmd = [_mpirun(), "-np", str(np_), *cmd]
     t0 = time.perf_counter()
-    proc = subprocess.run(cmd, env=plugin_env(), capture_output=True, text=True, stdin=subprocess.DEVNULL)
+    try:
+        (work / "deck.lmp").write_text(deck)
+        (work / "chain.data").write_text(data)
+        proc = subprocess.run(cmd, env=plugin_env(), capture_output=True, text=True, stdin=subprocess.DEVNULL)
+    except BaseException:  # Ctrl-C (the worker got it too), a full disk: leave no work directory behind
+        if work_dir is None:
+            cleanup(work)
+        raise
     status = work / "worker.json"
     info = json.loads(status.read_text()) if status.exists() else None
     if info is None or not info.get("ok"):
