@@ -3,8 +3,9 @@
 Paper setup: RK4 at dt = 5e-9 s on a fixed 1000-bead chain for a fixed end time, the force of the
 measured contacts stored every step (peaks taken from the stored samples). Planner: beads, end time
 and time step chosen by granchain for the rtol that the paper setup achieves (and, as the practical
-case, for rtol = 1e-3, with RK4 and with LAMMPS's Verlet), early stop. Errors of the measured contacts' peak forces are measured
-against a converged RK4 run (dt = 2.5e-9 s) on the planner's chain. Run by hand:
+case, for rtol = 1e-3, with RK4 and with LAMMPS's Verlet), early stop. Errors of the measured
+contacts' peak forces are measured against a converged RK4 run (dt = 2.5e-9 s) on the planner's
+chain. Run by hand:
 
     python benchmarks/bench_planner.py [SUBSTRING]   # only the cases whose name contains SUBSTRING
 """

@@ -244,3 +244,113 @@ def test_mutated_scenes_are_valid_or_refused_clearly(mutations):
 def test_bundled_scene_files_exist_on_disk():
     root = Path(__file__).parents[1] / "granchain" / "scenes"
     assert {p.stem for p in root.glob("*.toml")} == set(bundled_scenes())
+
+
+# ---- property-based, end to end: generated scene files through `granchain run` -- valid ones run,
+# invalid ones are refused with one message naming the file; never a traceback
+
+SMALL_SCENE = """
+[chain]
+beads = 8
+radius = 4.76e-3
+material = "brass"
+[contact]
+law = "hertz"
+[loading]
+kind = "impulse"
+impulse = 0.01
+duration = 1e-6
+[run]
+end_time = 2e-5
+timestep = 1e-7
+[outputs]
+peak_force = true
+histories = [1, 2]
+"""
+file_paths = st.sampled_from(
+    [
+        ("chain", "beads"),
+        ("chain", "radius"),
+        ("chain", "material"),
+        ("chain", "radii"),
+        ("contact", "law"),
+        ("contact", "unloading_coeff"),
+        ("contact", "plastic_stiffness"),
+        ("loading", "kind"),
+        ("loading", "velocity"),
+        ("loading", "impulse"),
+        ("loading", "duration"),
+        ("run", "timestep"),
+        ("run", "end_time"),
+        ("outputs", "histories"),
+        ("outputs", "snapshots"),
+        ("boundary", "far_end"),
+        ("damping", "dashpot"),
+        ("precompression", "force"),
+        ("loading", "mass"),
+        ("loading", "amplitude"),
+    ]
+)
+file_values = st.one_of(
+    st.sampled_from([0, 1, 2, 5, 12, -1, 0.5, 0.99, 1.0, 1e-7, 1e-6, 5e-6, 1e-5, 3e-5, 2.43e7, -4.76e-3, 4.76e-3]),
+    st.sampled_from(["hertz", "bilinear", "wall", "free", "velocity", "striker", "step", "brass", "auto", ""]),
+    st.lists(st.sampled_from([1, 2, 3, 7, 9, 4.76e-3, 3e-3]), max_size=3),
+    st.floats(allow_nan=True, allow_infinity=True, width=64),
+    st.booleans(),
+)
+
+#: run lengths stay small (a valid 1e7 s run is valid, and would run for a day)
+run_values = st.sampled_from([1e-7, 1e-6, 5e-6, 2e-5, 3e-5, 0, -1e-6, "auto", "x", float("nan"), float("inf"), True])
+
+
+def _toml_value(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return '"' + v + '"'
+    if isinstance(v, float):
+        return {"nan": "nan", "inf": "inf", "-inf": "-inf"}.get(repr(v), repr(v))
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    return repr(v)
+
+
+@settings(
+    max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
+@given(
+    st.lists(
+        file_paths.flatmap(lambda p: st.tuples(st.just(p), run_values if p[0] == "run" else file_values)), max_size=2
+    ),
+    st.sampled_from([""] * 12 + ["[chain\n", "beads = = 3\n", "\x00", "[run]\nend_time = 1e-5\n"]),
+)
+def test_generated_scene_files_run_or_are_refused_clearly(tmp_path_factory, mutations, garbage):
+    import contextlib
+    import io
+
+    from granchain.cli import main
+
+    data = tomllib.loads(SMALL_SCENE)
+    for (section, key), value in mutations:
+        data.setdefault(section, {})[key] = value
+    text = "\n".join(
+        f"[{section}]\n" + "".join(f"{k} = {_toml_value(v)}\n" for k, v in table.items())
+        for section, table in data.items()
+    )
+    d = tmp_path_factory.mktemp("gen")
+    path = d / "gen.toml"
+    path.write_text(text + garbage)
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        rc = main(["run", str(path), "--out", str(d / "out")])  # an uncaught exception fails the test
+    message = err.getvalue()
+    from hypothesis import event
+
+    event("ran" if rc == 0 else message.replace(str(path), "FILE")[:70])
+    if rc == 0:
+        assert (d / "out" / "summary.json").exists()
+        return
+    assert rc == 2 and message.startswith("granchain: error: ") and message.count("\n") <= 3, message
+    assert not (d / "out").exists()
+    if "invariant" not in message and "stability limit" not in message:
+        assert str(path) in message or "gen.toml" in message  # a scene error names the file
