@@ -99,7 +99,9 @@ def largest(sc, integrator: str, limit: float, accept) -> float:
 
 
 def stability() -> None:
-    print("| scene | integrator | predicted limit | largest without blow-up | ratio | largest inside the watch | ratio |")
+    print(
+        "| scene | integrator | predicted limit | largest without blow-up | ratio | largest inside the watch | ratio |"
+    )
     print("|---|---|---|---|---|---|---|")
     for name, sc in scenes():
         for integrator in ("rk4", "verlet", "lammps"):
