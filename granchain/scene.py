@@ -83,8 +83,8 @@ class Outputs:
     histories: tuple[int, ...] = ()  # contacts whose force (and bead velocity) vs time is kept
     snapshots: tuple[float, ...] = ()  # times of force/velocity profiles along the chain
     window: tuple[int, int] | None = None  # contacts used for leading peak and wave speed
-    history_interval: float | None = None  # s between history samples (default: every step)
-    dump_interval: float | None = None  # s between whole-chain LAMMPS dump frames (default: none)
+    history_interval: float | str | None = None  # s between history samples (default: every step; "auto")
+    dump_interval: float | str | None = None  # s between whole-chain LAMMPS dump frames (default: none; "auto")
 
 
 FAR_ENDS = ("free", "wall")
@@ -114,7 +114,12 @@ class Scene:
     @property
     def needs_plan(self) -> bool:
         """Some value is "auto": run granchain.workflows.plan.plan_scene first."""
-        return self.chain.beads is None or self.run.end_time is None or self.run.timestep is None
+        return (
+            self.chain.beads is None
+            or self.run.end_time is None
+            or self.run.timestep is None
+            or AUTO in (self.outputs.history_interval, self.outputs.dump_interval)
+        )
 
     # ---- derived quantities (definitions live in granchain.physics) ----
     @property
@@ -699,14 +704,18 @@ def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
         ):
             raise s.fail("window", v, allowed)
         window = (v[0], v[1])
-    interval = s.number(
-        "history_interval", required=False, low=0.0, what="s between history samples, at least the time step"
-    )
-    if interval is not None and run.timestep is not None and interval < run.timestep:
-        raise s.fail("history_interval", interval, f"at least the time step {run.timestep:g} s")
-    dump = s.number("dump_interval", required=False, low=0.0, what="s between whole-chain dump frames (LAMMPS)")
-    if dump is not None and run.timestep is not None and dump < run.timestep:
-        raise s.fail("dump_interval", dump, f"at least the time step {run.timestep:g} s")
+
+    def interval_or_auto(key: str, what: str):
+        if s.table.get(key) == AUTO:
+            s.raw(key)
+            return AUTO
+        v = s.number(key, required=False, low=0.0, what=what + ', or "auto" for the planner to choose')
+        if v is not None and run.timestep is not None and v < run.timestep:
+            raise s.fail(key, v, f"at least the time step {run.timestep:g} s")
+        return v
+
+    interval = interval_or_auto("history_interval", "s between history samples, at least the time step")
+    dump = interval_or_auto("dump_interval", "s between whole-chain dump frames (LAMMPS), at least the time step")
     if run.stop_after_contact is not None:
         if run.stop_after_contact > nc:
             raise SceneError(

@@ -132,3 +132,39 @@ def test_planner_on_paper_cases_reaches_converged_peaks(name):
     worst = idx[ok][np.argmax(np.abs(got.peak_force[idx][ok] - ref.peak_force[idx][ok]) / ref.peak_force[idx][ok])]
     print(f"{name}: dt {sc.run.timestep:.3g} s, error {err:.1e} (contact {worst + 1}), {ok.sum()} peaks")
     assert err <= 1e-3
+
+
+@pytest.mark.parametrize("method, rtol", [("rk4", 1e-3), ("verlet", 1e-2), ("verlet", 1e-3)])
+def test_auto_history_interval_keeps_dump_derived_peaks_within_rtol(method, rtol):
+    from granchain.postprocess.dumps import peaks_from_samples
+
+    text = AUTO.format(
+        law="hertz", extra="", loading='kind = "impulse"\nimpulse = 0.4\nduration = 1e-6', contacts="20, 40"
+    )
+    text += 'histories = [20, 30, 40]\nhistory_interval = "auto"\n'
+    plan = plan_scene(parse_scene(text, source="auto.toml"), rtol=rtol, method=method)
+    sc = plan.scene
+    stride = round(sc.outputs.history_interval / sc.run.timestep)
+    assert stride >= 1 and sc.outputs.history_interval == pytest.approx(stride * sc.run.timestep)
+    assert any(c.name == "history_interval" for c in plan.choices)
+    sol = run_scene(sc, method=method).solution
+    got, _ = peaks_from_samples(sol.history_time, sol.history_force, refine=True)
+    inrun = sol.peak_force[np.asarray(sc.outputs.histories) - 1]
+    err = float(np.max(np.abs(got - inrun) / inrun))
+    print(f"{method} rtol {rtol}: history every {stride} steps, dump-derived peaks within {err:.1e}")
+    assert err <= rtol
+    if method == "verlet":
+        assert stride > 1  # Verlet's small steps: fewer samples than steps
+
+
+def test_auto_intervals_need_a_plan():
+    from granchain.templates import history_stride
+
+    sc = parse_scene(
+        AUTO.format(law="hertz", extra="", loading='kind = "velocity"\nvelocity = 1.0', contacts="20")
+        + 'histories = [20]\nhistory_interval = "auto"\n',
+        source="auto.toml",
+    )
+    assert sc.needs_plan
+    with pytest.raises(ValueError, match="plan the scene first"):
+        history_stride(sc)

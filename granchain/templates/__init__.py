@@ -53,6 +53,7 @@ def history_stride(scene) -> int:
     """Steps between history samples: history_interval / timestep, at least 1."""
     if scene.outputs.history_interval is None:
         return 1
+    _planned(scene.outputs.history_interval, "history_interval")
     return max(1, round(scene.outputs.history_interval / scene.run.timestep))
 
 
@@ -60,7 +61,13 @@ def dump_stride(scene) -> int:
     """Steps between whole-chain dump frames (0: no whole-chain dump)."""
     if scene.outputs.dump_interval is None:
         return 0
+    _planned(scene.outputs.dump_interval, "dump_interval")
     return max(1, round(scene.outputs.dump_interval / scene.run.timestep))
+
+
+def _planned(value, key: str) -> None:
+    if isinstance(value, str):
+        raise ValueError(f'[outputs] {key} = "auto": plan the scene first (granchain.workflows.plan.plan_scene)')
 
 
 def atom_layout(scene) -> dict:

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field, replace
 
 from granchain.physics import models
 from granchain.physics.contact import hertz_tangent_stiffness
-from granchain.scene import Scene, SceneError, scene_from_dict, scene_to_dict
+from granchain.scene import AUTO, Scene, SceneError, scene_from_dict, scene_to_dict
 
 #: Error model constants C in  rel. error of peak forces ~ C (omega_max dt)^p. Measured C (planned
 #: runs against runs at dt/16, bundled scenes): RK4 0.2-0.54 (elastic long loads), Verlet 0.1-0.6;
@@ -226,6 +226,24 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4") -> 
         )
     if stop is not None:
         d["run"]["stop_after_contact"] = stop
+    # output intervals: the largest sampling interval whose dump-derived peaks (three-point parabola,
+    # postprocess.dumps.peaks_from_samples) stay within rtol at the stiffest frequency: the parabola
+    # misses a cosine's peak by about (omega D)^4 / 16 (measured on dumps: (omega D)^4 / 100); a
+    # multiple of the time step
+    o = scene.outputs
+    for key in ("history_interval", "dump_interval"):
+        if getattr(o, key) == AUTO:
+            step = d["run"]["timestep"]
+            stride = max(1, math.floor((16.0 * rtol_eff) ** 0.25 / omega / step))
+            d["outputs"][key] = stride * step
+            choices.append(
+                PlanChoice(
+                    key,
+                    stride * step,
+                    f"every {stride} steps: dump-derived peaks within rtol {rtol_eff:g} "
+                    f"((omega_max D)^4 / 16 <= rtol, D <= {(16.0 * rtol_eff) ** 0.25 / omega:.3g} s)",
+                )
+            )
     planned = scene_from_dict(d, source=scene.source or "<scene>")
     planned = replace(planned, source=scene.source, source_text=None)
     return Plan(scene=planned, rtol=rtol_eff, method=method, choices=choices, omega_max=omega, stable_timestep=stable)
