@@ -7,7 +7,8 @@ omega_max, the stiffest contact's angular frequency, h = the time step, W = the 
   velocity Verlet (reference and LAMMPS)  |E - W| <= (omega h)^2 / 4 W    (the harmonic oscillator's
       energy error amplitude: Verlet conserves a shadow energy, the error oscillates and does not grow)
   RK4                                     |E - W| <= n (omega h)^6 / 72 W  (n steps: per step RK4 damps
-      the stiffest mode's energy by (omega h)^6 / 72; the drift grows with n and stays this small)
+      the stiffest linear mode's energy by (omega h)^6 / 72; an estimate that holds on these runs but
+      not on a 1e6-step trapped pulse, 2.5x above it: see benchmarks/RESULTS.md)
   free chain                              total momentum = initial momentum + impulse, to 1e-9
   LAMMPS vs reference Verlet (same dt)    peaks agree to max(1e-9, 100 eps L / alpha, 1e-3 x Verlet's
       own error): round-off; LAMMPS's absolute positions (x ~ L carries eps L of absolute error, an
