@@ -184,7 +184,7 @@ def write_run_dir(result: RunResult, out: str | Path, overwrite: bool = False, e
     tmp = parent / f".{out.name}.partial-{os.getpid()}"
     for stale in parent.glob(f".{out.name}.partial-*"):  # left by a killed writer (or this pid's past)
         pid = stale.name.rsplit("-", 1)[-1]
-        if stale == tmp or (pid.isdigit() and not _pid_alive(int(pid))):
+        if stale == tmp or (pid.isdigit() and not pid_alive(int(pid))):
             shutil.rmtree(stale, ignore_errors=True)
     try:
         tmp.mkdir()
@@ -205,7 +205,8 @@ def write_run_dir(result: RunResult, out: str | Path, overwrite: bool = False, e
     return out
 
 
-def _pid_alive(pid: int) -> bool:
+def pid_alive(pid: int) -> bool:
+    """Whether a process exists (stale partial run and LAMMPS work directories name their writer)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:

@@ -24,7 +24,7 @@ from granchain.invariants import InvariantError, check_solution
 from granchain.lammps.build import build_plugin, mpich_file, plugin_env
 from granchain.postprocess.dumps import read_dump
 from granchain.reference.solver import step_plan, step_times
-from granchain.results import ChainSolution, RunResult, unreached_as_nan
+from granchain.results import ChainSolution, RunResult, pid_alive, unreached_as_nan
 from granchain.templates import atom_layout, render_deck
 
 #: files of a LAMMPS work directory that are copied into the run directory
@@ -48,18 +48,8 @@ def sweep_stale_work_dirs() -> None:
     """Remove work directories left by granchain processes that no longer exist (killed runs)."""
     for d in Path(tempfile.gettempdir()).glob(f"{WORK_PREFIX}*-*"):
         pid = d.name[len(WORK_PREFIX) :].split("-")[0]
-        if pid.isdigit() and not _alive(int(pid)):
+        if pid.isdigit() and not pid_alive(int(pid)):
             shutil.rmtree(d, ignore_errors=True)
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 def _deck_line(message: str) -> str | None:
