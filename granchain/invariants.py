@@ -58,7 +58,8 @@ def momentum_violation(momentum: float, expected: float, bound: float = MOMENTUM
 
 
 def check_solution(scene, sol, steps: int | None = None) -> None:
-    """Post-run check of a finished solution (the LAMMPS backend; the reference watches as it goes).
+    """Post-run check of a finished LAMMPS solution, behind the deck's own in-run watch (fix halt on
+    the same bounds, templates/watch.lmp.j2): it also uses the running maximum of the energy put in.
 
     Raises InvariantError for the first broken invariant found: finite state, energy balance at
     every energy sample, momentum of a free chain at the end.

@@ -86,3 +86,22 @@ def test_momentum_and_energy_checks_can_fail():
     sol.velocity[3] = float("nan")
     with pytest.raises(InvariantError, match="finite state"):
         check_solution(sc, sol)
+
+
+def test_lammps_in_run_momentum_and_energy_watch_can_fire(tmp_path):
+    # the deck's own watch, fed a wrong expectation, stops LAMMPS mid-run and becomes an InvariantError
+    from granchain.lammps.runner import LammpsError, invariant_from_lammps, run_deck
+    from granchain.templates import render_deck
+
+    sc = make_scene(beads=30, loading=PULSE, end_time=1e-4, timestep=1e-8)
+    deck = render_deck(sc)
+    for key, wrong, invariant in (
+        ('variable        watch_p_expected equal "0.0', 'variable        watch_p_expected equal "1e-3', "momentum"),
+        ('variable        watch_work equal "0.0', 'variable        watch_work equal "1.0', "energy balance"),
+    ):
+        assert key in deck.deck
+        with pytest.raises(LammpsError) as e:
+            run_deck(deck.deck.replace(key, wrong, 1), deck.data, work_dir=tmp_path / invariant.replace(" ", "_"))
+        broken = invariant_from_lammps(e.value, sc)
+        assert broken is not None and broken.invariant == invariant
+        assert broken.step == 20 if invariant == "momentum" else broken.step > 0

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from granchain.invariants import InvariantError, check_solution
+from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution
 from granchain.lammps.build import build_plugin, mpich_file, plugin_env
 from granchain.postprocess.dumps import read_dump
 from granchain.reference.solver import step_plan, step_times
@@ -134,17 +134,22 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
 def invariant_from_lammps(err: LammpsError, scene) -> InvariantError | None:
     """The run watch's stops (and LAMMPS's own instability errors) as InvariantErrors, else None."""
     msg = err.lammps_message or str(err)
-    dt = scene.run.timestep
-    m = re.search(r"[Ff]ix halt condition for fix-id watch met on step (\d+) with value (\S+)", msg)
+    m = re.search(r"[Ff]ix halt condition for fix-id (watch\w*) met on step (\d+) with value (\S+)", msg)
     if m:
-        step, atom = int(m.group(1)), int(float(m.group(2)))
-        return InvariantError(
-            "overlap far below the radius",
-            step * dt,
-            step,
-            atom - atom_layout(scene)["offset"],
-            "a contact force beyond the force at half the radius (the run watch's bound)",
-        )
+        fix, step, value = m.group(1), int(m.group(2)), float(m.group(3))
+        atom = int(abs(value))
+        if fix == "watch_energy":  # value = +-(atom + relative error capped below 1)
+            rel = abs(value) - atom
+            invariant, detail = (
+                "energy balance",
+                f"kinetic + stored + dissipated - work: {'at least ' if rel > 0.998 else ''}{rel:.2g} of the energy "
+                f"put in was {'created' if value > 0 else 'lost'} by the integrator (bound {ENERGY_WATCH:g}; LAMMPS)",
+            )
+        elif fix == "watch_momentum":
+            invariant, detail = "momentum", "total momentum differs from the initial momentum plus the impulse (LAMMPS)"
+        else:
+            invariant, detail = "overlap far below the radius", "a contact force beyond the force at half the radius"
+        return InvariantError(invariant, step_times_of(scene)[step], step, atom - atom_layout(scene)["offset"], detail)
     m = re.search(r"beads (\d+) and (\d+) overlap but are not neighbours", msg)
     if m:
         return InvariantError(
@@ -153,6 +158,15 @@ def invariant_from_lammps(err: LammpsError, scene) -> InvariantError | None:
     if "Non-numeric atom coords" in msg or "Non-numeric" in msg:
         return InvariantError("finite state", float("nan"), 0, 0, "LAMMPS found non-numeric atom coordinates")
     return None
+
+
+def step_times_of(scene) -> np.ndarray:
+    """Time after every step of the scene's run (steps are shortened at breakpoints)."""
+    ld = scene.loading
+    plan = step_plan(
+        scene.run.end_time, scene.run.timestep, ld.duration if ld.is_force else 0.0, scene.outputs.snapshots
+    )
+    return step_times(plan, scene.run.timestep)
 
 
 def x1_static(scene) -> float:

@@ -15,7 +15,7 @@ from importlib import resources
 import jinja2
 import numpy as np
 
-from granchain.invariants import OVERLAP_WATCH
+from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
 from granchain.reference.solver import STOP_CHECK_EVERY, step_plan
 from granchain.results import REACHED_FRACTION
 
@@ -179,6 +179,40 @@ def stop_force_floor(scene) -> float:
     return float(scene.effects.precompression) + REACHED_FRACTION * expected_peak_force(scene)
 
 
+def energy_watch_terms(scene) -> dict:
+    """What the deck's in-run energy and momentum watch needs (granchain.invariants, same bounds as
+    the reference): the energy at t = 0 (the reference's own bookkeeping, one Verlet step of it),
+    bead 1's and bead N's x at t = 0, and the initial momentum of a free chain."""
+    from granchain.reference.solver import ChainProblem, precompressed_displacements, solve_chain
+
+    dt = scene.run.timestep
+    e0 = float(solve_chain(ChainProblem.from_scene(scene), dt, dt, "verlet").work[0])
+    u0 = precompressed_displacements(scene)[0] if scene.effects.precompression else np.zeros(scene.chain.beads)
+    x0 = scene.bead_positions if scene.per_bead else np.arange(scene.chain.beads) * scene.diameter
+    ld = scene.loading
+    p0 = 0.0
+    if ld.kind == "velocity":
+        p0 = float(scene.bead_masses[0] if scene.per_bead else scene.mass) * ld.velocity
+    elif ld.kind == "striker":
+        p0 = scene.striker_mass * ld.velocity
+    f0, lay = float(scene.effects.precompression), atom_layout(scene)
+    static_work = ""  # the static forces' work: the push on bead 1 and, without a wall, the pull on bead N
+    if f0:
+        static_work = f" + {f0!r}*(x[{1 + lay['offset']}] - {float(x0[0] + u0[0])!r})"
+        if scene.effects.far_end != "wall":
+            static_work += f" - {f0!r}*(x[{scene.chain.beads + lay['offset']}] - {float(x0[-1] + u0[-1])!r})"
+    return {
+        "watch_static_work": static_work,
+        "energy_watch": ENERGY_WATCH,
+        "momentum_watch": MOMENTUM_WATCH,
+        "e0": e0,
+        "x1_0": float(x0[0] + u0[0]),
+        "xn_0": float(x0[-1] + u0[-1]),
+        "p0": p0,
+        "watch_momentum": scene.effects.far_end == "free" and not scene.effects.precompression,
+    }
+
+
 def render_deck(scene) -> Deck:
     from granchain import __version__
 
@@ -241,6 +275,7 @@ def render_deck(scene) -> Deck:
     a_watch = OVERLAP_WATCH * float(min(scene.bead_radii))
     watch_force = max(c["k"] for c in coeffs) * a_watch ** (1.0 if bilinear else 1.5)
     ctx = {
+        **energy_watch_terms(scene),
         "watch_force": watch_force,
         "watch_every": WATCH_EVERY,
         "peratom": peratom,
