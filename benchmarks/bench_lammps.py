@@ -14,7 +14,7 @@ from pathlib import Path
 
 from granchain.lammps.runner import run_deck
 from granchain.scene import parse_scene
-from granchain.templates import render_deck
+from granchain.templates import builtin_granular_deck, render_deck
 
 SCENE = """
 [chain]
@@ -34,20 +34,6 @@ peak_force = true
 """
 
 
-def builtin(deck: str, scene) -> str:
-    m = scene.chain.material
-    start, end = deck.index("# ---- contact law"), deck.index("neighbor")
-    return (
-        deck[:start]
-        + "fix             contact all property/atom d_fc d_fprev d_fprev2 d_fpeak d_tpeak ghost yes\n"
-        + "pair_style      granular\n"
-        + f"pair_coeff      * * hertz/material {m.youngs_modulus!r} 0.0 {m.poisson_ratio!r} "
-        + "tangential linear_nohistory 0.0 0.0 damping viscoelastic\n"
-        + "comm_modify     vel yes\n\n"
-        + deck[end:]
-    )
-
-
 def loop_time(work: Path) -> float:
     return sum(float(x) for x in re.findall(r"Loop time of ([0-9.eE+-]+)", (work / "log.lammps").read_text()))
 
@@ -59,7 +45,7 @@ def main() -> None:
         deck = render_deck(sc)
         res = {"ours": [], "builtin": []}
         for _ in range(3):
-            for name, text in (("ours", deck.deck), ("builtin", builtin(deck.deck, sc))):
+            for name, text in (("ours", deck.deck), ("builtin", builtin_granular_deck(deck.deck, sc))):
                 with tempfile.TemporaryDirectory() as tmp:
                     _, work = run_deck(text, deck.data, work_dir=tmp)
                     res[name].append(loop_time(work) / (n * steps) * 1e9)
