@@ -274,7 +274,7 @@ def _solve(
         if bilinear:
             alpha_hist[:] = alpha0  # the precompression loaded every contact plastically
     free_end = bool(np.isfinite(problem.mass[-1]))
-    p_initial = float(np.dot(np.where(np.isfinite(problem.mass), problem.mass, 0.0), v))
+    p_initial = float(np.dot(mass_ke, v))  # (a striker's or bead 1's initial momentum)
     u_init = u.copy()
 
     # ---- contact force into a padded buffer: fp[0] = 0 (external force added separately),
