@@ -210,6 +210,16 @@ class Scene:
         return (self.striker_mass if ld.kind == "striker" else self.mass) * ld.velocity
 
     @property
+    def initial_momentum(self) -> float:
+        """Momentum at t = 0: bead 1's m v (velocity load), the striker's M V, else 0."""
+        ld = self.loading
+        if ld.kind == "velocity":
+            return float(self.bead_masses[0] if self.per_bead else self.mass) * ld.velocity
+        if ld.kind == "striker":
+            return self.striker_mass * ld.velocity
+        return 0.0
+
+    @property
     def input_energy(self) -> float | None:
         """Kinetic energy put in by a velocity or striker load (None for force loads)."""
         ld = self.loading

@@ -151,6 +151,24 @@ def inverse_decay_exponent(beta: float) -> float:
     return (1.0 + beta) / 2.0
 
 
+def linear_sound_speed(k: float, mass: float, diameter: float) -> float:
+    """c = D sqrt(k/m) (Sec. III B): the plastic loading front's speed, and the largest group
+    velocity of a linear chain of stiffness k (nothing enters an undisturbed chain faster)."""
+    return diameter * math.sqrt(k / mass)
+
+
+def piston_step_amplitude(velocity: float, k: float, mass: float, diameter: float, linear: bool = False) -> float:
+    """The step load A a piston at speed V acts like: behind a long-load front the beads move at
+    v = D A / (m c) (Eq. 12); with v = V and the front speed c of Eq. 19 (Hertz,
+    c^2 = A^(1/3) k^(2/3) D^2 / m, so c = ((m V / D)^(1/3) k^(2/3) D^2 / m)^(3/5)) or c = D sqrt(k/m)
+    (linear loading line), A = m V c / D."""
+    if linear:
+        c = linear_sound_speed(k, mass, diameter)
+    else:
+        c = ((mass * velocity / diameter) ** (1 / 3) * k ** (2 / 3) * diameter**2 / mass) ** 0.6
+    return mass * velocity * c / diameter
+
+
 def long_load_bilinear(
     amplitude: float, duration: float, k: float, beta: float, mass: float, diameter: float
 ) -> dict[str, float]:
@@ -165,8 +183,8 @@ def long_load_bilinear(
     prints 0.342 m (x_t = 0.342 m would put the merge at T_t = 0.45 ms, before the load ends).
     """
     ku = k / (1.0 - beta)
-    c = diameter * math.sqrt(k / mass)
-    cu = diameter * math.sqrt(ku / mass)
+    c = linear_sound_speed(k, mass, diameter)
+    cu = linear_sound_speed(ku, mass, diameter)
     f1 = amplitude
     v1 = f1 * diameter / (mass * c)
     vt = v1 - f1 * diameter / (mass * cu)

@@ -72,7 +72,7 @@ def _model_rows(scene, ref_obs: dict) -> dict[str, tuple[float, str]]:
                 "Eq. A2 (short loading)",
             )
         if ld.is_force and ld.duration > 10.0 * contact_time:
-            out["wave_speed"] = (d * math.sqrt(k / m), "c = D sqrt(k/m) (Sec. III B, long loading)")
+            out["wave_speed"] = (models.linear_sound_speed(k, m, d), "c = D sqrt(k/m) (Sec. III B, long loading)")
     return out
 
 

@@ -189,12 +189,6 @@ def energy_watch_terms(scene) -> dict:
     e0 = float(solve_chain(ChainProblem.from_scene(scene), dt, dt, "verlet").work[0])
     u0 = precompressed_displacements(scene)[0] if scene.effects.precompression else np.zeros(scene.chain.beads)
     x0 = scene.bead_positions if scene.per_bead else np.arange(scene.chain.beads) * scene.diameter
-    ld = scene.loading
-    p0 = 0.0
-    if ld.kind == "velocity":
-        p0 = float(scene.bead_masses[0] if scene.per_bead else scene.mass) * ld.velocity
-    elif ld.kind == "striker":
-        p0 = scene.striker_mass * ld.velocity
     f0, lay = float(scene.effects.precompression), atom_layout(scene)
     static_work = ""  # the static forces' work: the push on bead 1 and, without a wall, the pull on bead N
     if f0:
@@ -208,7 +202,7 @@ def energy_watch_terms(scene) -> dict:
         "e0": e0,
         "x1_0": float(x0[0] + u0[0]),
         "xn_0": float(x0[-1] + u0[-1]),
-        "p0": p0,
+        "p0": scene.initial_momentum,
         "watch_momentum": scene.effects.far_end == "free" and not scene.effects.precompression,
     }
 

@@ -58,22 +58,17 @@ def step_equivalent(scene) -> tuple[float, float] | None:
     """(A, T) of the step load a scene's loading acts like, or None for a velocity kick of bead 1.
 
     Force loads: their own A and T. A striker of mass M at speed V pushes like a piston at V for as
-    long as it carries momentum: behind a long-load front the beads move at v = D A / (m c) (Eq. 12)
-    with c the front speed (Eq. 19, c^2 = A^(1/3) k^(2/3) D^2 / m); v = V gives
-    c = ((m V / D)^(1/3) k^(2/3) D^2 / m)^(3/5) and A = m V c / D, for T = M V / A. A light striker
-    gives a short T, and the short-pulse model (Eq. 8 with I = M V) takes over through the min below.
+    long as it carries momentum: A = models.piston_step_amplitude (Eqs. 12 and 19), for T = M V / A.
+    A light striker gives a short T, and the short-pulse model (Eq. 8 with I = M V) takes over
+    through the min below.
     """
     ld = scene.loading
     if ld.is_force:
         return ld.amplitude, ld.duration
     if ld.kind != "striker":
         return None
-    m, d = scene.mass, scene.diameter
-    if scene.contact.law == "hertz":
-        c = ((m * ld.velocity / d) ** (1 / 3) * scene.stiffness ** (2 / 3) * d**2 / m) ** 0.6
-    else:
-        c = d * math.sqrt(scene.stiffness / m)  # the bilinear loading line's sound speed
-    a = m * ld.velocity * c / d
+    linear = scene.contact.law != "hertz"  # the bilinear loading line
+    a = models.piston_step_amplitude(ld.velocity, scene.stiffness, scene.mass, scene.diameter, linear=linear)
     return a, scene.striker_mass * ld.velocity / a
 
 
@@ -106,7 +101,7 @@ def leading_edge_speed(scene) -> float:
     """The fastest a disturbance can enter the undisturbed chain, m/s (see the module docstring)."""
     if scene.contact.law == "hertz":
         return wave_speeds(scene)[1]
-    return scene.diameter * math.sqrt(scene.stiffness / scene.mass)
+    return models.linear_sound_speed(scene.stiffness, scene.mass, scene.diameter)
 
 
 def wave_speeds(scene) -> tuple[float, float]:
@@ -126,7 +121,7 @@ def wave_speeds(scene) -> tuple[float, float]:
         return slow * 0.1 ** (1 / 6), fast
     # c = D sqrt(k/m) is the fastest plastic loading signal; the peak of the dispersing leading pulse
     # travels slower (measured 0.8 c for beta = 0.8, Sec. III A scene): plan with 0.6 c
-    return 0.6 * d * math.sqrt(k / m), d * math.sqrt(scene.unloading_stiffness / m)
+    return 0.6 * models.linear_sound_speed(k, m, d), models.linear_sound_speed(scene.unloading_stiffness, m, d)
 
 
 def last_measured_contact(scene) -> int | None:
