@@ -6,6 +6,7 @@ import argparse
 import json
 import math
 import sys
+import warnings
 from importlib import resources
 from pathlib import Path
 
@@ -44,16 +45,16 @@ def _fmt(v) -> str:
     return str(v)
 
 
-def planned(scene: Scene, rtol: float | None, method: str | None):
-    """The scene with its "auto" values (and, given rtol, its time step) chosen by the planner."""
-    if not scene.needs_plan and rtol is None:
-        return scene, None
-    from granchain.workflows.plan import plan_scene
+def planned(scene: Scene, rtol: float | None, backend: str, method: str | None):
+    """The scene with its "auto" values (and, given rtol, its time step) chosen by the planner for
+    the integrator this backend runs; the plan's notes go to stderr (stdout may be a deck)."""
+    from granchain.workflows.run import integrator, plan_for
 
-    plan = plan_scene(scene, rtol=rtol, method=method or "rk4")
-    for c in plan.choices:
-        print(f"plan: {c.name} = {c.value:.6g}  ({c.reason})")
-    return plan.scene, plan
+    scene, plan = plan_for(scene, backend, method, rtol)
+    if plan is not None:
+        for c in plan.choices:
+            print(f"plan ({integrator(backend, method)}): {c.name} = {c.value:.6g}  ({c.reason})", file=sys.stderr)
+    return scene, plan
 
 
 def cmd_plan(args) -> int:
@@ -79,19 +80,25 @@ def cmd_plan(args) -> int:
 
 
 def cmd_run(args) -> int:
-    from granchain.workflows.run import run_scene
+    from granchain.workflows.run import check_resources, integrator, run_scene
 
-    scene, _ = planned(resolve_scene(args.scene), args.rtol, args.method)
+    method = integrator(args.backend, args.method)
+    scene = resolve_scene(args.scene)
+    np_ = 1 if args.np is None else args.np
+    if args.np is not None and args.backend != "lammps":
+        check_resources(scene, args.backend, max(2, args.np))  # refused, not ignored
+    scene, _ = planned(scene, args.rtol, args.backend, method)
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
-    out = args.out or f"runs/{name}-{args.backend}"
+    out = args.out or f"runs/{name}-{args.backend}" + ("" if args.backend == "lammps" else f"-{method}")
     result = run_scene(
         scene,
         backend=args.backend,
-        method=args.method,
+        method=method,
         out=out,
         overwrite=args.overwrite,
-        np_=args.np,
+        np_=np_,
         force=args.force,
+        oversubscribe=args.oversubscribe,
     )
     s = result.summary()
     print(f"scene      {scene.title or scene.source}")
@@ -127,17 +134,19 @@ def cmd_compare(args) -> int:
     from granchain.postprocess.compare import format_table
     from granchain.workflows.compare import compare_scene
 
-    scene, _ = planned(resolve_scene(args.scene), None, args.method)
+    scene = resolve_scene(args.scene)
+    plan_rtol = args.rtol / 2 if scene.run.timestep is None else None  # as compare_scene plans
+    for backend, method in (("lammps", None), ("reference", args.method)):
+        planned(scene, plan_rtol, backend, method)  # print each backend's plan (stderr)
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
-    out = args.out or f"runs/{name}-compare"
+    out = args.out or f"runs/{name}-compare-{args.method}"
     rows, lam, ref = compare_scene(
         scene, rtol=args.rtol, out=out, overwrite=args.overwrite, method=args.method, np_=args.np
     )
     print(f"scene      {scene.title or scene.source}")
-    print(
-        f"lammps     verlet, dt = {scene.run.timestep:g} s, {lam.solution.wall_time:.3g} s; "
-        f"reference {args.method}, {ref.solution.wall_time:.3g} s; rtol = {args.rtol:g}"
-    )
+    print(f"lammps     verlet, dt = {lam.solution.timestep:g} s, {lam.solution.wall_time:.3g} s wall")
+    print(f"reference  {args.method}, dt = {ref.solution.timestep:g} s, {ref.solution.wall_time:.3g} s wall")
+    print(f"rtol       {args.rtol:g}")
     print(format_table(rows))
     bad = [r.quantity for r in rows if not r.ok]
     print(f"compare directory: {out}")
@@ -165,7 +174,7 @@ def cmd_plot(args) -> int:
 def cmd_accuracy(args) -> int:
     from granchain.workflows.accuracy import accuracy_study, summary_text, write_study
 
-    scene, _ = planned(resolve_scene(args.scene), None, "rk4")
+    scene, _ = planned(resolve_scene(args.scene), None, "reference", "rk4")
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
     out = args.out or f"runs/{name}-accuracy"
     study = accuracy_study(scene, methods=tuple(args.methods.split(",")), levels=args.levels, repeats=args.repeats)
@@ -178,7 +187,7 @@ def cmd_accuracy(args) -> int:
 def cmd_render(args) -> int:
     from granchain.templates import render_deck
 
-    scene, _ = planned(resolve_scene(args.scene), None, "verlet")
+    scene, _ = planned(resolve_scene(args.scene), None, "lammps", None)
     deck = render_deck(scene)
     print(deck.data if args.data else deck.deck, end="")
     return 0
@@ -220,7 +229,8 @@ def build_parser() -> argparse.ArgumentParser:
         choices=["rk4", "verlet"],
         help="integrator: reference rk4 (default) or verlet; LAMMPS is always verlet",
     )
-    r.add_argument("--np", type=int, default=1, help="MPI ranks for the LAMMPS backend (default 1)")
+    r.add_argument("--np", type=int, default=None, help="MPI ranks for the LAMMPS backend (default 1)")
+    r.add_argument("--oversubscribe", action="store_true", help="allow more MPI ranks than cores (slower; for testing)")
     r.add_argument("--force", action="store_true", help="run even above the predicted stability limit")
     r.add_argument(
         "--rtol",
@@ -228,7 +238,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="let the planner choose the cheapest time step for this relative tolerance",
     )
-    r.add_argument("--out", help="run directory (default runs/<scene>-<backend>)")
+    r.add_argument("--out", help="run directory (default runs/<scene>-lammps or runs/<scene>-reference-<method>)")
     r.add_argument("--overwrite", action="store_true", help="replace an existing run directory")
     r.set_defaults(func=cmd_run)
 
@@ -248,7 +258,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--rtol", type=float, default=1e-3, help="tolerance between the two solvers (default 1e-3)")
     c.add_argument("--method", default="rk4", choices=["rk4", "verlet"], help="reference integrator")
     c.add_argument("--np", type=int, default=1, help="MPI ranks for LAMMPS")
-    c.add_argument("--out", help="output directory (default runs/<scene>-compare)")
+    c.add_argument("--out", help="output directory (default runs/<scene>-compare-<method>)")
     c.add_argument("--overwrite", action="store_true", help="replace an existing output directory")
     c.set_defaults(func=cmd_compare)
 
@@ -286,8 +296,15 @@ def main(argv: list[str] | None = None) -> int:
     from granchain.results import RunDirError
 
     args = build_parser().parse_args(argv)
+
+    def one_line(message, category, filename, lineno, file=None, line=None):
+        print(f"granchain: warning: {message}", file=sys.stderr)
+
     try:
-        return args.func(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = one_line
+            warnings.simplefilter("always", UserWarning)
+            return args.func(args)
     except (
         SceneError,
         RunDirError,

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from granchain.postprocess.compare import compare_runs, write_compare
 from granchain.results import check_output_dir, write_run_dir
-from granchain.workflows.run import run_scene
+from granchain.workflows.run import check_resources, plan_for, run_scene
 
 
 def compare_scene(
@@ -22,16 +22,26 @@ def compare_scene(
 ):
     """Run LAMMPS and the reference on a scene; returns (rows, lammps result, reference result).
 
+    A scene with "auto" values is planned separately for each backend's integrator (LAMMPS: velocity
+    Verlet; the reference: method), the time step for rtol / 2 each; lam.scene and ref.scene are
+    the scenes each one ran.
+
     reference_scene: give the reference a different scene (only to show that a physics mismatch is
     caught; `granchain compare` never does this). out: a directory with lammps/, reference/,
     compare.csv and compare.md, written atomically.
     """
     if out is not None:
         check_output_dir(out, overwrite)
-    lam = run_scene(scene, backend="lammps", np_=np_, keep_files=True)
+    # each backend runs the step planned for its own integrator; with timestep = "auto" each is
+    # planned for half the compare tolerance, so that two runs each within it differ by less than it
+    plan_rtol = rtol / 2 if scene.run.timestep is None else None
+    lam_scene, _ = plan_for(scene, "lammps", None, plan_rtol)
+    ref_scene, _ = plan_for(reference_scene or scene, "reference", method, plan_rtol)
+    check_resources(lam_scene, "lammps", np_)
+    lam = run_scene(lam_scene, backend="lammps", np_=np_, keep_files=True)
     files, work = lam.extra.pop("_files"), lam.extra.pop("_work")
     try:
-        ref = run_scene(reference_scene or scene, backend="reference", method=method)
+        ref = run_scene(ref_scene, backend="reference", method=method)
         rows = compare_runs(lam, ref, rtol)
         if out is not None:
             out = Path(out)

@@ -25,8 +25,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+
 from granchain.physics import models
-from granchain.physics.contact import hertz_tangent_stiffness
+from granchain.physics.contact import hertz_tangent_stiffness, unloading_stiffness
 from granchain.scene import AUTO, Scene, SceneError, scene_from_dict, scene_to_dict
 
 #: Error model constants C in  rel. error of peak forces ~ C (omega_max dt)^p. Measured C (planned
@@ -92,9 +94,67 @@ def expected_peak_force(scene) -> float:
 
 
 def max_stiffness(scene) -> float:
+    """The nominal contact's stiffest tangent (N/m): Hertz at the expected peak force, bilinear k_u."""
     if scene.contact.law == "hertz":
         return float(hertz_tangent_stiffness(expected_peak_force(scene), scene.stiffness))
     return float(scene.unloading_stiffness)
+
+
+def _tangent(scene, k, force: float) -> np.ndarray:
+    """The stiffest tangent of contacts of stiffness k at the force they are expected to reach."""
+    k = np.asarray(k, dtype=float)
+    if scene.contact.law == "hertz":
+        return hertz_tangent_stiffness(force, k)
+    return unloading_stiffness(k, scene.contact.unloading_coeff)
+
+
+def highest_frequency(scene) -> tuple[float, str]:
+    """An upper bound of the chain's highest frequency (rad/s) over every contact the scene has, and
+    the node that sets it.
+
+    The linearised chain at the stiffest tangents K_t has frequencies sqrt(eig(M^-1/2 K_t M^-1/2)); by
+    Gershgorin's theorem the largest is at most the largest row sum,
+    (k_l + k_r) / m_i + k_l / sqrt(m_(i-1) m_i) + k_r / sqrt(m_i m_(i+1)), which for a uniform chain is
+    exactly omega_max = 2 sqrt(k_t / m) (the linear chain's cut-off). Every effect enters where it acts:
+    per-bead masses and pair stiffnesses (taper, materials), the wall (an infinite mass; its contact is
+    stiffer, k_w, and sees the reflected wave, up to twice the force), a striker (its mass and pair
+    stiffness on bead 1), precompression (every contact carries F0 on top of the wave), a dashpot (the
+    overdamped modes decay at up to the Gershgorin bound of M^-1/2 C M^-1/2, and an explicit integrator
+    must resolve that rate like a frequency).
+    """
+    force = float(scene.effects.precompression) + expected_peak_force(scene)
+    # beads = "auto" (a uniform chain: no per-bead lists): three beads hold every kind of node
+    n = scene.chain.beads or 3
+    m = scene.bead_masses if scene.per_bead else np.full(n, scene.mass)
+    k = scene.contact_stiffnesses if scene.per_bead else np.full(n - 1, scene.stiffness)
+    kt = _tangent(scene, k, force)
+    # neighbours as (stiffness, neighbour mass) on each side; a missing neighbour adds nothing
+    kl, ml = np.concatenate(([0.0], kt)), np.concatenate(([np.inf], m[:-1]))
+    kr, mr = np.concatenate((kt, [0.0])), np.concatenate((m[1:], [np.inf]))
+    gamma = float(scene.effects.dashpot)
+    gl = np.where(np.arange(n) > 0, gamma, 0.0)
+    gr = np.where(np.arange(n) < n - 1, gamma, 0.0)
+    extra = {}
+    if scene.effects.far_end == "wall":  # a neighbour of infinite mass: only the diagonal term
+        kw = float(_tangent(scene, scene.wall_stiffness, float(scene.effects.precompression) + 2.0 * force))
+        kr[-1], mr[-1], gr[-1] = kw, np.inf, gamma
+        extra["wall"] = kw
+    if scene.loading.kind == "striker":
+        ms, ks = scene.striker_mass, float(_tangent(scene, scene.striker_stiffness, force))
+        kl[0], ml[0], gl[0] = ks, ms, gamma
+        extra["striker"] = (ks / ms + ks / math.sqrt(ms * m[0])) + (2 * gamma / ms if gamma else 0.0)
+    rows = (kl + kr) / m + kl / np.sqrt(m * ml) + kr / np.sqrt(m * mr)
+    damp = (gl + gr) / m + gl / np.sqrt(m * ml) + gr / np.sqrt(m * mr)
+    i = int(np.argmax(np.maximum(np.sqrt(rows), damp)))
+    omega = float(max(np.sqrt(rows[i]), damp[i]))
+    where = f"bead {i + 1}"
+    if "striker" in extra and max(math.sqrt(extra["striker"]), 0.0) > omega:
+        omega, where = math.sqrt(extra["striker"]), "the striker"
+    if damp[i] > np.sqrt(rows[i]):
+        where += f" (the dashpot's decay rate {damp[i]:.3g} 1/s)"
+    elif "wall" in extra and i == n - 1:
+        where += " (on the wall)"
+    return omega, where
 
 
 def leading_edge_speed(scene) -> float:
@@ -125,12 +185,17 @@ def wave_speeds(scene) -> tuple[float, float]:
 
 
 def last_measured_contact(scene) -> int | None:
+    """The farthest contact a requested output measures: histories, a peak_force list, the window;
+    peak_force = true on a chain of given length measures the leading peak and the wave speed over
+    the window, so the run lasts until the wave has passed the window's end (scene.window)."""
     o = scene.outputs
     cands = list(o.histories)
     if isinstance(o.peak_force, tuple) and o.peak_force:
         cands.append(max(o.peak_force))
     if o.window is not None:
         cands.append(o.window[1])
+    elif o.peak_force is True and scene.chain.beads is not None:
+        cands.append(scene.window[1])
     return max(cands) if cands else None
 
 
@@ -141,7 +206,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4") -> 
     rtol_eff = 1e-3 if rtol is None else rtol
     choices: list[PlanChoice] = []
     k_t = max_stiffness(scene)
-    omega = 2.0 * math.sqrt(k_t / scene.mass)
+    omega, stiffest = highest_frequency(scene)
     stable = STABILITY[method] / omega
     dt = scene.run.timestep
     if dt is None or rtol is not None:
@@ -150,7 +215,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4") -> 
         dt_new = min(dt_acc, 0.5 * stable)
         why = (
             f"{method}: error model {c:g} (omega_max dt)^{p} <= rtol {rtol_eff:g} with omega_max = "
-            f"{omega:.4g} rad/s (stiffest contact {k_t:.4g} N/m at the expected peak force"
+            f"{omega:.4g} rad/s at {stiffest} (nominal contact {k_t:.4g} N/m at the expected peak force"
             f"{'' if scene.contact.law == 'bilinear' else f' {expected_peak_force(scene):.4g} N'}); "
             f"stability limit {stable:.3g} s"
         )
@@ -180,12 +245,15 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4") -> 
         end = travel + min(load, travel)
         if ld.kind == "impulse" and end < ld.duration:
             end = ld.duration  # an impulse is measured whole: the run lasts at least the pulse
+        if scene.outputs.snapshots and end < max(scene.outputs.snapshots):
+            end = max(scene.outputs.snapshots)  # every requested snapshot is taken
         choices.append(
             PlanChoice(
                 "end_time",
                 end,
                 f"the leading wave (no slower than {slow:.4g} m/s) passes contact "
-                f"{last} by {travel:.3g} s, after a load of {load:.3g} s",
+                f"{last} by {travel:.3g} s, after a load of {load:.3g} s"
+                + (", and the last snapshot is taken" if scene.outputs.snapshots else ""),
             )
         )
     beads = scene.chain.beads

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -69,6 +71,94 @@ class UnstableTimestepError(ValueError):
     """The scene's time step is above the stability limit the planner predicts."""
 
 
+class AccuracyWarning(UserWarning):
+    """A fixed time step the planner's error model predicts will miss the run's tolerance."""
+
+
+#: fewer beads per MPI rank than this and the ranks spend the step exchanging ghosts: a 1D chain
+#: has two neighbours per bead, so each rank's work is its beads and its talk is two ghost beads
+#: per step whatever the length; refused before the run (a provisional bound: the performance issue
+#: measures the crossover)
+MIN_BEADS_PER_RANK = 1000
+
+
+def integrator(backend: str, method: str | None) -> str:
+    """The integrator a backend runs: reference rk4 (default) or verlet; LAMMPS velocity Verlet."""
+    if backend not in BACKENDS:
+        raise ValueError(f"backend = {backend!r} is not known; choose one of {', '.join(BACKENDS)}")
+    if method not in (None, "rk4", "verlet"):
+        raise ValueError(f"method = {method!r} is not known; choose rk4 or verlet")
+    if backend == "lammps":
+        if method not in (None, "verlet"):
+            raise ValueError(f"method = {method!r}: the LAMMPS backend integrates with velocity Verlet only")
+        return "verlet"
+    return method or "rk4"
+
+
+def available_cores() -> int:
+    """Cores this process may run on (the affinity mask where the OS has one)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return os.cpu_count() or 1
+
+
+def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False) -> None:
+    """Refuse an MPI request that cannot pay before anything runs: ranks on the reference backend,
+    more ranks than cores (unless oversubscribe), fewer than MIN_BEADS_PER_RANK beads per rank."""
+    if not isinstance(np_, int) or np_ < 1:
+        raise ValueError(f"--np = {np_!r}: the number of MPI ranks must be a whole number >= 1")
+    if np_ == 1:
+        return
+    if backend != "lammps":
+        raise ValueError(
+            f"--np = {np_}: the {backend} backend runs in one process; MPI ranks are for --backend lammps (drop --np)"
+        )
+    cores = available_cores()
+    if np_ > cores and not oversubscribe:
+        raise ValueError(
+            f"--np = {np_}: this machine has {cores} cores; more ranks than cores share them and run slower "
+            f"than --np {cores} (use --np {cores}, or --oversubscribe if you mean it)"
+        )
+    beads = scene.chain.beads
+    if beads is not None and beads < MIN_BEADS_PER_RANK * np_:
+        best = max(1, beads // MIN_BEADS_PER_RANK)
+        raise ValueError(
+            f"--np = {np_}: {beads} beads over {np_} ranks is {beads // np_} beads per rank; below "
+            f"{MIN_BEADS_PER_RANK} per rank the ranks spend their time exchanging ghosts, not computing "
+            f"(use --np {best})"
+        )
+
+
+def timestep_warning(scene, method: str, rtol: float) -> str | None:
+    """A sentence when the scene's fixed time step misses rtol by the planner's error model, naming
+    the step that would meet it; None when it meets it."""
+    from granchain.workflows.plan import CALIBRATION, plan_scene
+
+    plan = plan_scene(scene, method=method, rtol=None)
+    c, p = CALIBRATION[method]
+    predicted = c * (plan.omega_max * scene.run.timestep) ** p
+    if predicted <= rtol * (1 + 1e-9):  # a step planned for this rtol meets it, up to rounding
+        return None
+    good = plan_scene(scene, rtol=rtol, method=method).scene.run.timestep
+    return (
+        f"{scene.source}: [run] timestep = {scene.run.timestep:g} s is too coarse for rtol {rtol:g} with {method}: "
+        f"the planner's error model predicts a relative error of {predicted:.2g} in the peak forces; "
+        f'timestep = {good:.3g} s would meet rtol (or set timestep = "auto")'
+    )
+
+
+def plan_for(scene, backend: str = "reference", method: str | None = None, rtol: float | None = None):
+    """(scene, plan): the scene planned for the integrator this backend runs, or (scene, None) when
+    nothing is "auto" and no rtol is given."""
+    if not scene.needs_plan and rtol is None:
+        return scene, None
+    from granchain.workflows.plan import plan_scene
+
+    plan = plan_scene(scene, rtol=rtol, method=integrator(backend, method))
+    return plan.scene, plan
+
+
 def check_timestep(scene, method: str) -> None:
     """Refuse a time step above the predicted stability limit (before anything runs)."""
     from granchain.workflows.plan import plan_scene
@@ -93,31 +183,41 @@ def run_scene(
     np_: int = 1,
     keep_files: bool = False,
     force: bool = False,
+    rtol: float | None = None,
+    oversubscribe: bool = False,
 ) -> RunResult:
     """Run a scene on a backend; if out is given, write the run directory (checked before the run).
 
     reference: method rk4 (default) or verlet. lammps: velocity Verlet with granchain's pair
     styles, np_ MPI ranks; the run directory also gets the deck, data file, log and dumps.
+    A scene with "auto" values, or any scene when rtol is given, is planned first for the
+    integrator this backend runs (result.plan). A fixed time step that the planner's error model
+    says misses rtol (default 1e-3) gives an AccuracyWarning before the run.
     keep_files (lammps): keep LAMMPS's work directory and list its files in result.extra["_files"]
     and ["_work"], for a caller that writes the run directory itself and then removes "_work".
     """
-    if backend not in BACKENDS:
-        raise ValueError(f"backend = {backend!r} is not known; choose one of {', '.join(BACKENDS)}")
+    method = integrator(backend, method)
+    scene, plan = plan_for(scene, backend, method, rtol)
+    check_resources(scene, backend, np_, oversubscribe)
     if out is not None:
         check_output_dir(out, overwrite)
     if not force:
-        check_timestep(scene, "rk4" if backend == "reference" and method in (None, "rk4") else "verlet")
+        check_timestep(scene, method)
+    if plan is None or not any(c.name == "timestep" for c in plan.choices):  # a fixed step: does it do?
+        msg = timestep_warning(scene, method, 1e-3 if rtol is None else rtol)
+        if msg:
+            warnings.warn(msg, AccuracyWarning, stacklevel=2)
     if backend == "reference":
-        result = run_reference(scene, method or "rk4")
+        result = run_reference(scene, method)
+        result.plan = plan
         if out is not None:
             write_run_dir(result, out, overwrite=overwrite)
         return result
-    if method not in (None, "verlet"):
-        raise ValueError(f"method = {method!r}: the LAMMPS backend integrates with velocity Verlet only")
     from granchain.lammps.runner import cleanup, output_files, run_lammps
 
     with _with_fix(scene, "verlet"):
         result, work = run_lammps(scene, np_=np_)
+    result.plan = plan
     if keep_files:  # the caller writes the run directory later and removes the work directory
         result.extra["_files"] = output_files(work)
         result.extra["_work"] = work
