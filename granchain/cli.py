@@ -7,34 +7,17 @@ import json
 import math
 import sys
 import warnings
-from importlib import resources
 from pathlib import Path
 
-from granchain.scene import Scene, SceneError, load_scene, parse_scene
+from granchain.errors import GranchainError, UsageError
+from granchain.scene import Scene, SceneError, bundled_scenes, load_scene, parse_scene
 
 DEFAULT_SCENE = "default"
 
 
-def bundled_scenes() -> dict[str, str]:
-    """Bundled example scenes: name -> TOML text."""
-    root = resources.files("granchain") / "scenes"
-    return {
-        p.name.removesuffix(".toml"): p.read_text()
-        for p in sorted(root.iterdir(), key=lambda p: p.name)
-        if p.name.endswith(".toml")
-    }
-
-
 def resolve_scene(arg: str | None) -> Scene:
-    """A scene from a path, or from the name of a bundled scene."""
-    arg = arg or DEFAULT_SCENE
-    p = Path(arg)
-    if p.exists() or p.suffix == ".toml" or "/" in arg:
-        return load_scene(p)
-    scenes = bundled_scenes()
-    if arg in scenes:
-        return parse_scene(scenes[arg], source=f"<bundled scene {arg}>")
-    raise SceneError(f"{arg}: is neither a scene file nor a bundled scene; bundled: {', '.join(scenes)}")
+    """A scene from a path, or from the name of a bundled scene (the default scene if None)."""
+    return load_scene(arg or DEFAULT_SCENE)
 
 
 def _fmt(v) -> str:
@@ -80,13 +63,16 @@ def cmd_plan(args) -> int:
 
 
 def cmd_run(args) -> int:
-    from granchain.workflows.run import check_resources, integrator, run_scene
+    from granchain.workflows.run import integrator, run_scene
 
     method = integrator(args.backend, args.method)
     scene = resolve_scene(args.scene)
     np_ = 1 if args.np is None else args.np
-    if args.np is not None and args.backend != "lammps":
-        check_resources(scene, args.backend, max(2, args.np))  # refused, not ignored
+    if args.np is not None and args.backend != "lammps":  # refused, not ignored
+        raise UsageError(
+            f"--np = {args.np}: the {args.backend} backend runs in one process; MPI ranks are for "
+            "--backend lammps (drop --np)"
+        )
     scene, _ = planned(scene, args.rtol, args.backend, method)
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
     out = args.out or f"runs/{name}-{args.backend}" + ("" if args.backend == "lammps" else f"-{method}")
@@ -290,11 +276,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from granchain.lammps.build import PluginError
-    from granchain.lammps.runner import LammpsError
-    from granchain.reference.solver import InvariantError
-    from granchain.results import RunDirError
-
     args = build_parser().parse_args(argv)
 
     def one_line(message, category, filename, lineno, file=None, line=None):
@@ -305,14 +286,7 @@ def main(argv: list[str] | None = None) -> int:
             warnings.showwarning = one_line
             warnings.simplefilter("always", UserWarning)
             return args.func(args)
-    except (
-        SceneError,
-        RunDirError,
-        PluginError,
-        LammpsError,
-        InvariantError,
-        ValueError,
-    ) as e:  # incl. UnstableTimestepError
+    except GranchainError as e:  # a user's error: one line; anything else is a bug and keeps its traceback
         print(f"granchain: error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

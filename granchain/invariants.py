@@ -22,12 +22,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from granchain.errors import GranchainError
+
 ENERGY_WATCH = 0.05
 MOMENTUM_WATCH = 1e-6
 OVERLAP_WATCH = 0.5
 
 
-class InvariantError(RuntimeError):
+class InvariantError(GranchainError, RuntimeError):
     """A run broke an invariant; says which, when, where, and (from the workflow) the fix."""
 
     def __init__(self, invariant: str, time: float, step: int, contact: int, detail: str, fix: str = ""):

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from granchain.errors import GranchainError
 from granchain.physics import materials as mat
 from granchain.physics.contact import unloading_stiffness
 
@@ -23,7 +24,7 @@ LAWS = ("hertz", "bilinear")
 LOADING_KINDS = ("step", "impulse", "velocity", "striker")
 
 
-class SceneError(ValueError):
+class SceneError(GranchainError, ValueError):
     """A scene file is invalid. The message names the file, the key, the value and the fix."""
 
 
@@ -377,9 +378,46 @@ def _range_text(low, low_open, high, high_open, what) -> str:
     return text + (f" ({what})" if what else "")
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file."""
-    p = Path(path)
+def bundled_scenes() -> dict[str, str]:
+    """The bundled example scenes: name -> TOML text."""
+    from importlib import resources
+
+    root = resources.files("granchain") / "scenes"
+    return {
+        p.name.removesuffix(".toml"): p.read_text(encoding="utf-8")
+        for p in sorted(root.iterdir(), key=lambda p: p.name)
+        if p.name.endswith(".toml")
+    }
+
+
+def load_scene(path_or_name: str | Path) -> Scene:
+    """Read and validate a scene.
+
+    Parameters
+    ----------
+    path_or_name : str or Path
+        A ``.toml`` scene file, or the name of a bundled scene (``granchain scenes`` lists them).
+
+    Returns
+    -------
+    Scene
+        The validated scene; values given as ``"auto"`` are left for :func:`granchain.plan`.
+
+    Raises
+    ------
+    SceneError
+        The file does not exist or is invalid; the message names the file, the key and the fix.
+    """
+    p = Path(path_or_name)
+    arg = str(path_or_name)
+    if not p.exists() and p.suffix != ".toml" and "/" not in arg and "\\" not in arg:
+        scenes = bundled_scenes()
+        if arg in scenes:
+            return parse_scene(scenes[arg], source=f"<bundled scene {arg}>")
+        raise SceneError(
+            f"{arg}: is neither a scene file nor a bundled scene; bundled: {', '.join(scenes)} "
+            "(or give the path of a .toml file)"
+        )
     if not p.exists():
         raise SceneError(f"{p}: no such scene file; give the path of a .toml scene (see 'granchain scenes')")
     if not p.is_file():

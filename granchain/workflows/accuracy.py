@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from granchain.errors import UsageError
 from granchain.postprocess.observables import fit_wave_speed
 from granchain.reference.scipy_solver import solve_chain_dop853
 from granchain.reference.solver import ChainProblem, solve_chain
@@ -88,7 +89,7 @@ def accuracy_study(
     ref2 = solve_chain(problem, end, finest / 2, "rk4")
     passed = ref2.time_of_peak[idx] < 0.99 * ref2.end_time  # the leading wave has passed them
     if not passed.any():
-        raise ValueError(
+        raise UsageError(
             "no measured contact is passed by the leading wave before the end of the run: "
             "lengthen end_time or measure contacts nearer the loaded end"
         )

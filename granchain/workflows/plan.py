@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from granchain.errors import UsageError
 from granchain.physics import models
 from granchain.physics.contact import hertz_tangent_stiffness, unloading_stiffness
 from granchain.scene import AUTO, Scene, SceneError, scene_from_dict, scene_to_dict
@@ -202,7 +203,7 @@ def last_measured_contact(scene) -> int | None:
 def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4") -> Plan:
     """Fill "auto" values (and the time step, when rtol is given) with the reasons."""
     if rtol is not None and not (0 < rtol < 1):
-        raise ValueError(f"--rtol = {rtol!r}: a relative tolerance must be between 0 and 1")
+        raise UsageError(f"--rtol = {rtol!r}: a relative tolerance must be between 0 and 1")
     rtol_eff = 1e-3 if rtol is None else rtol
     choices: list[PlanChoice] = []
     k_t = max_stiffness(scene)

