@@ -1,12 +1,16 @@
-"""Every analytic prediction of the paper that applies to a scene, with its domain of validity."""
+"""Every analytic prediction of the paper for a scene, with its domain of validity and whether the
+scene is inside it (:func:`applicability`, the one place that rule lives: `granchain predict`,
+`compare` and the plots all ask it)."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
+from typing import NamedTuple
 
 from granchain.physics import models
 from granchain.physics.contact import dissipation_per_cycle
+from granchain.postprocess.regimes import loading_regime
 
 
 @dataclass(frozen=True)
@@ -17,13 +21,150 @@ class Prediction:
     equation: str
     valid: str  # the model's domain of validity, in words
     nondim: float | None = None  # F/(E* R*^2) for forces, I/(E* R*^2 tau) for impulses
+    applies: bool = True  # the scene is inside the model's domain (see applicability)
+    applies_reason: str = ""  # why it does or does not apply, with the scene's numbers
 
     def as_dict(self) -> dict:
         return asdict(self)
 
 
+# ------------------------------------------------------------------------- applicability
+
+
+class Applicability(NamedTuple):
+    applies: bool
+    reason: str
+
+
+#: Quantities of the scene itself (not models): they always apply.
+SCENE_QUANTITIES = frozenset({"tau", "impulse", "loading_time_over_tau", "amplitude"})
+
+_HERTZ_SHORT = ("short_load_peak_force", "short_load_wave_speed")
+_HERTZ_LONG = (
+    "front_speed_lower",
+    "front_speed_upper",
+    "long_load_peak_force_lower",
+    "long_load_peak_force_upper",
+    "bead_velocity_at_lower_speed",
+    "bead_velocity_at_upper_speed",
+)
+#: peak_force_envelope: min(Eq. 8, Eq. 15 bound), an upper estimate for any loading time;
+#: nesterenko_wave_speed: a solitary wave's speed from its peak force (ref. 9), used by `compare`.
+_HERTZ_ANY = ("peak_force_envelope", "nesterenko_wave_speed")
+_BILINEAR_SHORT = (
+    "first_contact_peak_force",
+    "first_beads_velocity_at_peak",
+    "second_contact_force_at_peak",
+    "trailing_velocity",
+    "dissipation_first_contact",
+    "gamma",
+    "eta",
+    "omega",
+    "exponential_decay_per_contact",
+    "transition_contact",
+    "inverse_decay_exponent",
+)
+_BILINEAR_LONG = tuple(f"long_load_{k}" for k in ("c", "c_u", "F_1", "v_1", "v_t", "x_t", "T_t", "F_2", "v_2"))
+
+#: Every model: (contact law, loading regime it needs: "short", "long" or "any").
+MODEL_DOMAINS: dict[str, tuple[str, str]] = {
+    **{n: ("hertz", "short") for n in _HERTZ_SHORT},
+    **{n: ("hertz", "long") for n in _HERTZ_LONG},
+    **{n: ("hertz", "any") for n in _HERTZ_ANY},
+    **{n: ("bilinear", "short") for n in _BILINEAR_SHORT},
+    **{n: ("bilinear", "long") for n in _BILINEAR_LONG},
+}
+
+#: (model, measured quantity) pairs where the run measures something other than what the model
+#: predicts, whatever the scene. A run's wave_speed follows the times of peak force along the window.
+MEASURES_OTHER = {
+    # Table I scene: 979 m/s measured from the times of peak, c = 757 m/s
+    ("long_load_c", "wave_speed"): (
+        "c is the plastic loading front's speed (where the force first rises), while wave_speed is measured "
+        "from the times of peak force, which lag the dispersing pulse of a short load and fall anywhere on the "
+        "flat plateau behind a long load's front"
+    ),
+}
+
+#: A striker within this fraction of a bead's mass hands bead 1 its velocity (equal elastic masses
+#: exchange velocities): the velocity load, Eq. 8's zero-duration limit (measured: Eq. 8 within 0.3%;
+#: 0.3 m: 65% above it, the striker rebounds; 2 m: 35% below, it pushes on).
+EQUAL_STRIKER_MASS = 0.05
+
+
+def applicability(name: str, scene, quantity: str | None = None) -> Applicability:
+    """Whether the model `name` (a prediction's name, see MODEL_DOMAINS) applies to `scene`, and why.
+
+    The paper's models are for a semi-infinite monodisperse chain with no dissipation but the contact
+    law's, no precompression, loaded by f(t) = A on 0 < t <= T (Eq. 4) or its zero-duration limit, a
+    velocity of bead 1. A model applies when the scene has its contact law, uniform beads, no dashpot,
+    no precompression, the paper's loading (a striker only as an equal-mass one, which hands bead 1
+    its velocity) and the loading regime the model is for
+    (granchain.postprocess.regimes.loading_regime). A far-end wall leaves every model in force for
+    the incident wave, before the reflection reaches a contact. Given the measured `quantity` it is
+    compared with, also whether the run measures what the model predicts (MEASURES_OTHER).
+    """
+    if name in SCENE_QUANTITIES:
+        return Applicability(True, "a quantity of the scene itself, not a model")
+    if name not in MODEL_DOMAINS:
+        raise ValueError(f"{name!r}: no such model; known: {', '.join([*SCENE_QUANTITIES, *MODEL_DOMAINS])}")
+    law, needs = MODEL_DOMAINS[name]
+    why_not: list[str] = []
+    if scene.contact.law != law:
+        why_not.append(f"a {law} model; this chain's contact law is {scene.contact.law}")
+    if scene.per_bead:
+        r = scene.chain.radii or (scene.chain.radius,)
+        differ = [f"radii {min(r) * 1e3:.3g} to {max(r) * 1e3:.3g} mm: tapered or decorated"] if len(set(r)) > 1 else []
+        if scene.chain.materials is not None and len(set(scene.chain.materials)) > 1:
+            differ.append(f"materials {', '.join(sorted(set(scene.chain.materials)))}")
+        why_not.append(f"the beads differ ({'; '.join(differ)}): the paper's models are for a monodisperse chain")
+    if scene.effects.dashpot:
+        why_not.append(
+            f"viscous dashpot (gamma = {scene.effects.dashpot:g} N s/m): the paper's models have no viscous dissipation"
+        )
+    if scene.effects.precompression:
+        why_not.append(
+            f"static precompression F0 = {scene.effects.precompression:g} N: the paper's models are for an "
+            "uncompressed chain (a precompressed chain carries other waves, ref. 9)"
+        )
+    ld = scene.loading
+    if ld.kind == "striker":
+        ratio = scene.striker_mass / scene.mass
+        if scene.contact.law != "hertz" or abs(ratio - 1.0) > EQUAL_STRIKER_MASS:
+            why_not.append(
+                f"a striker (M = {ratio:.3g} m at {ld.velocity:g} m/s) is not the paper's loading (a force "
+                "f(t), Eq. 4, or bead 1's velocity): a lighter one rebounds, a heavier one pushes on"
+                + ("" if scene.contact.law == "hertz" else ", and its bilinear contact dissipates")
+            )
+    wall = (
+        "; with the far-end wall: for the incident wave, at contacts the wall's reflection has not yet reached"
+        if scene.effects.far_end == "wall"
+        else ""
+    )
+    regime = loading_regime(scene) if scene.contact.law == law else None
+    if regime is not None and needs != "any" and regime.regime != needs:
+        why_not.append(f"{regime.text}; the model is for a {needs} load")
+    if why_not:
+        return Applicability(False, "; ".join(why_not))
+    if quantity is not None and (name, quantity) in MEASURES_OTHER:
+        return Applicability(False, MEASURES_OTHER[(name, quantity)])
+    chain = f"uniform {'Hertz' if law == 'hertz' else law} chain, no dashpot, no precompression"
+    if needs == "any":
+        return Applicability(True, f"{chain}, any loading time{wall}")
+    return Applicability(True, f"{regime.text}; {chain}{wall}")
+
+
 def predict(scene) -> list[Prediction]:
-    """Predictions for this scene (SI), nondimensional forms where the paper gives them."""
+    """Predictions for this scene (SI), nondimensional forms where the paper gives them, each with
+    whether it applies to the scene (applies, applies_reason: see applicability)."""
+    out = []
+    for p in _predict(scene):
+        verdict = applicability(p.name, scene)
+        out.append(replace(p, applies=verdict.applies, applies_reason=verdict.reason))
+    return out
+
+
+def _predict(scene) -> list[Prediction]:
     m, d, k = scene.mass, scene.diameter, scene.stiffness
     fs, isc = scene.force_scale, scene.impulse_scale
     ld = scene.loading
@@ -154,7 +295,10 @@ def predict(scene) -> list[Prediction]:
         )
     )
     if ld.is_force:
-        r = models.long_load_bilinear(ld.amplitude, ld.duration, k, beta, m, d)
+        try:
+            r = models.long_load_bilinear(ld.amplitude, ld.duration, k, beta, m, d)
+        except ZeroDivisionError:  # beta ~ 0: c_u = c, the fronts never merge (Eq. 36's x_t is infinite)
+            r = {}
         long_valid = "long loading (steady fronts, Sec. III B); until the first collision of the fronts"
         units = {
             "c": "m/s",

@@ -1,15 +1,15 @@
-"""One function compares two runs of the same scene (any two backends), with the models beside them."""
+"""One function compares two runs of the same scene (any two backends), with the models that apply beside them."""
 
 from __future__ import annotations
 
 import csv
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from granchain.physics import models
+from granchain.physics.predictions import applicability, predict
 
 
 @dataclass(frozen=True)
@@ -18,9 +18,11 @@ class CompareRow:
     unit: str
     a: float | None  # first run (LAMMPS in `granchain compare`)
     b: float | None  # second run (reference)
-    model: float | None
-    model_source: str
+    model: float | None  # None where no model is compared (none exists, or it does not apply)
+    model_source: str  # the model's equation; "n/a: <model>: <reason>" where it does not apply
     rtol: float
+    model_applies: bool | None = None  # None: no model for this quantity
+    not_measured: str | None = None  # neither run measured the quantity: why
 
     @property
     def rel_diff(self) -> float | None:
@@ -31,48 +33,90 @@ class CompareRow:
 
     @property
     def rel_model(self) -> float | None:
-        if self.model is None or self.b is None or self.model == 0:
+        if not self.model_applies or self.model is None or self.b is None or self.model == 0:
             return None
         return abs(self.b - self.model) / abs(self.model)
 
     @property
+    def measured(self) -> bool:
+        return self.a is not None or self.b is not None
+
+    @property
     def ok(self) -> bool:
-        """Within rtol; a quantity one run has and the other lacks is a failure too."""
-        if self.a is None and self.b is None:
+        """Not a failure: the two runs agree within rtol, or neither measured the quantity (then the row
+        reads "not measured: <reason>", never "yes"). A quantity one run has and the other lacks is a
+        failure. The model columns never make a row fail or pass."""
+        if not self.measured:
             return True
         d = self.rel_diff
         return d is not None and d <= self.rtol
 
+    @property
+    def verdict(self) -> str:
+        """The within_rtol cell: "yes", "FAIL" or "not measured: <reason>"."""
+        if not self.measured:
+            return f"not measured: {self.not_measured or 'neither run reports it'}"
+        return "yes" if self.ok else "FAIL"
 
-def _model_rows(scene, ref_obs: dict) -> dict[str, tuple[float, str]]:
-    """Model values for the compared quantities, where a model applies to this scene."""
-    out: dict[str, tuple[float, str]] = {}
-    m, d, k = scene.mass, scene.diameter, scene.stiffness
-    ld = scene.loading
-    impulse = scene.input_impulse
-    if scene.contact.law == "hertz":
-        fp = models.short_load_peak_force(impulse, m, scene.e_star, scene.r_star)
-        src = "Eq. 8"
-        if ld.is_force:
-            fu = models.solitary_wave_peak_force(models.front_speed_upper(ld.amplitude, k, m, d), k, m, d)
-            if fu < fp:
-                fp, src = fu, "Eq. 15 + Nesterenko (upper bound)"
-        out["leading_peak_force"] = (fp, src)
-        if ref_obs.get("leading_peak_force"):
-            out["wave_speed"] = (
-                models.solitary_wave_speed(ref_obs["leading_peak_force"], k, m, d),
-                "Nesterenko at the reference's leading peak",
-            )
-    else:
-        beta = scene.contact.unloading_coeff
-        contact_time = math.pi * math.sqrt(m / (2.0 * k))  # two beads on a linear spring k
-        if not ld.is_force or ld.duration < 0.1 * contact_time:
-            out["peak_force_contact_1"] = (
-                models.linear_chain_impulse_response(impulse, k, m, beta)["F_p"],
-                "Eq. A2 (short loading)",
-            )
-        if ld.is_force and ld.duration > 10.0 * contact_time:
-            out["wave_speed"] = (models.linear_sound_speed(k, m, d), "c = D sqrt(k/m) (Sec. III B, long loading)")
+
+#: The model each compared quantity is checked against, per contact law, in order of preference:
+#: (prediction name, label); the first that applies to the scene is used (predictions.applicability).
+ROW_MODELS: dict[tuple[str, str], tuple[tuple[str, str], ...]] = {
+    ("hertz", "leading_peak_force"): (
+        ("short_load_peak_force", "Eq. 8"),
+        ("long_load_peak_force_upper", "Eq. 15 + Nesterenko (upper bound)"),
+    ),
+    ("hertz", "wave_speed"): (("nesterenko_wave_speed", "Nesterenko at the reference's leading peak"),),
+    ("bilinear", "peak_force_contact_1"): (("first_contact_peak_force", "Eq. A2 (short loading)"),),
+    ("bilinear", "wave_speed"): (("long_load_c", "c = D sqrt(k/m) (Sec. III B, long loading)"),),
+}
+
+
+def _model_rows(scene, ref_obs: dict) -> dict[str, tuple[float | None, str, bool]]:
+    """(value, source, applies) of the model for each compared quantity that has one; where none of
+    its models applies to the scene: (None, "n/a: <model>: <reason>", False)."""
+    values = {p.name: p.value for p in predict(scene)}
+    if ref_obs.get("leading_peak_force"):
+        values["nesterenko_wave_speed"] = models.solitary_wave_speed(
+            ref_obs["leading_peak_force"], scene.stiffness, scene.mass, scene.diameter
+        )
+    out: dict[str, tuple[float | None, str, bool]] = {}
+    for (law, quantity), candidates in ROW_MODELS.items():
+        if law != scene.contact.law:
+            continue
+        first_no = None
+        for name, label in candidates:
+            verdict = applicability(name, scene, quantity=quantity)
+            if verdict.applies and name in values:
+                out[quantity] = (values[name], label, True)
+                break
+            if first_no is None:
+                reason = verdict.reason
+                if verdict.applies:  # applies, but needs what the run did not measure
+                    reason = "needs the reference's leading peak, which it did not measure"
+                first_no = (None, f"n/a: {label}: {reason}", False)
+        else:
+            out[quantity] = first_no
+    return out
+
+
+def _not_measured(sol, obs: dict) -> dict[str, str]:
+    """Why a quantity can be missing from both runs (keyed like the rows)."""
+    w0, w1 = obs["window"]
+    ended = f"before the run ended at t = {sol.end_time:g} s"
+    out = {
+        "leading_peak_force": f"the leading wave did not reach contact {w1} (the window's end) {ended}",
+        f"time_of_peak_contact_{w1}": f"the wave did not reach contact {w1} {ended}",
+        f"peak_force_contact_{w0}": f"the wave did not reach contact {w0} {ended}",
+        "wall_peak_force": f"the wave did not reach the wall {ended}",
+    }
+    out["leading_peak_force_nondim"] = out["leading_peak_force"]
+    out["wave_speed"] = (
+        out["leading_peak_force"]
+        if obs.get("leading_peak_force") is None
+        else f"the times of peak over contacts {w0}-{w1} do not fit a forward-moving wave (fewer than three, "
+        "or decreasing)"
+    )
     return out
 
 
@@ -83,13 +127,20 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
     modl = _model_rows(scene, ob)
     sa, sb = a.solution, b.solution
     w0, w1 = ob["window"]
+
+    def reached(sol, contact: int) -> bool:
+        return bool(np.isfinite(sol.time_of_peak[contact - 1]))
+
+    def peak(sol, contact: int) -> float | None:
+        return float(sol.peak_force[contact - 1]) if reached(sol, contact) else None
+
     rows: list[tuple[str, str, float | None, float | None]] = [
         ("leading_peak_force", "N", oa["leading_peak_force"], ob["leading_peak_force"]),
         ("leading_peak_force_nondim", "-", oa["leading_peak_force_nondim"], ob["leading_peak_force_nondim"]),
         ("wave_speed", "m/s", oa["wave_speed"], ob["wave_speed"]),
         ("max_peak_force", "N", oa["max_peak_force"], ob["max_peak_force"]),
         ("peak_force_contact_1", "N", float(sa.peak_force[0]), float(sb.peak_force[0])),
-        (f"peak_force_contact_{w0}", "N", float(sa.peak_force[w0 - 1]), float(sb.peak_force[w0 - 1])),
+        (f"peak_force_contact_{w0}", "N", peak(sa, w0), peak(sb, w0)),
         (f"time_of_peak_contact_{w1}", "s", _finite(sa.time_of_peak[w1 - 1]), _finite(sb.time_of_peak[w1 - 1])),
         ("final_kinetic_energy", "J", float(sa.kinetic[-1]), float(sb.kinetic[-1])),
         ("momentum", "N s", sa.momentum, sb.momentum),
@@ -98,10 +149,13 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
         rows.append(("dissipated_energy", "J", float(sa.dissipated[-1]), float(sb.dissipated[-1])))
     if scene.effects.far_end == "wall":
         rows.append(("wall_peak_force", "N", sa.wall_peak_force, sb.wall_peak_force))
+    why = _not_measured(sb, ob)
+    if hasattr(b, "observables_missing"):  # the observables' own reasons, where the run result gives them
+        why.update(b.observables_missing())
     out = []
     for q, unit, va, vb in rows:
-        mv, msrc = modl.get(q, (None, ""))
-        out.append(CompareRow(q, unit, va, vb, mv, msrc, rtol))
+        mv, msrc, applies = modl.get(q, (None, "", None))
+        out.append(CompareRow(q, unit, va, vb, mv, msrc, rtol, applies, why.get(q)))
     return out
 
 
@@ -131,10 +185,10 @@ def _cells(r: CompareRow) -> list[str]:
         r.unit,
         g(r.a),
         g(r.b),
-        g(r.model),
+        "n/a" if r.model_applies is False else g(r.model),
         g(r.rel_diff),
         g(r.rel_model),
-        "yes" if r.ok else "FAIL",
+        r.verdict,
         r.model_source,
     ]
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import json
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -19,7 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from granchain.physics import models  # noqa: E402
-from granchain.physics.predictions import transition_contact  # noqa: E402
+from granchain.physics.predictions import applicability, transition_contact  # noqa: E402
 from granchain.scene import parse_scene  # noqa: E402
 
 
@@ -74,35 +75,53 @@ def plot_histories(run: Path) -> Path | None:
     return out
 
 
-def model_curves(scene, contacts: np.ndarray) -> dict[str, np.ndarray]:
-    """Model peak force vs contact that applies to the scene (for the peak plot)."""
+def model_curves(scene, contacts: np.ndarray, skipped: dict[str, str] | None = None) -> dict[str, np.ndarray]:
+    """Model peak force vs contact, for the models that apply to the scene (predictions.applicability).
+
+    skipped: if given, filled with label -> reason for each model left out because it does not apply.
+    """
     m, d, k = scene.mass, scene.diameter, scene.stiffness
     ld = scene.loading
     impulse = scene.input_impulse
     curves: dict[str, np.ndarray] = {}
+
+    def applies(name: str, label: str) -> bool:
+        verdict = applicability(name, scene)
+        if not verdict.applies and skipped is not None:
+            skipped[label] = verdict.reason
+        return verdict.applies
+
     if scene.contact.law == "hertz":
-        curves["Eq. 8 (short load)"] = np.full(
-            contacts.shape, models.short_load_peak_force(impulse, m, scene.e_star, scene.r_star)
-        )
-        if ld.is_force:
-            for name, fn in (("Eq. 19", models.front_speed_lower), ("Eq. 15", models.front_speed_upper)):
-                f = models.solitary_wave_peak_force(fn(ld.amplitude, k, m, d), k, m, d)
-                curves[f"{name} + Nesterenko (long load)"] = np.full(contacts.shape, f)
+        label = "Eq. 8 (short load)"
+        if applies("short_load_peak_force", label):
+            curves[label] = np.full(
+                contacts.shape, models.short_load_peak_force(impulse, m, scene.e_star, scene.r_star)
+            )
+        for name, eq, fn in (
+            ("long_load_peak_force_lower", "Eq. 19", models.front_speed_lower),
+            ("long_load_peak_force_upper", "Eq. 15", models.front_speed_upper),
+        ):
+            label = f"{eq} + Nesterenko (long load)"
+            if applies(name, label) and ld.is_force:
+                curves[label] = np.full(
+                    contacts.shape, models.solitary_wave_peak_force(fn(ld.amplitude, k, m, d), k, m, d)
+                )
     else:
         beta = scene.contact.unloading_coeff
         f1 = models.linear_chain_impulse_response(impulse, k, m, beta)["F_p"]
         lam = models.exponential_decay_rate(k, m, beta)
         coeffs = models.leading_wave_coefficients(k, m, beta)
         tc = transition_contact(f1, lam, scene.unloading_stiffness, m, coeffs.omega, int(contacts.max()))
-        # Eq. 27 holds before the transition; drawn a little past it to show where the two meet
-        last = 2 * tc if tc is not None else contacts.max()
-        curves["Eq. 27 (exponential regime)"] = np.where(contacts <= last, f1 * np.exp(-lam * (contacts - 1)), np.nan)
-        if tc is not None:
+        label = "Eq. 27 (exponential regime)"
+        if applies("exponential_decay_per_contact", label):
+            # Eq. 27 holds before the transition; drawn a little past it to show where the two meet
+            last = 2 * tc if tc is not None else contacts.max()
+            curves[label] = np.where(contacts <= last, f1 * np.exp(-lam * (contacts - 1)), np.nan)
+        label = "Eq. 34 slope (1+beta)/2" + (f" from contact {tc}" if tc is not None else "")
+        if applies("inverse_decay_exponent", label) and tc is not None:
             p = models.inverse_decay_exponent(beta)
             anchor = f1 * np.exp(-lam * (tc - 1))
-            curves[f"Eq. 34 slope (1+beta)/2 from contact {tc}"] = np.where(
-                contacts >= tc, anchor * (contacts / tc) ** (-p), np.nan
-            )
+            curves[label] = np.where(contacts >= tc, anchor * (contacts / tc) ** (-p), np.nan)
     return curves
 
 
@@ -111,7 +130,8 @@ def plot_peaks(run: Path, log: bool = True) -> Path:
     scene = parse_scene((run / "scene.toml").read_text(), source=str(run / "scene.toml"))
     _, data = _read_csv(run / "peaks.csv")
     contacts, peak = data[:, 0], data[:, 1]
-    curves = model_curves(scene, contacts)
+    skipped: dict[str, str] = {}
+    curves = model_curves(scene, contacts, skipped)
     fig, ax = plt.subplots(figsize=(8, 5))
     ok = peak > 0
     ax.plot(contacts[ok], peak[ok], "o", ms=3, label=f"peak force — {_label(summary)}")
@@ -127,7 +147,15 @@ def plot_peaks(run: Path, log: bool = True) -> Path:
     ax.set_title(scene.title or "peak force along the chain", fontsize=9)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    fig.tight_layout()
+    if skipped:  # say which models are left out, and why
+        note = "\n".join(
+            textwrap.shorten(f"not drawn, {label}: {reason}", width=160, placeholder=" ...")
+            for label, reason in skipped.items()
+        )
+        fig.text(0.01, 0.01, note, fontsize=6, va="bottom", ha="left", color="0.3")
+        fig.tight_layout(rect=(0, 0.025 * (len(skipped) + 1), 1, 1))
+    else:
+        fig.tight_layout()
     out = run / "peaks.png"
     fig.savefig(out, dpi=120)
     plt.close(fig)
