@@ -109,10 +109,14 @@ def cmd_predict(args) -> int:
     if args.json:
         print(json.dumps([p.as_dict() for p in preds], indent=2))
         return 0
-    print(f"{'quantity':34s} {'value':>12s} {'unit':8s} {'nondim':>10s}  source; valid when")
+    print(f"{'quantity':34s} {'value':>12s} {'unit':8s} {'nondim':>10s}  {'applies':7s}  source; valid when; why")
     for p in preds:
         nd = f"{p.nondim:.4g}" if p.nondim is not None else ""
-        print(f"{p.name:34s} {p.value:12.5g} {p.unit:8s} {nd:>10s}  {p.equation}; {p.valid}")
+        applies = "yes" if p.applies else "no"
+        print(
+            f"{p.name:34s} {p.value:12.5g} {p.unit:8s} {nd:>10s}  {applies:7s}  "
+            f"{p.equation}; {p.valid}; {p.applies_reason}"
+        )
     return 0
 
 
@@ -134,6 +138,9 @@ def cmd_compare(args) -> int:
     print(f"reference  {args.method}, dt = {ref.solution.timestep:g} s, {ref.solution.wall_time:.3g} s wall")
     print(f"rtol       {args.rtol:g}")
     print(format_table(rows))
+    unmeasured = [r.quantity for r in rows if not r.measured]
+    if unmeasured:
+        print(f"granchain: not measured (the table says why): {', '.join(unmeasured)}", file=sys.stderr)
     bad = [r.quantity for r in rows if not r.ok]
     print(f"compare directory: {out}")
     if bad:
