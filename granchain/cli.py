@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 import warnings
 from pathlib import Path
@@ -296,6 +297,9 @@ def main(argv: list[str] | None = None) -> int:
     except GranchainError as e:  # a user's error: one line; anything else is a bug and keeps its traceback
         print(f"granchain: error: {e}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # `granchain predict | head`: the reader has what it wanted
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - no flush error at exit
+        return 0
     except KeyboardInterrupt:
         print("granchain: interrupted; no run directory was written", file=sys.stderr)
         return 130
