@@ -9,8 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings
 
 from granchain.cli import main, resolve_scene
 from granchain.physics.contact import hertz_tangent_stiffness, unloading_stiffness
@@ -18,6 +17,7 @@ from granchain.scene import parse_scene
 from granchain.workflows import run as run_mod
 from granchain.workflows.plan import expected_peak_force, highest_frequency, plan_scene
 from granchain.workflows.run import AccuracyWarning, check_resources, plan_for, run_scene
+from tests.scenegen import scenes
 
 STEEL = """
 title = "steel bilinear chain, 2 kN step for 50 us"
@@ -101,42 +101,11 @@ def _linearised_highest_frequency(scene) -> float:
     return float(np.sqrt(np.max(np.linalg.eigvalsh(s[:, None] * kmat * s[None, :]))))
 
 
-def _scene(beads, law, taper, wall, striker, pre, materials):
-    contact = "unloading_coeff = 0.7\nplastic_stiffness = 2.43e7" if law == "bilinear" else ""
-    chain = f"beads = {beads}\nradius = 4.76e-3\n"
-    if materials:
-        chain += "material = [" + ", ".join(f'"{m}"' for m in materials[:beads]) + "]\n"
-    else:
-        chain += 'material = "brass"\n'
-    if taper:
-        chain += f"taper = {taper!r}\n"
-    loading = 'kind = "striker"\nvelocity = 2.0' if striker else 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
-    text = f'[chain]\n{chain}[contact]\nlaw = "{law}"\n{contact}\n[loading]\n{loading}\n'
-    text += "[run]\nend_time = 1e-4\ntimestep = 1e-8\n"
-    if wall:
-        text += '[boundary]\nfar_end = "wall"\n'
-    if pre:
-        text += f"[precompression]\nforce = {pre!r}\n"
-    return parse_scene(text, source="generated.toml")
-
-
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
-@given(
-    beads=st.integers(3, 40),
-    law=st.sampled_from(["hertz", "bilinear"]),
-    taper=st.one_of(st.none(), st.floats(0.9, 1.05)),
-    wall=st.booleans(),
-    striker=st.booleans(),
-    pre=st.one_of(st.none(), st.floats(0.1, 100.0)),
-    materials=st.one_of(st.none(), st.lists(st.sampled_from(["brass", "steel"]), min_size=40, max_size=40)),
-)
-def test_omega_max_bounds_the_linearised_chain_for_every_effect(beads, law, taper, wall, striker, pre, materials):
-    from granchain.scene import SceneError
-
-    try:
-        sc = _scene(beads, law, taper, wall, striker, pre, materials)
-    except SceneError:
-        return  # a combination the scene refuses (with its own message, tested in test_scene)
+@settings(max_examples=80, deadline=None)
+@given(sc=scenes(auto=False))
+def test_omega_max_bounds_the_linearised_chain_for_every_effect(sc):
+    """Every generated scene (taper, per-bead materials, wall, striker, precompression, dashpot; both
+    laws): the planner's bound is never below the exact top frequency of the linearised chain."""
     omega, _ = highest_frequency(sc)
     exact = _linearised_highest_frequency(sc)
     assert omega >= exact * (1 - 1e-12)

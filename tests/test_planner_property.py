@@ -1,0 +1,48 @@
+"""Issue 11's property: on any valid scene with timestep = "auto", for rtol 1e-2 and 1e-3 and for
+RK4, reference Verlet and LAMMPS, every complete measured peak is within rtol of a run at a quarter
+of the planned step.
+
+The achieved error over rtol of every example is appended to the file named by
+$GRANCHAIN_PROPERTY_LOG (when set), one line per run, for the note's table.
+"""
+
+import os
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+
+from granchain.workflows.run import plan_for, run_scene
+from tests.scenegen import scenes
+
+INTEGRATORS = {"rk4": ("reference", "rk4"), "verlet": ("reference", "verlet"), "lammps": ("lammps", None)}
+
+
+def achieved_error(scene, backend, method, rtol):
+    """The largest relative difference of complete peaks (complete in both runs) between the planned
+    run and a run at a quarter of its step; and how many peaks it was taken over."""
+    planned, _ = plan_for(scene, backend, method, rtol)
+    got = run_scene(planned, backend=backend, method=method, rtol=None).solution
+    fine_scene = replace(planned, run=replace(planned.run, timestep=planned.run.timestep / 4))
+    fine = run_scene(fine_scene, backend=backend, method=method).solution
+    both = got.complete & fine.complete
+    if not both.any():
+        return 0.0, 0
+    rel = np.abs(got.peak_force[both] / fine.peak_force[both] - 1.0)
+    return float(rel.max()), int(both.sum())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("integrator", list(INTEGRATORS))
+@pytest.mark.parametrize("rtol", [1e-2, 1e-3])
+@settings(max_examples=8, deadline=None, derandomize=True)
+@given(scene=scenes(max_beads=40))
+def test_planned_step_meets_rtol_on_any_scene(scene, rtol, integrator):
+    backend, method = INTEGRATORS[integrator]
+    err, n = achieved_error(scene, backend, method, rtol)
+    log = os.environ.get("GRANCHAIN_PROPERTY_LOG")
+    if log:
+        with open(log, "a") as f:
+            f.write(f"{integrator} {rtol:g} {err / rtol:.4g} {n} {scene.contact.law} {scene.loading.kind}\n")
+    assert err <= rtol, f"{integrator} at rtol {rtol:g}: {err:.3g} over {n} complete peaks\n{scene.to_toml()}"
