@@ -4,6 +4,8 @@ render_deck(scene) returns the deck text and the data file it reads (chain.data)
 contact_<law> (hertz | bilinear), loading_<force | velocity>, energy, histories (only when asked
 for), and a snapshot write_dump at each snapshot time. Every number is written with repr(), the
 shortest text that reads back to the same double. StrictUndefined: a missing value is an error.
+Free text (title, file name) enters a deck only through the `comment` filter, as an inert comment;
+any other template value that is not one line of printable text is an error.
 """
 
 from __future__ import annotations
@@ -36,6 +38,38 @@ def _g(x) -> str:
     return repr(float(x))
 
 
+def comment(text) -> str:
+    """Any text (a scene's title, a file name) as the payload of one inert comment line of a deck.
+
+    LAMMPS reads a line up to '\\n' only, joins the next line when the last non-blank character is
+    '&', keeps reading while a line holds an odd number of triple quotes, loses the line end after a
+    NUL, and only then drops the comment (input.cpp: Input::file, Input::parse). So: every character
+    that is not printable (line and paragraph breaks of C and of str.splitlines, NUL, tabs, other
+    controls, lone surrogates from undecodable file names) becomes a space (white space) or '?';
+    '&' becomes '+' and '"' becomes "'", so the text holds no continuation and no triple quote
+    wherever it sits on the line. '$' stays: LAMMPS drops a comment before it substitutes variables.
+    """
+    out = []
+    for ch in str(text):
+        if ch == "&":
+            out.append("+")
+        elif ch == '"':
+            out.append("'")
+        elif ch.isprintable():
+            out.append(ch)
+        else:
+            out.append(" " if ch.isspace() else "?")
+    return "".join(out)
+
+
+def _one_line(value):
+    """Every {{ expression }} of the templates: text that would break a deck line is an error (free
+    text goes through the comment filter; the rest is numbers and the templates' own words)."""
+    if isinstance(value, str) and not value.isprintable():
+        raise ValueError(f"deck template value {value!r} is not one line of printable text")
+    return value
+
+
 def _env() -> jinja2.Environment:
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(resources.files("granchain") / "templates")),
@@ -44,8 +78,10 @@ def _env() -> jinja2.Environment:
         lstrip_blocks=True,
         keep_trailing_newline=True,
         autoescape=False,
+        finalize=_one_line,
     )
     env.filters["g"] = _g
+    env.filters["comment"] = comment
     return env
 
 
@@ -212,7 +248,8 @@ def builtin_granular_deck(deck: str, scene) -> str:
     tangential force) instead of chain/hertz: the yardstick our pair style is tested and timed
     against. The built-in style tallies no contact energy, so the energy watch is left out."""
     m = scene.chain.material
-    start, end = deck.index("# ---- contact law"), deck.index("neighbor")
+    start = deck.index("\n# ---- contact law") + 1  # at a line start: a title may hold these words
+    end = deck.index("\nneighbor ", start) + 1
     return (
         deck[:start]
         + "fix             contact all property/atom d_fc d_fprev d_fprev2 d_fpeak d_tpeak ghost yes\n"
@@ -221,7 +258,7 @@ def builtin_granular_deck(deck: str, scene) -> str:
         + "tangential linear_nohistory 0.0 0.0 damping viscoelastic\n"
         + "comm_modify     vel yes\n\n"
         + deck[end:]
-    ).replace("fix             watch_energy", "# (no energy tallied) fix watch_energy")
+    ).replace("\nfix             watch_energy", "\n# (no energy tallied) fix watch_energy")
 
 
 def render_deck(scene) -> Deck:
