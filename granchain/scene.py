@@ -865,10 +865,23 @@ def _toml_value(v: Any) -> str:
     if isinstance(v, float):
         return repr(v)
     if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        return '"' + "".join(_toml_char(c) for c in v) + '"'
     if isinstance(v, list):
         return "[" + ", ".join(_toml_value(x) for x in v) + "]"
     raise TypeError(f"cannot write {v!r} as TOML")
+
+
+def _toml_char(c: str) -> str:
+    """One character of a TOML basic string: quote and backslash escaped, control characters as
+    \\uXXXX (TOML allows none raw), a lone surrogate (not a Unicode scalar value) as U+FFFD."""
+    if c in '"\\':
+        return "\\" + c
+    o = ord(c)
+    if o < 0x20 or o == 0x7F:
+        return f"\\u{o:04X}"
+    if 0xD800 <= o <= 0xDFFF:
+        return "\ufffd"
+    return c
 
 
 def _dump_toml(d: dict) -> str:

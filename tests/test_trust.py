@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from granchain.cli import main, resolve_scene
 from granchain.physics.contact import hertz_tangent_stiffness, unloading_stiffness
@@ -264,3 +265,15 @@ def test_cli_shows_a_bug_as_a_traceback(monkeypatch):
     monkeypatch.setattr(plan_mod, "plan_scene", broken)
     with pytest.raises(ValueError, match="a bug"):
         main(["plan", "default"])
+
+
+@settings(max_examples=200, deadline=None)
+@given(title=st.text())
+def test_any_title_round_trips_through_scene_toml(title):
+    """Scene.to_toml (written to every run directory) reads back for any title text."""
+    from granchain.scene import parse_scene
+
+    sc = replace(resolve_scene("default"), title=title)
+    back = parse_scene(sc.to_toml())
+    expected = "".join("\ufffd" if 0xD800 <= ord(c) <= 0xDFFF else c for c in title)
+    assert back.title == expected
