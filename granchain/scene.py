@@ -84,7 +84,7 @@ class Outputs:
     histories: tuple[int, ...] = ()  # contacts whose force (and bead velocity) vs time is kept
     snapshots: tuple[float, ...] = ()  # times of force/velocity profiles along the chain
     window: tuple[int, int] | None = None  # contacts used for leading peak and wave speed
-    history_interval: float | str | None = None  # s between history samples (default: every step; "auto")
+    history_interval: float | str | None = None  # s between history samples ("auto", the default with histories)
     dump_interval: float | str | None = None  # s between whole-chain LAMMPS dump frames (default: none; "auto")
 
 
@@ -306,9 +306,15 @@ class _Section:
         self.used.add(key)
         return self.table.get(key, default)
 
+    def missing(self, key: str, allowed: str) -> SceneError:
+        """A required key is absent: name it, and the present key that looks like a typo of it."""
+        typo = [k for k in self.table if k not in self.used and _did_you_mean(k, (key,))]
+        hint = f" ({typo[0]!r} looks like a typo of {key!r})" if typo else ""
+        return SceneError(f"{self.file}: [{self.name}] is missing {key!r}{hint}: {allowed}")
+
     def required(self, key: str, allowed: str) -> Any:
         if key not in self.table:
-            raise SceneError(f"{self.file}: [{self.name}] is missing {key!r}: {allowed}")
+            raise self.missing(key, allowed)
         return self.raw(key)
 
     def number(
@@ -326,7 +332,7 @@ class _Section:
         allowed = _range_text(low, low_open, high, high_open, what)
         if key not in self.table:
             if required:
-                raise SceneError(f"{self.file}: [{self.name}] is missing {key!r}: {allowed}")
+                raise self.missing(key, allowed)
             return default
         v = self.raw(key)
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
@@ -364,8 +370,16 @@ class _Section:
             if key not in self.used:
                 raise SceneError(
                     f"{self.file}: [{self.name}] has unknown key {key!r} = {self.table[key]!r}; "
-                    f"allowed keys: {', '.join(known)}"
+                    f"{_did_you_mean(key, known)}allowed keys: {', '.join(known)}"
                 )
+
+
+def _did_you_mean(key: str, known) -> str:
+    """'did you mean "beads"? ' for a key one typo away from a known one, else ''."""
+    import difflib
+
+    close = difflib.get_close_matches(str(key), list(known), n=1, cutoff=0.6)
+    return f"did you mean {close[0]!r}? " if close else ""
 
 
 def _range_text(low, low_open, high, high_open, what) -> str:
@@ -451,7 +465,10 @@ SECTIONS = ("title", "chain", "contact", "loading", "run", "outputs", "boundary"
 def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
     for key in data:
         if key not in SECTIONS:
-            raise SceneError(f"{source}: unknown section or key {key!r}; allowed: {', '.join(SECTIONS)}")
+            raise SceneError(
+                f"{source}: unknown section or key {key!r}; {_did_you_mean(key, SECTIONS)}"
+                f"allowed: {', '.join(SECTIONS)}"
+            )
     for sec in ("chain", "contact", "loading", "run"):
         if sec not in data:
             raise SceneError(
@@ -760,9 +777,15 @@ def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
         v = s.number(key, required=False, low=0.0, what=what + ', or "auto" for the planner to choose')
         if v is not None and run.timestep is not None and v < run.timestep:
             raise s.fail(key, v, f"at least the time step {run.timestep:g} s")
+        if v is not None and run.end_time is not None and v > run.end_time:
+            raise s.fail(key, v, f"at most the run's end_time {run.end_time:g} s (one sample per interval)")
         return v
 
     interval = interval_or_auto("history_interval", "s between history samples, at least the time step")
+    if interval is None and histories:
+        # every step made a 245 MB dump of 454k steps x 3 contacts: by default the planner's largest
+        # interval whose dump-derived peaks stay within rtol (granchain.workflows.plan)
+        interval = AUTO
     dump = interval_or_auto("dump_interval", "s between whole-chain dump frames (LAMMPS), at least the time step")
     if run.stop_after_contact is not None:
         if run.stop_after_contact > nc:

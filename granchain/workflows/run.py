@@ -149,6 +149,50 @@ def timestep_warning(scene, method: str, rtol: float) -> str | None:
     )
 
 
+class OutputSizeWarning(UserWarning):
+    """The requested dumps or history files will be larger than OUTPUT_WARN_BYTES."""
+
+
+#: a dump or history file larger than this is announced before the run (with the interval that fits)
+OUTPUT_WARN_BYTES = 1e9
+#: bytes of one atom line of a granchain dump: 10 columns at %.17g (granchain/templates/*dump*.j2)
+DUMP_LINE_BYTES = 230
+DUMP_FRAME_HEADER_BYTES = 200
+
+
+def output_sizes(scene) -> dict[str, float]:
+    """Estimated bytes of each file a planned scene's run writes in proportion to its length:
+    the LAMMPS history and whole-chain dumps and histories.csv (the peak table, energy and
+    snapshots are small)."""
+    from granchain.templates import dump_stride, history_stride
+
+    steps = scene.run.end_time / scene.run.timestep
+    sizes = {}
+    if scene.outputs.histories:
+        frames = steps / history_stride(scene) + 1
+        n = len(scene.outputs.histories)
+        sizes["histories.dump"] = frames * (DUMP_FRAME_HEADER_BYTES + n * DUMP_LINE_BYTES)
+        sizes["histories.csv"] = frames * (1 + 2 * n) * 24
+    if dump_stride(scene):
+        frames = steps / dump_stride(scene) + 1
+        sizes["chain.dump"] = frames * (DUMP_FRAME_HEADER_BYTES + scene.chain.beads * DUMP_LINE_BYTES)
+    return sizes
+
+
+def output_size_warning(scene) -> str | None:
+    """A sentence naming each file that will exceed OUTPUT_WARN_BYTES and the interval that fits."""
+    parts = []
+    for name, size in output_sizes(scene).items():
+        if size > OUTPUT_WARN_BYTES:
+            key = "dump_interval" if name == "chain.dump" else "history_interval"
+            now = getattr(scene.outputs, key) or scene.run.timestep
+            fits = now * size / OUTPUT_WARN_BYTES
+            parts.append(f"{name} about {size / 1e9:.3g} GB ([outputs] {key} >= {fits:.3g} s keeps it under 1 GB)")
+    if not parts:
+        return None
+    return f"{scene.source}: this run will write " + "; ".join(parts)
+
+
 def plan_for(scene, backend: str = "reference", method: str | None = None, rtol: float | None = None):
     """(scene, plan): the scene planned for the integrator this backend runs, or (scene, None) when
     nothing is "auto" and no rtol is given."""
@@ -208,6 +252,9 @@ def run_scene(
         msg = timestep_warning(scene, method, 1e-3 if rtol is None else rtol)
         if msg:
             warnings.warn(msg, AccuracyWarning, stacklevel=2)
+    msg = output_size_warning(scene)
+    if msg:
+        warnings.warn(msg, OutputSizeWarning, stacklevel=2)
     if backend == "reference":
         result = run_reference(scene, method)
         result.plan = plan
