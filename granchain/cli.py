@@ -93,13 +93,41 @@ def cmd_run(args) -> int:
         f"backend    {s['backend']} ({s['method']}), dt = {s['timestep']:g} s, {s['steps']} steps, "
         f"{s['wall_time']:.3g} s wall"
     )
+    missing = s.get("observables_missing", {})
     for k, v in s["observables"].items():
-        print(f"  {k:28s} {_fmt(v)}")
+        label = f"{k} ({OBSERVABLE_UNITS.get(k, '?')})"
+        why = f"   not measured: {missing[k]}" if v is None and k in missing else ""
+        print(f"  {label:38s} {_fmt(v)}{why}")
     c = s["conservation"]
-    print(f"  {'impulse delivered (N s)':28s} {_fmt(c['impulse_delivered'])}   momentum {_fmt(c['momentum'])}")
-    print(f"  {'energy balance error (rel)':28s} {_fmt(c['energy_balance_error_relative'])}")
+    ld = scene.loading
+    if ld.is_force:
+        print(f"  {'impulse of the load (N s)':38s} {_fmt(c['impulse_delivered'])}   (A T delivered by the force)")
+    else:
+        who = "the striker's M V" if ld.kind == "striker" else "bead 1's m v0"
+        print(f"  {'momentum put in at t = 0 (N s)':38s} {_fmt(scene.initial_momentum)}   ({who}; no force load)")
+    free = scene.effects.far_end == "free" and not scene.effects.precompression
+    print(
+        f"  {'momentum at the end (N s)':38s} {_fmt(c['momentum'])}"
+        + ("   (a free chain keeps what was put in)" if free else "   (the wall or the static load takes some)")
+    )
+    err = _fmt(c["energy_balance_error_relative"])
+    print(f"  {'energy balance error (1)':38s} {err}   (relative to the energy put in)")
     print(f"run directory: {out}")
     return 0
+
+
+#: units of the observables `granchain run` prints ("1": dimensionless)
+OBSERVABLE_UNITS = {
+    "window": "contacts",
+    "leading_peak_contact": "contact",
+    "leading_peak_force": "N",
+    "leading_peak_force_nondim": "1",  # F / (E* R*^2), Eq. 5
+    "wave_speed": "m/s",
+    "wave_speed_stderr": "m/s",
+    "wave_speed_contacts": "contacts fitted",
+    "max_peak_force": "N",
+    "max_peak_contact": "contact",
+}
 
 
 def cmd_predict(args) -> int:

@@ -1,0 +1,91 @@
+"""Issue 12: output sizes, words a user reads, refusals before the run."""
+
+import warnings
+from dataclasses import replace
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from granchain.cli import main, resolve_scene
+from granchain.scene import SceneError, parse_scene
+from granchain.workflows.plan import plan_scene
+from granchain.workflows.run import OUTPUT_WARN_BYTES, OutputSizeWarning, output_sizes, run_scene
+from tests.conftest import make_scene_text
+
+KEYS = {
+    "chain": ["beads", "radius", "material"],
+    "loading": ["kind", "velocity"],
+    "run": ["end_time", "timestep"],
+}
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    section=st.sampled_from(sorted(KEYS)),
+    data=st.data(),
+)
+def test_a_typo_in_a_key_names_the_key_it_looks_like(section, data):
+    key = data.draw(st.sampled_from(KEYS[section]))
+    i = data.draw(st.integers(0, len(key) - 1))
+    typo = key[:i] + data.draw(st.sampled_from("xz")) + key[i + 1 :]  # one letter changed
+    text = make_scene_text(loading='kind = "velocity"\nvelocity = 1.0')
+    lines = text.splitlines()
+    current = None
+    for n, line in enumerate(lines):
+        if line.startswith("["):
+            current = line.strip("[]")
+        elif current == section and line.split("=")[0].strip() == key:
+            lines[n] = line.replace(key, typo, 1)
+            break
+    with pytest.raises(SceneError) as e:
+        parse_scene("\n".join(lines), source="typo.toml")
+    assert repr(typo) in str(e.value) and repr(key) in str(e.value)
+
+
+def test_history_interval_longer_than_the_run_is_refused():
+    text = make_scene_text(outputs="histories = [1]\nhistory_interval = 1e-3", end_time=2e-4)
+    with pytest.raises(SceneError, match=r"history_interval = 0.001 is invalid: at most the run's end_time"):
+        parse_scene(text, source="long.toml")
+
+
+def test_histories_default_to_the_planned_interval_not_every_step():
+    sc = parse_scene(make_scene_text(outputs="histories = [1, 5]"), source="h.toml")
+    assert sc.outputs.history_interval == "auto"
+    planned = plan_scene(sc).scene
+    assert planned.outputs.history_interval >= planned.run.timestep
+    explicit = parse_scene(make_scene_text(outputs="histories = [1, 5]\nhistory_interval = 1e-8"), source="h.toml")
+    assert plan_scene(explicit).scene.outputs.history_interval == 1e-8  # an explicit interval wins
+
+
+def test_a_dump_over_a_gigabyte_is_announced_before_the_run(monkeypatch):
+    base = parse_scene(make_scene_text(beads=400, outputs="histories = [1]\nhistory_interval = 1e-8"), source="d.toml")
+    sc = replace(base, outputs=replace(base.outputs, dump_interval=1e-8))
+    sizes = output_sizes(sc)
+    assert sizes["chain.dump"] > OUTPUT_WARN_BYTES  # 2e4 frames of 400 beads
+    ran = []
+    monkeypatch.setattr("granchain.workflows.run.run_reference", lambda *a, **k: (ran.append(1), 1 / 0))
+    with pytest.warns(OutputSizeWarning, match=r"chain.dump about .* GB \(\[outputs\] dump_interval >= "):
+        with pytest.raises(ZeroDivisionError):  # the warning came before the run started
+            run_scene(sc)
+    assert ran == [1]
+
+
+def test_default_outputs_stay_small_on_every_bundled_scene():
+    from granchain.scene import bundled_scenes
+    from granchain.workflows.run import plan_for
+
+    for name in bundled_scenes():
+        sc, _ = plan_for(resolve_scene(name), "lammps")
+        for file, size in output_sizes(sc).items():
+            assert size < 50e6, (name, file, size)
+
+
+def test_run_prints_units(tmp_path, capsys):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert main(["run", "effect-striker", "--rtol", "1e-2", "--out", str(tmp_path / "r")]) == 0
+    out = capsys.readouterr().out
+    for line in out.splitlines():
+        if line.startswith("  "):
+            assert "(" in line and ")" in line, line  # every quantity says its unit
