@@ -22,10 +22,58 @@ class Material:
     yield_strength: float | None = None  # Pa, only needed for the bilinear law's k
 
 
-#: Built-in materials. Brass is the paper's (Sec. II A): rho = 8500, E = 115 GPa, nu = 0.30.
+#: Built-in materials: the bead materials of granular-chain experiments, by name (``material = "<name>"``
+#: in a scene; ``granchain materials`` lists them). Values are typical room-temperature ones; a real
+#: batch of beads can differ by a few per cent in E (and far more in yield strength, which depends on
+#: temper): give an inline [chain.material] table for measured values. yield_strength is None where
+#: it is not meaningful (brittle glass and carbide, viscoelastic PTFE) or, for brass, not in the paper.
+#: A built-in yield_strength sets the bilinear law's k = 18.5 sigma_y R* when the scene gives none.
 MATERIALS: dict[str, Material] = {
+    # Pal & Geubelle, Sec. II A (the paper's brass; no yield strength given there). Do not change:
+    # the bundled scenes and the tests reproduce the paper with exactly these values.
     "brass": Material(density=8500.0, youngs_modulus=115e9, poisson_ratio=0.30),
+    # AISI 316 (non-magnetic) stainless: rho, E, nu as used by Daraio, Nesterenko, Herbold & Jin,
+    # Phys. Rev. E 73, 026610 (2006) for their stainless-steel chains; E = 193 GPa is also the ASM
+    # handbook value (Callister, App. B). Yield 290 MPa: typical annealed 316 (ASM; ASTM A240
+    # minimum 205 MPa); cold-worked or ball-grade stock is stronger.
+    "stainless-steel-316": Material(density=8000.0, youngs_modulus=193e9, poisson_ratio=0.30, yield_strength=290e6),
+    # AISI 52100 chrome (bearing) steel balls: rho = 7780, E = 203 GPa, nu = 0.3 as used by Coste,
+    # Falcon & Fauve, Phys. Rev. E 56, 6104 (1997) for their chain of steel beads. Yield 2.0 GPa:
+    # typical handbook value for through-hardened 52100 (HRC 60-64), strongly temper-dependent.
+    "chrome-steel-52100": Material(density=7780.0, youngs_modulus=203e9, poisson_ratio=0.30, yield_strength=2.0e9),
+    # Aluminium alloy 6061-T6: Aluminum Association typical values (MatWeb / ASM): rho 2.70 g/cm^3,
+    # E 68.9 GPa, nu 0.33, tensile yield 276 MPa (T6 temper; annealed 6061-O yields at ~55 MPa).
+    "aluminium-6061-t6": Material(density=2700.0, youngs_modulus=68.9e9, poisson_ratio=0.33, yield_strength=276e6),
+    # Tungsten carbide (WC): rho 15.6 g/cm^3 (CRC Handbook, pure WC); E = 628 GPa and nu = 0.21 as
+    # commonly quoted for WC beads in granular-crystal work, inside the 530-700 GPa handbook range
+    # (not checked against a primary paper here). Cemented WC-6% Co balls are lighter (~14.9 g/cm^3):
+    # use an inline table for those. Brittle: no yield strength.
+    "tungsten-carbide": Material(density=15600.0, youngs_modulus=628e9, poisson_ratio=0.21),
+    # Soda-lime glass: rho 2.52 g/cm^3 and E 72 GPa (container glass at 20 C, the property table of
+    # Wikipedia's "Soda-lime glass" article); nu 0.22 typical (0.22-0.23 in handbooks). Brittle: no
+    # yield strength.
+    "soda-lime-glass": Material(density=2520.0, youngs_modulus=72e9, poisson_ratio=0.22),
+    # PTFE (Teflon): rho 2200, E 1.46 GPa, nu 0.46 as used by Daraio, Nesterenko, Herbold & Jin,
+    # Phys. Rev. E 72, 016603 (2005) and 73, 026610 (2006) for their PTFE chains. Viscoelastic and
+    # strain-rate dependent: no yield strength (the bilinear law assumes elastic-plastic yielding).
+    "ptfe": Material(density=2200.0, youngs_modulus=1.46e9, poisson_ratio=0.46),
 }
+
+#: A short citation per built-in material (the comments above give the detail).
+SOURCES: dict[str, str] = {
+    "brass": "Pal & Geubelle, Sec. II A (the paper)",
+    "stainless-steel-316": "Daraio et al., PRE 73, 026610 (2006); yield: ASM, annealed",
+    "chrome-steel-52100": "Coste, Falcon & Fauve, PRE 56, 6104 (1997); yield: handbook, hardened",
+    "aluminium-6061-t6": "Aluminum Association typical (MatWeb/ASM), T6 temper",
+    "tungsten-carbide": "rho: CRC Handbook; E, nu: typical for WC beads (unverified)",
+    "soda-lime-glass": "Wikipedia soda-lime glass table (container glass); nu typical",
+    "ptfe": "Daraio et al., PRE 72, 016603 (2005); PRE 73, 026610 (2006)",
+}
+
+
+def material_table() -> list[tuple[str, Material, str]]:
+    """(name, material, source) of every built-in material, in MATERIALS order (for listings)."""
+    return [(name, m, SOURCES[name]) for name, m in MATERIALS.items()]
 
 
 def effective_modulus(m: Material) -> float:
