@@ -1,4 +1,4 @@
-"""granchain command line: run, predict, scenes."""
+"""granchain command line: run, compare, plan, predict, plot, render, scenes, materials, doctor."""
 
 from __future__ import annotations
 
@@ -238,6 +238,22 @@ def cmd_scenes(args) -> int:
     return 0
 
 
+def cmd_materials(args) -> int:
+    from granchain.physics.materials import material_table
+
+    rows = material_table()
+    if args.name:
+        names = [n for n, _, _ in rows]
+        if args.name not in names:
+            raise UsageError(f"{args.name}: no built-in material of that name; built-in: {', '.join(names)}")
+        rows = [r for r in rows if r[0] == args.name]
+    print(f"{'name':20s} {'rho kg/m^3':>10s} {'E GPa':>7s} {'nu':>5s} {'yield MPa':>9s}  source")
+    for name, m, source in rows:
+        ys = "-" if m.yield_strength is None else f"{m.yield_strength / 1e6:.0f}"
+        print(f"{name:20s} {m.density:10.0f} {m.youngs_modulus / 1e9:7.4g} {m.poisson_ratio:5.2f} {ys:>9s}  {source}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="granchain", description="Stress waves in 1D granular chains.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -308,6 +324,10 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("scenes", help="list the bundled example scenes, or print one")
     s.add_argument("name", nargs="?", help="print this scene's TOML")
     s.set_defaults(func=cmd_scenes)
+
+    mt = sub.add_parser("materials", help="list the built-in bead materials with their sources")
+    mt.add_argument("name", nargs="?", help="show one material")
+    mt.set_defaults(func=cmd_materials)
     return p
 
 

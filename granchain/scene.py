@@ -631,7 +631,7 @@ def _read_contact(s: _Section, chain: Chain) -> Contact:
             f"{s.file}: [contact] law = 'bilinear' needs a stiffness: give plastic_stiffness (N/m) or "
             f"the material's yield_strength (Pa) in [chain.material], from which k = 18.5 sigma_y R*"
         )
-    if k is not None and ys is not None:
+    if k is not None and ys is not None and chain.material_name is None:  # a built-in's yield gives way to k
         raise SceneError(
             f"{s.file}: [contact] plastic_stiffness = {k!r} and [chain.material] yield_strength = {ys!r} "
             f"both set k; give only one"

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from hypothesis import strategies as st
 
+from granchain.physics.materials import MATERIALS
 from granchain.scene import parse_scene
 
 
@@ -28,10 +29,11 @@ def scene_texts(draw, *, max_beads: int = 60, auto: bool = True) -> str:
     dashpot = draw(st.one_of(st.just(0.0), st.floats(0.1, 20.0)))
 
     chain = f"beads = {beads}\nradius = {radius!r}\n"
+    names = sorted(MATERIALS)
     if per_bead == "materials":
-        chain += "material = [" + ", ".join(['"brass"'] * beads) + "]\n"
+        chain += "material = [" + ", ".join(f'"{draw(st.sampled_from(names))}"' for _ in range(beads)) + "]\n"
     else:
-        chain += 'material = "brass"\n'
+        chain += f'material = "{draw(st.sampled_from(names))}"\n'
     if per_bead == "taper":
         chain += f"taper = {draw(st.floats(0.95, 0.995))!r}\n"
     contact = f'law = "{law}"\n'
@@ -47,7 +49,7 @@ def scene_texts(draw, *, max_beads: int = 60, auto: bool = True) -> str:
         loading = f"velocity = {draw(st.floats(0.05, 5.0))!r}\n"
     else:
         loading = f"velocity = {draw(st.floats(0.05, 5.0))!r}\n"
-        loading += f"mass = {draw(st.floats(0.5, 10.0)) * 8500.0 * 4.18879 * radius**3!r}\n"
+        loading += f"mass = {draw(st.floats(0.5, 10.0)) * 16000.0 * 4.18879 * radius**3!r}\n"
     n = beads - 1
     histories = sorted({1, draw(st.integers(2, n)), draw(st.integers(2, n))})
     text = f'[chain]\n{chain}\n[contact]\n{contact}\n[loading]\nkind = "{kind}"\n{loading}\n'

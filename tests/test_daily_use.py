@@ -89,3 +89,13 @@ def test_run_prints_units(tmp_path, capsys):
     for line in out.splitlines():
         if line.startswith("  "):
             assert "(" in line and ")" in line, line  # every quantity says its unit
+
+
+def test_materials_command_lists_every_built_in_material(capsys):
+    from granchain.physics.materials import MATERIALS
+
+    assert main(["materials"]) == 0
+    out = capsys.readouterr().out
+    assert all(name in out for name in MATERIALS)
+    assert main(["materials", "unobtainium"]) == 2
+    assert "no built-in material of that name" in capsys.readouterr().err

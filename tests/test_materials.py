@@ -240,12 +240,6 @@ def test_same_nondimensional_impulse_gives_the_same_nondimensional_wave(name, br
     assert list(pm["complete"]) == list(pb["complete"])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="scene.py refuses plastic_stiffness beside a built-in material's yield_strength, and to_toml writes "
-    "both for a bilinear scene; fixed when an explicit plastic_stiffness overrides a built-in yield strength "
-    "(remove this marker then)",
-)
 def test_bilinear_scene_with_a_built_in_yield_strength_round_trips():
     sc = parse_scene(
         scene_text('"aluminium-6061-t6"', law="bilinear", contact_extra="unloading_coeff = 0.8"), source="b.toml"

@@ -170,3 +170,7 @@ def test_auto_intervals_need_a_plan():
     assert sc.needs_plan
     with pytest.raises(ValueError, match="plan the scene first"):
         history_stride(sc)
+    # with a fixed step, an "auto" interval is the planner's own choice
+    planned = plan_scene(sc, rtol=1e-3)
+    fixed = replace(sc, run=planned.scene.run, chain=planned.scene.chain)
+    assert history_stride(fixed) * fixed.run.timestep == pytest.approx(planned.scene.outputs.history_interval)

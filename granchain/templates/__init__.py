@@ -86,24 +86,29 @@ def _env() -> jinja2.Environment:
 
 
 def history_stride(scene) -> int:
-    """Steps between history samples: history_interval / timestep, at least 1."""
+    """Steps between history samples: history_interval / timestep, at least 1 ("auto": the planner's)."""
     if scene.outputs.history_interval is None:
         return 1
-    _planned(scene.outputs.history_interval, "history_interval")
-    return max(1, round(scene.outputs.history_interval / scene.run.timestep))
+    return _stride(scene, scene.outputs.history_interval)
 
 
 def dump_stride(scene) -> int:
-    """Steps between whole-chain dump frames (0: no whole-chain dump)."""
+    """Steps between whole-chain dump frames (0: no whole-chain dump; "auto": the planner's)."""
     if scene.outputs.dump_interval is None:
         return 0
-    _planned(scene.outputs.dump_interval, "dump_interval")
-    return max(1, round(scene.outputs.dump_interval / scene.run.timestep))
+    return _stride(scene, scene.outputs.dump_interval)
 
 
-def _planned(value, key: str) -> None:
-    if isinstance(value, str):
-        raise ValueError(f'[outputs] {key} = "auto": plan the scene first (granchain.workflows.plan.plan_scene)')
+def _stride(scene, interval) -> int:
+    if scene.run.timestep is None:
+        from granchain.errors import UsageError
+
+        raise UsageError('[run] timestep = "auto": plan the scene first (granchain.plan or granchain.run)')
+    if interval == "auto":  # what plan_scene would choose at its default rtol (the same function)
+        from granchain.workflows.plan import highest_frequency, output_stride
+
+        return output_stride(highest_frequency(scene)[0], scene.run.timestep)
+    return max(1, round(interval / scene.run.timestep))
 
 
 def atom_layout(scene) -> dict:

@@ -200,6 +200,12 @@ def last_measured_contact(scene) -> int | None:
     return max(cands) if cands else None
 
 
+def output_stride(omega_max: float, timestep: float, rtol: float = 1e-3) -> int:
+    """Steps between output samples: the largest whose three-point-parabola peaks stay within rtol
+    at the chain's highest frequency ((omega_max D)^4 / 16 <= rtol, see plan_scene)."""
+    return max(1, math.floor((16.0 * rtol) ** 0.25 / omega_max / timestep))
+
+
 def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4") -> Plan:
     """Fill "auto" values (and the time step, when rtol is given) with the reasons."""
     if rtol is not None and not (0 < rtol < 1):
@@ -298,7 +304,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4") -> 
     for key in ("history_interval", "dump_interval"):
         if getattr(o, key) == AUTO:
             step = d["run"]["timestep"]
-            stride = max(1, math.floor((16.0 * rtol_eff) ** 0.25 / omega / step))
+            stride = output_stride(omega, step, rtol_eff)
             d["outputs"][key] = stride * step
             choices.append(
                 PlanChoice(
