@@ -1,16 +1,33 @@
-"""Plots of a finished run directory (PNG, each with the CSV of its data beside it).
+"""Figures of a finished run directory, and of a compare directory (LAMMPS against the reference).
 
-histories.png   contact forces and bead velocities vs time at the recorded contacts (Fig. 5a, 5b)
-peaks.png       peak force vs contact, log axes, with the models that apply (Figs. 6, 7)
-snapshots.png   force and velocity along the chain at the snapshot times, with the running
+Each figure is written in every requested format (``formats``: any of png, pdf, svg), with the CSV
+of its plotted data beside it (``<figure>_plot.csv``). Axis labels use matplotlib's mathtext
+(``$F_{i,i+1}$``: no TeX installation needed).
+
+Run directory (plot_run):
+histories       contact forces and bead velocities vs time at the recorded contacts (Fig. 5a, 5b)
+peaks           peak force vs contact, log axes, with the models that apply (Figs. 6, 7); open
+                markers: peaks that are not complete (peaks.csv's ``complete`` column, if present)
+snapshots       force and velocity along the chain at the snapshot times, with the running
                 peak-force envelope (Figs. 2, 8, 9)
+heatmap         contact force over contact index and time (an x-t diagram), from the whole-chain
+                time data the run has (see spacetime_force); skipped, with the reason, when it has
+                none: a heat map is never interpolated from a few contacts or frames
+
+Compare directory (plot_compare; ``granchain compare`` writes lammps/ and reference/ beside
+compare.csv):
+compare_histories   LAMMPS and reference force histories overlaid, their difference below
+compare_peaks       LAMMPS and reference peak force along the chain, their relative difference below
 """
 
 from __future__ import annotations
 
 import csv
 import json
+import logging
 import textwrap
+from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib
@@ -18,16 +35,79 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.colors import LogNorm, Normalize  # noqa: E402
+from matplotlib.ticker import FuncFormatter, MaxNLocator  # noqa: E402
 
+from granchain.errors import GranchainError, UsageError  # noqa: E402
 from granchain.physics import models  # noqa: E402
 from granchain.physics.predictions import applicability, transition_contact  # noqa: E402
 from granchain.scene import parse_scene  # noqa: E402
+
+logger = logging.getLogger(__name__)
+
+#: figure formats plot_run and plot_compare write (matplotlib's savefig, by file suffix)
+FORMATS = ("png", "pdf", "svg")
+DPI = 120
+
+#: a heat map needs at least this many frames (times) and this many contacts: fewer, and the
+#: picture would be an interpolation of a handful of lines, not the wave
+HEATMAP_MIN_FRAMES = 20
+HEATMAP_MIN_CONTACTS = 10
+#: at most this many cells along each heat-map axis; denser data is reduced by the maximum over
+#: blocks (a narrow pulse stays visible, as it would not with plain subsampling)
+HEATMAP_MAX_CELLS = 1500
+#: the log colour scale spans at most this many decades below the largest force; weaker forces
+#: (and open contacts, F = 0) take the colour of the bottom of the scale
+HEATMAP_DECADES = 4
+
+
+class PlotError(GranchainError, ValueError):
+    """A directory that cannot be plotted (not a run or compare directory, or missing data)."""
+
+
+# ---------------------------------------------------------------------------------------------
+# formats, files and text
+
+
+def check_formats(formats: str | Iterable[str]) -> tuple[str, ...]:
+    """The figure formats asked for, checked: a comma-separated string or an iterable of names."""
+    if isinstance(formats, str):
+        formats = formats.split(",")
+    fmts = [str(f).strip().lower().lstrip(".") for f in formats]
+    fmts = [f for f in fmts if f]
+    if not fmts:
+        raise UsageError(f"no figure format given: choose one or more of {', '.join(FORMATS)} (e.g. png,pdf)")
+    bad = [f for f in fmts if f not in FORMATS]
+    if bad:
+        raise UsageError(
+            f"unknown figure format {bad[0]!r}: choose one or more of {', '.join(FORMATS)} (e.g. --format png,pdf)"
+        )
+    return tuple(dict.fromkeys(fmts))
+
+
+def _save(fig, base: Path, formats: tuple[str, ...]) -> list[Path]:
+    """fig as base.<format> for each format; closes the figure."""
+    out = []
+    try:
+        for fmt in formats:
+            p = base.with_name(f"{base.name}.{fmt}")
+            fig.savefig(p, dpi=DPI, metadata={"Date": None} if fmt == "svg" else None)
+            out.append(p)
+    finally:
+        plt.close(fig)
+    return out
 
 
 def _read_csv(path: Path) -> tuple[list[str], np.ndarray]:
     with open(path) as fh:
         header = next(csv.reader(fh))
     return header, np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)
+
+
+def _columns(path: Path) -> dict[str, np.ndarray]:
+    """A CSV file as name -> column."""
+    header, data = _read_csv(path)
+    return {h: data[:, k] for k, h in enumerate(header)}
 
 
 def _write_csv(path: Path, header: list[str], columns: list[np.ndarray]) -> None:
@@ -38,41 +118,124 @@ def _write_csv(path: Path, header: list[str], columns: list[np.ndarray]) -> None
             w.writerow([repr(float(x)) for x in row])
 
 
+def _plain(text: str) -> str:
+    """User text (a scene title) shown as is: a $ would start mathtext."""
+    return str(text).replace("$", r"\$")
+
+
+def _method_label(summary: dict) -> str:
+    return _plain(f"({summary['method']}, ") + rf"$\Delta t$ = {summary['timestep']:g} s)"
+
+
 def _label(summary: dict) -> str:
-    return f"{summary['backend']} ({summary['method']}, dt = {summary['timestep']:g} s)"
+    return _plain(summary["backend"]) + " " + _method_label(summary)
 
 
-def plot_histories(run: Path) -> Path | None:
+def _time_unit(t_max: float) -> tuple[float, str]:
+    """Factor and mathtext unit for a time axis running to t_max seconds."""
+    for factor, unit in ((1.0, "s"), (1e3, "ms"), (1e6, r"$\mu$s")):
+        if t_max * factor >= 1.0:
+            return factor, unit
+    return 1e9, "ns"
+
+
+@dataclass
+class Peaks:
+    """peaks.csv of a run directory, with or without its complete column."""
+
+    contact: np.ndarray  # 1-based
+    peak_force: np.ndarray  # N
+    time_of_peak: np.ndarray  # s; nan where the wave never reached the contact
+    complete: np.ndarray  # bool; all True when the file has no complete column
+    has_complete: bool  # whether the file has a complete column
+
+    @property
+    def reached(self) -> np.ndarray:
+        """Contacts with a peak: reached by the wave (a time of peak) and a positive force."""
+        return np.isfinite(self.time_of_peak) & (self.peak_force > 0)
+
+
+def load_peaks(run_dir: str | Path) -> Peaks:
+    """peaks.csv of a run directory (the complete column, 0/1, is optional)."""
+    cols = _columns(Path(run_dir) / "peaks.csv")
+    has = "complete" in cols
+    complete = cols["complete"] == 1 if has else np.ones(cols["contact"].shape, bool)
+    return Peaks(cols["contact"], cols["peak_force"], cols["time_of_peak"], complete, has)
+
+
+def _summary(run: Path) -> dict:
+    return json.loads((run / "summary.json").read_text())
+
+
+def _scene(run: Path):
+    return parse_scene((run / "scene.toml").read_text(), source=str(run / "scene.toml"))
+
+
+def _plain_log_ticks(*axes) -> None:
+    """Plain numbers on log y axes spanning less than a decade (not 4.2 x 10^4 on every minor tick)."""
+    lo, hi = axes[0].get_ylim()
+    if lo > 0 and hi / lo < 10.0:
+        for ax in axes:
+            for set_fmt in (ax.yaxis.set_major_formatter, ax.yaxis.set_minor_formatter):
+                set_fmt(FuncFormatter(lambda v, _: f"{v:.6g}"))
+
+
+def _legend_label(model_label: str) -> str:
+    """A model_curves label for a legend: its formulas in mathtext."""
+    return model_label.replace("(1+beta)/2", r"$(1+\beta)/2$")
+
+
+# ---------------------------------------------------------------------------------------------
+# a run directory
+
+
+#: more lines than this (snapshot times, history contacts) and they are coloured by a colour bar, not
+#: named in a legend
+LEGEND_MAX = 8
+
+
+def plot_histories(run: Path, formats=("png",)) -> list[Path]:
     if not (run / "histories.csv").exists():
-        return None
-    summary = json.loads((run / "summary.json").read_text())
+        return []
+    summary = _summary(run)
     header, data = _read_csv(run / "histories.csv")
-    t_us = data[:, 0] * 1e6
+    factor, unit = _time_unit(float(np.max(data[:, 0])) if data.size else 0.0)
+    t = data[:, 0] * factor
     fcols = [i for i, h in enumerate(header) if h.startswith("force_")]
     vcols = [i for i, h in enumerate(header) if h.startswith("velocity_")]
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+    contacts = [int(header[i].split("_")[1]) for i in fcols]
+    many = len(fcols) > LEGEND_MAX
+    cmap = plt.get_cmap("viridis")
+    norm = Normalize(min(contacts), max(contacts)) if many else None
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 7), sharex=True, layout="constrained" if many else None)
     for i in fcols:
-        ax1.plot(t_us, data[:, i], label=f"contact {header[i].split('_')[1]}")
+        c = int(header[i].split("_")[1])
+        kw = {"color": cmap(norm(c))} if many else {"label": rf"$F_{{{c},{c + 1}}}$"}
+        ax1.plot(t, data[:, i], lw=1, **kw)
     for i in vcols:
-        ax2.plot(t_us, data[:, i], label=f"bead {header[i].split('_')[1]}")
-    ax1.set_ylabel("contact force F (N)")
-    ax2.set_ylabel("bead velocity v (m/s)")
-    ax2.set_xlabel("time t (µs)")
+        c = int(header[i].split("_")[1])
+        kw = {"color": cmap(norm(c))} if many else {"label": rf"$v_{{{c}}}$"}
+        ax2.plot(t, data[:, i], lw=1, **kw)
+    ax1.set_ylabel(r"contact force $F_{i,i+1}$ (N)")
+    ax2.set_ylabel(r"bead velocity $v_i$ (m/s)")
+    ax2.set_xlabel(rf"time $t$ ({unit})")
     ax1.set_title(f"Contact force and bead velocity histories — {_label(summary)}", fontsize=10)
-    ax1.legend(fontsize=8)
-    ax2.legend(fontsize=8)
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
-    fig.tight_layout()
-    out = run / "histories.png"
-    fig.savefig(out, dpi=120)
-    plt.close(fig)
+    if many:
+        cb = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=r"contact / bead $i$")
+        cb.ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    else:
+        ax1.legend(fontsize=8)
+        ax2.legend(fontsize=8)
+        fig.tight_layout()
+    made = _save(fig, run / "histories", formats)
     _write_csv(
         run / "histories_plot.csv",
         [header[0], *[header[i] for i in fcols + vcols]],
         [data[:, 0], *[data[:, i] for i in fcols + vcols]],
     )
-    return out
+    return made
 
 
 def model_curves(scene, contacts: np.ndarray, skipped: dict[str, str] | None = None) -> dict[str, np.ndarray]:
@@ -125,78 +288,508 @@ def model_curves(scene, contacts: np.ndarray, skipped: dict[str, str] | None = N
     return curves
 
 
-def plot_peaks(run: Path, log: bool = True) -> Path:
-    summary = json.loads((run / "summary.json").read_text())
-    scene = parse_scene((run / "scene.toml").read_text(), source=str(run / "scene.toml"))
-    _, data = _read_csv(run / "peaks.csv")
-    contacts, peak = data[:, 0], data[:, 1]
+def _peak_markers(
+    ax, contacts, peak, reached, complete, has_complete: bool, label: str, color=None, open_note: str = ""
+) -> None:
+    """Peak forces of the reached contacts as markers: filled where the peak is complete, open where it
+    is not (when known)."""
+    full = reached & complete
+    (line,) = ax.plot(contacts[full], peak[full], "o", ms=3, color=color, label=label)
+    part = reached & ~complete
+    if has_complete and part.any():
+        ax.plot(
+            contacts[part],
+            peak[part],
+            "o",
+            ms=4,
+            mfc="none",
+            color=line.get_color(),
+            label=f"peak not complete at the end of the run (open marker{open_note})",
+        )
+
+
+def plot_peaks(run: Path, log: bool = True, formats=("png",)) -> list[Path]:
+    summary = _summary(run)
+    scene = _scene(run)
+    pk = load_peaks(run)
+    contacts, peak = pk.contact, pk.peak_force
     skipped: dict[str, str] = {}
     curves = model_curves(scene, contacts, skipped)
     fig, ax = plt.subplots(figsize=(8, 5))
-    ok = peak > 0
-    ax.plot(contacts[ok], peak[ok], "o", ms=3, label=f"peak force — {_label(summary)}")
+    # on log axes, the tiny peaks of contacts the front is still reaching at the end of the run (not
+    # complete) would squash the profile into a line: the axis is set by the complete peaks, the rest
+    # are counted in the legend (and kept in peaks_plot.csv)
+    done = pk.reached & pk.complete
+    floor, note = None, ""
+    if log and pk.has_complete and done.any():
+        floor = float(peak[done].min()) / 1.5
+        below = int(np.sum(pk.reached & ~pk.complete & (peak < floor)))
+        if below:
+            note = f"; {below} below the axis"
+        else:
+            floor = None
+    label = f"peak force — {_label(summary)}"
+    _peak_markers(ax, contacts, peak, pk.reached, pk.complete, pk.has_complete, label, open_note=note)
     for name, y in curves.items():
-        ax.plot(contacts, y, "-", lw=1.2, label=name)
+        ax.plot(contacts, y, "-", lw=1.2, label=_legend_label(name))
     if log:
         ax.set_xscale("log")
         ax.set_yscale("log")
-    ax.set_xlabel("contact i (between bead i and i+1)")
-    ax.set_ylabel("peak contact force F_p (N)")
+    if floor is not None:
+        tops = [float(peak[pk.reached].max()), *(float(np.nanmax(y)) for y in curves.values() if np.isfinite(y).any())]
+        ax.set_ylim(floor, 1.3 * max(tops))
+    ax.set_xlabel(r"contact $i$ (between bead $i$ and $i+1$)")
+    ax.set_ylabel(r"peak contact force $F_p$ (N)")
     sec = ax.secondary_yaxis("right", functions=(lambda f: f / scene.force_scale, lambda g: g * scene.force_scale))
-    sec.set_ylabel("F_p / (E* R*^2)")
-    ax.set_title(scene.title or "peak force along the chain", fontsize=9)
+    sec.set_ylabel(r"$F_p \,/\, (E^* R^{*2})$")
+    if log:
+        _plain_log_ticks(ax, sec)
+    ax.set_title(_plain(scene.title or "peak force along the chain"), fontsize=9)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     if skipped:  # say which models are left out, and why
         note = "\n".join(
-            textwrap.shorten(f"not drawn, {label}: {reason}", width=160, placeholder=" ...")
+            _plain(textwrap.shorten(f"not drawn, {label}: {reason}", width=160, placeholder=" ..."))
             for label, reason in skipped.items()
         )
         fig.text(0.01, 0.01, note, fontsize=6, va="bottom", ha="left", color="0.3")
         fig.tight_layout(rect=(0, 0.025 * (len(skipped) + 1), 1, 1))
     else:
         fig.tight_layout()
-    out = run / "peaks.png"
-    fig.savefig(out, dpi=120)
-    plt.close(fig)
-    _write_csv(run / "peaks_plot.csv", ["contact", "peak_force", *curves], [contacts, peak, *curves.values()])
-    return out
+    made = _save(fig, run / "peaks", formats)
+    header, cols = ["contact", "peak_force"], [contacts, peak]
+    if pk.has_complete:
+        header, cols = [*header, "complete"], [*cols, pk.complete.astype(float)]
+    _write_csv(run / "peaks_plot.csv", [*header, *curves], [*cols, *curves.values()])
+    return made
 
 
-def plot_snapshots(run: Path) -> Path | None:
+def plot_snapshots(run: Path, formats=("png",)) -> list[Path]:
     if not (run / "snapshots.csv").exists():
-        return None
-    summary = json.loads((run / "summary.json").read_text())
+        return []
+    summary = _summary(run)
     _, data = _read_csv(run / "snapshots.csv")
-    _, peaks = _read_csv(run / "peaks.csv")
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
+    pk = load_peaks(run)
+    times = np.unique(data[:, 0])
+    factor, unit = _time_unit(float(times.max()))
+    many = times.size > LEGEND_MAX
+    cmap = plt.get_cmap("viridis")
+    norm = Normalize(times.min() * factor, times.max() * factor) if many else None
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), sharex=True, layout="constrained" if many else None)
     cols = {"time": [], "bead": [], "velocity": [], "contact_force": []}
-    for t in np.unique(data[:, 0]):
+    for t in times:
         rows = data[data[:, 0] == t]
-        label = f"t = {t * 1e3:g} ms"
-        ax1.plot(rows[:-1, 1], rows[:-1, 4], lw=1, label=label)
-        ax2.plot(rows[:, 1], rows[:, 3], lw=1, label=label)
+        kw = {"color": cmap(norm(t * factor))} if many else {"label": rf"$t$ = {t * factor:g} {unit}"}
+        ax1.plot(rows[:-1, 1], rows[:-1, 4], lw=1, **kw)
+        ax2.plot(rows[:, 1], rows[:, 3], lw=1, **kw)
         for k, c in zip(cols, (rows[:, 0], rows[:, 1], rows[:, 3], rows[:, 4]), strict=True):
             cols[k].append(c)
-    ax1.plot(peaks[:, 0], peaks[:, 1], "k--", lw=1, label="peak-force envelope (whole run)")
-    ax1.set_ylabel("contact force F_{i,i+1} (N)")
-    ax2.set_ylabel("bead velocity v_i (m/s)")
-    ax2.set_xlabel("bead / contact index i")
+    ax1.plot(pk.contact, pk.peak_force, "k--", lw=1, label="peak-force envelope (whole run)")
+    ax1.set_ylabel(r"contact force $F_{i,i+1}$ (N)")
+    ax2.set_ylabel(r"bead velocity $v_i$ (m/s)")
+    ax2.set_xlabel(r"bead / contact index $i$")
     ax1.set_title(f"Force and velocity along the chain — {_label(summary)}", fontsize=10)
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.tight_layout()
-    out = run / "snapshots.png"
-    fig.savefig(out, dpi=120)
-    plt.close(fig)
+    ax1.legend(fontsize=8)
+    if not many:
+        ax2.legend(fontsize=8)
+    if many:
+        fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=rf"snapshot time $t$ ({unit})")
+    else:
+        fig.tight_layout()
+    made = _save(fig, run / "snapshots", formats)
     _write_csv(run / "snapshots_plot.csv", list(cols), [np.concatenate(v) for v in cols.values()])
-    return out
+    return made
 
 
-def plot_run(run_dir: str | Path, log: bool = True) -> list[Path]:
+# ---------------------------------------------------------------------------------------------
+# the x-t heat map
+
+
+@dataclass
+class SpaceTime:
+    """Contact force over time and contact: what the heat map draws."""
+
+    time: np.ndarray  # (frames,) s
+    contacts: np.ndarray  # (contacts,) 1-based contact indices
+    force: np.ndarray  # (frames, contacts) N
+    source: str  # where the data came from, for the figure
+
+
+def _from_dump(run: Path) -> SpaceTime:
+    """The whole-chain LAMMPS dump (chain.dump, written every [outputs] dump_interval)."""
+    from granchain.postprocess.dumps import read_dump
+    from granchain.reference.solver import step_plan, step_times
+    from granchain.templates import atom_layout
+
+    scene = _scene(run)
+    ld = scene.loading
+    plan = step_plan(
+        scene.run.end_time, scene.run.timestep, ld.duration if ld.is_force else 0.0, scene.outputs.snapshots
+    )
+    times = step_times(plan, scene.run.timestep)
+    dd = read_dump(run / "chain.dump", times, columns=("d_fc",))
+    o, n = atom_layout(scene)["offset"], scene.chain.beads
+    force = dd.columns["d_fc"][:, o : o + n - 1]  # contact i lives on bead i's atom
+    return SpaceTime(dd.time, np.arange(1, n), force, "whole-chain dump chain.dump")
+
+
+def _from_snapshots(run: Path) -> SpaceTime:
+    c = _columns(run / "snapshots.csv")
+    times = np.unique(c["time"])
+    beads = np.unique(c["bead"])
+    force = np.full((times.size, beads.size), np.nan)
+    force[np.searchsorted(times, c["time"]), np.searchsorted(beads, c["bead"])] = c["contact_force"]
+    # the last bead has no right-hand contact
+    return SpaceTime(times, beads[:-1].astype(int), force[:, :-1], f"snapshots.csv ({times.size} snapshots)")
+
+
+def _from_histories(run: Path) -> SpaceTime:
+    header, data = _read_csv(run / "histories.csv")
+    fcols = [i for i, h in enumerate(header) if h.startswith("force_")]
+    contacts = np.array([int(header[i].split("_")[1]) for i in fcols])
+    return SpaceTime(data[:, 0], contacts, data[:, fcols], f"histories.csv ({contacts.size} contacts)")
+
+
+def spacetime_force(run_dir: str | Path) -> tuple[SpaceTime | None, str]:
+    """Contact force over time and the whole chain, from what the run directory has; or None and why not.
+
+    Sources, best first: the whole-chain LAMMPS dump (chain.dump, [outputs] dump_interval); snapshots.csv
+    with at least HEATMAP_MIN_FRAMES snapshot times; histories.csv with at least HEATMAP_MIN_CONTACTS
+    contacts and HEATMAP_MIN_FRAMES samples. Nothing is interpolated between contacts or frames.
+    """
     run = Path(run_dir)
+    why = []
+    if (run / "chain.dump").exists():
+        return _from_dump(run), ""
+    why.append("no whole-chain dump (chain.dump: a LAMMPS run with [outputs] dump_interval)")
+    if (run / "snapshots.csv").exists():
+        st = _from_snapshots(run)
+        if st.time.size >= HEATMAP_MIN_FRAMES:
+            return st, ""
+        why.append(f"snapshots.csv has {st.time.size} snapshot time(s), fewer than {HEATMAP_MIN_FRAMES}")
+    else:
+        why.append("no snapshots.csv")
+    if (run / "histories.csv").exists():
+        st = _from_histories(run)
+        if st.contacts.size >= HEATMAP_MIN_CONTACTS and st.time.size >= HEATMAP_MIN_FRAMES:
+            return st, ""
+        why.append(
+            f"histories.csv has {st.contacts.size} contact(s), {st.time.size} sample(s) "
+            f"(at least {HEATMAP_MIN_CONTACTS} and {HEATMAP_MIN_FRAMES})"
+        )
+    else:
+        why.append("no histories.csv")
+    return None, (
+        "no whole-chain time data: "
+        + "; ".join(why)
+        + f". Set [outputs] dump_interval (LAMMPS), snapshots = [{HEATMAP_MIN_FRAMES} or more times] "
+        f"or histories = [{HEATMAP_MIN_CONTACTS} or more contacts]"
+    )
+
+
+def _block_max(a: np.ndarray, axis: int, max_cells: int) -> tuple[np.ndarray, int]:
+    """Reduce axis of a to at most max_cells by the maximum over blocks; returns (reduced, block)."""
+    n = a.shape[axis]
+    block = -(-n // max_cells)
+    if block <= 1:
+        return a, 1
+    pad = (-n) % block
+    a = np.moveaxis(a, axis, 0)
+    a = np.concatenate([a, np.full((pad, *a.shape[1:]), np.nan)]) if pad else a
+    red = np.nanmax(a.reshape(-1, block, *a.shape[1:]), axis=1)
+    return np.moveaxis(red, 0, axis), block
+
+
+def heatmap_data(st: SpaceTime, max_cells: int = HEATMAP_MAX_CELLS) -> SpaceTime:
+    """What the heat map draws: st reduced by block maxima to at most max_cells per axis."""
+    force, bt = _block_max(st.force, 0, max_cells)
+    force, bc = _block_max(force, 1, max_cells)
+    time = st.time[::bt] if bt > 1 else st.time
+    contacts = st.contacts[::bc] if bc > 1 else st.contacts
+    source = st.source + (f", maximum over blocks of {bt} frames x {bc} contacts" if bt * bc > 1 else "")
+    return SpaceTime(time, contacts, force, source)
+
+
+def plot_heatmap(run_dir: str | Path, formats=("png",), skipped: dict[str, str] | None = None) -> list[Path]:
+    """The x-t diagram of contact force (heatmap.<format>); [] and the reason in skipped["heatmap"] (and
+    the log) when the run directory has no whole-chain time data."""
+    run = Path(run_dir)
+    formats = check_formats(formats)
+    st, why = spacetime_force(run)
+    if st is None:
+        if skipped is not None:
+            skipped["heatmap"] = why
+        (logger.info if skipped is not None else logger.warning)("%s: heat map not drawn: %s", run, why)
+        return []
+    st = heatmap_data(st)
+    summary = _summary(run)
+    factor, unit = _time_unit(float(np.nanmax(st.time)))
+    f = np.where(np.isfinite(st.force), st.force, 0.0)
+    fmax = float(f.max())
+    positive = f[f > 0]
+    log_scale = positive.size > 0 and positive.min() < fmax / 100.0
+    base = plt.get_cmap("magma")
+    cmap = base.with_extremes(under=base(0.0))
+    if log_scale:
+        norm = LogNorm(vmin=fmax * 10.0**-HEATMAP_DECADES, vmax=fmax, clip=False)
+        f = np.where(f > 0, f, norm.vmin * 0.5)  # open contacts: the colour below the scale
+    else:
+        norm = Normalize(vmin=0.0, vmax=fmax if fmax > 0 else 1.0)
+    fig, ax = plt.subplots(figsize=(8, 6))
+    mesh = ax.pcolormesh(st.contacts, st.time * factor, f, shading="nearest", cmap=cmap, norm=norm, rasterized=True)
+    cb = fig.colorbar(mesh, ax=ax, extend="min" if log_scale else "neither")
+    cb.set_label(r"contact force $F_{i,i+1}$ (N)" + (", log scale" if log_scale else ""))
+    ax.set_xlabel(r"contact $i$ (between bead $i$ and $i+1$)")
+    ax.set_ylabel(rf"time $t$ ({unit})")
+    ax.set_title(f"Contact force over the chain and time — {_label(summary)}\nfrom {_plain(st.source)}", fontsize=9)
+    fig.tight_layout()
+    made = _save(fig, run / "heatmap", formats)
+    _write_csv(
+        run / "heatmap_plot.csv",
+        ["time", *[f"force_{c}" for c in st.contacts]],
+        [st.time, *st.force.T],
+    )
+    return made
+
+
+def plot_run(
+    run_dir: str | Path, log: bool = True, formats=("png",), skipped: dict[str, str] | None = None
+) -> list[Path]:
+    """Every figure of a run directory, in each format; returns the figure files.
+
+    skipped: if given, filled with figure -> reason for each figure that could not be drawn (the heat map
+    of a run without whole-chain time data); the reason is also logged.
+    """
+    run = Path(run_dir)
+    formats = check_formats(formats)
     if not (run / "summary.json").exists():
         raise FileNotFoundError(f"{run}: not a complete granchain run directory (no summary.json)")
-    made = [plot_peaks(run, log), plot_histories(run), plot_snapshots(run)]
-    return [p for p in made if p is not None]
+    return [
+        *plot_peaks(run, log, formats),
+        *plot_histories(run, formats),
+        *plot_snapshots(run, formats),
+        *plot_heatmap(run, formats, skipped),
+    ]
+
+
+# ---------------------------------------------------------------------------------------------
+# a compare directory: LAMMPS against the reference
+
+
+def is_compare_dir(path: str | Path) -> bool:
+    """A directory written by granchain compare: lammps/ and reference/ run directories."""
+    p = Path(path)
+    return (p / "lammps" / "summary.json").exists() and (p / "reference" / "summary.json").exists()
+
+
+@dataclass
+class HistoryOverlay:
+    """One contact's force history in both runs, on one time grid, and their difference (N)."""
+
+    contact: int
+    time: np.ndarray  # s
+    lammps: np.ndarray
+    reference: np.ndarray
+    difference: np.ndarray  # lammps - reference
+    grid: str  # how the two runs' samples were put on one time grid
+
+
+@dataclass
+class PeakOverlay:
+    """Peak force along the chain in both runs and their relative difference."""
+
+    contact: np.ndarray
+    lammps: np.ndarray
+    reference: np.ndarray
+    relative_difference: np.ndarray  # (lammps - reference) / reference; nan where either is not reached
+    reached: np.ndarray  # reached in both runs (Peaks.reached)
+    complete: np.ndarray  # complete in both runs (all True without the complete column)
+    has_complete: bool  # either peaks.csv has a complete column
+
+
+def _spline(t: np.ndarray, f: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """f(t) at the times at, by a cubic spline through the samples (repeated times: the last sample)."""
+    from scipy.interpolate import CubicSpline
+
+    keep = np.append(np.diff(t) > 0, True)
+    return CubicSpline(t[keep], f[keep])(at)
+
+
+def _on_one_grid(t_a, f_a, t_b, f_b, name_a: str, name_b: str):
+    """Two sampled series on one time grid: as they are if the grids coincide, else the finer one
+    interpolated (cubic spline: a linear one's error, h^2 F''/8, would swamp the difference of two
+    converged runs) to the coarser one's samples within both runs' time span."""
+    if min(t_a.size, t_b.size) < 2:
+        raise PlotError("a force history with fewer than two samples cannot be compared")
+    if t_a.shape == t_b.shape and np.allclose(t_a, t_b, rtol=0.0, atol=1e-9 * max(float(np.max(t_a)), 1e-300)):
+        return t_a, f_a, f_b, "both on the same sample times"
+    h_a, h_b = np.median(np.diff(t_a)), np.median(np.diff(t_b))
+    if h_a >= h_b:
+        keep = (t_a >= t_b[0]) & (t_a <= t_b[-1])
+        t = t_a[keep]
+        return t, f_a[keep], _spline(t_b, f_b, t), f"{name_b} interpolated (cubic spline) to the {name_a} samples"
+    keep = (t_b >= t_a[0]) & (t_b <= t_a[-1])
+    t = t_b[keep]
+    return t, _spline(t_a, f_a, t), f_b[keep], f"{name_a} interpolated (cubic spline) to the {name_b} samples"
+
+
+def compare_histories(compare_dir: str | Path) -> tuple[list[HistoryOverlay], str]:
+    """The force histories of both runs of a compare directory, per common history contact, with their
+    difference; or [] and why not."""
+    d = Path(compare_dir)
+    lam, ref = d / "lammps" / "histories.csv", d / "reference" / "histories.csv"
+    missing = [str(p.relative_to(d)) for p in (lam, ref) if not p.exists()]
+    if missing:
+        return [], f"no force histories to compare ({' and '.join(missing)} missing: [outputs] histories)"
+    a, b = _columns(lam), _columns(ref)
+    contacts = sorted(
+        {int(k.split("_")[1]) for k in a if k.startswith("force_")}
+        & {int(k.split("_")[1]) for k in b if k.startswith("force_")}
+    )
+    if not contacts:
+        return [], "the two runs have no history contact in common"
+    out = []
+    for c in contacts:
+        t, fa, fb, grid = _on_one_grid(a["time"], a[f"force_{c}"], b["time"], b[f"force_{c}"], "LAMMPS", "reference")
+        out.append(HistoryOverlay(c, t, fa, fb, fa - fb, grid))
+    return out, ""
+
+
+def compare_peaks(compare_dir: str | Path) -> PeakOverlay:
+    """The peak-force profiles of both runs of a compare directory, over their common contacts."""
+    d = Path(compare_dir)
+    a, b = load_peaks(d / "lammps"), load_peaks(d / "reference")
+    contacts, ia, ib = np.intersect1d(a.contact, b.contact, return_indices=True)
+    fa, fb = a.peak_force[ia], b.peak_force[ib]
+    reached = a.reached[ia] & b.reached[ib]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.where(reached, (fa - fb) / fb, np.nan)
+    return PeakOverlay(
+        contacts.astype(int), fa, fb, rel, reached, a.complete[ia] & b.complete[ib], a.has_complete or b.has_complete
+    )
+
+
+def _plot_compare_histories(d: Path, la: str, lr: str, formats, skipped) -> list[Path]:
+    overlays, why = compare_histories(d)
+    if not overlays:
+        if skipped is not None:
+            skipped["compare_histories"] = why
+        (logger.info if skipped is not None else logger.warning)("%s: history overlay not drawn: %s", d, why)
+        return []
+    t_max = max(float(np.max(o.time)) for o in overlays)
+    factor, unit = _time_unit(t_max)
+    many = len(overlays) > LEGEND_MAX  # then coloured by contact (a colour bar), line styles in the legend
+    cmap = plt.get_cmap("viridis")
+    norm = Normalize(overlays[0].contact, overlays[-1].contact) if many else None
+    fig, (ax1, ax2) = plt.subplots(
+        2,
+        1,
+        figsize=(9, 7.5),
+        sharex=True,
+        gridspec_kw={"height_ratios": [2.2, 1]},
+        layout="constrained" if many else None,
+    )
+    for k, o in enumerate(overlays):
+        color = cmap(norm(o.contact)) if many else f"C{k % 10}"
+        sub = f"{o.contact},{o.contact + 1}"
+        lab = (lambda text: "_" + text) if many else (lambda text: text)  # "_...": not in the legend
+        ax1.plot(o.time * factor, o.lammps, "-", color=color, lw=2.2, alpha=0.45, label=lab(rf"$F_{{{sub}}}$ LAMMPS"))
+        ax1.plot(o.time * factor, o.reference, "--", color=color, lw=1.0, label=lab(rf"$F_{{{sub}}}$ reference"))
+        ax2.plot(o.time * factor, o.difference, "-", color=color, lw=1.0, label=lab(rf"$F_{{{sub}}}$"))
+    if many:
+        ax1.plot([], [], "-", color="0.4", lw=2.2, alpha=0.45, label="LAMMPS")
+        ax1.plot([], [], "--", color="0.4", lw=1.0, label="reference")
+        cb = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=r"contact $i$")
+        cb.ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    ax2.axhline(0.0, color="0.5", lw=0.6)
+    ax1.set_ylabel(r"contact force $F_{i,i+1}$ (N)")
+    ax2.set_ylabel(r"$F^{\mathrm{LAMMPS}} - F^{\mathrm{ref}}$ (N)")
+    ax2.set_xlabel(rf"time $t$ ({unit})")
+    peak = max(float(np.max(np.abs(o.reference))) for o in overlays) or 1.0
+    sec = ax2.secondary_yaxis("right", functions=(lambda x: x / peak, lambda y: y * peak))
+    sec.set_ylabel(r"$/\ \max\,|F^{\mathrm{ref}}|$", fontsize=9)
+    ax1.set_title(f"Force histories: LAMMPS {la}, wide pale lines; reference {lr}, dashed", fontsize=9)
+    ax2.set_title(f"difference, LAMMPS − reference; {_plain(overlays[0].grid)}", fontsize=8)
+    ax1.legend(fontsize=7, ncol=1 if many else min(3, len(overlays)))
+    if not many:
+        ax2.legend(fontsize=7, ncol=min(3, len(overlays)))
+        fig.tight_layout()
+    for ax in (ax1, ax2):
+        ax.grid(alpha=0.3)
+    made = _save(fig, d / "compare_histories", formats)
+    rows = [
+        (o.contact, t, fa, fb, df)
+        for o in overlays
+        for t, fa, fb, df in zip(o.time, o.lammps, o.reference, o.difference, strict=True)
+    ]
+    _write_csv(
+        d / "compare_histories_plot.csv",
+        ["contact", "time", "lammps", "reference", "difference"],
+        [np.array(c, dtype=float) for c in zip(*rows, strict=True)] if rows else [np.zeros(0)] * 5,
+    )
+    return made
+
+
+def _plot_compare_peaks(d: Path, la: str, lr: str, formats) -> list[Path]:
+    p = compare_peaks(d)
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7.5), sharex=True, gridspec_kw={"height_ratios": [2.2, 1]})
+    reached = p.reached
+    ax1.plot(p.contact[reached], p.reference[reached], "-", color="C1", lw=1.2, label=f"reference {lr}")
+    _peak_markers(ax1, p.contact, p.lammps, reached, p.complete, p.has_complete, f"LAMMPS {la}", color="C0")
+    # the relative difference spans decades (1e-5 behind the wave, 1e-3 at a front still rising at the
+    # end): its size on log axes, its sign by colour; open markers as above
+    size = np.abs(p.relative_difference)
+    tiny = np.finfo(float).eps
+    above = p.relative_difference >= 0
+    for side, color, word in ((reached & above, "C0", "above"), (reached & ~above, "C3", "below")):
+        for complete, mfc, ms, note in ((True, None, 3, ""), (False, "none", 4, ", not complete")):
+            sel = side & (p.complete == complete)
+            if sel.any():
+                ax2.plot(
+                    p.contact[sel],
+                    np.maximum(size[sel], tiny),
+                    "o",
+                    ms=ms,
+                    mfc=mfc,
+                    color=color,
+                    label=f"LAMMPS {word} the reference{note}",
+                )
+    ax2.set_yscale("log")
+    # log axes for a profile that spans decades over its complete peaks (a plastic chain's decay)
+    ok = reached & p.complete if (reached & p.complete).any() else reached
+    if ok.any() and p.reference[ok].max() / p.reference[ok].min() > 10.0:
+        ax1.set_yscale("log")
+    ax1.set_ylabel(r"peak contact force $F_p$ (N)")
+    ax2.set_ylabel(r"$|F_p^{\mathrm{LAMMPS}} - F_p^{\mathrm{ref}}|\,/\,F_p^{\mathrm{ref}}$")
+    ax2.set_xlabel(r"contact $i$ (between bead $i$ and $i+1$)")
+    ax1.set_title("Peak force along the chain: LAMMPS vs reference", fontsize=9)
+    ax2.set_title("relative difference of the peak force (log scale; colour: its sign)", fontsize=8)
+    ax1.legend(fontsize=8)
+    if ax2.lines:
+        ax2.legend(fontsize=7)
+    for ax in (ax1, ax2):
+        ax.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    made = _save(fig, d / "compare_peaks", formats)
+    header = ["contact", "lammps", "reference", "relative_difference"]
+    cols = [p.contact, p.lammps, p.reference, p.relative_difference]
+    if p.has_complete:
+        header, cols = [*header, "complete"], [*cols, p.complete.astype(float)]
+    _write_csv(d / "compare_peaks_plot.csv", header, cols)
+    return made
+
+
+def plot_compare(compare_dir: str | Path, formats=("png",), skipped: dict[str, str] | None = None) -> list[Path]:
+    """The figures of a compare directory (compare_histories, compare_peaks), in each format, written in
+    it beside compare.csv; returns the figure files. skipped: as in plot_run."""
+    d = Path(compare_dir)
+    formats = check_formats(formats)
+    if not is_compare_dir(d):
+        raise PlotError(
+            f"{d}: not a compare directory (granchain compare writes lammps/ and reference/ run directories, "
+            "each with a summary.json)"
+        )
+    la, lr = (_method_label(_summary(d / name)) for name in ("lammps", "reference"))
+    return [*_plot_compare_histories(d, la, lr, formats, skipped), *_plot_compare_peaks(d, la, lr, formats)]
