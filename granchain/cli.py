@@ -182,14 +182,21 @@ def cmd_compare(args) -> int:
 
 
 def cmd_plot(args) -> int:
-    from granchain.postprocess.plots import plot_run
+    from granchain.postprocess.plots import is_compare_dir, plot_compare, plot_run
 
+    skipped: dict[str, str] = {}
     try:
-        for p in plot_run(args.run_dir, log=not args.linear):
-            print(p)
+        if is_compare_dir(args.run_dir):  # lammps/ and reference/, each with summary.json
+            made = plot_compare(args.run_dir, formats=args.format, skipped=skipped)
+        else:
+            made = plot_run(args.run_dir, log=not args.linear, formats=args.format, skipped=skipped)
     except FileNotFoundError as e:
         print(f"granchain: error: {e}", file=sys.stderr)
         return 2
+    for p in made:
+        print(p)
+    for figure, why in skipped.items():
+        print(f"granchain: {figure} not drawn: {why}", file=sys.stderr)
     return 0
 
 
@@ -300,9 +307,10 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--overwrite", action="store_true", help="replace an existing output directory")
     c.set_defaults(func=cmd_compare)
 
-    pl = sub.add_parser("plot", help="make the plots of a finished run directory")
-    pl.add_argument("run_dir", help="a run directory written by granchain run")
+    pl = sub.add_parser("plot", help="make the figures of a run directory or of a compare directory")
+    pl.add_argument("run_dir", help="a run directory (granchain run) or a compare directory (granchain compare)")
     pl.add_argument("--linear", action="store_true", help="linear axes for the peak-force plot")
+    pl.add_argument("--format", default="png", help="figure formats, comma-separated: png, pdf, svg (default png)")
     pl.set_defaults(func=cmd_plot)
 
     acc = sub.add_parser("accuracy", help="work-precision study: error vs wall time per method")
