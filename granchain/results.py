@@ -4,8 +4,10 @@ A backend (reference solver or LAMMPS) fills a :class:`ChainSolution`; :func:`wr
 turns it into a run directory:
 
     scene.toml      the scene as given
-    summary.json    backend, method, timestep, steps, wall_time, observables, conservation checks
-    peaks.csv       contact,peak_force,time_of_peak,peak_force_nondim (contacts numbered from 1)
+    summary.json    backend, method, timestep, steps, wall_time, observables (and why any is missing),
+                    peak status counts, conservation checks (the state at the end of the run)
+    peaks.csv       contact,peak_force,time_of_peak,peak_force_nondim,complete (contacts numbered from 1;
+                    complete: 1 if the peak is complete, see complete_peaks)
     histories.csv   time, force_<i>, velocity_<i> for each requested contact i (if requested)
     snapshots.csv   time, bead, displacement, velocity, contact_force (if requested)
     energy.csv      time, kinetic, potential, dissipated, work
@@ -25,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from granchain.errors import GranchainError
 from granchain.postprocess.observables import measure_observables
 
 #: A contact counts as reached by the wave when its peak force exceeds this fraction of the largest
@@ -41,6 +44,38 @@ def unreached_as_nan(peak_force: np.ndarray, time_of_peak: np.ndarray, static_fo
     rise = np.asarray(peak_force) - static_force
     floor = REACHED_FRACTION * float(np.max(rise, initial=0.0))
     return np.where(rise > floor, time_of_peak, np.nan)
+
+
+#: A contact's peak is complete once the contact's force has fallen to at most this fraction of its
+#: peak (both counted above the static force F0) at some sample after the peak. It is the fraction
+#: by which [run] stop_after_contact decides that the leading wave has passed a contact (the
+#: reference's wave_passed and the deck's v_wave_passed), so a run stopped by it ends with its stop
+#: contact complete. Why this value:
+#: - A peak that is not complete is the force at the end of the run (still rising), or a maximum so
+#:   recent that the next samples might still exceed it; neither converges with the time step.
+#: - A fall to half the peak cannot be round-off or integration noise, nor a flat top: the peak is a
+#:   genuine local maximum with samples on both sides, refined inside its step (Hermite / parabola),
+#:   so its value converges at the method's order.
+#: - It is checked on the minimum since the peak, not on the force at the end: behind a long load's
+#:   front the force oscillates (elastic-step-40N: between 0.01 and 0.85 of the peak at the end of
+#:   the run), and the force at the end alone would mark 39 of that scene's 151 window contacts,
+#:   passed long before, as incomplete. Every one of them fell below 0.03 of its peak.
+#: - A later, larger peak (a reflection, a second wave) moves the peak and restarts the minimum.
+PEAK_PASSED_FRACTION = 0.5
+
+
+def complete_peaks(
+    peak_force: np.ndarray, force_min_after_peak: np.ndarray, time_of_peak: np.ndarray, static_force: float = 0.0
+) -> np.ndarray:
+    """Which contacts' peaks are complete: the one definition, used by every backend.
+
+    force_min_after_peak: the smallest force sample of each contact since (the sample of) its peak;
+    time_of_peak: nan for contacts the wave has not reached (see unreached_as_nan), never complete.
+    Complete: reached and min - F0 <= PEAK_PASSED_FRACTION (peak - F0) (see PEAK_PASSED_FRACTION).
+    """
+    rise = np.asarray(peak_force, dtype=float) - static_force
+    fell = np.asarray(force_min_after_peak, dtype=float) - static_force <= PEAK_PASSED_FRACTION * rise
+    return np.isfinite(time_of_peak) & fell
 
 
 @dataclass
@@ -79,6 +114,17 @@ class ChainSolution:
     striker_peak_force: float | None = None  # striker-bead 1 contact (only with a striker)
     striker_time_of_peak: float | None = None
     striker_velocity: float | None = None  # at the end
+    # smallest force sample of each contact since its peak (N-1,), N; and which peaks are complete
+    # (complete_peaks). A backend that does not track them leaves them empty: no peak is complete.
+    force_min_after_peak: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    complete: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+
+    def __post_init__(self):
+        self.complete = np.asarray(self.complete, dtype=bool)
+        if self.complete.size == 0:
+            self.complete = np.zeros(np.shape(self.peak_force), dtype=bool)
+        elif self.complete.shape != np.shape(self.peak_force):
+            raise ValueError(f"complete has shape {self.complete.shape}, peak_force {np.shape(self.peak_force)}")
 
     @property
     def energy_balance_error(self) -> np.ndarray:
@@ -98,10 +144,45 @@ class RunResult:
     def observables(self) -> dict:
         return measure_observables(self.scene, self.solution)
 
+    @property
+    def peak_table(self) -> np.ndarray:
+        """The peak-force table of peaks.csv as a numpy structured array: contact (1-based), peak_force
+        (N), time_of_peak (s, nan if not reached) and complete (see complete_peaks)."""
+        idx = np.asarray(self.scene.peak_contacts, dtype=int) - 1
+        s = self.solution
+        table = np.empty(
+            idx.size, dtype=[("contact", int), ("peak_force", float), ("time_of_peak", float), ("complete", bool)]
+        )
+        table["contact"] = idx + 1
+        table["peak_force"] = s.peak_force[idx]
+        table["time_of_peak"] = s.time_of_peak[idx]
+        table["complete"] = s.complete[idx]
+        return table
+
+    def observables_missing(self) -> dict[str, str]:
+        """Why each observable that is None could not be measured (name -> reason)."""
+        missing: dict[str, str] = {}
+        measure_observables(self.scene, self.solution, missing)
+        return missing
+
+    def peak_status(self) -> dict:
+        """How many of the measured contacts (those of peaks.csv) have a complete peak, one that is not
+        complete yet (the wave is still there at the end of the run) and one never reached."""
+        idx = np.asarray(self.scene.peak_contacts, dtype=int) - 1
+        reached = np.isfinite(self.solution.time_of_peak[idx])
+        complete = self.solution.complete[idx]
+        return {
+            "complete": int(np.sum(complete)),
+            "incomplete": int(np.sum(reached & ~complete)),
+            "unreached": int(np.sum(~reached)),
+        }
+
     def summary(self) -> dict:
         s, sc = self.solution, self.scene
         eb = s.energy_balance_error
         work_scale = float(np.max(np.abs(s.work))) if s.work.size else 0.0
+        missing: dict[str, str] = {}
+        observables = measure_observables(sc, s, missing)
         return {
             "title": sc.title,
             "scene_source": sc.source,
@@ -114,8 +195,12 @@ class RunResult:
             "contact_law": sc.contact.law,
             "loading": sc.loading.kind,
             "wall_time": s.wall_time,
-            "observables": self.observables(),
+            "observables": observables,
+            "observables_missing": missing,
+            "peaks": self.peak_status(),
+            # the state at the end of the run: both backends' energy series end with it
             "conservation": {
+                "time": float(s.energy_time[-1]) if s.energy_time.size else 0.0,
                 "impulse_delivered": s.impulse_delivered,
                 "momentum": s.momentum,
                 "work": float(s.work[-1]) if s.work.size else 0.0,
@@ -136,7 +221,7 @@ class RunResult:
         }
 
 
-class RunDirError(RuntimeError):
+class RunDirError(GranchainError, RuntimeError):
     """The run directory cannot be written (exists, not writable, disk full, ...)."""
 
 
@@ -223,8 +308,15 @@ def _write_contents(result: RunResult, d: Path, extra_files: dict) -> None:
     idx = contacts - 1
     _write_csv(
         d / "peaks.csv",
-        ["contact", "peak_force", "time_of_peak", "peak_force_nondim"],
-        zip(contacts, s.peak_force[idx], s.time_of_peak[idx], s.peak_force[idx] / sc.force_scale, strict=True),
+        ["contact", "peak_force", "time_of_peak", "peak_force_nondim", "complete"],
+        zip(
+            contacts,
+            s.peak_force[idx],
+            s.time_of_peak[idx],
+            s.peak_force[idx] / sc.force_scale,
+            s.complete[idx].astype(int),
+            strict=True,
+        ),
     )
     if s.history_contacts:
         cols = [f"force_{i + 1}" for i in s.history_contacts] + [f"velocity_{i + 1}" for i in s.history_contacts]
@@ -269,9 +361,12 @@ def _json_default(o):
 
 
 def read_peaks(run_dir: str | Path) -> dict[str, np.ndarray]:
-    """peaks.csv of a run directory as arrays (contact is 1-based)."""
+    """peaks.csv of a run directory as arrays (contact is 1-based; complete, where present, is bool)."""
     data = np.genfromtxt(Path(run_dir) / "peaks.csv", delimiter=",", names=True, ndmin=1)
-    return {name: np.asarray(data[name]) for name in data.dtype.names}
+    out = {name: np.asarray(data[name]) for name in data.dtype.names}
+    if "complete" in out:
+        out["complete"] = out["complete"] == 1
+    return out
 
 
 def read_summary(run_dir: str | Path) -> dict:

@@ -98,7 +98,7 @@ double *PairChain::custom(const char *name)
   if (idx < 0 || flag != 1 || cols != 0)
     error->all(FLERR,
                "pair {} needs the per-atom vector d_{}: add 'fix ID all property/atom d_fc d_fprev d_fprev2 "
-               "d_fpeak d_tpeak{} ghost yes' before the run (granchain's decks do)",
+               "d_fpeak d_tpeak{} d_fmin ghost yes' before the run (granchain's decks do)",
                force->pair_style, name, bilinear ? " d_amax d_edis" : "");
   return atom->dvector[idx];
 }
@@ -110,6 +110,7 @@ void PairChain::init_style()
                force->pair_style);
   if (!atom->tag_enable) error->all(FLERR, "pair {} requires atom IDs", force->pair_style);
   custom("fc");
+  custom("fmin");
   if (bilinear) custom("amax");
   if (gamma > 0.0) {
     custom("edash");
@@ -143,6 +144,7 @@ void PairChain::compute(int eflag, int vflag)
   double *fprev2 = custom("fprev2");
   double *fpeak = custom("fpeak");
   double *tpeak = custom("tpeak");
+  double *fmin = custom("fmin");
   double *amax = bilinear ? custom("amax") : nullptr;
   double *edis = bilinear ? custom("edis") : nullptr;
   double *edash = gamma > 0.0 ? custom("edash") : nullptr;
@@ -233,14 +235,17 @@ void PairChain::compute(int eflag, int vflag)
   }
 
   // running peak of every owned contact: the largest sample, refined by the vertex of the parabola
-  // through the last three samples when the middle one is a local maximum
+  // through the last three samples when the middle one is a local maximum; and the smallest sample
+  // since the peak (granchain.results.complete_peaks), restarted by every new peak
   const bool refine = new_sample && std::isfinite(t_fprev2);
   const double a = t_fprev2 - t_fprev, b = t_fc - t_fprev;    // sample times relative to the middle one
   const double det = a * b * (b - a);
   for (int i = 0; i < nlocal; i++) {
+    fmin[i] = MIN(fmin[i], fc[i]);
     if (fc[i] > fpeak[i]) {
       fpeak[i] = fc[i];
       tpeak[i] = t;
+      fmin[i] = fc[i];
     }
     if (!refine || !(fprev[i] > fc[i]) || !(fprev[i] >= fprev2[i]) || !(fprev[i] > 0.0)) continue;
     const double fa = fprev2[i] - fprev[i], fb = fc[i] - fprev[i];
@@ -252,6 +257,7 @@ void PairChain::compute(int eflag, int vflag)
     if (val > fpeak[i]) {
       fpeak[i] = val;
       tpeak[i] = t_fprev + s;
+      fmin[i] = fc[i];    // the refined peak lies before this sample
     }
   }
   if (vflag_fdotr) virial_fdotr_compute();

@@ -13,10 +13,12 @@
  *
  * Contact i joins the beads with IDs i and i+1; its per-contact data live on bead i in per-atom
  * custom vectors created by  fix ID all property/atom d_fc d_fprev d_fprev2 d_fpeak d_tpeak
- * [d_amax d_edis] ghost yes:
+ * [d_amax d_edis] d_fmin ghost yes:
  *   d_fc     force of the contact at the current step (readable by dump custom / computes)
  *   d_fprev, d_fprev2   the two previous samples (for the peak refinement)
  *   d_fpeak, d_tpeak    running peak force and its time, refined by a parabola through three samples
+ *   d_fmin   smallest force sample since the peak (restarted by every new peak): the peak is complete
+ *            once it has fallen far enough (granchain.results.complete_peaks)
  *   d_amax   largest overlap so far (bilinear history), d_edis  energy dissipated so far (bilinear)
  * Requires newton_pair off: a pair that straddles two ranks is computed on both, so the rank that
  * owns bead i always writes bead i's data itself; alpha_max reaches ghost copies by forward comm.

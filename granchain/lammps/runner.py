@@ -20,18 +20,19 @@ from pathlib import Path
 
 import numpy as np
 
+from granchain.errors import GranchainError
 from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution
 from granchain.lammps.build import build_plugin, mpich_file, plugin_env
 from granchain.postprocess.dumps import read_dump
 from granchain.reference.solver import step_plan, step_times
-from granchain.results import ChainSolution, RunResult, pid_alive, unreached_as_nan
+from granchain.results import ChainSolution, RunResult, complete_peaks, pid_alive, unreached_as_nan
 from granchain.templates import atom_layout, render_deck
 
 #: files of a LAMMPS work directory that are copied into the run directory
 OUTPUT_GLOBS = ("deck.lmp", "chain.data", "log.lammps", "*.dump", "energy.txt", "load_end.txt", "results.npz")
 
 
-class LammpsError(RuntimeError):
+class LammpsError(GranchainError, RuntimeError):
     """LAMMPS failed; .lammps_message is LAMMPS's own text, .deck_line the failing line (if known)."""
 
     def __init__(self, message: str, lammps_message: str = "", deck_line: str | None = None):
@@ -188,12 +189,17 @@ def read_solution(
     o = lay["offset"]  # a striker is atom 1; bead i is atom i + o; contact i lives on atom i + o
     fpeak = res["fpeak"][o : o + n - 1]
     tpeak = unreached_as_nan(fpeak, res["tpeak"][o : o + n - 1], scene.effects.precompression)
+    # the smallest force since each peak (a deck without d_fmin: no peak counts as complete)
+    fmin = res["fmin"][o : o + n - 1] if "fmin" in res else fpeak
     u = res["x"][o : o + n] - (scene.bead_positions if scene.per_bead else np.arange(n) * d)
     v = res["vx"][o : o + n]
     wall = lay["wall"]  # bead N's contact is the wall's
     amax = res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1)
 
     e = np.loadtxt(work / "energy.txt", comments="#", ndmin=2)
+    # the deck appends the end of the run (energy.lmp.j2); where the last periodic sample is that, keep one
+    keep = np.append(e[1:, 0] != e[:-1, 0], True)
+    e = e[keep]
     f0 = scene.effects.precompression
     dis_col = "d_edis" in (work / "deck.lmp").read_text() or scene.effects.dashpot > 0
     if not dis_col:  # no dissipation column: an elastic law without a dashpot
@@ -246,6 +252,8 @@ def read_solution(
         peak_overlap=np.zeros(n - 1),
         peak_force=fpeak,
         time_of_peak=tpeak,
+        force_min_after_peak=fmin,
+        complete=complete_peaks(fpeak, fmin, tpeak, f0),
         history_contacts=hist,
         history_time=h_t,
         history_force=h_f,

@@ -4,7 +4,8 @@
 
 RUN_DIR holds deck.lmp and chain.data; LAMMPS_PLUGIN_PATH must name the plugin's directory.
 Rank 0 writes worker.json: {"ok": true, "wall_time": ..., "startup_time": ..., "ranks": ...}
-or {"ok": false, "error": LAMMPS's message, "kind": ...}. This module must not import lammps at
+or {"ok": false, "error": LAMMPS's message, "kind": ...}. After the deck it saves the final state and
+every contact's peak data, gathered by atom ID, in results.npz. This module must not import lammps at
 import time (the parent process never loads LAMMPS: a LAMMPS crash cannot take it down).
 """
 
@@ -50,6 +51,7 @@ def main(run_dir: str) -> int:
     import os
 
     cwd = os.getcwd()
+    deck = (d / "deck.lmp").read_text()
     try:
         os.chdir(d)  # the deck's relative file names (chain.data, dumps) live in the run directory
         lmp.file("deck.lmp")
@@ -69,8 +71,10 @@ def main(run_dir: str) -> int:
         "fpeak": np.array(lmp.gather("d_fpeak", 1, 1)[:]),
         "tpeak": np.array(lmp.gather("d_tpeak", 1, 1)[:]),
     }
-    if "d_amax" in (d / "deck.lmp").read_text():  # the bilinear style's history
+    if "d_amax" in deck:  # the bilinear style's history
         arrays["amax"] = np.array(lmp.gather("d_amax", 1, 1)[:])
+    if "d_fmin" in deck:  # the smallest force since each contact's peak (granchain's pair styles)
+        arrays["fmin"] = np.array(lmp.gather("d_fmin", 1, 1)[:])
     if rank == 0:
         np.savez(d / "results.npz", **arrays)
     report(

@@ -86,6 +86,22 @@ def peaks_from_samples(time: np.ndarray, force: np.ndarray, refine: bool = True)
     return peak, tpk
 
 
+def complete_from_samples(
+    time: np.ndarray, force: np.ndarray, peak_force: np.ndarray, time_of_peak: np.ndarray, static_force: float = 0.0
+) -> np.ndarray:
+    """Which contacts' peaks are complete, from force samples (frames, contacts), e.g. a dump or histories.
+
+    The smallest sample at or after each contact's time of peak, judged by granchain.results.complete_peaks
+    (the definition the backends apply to their in-run minimum). Sampled every step, this is the in-run answer.
+    """
+    from granchain.results import complete_peaks
+
+    tp = np.asarray(time_of_peak, dtype=float)
+    after = np.asarray(time, dtype=float)[:, None] >= np.where(np.isfinite(tp), tp, np.inf)[None, :]
+    fmin = np.where(after, force, np.inf).min(axis=0, initial=np.inf)
+    return complete_peaks(peak_force, fmin, tp, static_force)
+
+
 def arrival_times(time: np.ndarray, force: np.ndarray, fraction: float = 0.5) -> np.ndarray:
     """First time each contact's force reaches fraction x its peak (linear interpolation)."""
     peak = force.max(axis=0)

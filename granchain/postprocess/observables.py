@@ -1,11 +1,18 @@
-"""Scalar observables of a run, measured the same way for every backend.
+"""Scalar observables of a run, measured the same way for every backend, from complete peaks only.
+
+A peak feeds an observable only if it is complete (granchain.results.complete_peaks: the contact's
+force has fallen to half its peak since). A contact the wave is still passing at the end of the run
+holds a value that is still rising or a maximum that the next steps may exceed; it never feeds one.
 
 leading_peak_force: the peak force at the last contact of the measurement window (the wave has
     formed there and has not yet met the far end), in N and as F / (E* R*^2) (Eq. 5).
 wave_speed: D / (d time_of_peak / d contact), a least-squares line through the times of peak of
-    the window's contacts, with the slope's standard error propagated to the speed.
-Both are None where they cannot be measured (the wave has not reached the window before the end
-of the run, or fewer than three contacts were reached).
+    the window's contacts whose peaks are complete (wave_speed_contacts of them), with the slope's
+    standard error propagated to the speed.
+max_peak_force: the largest complete peak, and its contact.
+Each is None where it cannot be measured (the window's last contact not reached or its peak not
+complete before the end of the run; fewer than three complete peaks in the window; no complete
+peak at all); measure_observables says why in the dict passed as `missing`.
 """
 
 from __future__ import annotations
@@ -30,20 +37,53 @@ def fit_wave_speed(contacts: np.ndarray, times: np.ndarray, diameter: float) -> 
     return float(speed), float(speed * stderr_slope / slope)
 
 
-def measure_observables(scene, solution) -> dict:
+def _why_not_complete(solution, contact: int) -> str:
+    """Why a 1-based contact's peak cannot be used."""
+    from granchain.results import PEAK_PASSED_FRACTION  # (results imports this module)
+
+    t = float(solution.time_of_peak[contact - 1])
+    if not np.isfinite(t):
+        return f"contact {contact} was not reached by the wave before the end of the run (t = {solution.end_time:g} s)"
+    return (
+        f"the peak at contact {contact} is not complete: its force has not fallen to {PEAK_PASSED_FRACTION:g} of "
+        f"its peak since (peak {float(solution.peak_force[contact - 1]):.6g} N at t = {t:g} s, run ends at "
+        f"t = {solution.end_time:g} s); run longer"
+    )
+
+
+def measure_observables(scene, solution, missing: dict | None = None) -> dict:
+    """The observables of a run (complete peaks only); `missing`, if given, gets name -> reason for each None."""
+    why: dict[str, str] = {}
+    complete = np.asarray(solution.complete, dtype=bool)
     a, b = scene.window
     contacts = np.arange(a, b + 1)
-    times = solution.time_of_peak[contacts - 1]
     out: dict = {"window": [int(a), int(b)]}
     last = b - 1
-    reached = np.isfinite(solution.time_of_peak[last])
     out["leading_peak_contact"] = int(b)
-    out["leading_peak_force"] = float(solution.peak_force[last]) if reached else None
-    out["leading_peak_force_nondim"] = float(solution.peak_force[last] / scene.force_scale) if reached else None
-    fit = fit_wave_speed(contacts, times, scene.diameter) if reached else None
+    if complete[last]:
+        out["leading_peak_force"] = float(solution.peak_force[last])
+        out["leading_peak_force_nondim"] = float(solution.peak_force[last] / scene.force_scale)
+    else:
+        out["leading_peak_force"] = out["leading_peak_force_nondim"] = None
+        why["leading_peak_force"] = why["leading_peak_force_nondim"] = _why_not_complete(solution, b)
+    ok = complete[contacts - 1]
+    fit = fit_wave_speed(contacts[ok], solution.time_of_peak[contacts - 1][ok], scene.diameter)
     out["wave_speed"] = fit[0] if fit else None
     out["wave_speed_stderr"] = fit[1] if fit else None
-    i = int(np.argmax(solution.peak_force))
-    out["max_peak_force"] = float(solution.peak_force[i])
-    out["max_peak_contact"] = i + 1
+    out["wave_speed_contacts"] = int(np.sum(ok))
+    if fit is None:
+        why["wave_speed"] = why["wave_speed_stderr"] = (
+            f"{int(np.sum(ok))} of the window's contacts {a}-{b} have a complete peak; the fit needs 3"
+            if np.sum(ok) < 3
+            else f"the times of peak of the window's complete peaks (contacts {a}-{b}) do not increase"
+        )
+    if complete.any():
+        i = int(np.argmax(np.where(complete, solution.peak_force, -np.inf)))
+        out["max_peak_force"] = float(solution.peak_force[i])
+        out["max_peak_contact"] = i + 1
+    else:
+        out["max_peak_force"] = out["max_peak_contact"] = None
+        why["max_peak_force"] = why["max_peak_contact"] = "no contact has a complete peak before the end of the run"
+    if missing is not None:
+        missing.update(why)
     return out

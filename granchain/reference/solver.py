@@ -36,7 +36,7 @@ import numpy as np
 
 from granchain.invariants import InvariantError, energy_violation, momentum_violation
 from granchain.physics.contact import BilinearLaw, HertzLaw
-from granchain.results import ChainSolution, unreached_as_nan
+from granchain.results import PEAK_PASSED_FRACTION, ChainSolution, complete_peaks, unreached_as_nan
 
 METHODS = ("rk4", "verlet")
 STOP_CHECK_EVERY = 10  # steps between checks of a stop condition (the decks' fix halt uses the same)
@@ -209,9 +209,10 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
         sol.striker_peak_force = float(sol.peak_force[0])
         sol.striker_time_of_peak = float(sol.time_of_peak[0])
         sol.striker_velocity = float(sol.velocity[0])
-    for name in ("peak_overlap", "peak_force", "time_of_peak", "alpha_max"):
+    for name in ("peak_overlap", "peak_force", "time_of_peak", "alpha_max", "force_min_after_peak"):
         setattr(sol, name, getattr(sol, name)[s0 : s0 + n - 1])
     sol.time_of_peak = unreached_as_nan(sol.peak_force, sol.time_of_peak, problem.precompression)
+    sol.complete = complete_peaks(sol.peak_force, sol.force_min_after_peak, sol.time_of_peak, problem.precompression)
     sol.history_contacts = tuple(i - s0 for i in sol.history_contacts)
     sol.displacement, sol.velocity = sol.displacement[s0 : s0 + n], sol.velocity[s0 : s0 + n]
     sol.snapshot_displacement = sol.snapshot_displacement[:, s0 : s0 + n]
@@ -339,6 +340,7 @@ def _solve(
 
     amax = u[:-1] - u[1:]  # running peak overlap (refined): the static overlap at t = 0
     tmax = np.where(amax > 0.0, 0.0, np.nan)
+    amin = amax.copy()  # RK4: smallest overlap at a step end since the peak (results.complete_peaks)
     a_int = np.empty(n)
     accel(u, a_int, v)
 
@@ -516,10 +518,12 @@ def _solve(
         nonlocal alpha_old, adot_old
         alpha_new = u[:-1] - u[1:]
         adot_new = v[:-1] - v[1:]
+        np.minimum(amin, alpha_new, out=amin)
         rising = alpha_new > amax
         if rising.any():
             amax[rising] = alpha_new[rising]
             tmax[rising] = t1
+            amin[rising] = alpha_new[rising]
         turning = np.flatnonzero((adot_old > 0.0) & (adot_new <= 0.0) & (alpha_new > 0.0))
         if turning.size:
             p, tp = _hermite_max(t0, t1, alpha_old[turning], alpha_new[turning], adot_old[turning], adot_new[turning])
@@ -527,6 +531,7 @@ def _solve(
             ix = turning[better]
             amax[ix] = p[better]
             tmax[ix] = tp[better]
+            amin[ix] = alpha_new[ix]  # the peak lies inside this step: only its end comes after it
         if bilinear and method == "rk4":
             np.maximum(alpha_hist, amax, out=alpha_hist)
         alpha_old, adot_old = alpha_new, adot_new
@@ -539,15 +544,18 @@ def _solve(
     t_now, t_prev, t_prev2 = 0.0, -math.inf, -math.inf
     fpk = f_now.copy()  # the t = 0 sample (nonzero only with precompression)
     tpk = np.where(fpk > 0.0, 0.0, np.nan)
+    fmin = fpk.copy()  # smallest force sample since the peak (results.complete_peaks), as the pair styles
 
     def sample_forces(t1: float) -> None:
         nonlocal f_now, f_prev, f_prev2, t_now, t_prev, t_prev2
         f_prev2, f_prev, f_now = f_prev, f_now, fc.copy()
         t_prev2, t_prev, t_now = t_prev, t_now, t1
         np.maximum(amax, u[:-1] - u[1:], out=amax)
+        np.minimum(fmin, f_now, out=fmin)
         rising = f_now > fpk
         fpk[rising] = f_now[rising]
         tpk[rising] = t1
+        fmin[rising] = f_now[rising]
         if not math.isfinite(t_prev2):
             return
         ix = np.flatnonzero((f_prev > f_now) & (f_prev >= f_prev2) & (f_prev > 0.0))
@@ -565,6 +573,7 @@ def _solve(
         better = val > fpk[ix]
         fpk[ix[better]] = val[better]
         tpk[ix[better]] = t_prev + sv[better]
+        fmin[ix[better]] = f_now[ix[better]]  # the refined peak lies before this sample
 
     def wave_passed(c: int) -> bool:
         if method == "verlet":
@@ -574,7 +583,7 @@ def _solve(
             # (striker, wall, per-bead chains) only broadcast against whole-chain arrays
             now = float(law.force(u[:-1] - u[1:], alpha_hist)[c])
             peak = float(law.force_at_peak_overlap(amax)[c])
-        return peak > stop_floor and now < 0.5 * peak
+        return peak > stop_floor and now < PEAK_PASSED_FRACTION * peak
 
     def watch(step: int, t: float) -> None:
         """Cheap invariants, every watch_every steps: a finite state, overlaps below max_overlap."""
@@ -677,9 +686,11 @@ def _solve(
         record_history(t)
 
     if method == "verlet":
-        peak_force, tmax = fpk, tpk
+        peak_force, tmax, force_min = fpk, tpk, fmin
     else:
         peak_force = np.asarray(law.force_at_peak_overlap(amax), dtype=float)
+        force_min = np.asarray(law.force(np.maximum(amin, 0.0), alpha_hist), dtype=float)
+    time_of_peak = unreached_as_nan(peak_force, tmax, f0)
     e = np.asarray(e_rows)
     # remove duplicate times (a breakpoint may coincide with a periodic sample)
     _, keep = np.unique(e[:, 0], return_index=True)
@@ -694,7 +705,9 @@ def _solve(
         end_time=t,
         peak_overlap=amax,
         peak_force=peak_force,
-        time_of_peak=unreached_as_nan(peak_force, tmax, f0),
+        time_of_peak=time_of_peak,
+        force_min_after_peak=force_min,
+        complete=complete_peaks(peak_force, force_min, time_of_peak, f0),
         history_contacts=tuple(int(i) for i in hist_idx),
         history_time=h_t[:nrec].copy(),
         history_force=h_f[:nrec].copy(),
