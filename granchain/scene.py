@@ -556,8 +556,8 @@ def _read_material(s: _Section, source: str, required: bool = True) -> tuple[mat
     if isinstance(m, dict):
         ms = _Section(source, f"{s.name}.material", m)
         material = mat.Material(
-            density=ms.number("density", low=0.0, what="kg/m^3"),
-            youngs_modulus=ms.number("youngs_modulus", low=0.0, what="Pa"),
+            density=ms.number("density", low=0.0, high=1e5, high_open=False, what="kg/m^3, at most 1e5"),
+            youngs_modulus=ms.number("youngs_modulus", low=0.0, high=1e13, high_open=False, what="Pa, at most 1e13"),
             poisson_ratio=ms.number("poisson_ratio", low=-1.0, high=0.5, what="-1 < nu < 0.5"),
             yield_strength=ms.number("yield_strength", required=False, low=0.0, what="Pa"),
         )
@@ -575,17 +575,23 @@ def _read_chain(s: _Section, source: str) -> Chain:
     radii = materials = None
     if isinstance(s.table.get("radius"), list):
         v = s.raw("radius")
-        allowed = f"a list of {beads} radii in m, all > 0 (one per bead)"
+        allowed = f"a list of {beads} radii in m, all > 0 and <= 1 (one per bead)"
         if (
             beads is None
             or len(v) != beads
-            or any(isinstance(x, bool) or not isinstance(x, (int, float)) or not x > 0 for x in v)
+            or any(isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x <= 1.0 for x in v)
         ):
             raise s.fail("radius", v, allowed)
         radii = tuple(float(x) for x in v)
         radius = radii[0]
     else:
-        radius = s.number("radius", low=0.0, what="bead radius in m, or a list of one radius per bead")
+        radius = s.number(
+            "radius",
+            low=0.0,
+            high=1.0,
+            high_open=False,
+            what="bead radius in m (at most 1 m: granular-chain beads), or a list of one radius per bead",
+        )
     taper = s.number(
         "taper", required=False, low=0.0, what="radius ratio of neighbouring beads: R_i = radius taper^(i-1)"
     )
@@ -646,7 +652,7 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
     kind = s.choice("kind", LOADING_KINDS)
     if kind == "step":
         s.forbid(("impulse", "velocity"), "a step load is given by amplitude (N) and duration (s)")
-        a = s.number("amplitude", low=0.0, what="force A in N")
+        a = s.number("amplitude", low=0.0, high=1e12, high_open=False, what="force A in N, at most 1e12")
         t = s.number("duration", low=0.0, what="loading time T in s")
         s.finish(("kind", "amplitude", "duration"))
         return Loading(kind=kind, amplitude=a, duration=t)
@@ -655,7 +661,7 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
             ("amplitude", "velocity"),
             "an impulse load is given by impulse (N s) and duration (s); amplitude = impulse/duration",
         )
-        i = s.number("impulse", low=0.0, what="impulse I in N s")
+        i = s.number("impulse", low=0.0, high=1e9, high_open=False, what="impulse I in N s, at most 1e9")
         t = s.number("duration", low=0.0, what="loading time T in s")
         s.finish(("kind", "impulse", "duration"))
         return Loading(kind=kind, amplitude=i / t, duration=t)
@@ -664,8 +670,12 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
             ("amplitude", "duration", "impulse"),
             "a striker is given by velocity (m/s), radius (m), material and mass (kg, optional)",
         )
-        v = s.number("velocity", low=0.0, what="the striker's velocity in m/s when it touches bead 1")
-        r = s.number("radius", required=False, default=chain.radius, low=0.0, what="the striker's radius in m")
+        v = s.number(
+            "velocity", low=0.0, high=1e5, high_open=False, what="the striker's velocity in m/s when it touches bead 1"
+        )
+        r = s.number(
+            "radius", required=False, default=chain.radius, low=0.0, high=1.0, what="the striker's radius in m, <= 1"
+        )
         material, name = _read_material(s, source, required=False)
         if material is None:
             material, name = chain.material, chain.material_name
@@ -685,7 +695,9 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
         ("amplitude", "duration", "impulse", "radius", "material", "mass"),
         "a velocity load is given by velocity (m/s) of bead 1 at t = 0",
     )
-    v = s.number("velocity", low=0.0, what="initial velocity of bead 1 in m/s, towards the chain")
+    v = s.number(
+        "velocity", low=0.0, high=1e5, high_open=False, what="initial velocity of bead 1 in m/s, towards the chain"
+    )
     s.finish(("kind", "velocity"))
     return Loading(kind=kind, velocity=v)
 

@@ -1,3 +1,4 @@
+import re
 import textwrap
 
 import pytest
@@ -33,6 +34,9 @@ def make_scene_text(
     *, beads=30, law="hertz", contact_extra="", loading=None, end_time=2e-4, timestep=1e-8, outputs=""
 ) -> str:
     loading = loading or 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
+    if "histories" in outputs and "history_interval" not in outputs:
+        # these tests compare histories sample by sample: every step (the scene's default is "auto")
+        outputs = re.sub(r"^(histories = .*)$", rf"\1\nhistory_interval = {timestep!r}", outputs, count=1, flags=re.M)
     return (
         textwrap.dedent(f"""
         [chain]

@@ -67,5 +67,20 @@ def scene_texts(draw, *, max_beads: int = 60, auto: bool = True) -> str:
     return text
 
 
-def scenes(**kw):
-    return scene_texts(**kw).map(lambda t: parse_scene(t, source="generated.toml"))
+def overlap_fraction(scene) -> float:
+    """The overlap at the planner's largest expected force, as a fraction of the smallest radius."""
+    from granchain.workflows.plan import expected_peak_force
+
+    f = float(scene.effects.precompression) + expected_peak_force(scene)
+    k = scene.stiffness
+    alpha = (f / k) ** (2.0 / 3.0) if scene.contact.law == "hertz" else f / k
+    radii = scene.bead_radii if scene.chain.beads else [scene.chain.radius]
+    return float(alpha / min(radii))
+
+
+def scenes(max_overlap: float = 0.05, **kw):
+    """Valid scenes whose loads the contact laws describe: the expected overlap stays below
+    max_overlap x the radius (a load that crushes the beads is refused by the run watch, tested in
+    test_hard_cases and test_invariants, not here)."""
+    parsed = scene_texts(**kw).map(lambda t: parse_scene(t, source="generated.toml"))
+    return parsed.filter(lambda sc: overlap_fraction(sc) < max_overlap)

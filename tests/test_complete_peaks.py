@@ -77,13 +77,14 @@ def test_default_scene_cut_short_leading_peak_missing_with_reason(default_run, t
     obs = short.observables()
     assert obs["leading_peak_force"] is None and obs["leading_peak_force_nondim"] is None
     missing = read_summary(tmp_path / "r")["observables_missing"]
-    assert "not complete" in missing["leading_peak_force"] and "74" in missing["leading_peak_force"]
-    # the wave speed is fitted through the complete peaks of the window only
+    assert "no leading pulse yet" in missing["leading_peak_force"] and "74" in missing["leading_peak_force"]
+    # the wave speed is fitted through the arrival times of the window's passed leading pulses only
     a, b = sc.window
     c = np.arange(a, b + 1)
-    ok = s.complete[c - 1]
+    ok = np.isfinite(s.leading_pulse_time[c - 1])
+    assert np.array_equal(ok, s.complete[c - 1])  # a single pulse: its leading pulse passed when complete
     assert 3 <= ok.sum() < len(c)
-    fit = fit_wave_speed(c[ok], s.time_of_peak[c - 1][ok], sc.diameter)
+    fit = fit_wave_speed(c[ok], s.leading_pulse_time[c - 1][ok], sc.diameter)
     assert obs["wave_speed"] == pytest.approx(fit[0], rel=1e-12)
     assert obs["wave_speed_contacts"] == int(ok.sum())
     assert s.complete[obs["max_peak_contact"] - 1]
@@ -161,7 +162,12 @@ def test_complete_means_the_force_fell_and_observables_use_only_complete(scene, 
     )
     assert measure_observables(scene, junk) == obs
     b = scene.window[1]
-    assert (obs["leading_peak_force"] is not None) == bool(c[b - 1])
+    assert (obs["leading_peak_force"] is not None) == bool(np.isfinite(sol.leading_pulse_force[b - 1]))
+    # a leading pulse has passed only at a reached contact, never after the largest peak
+    lead = np.isfinite(sol.leading_pulse_force)
+    assert np.all(np.isfinite(sol.time_of_peak[lead])) and np.all(
+        sol.leading_pulse_time[lead] <= sol.time_of_peak[lead]
+    )
     assert obs["max_peak_contact"] is None or c[obs["max_peak_contact"] - 1]
 
 

@@ -30,7 +30,15 @@ def test_run_writes_documented_files(tmp_path):
     assert s["backend"] == "reference" and s["steps"] == res.solution.steps
     with open(out / "peaks.csv") as fh:
         rows = list(csv.reader(fh))
-    assert rows[0] == ["contact", "peak_force", "time_of_peak", "peak_force_nondim"]
+    assert rows[0] == [
+        "contact",
+        "peak_force",
+        "time_of_peak",
+        "peak_force_nondim",
+        "complete",
+        "leading_pulse_force",
+        "arrival_time",
+    ]
     assert [int(r[0]) for r in rows[1:]] == [1, 2, 10]
     p = read_peaks(out)
     assert np.array_equal(p["peak_force"], res.solution.peak_force[[0, 1, 9]])  # full precision

@@ -19,7 +19,7 @@
 using namespace LAMMPS_NS;
 
 PairChain::PairChain(LAMMPS *lmp, bool is_bilinear) :
-    Pair(lmp), bilinear(is_bilinear), gamma(0.0), kcoeff(nullptr), d0(nullptr), beta(nullptr),
+    Pair(lmp), bilinear(is_bilinear), gamma(0.0), lead(false), kcoeff(nullptr), d0(nullptr), beta(nullptr),
     t_fc(-std::numeric_limits<double>::infinity()), t_fprev(-std::numeric_limits<double>::infinity()),
     t_fprev2(-std::numeric_limits<double>::infinity()), amax_comm(nullptr)
 {
@@ -56,11 +56,26 @@ void PairChain::allocate()
 void PairChain::settings(int narg, char **arg)
 {
   gamma = 0.0;
-  if (narg == 2 && strcmp(arg[0], "dashpot") == 0) {
-    gamma = utils::numeric(FLERR, arg[1], false, lmp);
-    if (gamma < 0.0) error->all(FLERR, "pair_style {} dashpot gamma must be >= 0, got {}", force->pair_style, gamma);
-  } else if (narg != 0) {
-    error->all(FLERR, "Illegal pair_style {} command: expected no arguments or 'dashpot gamma'", force->pair_style);
+  lead = false;
+  int i = 0;
+  while (i < narg) {
+    if (strcmp(arg[i], "dashpot") == 0 && i + 1 < narg) {
+      gamma = utils::numeric(FLERR, arg[i + 1], false, lmp);
+      if (gamma < 0.0)
+        error->all(FLERR, "pair_style {} dashpot gamma must be >= 0, got {}", force->pair_style, gamma);
+      i += 2;
+    } else if (strcmp(arg[i], "lead") == 0 && i + 3 < narg) {
+      lead = true;
+      lead_floor = utils::numeric(FLERR, arg[i + 1], false, lmp);
+      lead_f0 = utils::numeric(FLERR, arg[i + 2], false, lmp);
+      lead_fraction = utils::numeric(FLERR, arg[i + 3], false, lmp);
+      if (lead_floor <= 0.0 || lead_fraction <= 0.0 || lead_fraction >= 1.0)
+        error->all(FLERR, "pair_style {} lead needs floor > 0 and 0 < fraction < 1", force->pair_style);
+      i += 4;
+    } else {
+      error->all(FLERR, "Illegal pair_style {} command: expected [dashpot gamma] [lead floor F0 fraction]",
+                 force->pair_style);
+    }
   }
 }
 
@@ -111,6 +126,10 @@ void PairChain::init_style()
   if (!atom->tag_enable) error->all(FLERR, "pair {} requires atom IDs", force->pair_style);
   custom("fc");
   custom("fmin");
+  if (lead) {
+    custom("flead");
+    custom("tlead");
+  }
   if (bilinear) custom("amax");
   if (gamma > 0.0) {
     custom("edash");
@@ -258,6 +277,20 @@ void PairChain::compute(int eflag, int vflag)
       fpeak[i] = val;
       tpeak[i] = t_fprev + s;
       fmin[i] = fc[i];    // the refined peak lies before this sample
+    }
+  }
+  // the leading pulse: a contact's peak as it stands when the contact first completes (its force
+  // falls to fraction x the peak above F0, granchain.results.complete_peaks), frozen from then on;
+  // flead = 0 until then (a frozen value exceeds F0 + floor > 0)
+  if (lead) {
+    double *flead = custom("flead");
+    double *tlead = custom("tlead");
+    for (int i = 0; i < nlocal; i++) {
+      const double rise = fpeak[i] - lead_f0;
+      if (flead[i] == 0.0 && rise > lead_floor && fmin[i] - lead_f0 <= lead_fraction * rise) {
+        flead[i] = fpeak[i];
+        tlead[i] = tpeak[i];
+      }
     }
   }
   if (vflag_fdotr) virial_fdotr_compute();

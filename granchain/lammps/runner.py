@@ -25,7 +25,14 @@ from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution
 from granchain.lammps.build import build_plugin, mpich_file, plugin_env
 from granchain.postprocess.dumps import read_dump
 from granchain.reference.solver import step_plan, step_times
-from granchain.results import ChainSolution, RunResult, complete_peaks, pid_alive, unreached_as_nan
+from granchain.results import (
+    ChainSolution,
+    RunResult,
+    complete_peaks,
+    leading_pulse,
+    pid_alive,
+    unreached_as_nan,
+)
 from granchain.templates import atom_layout, render_deck
 
 #: files of a LAMMPS work directory that are copied into the run directory
@@ -191,6 +198,10 @@ def read_solution(
     tpeak = unreached_as_nan(fpeak, res["tpeak"][o : o + n - 1], scene.effects.precompression)
     # the smallest force since each peak (a deck without d_fmin: no peak counts as complete)
     fmin = res["fmin"][o : o + n - 1] if "fmin" in res else fpeak
+    if "flead" in res:
+        flead, tlead = leading_pulse(res["flead"][o : o + n - 1], res["tlead"][o : o + n - 1], tpeak)
+    else:  # a deck without the leading-pulse vectors (the built-in granular yardstick)
+        flead, tlead = np.full(n - 1, np.nan), np.full(n - 1, np.nan)
     u = res["x"][o : o + n] - (scene.bead_positions if scene.per_bead else np.arange(n) * d)
     v = res["vx"][o : o + n]
     wall = lay["wall"]  # bead N's contact is the wall's
@@ -254,6 +265,8 @@ def read_solution(
         time_of_peak=tpeak,
         force_min_after_peak=fmin,
         complete=complete_peaks(fpeak, fmin, tpeak, f0),
+        leading_pulse_force=flead,
+        leading_pulse_time=tlead,
         history_contacts=hist,
         history_time=h_t,
         history_force=h_f,

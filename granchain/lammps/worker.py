@@ -71,10 +71,16 @@ def main(run_dir: str) -> int:
         "fpeak": np.array(lmp.gather("d_fpeak", 1, 1)[:]),
         "tpeak": np.array(lmp.gather("d_tpeak", 1, 1)[:]),
     }
-    if "d_amax" in deck:  # the bilinear style's history
-        arrays["amax"] = np.array(lmp.gather("d_amax", 1, 1)[:])
-    if "d_fmin" in deck:  # the smallest force since each contact's peak (granchain's pair styles)
-        arrays["fmin"] = np.array(lmp.gather("d_fmin", 1, 1)[:])
+    # per-atom vectors the deck declares (on its command lines; a title or comment naming one does not count)
+    declared = {
+        word
+        for line in deck.splitlines()
+        if line.split()[:1] == ["fix"] and "property/atom" in line.split("#")[0]
+        for word in line.split("#")[0].split()
+    }
+    for name in ("amax", "fmin", "flead", "tlead"):  # bilinear history; completion; the leading pulse
+        if f"d_{name}" in declared:
+            arrays[name] = np.array(lmp.gather(f"d_{name}", 1, 1)[:])
     if rank == 0:
         np.savez(d / "results.npz", **arrays)
     report(

@@ -1,15 +1,19 @@
 """Scalar observables of a run, measured the same way for every backend, from complete peaks only.
 
-A peak feeds an observable only if it is complete (granchain.results.complete_peaks: the contact's
-force has fallen to half its peak since). A contact the wave is still passing at the end of the run
-holds a value that is still rising or a maximum that the next steps may exceed; it never feeds one.
+A peak feeds an observable only once it has passed: the largest peak (max_peak_force) once it is
+complete (granchain.results.complete_peaks: the force has fallen to half of it since), the leading
+pulse once its maximum is behind it (granchain.results.leading_pulse). A contact the wave is still
+passing at the end of the run holds a value that is still rising; it never feeds one.
 
-leading_peak_force: the peak force at the last contact of the measurement window (the wave has
-    formed there and has not yet met the far end), in N and as F / (E* R*^2) (Eq. 5).
-wave_speed: D / (d time_of_peak / d contact), a least-squares line through the times of peak of
-    the window's contacts whose peaks are complete (wave_speed_contacts of them), with the slope's
-    standard error propagated to the speed.
-max_peak_force: the largest complete peak, and its contact.
+leading_peak_force: the leading pulse at the last contact of the measurement window (the wave has
+    formed there and has not yet met the far end), in N and as F / (E* R*^2) (Eq. 5). The leading
+    pulse is a contact's first maximum, not its largest (granchain.results.leading_pulse): in a
+    forming wave train the largest pulse, and the time it passes, jump between pulses as the time
+    step changes; the first does not.
+wave_speed: the front's speed, D / (d t_arrival / d contact), a least-squares line through the
+    arrival times (the leading pulse's time) of the window's contacts whose leading pulse is
+    complete (wave_speed_contacts of them), with the slope's standard error propagated to the speed.
+max_peak_force: the largest complete peak (of any pulse), and its contact.
 Each is None where it cannot be measured (the window's last contact not reached or its peak not
 complete before the end of the run; fewer than three complete peaks in the window; no complete
 peak at all); measure_observables says why in the dict passed as `missing`.
@@ -51,6 +55,21 @@ def _why_not_complete(solution, contact: int) -> str:
     )
 
 
+def _why_no_leading_pulse(solution, contact: int) -> str:
+    """Why a 1-based contact has no leading pulse."""
+    from granchain.results import LEAD_FRACTION, PEAK_PASSED_FRACTION
+
+    t = float(solution.time_of_peak[contact - 1])
+    if not np.isfinite(t):
+        return f"contact {contact} was not reached by the wave before the end of the run (t = {solution.end_time:g} s)"
+    return (
+        f"contact {contact} has no leading pulse yet: its force has not fallen to {PEAK_PASSED_FRACTION:g} of a "
+        f"maximum above {LEAD_FRACTION:g} of the largest expected force (peak so far "
+        f"{float(solution.peak_force[contact - 1]):.6g} N at t = {t:g} s, run ends at t = {solution.end_time:g} s); "
+        "run longer"
+    )
+
+
 def measure_observables(scene, solution, missing: dict | None = None) -> dict:
     """The observables of a run (complete peaks only); `missing`, if given, gets name -> reason for each None."""
     why: dict[str, str] = {}
@@ -60,22 +79,25 @@ def measure_observables(scene, solution, missing: dict | None = None) -> dict:
     out: dict = {"window": [int(a), int(b)]}
     last = b - 1
     out["leading_peak_contact"] = int(b)
-    if complete[last]:
-        out["leading_peak_force"] = float(solution.peak_force[last])
-        out["leading_peak_force_nondim"] = float(solution.peak_force[last] / scene.force_scale)
+    lead_f = np.asarray(solution.leading_pulse_force, dtype=float)
+    lead_t = np.asarray(solution.leading_pulse_time, dtype=float)
+    if np.isfinite(lead_f[last]):
+        out["leading_peak_force"] = float(lead_f[last])
+        out["leading_peak_force_nondim"] = float(lead_f[last] / scene.force_scale)
     else:
         out["leading_peak_force"] = out["leading_peak_force_nondim"] = None
-        why["leading_peak_force"] = why["leading_peak_force_nondim"] = _why_not_complete(solution, b)
-    ok = complete[contacts - 1]
-    fit = fit_wave_speed(contacts[ok], solution.time_of_peak[contacts - 1][ok], scene.diameter)
+        why["leading_peak_force"] = why["leading_peak_force_nondim"] = _why_no_leading_pulse(solution, b)
+    ok = np.isfinite(lead_t[contacts - 1])
+    fit = fit_wave_speed(contacts[ok], lead_t[contacts - 1][ok], scene.diameter)
     out["wave_speed"] = fit[0] if fit else None
     out["wave_speed_stderr"] = fit[1] if fit else None
     out["wave_speed_contacts"] = int(np.sum(ok))
     if fit is None:
         why["wave_speed"] = why["wave_speed_stderr"] = (
-            f"{int(np.sum(ok))} of the window's contacts {a}-{b} have a complete peak; the fit needs 3"
+            f"{int(np.sum(ok))} of the window's contacts {a}-{b} have a leading pulse whose maximum has passed; "
+            "the fit needs 3"
             if np.sum(ok) < 3
-            else f"the times of peak of the window's complete peaks (contacts {a}-{b}) do not increase"
+            else f"the arrival times of the window's complete leading pulses (contacts {a}-{b}) do not increase"
         )
     if complete.any():
         i = int(np.argmax(np.where(complete, solution.peak_force, -np.inf)))

@@ -209,10 +209,20 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
         sol.striker_peak_force = float(sol.peak_force[0])
         sol.striker_time_of_peak = float(sol.time_of_peak[0])
         sol.striker_velocity = float(sol.velocity[0])
-    for name in ("peak_overlap", "peak_force", "time_of_peak", "alpha_max", "force_min_after_peak"):
+    for name in (
+        "peak_overlap",
+        "peak_force",
+        "time_of_peak",
+        "alpha_max",
+        "force_min_after_peak",
+        "leading_pulse_force",
+        "leading_pulse_time",
+    ):
         setattr(sol, name, getattr(sol, name)[s0 : s0 + n - 1])
     sol.time_of_peak = unreached_as_nan(sol.peak_force, sol.time_of_peak, problem.precompression)
     sol.complete = complete_peaks(sol.peak_force, sol.force_min_after_peak, sol.time_of_peak, problem.precompression)
+    unreached = ~np.isfinite(sol.time_of_peak)
+    sol.leading_pulse_force[unreached] = sol.leading_pulse_time[unreached] = np.nan
     sol.history_contacts = tuple(i - s0 for i in sol.history_contacts)
     sol.displacement, sol.velocity = sol.displacement[s0 : s0 + n], sol.velocity[s0 : s0 + n]
     sol.snapshot_displacement = sol.snapshot_displacement[:, s0 : s0 + n]
@@ -234,6 +244,7 @@ def _solve(
     event_location: bool = True,
     stop_after: int | None = None,
     stop_floor: float = 0.0,
+    lead_floor: float = 0.0,
     max_overlap: float | None = None,
     energy_watch: float | None = None,
     momentum_watch: float | None = None,
@@ -247,6 +258,7 @@ def _solve(
     stop_after: 0-based contact; stop (checked every STOP_CHECK_EVERY steps, as LAMMPS's fix halt
     does) once its force has fallen below half its peak: the leading wave has passed it. Only a
     peak above stop_floor counts (round-off forces ahead of the wave must not stop the run).
+    lead_floor: the smallest rise above F0 that can be a leading pulse (results.leading_pulse).
     max_overlap, energy_watch, momentum_watch: the run watch (granchain.invariants); None = off.
     Overlaps and a finite state are checked every watch_every steps and at breakpoints, the energy
     balance and the momentum of a free chain at every energy sample (~200 per run, as LAMMPS).
@@ -341,6 +353,8 @@ def _solve(
     amax = u[:-1] - u[1:]  # running peak overlap (refined): the static overlap at t = 0
     tmax = np.where(amax > 0.0, 0.0, np.nan)
     amin = amax.copy()  # RK4: smallest overlap at a step end since the peak (results.complete_peaks)
+    lead_f, lead_t = np.full(n - 1, np.nan), np.full(n - 1, np.nan)  # the leading pulse
+    lead_done = np.zeros(n - 1, dtype=bool)
     a_int = np.empty(n)
     accel(u, a_int, v)
 
@@ -535,6 +549,18 @@ def _solve(
         if bilinear and method == "rk4":
             np.maximum(alpha_hist, amax, out=alpha_hist)
         alpha_old, adot_old = alpha_new, adot_new
+        if method == "rk4" and not lead_done.all():
+            peak = np.asarray(law.force_at_peak_overlap(amax), dtype=float)
+            freeze_leading(peak, np.asarray(law.force(np.maximum(amin, 0.0), alpha_hist), dtype=float), tmax)
+
+    def freeze_leading(peak, force_min, time_of_peak) -> None:
+        """The leading pulse (results.leading_pulse): each contact's peak as it stands when the contact
+        first completes, frozen from then on (the pair styles' d_flead, d_tlead)."""
+        rise = peak - f0
+        now = ~lead_done & (rise > lead_floor) & (force_min - f0 <= PEAK_PASSED_FRACTION * rise)
+        if now.any():
+            lead_f[now], lead_t[now] = peak[now], time_of_peak[now]
+            lead_done[now] = True
 
     # Verlet: the peak tracking of granchain's LAMMPS pair styles, so that the two agree step for
     # step: running maximum of the force samples at step ends, refined by the vertex of the
@@ -547,6 +573,10 @@ def _solve(
     fmin = fpk.copy()  # smallest force sample since the peak (results.complete_peaks), as the pair styles
 
     def sample_forces(t1: float) -> None:
+        _sample_forces(t1)
+        freeze_leading(fpk, fmin, tpk)
+
+    def _sample_forces(t1: float) -> None:
         nonlocal f_now, f_prev, f_prev2, t_now, t_prev, t_prev2
         f_prev2, f_prev, f_now = f_prev, f_now, fc.copy()
         t_prev2, t_prev, t_now = t_prev, t_now, t1
@@ -583,7 +613,7 @@ def _solve(
             # (striker, wall, per-bead chains) only broadcast against whole-chain arrays
             now = float(law.force(u[:-1] - u[1:], alpha_hist)[c])
             peak = float(law.force_at_peak_overlap(amax)[c])
-        return peak > stop_floor and now < PEAK_PASSED_FRACTION * peak
+        return peak > stop_floor and now - f0 < PEAK_PASSED_FRACTION * (peak - f0)
 
     def watch(step: int, t: float) -> None:
         """Cheap invariants, every watch_every steps: a finite state, overlaps below max_overlap."""
@@ -682,8 +712,8 @@ def _solve(
             snaps[seg_end] = (u.copy(), v.copy(), forces_now())
         energy_row(t)
 
-    if len(hist_idx) and (nrec == 0 or h_t[nrec - 1] != t):
-        record_history(t)
+    # no extra history row at the end: the samples are every history_stride steps from t = 0 in both
+    # backends (LAMMPS's dump writes only those), so the two tables have the same rows
 
     if method == "verlet":
         peak_force, tmax, force_min = fpk, tpk, fmin
@@ -708,6 +738,8 @@ def _solve(
         time_of_peak=time_of_peak,
         force_min_after_peak=force_min,
         complete=complete_peaks(peak_force, force_min, time_of_peak, f0),
+        leading_pulse_force=np.where(np.isfinite(time_of_peak), lead_f, np.nan),
+        leading_pulse_time=np.where(np.isfinite(time_of_peak), lead_t, np.nan),
         history_contacts=tuple(int(i) for i in hist_idx),
         history_time=h_t[:nrec].copy(),
         history_force=h_f[:nrec].copy(),

@@ -19,7 +19,7 @@ import numpy as np
 
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
 from granchain.reference.solver import STOP_CHECK_EVERY, step_plan
-from granchain.results import REACHED_FRACTION
+from granchain.results import LEAD_FRACTION, PEAK_PASSED_FRACTION, REACHED_FRACTION
 
 #: steps between two checks of the LAMMPS run watch (the reference checks every 20 steps as well)
 WATCH_EVERY = 20
@@ -215,9 +215,22 @@ def stop_force_floor(scene) -> float:
     """The smallest peak that counts as the leading wave for [run] stop_after_contact (both backends):
     the static force plus REACHED_FRACTION of the largest expected force. Round-off forces ahead of
     the wave (LAMMPS's positions miss D by an ulp: ~1e-11 N on a linear contact) stay far below."""
+    return float(scene.effects.precompression) + reached_floor(scene)
+
+
+def lead_floor(scene) -> float:
+    """The smallest rise above the static force that can be a leading pulse (both backends):
+    results.LEAD_FRACTION of the largest expected force."""
     from granchain.workflows.plan import expected_peak_force
 
-    return float(scene.effects.precompression) + REACHED_FRACTION * expected_peak_force(scene)
+    return LEAD_FRACTION * expected_peak_force(scene)
+
+
+def reached_floor(scene) -> float:
+    """REACHED_FRACTION of the largest expected force: round-off forces ahead of the wave stay below."""
+    from granchain.workflows.plan import expected_peak_force
+
+    return REACHED_FRACTION * expected_peak_force(scene)
 
 
 def energy_watch_terms(scene) -> dict:
@@ -332,7 +345,9 @@ def render_deck(scene) -> Deck:
         "watch_force": watch_force,
         "watch_every": WATCH_EVERY,
         "peratom": peratom,
-        "pair_args": f" dashpot {fx.dashpot!r}" if fx.dashpot else "",
+        # the leading pulse (results.leading_pulse): above the static force plus the reached floor
+        "pair_args": f" lead {lead_floor(scene)!r} {float(fx.precompression)!r} {PEAK_PASSED_FRACTION!r}"
+        + (f" dashpot {fx.dashpot!r}" if fx.dashpot else ""),
         "pair_coeffs": coeffs,
         "dashpot": fx.dashpot,
         "dissipation_terms": (["d_edis"] if bilinear else []) + (["d_edash"] if fx.dashpot else []),
@@ -372,6 +387,8 @@ def render_deck(scene) -> Deck:
         "stop_id": (scene.run.stop_after_contact or 0) + lay["offset"],
         "stop_every": STOP_CHECK_EVERY,
         "stop_floor": stop_force_floor(scene) if scene.run.stop_after_contact else 0.0,
+        "stop_f0": float(fx.precompression),  # the wave has passed: its force back below half its rise
+        "stop_fraction": PEAK_PASSED_FRACTION,
     }
     deck = _env().get_template("chain.lmp.j2").render(**ctx)
     return Deck(deck=deck, data=render_data(scene), total_steps=total)

@@ -13,7 +13,7 @@ from granchain.errors import UsageError
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH, InvariantError
 from granchain.reference.solver import ChainProblem, solve_chain
 from granchain.results import RunResult, check_output_dir, write_run_dir
-from granchain.templates import history_stride, stop_force_floor
+from granchain.templates import history_stride, lead_floor, stop_force_floor
 
 BACKENDS = ("reference", "lammps")
 
@@ -61,6 +61,7 @@ def _solve_scene(scene, method: str):
         snapshots=scene.outputs.snapshots,
         stop_after=None if scene.run.stop_after_contact is None else scene.run.stop_after_contact - 1,
         stop_floor=stop_force_floor(scene),
+        lead_floor=lead_floor(scene),
         # blow-up and garbage detectors (granchain.invariants), not accuracy targets
         max_overlap=OVERLAP_WATCH * float(min(scene.bead_radii)),
         energy_watch=ENERGY_WATCH,
