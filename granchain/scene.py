@@ -575,11 +575,11 @@ def _read_chain(s: _Section, source: str) -> Chain:
     radii = materials = None
     if isinstance(s.table.get("radius"), list):
         v = s.raw("radius")
-        allowed = f"a list of {beads} radii in m, all > 0 and <= 1 (one per bead)"
+        allowed = f"a list of {beads} radii in m, all from 1e-6 to 1 (one per bead)"
         if (
             beads is None
             or len(v) != beads
-            or any(isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x <= 1.0 for x in v)
+            or any(isinstance(x, bool) or not isinstance(x, (int, float)) or not 1e-6 <= x <= 1.0 for x in v)
         ):
             raise s.fail("radius", v, allowed)
         radii = tuple(float(x) for x in v)
@@ -587,10 +587,11 @@ def _read_chain(s: _Section, source: str) -> Chain:
     else:
         radius = s.number(
             "radius",
-            low=0.0,
+            low=1e-6,
+            low_open=False,
             high=1.0,
             high_open=False,
-            what="bead radius in m (at most 1 m: granular-chain beads), or a list of one radius per bead",
+            what="bead radius in m (1 um to 1 m: granular-chain beads), or a list of one radius per bead",
         )
     taper = s.number(
         "taper", required=False, low=0.0, what="radius ratio of neighbouring beads: R_i = radius taper^(i-1)"
@@ -652,7 +653,9 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
     kind = s.choice("kind", LOADING_KINDS)
     if kind == "step":
         s.forbid(("impulse", "velocity"), "a step load is given by amplitude (N) and duration (s)")
-        a = s.number("amplitude", low=0.0, high=1e12, high_open=False, what="force A in N, at most 1e12")
+        a = s.number(
+            "amplitude", low=1e-9, low_open=False, high=1e12, high_open=False, what="force A in N, 1e-9 to 1e12"
+        )
         t = s.number("duration", low=0.0, what="loading time T in s")
         s.finish(("kind", "amplitude", "duration"))
         return Loading(kind=kind, amplitude=a, duration=t)
@@ -661,7 +664,9 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
             ("amplitude", "velocity"),
             "an impulse load is given by impulse (N s) and duration (s); amplitude = impulse/duration",
         )
-        i = s.number("impulse", low=0.0, high=1e9, high_open=False, what="impulse I in N s, at most 1e9")
+        i = s.number(
+            "impulse", low=1e-18, low_open=False, high=1e9, high_open=False, what="impulse I in N s, 1e-18 to 1e9"
+        )
         t = s.number("duration", low=0.0, what="loading time T in s")
         s.finish(("kind", "impulse", "duration"))
         return Loading(kind=kind, amplitude=i / t, duration=t)
@@ -671,7 +676,12 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
             "a striker is given by velocity (m/s), radius (m), material and mass (kg, optional)",
         )
         v = s.number(
-            "velocity", low=0.0, high=1e5, high_open=False, what="the striker's velocity in m/s when it touches bead 1"
+            "velocity",
+            low=1e-9,
+            low_open=False,
+            high=1e5,
+            high_open=False,
+            what="the striker's speed in m/s at bead 1, 1e-9 to 1e5",
         )
         r = s.number(
             "radius", required=False, default=chain.radius, low=0.0, high=1.0, what="the striker's radius in m, <= 1"
@@ -696,7 +706,12 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
         "a velocity load is given by velocity (m/s) of bead 1 at t = 0",
     )
     v = s.number(
-        "velocity", low=0.0, high=1e5, high_open=False, what="initial velocity of bead 1 in m/s, towards the chain"
+        "velocity",
+        low=1e-9,
+        low_open=False,
+        high=1e5,
+        high_open=False,
+        what="initial velocity of bead 1 in m/s, 1e-9 to 1e5",
     )
     s.finish(("kind", "velocity"))
     return Loading(kind=kind, velocity=v)

@@ -78,8 +78,8 @@ RULES = [
     ("beads wrong type", ("chain", "beads"), "200", "beads", "integer"),
     ("beads float", ("chain", "beads"), 200.0, "beads", "integer"),
     ("beads too few", ("chain", "beads"), 1, "beads", ">= 2"),
-    ("negative radius", ("chain", "radius"), -4.76e-3, "radius", "> 0"),
-    ("zero radius", ("chain", "radius"), 0.0, "radius", "> 0"),
+    ("negative radius", ("chain", "radius"), -4.76e-3, "radius", ">= 1e-06"),
+    ("zero radius", ("chain", "radius"), 0.0, "radius", ">= 1e-06"),
     ("radius bool", ("chain", "radius"), True, "radius", "number"),
     ("unknown material", ("chain", "material"), "unobtainium", "material", "brass"),
     (
