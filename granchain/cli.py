@@ -74,7 +74,7 @@ def cmd_run(args) -> int:
             f"--np = {args.np}: the {args.backend} backend runs in one process; MPI ranks are for "
             "--backend lammps (drop --np)"
         )
-    scene, _ = planned(scene, args.rtol, args.backend, method)
+    planned(scene, args.rtol, args.backend, method)  # the plan's notes, before the run (run_scene plans it)
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
     out = args.out or f"runs/{name}-{args.backend}" + ("" if args.backend == "lammps" else f"-{method}")
     result = run_scene(
@@ -86,7 +86,9 @@ def cmd_run(args) -> int:
         np_=np_,
         force=args.force,
         oversubscribe=args.oversubscribe,
+        rtol=args.rtol,
     )
+    scene = result.scene
     s = result.summary()
     print(f"scene      {scene.title or scene.source}")
     print(

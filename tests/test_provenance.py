@@ -270,11 +270,6 @@ def test_default_run_names_do_not_collide(tmp_path, monkeypatch):
     assert read_summary(runs / "small-lammps")["provenance"]["lammps"]["ranks"] == 1
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="cli.cmd_run plans the scene itself and passes the concrete scene to run_scene without rtol, "
-    "so result.plan is None; see the provenance report for the change in cli.py",
-)
 def test_cli_run_records_the_plan(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert main(["run", "default", "--method", "verlet", "--rtol", "1e-2"]) == 0

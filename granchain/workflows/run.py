@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import warnings
 from contextlib import contextmanager
+from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
@@ -242,6 +243,7 @@ def run_scene(
     keep_files (lammps): keep LAMMPS's work directory and list its files in result.extra["_files"]
     and ["_work"], for a caller that writes the run directory itself and then removes "_work".
     """
+    started = datetime.now(UTC)
     method = integrator(backend, method)
     scene, plan = plan_for(scene, backend, method, rtol)
     check_resources(scene, backend, np_, oversubscribe)
@@ -258,7 +260,7 @@ def run_scene(
         warnings.warn(msg, OutputSizeWarning, stacklevel=2)
     if backend == "reference":
         result = run_reference(scene, method)
-        result.plan = plan
+        result.plan, result.started_utc = plan, started
         if out is not None:
             write_run_dir(result, out, overwrite=overwrite)
         return result
@@ -266,7 +268,7 @@ def run_scene(
 
     with _with_fix(scene, "verlet"):
         result, work = run_lammps(scene, np_=np_)
-    result.plan = plan
+    result.plan, result.started_utc = plan, started
     if keep_files:  # the caller writes the run directory later and removes the work directory
         result.extra["_files"] = output_files(work)
         result.extra["_work"] = work
