@@ -64,16 +64,17 @@ void PairChain::settings(int narg, char **arg)
       if (gamma < 0.0)
         error->all(FLERR, "pair_style {} dashpot gamma must be >= 0, got {}", force->pair_style, gamma);
       i += 2;
-    } else if (strcmp(arg[i], "lead") == 0 && i + 3 < narg) {
+    } else if (strcmp(arg[i], "lead") == 0 && i + 4 < narg) {
       lead = true;
       lead_floor = utils::numeric(FLERR, arg[i + 1], false, lmp);
       lead_f0 = utils::numeric(FLERR, arg[i + 2], false, lmp);
       lead_fraction = utils::numeric(FLERR, arg[i + 3], false, lmp);
-      if (lead_floor <= 0.0 || lead_fraction <= 0.0 || lead_fraction >= 1.0)
-        error->all(FLERR, "pair_style {} lead needs floor > 0 and 0 < fraction < 1", force->pair_style);
-      i += 4;
+      lead_every = utils::inumeric(FLERR, arg[i + 4], false, lmp);
+      if (lead_floor <= 0.0 || lead_fraction <= 0.0 || lead_fraction >= 1.0 || lead_every < 1)
+        error->all(FLERR, "pair_style {} lead needs floor > 0, 0 < fraction < 1, every >= 1", force->pair_style);
+      i += 5;
     } else {
-      error->all(FLERR, "Illegal pair_style {} command: expected [dashpot gamma] [lead floor F0 fraction]",
+      error->all(FLERR, "Illegal pair_style {} command: expected [dashpot gamma] [lead floor F0 fraction every]",
                  force->pair_style);
     }
   }
@@ -282,7 +283,8 @@ void PairChain::compute(int eflag, int vflag)
   // the leading pulse: a contact's peak as it stands when the contact first completes (its force
   // falls to fraction x the peak above F0, granchain.results.complete_peaks), frozen from then on;
   // flead = 0 until then (a frozen value exceeds F0 + floor > 0)
-  if (lead) {
+  // checked every lead_every steps, at the steps the reference checks (its step count is ntimestep)
+  if (lead && new_sample && update->ntimestep % lead_every == 0) {
     double *flead = custom("flead");
     double *tlead = custom("tlead");
     for (int i = 0; i < nlocal; i++) {

@@ -8,7 +8,8 @@
  *   pair_style chain/<law> dashpot gamma   adds gamma * d(alpha)/dt while beads overlap (the total
  *                                never pulls); needs 'comm_modify vel yes' and the vector d_edash,
  *                                the dashpot energy of each contact so far
- *   pair_style chain/<law> lead floor F0 fraction   tracks the leading pulse (d_flead, d_tlead)
+ *   pair_style chain/<law> lead floor F0 fraction every   tracks the leading pulse (d_flead, d_tlead),
+ *                                checked every `every` steps (ntimestep % every == 0)
  *   pair_coeff I J k d0 [beta]   k in N/m^1.5 (hertz) or N/m (bilinear), d0 = contact distance
  *                                (R_I + R_J), beta the unloading coefficient (bilinear only).
  *
@@ -23,7 +24,7 @@
  *   d_amax   largest overlap so far (bilinear history), d_edis  energy dissipated so far (bilinear)
  *   d_flead, d_tlead   (with 'lead floor F0 fraction') the leading pulse: the peak and its time as
  *            they stand when the contact first completes (d_fmin - F0 <= fraction (d_fpeak - F0),
- *            with d_fpeak - F0 > floor), frozen from then on; 0 until then
+ *            with d_fpeak - F0 > floor, checked every `every` steps), frozen from then on; 0 until then
  * Requires newton_pair off: a pair that straddles two ranks is computed on both, so the rank that
  * owns bead i always writes bead i's data itself; alpha_max reaches ghost copies by forward comm.
  */
@@ -53,6 +54,7 @@ class PairChain : public Pair {
   double gamma;    // dashpot coefficient, 0: none
   bool lead;       // track the leading pulse (d_flead, d_tlead): pair_style ... lead floor F0 fraction
   double lead_floor = 0.0, lead_f0 = 0.0, lead_fraction = 0.5;
+  bigint lead_every = 1;
   double **kcoeff, **d0, **beta;
   double t_fc, t_fprev, t_fprev2;    // times of the current and the two previous samples
   double *amax_comm;         // the d_amax vector during forward comm

@@ -21,6 +21,9 @@ from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
 from granchain.reference.solver import STOP_CHECK_EVERY, step_plan
 from granchain.results import LEAD_FRACTION, PEAK_PASSED_FRACTION, REACHED_FRACTION
 
+#: steps between two checks of the leading pulse (the reference checks at every sample as well)
+LEAD_CHECK_EVERY = 1
+
 #: steps between two checks of the LAMMPS run watch (the reference checks every 20 steps as well)
 WATCH_EVERY = 20
 
@@ -347,6 +350,7 @@ def render_deck(scene) -> Deck:
         "peratom": peratom,
         # the leading pulse (results.leading_pulse): above the static force plus the reached floor
         "pair_args": f" lead {lead_floor(scene)!r} {float(fx.precompression)!r} {PEAK_PASSED_FRACTION!r}"
+        f" {LEAD_CHECK_EVERY}"
         + (f" dashpot {fx.dashpot!r}" if fx.dashpot else ""),
         "pair_coeffs": coeffs,
         "dashpot": fx.dashpot,

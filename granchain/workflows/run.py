@@ -136,11 +136,10 @@ def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False) 
 def timestep_warning(scene, method: str, rtol: float) -> str | None:
     """A sentence when the scene's fixed time step misses rtol by the planner's error model, naming
     the step that would meet it; None when it meets it."""
-    from granchain.workflows.plan import CALIBRATION, plan_scene
+    from granchain.workflows.plan import damping_rate, plan_scene, predicted_error
 
     plan = plan_scene(scene, method=method, rtol=None)
-    c, p = CALIBRATION[method]
-    predicted = c * (plan.omega_max * scene.run.timestep) ** p
+    predicted = predicted_error(method, plan.omega_max, damping_rate(scene), scene.run.timestep)
     if predicted <= rtol * (1 + 1e-9):  # a step planned for this rtol meets it, up to rounding
         return None
     good = plan_scene(scene, rtol=rtol, method=method).scene.run.timestep
