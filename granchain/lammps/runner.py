@@ -16,6 +16,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +25,7 @@ from granchain.errors import GranchainError
 from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution
 from granchain.lammps.build import build_plugin, mpich_file, plugin_env
 from granchain.postprocess.dumps import read_dump
+from granchain.progress import Progress
 from granchain.reference.solver import step_plan, step_times
 from granchain.results import (
     ChainSolution,
@@ -52,12 +54,74 @@ class LammpsError(GranchainError, RuntimeError):
 WORK_PREFIX = "granchain-lammps-"
 
 
-def sweep_stale_work_dirs() -> None:
-    """Remove work directories left by granchain processes that no longer exist (killed runs)."""
-    for d in Path(tempfile.gettempdir()).glob(f"{WORK_PREFIX}*-*"):
+#: seconds between two looks at a running LAMMPS's progress.txt (the deck's fix progress)
+POLL_INTERVAL = 0.5
+
+
+class StaleWorkDirWarning(UserWarning):
+    """LAMMPS work directories of killed granchain runs could not be removed."""
+
+
+def work_dirs() -> list[tuple[Path, int, bool]]:
+    """Every LAMMPS work directory in the temporary directory: (path, owner pid, owner alive)."""
+    found = []
+    for d in sorted(Path(tempfile.gettempdir()).glob(f"{WORK_PREFIX}*-*")):
         pid = d.name[len(WORK_PREFIX) :].split("-")[0]
-        if pid.isdigit() and not pid_alive(int(pid)):
+        if pid.isdigit() and d.is_dir():
+            found.append((d, int(pid), pid_alive(int(pid))))
+    return found
+
+
+def _size(d: Path) -> int:
+    total = 0
+    for p in d.rglob("*"):
+        try:
+            total += p.stat().st_size if p.is_file() else 0
+        except OSError:
+            pass
+    return total
+
+
+def _describe(dirs: list[Path]) -> str:
+    mb = sum(_size(d) for d in dirs) / 1e6
+    return f"{len(dirs)} ({mb:.1f} MB): {', '.join(str(d) for d in dirs)}"
+
+
+def sweep_stale_work_dirs() -> list[Path]:
+    """Remove work directories left by granchain processes that no longer exist (killed runs).
+
+    A killed run cannot remove its own work directory; the next LAMMPS run does, here. Those that
+    cannot be removed (another user's, a read-only directory) are named in a StaleWorkDirWarning
+    and returned.
+    """
+    left = []
+    for d, _, alive in work_dirs():
+        if not alive:
             shutil.rmtree(d, ignore_errors=True)
+            if d.exists():
+                left.append(d)
+    if left:
+        warnings.warn(
+            f"LAMMPS work directories left by killed granchain runs could not be removed, {_describe(left)}; "
+            "remove them by hand",
+            StaleWorkDirWarning,
+            stacklevel=2,
+        )
+    return left
+
+
+def work_dirs_report() -> str:
+    """For granchain doctor: where the LAMMPS work directories are, and which are stale (a killed run's)."""
+    where = Path(tempfile.gettempdir()) / f"{WORK_PREFIX}<pid>-*"
+    dirs = work_dirs()
+    stale = [d for d, _, alive in dirs if not alive]
+    live = [d for d, _, alive in dirs if alive]
+    parts = []
+    if stale:
+        parts.append(f"stale, left by killed runs (the next LAMMPS run removes them) {_describe(stale)}")
+    if live:
+        parts.append(f"in use by running granchain processes {_describe(live)}")
+    return f"{where}: {'; '.join(parts) or 'none'}"
 
 
 def _deck_line(message: str) -> str | None:
@@ -72,8 +136,44 @@ def _mpirun() -> str:
     return str(mpich_file("bin/mpirun"))
 
 
-def run_deck(deck: str, data: str, np_: int = 1, work_dir: str | Path | None = None) -> tuple[dict, Path]:
-    """Run a deck (with its chain.data) in a worker process; returns the worker's report and the work dir."""
+def deck_steps(deck: str) -> int:
+    """The steps a deck's run commands add up to (conditional runs included)."""
+    return sum(int(n) for n in re.findall(r'(?m)^\s*(?:if\s.*then\s+")?run\s+(\d+)', deck))
+
+
+class _StepTail:
+    """The last step LAMMPS wrote to progress.txt (the deck's `fix progress ... print`), read as it grows."""
+
+    def __init__(self, path: Path):
+        self.path, self.pos, self.rest, self.step = path, 0, b"", 0
+
+    def read(self) -> int:
+        try:
+            with open(self.path, "rb") as f:
+                f.seek(self.pos)
+                chunk = f.read()
+        except OSError:
+            return self.step
+        self.pos += len(chunk)
+        *lines, self.rest = (self.rest + chunk).split(b"\n")
+        for line in reversed(lines):
+            try:
+                self.step = int(float(line))
+                break
+            except ValueError:
+                continue
+        return self.step
+
+
+def run_deck(
+    deck: str, data: str, np_: int = 1, work_dir: str | Path | None = None, total_steps: int | None = None
+) -> tuple[dict, Path]:
+    """Run a deck (with its chain.data) in a worker process; returns the worker's report and the work dir.
+
+    While LAMMPS runs, its step count (the deck's progress.txt) drives a granchain.progress.Progress
+    of total_steps (default: the deck's run commands added up). A work directory of its own
+    (work_dir None) is removed when the run fails; a LammpsError then carries the log's last lines.
+    """
     if np_ < 1:
         raise ValueError(f"--np = {np_}: the number of MPI ranks must be at least 1")
     build_plugin()
@@ -87,25 +187,51 @@ def run_deck(deck: str, data: str, np_: int = 1, work_dir: str | Path | None = N
     if np_ > 1:
         cmd = [_mpirun(), "-np", str(np_), *cmd]
     t0 = time.perf_counter()
+    progress = Progress(total_steps or deck_steps(deck), "LAMMPS" + (f" on {np_} ranks" if np_ > 1 else ""))
     try:
         (work / "deck.lmp").write_text(deck)
         (work / "chain.data").write_text(data)
-        proc = subprocess.run(cmd, env=plugin_env(), capture_output=True, text=True, stdin=subprocess.DEVNULL)
+        tail = _StepTail(work / "progress.txt")
+        with subprocess.Popen(
+            cmd, env=plugin_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL
+        ) as proc:
+            try:  # as subprocess.run(capture_output=True), looking at LAMMPS's step count every POLL_INTERVAL
+                while True:
+                    try:
+                        _, stderr = proc.communicate(timeout=POLL_INTERVAL)
+                        break
+                    except subprocess.TimeoutExpired:
+                        if not progress.disabled:
+                            progress.update(tail.read())
+            except BaseException:  # Ctrl-C: communicate() gave the worker (which got it too) a moment
+                proc.kill()
+                raise
+        status = work / "worker.json"
+        info = json.loads(status.read_text()) if status.exists() else None
     except BaseException:  # Ctrl-C (the worker got it too), a full disk: leave no work directory behind
+        progress.close()
         if work_dir is None:
             cleanup(work)
         raise
-    status = work / "worker.json"
-    info = json.loads(status.read_text()) if status.exists() else None
     if info is None or not info.get("ok"):
+        progress.close()
+        log = work / "log.lammps"
+        log_text = log.read_text(errors="replace") if log.exists() else ""
         lmsg = info["error"] if info else ""
+        log_lines = ""
         if not lmsg:
-            log = work / "log.lammps"
-            tail = log.read_text()[-2000:] if log.exists() else ""
-            lmsg = (proc.stderr[-2000:] + "\n" + tail).strip()
+            lmsg = (stderr[-2000:] + "\n" + log_text[-2000:]).strip()
+        elif work_dir is None and log_text.strip():  # the directory goes: keep what its log said last
+            log_lines = "\nlast lines of log.lammps:\n" + "\n".join(log_text.strip().splitlines()[-8:])[-1500:]
         line = _deck_line(lmsg)
         where = f"\nfailing deck line: {line}" if line else ""
-        raise LammpsError(f"LAMMPS failed (exit {proc.returncode}) in {work}:\n{lmsg.strip()}{where}", lmsg, line)
+        place = f" in {work}" if work_dir is not None else ""
+        if work_dir is None:  # a failed (or halted) run's own work directory: remove it now, not at the next run
+            cleanup(work)
+        raise LammpsError(
+            f"LAMMPS failed (exit {proc.returncode}){place}:\n{lmsg.strip()}{where}{log_lines}", lmsg, line
+        )
+    progress.finish(int(info.get("steps", progress.total)))
     info["process_time"] = time.perf_counter() - t0
     return info, work
 
@@ -117,17 +243,21 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
     t_build = time.perf_counter() - t_build
     deck = render_deck(scene)
     try:
-        info, work = run_deck(deck.deck, deck.data, np_, work_dir)
-    except LammpsError as e:
+        info, work = run_deck(deck.deck, deck.data, np_, work_dir, deck.total_steps)
+    except LammpsError as e:  # run_deck has removed a work directory of its own already
         broken = invariant_from_lammps(e, scene)
         if broken is None:
             raise
         raise broken from None
-    sol = read_solution(scene, work, info.get("steps", deck.total_steps), info["wall_time"], info.get("time"))
     try:
+        sol = read_solution(scene, work, info.get("steps", deck.total_steps), info["wall_time"], info.get("time"))
         check_solution(scene, sol)
     except InvariantError:
         cleanup(work)
+        raise
+    except BaseException:  # unreadable results, Ctrl-C: no work directory of its own left behind
+        if work_dir is None:
+            cleanup(work)
         raise
     extra = {
         "lammps_version": info.get("lammps_version"),
@@ -308,4 +438,12 @@ def cleanup(work: Path) -> None:
     shutil.rmtree(work, ignore_errors=True)
 
 
-__all__ = ["LammpsError", "run_lammps", "run_deck", "output_files", "cleanup"]
+__all__ = [
+    "LammpsError",
+    "run_lammps",
+    "run_deck",
+    "output_files",
+    "cleanup",
+    "sweep_stale_work_dirs",
+    "work_dirs_report",
+]

@@ -36,6 +36,7 @@ import numpy as np
 
 from granchain.invariants import InvariantError, energy_violation, momentum_violation
 from granchain.physics.contact import BilinearLaw, HertzLaw
+from granchain.progress import Progress
 from granchain.results import PEAK_PASSED_FRACTION, ChainSolution, complete_peaks, unreached_as_nan
 
 METHODS = ("rk4", "verlet")
@@ -175,6 +176,9 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
     A far-end wall is an immovable extra bead (zero inverse mass) whose contact with bead N has the
     wall's stiffness; its peak is reported as wall_peak_force. Keywords: see _solve.
     """
+    if "progress" not in kw:  # progress on stderr for a long run (granchain.progress); closed if the run raises
+        with Progress(None, f"reference {method}") as progress:
+            return solve_chain(problem, end_time, timestep, method, progress=progress, **kw)
     wall, striker = problem.wall_stiffness is not None, problem.striker_mass is not None
     if not (wall or striker):
         return _solve(problem, end_time, timestep, method, **kw)
@@ -249,6 +253,7 @@ def _solve(
     energy_watch: float | None = None,
     momentum_watch: float | None = None,
     watch_every: int = 20,
+    progress: Progress | None = None,
 ) -> ChainSolution:
     """Integrate the chain from rest (bead 1 possibly moving) to end_time.
 
@@ -262,6 +267,7 @@ def _solve(
     max_overlap, energy_watch, momentum_watch: the run watch (granchain.invariants); None = off.
     Overlaps and a finite state are checked every watch_every steps and at breakpoints, the energy
     balance and the momentum of a free chain at every energy sample (~200 per run, as LAMMPS).
+    progress: told the step count every ~0.1 s of steps (its update() names the next step to call it at).
     """
     if method not in METHODS:
         raise ValueError(f"method = {method!r} is not known; choose one of {', '.join(METHODS)}")
@@ -338,6 +344,7 @@ def _solve(
         for g in step_plan(end_time, timestep, problem.duration if problem.amplitude else 0.0, snapshots)
     ]
     total_steps = sum(p[2] for p in plan)
+    progress_at = -1 if progress is None else progress.start(total_steps)  # one int comparison per step
     hist_idx = np.asarray(histories, dtype=int)
     nh = (total_steps // history_stride + 2) if len(hist_idx) else 0
     h_t = np.empty(nh)
@@ -685,6 +692,8 @@ def _solve(
             else:
                 rk4_step(h, a_ext)
             step += 1
+            if step == progress_at:
+                progress_at = progress.update(step)
             if method == "verlet":
                 sample_forces(t_new)
             else:
@@ -711,6 +720,9 @@ def _solve(
         if seg_end in snapshot_set:
             snaps[seg_end] = (u.copy(), v.copy(), forces_now())
         energy_row(t)
+
+    if progress is not None:
+        progress.finish(step)
 
     # no extra history row at the end: the samples are every history_stride steps from t = 0 in both
     # backends (LAMMPS's dump writes only those), so the two tables have the same rows
