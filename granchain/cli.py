@@ -335,6 +335,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("name", nargs="?", help="print this scene's TOML")
     s.set_defaults(func=cmd_scenes)
 
+    for sp in (r, c, acc):
+        sp.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+
     mt = sub.add_parser("materials", help="list the built-in bead materials with their sources")
     mt.add_argument("name", nargs="?", help="show one material")
     mt.set_defaults(func=cmd_materials)
@@ -342,13 +345,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from granchain import progress
+
     args = build_parser().parse_args(argv)
 
     def one_line(message, category, filename, lineno, file=None, line=None):
         print(f"granchain: warning: {message}", file=sys.stderr)
 
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), progress.quiet(getattr(args, "quiet", False)):
             warnings.showwarning = one_line
             warnings.simplefilter("always", UserWarning)
             return args.func(args)

