@@ -277,3 +277,32 @@ def test_any_title_round_trips_through_scene_toml(title):
     back = parse_scene(sc.to_toml())
     expected = "".join("\ufffd" if 0xD800 <= ord(c) <= 0xDFFF else c for c in title)
     assert back.title == expected
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    method=st.sampled_from(["rk4", "verlet"]),
+    omega=st.floats(1e2, 1e9),
+    rate=st.one_of(st.just(0.0), st.floats(1e-3, 1e8)),
+    rtol=st.floats(1e-8, 0.5),
+)
+def test_the_planned_step_meets_its_own_error_model(method, omega, rate, rtol):
+    """accurate_timestep returns a step whose predicted error (with Verlet's first-order dashpot
+    term) is within rtol, and is no coarser with a dashpot than without."""
+    from granchain.workflows.plan import accurate_timestep, predicted_error
+
+    dt = accurate_timestep(method, omega, rate, rtol)
+    assert predicted_error(method, omega, rate, dt) <= rtol * (1 + 1e-9)
+    assert dt <= accurate_timestep(method, omega, 0.0, rtol) * (1 + 1e-12)
+
+
+def test_verlet_plans_a_dashpot_chain_finer_than_its_frequency_alone():
+    from granchain.workflows.plan import damping_rate
+
+    sc = resolve_scene("effect-dashpot")
+    rate = damping_rate(sc)
+    assert rate > 0 and damping_rate(resolve_scene("default")) == 0.0
+    verlet = plan_scene(replace(sc, effects=replace(sc.effects, dashpot=1e3)), rtol=1e-3, method="verlet")
+    assert "first-order error" in verlet.choices[0].reason
+    plain = plan_scene(replace(sc, effects=replace(sc.effects, dashpot=0.0)), rtol=1e-3, method="verlet")
+    assert verlet.scene.run.timestep < plain.scene.run.timestep
