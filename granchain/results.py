@@ -88,7 +88,8 @@ def leading_pulse(
     """The leading pulse of each contact, read back from a backend's frozen values (0: none yet).
 
     Definition (docs/observables.md): the first maximum of a contact's force, i.e. its running peak
-    as it stands at the first sample where the force has fallen to PEAK_PASSED_FRACTION of that
+    as it stands at the first check (every STOP_CHECK_EVERY steps, the same steps in both backends)
+    where the force has fallen to PEAK_PASSED_FRACTION of that
     peak's rise above the static force F0 (the first moment the contact is complete, complete_peaks),
     frozen from then on; only a rise above LEAD_FRACTION of the largest expected force counts. In a
     forming wave train this is the first pulse, whatever larger pulses follow: the largest peak jumps

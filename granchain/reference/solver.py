@@ -556,9 +556,6 @@ def _solve(
         if bilinear and method == "rk4":
             np.maximum(alpha_hist, amax, out=alpha_hist)
         alpha_old, adot_old = alpha_new, adot_new
-        if method == "rk4" and not lead_done.all():
-            peak = np.asarray(law.force_at_peak_overlap(amax), dtype=float)
-            freeze_leading(peak, np.asarray(law.force(np.maximum(amin, 0.0), alpha_hist), dtype=float), tmax)
 
     def freeze_leading(peak, force_min, time_of_peak) -> None:
         """The leading pulse (results.leading_pulse): each contact's peak as it stands when the contact
@@ -580,10 +577,6 @@ def _solve(
     fmin = fpk.copy()  # smallest force sample since the peak (results.complete_peaks), as the pair styles
 
     def sample_forces(t1: float) -> None:
-        _sample_forces(t1)
-        freeze_leading(fpk, fmin, tpk)
-
-    def _sample_forces(t1: float) -> None:
         nonlocal f_now, f_prev, f_prev2, t_now, t_prev, t_prev2
         f_prev2, f_prev, f_now = f_prev, f_now, fc.copy()
         t_prev2, t_prev, t_now = t_prev, t_now, t1
@@ -699,6 +692,13 @@ def _solve(
             else:
                 track_peaks(t, t_new)
             t = t_new
+            if step % STOP_CHECK_EVERY == 0 and not lead_done.all():  # the pair styles' 'lead ... every'
+                if method == "verlet":
+                    freeze_leading(fpk, fmin, tpk)
+                else:
+                    peak = np.asarray(law.force_at_peak_overlap(amax), dtype=float)
+                    fmin_now = np.asarray(law.force(np.maximum(amin, 0.0), alpha_hist), dtype=float)
+                    freeze_leading(peak, fmin_now, tmax)
             if len(hist_idx) and step % history_stride == 0:
                 record_history(t)
             if step % energy_every == 0 and t < seg_end:

@@ -21,8 +21,8 @@ from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
 from granchain.reference.solver import STOP_CHECK_EVERY, step_plan
 from granchain.results import LEAD_FRACTION, PEAK_PASSED_FRACTION, REACHED_FRACTION
 
-#: steps between two checks of the leading pulse (the reference checks at every sample as well)
-LEAD_CHECK_EVERY = 1
+#: steps between two checks of the leading pulse (the reference checks at the same steps)
+LEAD_CHECK_EVERY = STOP_CHECK_EVERY
 
 #: steps between two checks of the LAMMPS run watch (the reference checks every 20 steps as well)
 WATCH_EVERY = 20
