@@ -29,7 +29,7 @@ import numpy as np
 
 from granchain.errors import UsageError
 from granchain.physics import models
-from granchain.physics.contact import hertz_tangent_stiffness, unloading_stiffness
+from granchain.physics.contact import BilinearLaw, HertzLaw, hertz_tangent_stiffness
 from granchain.scene import AUTO, Scene, SceneError, scene_from_dict, scene_to_dict
 
 #: Error model constants C in  rel. error of peak forces ~ C (omega_max dt)^p. Measured C (planned
@@ -102,11 +102,12 @@ def max_stiffness(scene) -> float:
 
 
 def _tangent(scene, k, force: float) -> np.ndarray:
-    """The stiffest tangent of contacts of stiffness k at the force they are expected to reach."""
+    """The stiffest tangent of contacts of stiffness k at the force they are expected to reach: the
+    law's own max_stiffness (physics.contact: Hertz 3/2 k^(2/3) F^(1/3), bilinear k_u)."""
     k = np.asarray(k, dtype=float)
     if scene.contact.law == "hertz":
-        return hertz_tangent_stiffness(force, k)
-    return unloading_stiffness(k, scene.contact.unloading_coeff)
+        return np.asarray(HertzLaw(k).max_stiffness(force), dtype=float)
+    return np.asarray(BilinearLaw(k, scene.contact.unloading_coeff).max_stiffness(force), dtype=float)
 
 
 def damping_rate(scene) -> float:
