@@ -228,7 +228,7 @@ def test_scene_text_runs_nothing_in_lammps(tmp_path, where):
     """The issue's exploit on real LAMMPS: a title or file name with a line break and a shell command
     (plus the continuation and triple-quote tricks) runs nothing and drops no command: the run gives
     the plain deck's results."""
-    from granchain.lammps.runner import LammpsError, run_deck
+    from granchain.lammps.runner import LammpsError, read_results, run_deck
 
     pwned = tmp_path / "pwned"
     evil = f'x\nshell touch {pwned}\n# """ &'
@@ -243,6 +243,7 @@ def test_scene_text_runs_nothing_in_lammps(tmp_path, where):
     assert w1 is not None, failure
     assert not [line for line in deck.deck.splitlines() if line.split()[:1] == ["shell"]]
     _, w2 = run_deck(plain.deck, plain.data, work_dir=tmp_path / "plain")
-    a, b = np.load(w1 / "results.npz"), np.load(w2 / "results.npz")
-    for key in b.files:
+    a, b = read_results(w1), read_results(w2)
+    assert a.keys() == b.keys()
+    for key in b:
         np.testing.assert_array_equal(a[key], b[key])

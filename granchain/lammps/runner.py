@@ -4,6 +4,11 @@ run_lammps(scene) renders the deck, runs it with granchain.lammps.worker in its 
 (under the mpich wheel's mpirun for np > 1), and turns the deck's outputs into the same
 ChainSolution the reference solver returns. A LAMMPS error becomes a LammpsError carrying
 LAMMPS's message and the failing deck line; the calling process is never taken down.
+
+lammps_result(scene, directory, ...) is the one way from a deck's output files to a RunResult: the
+in-process run and granchain collect (a directory plain LAMMPS ran) both call it. Everything it reads
+is a file the deck writes: the results dump (templates.RESULT_COLUMNS), the run's last step and
+time, energy.txt, load_end.txt and the history and snapshot dumps.
 """
 
 from __future__ import annotations
@@ -35,10 +40,10 @@ from granchain.results import (
     pid_alive,
     unreached_as_nan,
 )
-from granchain.templates import atom_layout, render_deck
+from granchain.templates import RESULT_COLUMNS, RESULTS_DUMP, RUN_END_FILE, atom_layout, render_deck
 
 #: files of a LAMMPS work directory that are copied into the run directory
-OUTPUT_GLOBS = ("deck.lmp", "chain.data", "log.lammps", "*.dump", "energy.txt", "load_end.txt", "results.npz")
+OUTPUT_GLOBS = ("deck.lmp", "chain.data", "log.lammps", "*.dump", "energy.txt", "load_end.txt", RUN_END_FILE)
 
 
 class LammpsError(GranchainError, RuntimeError):
@@ -249,16 +254,6 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
         if broken is None:
             raise
         raise broken from None
-    try:
-        sol = read_solution(scene, work, info.get("steps", deck.total_steps), info["wall_time"], info.get("time"))
-        check_solution(scene, sol)
-    except InvariantError:
-        cleanup(work)
-        raise
-    except BaseException:  # unreadable results, Ctrl-C: no work directory of its own left behind
-        if work_dir is None:
-            cleanup(work)
-        raise
     extra = {
         "lammps_version": info.get("lammps_version"),
         "ranks": info.get("ranks"),
@@ -266,7 +261,82 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
         "process_time": info.get("process_time"),
         "plugin_build_time": t_build,
     }
-    return RunResult(scene=scene, backend="lammps", solution=sol, extra=extra), work
+    try:
+        result = lammps_result(scene, work, info["wall_time"], extra)
+    except InvariantError:
+        cleanup(work)
+        raise
+    except BaseException:  # unreadable results, Ctrl-C: no work directory of its own left behind
+        if work_dir is None:
+            cleanup(work)
+        raise
+    return result, work
+
+
+def lammps_result(scene, work: Path, wall_time: float, extra: dict | None = None) -> RunResult:
+    """A deck's output files in a directory (templates.RESULTS_DUMP and the rest) -> its RunResult.
+
+    The one post-processing path: run_lammps calls it on its work directory, granchain collect on a
+    directory that plain LAMMPS ran. The run's invariants are checked (InvariantError).
+    """
+    steps, end_time = read_run_end(work)
+    sol = read_solution(scene, work, steps, wall_time, end_time)
+    check_solution(scene, sol)
+    return RunResult(scene=scene, backend="lammps", solution=sol, extra=dict(extra or {}))
+
+
+class ResultsError(GranchainError, RuntimeError):
+    """A deck's results (templates.RESULTS_DUMP, RUN_END_FILE) are missing or incomplete."""
+
+
+def read_run_end(work: Path) -> tuple[int, float]:
+    """The run's last step and time, as the deck printed them (templates.RUN_END_FILE)."""
+    p = Path(work) / RUN_END_FILE
+    try:
+        step, t = p.read_text().split()
+        return int(step), float(t)
+    except FileNotFoundError:
+        raise ResultsError(f"{p}: missing; the deck writes it when the run has finished") from None
+    except (OSError, ValueError) as e:
+        raise ResultsError(f"{p}: not the line 'step time' the deck writes at the end of the run ({e})") from None
+
+
+def read_results(work: Path) -> dict[str, np.ndarray]:
+    """The deck's per-atom results at the end of the run (templates.RESULTS_DUMP), by atom ID.
+
+    Keys: the dump's columns of templates.RESULT_COLUMNS without their d_ prefix (x, vx, fpeak,
+    tpeak, fmin, flead, tlead, amax: whichever the deck declared), as float64 read from %.17g text,
+    so exactly the doubles LAMMPS held.
+    """
+    p = Path(work) / RESULTS_DUMP
+    try:
+        with open(p) as fh:
+            header = [fh.readline() for _ in range(9)]
+            body = fh.read()
+    except FileNotFoundError:
+        raise ResultsError(f"{p}: missing; the deck writes it as its last file when the run has finished") from None
+    if not header[0].startswith("ITEM: TIMESTEP") or not header[8].startswith("ITEM: ATOMS"):
+        raise ResultsError(f"{p}: not a LAMMPS dump custom file (its header is incomplete)")
+    try:
+        natoms = int(header[3])
+    except ValueError:
+        raise ResultsError(f"{p}: not a LAMMPS dump custom file (no atom count)") from None
+    names = header[8].split()[2:]
+    rows = [line for line in body.splitlines() if line.strip()]
+    try:
+        if len(rows) != natoms:
+            raise ValueError(f"{len(rows)} rows")
+        data = np.loadtxt(rows, ndmin=2)
+        if data.shape[1] != len(names):
+            raise ValueError(f"{data.shape[1]} columns")
+    except ValueError:
+        raise ResultsError(
+            f"{p}: does not hold {len(names)} columns for each of its {natoms} atoms: the dump was cut off"
+        ) from None
+    ids = data[:, names.index("id")].astype(int)
+    if not np.array_equal(ids, np.arange(1, natoms + 1)):
+        raise ResultsError(f"{p}: atom IDs are not 1..{natoms} in order (the deck writes it sorted by ID)")
+    return {c.removeprefix("d_"): data[:, names.index(c)] for c in RESULT_COLUMNS if c in names}
 
 
 def invariant_from_lammps(err: LammpsError, scene) -> InvariantError | None:
@@ -321,7 +391,7 @@ def read_solution(
 ) -> ChainSolution:
     n, d, m = scene.chain.beads, scene.diameter, scene.mass
     ld = scene.loading
-    res = np.load(work / "results.npz")  # gathered by atom ID by the worker
+    res = read_results(work)  # by atom ID: templates.RESULT_COLUMNS
     lay = atom_layout(scene)
     o = lay["offset"]  # a striker is atom 1; bead i is atom i + o; contact i lives on atom i + o
     fpeak = res["fpeak"][o : o + n - 1]
@@ -441,6 +511,10 @@ def cleanup(work: Path) -> None:
 __all__ = [
     "LammpsError",
     "run_lammps",
+    "lammps_result",
+    "read_results",
+    "read_run_end",
+    "ResultsError",
     "run_deck",
     "output_files",
     "cleanup",

@@ -4,9 +4,10 @@
 
 RUN_DIR holds deck.lmp and chain.data; LAMMPS_PLUGIN_PATH must name the plugin's directory.
 Rank 0 writes worker.json: {"ok": true, "wall_time": ..., "startup_time": ..., "ranks": ...}
-or {"ok": false, "error": LAMMPS's message, "kind": ...}. After the deck it saves the final state and
-every contact's peak data, gathered by atom ID, in results.npz. This module must not import lammps at
-import time (the parent process never loads LAMMPS: a LAMMPS crash cannot take it down).
+or {"ok": false, "error": LAMMPS's message, "kind": ...}. The results themselves are files the deck
+writes (its results dump and the rest; granchain.lammps.runner.lammps_result reads them), the same
+files a plain `lmp -in deck.lmp` writes. This module must not import lammps at import time (the parent
+process never loads LAMMPS: a LAMMPS crash cannot take it down).
 """
 
 from __future__ import annotations
@@ -51,7 +52,6 @@ def main(run_dir: str) -> int:
     import os
 
     cwd = os.getcwd()
-    deck = (d / "deck.lmp").read_text()
     try:
         os.chdir(d)  # the deck's relative file names (chain.data, dumps) live in the run directory
         lmp.file("deck.lmp")
@@ -61,28 +61,6 @@ def main(run_dir: str) -> int:
     finally:
         os.chdir(cwd)
     t2 = time.perf_counter()
-    # results by atom ID, gathered from every rank (no dump needed for them)
-    import numpy as np
-
-    n = lmp.get_natoms()
-    arrays = {
-        "x": np.array(lmp.gather_atoms("x", 1, 3)[:]).reshape(n, 3)[:, 0],
-        "vx": np.array(lmp.gather_atoms("v", 1, 3)[:]).reshape(n, 3)[:, 0],
-        "fpeak": np.array(lmp.gather("d_fpeak", 1, 1)[:]),
-        "tpeak": np.array(lmp.gather("d_tpeak", 1, 1)[:]),
-    }
-    # per-atom vectors the deck declares (on its command lines; a title or comment naming one does not count)
-    declared = {
-        word
-        for line in deck.splitlines()
-        if line.split()[:1] == ["fix"] and "property/atom" in line.split("#")[0]
-        for word in line.split("#")[0].split()
-    }
-    for name in ("amax", "fmin", "flead", "tlead"):  # bilinear history; completion; the leading pulse
-        if f"d_{name}" in declared:
-            arrays[name] = np.array(lmp.gather(f"d_{name}", 1, 1)[:])
-    if rank == 0:
-        np.savez(d / "results.npz", **arrays)
     report(
         {
             "ok": True,

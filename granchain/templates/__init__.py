@@ -11,6 +11,7 @@ any other template value that is not one line of printable text is an error.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from importlib import resources
 
@@ -19,7 +20,7 @@ import numpy as np
 
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
 from granchain.reference.solver import STOP_CHECK_EVERY, step_plan
-from granchain.results import LEAD_FRACTION, PEAK_PASSED_FRACTION, REACHED_FRACTION
+from granchain.results import LEAD_FRACTION, PEAK_PASSED_FRACTION, REACHED_FRACTION, scene_hash
 
 #: steps between two checks of the leading pulse (the reference checks at the same steps)
 LEAD_CHECK_EVERY = STOP_CHECK_EVERY
@@ -28,6 +29,39 @@ LEAD_CHECK_EVERY = STOP_CHECK_EVERY
 WATCH_EVERY = 20
 
 LAMMPS_FILES = ("deck.lmp", "chain.data")
+
+#: The per-atom results a LAMMPS run ends with: the one list. The deck's last command writes them,
+#: by atom ID at full precision, into RESULTS_DUMP (results_dump_command), and
+#: granchain.lammps.runner.read_results reads them back by the dump's own column names, for runs
+#: through the Python module and for plain-LAMMPS runs (granchain collect) alike; a column added
+#: here is written by every deck rendered from now on and read by both. Each is a dump custom
+#: column; a per-atom vector d_NAME is written only when the deck declares it (d_amax: bilinear
+#: law; the built-in granular yardstick has d_fpeak and d_tpeak only) and is read as NAME.
+RESULT_COLUMNS = (
+    "x",  # final position (m)
+    "vx",  # final velocity (m/s)
+    "d_fpeak",  # running peak force of the contact that lives on this atom (N)
+    "d_tpeak",  # its time (s)
+    "d_fmin",  # the smallest force since that peak (complete peaks)
+    "d_flead",  # the leading pulse: the peak as it stood when the contact first completed (N)
+    "d_tlead",  # its time (s)
+    "d_amax",  # bilinear law: the largest overlap so far (m)
+)
+
+#: the deck's results dump (RESULT_COLUMNS) and the run's last step and time ("step time"); the
+#: dump is the last file a deck writes, so its presence marks a finished run
+RESULTS_DUMP = "peaks.dump"
+RUN_END_FILE = "run_end.txt"
+
+
+def result_columns(declared) -> list[str]:
+    """RESULT_COLUMNS that a deck declaring these per-atom vectors (d_NAME) can write."""
+    return [c for c in RESULT_COLUMNS if not c.startswith("d_") or c in set(declared)]
+
+
+def results_dump_command(columns) -> str:
+    """The deck's write_dump of the results (RESULT_COLUMNS), by atom ID, %.17g (round-trip doubles)."""
+    return f"write_dump      all custom {RESULTS_DUMP} id {' '.join(columns)} modify format float %.17g sort id"
 
 
 @dataclass(frozen=True)
@@ -269,11 +303,18 @@ def builtin_granular_deck(deck: str, scene) -> str:
     tangential force) instead of chain/hertz: the yardstick our pair style is tested and timed
     against. The built-in style tallies no contact energy, so the energy watch is left out."""
     m = scene.chain.material
+    builtin = ("d_fc", "d_fprev", "d_fprev2", "d_fpeak", "d_tpeak")
+    deck = re.sub(
+        rf"^write_dump\s+all custom {re.escape(RESULTS_DUMP)} .*$",
+        results_dump_command(result_columns(builtin)),
+        deck,
+        flags=re.M,
+    )
     start = deck.index("\n# ---- contact law") + 1  # at a line start: a title may hold these words
     end = deck.index("\nneighbor ", start) + 1
     return (
         deck[:start]
-        + "fix             contact all property/atom d_fc d_fprev d_fprev2 d_fpeak d_tpeak ghost yes\n"
+        + f"fix             contact all property/atom {' '.join(builtin)} ghost yes\n"
         + "pair_style      granular\n"
         + f"pair_coeff      * * hertz/material {m.youngs_modulus!r} 0.0 {m.poisson_ratio!r} "
         + "tangential linear_nohistory 0.0 0.0 damping viscoelastic\n"
@@ -310,6 +351,7 @@ def render_deck(scene) -> Deck:
     peratom = ["d_fc", "d_fprev", "d_fprev2", "d_fpeak", "d_tpeak"]
     peratom += ["d_amax", "d_edis"] if bilinear else []
     peratom += ["d_edash"] if fx.dashpot else []
+    peratom += ["d_fmin", "d_flead", "d_tlead"]  # completion; the leading pulse
     r = scene.chain.radius
     lay = atom_layout(scene)
     tw, ts = lay["types"].get("wall"), lay["types"].get("striker")
@@ -348,6 +390,10 @@ def render_deck(scene) -> Deck:
         "watch_force": watch_force,
         "watch_every": WATCH_EVERY,
         "peratom": peratom,
+        "results_dump": results_dump_command(result_columns(peratom)),
+        "results_end": RUN_END_FILE,
+        "results_file": RESULTS_DUMP,
+        "scene_sha256": scene_hash(scene),
         # the leading pulse (results.leading_pulse): above the static force plus the reached floor
         "pair_args": f" lead {lead_floor(scene)!r} {float(fx.precompression)!r} {PEAK_PASSED_FRACTION!r}"
         f" {LEAD_CHECK_EVERY}"
