@@ -1,4 +1,4 @@
-"""granchain command line: run, compare, plan, predict, plot, render, scenes, materials, doctor."""
+"""granchain command line: run, compare, plan, predict, plot, render, collect, scenes, materials, doctor."""
 
 from __future__ import annotations
 
@@ -88,6 +88,12 @@ def cmd_run(args) -> int:
         oversubscribe=args.oversubscribe,
         rtol=args.rtol,
     )
+    print_result(result, out)
+    return 0
+
+
+def print_result(result, out) -> None:
+    """What `granchain run` (and `granchain collect`) prints about a finished run."""
     scene = result.scene
     s = result.summary()
     print(f"scene      {scene.title or scene.source}")
@@ -115,7 +121,6 @@ def cmd_run(args) -> int:
     err = _fmt(c["energy_balance_error_relative"])
     print(f"  {'energy balance error (1)':38s} {err}   (relative to the energy put in)")
     print(f"run directory: {out}")
-    return 0
 
 
 #: units of the observables `granchain run` prints ("1": dimensionless)
@@ -218,9 +223,27 @@ def cmd_accuracy(args) -> int:
 def cmd_render(args) -> int:
     from granchain.templates import render_deck
 
-    scene, _ = planned(resolve_scene(args.scene), None, "lammps", None)
+    if args.out and args.data:
+        raise UsageError("--data prints chain.data; --out writes it (with the deck and the scene): give one of them")
+    scene, plan = planned(resolve_scene(args.scene), None, "lammps", None)
+    if args.out:
+        from granchain.lammps.collect import render_dir
+
+        out = render_dir(scene, args.out, plan)
+        print(f"deck directory: {out} ({', '.join(sorted(p.name for p in out.iterdir()))})")
+        print(f"run it with plain LAMMPS:   cd {out} && lmp -in deck.lmp   (or: mpirun -np N lmp -in deck.lmp)")
+        print(f"then make it a run directory: granchain collect {out}")
+        return 0
     deck = render_deck(scene)
     print(deck.data if args.data else deck.deck, end="")
+    return 0
+
+
+def cmd_collect(args) -> int:
+    from granchain.lammps.collect import collect
+
+    result = collect(args.run_dir, out=args.out, overwrite=args.overwrite)
+    print_result(result, args.out or args.run_dir)
     return 0
 
 
@@ -323,10 +346,23 @@ def build_parser() -> argparse.ArgumentParser:
     acc.add_argument("--out", help="output directory (default runs/<scene>-accuracy)")
     acc.set_defaults(func=cmd_accuracy)
 
-    d = sub.add_parser("render", help="print the LAMMPS deck of a scene")
+    d = sub.add_parser("render", help="print the LAMMPS deck of a scene, or write a directory plain LAMMPS runs")
     d.add_argument("scene", nargs="?", help="scene file or bundled scene name")
     d.add_argument("--data", action="store_true", help="print the data file (chain.data) instead")
+    d.add_argument(
+        "--out",
+        help="write a new directory with deck.lmp, chain.data, scene.toml (and plan.json): run it with "
+        "'lmp -in deck.lmp' there, then 'granchain collect DIR'",
+    )
     d.set_defaults(func=cmd_render)
+
+    co = sub.add_parser(
+        "collect", help="make a directory that plain LAMMPS ran (granchain render --out) a run directory"
+    )
+    co.add_argument("run_dir", help="the directory of 'granchain render --out' after 'lmp -in deck.lmp' ran in it")
+    co.add_argument("--out", help="write a new run directory here instead of adding the files to RUN_DIR")
+    co.add_argument("--overwrite", action="store_true", help="replace an existing --out directory")
+    co.set_defaults(func=cmd_collect)
 
     doc = sub.add_parser("doctor", help="report LAMMPS, MPI and plugin status")
     doc.set_defaults(func=cmd_doctor)

@@ -1,0 +1,318 @@
+"""A deck that stands alone: render a directory plain LAMMPS can run anywhere, and collect it back.
+
+    granchain render SCENE --out DIR     render_dir: DIR/deck.lmp, chain.data, scene.toml (the scene as
+                                         run, "auto" values planned), plan.json (the planner's choices)
+    cd DIR && lmp -in deck.lmp           or mpirun -np N lmp -in deck.lmp, on this machine or a cluster
+    granchain collect DIR                collect: DIR becomes the run directory `granchain run --backend
+                                         lammps` writes (peaks.csv, summary.json, energy.csv, ...)
+
+The deck writes every result granchain needs as files (its results dump, templates.RESULT_COLUMNS,
+the run's last step and time, energy.txt, the history and snapshot dumps), and collect turns them
+into a RunResult through the same function the in-process run uses (runner.lammps_result). What
+only the plain run's log knows (LAMMPS's version, the ranks, the loop times) is read from
+log.lammps; summary.json's provenance says the run was collected and what was not recorded.
+
+collect refuses, with a CollectError saying what to do: a directory without deck.lmp, chain.data or
+scene.toml; a scene.toml whose content hash is not the one render wrote into the deck; a run that
+has not finished (no results dump: the log's last lines are in the message). Nothing is written
+then; the files it adds are written aside and renamed into place, summary.json last.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+
+from granchain.errors import GranchainError
+from granchain.results import RunDirError, RunResult, pid_alive, scene_hash, write_run_dir
+from granchain.templates import RESULTS_DUMP, RUN_END_FILE, render_deck
+
+#: what granchain render --out writes (plan.json only when something was planned)
+RENDER_FILES = ("deck.lmp", "chain.data", "scene.toml")
+PLAN_FILE = "plan.json"
+LOG_FILE = "log.lammps"
+
+#: the deck's line naming its scene's content hash (templates/chain.lmp.j2)
+_HASH_LINE = re.compile(r"^# Scene sha256: ([0-9a-f]{64})\b", re.M)
+_RENDERED_BY = re.compile(r"^# Rendered by granchain (\S+) from ", re.M)
+_MONTHS = {m: i + 1 for i, m in enumerate("Jan Feb Mar Apr May Jun Jul Aug Sep Oct Nov Dec".split())}
+
+
+class CollectError(GranchainError, RuntimeError):
+    """A directory that granchain collect cannot turn into a run directory; the message says why and what to do."""
+
+
+def scene_file_text(scene) -> str:
+    """scene.toml as a run directory holds it (results.write_run_dir): the file's own text, or the
+    canonical TOML of a planned scene."""
+    return scene.source_text if scene.source_text else scene.to_toml()
+
+
+def plan_to_dict(plan) -> dict | None:
+    """The planner's choices as plan.json holds them (the same record as summary.json's provenance.plan)."""
+    if plan is None:
+        return None
+    return {
+        "method": plan.method,
+        "rtol": plan.rtol,
+        "omega_max": plan.omega_max,
+        "stable_timestep": plan.stable_timestep,
+        "choices": [{"name": c.name, "value": c.value, "reason": c.reason} for c in plan.choices],
+    }
+
+
+def plan_from_dict(data: dict | None, scene):
+    if data is None:
+        return None
+    from granchain.workflows.plan import Plan, PlanChoice
+
+    return Plan(
+        scene=scene,
+        rtol=float(data["rtol"]),
+        method=str(data["method"]),
+        choices=[PlanChoice(str(c["name"]), float(c["value"]), str(c["reason"])) for c in data["choices"]],
+        omega_max=float(data["omega_max"]),
+        stable_timestep=float(data["stable_timestep"]),
+    )
+
+
+def render_dir(scene, out: str | Path, plan=None) -> Path:
+    """Write a directory that plain LAMMPS runs as it is (`lmp -in deck.lmp` inside it): deck.lmp,
+    chain.data, scene.toml (the scene as run) and, when the scene was planned, plan.json. The scene
+    must be concrete (planned). out must not exist; the directory appears complete or not at all."""
+    out = Path(out)
+    if out.exists() or out.is_symlink():
+        raise RunDirError(f"{out}: already exists; granchain render --out writes a new directory: choose another")
+    deck = render_deck(scene)
+    parent = out.resolve().parent
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise RunDirError(f"{parent}: cannot create the directory ({e.strerror}); choose another --out") from None
+    tmp = parent / f".{out.name}.partial-{os.getpid()}"
+    shutil.rmtree(tmp, ignore_errors=True)
+    try:
+        tmp.mkdir()
+        (tmp / "deck.lmp").write_text(deck.deck)
+        (tmp / "chain.data").write_text(deck.data)
+        (tmp / "scene.toml").write_text(scene_file_text(scene))
+        if plan is not None:
+            (tmp / PLAN_FILE).write_text(json.dumps(plan_to_dict(plan), indent=2) + "\n")
+        os.replace(tmp, out)
+    except OSError as e:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise RunDirError(f"{out}: could not write the deck directory ({e}); nothing was left behind") from None
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return out
+
+
+@dataclass
+class LammpsLog:
+    """What a plain LAMMPS run's log.lammps says about the run."""
+
+    version_text: str | None  # "22 Jul 2025 - Update 4"
+    version: int | None  # 20250722, as the Python module's lammps.version() reports it
+    ranks: int | None  # MPI ranks ("Loop time of ... on N procs")
+    threads: int | None  # OpenMP threads per rank
+    loop_time: float  # s, LAMMPS's loop times added up (every run command)
+    total_wall_time: str | None  # "H:MM:SS", once LAMMPS has ended normally
+    text: str
+
+    def tail(self, lines: int = 8) -> str:
+        return "\n".join(self.text.strip().splitlines()[-lines:])[-1500:]
+
+
+def read_log(path: Path) -> LammpsLog:
+    text = path.read_text(errors="replace")
+    m = re.search(r"^LAMMPS \((\d{1,2}) (\w{3}) (\d{4})([^)]*)\)", text, re.M)
+    version_text = version = None
+    if m:
+        version_text = f"{m.group(1)} {m.group(2)} {m.group(3)}{m.group(4)}"
+        if m.group(2) in _MONTHS:
+            version = int(m.group(3)) * 10000 + _MONTHS[m.group(2)] * 100 + int(m.group(1))
+    loops = re.findall(r"^Loop time of (\S+) on (\d+) procs", text, re.M)
+    threads = re.search(r"using (\d+) OpenMP thread", text)
+    wall = re.search(r"^Total wall time: (\S+)", text, re.M)
+    return LammpsLog(
+        version_text=version_text,
+        version=version,
+        ranks=int(loops[-1][1]) if loops else None,
+        threads=int(threads.group(1)) if threads else None,
+        loop_time=sum(float(t) for t, _ in loops),
+        total_wall_time=wall.group(1) if wall else None,
+        text=text,
+    )
+
+
+@dataclass
+class CollectedRunResult(RunResult):
+    """A RunResult made from a plain-LAMMPS run: its provenance says so ("collected")."""
+
+    collected: dict = field(default_factory=dict)
+
+    def provenance(self) -> dict:
+        p = super().provenance()
+        p["collected"] = self.collected
+        return p
+
+
+def _check_is_render_dir(d: Path) -> None:
+    if not d.is_dir():
+        raise CollectError(
+            f"{d}: no such directory; give a directory written by 'granchain render SCENE --out DIR' and run by LAMMPS"
+        )
+    missing = [f for f in RENDER_FILES if not (d / f).is_file()]
+    if missing:
+        raise CollectError(
+            f"{d}: has no {', '.join(missing)}: not a directory of 'granchain render SCENE --out DIR' "
+            "(collect needs the deck, its data file and the scene it was rendered from)"
+        )
+
+
+def _check_scene_matches_deck(d: Path, scene, deck: str) -> None:
+    m = _HASH_LINE.search(deck)
+    if m is None:
+        raise CollectError(
+            f"{d / 'deck.lmp'}: carries no '# Scene sha256:' line, so scene.toml cannot be checked against it; "
+            "render the scene again with 'granchain render SCENE --out DIR' and run that deck"
+        )
+    have = scene_hash(scene)
+    if m.group(1) != have:
+        raise CollectError(
+            f"{d / 'scene.toml'}: does not match deck.lmp (the deck was rendered from a scene with sha256 "
+            f"{m.group(1)[:16]}..., scene.toml's is {have[:16]}...); put back the scene.toml that "
+            "'granchain render --out' wrote beside this deck, or render and run the scene again"
+        )
+
+
+def _check_finished(d: Path, scene, log: LammpsLog | None) -> None:
+    if (d / RESULTS_DUMP).is_file() and (d / RUN_END_FILE).is_file():
+        return
+    if log is None:
+        raise CollectError(
+            f"{d}: LAMMPS has not run here (no {LOG_FILE}, no {RESULTS_DUMP}); run 'lmp -in deck.lmp' "
+            "(or 'mpirun -np N lmp -in deck.lmp') in this directory, then collect it"
+        )
+    from granchain.lammps.runner import LammpsError, invariant_from_lammps
+
+    why = ""
+    broken = invariant_from_lammps(LammpsError(log.tail(40), log.tail(40)), scene)
+    if broken is not None:
+        why = f" LAMMPS stopped it: {broken}."
+    elif "ERROR" in log.tail(40):
+        why = " LAMMPS stopped with an error (below)."
+    raise CollectError(
+        f"{d}: the LAMMPS run did not finish: there is no {RESULTS_DUMP}, which the deck writes as its last "
+        f"file.{why} Last lines of {LOG_FILE}:\n{log.tail()}"
+    )
+
+
+def _finished_utc(d: Path) -> datetime:
+    return datetime.fromtimestamp((d / RESULTS_DUMP).stat().st_mtime, UTC)
+
+
+def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool = False) -> RunResult:
+    """Turn a directory of 'granchain render --out' that plain LAMMPS ran into a run directory.
+
+    out None: the run directory's files (peaks.csv, summary.json, energy.csv, histories.csv,
+    snapshots.csv) are added to run_dir itself, beside LAMMPS's; otherwise a new run directory out
+    is written as `granchain run --out` writes one (overwrite: replace it). Returns the RunResult.
+    """
+    from granchain.lammps.runner import ResultsError, lammps_result, output_files
+    from granchain.scene import load_scene
+
+    d = Path(run_dir)
+    _check_is_render_dir(d)
+    scene = load_scene(d / "scene.toml")
+    deck = (d / "deck.lmp").read_text(errors="replace")
+    _check_scene_matches_deck(d, scene, deck)
+    log = read_log(d / LOG_FILE) if (d / LOG_FILE).is_file() else None
+    _check_finished(d, scene, log)
+    if log is None:
+        raise CollectError(
+            f"{d}: the run finished but left no {LOG_FILE}; collect reads LAMMPS's version, ranks and wall "
+            "time from it: run the deck with LAMMPS's default log ('lmp -in deck.lmp'), or copy log.lammps back"
+        )
+    plan = None
+    if (d / PLAN_FILE).is_file():
+        try:
+            plan = plan_from_dict(json.loads((d / PLAN_FILE).read_text()), scene)
+        except (ValueError, KeyError, TypeError) as e:
+            raise CollectError(f"{d / PLAN_FILE}: is not the plan 'granchain render --out' wrote ({e})") from None
+    extra = {
+        "lammps_version": log.version,
+        "ranks": log.ranks,
+        "startup_time": None,
+        "process_time": None,
+        "plugin_build_time": None,
+    }
+    try:
+        base = lammps_result(scene, d, log.loop_time, extra)
+    except ResultsError as e:
+        raise CollectError(
+            f"{d}: the LAMMPS run's results cannot be read: {e}. Last lines of {LOG_FILE}:\n{log.tail()}"
+        ) from None
+    rendered = _RENDERED_BY.search(deck)
+    result = CollectedRunResult(
+        scene=base.scene,
+        backend=base.backend,
+        solution=base.solution,
+        extra=base.extra,
+        plan=plan,
+        finished_utc=_finished_utc(d),
+        collected={
+            "from": "a plain LAMMPS run of the deck (lmp -in deck.lmp or mpirun -np N lmp -in deck.lmp), "
+            "collected by granchain collect",
+            "run_dir": str(d.resolve()),
+            "lammps_version": log.version_text,
+            "ranks": log.ranks,
+            "openmp_threads": log.threads,
+            "lammps_total_wall_time": log.total_wall_time,
+            "rendered_by_granchain": rendered.group(1) if rendered else None,
+            "collected_utc": datetime.now(UTC).isoformat(timespec="milliseconds"),
+            "how": f"wall_time: LAMMPS's loop times added up ({LOG_FILE}); finished_utc: the modification time of "
+            f"{RESULTS_DUMP}; started_utc: estimated from them",
+            "not_recorded": "the LAMMPS run's command line and host: command, cwd and host are granchain "
+            "collect's, and lammps.plugin is this machine's plugin",
+        },
+    )
+    if out is not None:
+        write_run_dir(result, out, overwrite=overwrite, extra_files=output_files(d))
+    else:
+        _write_in_place(result, d)
+    return result
+
+
+def _write_in_place(result: RunResult, d: Path) -> None:
+    """Add the run directory's own files to d: written aside (d/.collect-<pid>), then renamed in one by
+    one, summary.json last (its presence marks a complete run directory); a previous collect's
+    summary.json goes first. scene.toml stays as it is (the same text)."""
+    for stale in d.glob(".collect-*"):  # left by a killed collect
+        pid = stale.name.rsplit("-", 1)[-1]
+        if pid.isdigit() and not pid_alive(int(pid)):
+            shutil.rmtree(stale, ignore_errors=True)
+    tmp = d / f".collect-{os.getpid()}"
+    shutil.rmtree(tmp, ignore_errors=True)
+    try:
+        write_run_dir(result, tmp)
+        made = sorted(p.name for p in tmp.iterdir() if p.name not in ("scene.toml", "summary.json"))
+        (d / "summary.json").unlink(missing_ok=True)
+        for name in made:
+            os.replace(tmp / name, d / name)
+        os.replace(tmp / "summary.json", d / "summary.json")
+    except OSError as e:
+        raise RunDirError(
+            f"{d}: could not write the run directory's files ({e}); no summary.json was written"
+        ) from None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+__all__ = ["CollectError", "CollectedRunResult", "collect", "read_log", "render_dir"]
