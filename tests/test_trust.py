@@ -14,10 +14,11 @@ from hypothesis import strategies as st
 
 from granchain.cli import main, resolve_scene
 from granchain.physics.contact import hertz_tangent_stiffness, unloading_stiffness
+from granchain.results import read_summary
 from granchain.scene import parse_scene
 from granchain.workflows import run as run_mod
-from granchain.workflows.plan import expected_peak_force, highest_frequency, plan_scene
-from granchain.workflows.run import AccuracyWarning, check_resources, plan_for, run_scene
+from granchain.workflows.plan import expected_peak_force, highest_frequency, peak_ratio, plan_scene
+from granchain.workflows.run import AccuracyWarning, PlanRefinedWarning, check_resources, plan_for, run_scene
 from tests.scenegen import scenes
 
 STEEL = """
@@ -57,7 +58,10 @@ def test_each_backend_runs_the_step_planned_for_its_own_integrator():
     assert lam.run.timestep < ref.run.timestep
     assert lam.run.timestep == plan_scene(sc, method="verlet").scene.run.timestep
     result = run_scene(sc, backend="lammps")
-    assert result.solution.timestep == lam.run.timestep
+    # the planned step, or a finer one when the first run's peaks fell below the force scale
+    # (test_refined_plan_meets_rtol_on_a_decaying_chain)
+    assert result.plan.method == "verlet"
+    assert result.solution.timestep == result.plan.scene.run.timestep <= lam.run.timestep
 
 
 def test_compare_prints_the_step_each_backend_ran(tmp_path, capsys):
@@ -65,10 +69,46 @@ def test_compare_prints_the_step_each_backend_ran(tmp_path, capsys):
     p.write_text(STEEL.format(beads=60))
     main(["compare", str(p), "--out", str(tmp_path / "c")])
     out = capsys.readouterr().out
-    lam = plan_for(parse_scene(p.read_text()), "lammps", None, 5e-4)[0].run.timestep
-    ref = plan_for(parse_scene(p.read_text()), "reference", "rk4", 5e-4)[0].run.timestep
-    assert f"lammps     verlet, dt = {lam:g} s" in out
-    assert f"reference  rk4, dt = {ref:g} s" in out
+    for backend, method in (("lammps", "verlet"), ("reference", "rk4")):
+        ran = read_summary(tmp_path / "c" / backend)["timestep"]
+        planned = plan_for(parse_scene(p.read_text()), backend, method, 5e-4)[0].run.timestep
+        assert ran <= planned  # planned for rtol / 2, or refined below it
+        assert f"{backend:10s} {method}, dt = {ran:g} s" in out
+
+
+@pytest.mark.slow
+def test_refined_plan_meets_rtol_on_a_decaying_chain():
+    """A bilinear steel chain whose front decays from 2.3 kN to 70 N by contact 186: the step planned
+    at the force scale left the small peaks 39 x rtol off a quarter step (LAMMPS, contact 185). The
+    run measures how far its peaks fell, is run again for rtol / that ratio, and then meets rtol on
+    every contact the wave has passed. The stop contact itself (186, whose peak is the top of a
+    plateau that ends where the run stops) still misses by 2.2 x: a known shortfall of issue 11,
+    reported in the note, not asserted away."""
+    sc = parse_scene(STEEL.format(beads=250).replace("histories = [1, 10, 30]", "histories = [1]"), source="steel.toml")
+    with pytest.warns(PlanRefinedWarning, match="running again"):
+        got = run_scene(sc, backend="lammps", rtol=1e-3)
+    plan = got.plan
+    first = plan_for(sc, "lammps", None, 1e-3)[0].run.timestep
+    assert got.solution.timestep < first / 4
+    assert "refined after a first run" in next(c.reason for c in plan.choices if c.name == "timestep")
+    s = plan.scene
+    fine = run_scene(replace(s, run=replace(s.run, timestep=s.run.timestep / 4)), backend="lammps").solution
+    last = s.window[1] - 1  # the contacts before the stop contact
+    ok = got.solution.complete[:last] & fine.complete[:last]
+    assert ok.sum() > last // 2
+    assert peak_ratio(s, got.solution)[0] > 10  # the case this is about: peaks far below the scale
+    err = np.abs(got.solution.peak_force[:last][ok] / fine.peak_force[:last][ok] - 1)
+    assert err.max() <= 1e-3
+
+
+def test_no_refinement_when_the_peaks_stay_at_the_force_scale():
+    """An elastic chain keeps its solitary wave: one run, at the planned step."""
+    sc = resolve_scene("elastic-short-pulse")
+    sc = replace(sc, run=replace(sc.run, timestep=None, end_time=None), outputs=replace(sc.outputs, snapshots=()))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlanRefinedWarning)
+        got = run_scene(sc, backend="lammps", rtol=1e-3)
+    assert got.solution.timestep == plan_for(sc, "lammps", None, 1e-3)[0].run.timestep
 
 
 # ---------------------------------------------------------------- 2. every effect in omega_max

@@ -35,13 +35,15 @@ def compare_scene(
     # each backend runs the step planned for its own integrator; with timestep = "auto" each is
     # planned for half the compare tolerance, so that two runs each within it differ by less than it
     plan_rtol = rtol / 2 if scene.run.timestep is None else None
+    # (run_scene plans each one, and runs it again finer if its measured peaks fell far below the
+    # force scale: granchain.workflows.plan.refined_plan)
     lam_scene, _ = plan_for(scene, "lammps", None, plan_rtol)
-    ref_scene, _ = plan_for(reference_scene or scene, "reference", method, plan_rtol)
+    plan_for(reference_scene or scene, "reference", method, plan_rtol)  # a bad scene fails before any run
     check_resources(lam_scene, "lammps", np_)
-    lam = run_scene(lam_scene, backend="lammps", np_=np_, keep_files=True)
+    lam = run_scene(scene, backend="lammps", np_=np_, keep_files=True, rtol=plan_rtol)
     files, work = lam.extra.pop("_files"), lam.extra.pop("_work")
     try:
-        ref = run_scene(ref_scene, backend="reference", method=method)
+        ref = run_scene(reference_scene or scene, backend="reference", method=method, rtol=plan_rtol)
         rows = compare_runs(lam, ref, rtol)
         if out is not None:
             out = Path(out)

@@ -150,6 +150,30 @@ def timestep_warning(scene, method: str, rtol: float) -> str | None:
     )
 
 
+class PlanRefinedWarning(UserWarning):
+    """A planned run is run again at a finer step: its measured peaks fell far below its force scale
+    (granchain.workflows.plan.refined_plan says why)."""
+
+
+def _execute(scene, backend: str, method: str, np_: int):
+    """(result, LAMMPS work directory or None): one run of a concrete scene."""
+    if backend == "reference":
+        return run_reference(scene, method), None
+    from granchain.lammps.runner import run_lammps
+
+    with _with_fix(scene, "verlet"):
+        return run_lammps(scene, np_=np_)
+
+
+def _refined(given, plan, result):
+    """The refined plan when a planned run's peaks missed rtol by the error model (else None)."""
+    if plan is None:
+        return None
+    from granchain.workflows.plan import refined_plan
+
+    return refined_plan(given, plan, result.solution)
+
+
 class OutputSizeWarning(UserWarning):
     """The requested dumps or history files will be larger than OUTPUT_WARN_BYTES."""
 
@@ -244,6 +268,7 @@ def run_scene(
     """
     started = datetime.now(UTC)
     method = integrator(backend, method)
+    given = scene
     scene, plan = plan_for(scene, backend, method, rtol)
     check_resources(scene, backend, np_, oversubscribe)
     if out is not None:
@@ -257,17 +282,33 @@ def run_scene(
     msg = output_size_warning(scene)
     if msg:
         warnings.warn(msg, OutputSizeWarning, stacklevel=2)
+    result, work = _execute(scene, backend, method, np_)
+    refined = _refined(given, plan, result)
+    if refined is not None:  # the measured peaks were far below the force scale: run again, finer
+        from granchain.lammps.runner import cleanup
+
+        if work is not None:
+            cleanup(work)
+        plan = refined
+        scene = refined.scene
+        warnings.warn(
+            f"{scene.source}: running again at timestep = {scene.run.timestep:.4g} s: "
+            + "refined "
+            + next(c.reason for c in plan.choices if c.name == "timestep").split("; refined ", 1)[-1],
+            PlanRefinedWarning,
+            stacklevel=2,
+        )
+        msg = output_size_warning(scene)
+        if msg:
+            warnings.warn(msg, OutputSizeWarning, stacklevel=2)
+        result, work = _execute(scene, backend, method, np_)
+    result.plan, result.started_utc = plan, started
     if backend == "reference":
-        result = run_reference(scene, method)
-        result.plan, result.started_utc = plan, started
         if out is not None:
             write_run_dir(result, out, overwrite=overwrite)
         return result
-    from granchain.lammps.runner import cleanup, output_files, run_lammps
+    from granchain.lammps.runner import cleanup, output_files
 
-    with _with_fix(scene, "verlet"):
-        result, work = run_lammps(scene, np_=np_)
-    result.plan, result.started_utc = plan, started
     if keep_files:  # the caller writes the run directory later and removes the work directory
         result.extra["_files"] = output_files(work)
         result.extra["_work"] = work
