@@ -205,6 +205,17 @@ def test_a_cut_off_results_dump_is_refused(tmp_path):
     assert not (job / "summary.json").exists() and not (job / "peaks.csv").exists()
 
 
+def test_a_log_that_did_not_end_is_refused(tmp_path):
+    """A finished peaks.dump beside a log that did not end: LAMMPS still running, or an earlier run's results."""
+    job = render(tmp_path, "effect-wall")
+    assert lmp(job).returncode == 0
+    log = (job / "log.lammps").read_text()
+    (job / "log.lammps").write_text(log[: log.index("Total wall time")])
+    with pytest.raises(CollectError, match="did not finish: log.lammps does not end with LAMMPS's 'Total wall time'"):
+        collect(job)
+    assert not (job / "summary.json").exists()
+
+
 def test_a_run_lammps_stopped_names_the_invariant(tmp_path):
     scene = make_scene_text(beads=20, loading='kind = "velocity"\nvelocity = 1000.0', end_time=2e-5, timestep=1e-7)
     job = render(tmp_path, scene)

@@ -193,8 +193,15 @@ def _check_scene_matches_deck(d: Path, scene, deck: str) -> None:
 
 
 def _check_finished(d: Path, scene, log: LammpsLog | None) -> None:
-    if (d / RESULTS_DUMP).is_file() and (d / RUN_END_FILE).is_file():
-        return
+    missing = [f for f in (RUN_END_FILE, RESULTS_DUMP) if not (d / f).is_file()]
+    if not missing:
+        if log is None or log.total_wall_time is not None:
+            return
+        raise CollectError(
+            f"{d}: the LAMMPS run did not finish: {LOG_FILE} does not end with LAMMPS's 'Total wall time' (LAMMPS "
+            f"is still running, or was stopped; the {RESULTS_DUMP} here may be an earlier run's). Last lines of "
+            f"{LOG_FILE}:\n{log.tail()}"
+        )
     if log is None:
         raise CollectError(
             f"{d}: LAMMPS has not run here (no {LOG_FILE}, no {RESULTS_DUMP}); run 'lmp -in deck.lmp' "
@@ -209,8 +216,8 @@ def _check_finished(d: Path, scene, log: LammpsLog | None) -> None:
     elif "ERROR" in log.tail(40):
         why = " LAMMPS stopped with an error (below)."
     raise CollectError(
-        f"{d}: the LAMMPS run did not finish: there is no {RESULTS_DUMP}, which the deck writes as its last "
-        f"file.{why} Last lines of {LOG_FILE}:\n{log.tail()}"
+        f"{d}: the LAMMPS run did not finish: there is no {' and no '.join(missing)}, which the deck writes at "
+        f"its very end.{why} Last lines of {LOG_FILE}:\n{log.tail()}"
     )
 
 
