@@ -225,11 +225,12 @@ def cmd_render(args) -> int:
 
     if args.out and args.data:
         raise UsageError("--data prints chain.data; --out writes it (with the deck and the scene): give one of them")
-    scene, plan = planned(resolve_scene(args.scene), None, "lammps", None)
+    given = resolve_scene(args.scene)
+    scene, plan = planned(given, None, "lammps", None)
     if args.out:
         from granchain.lammps.collect import render_dir
 
-        out = render_dir(scene, args.out, plan)
+        out = render_dir(scene, args.out, plan, given)
         print(f"deck directory: {out} ({', '.join(sorted(p.name for p in out.iterdir()))})")
         print(f"run it with plain LAMMPS:   cd {out} && lmp -in deck.lmp   (or: mpirun -np N lmp -in deck.lmp)")
         print(f"then make it a run directory: granchain collect {out}")

@@ -12,7 +12,7 @@ import pytest
 
 from granchain.cli import main
 from granchain.lammps.build import plugin_env
-from granchain.lammps.collect import CollectError, collect
+from granchain.lammps.collect import CollectError, NotRefinedWarning, collect
 from granchain.lammps.runner import read_results
 from granchain.results import read_peaks, read_summary
 from granchain.templates import RESULT_COLUMNS, RESULTS_DUMP
@@ -37,6 +37,31 @@ STRIKER_WALL = (
 
 #: a run that [run] stop_after_contact ends early (LAMMPS's halt skips the remaining run commands)
 STOPPED = make_scene_text(beads=60, end_time=4e-4, timestep=2e-8).replace("[run]\n", "[run]\nstop_after_contact = 20\n")
+
+
+#: a bilinear steel chain whose front decays far below the force scale (as tests/test_trust.py's STEEL)
+STEEL_DECAYING = """
+[chain]
+beads = 60
+radius = 4.76e-3
+[chain.material]
+density = 7850
+youngs_modulus = 200e9
+poisson_ratio = 0.3
+yield_strength = 1e9
+[contact]
+law = "bilinear"
+unloading_coeff = 0.6
+[loading]
+kind = "step"
+amplitude = 2000.0
+duration = 5e-5
+[run]
+timestep = "auto"
+end_time = "auto"
+[outputs]
+histories = [1, 10, 30]
+"""
 
 
 def scene_arg(tmp_path: Path, scene: str) -> str:
@@ -115,6 +140,7 @@ def test_collected_plain_lammps_run_equals_granchain_run(tmp_path, scene, capsys
     assert prov["lammps"]["ranks"] == prov["collected"]["ranks"] == 1
     assert prov["scene"]["sha256"] == run_prov["scene"]["sha256"]
     assert prov["plan"] == run_prov["plan"]  # the planner's choices, through plan.json
+    assert prov["collected"]["not_refined"] is None  # granchain run ran it once too
     assert "collected" not in run_prov
 
 
@@ -158,6 +184,21 @@ def test_mpirun_np2_collects_to_the_serial_run(tmp_path):
     assert_same_run(job, ref, rtol=1e-9)
     prov = read_summary(job)["provenance"]
     assert prov["lammps"]["ranks"] == prov["collected"]["ranks"] == 2
+
+
+def test_collect_warns_where_granchain_run_would_refine_the_step(tmp_path, capsys):
+    """granchain run runs a planned scene again at a finer step when its peaks fall far below the force
+    scale (workflows.plan.refined_plan); a plain-LAMMPS run ran once: collect says so, and how to match."""
+    job = render(tmp_path, STEEL_DECAYING)
+    assert "scene_as_given" in json.loads((job / "plan.json").read_text())
+    assert lmp(job).returncode == 0
+    with pytest.warns(NotRefinedWarning, match=r"granchain run would run this scene again at timestep = \S+ s"):
+        result = collect(job)
+    refined = result.summary()["provenance"]["collected"]["not_refined"]
+    assert refined["timestep"] < result.solution.timestep
+    assert main(["collect", str(job)]) == 0  # a warning, on one line, not an error
+    assert "granchain: warning:" in capsys.readouterr().err
+    assert read_summary(job)["provenance"]["collected"]["not_refined"] == refined
 
 
 # ------------------------------------------------------------------------------------- refusals

@@ -47,6 +47,11 @@ class CollectError(GranchainError, RuntimeError):
     """A directory that granchain collect cannot turn into a run directory; the message says why and what to do."""
 
 
+class NotRefinedWarning(UserWarning):
+    """granchain run would have run this planned scene again at a finer step (workflows.plan.refined_plan);
+    the plain-LAMMPS run was run once, at the step planned before any run."""
+
+
 def scene_file_text(scene) -> str:
     """scene.toml as a run directory holds it (results.write_run_dir): the file's own text, or the
     canonical TOML of a planned scene."""
@@ -81,10 +86,12 @@ def plan_from_dict(data: dict | None, scene):
     )
 
 
-def render_dir(scene, out: str | Path, plan=None) -> Path:
+def render_dir(scene, out: str | Path, plan=None, given=None) -> Path:
     """Write a directory that plain LAMMPS runs as it is (`lmp -in deck.lmp` inside it): deck.lmp,
-    chain.data, scene.toml (the scene as run) and, when the scene was planned, plan.json. The scene
-    must be concrete (planned). out must not exist; the directory appears complete or not at all."""
+    chain.data, scene.toml (the scene as run) and, when the scene was planned, plan.json (the plan,
+    and the scene as given, with its "auto" values: collect checks whether granchain run would have
+    refined the step). The scene must be concrete (planned). out must not exist; the directory
+    appears complete or not at all."""
     out = Path(out)
     if out.exists() or out.is_symlink():
         raise RunDirError(f"{out}: already exists; granchain render --out writes a new directory: choose another")
@@ -102,7 +109,10 @@ def render_dir(scene, out: str | Path, plan=None) -> Path:
         (tmp / "chain.data").write_text(deck.data)
         (tmp / "scene.toml").write_text(scene_file_text(scene))
         if plan is not None:
-            (tmp / PLAN_FILE).write_text(json.dumps(plan_to_dict(plan), indent=2) + "\n")
+            record = plan_to_dict(plan)
+            if given is not None:
+                record["scene_as_given"] = scene_file_text(given)
+            (tmp / PLAN_FILE).write_text(json.dumps(record, indent=2) + "\n")
         os.replace(tmp, out)
     except OSError as e:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -247,10 +257,11 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
             f"{d}: the run finished but left no {LOG_FILE}; collect reads LAMMPS's version, ranks and wall "
             "time from it: run the deck with LAMMPS's default log ('lmp -in deck.lmp'), or copy log.lammps back"
         )
-    plan = None
+    plan = plan_record = None
     if (d / PLAN_FILE).is_file():
         try:
-            plan = plan_from_dict(json.loads((d / PLAN_FILE).read_text()), scene)
+            plan_record = json.loads((d / PLAN_FILE).read_text())
+            plan = plan_from_dict(plan_record, scene)
         except (ValueError, KeyError, TypeError) as e:
             raise CollectError(f"{d / PLAN_FILE}: is not the plan 'granchain render --out' wrote ({e})") from None
     extra = {
@@ -267,6 +278,7 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
             f"{d}: the LAMMPS run's results cannot be read: {e}. Last lines of {LOG_FILE}:\n{log.tail()}"
         ) from None
     rendered = _RENDERED_BY.search(deck)
+    refinement = _refinement(d, plan_record, plan, base)
     result = CollectedRunResult(
         scene=base.scene,
         backend=base.backend,
@@ -288,6 +300,7 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
             f"{RESULTS_DUMP}; started_utc: estimated from them",
             "not_recorded": "the LAMMPS run's command line and host: command, cwd and host are granchain "
             "collect's, and lammps.plugin is this machine's plugin",
+            "not_refined": refinement,
         },
     )
     if out is not None:
@@ -295,6 +308,34 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
     else:
         _write_in_place(result, d)
     return result
+
+
+def _refinement(d: Path, record: dict | None, plan, result) -> dict | None:
+    """Whether granchain run would have run this planned scene again at a finer step (its measured
+    peaks fell far below the force scale: workflows.plan.refined_plan); then a NotRefinedWarning and
+    {"timestep", "reason"} for the provenance. A plain-LAMMPS run is run once."""
+    if plan is None or not record or not record.get("scene_as_given"):
+        return None
+    import warnings
+
+    from granchain.scene import parse_scene
+    from granchain.workflows.plan import refined_plan
+
+    given = parse_scene(record["scene_as_given"], source=f"{d / PLAN_FILE} (scene as given)")
+    refined = refined_plan(given, plan, result.solution)
+    if refined is None:
+        return None
+    dt = refined.scene.run.timestep
+    reason = next(c.reason for c in refined.choices if c.name == "timestep")
+    warnings.warn(
+        f"{d}: granchain run would run this scene again at timestep = {dt:.4g} s ("
+        + reason.split("; refined ", 1)[-1]
+        + f"); this plain-LAMMPS run ran once at {plan.scene.run.timestep:.4g} s: for granchain run's accuracy "
+        f"set [run] timestep = {dt:.4g} in the scene, render it again and run that deck",
+        NotRefinedWarning,
+        stacklevel=3,
+    )
+    return {"timestep": dt, "reason": reason}
 
 
 def _write_in_place(result: RunResult, d: Path) -> None:
@@ -322,4 +363,4 @@ def _write_in_place(result: RunResult, d: Path) -> None:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-__all__ = ["CollectError", "CollectedRunResult", "collect", "read_log", "render_dir"]
+__all__ = ["CollectError", "CollectedRunResult", "NotRefinedWarning", "collect", "read_log", "render_dir"]
