@@ -74,9 +74,9 @@ PEAK_PASSED_FRACTION = 0.5
 
 
 #: A leading pulse must rise above this fraction of the planner's largest expected force. Ahead of a
-#: front, dispersive precursors make maxima that also fall by half: on a 500-bead steel bilinear chain
-#: (2 kN step) they reached 1e-5 N, 3e-9 of the expected 3.4 kN, 0.6 ms before the 50 N front, and
-#: taken as the first maximum they moved the wave speed by 3% between two time steps. Leading pulses
+#: front, dispersive precursors make maxima: on a 500-bead steel bilinear chain (2 kN step) they
+#: reached 1e-5 N, 3e-9 of the expected 3.4 kN, 0.6 ms before the 50 N front, and taken as the first
+#: maximum they moved the wave speed by 3% between two time steps. Leading pulses
 #: decay along a chain by far less than 1e6 (the same chain: 46x over 374 contacts); one that decays
 #: more is reported as not measured, with the reason.
 LEAD_FRACTION = 1e-6
@@ -87,16 +87,16 @@ def leading_pulse(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The leading pulse of each contact, read back from a backend's frozen values (0: none yet).
 
-    Definition (docs/observables.md): the first maximum of a contact's force, i.e. its running peak
-    as it stands at the first check (every STOP_CHECK_EVERY steps, the same steps in both backends)
-    where the force has fallen to PEAK_PASSED_FRACTION of that
-    peak's rise above the static force F0 (the first moment the contact is complete, complete_peaks),
-    frozen from then on; only a rise above LEAD_FRACTION of the largest expected force counts. In a
-    forming wave train this is the first pulse, whatever larger pulses follow: the largest peak jumps
-    between pulses as the time step changes, the first one does not. Its time is the front's arrival
-    at the contact. Measured limits (docs/observables.md): a smaller drop (1%) picks wiggles on the
-    rise whose dips are borderline; where pulses merge into a plateau whose oscillations do not
-    converge, the first half-drop can still fall on different pulses at different time steps.
+    Definition (docs/observables.md): the first maximum of a contact's force whose rise above the
+    static force F0 exceeds LEAD_FRACTION of the largest expected force, frozen from then on: the
+    first sample above both neighbours, refined by the vertex of the parabola through the three (as
+    the running peak), in both backends at every step (RK4: the first maximum of the overlap inside a
+    step, on its Hermite interpolant, and the force there). Its time is the front's arrival at the
+    contact. In a forming wave train this is the first pulse, whatever larger pulses follow; on a
+    front that rises to a plateau it is the plateau's first overshoot, not the largest of the
+    oscillations that follow (those do not converge with the time step: docs/observables.md).
+    Measured limit: a shoulder on the rise whose slope only just turns negative is a maximum at one
+    time step and not at another.
     """
     flead = np.asarray(flead, dtype=float)
     done = flead > 0.0

@@ -64,18 +64,14 @@ void PairChain::settings(int narg, char **arg)
       if (gamma < 0.0)
         error->all(FLERR, "pair_style {} dashpot gamma must be >= 0, got {}", force->pair_style, gamma);
       i += 2;
-    } else if (strcmp(arg[i], "lead") == 0 && i + 4 < narg) {
+    } else if (strcmp(arg[i], "lead") == 0 && i + 2 < narg) {
       lead = true;
       lead_floor = utils::numeric(FLERR, arg[i + 1], false, lmp);
       lead_f0 = utils::numeric(FLERR, arg[i + 2], false, lmp);
-      lead_fraction = utils::numeric(FLERR, arg[i + 3], false, lmp);
-      lead_every = utils::inumeric(FLERR, arg[i + 4], false, lmp);
-      if (lead_floor <= 0.0 || lead_fraction <= 0.0 || lead_fraction >= 1.0 || lead_every < 1)
-        error->all(FLERR, "pair_style {} lead needs floor > 0, 0 < fraction < 1, every >= 1", force->pair_style);
-      i += 5;
+      if (lead_floor <= 0.0) error->all(FLERR, "pair_style {} lead needs floor > 0", force->pair_style);
+      i += 3;
     } else {
-      error->all(FLERR, "Illegal pair_style {} command: expected [dashpot gamma] [lead floor F0 fraction every]",
-                 force->pair_style);
+      error->all(FLERR, "Illegal pair_style {} command: expected [dashpot gamma] [lead floor F0]", force->pair_style);
     }
   }
 }
@@ -260,6 +256,8 @@ void PairChain::compute(int eflag, int vflag)
   const bool refine = new_sample && std::isfinite(t_fprev2);
   const double a = t_fprev2 - t_fprev, b = t_fc - t_fprev;    // sample times relative to the middle one
   const double det = a * b * (b - a);
+  double *flead = lead ? custom("flead") : nullptr;
+  double *tlead = lead ? custom("tlead") : nullptr;
   for (int i = 0; i < nlocal; i++) {
     fmin[i] = MIN(fmin[i], fc[i]);
     if (fc[i] > fpeak[i]) {
@@ -268,31 +266,27 @@ void PairChain::compute(int eflag, int vflag)
       fmin[i] = fc[i];
     }
     if (!refine || !(fprev[i] > fc[i]) || !(fprev[i] >= fprev2[i]) || !(fprev[i] > 0.0)) continue;
+    // the middle sample is a local maximum: its value is the vertex of the parabola through the
+    // three samples where that opens downwards, else the sample itself
     const double fa = fprev2[i] - fprev[i], fb = fc[i] - fprev[i];
     const double c1 = (fa * b * b - fb * a * a) / det;
     const double c2 = (a * fb - b * fa) / det;
-    if (!(c2 < 0.0)) continue;
-    const double s = MIN(MAX(-c1 / (2.0 * c2), a), b);
-    const double val = fprev[i] + (c1 + c2 * s) * s;
-    if (val > fpeak[i]) {
-      fpeak[i] = val;
-      tpeak[i] = t_fprev + s;
-      fmin[i] = fc[i];    // the refined peak lies before this sample
-    }
-  }
-  // the leading pulse: a contact's peak as it stands when the contact first completes (its force
-  // falls to fraction x the peak above F0, granchain.results.complete_peaks), frozen from then on;
-  // flead = 0 until then (a frozen value exceeds F0 + floor > 0)
-  // checked every lead_every steps, at the steps the reference checks (its step count is ntimestep)
-  if (lead && new_sample && update->ntimestep % lead_every == 0) {
-    double *flead = custom("flead");
-    double *tlead = custom("tlead");
-    for (int i = 0; i < nlocal; i++) {
-      const double rise = fpeak[i] - lead_f0;
-      if (flead[i] == 0.0 && rise > lead_floor && fmin[i] - lead_f0 <= lead_fraction * rise) {
-        flead[i] = fpeak[i];
-        tlead[i] = tpeak[i];
+    if (c2 < 0.0) {
+      const double s = MIN(MAX(-c1 / (2.0 * c2), a), b);
+      const double val = fprev[i] + (c1 + c2 * s) * s;
+      if (val > fpeak[i]) {
+        fpeak[i] = val;
+        tpeak[i] = t_fprev + s;
+        fmin[i] = fc[i];    // the refined peak lies before this sample
       }
+    }
+    // the leading pulse (granchain.results.leading_pulse): the first maximum of the contact's
+    // force rising more than lead_floor above F0, frozen; flead = 0 until then (a frozen value
+    // exceeds F0 + floor > 0). At the first maximum the running peak is that maximum (before it
+    // the force only rose), refined as above
+    if (lead && flead[i] == 0.0 && fpeak[i] - lead_f0 > lead_floor) {
+      flead[i] = fpeak[i];
+      tlead[i] = tpeak[i];
     }
   }
   if (vflag_fdotr) virial_fdotr_compute();

@@ -8,8 +8,7 @@
  *   pair_style chain/<law> dashpot gamma   adds gamma * d(alpha)/dt while beads overlap (the total
  *                                never pulls); needs 'comm_modify vel yes' and the vector d_edash,
  *                                the dashpot energy of each contact so far
- *   pair_style chain/<law> lead floor F0 fraction every   tracks the leading pulse (d_flead, d_tlead),
- *                                checked every `every` steps (ntimestep % every == 0)
+ *   pair_style chain/<law> lead floor F0   tracks the leading pulse (d_flead, d_tlead)
  *   pair_coeff I J k d0 [beta]   k in N/m^1.5 (hertz) or N/m (bilinear), d0 = contact distance
  *                                (R_I + R_J), beta the unloading coefficient (bilinear only).
  *
@@ -22,9 +21,9 @@
  *   d_fmin   smallest force sample since the peak (restarted by every new peak): the peak is complete
  *            once it has fallen far enough (granchain.results.complete_peaks)
  *   d_amax   largest overlap so far (bilinear history), d_edis  energy dissipated so far (bilinear)
- *   d_flead, d_tlead   (with 'lead floor F0 fraction') the leading pulse: the peak and its time as
- *            they stand when the contact first completes (d_fmin - F0 <= fraction (d_fpeak - F0),
- *            with d_fpeak - F0 > floor, checked every `every` steps), frozen from then on; 0 until then
+ *   d_flead, d_tlead   (with 'lead floor F0') the leading pulse: the first maximum of the contact's
+ *            force (a sample above both neighbours, refined like the peak) that rises more than
+ *            floor above F0, and its time, frozen from then on; 0 until then
  * Requires newton_pair off: a pair that straddles two ranks is computed on both, so the rank that
  * owns bead i always writes bead i's data itself; alpha_max reaches ghost copies by forward comm.
  */
@@ -52,9 +51,8 @@ class PairChain : public Pair {
  protected:
   bool bilinear;
   double gamma;    // dashpot coefficient, 0: none
-  bool lead;       // track the leading pulse (d_flead, d_tlead): pair_style ... lead floor F0 fraction
-  double lead_floor = 0.0, lead_f0 = 0.0, lead_fraction = 0.5;
-  bigint lead_every = 1;
+  bool lead;       // track the leading pulse (d_flead, d_tlead): pair_style ... lead floor F0
+  double lead_floor = 0.0, lead_f0 = 0.0;
   double **kcoeff, **d0, **beta;
   double t_fc, t_fprev, t_fprev2;    // times of the current and the two previous samples
   double *amax_comm;         // the d_amax vector during forward comm

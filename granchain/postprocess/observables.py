@@ -2,17 +2,18 @@
 
 A peak feeds an observable only once it has passed: the largest peak (max_peak_force) once it is
 complete (granchain.results.complete_peaks: the force has fallen to half of it since), the leading
-pulse once its maximum is behind it (granchain.results.leading_pulse). A contact the wave is still
+pulse once its first maximum is behind it (granchain.results.leading_pulse). A contact the wave is still
 passing at the end of the run holds a value that is still rising; it never feeds one.
 
 leading_peak_force: the leading pulse at the last contact of the measurement window (the wave has
     formed there and has not yet met the far end), in N and as F / (E* R*^2) (Eq. 5). The leading
     pulse is a contact's first maximum, not its largest (granchain.results.leading_pulse): in a
-    forming wave train the largest pulse, and the time it passes, jump between pulses as the time
-    step changes; the first does not.
+    forming wave train or behind a front that rises to a plateau, the largest pulse, and the time it
+    passes, jump between oscillations as the time step changes; the first does not
+    (docs/observables.md).
 wave_speed: the front's speed, D / (d t_arrival / d contact), a least-squares line through the
-    arrival times (the leading pulse's time) of the window's contacts whose leading pulse is
-    complete (wave_speed_contacts of them), with the slope's standard error propagated to the speed.
+    arrival times (the leading pulse's time) of the window's contacts that have a leading
+    pulse (wave_speed_contacts of them), with the slope's standard error propagated to the speed.
 max_peak_force: the largest complete peak (of any pulse), and its contact.
 Each is None where it cannot be measured (the window's last contact not reached or its peak not
 complete before the end of the run; fewer than three complete peaks in the window; no complete
@@ -57,14 +58,14 @@ def _why_not_complete(solution, contact: int) -> str:
 
 def _why_no_leading_pulse(solution, contact: int) -> str:
     """Why a 1-based contact has no leading pulse."""
-    from granchain.results import LEAD_FRACTION, PEAK_PASSED_FRACTION
+    from granchain.results import LEAD_FRACTION
 
     t = float(solution.time_of_peak[contact - 1])
     if not np.isfinite(t):
         return f"contact {contact} was not reached by the wave before the end of the run (t = {solution.end_time:g} s)"
     return (
-        f"contact {contact} has no leading pulse yet: its force has not fallen to {PEAK_PASSED_FRACTION:g} of a "
-        f"maximum above {LEAD_FRACTION:g} of the largest expected force (peak so far "
+        f"contact {contact} has no leading pulse yet: its force has not had a maximum rising above "
+        f"{LEAD_FRACTION:g} of the largest expected force (peak so far "
         f"{float(solution.peak_force[contact - 1]):.6g} N at t = {t:g} s, run ends at t = {solution.end_time:g} s); "
         "run longer"
     )

@@ -553,18 +553,27 @@ def _solve(
             amax[ix] = p[better]
             tmax[ix] = tp[better]
             amin[ix] = alpha_new[ix]  # the peak lies inside this step: only its end comes after it
+            first = ~lead_done[turning]
+            if first.any():
+                # the leading pulse: at a contact's first maximum, its running peak is that maximum
+                # (before it the overlap only rose; a maximum at a split step's end is the running
+                # peak already); the force there (F is monotone in the overlap at a fixed history);
+                # whole-chain evaluation: per-contact stiffness arrays broadcast only against those
+                f_at = np.asarray(law.force(np.maximum(amax, 0.0), alpha_hist), dtype=float)[turning]
+                freeze_leading(turning[first], f_at[first], tmax[turning][first])
         if bilinear and method == "rk4":
             np.maximum(alpha_hist, amax, out=alpha_hist)
         alpha_old, adot_old = alpha_new, adot_new
 
-    def freeze_leading(peak, force_min, time_of_peak) -> None:
-        """The leading pulse (results.leading_pulse): each contact's peak as it stands when the contact
-        first completes, frozen from then on (the pair styles' d_flead, d_tlead)."""
-        rise = peak - f0
-        now = ~lead_done & (rise > lead_floor) & (force_min - f0 <= PEAK_PASSED_FRACTION * rise)
+    def freeze_leading(ix, force, time) -> None:
+        """The leading pulse (results.leading_pulse): the first maximum of each contact's force that
+        rises more than lead_floor above F0, frozen from then on (the pair styles' d_flead, d_tlead).
+        ix: contacts at their first maximum now; force, time: that maximum (refined) and its time."""
+        now = force - f0 > lead_floor
         if now.any():
-            lead_f[now], lead_t[now] = peak[now], time_of_peak[now]
-            lead_done[now] = True
+            j = ix[now]
+            lead_f[j], lead_t[j] = force[now], time[now]
+            lead_done[j] = True
 
     # Verlet: the peak tracking of granchain's LAMMPS pair styles, so that the two agree step for
     # step: running maximum of the force samples at step ends, refined by the vertex of the
@@ -591,19 +600,26 @@ def _solve(
         ix = np.flatnonzero((f_prev > f_now) & (f_prev >= f_prev2) & (f_prev > 0.0))
         if ix.size == 0:
             return
+        # the middle sample is a local maximum: its value is the vertex of the parabola through the
+        # three samples where that opens downwards, else the sample itself (as the pair styles)
         a, b = t_prev2 - t_prev, t_now - t_prev
         det = a * b * (b - a)
         fa, fb = f_prev2[ix] - f_prev[ix], f_now[ix] - f_prev[ix]
         c1 = (fa * b * b - fb * a * a) / det
         c2 = (a * fb - b * fa) / det
         ok = c2 < 0.0
-        ix, c1, c2 = ix[ok], c1[ok], c2[ok]
-        sv = np.clip(-c1 / (2.0 * c2), a, b)
-        val = f_prev[ix] + (c1 + c2 * sv) * sv
-        better = val > fpk[ix]
+        sv = np.zeros(ix.size)
+        sv[ok] = np.clip(-c1[ok] / (2.0 * c2[ok]), a, b)
+        val = f_prev[ix].copy()
+        val[ok] += (c1[ok] + c2[ok] * sv[ok]) * sv[ok]
+        better = ok & (val > fpk[ix])
         fpk[ix[better]] = val[better]
         tpk[ix[better]] = t_prev + sv[better]
         fmin[ix[better]] = f_now[ix[better]]  # the refined peak lies before this sample
+        first = ~lead_done[ix]
+        if first.any():  # at a contact's first maximum its running peak is that maximum (as the pair styles)
+            j = ix[first]
+            freeze_leading(j, fpk[j], tpk[j])
 
     def wave_passed(c: int) -> bool:
         if method == "verlet":
@@ -692,13 +708,6 @@ def _solve(
             else:
                 track_peaks(t, t_new)
             t = t_new
-            if step % STOP_CHECK_EVERY == 0 and not lead_done.all():  # the pair styles' 'lead ... every'
-                if method == "verlet":
-                    freeze_leading(fpk, fmin, tpk)
-                else:
-                    peak = np.asarray(law.force_at_peak_overlap(amax), dtype=float)
-                    fmin_now = np.asarray(law.force(np.maximum(amin, 0.0), alpha_hist), dtype=float)
-                    freeze_leading(peak, fmin_now, tmax)
             if len(hist_idx) and step % history_stride == 0:
                 record_history(t)
             if step % energy_every == 0 and t < seg_end:

@@ -22,9 +22,6 @@ from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
 from granchain.reference.solver import STOP_CHECK_EVERY, step_plan
 from granchain.results import LEAD_FRACTION, PEAK_PASSED_FRACTION, REACHED_FRACTION, scene_hash
 
-#: steps between two checks of the leading pulse (the reference checks at the same steps)
-LEAD_CHECK_EVERY = STOP_CHECK_EVERY
-
 #: steps between two checks of the LAMMPS run watch (the reference checks every 20 steps as well)
 WATCH_EVERY = 20
 
@@ -43,7 +40,7 @@ RESULT_COLUMNS = (
     "d_fpeak",  # running peak force of the contact that lives on this atom (N)
     "d_tpeak",  # its time (s)
     "d_fmin",  # the smallest force since that peak (complete peaks)
-    "d_flead",  # the leading pulse: the peak as it stood when the contact first completed (N)
+    "d_flead",  # the leading pulse: the contact's first maximum above the floor (N)
     "d_tlead",  # its time (s)
     "d_amax",  # bilinear law: the largest overlap so far (m)
 )
@@ -395,8 +392,7 @@ def render_deck(scene) -> Deck:
         "results_file": RESULTS_DUMP,
         "scene_sha256": scene_hash(scene),
         # the leading pulse (results.leading_pulse): above the static force plus the reached floor
-        "pair_args": f" lead {lead_floor(scene)!r} {float(fx.precompression)!r} {PEAK_PASSED_FRACTION!r}"
-        f" {LEAD_CHECK_EVERY}"
+        "pair_args": f" lead {lead_floor(scene)!r} {float(fx.precompression)!r}"
         + (f" dashpot {fx.dashpot!r}" if fx.dashpot else ""),
         "pair_coeffs": coeffs,
         "dashpot": fx.dashpot,
