@@ -20,11 +20,17 @@ import sys, time
 sys.path.insert(0, sys.argv[1])
 from granchain.scene import parse_scene
 from granchain.reference.solver import ChainProblem, solve_chain
+import inspect
+from granchain.reference import solver
 sc = parse_scene(open(sys.argv[2]).read())
 p = ChainProblem.from_scene(sc)
 method, dt = sys.argv[3], float(sys.argv[4])
+kw = {}
+if "lead_floor" in inspect.signature(solver._solve).parameters:  # as a run passes it
+    from granchain.templates import lead_floor
+    kw["lead_floor"] = lead_floor(sc)
 t = time.perf_counter()
-solve_chain(p, 7e-4, dt, method)
+solve_chain(p, 7e-4, dt, method, **kw)
 print(time.perf_counter() - t)
 """
 

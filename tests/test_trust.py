@@ -111,6 +111,16 @@ def test_no_refinement_when_the_peaks_stay_at_the_force_scale():
     assert got.solution.timestep == plan_for(sc, "lammps", None, 1e-3)[0].run.timestep
 
 
+@pytest.mark.slow
+def test_compare_passes_on_the_issue_steel_scene(tmp_path):
+    """Issue 11's acceptance: `granchain compare` on the 500-bead steel scene, every value "auto",
+    passes at its default rtol (it failed with 6 FAILs, then 4, before the plan per integrator, the
+    refinement for peaks far below the force scale and the first-maximum leading pulse)."""
+    p = tmp_path / "steel.toml"
+    p.write_text(STEEL.format(beads=500).replace("histories = [1, 10, 30]", "histories = [1, 100, 300]"))
+    assert main(["compare", str(p), "--out", str(tmp_path / "c"), "--quiet"]) == 0
+
+
 # ---------------------------------------------------------------- 2. every effect in omega_max
 
 
