@@ -1,0 +1,152 @@
+"""Measured error bars: Richardson extrapolation over runs at dt, 2 dt and 4 dt.
+
+A run at time step dt is repeated at 2 dt and, where that is stable, at 4 dt (the same plan
+otherwise). For a quantity Q measured by all three, with an integrator of order p (RK4 4, velocity
+Verlet 2):
+
+    Q(dt) = Q* + C dt^p + ...   =>   error of Q(dt) ~ (Q(dt) - Q(2 dt)) / (2^p - 1)
+
+The third run checks the order: the observed order is log2((Q(2dt) - Q(4dt)) / (Q(dt) - Q(2dt))).
+Where it is within ORDER_SLACK of p the nominal order is used; where it is a clear, positive order
+of its own (at least 1) the observed order is used and the status says so; where the differences
+do not shrink (observed order below 1, or the differences change sign) the estimate is unreliable
+and no number is given. Without a 4 dt run (unstable) the nominal order is assumed, and the status
+says so.
+
+Other ways an estimate fails, each with its own status (never a small number in their place):
+- the peak is another pulse in a companion run: its time moved by more than half the shortest
+  period of the chain (pi / omega_max) between two runs;
+- round-off: the differences are below ROUNDOFF_ULPS units in the last place of the value (the
+  error is at most that, and is reported as that bound);
+- not measured: the quantity is missing (nan) in one of the runs (a peak not complete, a contact
+  not reached).
+
+Statuses (the `*_error_status` columns and summary entries):
+    "nominal order p"            Richardson with the integrator's order, confirmed by the 4 dt run
+    "observed order q"           the 4 dt run shows another clear order q, used instead
+    "order not checked"          no 4 dt run (it would be unstable): nominal order assumed
+    "round-off"                  differences at round-off: the error is at most the bound given
+    "unreliable: ..."            no estimate; the reason follows
+    "not measured: ..."          no estimate; the reason follows
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: the integrators' orders of accuracy
+ORDER = {"rk4": 4, "verlet": 2}
+#: an observed order within this of the nominal one confirms it
+ORDER_SLACK = 0.75
+#: an observed order below this is not convergence: the estimate is unreliable
+MIN_ORDER = 1.0
+#: differences below this many units in the last place of the value are round-off
+ROUNDOFF_ULPS = 64.0
+
+
+@dataclass
+class ErrorBars:
+    """Per-item error estimates of a quantity measured at dt (the run reported)."""
+
+    error: np.ndarray  # absolute error estimate of the value at dt; nan where there is none
+    status: np.ndarray  # object array of status strings (see the module docstring)
+    order: np.ndarray  # the order used (nan where none)
+
+    @property
+    def reliable(self) -> np.ndarray:
+        return np.isfinite(self.error)
+
+
+def richardson(
+    fine: np.ndarray,
+    coarse: np.ndarray,
+    coarser: np.ndarray | None,
+    order: int,
+    times: tuple[np.ndarray, np.ndarray, np.ndarray | None] | None = None,
+    jump_time: float | None = None,
+) -> ErrorBars:
+    """Error estimates of `fine` (the values at dt) from the same quantities at 2 dt and 4 dt.
+
+    Parameters
+    ----------
+    fine, coarse, coarser : array_like
+        The quantity at dt, 2 dt and 4 dt (coarser None: no 4 dt run, the order is not checked).
+        nan where a run did not measure it.
+    order : int
+        The integrator's order p.
+    times : tuple of arrays, optional
+        The times at which each run measured each item (a peak's time): an item whose time moved by
+        more than jump_time between two runs is another pulse there, and has no estimate.
+    jump_time : float, optional
+        See times (half the shortest period of the chain, pi / omega_max).
+
+    Returns
+    -------
+    ErrorBars
+    """
+    f = np.atleast_1d(np.asarray(fine, dtype=float))
+    c = np.atleast_1d(np.asarray(coarse, dtype=float))
+    cc = None if coarser is None else np.atleast_1d(np.asarray(coarser, dtype=float))
+    n = f.size
+    err = np.full(n, np.nan)
+    used = np.full(n, np.nan)
+    status = np.empty(n, dtype=object)
+    for i in range(n):
+        err[i], used[i], status[i] = _one(
+            f[i],
+            c[i],
+            None if cc is None else cc[i],
+            order,
+            None if times is None else tuple(None if t is None else float(np.atleast_1d(t)[i]) for t in times),
+            jump_time,
+        )
+    return ErrorBars(err, status, used)
+
+
+def _one(f, c, cc, p, times, jump_time):
+    if not (np.isfinite(f) and np.isfinite(c)):
+        return math.nan, math.nan, "not measured: missing in the run or its 2 dt companion"
+    if times is not None and jump_time is not None:
+        tf, tc, tcc = times
+        moved = [abs(a - b) for a, b in ((tf, tc), (tc, tcc)) if a is not None and b is not None]
+        if any(not np.isfinite(m) for m in moved):
+            return math.nan, math.nan, "not measured: missing in a companion run"
+        if any(m > jump_time for m in moved):
+            return (
+                math.nan,
+                math.nan,
+                "unreliable: another pulse in a companion run (its time moved by more than half the shortest period)",
+            )
+    d1 = f - c
+    ulp = ROUNDOFF_ULPS * np.spacing(max(abs(f), abs(c)))
+    if abs(d1) <= ulp:
+        return float(ulp), float(p), "round-off"
+    if cc is None:
+        return abs(d1) / (2.0**p - 1.0), float(p), "order not checked"
+    if not np.isfinite(cc):
+        return math.nan, math.nan, "not measured: missing in the 4 dt companion"
+    d2 = c - cc
+    if abs(d2) <= ulp:
+        # the coarser pair agrees to round-off but the finer does not: no convergence to speak of
+        return math.nan, math.nan, "unreliable: the differences do not shrink with the time step"
+    ratio = d2 / d1
+    if ratio <= 0.0:
+        return math.nan, math.nan, "unreliable: the differences change sign between the runs (not converging)"
+    q = math.log2(ratio)
+    if q < MIN_ORDER:
+        return math.nan, math.nan, f"unreliable: observed order {q:.2g} (< {MIN_ORDER:g}): not converging"
+    if abs(q - p) <= ORDER_SLACK:
+        return abs(d1) / (2.0**p - 1.0), float(p), f"nominal order {p}"
+    return abs(d1) / (2.0**q - 1.0), q, f"observed order {q:.2g}"
+
+
+def largest_relative(values: np.ndarray, bars: ErrorBars) -> float | None:
+    """The largest relative error over the items that have an estimate (None if none has)."""
+    v = np.asarray(values, dtype=float)
+    ok = bars.reliable & np.isfinite(v) & (v != 0)
+    if not ok.any():
+        return None
+    return float(np.max(bars.error[ok] / np.abs(v[ok])))

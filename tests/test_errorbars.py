@@ -1,0 +1,77 @@
+"""granchain.errorbars: Richardson error estimates and their failure modes, on synthetic sequences."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from granchain.errorbars import ORDER, ORDER_SLACK, richardson
+
+values = st.floats(min_value=1e-3, max_value=1e6)
+rel_errors = st.floats(min_value=1e-9, max_value=1e-2)
+
+
+@given(q_true=values, rel=rel_errors, p=st.sampled_from(sorted(ORDER.values())), sign=st.sampled_from([-1.0, 1.0]))
+def test_a_clean_order_p_sequence_gives_its_exact_error(q_true, rel, p, sign):
+    """Q(h) = Q* + C h^p: the estimate of Q(dt)'s error is exactly C dt^p, with the nominal order."""
+    c = sign * rel * q_true
+    runs = [q_true + c * k**p for k in (1, 2, 4)]
+    bars = richardson([runs[0]], [runs[1]], [runs[2]], p)
+    assert bars.status[0] == f"nominal order {p}"
+    assert bars.error[0] == pytest.approx(abs(c), rel=1e-6)
+
+
+@given(q_true=values, rel=rel_errors, p=st.sampled_from([2, 4]), q=st.floats(min_value=1.05, max_value=6.0))
+def test_another_clear_order_is_observed_and_said(q_true, rel, p, q):
+    """A sequence of order q != p: the estimate uses q where it differs clearly, and says so."""
+    c = rel * q_true
+    runs = [q_true + c * k**q for k in (1, 2, 4)]
+    bars = richardson([runs[0]], [runs[1]], [runs[2]], p)
+    if abs(q - p) > ORDER_SLACK + 1e-6:
+        assert bars.status[0].startswith("observed order")
+        assert bars.order[0] == pytest.approx(q, rel=1e-6)
+        assert bars.error[0] == pytest.approx(c, rel=1e-6)
+    elif abs(q - p) < ORDER_SLACK - 1e-6:
+        assert bars.status[0] == f"nominal order {p}"
+
+
+@given(q_true=values, rel=rel_errors, p=st.sampled_from([2, 4]))
+def test_differences_that_change_sign_or_do_not_shrink_are_unreliable(q_true, rel, p):
+    c = rel * q_true
+    wobble = [q_true + c, q_true - c, q_true + c]  # changes sign
+    flat = [q_true + c, q_true + 1.5 * c, q_true + 2.2 * c]  # shrinks at order < 1
+    for runs in (wobble, flat):
+        bars = richardson([runs[0]], [runs[1]], [runs[2]], p)
+        assert bars.status[0].startswith("unreliable")
+        assert math.isnan(bars.error[0])
+
+
+def test_a_peak_that_jumps_to_another_pulse_has_no_estimate():
+    f = np.array([10.0, 10.0])
+    c = np.array([10.003, 10.003])  # Q* + C h^2 with C = 0.001
+    cc = np.array([10.015, 10.015])
+    t = (np.array([1.0, 1.0]), np.array([1.0, 1.3]), np.array([1.0, 1.3]))
+    bars = richardson(f, c, cc, 2, times=t, jump_time=0.1)
+    assert bars.status[0].startswith("nominal") and np.isfinite(bars.error[0])
+    assert bars.status[1].startswith("unreliable: another pulse") and math.isnan(bars.error[1])
+
+
+def test_round_off_is_a_bound_not_a_small_number():
+    x = 1234.5
+    bars = richardson([x], [np.nextafter(x, 2 * x)], [x], 4)
+    assert bars.status[0] == "round-off"
+    assert bars.error[0] >= np.spacing(x)
+
+
+def test_without_a_4dt_run_the_order_is_assumed_and_said():
+    bars = richardson([1.0], [1.003], None, 2)
+    assert bars.status[0] == "order not checked"
+    assert bars.error[0] == pytest.approx(0.001)
+
+
+def test_missing_values_are_not_measured():
+    bars = richardson([np.nan, 1.0], [1.0, np.nan], [1.0, 1.0], 2)
+    assert all(s.startswith("not measured") for s in bars.status)
+    assert np.all(np.isnan(bars.error))
