@@ -10,13 +10,15 @@ The public API is small::
     result.peak_table["peak_force"], result.summary()["observables"]
 
 Every error a user can cause is a :class:`GranchainError`.
+
+This package root is the public API's facade: it sits above every layer (it imports the workflows,
+lazily) and no module of granchain imports it (pyproject.toml, [tool.importlinter]).
 """
 
 from __future__ import annotations
 
+from granchain._version import __version__
 from granchain.errors import GranchainError
-
-__version__ = "0.1.0"
 
 __all__ = ["GranchainError", "__version__", "load_scene", "plan", "run"]
 

@@ -189,7 +189,7 @@ def cmd_compare(args) -> int:
 
 
 def cmd_plot(args) -> int:
-    from granchain.postprocess.plots import is_compare_dir, plot_compare, plot_run
+    from granchain.workflows.plots import is_compare_dir, plot_compare, plot_run
 
     skipped: dict[str, str] = {}
     try:
@@ -228,7 +228,7 @@ def cmd_render(args) -> int:
     given = resolve_scene(args.scene)
     scene, plan = planned(given, None, "lammps", None)
     if args.out:
-        from granchain.lammps.collect import render_dir
+        from granchain.workflows.collect import render_dir
 
         out = render_dir(scene, args.out, plan, given)
         print(f"deck directory: {out} ({', '.join(sorted(p.name for p in out.iterdir()))})")
@@ -241,7 +241,7 @@ def cmd_render(args) -> int:
 
 
 def cmd_collect(args) -> int:
-    from granchain.lammps.collect import collect
+    from granchain.workflows.collect import collect
 
     result = collect(args.run_dir, out=args.out, overwrite=args.overwrite)
     print_result(result, args.out or args.run_dir)

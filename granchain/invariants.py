@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from granchain.errors import GranchainError
+from granchain.schedule import step_plan, step_times
 
 ENERGY_WATCH = 0.05
 MOMENTUM_WATCH = 1e-6
@@ -85,8 +86,6 @@ def check_solution(scene, sol, steps: int | None = None) -> None:
     for k in range(len(e)):
         detail = energy_violation(float(e[k]), float(put_in[k]))
         if detail:
-            from granchain.reference.solver import step_plan, step_times
-
             t = float(sol.energy_time[k])
             ld = scene.loading
             grid = step_times(

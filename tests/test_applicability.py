@@ -13,12 +13,12 @@ from hypothesis import strategies as st
 from granchain.cli import bundled_scenes, main
 from granchain.physics import models
 from granchain.physics.predictions import MODEL_DOMAINS, SCENE_QUANTITIES, applicability, predict
+from granchain.physics.regimes import HERTZ_LONG_ABOVE, HERTZ_SHORT_BELOW, loading_regime
 from granchain.postprocess.compare import CompareRow, compare_runs, format_table
-from granchain.postprocess.plots import model_curves
-from granchain.postprocess.regimes import HERTZ_LONG_ABOVE, HERTZ_SHORT_BELOW, loading_regime
 from granchain.results import ChainSolution, RunResult
 from granchain.scene import SceneError, parse_scene, scene_from_dict
 from granchain.workflows.plan import plan_scene
+from granchain.workflows.plots import model_curves
 from granchain.workflows.run import run_scene
 
 from .conftest import make_scene_text

@@ -12,10 +12,10 @@ import pytest
 
 from granchain.cli import main
 from granchain.lammps.build import plugin_env
-from granchain.lammps.collect import CollectError, NotRefinedWarning, collect
 from granchain.lammps.runner import read_results
 from granchain.results import read_peaks, read_summary
 from granchain.templates import RESULT_COLUMNS, RESULTS_DUMP
+from granchain.workflows.collect import CollectError, NotRefinedWarning, collect
 
 from .conftest import BILINEAR, make_scene_text
 

@@ -1,7 +1,7 @@
 """Complete peaks (issue 11, defect 3) and the end-of-run state in the summary (defect 6).
 
 A contact's peak is complete once its force has fallen to PEAK_PASSED_FRACTION of the peak (both
-above the static force) at some sample after the peak (granchain.results.complete_peaks). A peak
+above the static force) at some sample after the peak (granchain.peaks.complete_peaks). A peak
 that is not complete is marked so in the solution, peaks.csv and summary.json and never feeds an
 observable. The summary's energies are those of the end of the run, not of the last periodic
 energy sample.
@@ -15,11 +15,12 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from granchain.cli import resolve_scene
+from granchain.peaks import PEAK_PASSED_FRACTION, complete_peaks
 from granchain.postprocess.compare import compare_runs
 from granchain.postprocess.dumps import complete_from_samples
 from granchain.postprocess.observables import fit_wave_speed, measure_observables
 from granchain.reference.solver import ChainProblem, solve_chain
-from granchain.results import PEAK_PASSED_FRACTION, complete_peaks, read_peaks, read_summary
+from granchain.results import read_peaks, read_summary
 from granchain.scene import parse_scene
 from granchain.workflows.run import run_reference, run_scene
 

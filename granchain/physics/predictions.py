@@ -10,7 +10,7 @@ from typing import NamedTuple
 
 from granchain.physics import models
 from granchain.physics.contact import dissipation_per_cycle
-from granchain.postprocess.regimes import loading_regime
+from granchain.physics.regimes import loading_regime
 
 
 @dataclass(frozen=True)
@@ -100,7 +100,7 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
     velocity of bead 1. A model applies when the scene has its contact law, uniform beads, no dashpot,
     no precompression, the paper's loading (a striker only as an equal-mass one, which hands bead 1
     its velocity) and the loading regime the model is for
-    (granchain.postprocess.regimes.loading_regime). A far-end wall leaves every model in force for
+    (granchain.physics.regimes.loading_regime). A far-end wall leaves every model in force for
     the incident wave, before the reflection reaches a contact. Given the measured `quantity` it is
     compared with, also whether the run measures what the model predicts (MEASURES_OTHER).
     """

@@ -142,7 +142,7 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
         ("max_peak_force", "N", oa["max_peak_force"], ob["max_peak_force"]),
         ("peak_force_contact_1", "N", peak(sa, 1), peak(sb, 1)),
         (f"peak_force_contact_{w0}", "N", peak(sa, w0), peak(sb, w0)),
-        # the front's arrival: the leading pulse's time (results.leading_pulse), not the largest peak's
+        # the front's arrival: the leading pulse's time (peaks.leading_pulse), not the largest peak's
         (
             f"arrival_time_contact_{w1}",
             "s",

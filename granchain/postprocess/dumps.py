@@ -10,7 +10,7 @@ MDAnalysis's LAMMPSDUMP reader has quirks; how each is handled here:
   ``compute displace/atom``). The float32 x/vx are ignored.
 - Time is step x the dt passed in; a granchain run shortens the step before each breakpoint (load
   end, snapshot), so time is not step x dt. We pass dt = 1 and map ``ts.data['step']`` to time with
-  the run's step plan (``granchain.reference.solver.step_times``).
+  the run's step plan (``granchain.schedule.step_times``).
 - Masses default to 1.0: never used (masses come from the scene).
 - ``dump_modify format float %.17g`` makes the text exact; ``sort id`` orders atoms by ID.
 - MDAnalysis cannot parse the optional ``ITEM: TIME`` header, so decks do not write it.
@@ -23,6 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from granchain.peaks import complete_peaks
 
 DUMP_COLUMNS = ("d_fc", "v_vel", "v_ux")
 
@@ -91,11 +93,9 @@ def complete_from_samples(
 ) -> np.ndarray:
     """Which contacts' peaks are complete, from force samples (frames, contacts), e.g. a dump or histories.
 
-    The smallest sample at or after each contact's time of peak, judged by granchain.results.complete_peaks
+    The smallest sample at or after each contact's time of peak, judged by granchain.peaks.complete_peaks
     (the definition the backends apply to their in-run minimum). Sampled every step, this is the in-run answer.
     """
-    from granchain.results import complete_peaks
-
     tp = np.asarray(time_of_peak, dtype=float)
     after = np.asarray(time, dtype=float)[:, None] >= np.where(np.isfinite(tp), tp, np.inf)[None, :]
     fmin = np.where(after, force, np.inf).min(axis=0, initial=np.inf)

@@ -1,13 +1,13 @@
 """Scalar observables of a run, measured the same way for every backend, from complete peaks only.
 
 A peak feeds an observable only once it has passed: the largest peak (max_peak_force) once it is
-complete (granchain.results.complete_peaks: the force has fallen to half of it since), the leading
-pulse once its first maximum is behind it (granchain.results.leading_pulse). A contact the wave is still
+complete (granchain.peaks.complete_peaks: the force has fallen to half of it since), the leading
+pulse once its first maximum is behind it (granchain.peaks.leading_pulse). A contact the wave is still
 passing at the end of the run holds a value that is still rising; it never feeds one.
 
 leading_peak_force: the leading pulse at the last contact of the measurement window (the wave has
     formed there and has not yet met the far end), in N and as F / (E* R*^2) (Eq. 5). The leading
-    pulse is a contact's first maximum, not its largest (granchain.results.leading_pulse): in a
+    pulse is a contact's first maximum, not its largest (granchain.peaks.leading_pulse): in a
     forming wave train or behind a front that rises to a plateau, the largest pulse, and the time it
     passes, jump between oscillations as the time step changes; the first does not
     (docs/observables.md).
@@ -23,6 +23,8 @@ peak at all); measure_observables says why in the dict passed as `missing`.
 from __future__ import annotations
 
 import numpy as np
+
+from granchain.peaks import LEAD_FRACTION, PEAK_PASSED_FRACTION
 
 
 def fit_wave_speed(contacts: np.ndarray, times: np.ndarray, diameter: float) -> tuple[float, float] | None:
@@ -44,8 +46,6 @@ def fit_wave_speed(contacts: np.ndarray, times: np.ndarray, diameter: float) -> 
 
 def _why_not_complete(solution, contact: int) -> str:
     """Why a 1-based contact's peak cannot be used."""
-    from granchain.results import PEAK_PASSED_FRACTION  # (results imports this module)
-
     t = float(solution.time_of_peak[contact - 1])
     if not np.isfinite(t):
         return f"contact {contact} was not reached by the wave before the end of the run (t = {solution.end_time:g} s)"
@@ -58,8 +58,6 @@ def _why_not_complete(solution, contact: int) -> str:
 
 def _why_no_leading_pulse(solution, contact: int) -> str:
     """Why a 1-based contact has no leading pulse."""
-    from granchain.results import LEAD_FRACTION
-
     t = float(solution.time_of_peak[contact - 1])
     if not np.isfinite(t):
         return f"contact {contact} was not reached by the wave before the end of the run (t = {solution.end_time:g} s)"

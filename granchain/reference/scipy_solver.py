@@ -10,9 +10,12 @@ import time
 
 import numpy as np
 
+from granchain.peaks import unreached_as_nan
 from granchain.physics.contact import HertzLaw
-from granchain.reference.solver import ChainProblem, _hermite_max, step_plan
-from granchain.results import ChainSolution, unreached_as_nan
+from granchain.problem import ChainProblem
+from granchain.reference.solver import _hermite_max
+from granchain.results import ChainSolution
+from granchain.schedule import step_plan
 
 
 def solve_chain_dop853(problem: ChainProblem, end_time: float, rtol: float, atol: float | None = None) -> ChainSolution:

@@ -30,125 +30,18 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
 from granchain.invariants import InvariantError, energy_violation, momentum_violation
-from granchain.physics.contact import BilinearLaw, HertzLaw
+from granchain.peaks import PEAK_PASSED_FRACTION, complete_peaks, unreached_as_nan
+from granchain.physics.contact import BilinearLaw
+from granchain.problem import ChainProblem, initial_state, moving_mass, state_energy
 from granchain.progress import Progress
-from granchain.results import PEAK_PASSED_FRACTION, ChainSolution, complete_peaks, unreached_as_nan
+from granchain.results import ChainSolution
+from granchain.schedule import STOP_CHECK_EVERY, step_plan
 
 METHODS = ("rk4", "verlet")
-STOP_CHECK_EVERY = 10  # steps between checks of a stop condition (the decks' fix halt uses the same)
-
-
-@dataclass(frozen=True)
-class ChainProblem:
-    """A chain of point masses joined by contact springs, loaded at bead 1."""
-
-    mass: np.ndarray  # (N,) kg
-    law: HertzLaw | BilinearLaw
-    amplitude: float = 0.0  # A, N
-    duration: float = 0.0  # T, s
-    initial_velocity: float = 0.0  # m/s of bead 1 at t = 0
-    wall_stiffness: float | None = None  # far end: None free, else bead N on a rigid flat (same law)
-    striker_mass: float | None = None  # a striker before bead 1 (moving at initial_velocity), or None
-    striker_stiffness: float | None = None  # its contact with bead 1
-    dashpot: float = 0.0  # gamma, N s/m, while beads overlap; the total force never pulls
-    precompression: float = 0.0  # F0, N: every contact starts in equilibrium at F0 (bead 1 pushed
-    # by F0; the far end held by the wall, or pulled by F0 on bead N when free)
-
-    @property
-    def beads(self) -> int:
-        return int(self.mass.shape[0])
-
-    @classmethod
-    def from_scene(cls, scene) -> ChainProblem:
-        n = scene.chain.beads
-        mass = scene.bead_masses if scene.per_bead else np.full(n, scene.mass)
-        k = scene.contact_stiffnesses if scene.per_bead else scene.stiffness
-        if scene.contact.law == "hertz":
-            law: HertzLaw | BilinearLaw = HertzLaw(k=k)
-        else:
-            law = BilinearLaw(k=k, beta=scene.contact.unloading_coeff)
-        ld = scene.loading
-        fx = scene.effects
-        extra = {
-            "wall_stiffness": scene.wall_stiffness if fx.far_end == "wall" else None,
-            "dashpot": fx.dashpot,
-            "precompression": fx.precompression,
-        }
-        if ld.kind == "striker":
-            extra.update(striker_mass=scene.striker_mass, striker_stiffness=scene.striker_stiffness)
-        if ld.is_force:
-            return cls(mass=mass, law=law, amplitude=ld.amplitude, duration=ld.duration, **extra)
-        return cls(mass=mass, law=law, initial_velocity=ld.velocity, **extra)
-
-
-def static_state(law, force: float, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Displacements (n,) and overlaps (n-1,) of a chain whose every contact carries `force` in static
-    equilibrium, the last bead (or wall) at u = 0: Hertz alpha0 = (F0/k)^(2/3), bilinear F0/k."""
-    k_c = np.broadcast_to(np.asarray(law.k, dtype=float), (n - 1,))
-    alpha0 = force / k_c if isinstance(law, BilinearLaw) else (force / k_c) ** (2.0 / 3.0)
-    u = np.zeros(n)
-    u[:-1] = np.cumsum(alpha0[::-1])[::-1]
-    return u, alpha0
-
-
-def precompressed_displacements(scene) -> tuple[np.ndarray, np.ndarray]:
-    """Static displacements of the scene's beads and overlaps of its contacts (the wall's last)."""
-    p = ChainProblem.from_scene(scene)
-    n = p.beads
-    k = np.broadcast_to(np.asarray(p.law.k, dtype=float), (n - 1,))
-    if p.wall_stiffness is not None:
-        k = np.append(k, p.wall_stiffness)
-        n += 1
-    law = HertzLaw(k=k) if isinstance(p.law, HertzLaw) else BilinearLaw(k=k, beta=p.law.beta)
-    u, alpha0 = static_state(law, p.precompression, n)
-    return u[: p.beads], alpha0
-
-
-@dataclass(frozen=True)
-class Segment:
-    """A stretch of the run between two breakpoints (load end, snapshot, end), in equal steps.
-
-    ``steps`` steps: all of length dt except the last, of length ``last`` (<= dt), which lands
-    exactly on ``end``. ``loaded``: the step load acts over the whole segment.
-    """
-
-    start: float
-    end: float
-    steps: int
-    last: float
-    loaded: bool
-
-
-def step_plan(end_time: float, dt: float, load_duration: float = 0.0, snapshots=()) -> list[Segment]:
-    """Split a run into segments so that T (if a load ends inside the run), every snapshot time and
-    the end time are step boundaries. Used by every backend, so their steps coincide."""
-    pts = {float(end_time)}
-    if 0.0 < load_duration < end_time:
-        pts.add(float(load_duration))
-    pts.update(float(s) for s in snapshots if 0.0 < s < end_time)
-    plan, start = [], 0.0
-    for bp in sorted(pts):
-        n = max(1, math.ceil((bp - start) / dt * (1.0 - 1e-12)))
-        last = (bp - start) - (n - 1) * dt
-        if abs(last - dt) <= 1e-9 * dt:  # a whole number of steps up to round-off: keep dt exactly
-            last = dt
-        plan.append(Segment(start, bp, n, last, load_duration > 0.0 and start < load_duration))
-        start = bp
-    return plan
-
-
-def step_times(plan: list[Segment], dt: float) -> np.ndarray:
-    """Time after every step of a plan, index = step number (0 = start): maps dump steps to times."""
-    times = [0.0]
-    for g in plan:
-        times.extend(g.start + (j + 1) * dt for j in range(g.steps - 1))
-        times.append(g.end)
-    return np.asarray(times)
 
 
 def _hermite_max(t0, t1, a0, a1, d0, d1):
@@ -183,23 +76,7 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
     if not (wall or striker):
         return _solve(problem, end_time, timestep, method, **kw)
     n = problem.beads
-    law = problem.law
-    k = np.broadcast_to(np.asarray(law.k, dtype=float), (n - 1,))
-    mass = problem.mass
-    if striker:  # an extra bead in front, moving; its contact has the striker-bead stiffness
-        k, mass = np.concatenate(([problem.striker_stiffness], k)), np.concatenate(([problem.striker_mass], mass))
-    if wall:  # an immovable extra bead at the end (zero inverse mass)
-        k, mass = np.append(k, problem.wall_stiffness), np.append(mass, np.inf)
-    law_x = HertzLaw(k=k) if isinstance(law, HertzLaw) else BilinearLaw(k=k, beta=law.beta)
-    inner = ChainProblem(
-        mass=mass,
-        law=law_x,
-        amplitude=problem.amplitude,
-        duration=problem.duration,
-        initial_velocity=problem.initial_velocity,
-        dashpot=problem.dashpot,
-        precompression=problem.precompression,
-    )
+    inner = problem.with_ends()  # the striker an extra bead in front, the wall an immovable one at the end
     s0 = 1 if striker else 0  # index of bead 1 inside
     if "histories" in kw:
         kw["histories"] = tuple(i + s0 for i in kw["histories"])
@@ -263,7 +140,7 @@ def _solve(
     stop_after: 0-based contact; stop (checked every STOP_CHECK_EVERY steps, as LAMMPS's fix halt
     does) once its force has fallen below half its peak: the leading wave has passed it. Only a
     peak above stop_floor counts (round-off forces ahead of the wave must not stop the run).
-    lead_floor: the smallest rise above F0 that can be a leading pulse (results.leading_pulse).
+    lead_floor: the smallest rise above F0 that can be a leading pulse (peaks.leading_pulse).
     max_overlap, energy_watch, momentum_watch: the run watch (granchain.invariants); None = off.
     Overlaps and a finite state are checked every watch_every steps and at breakpoints, the energy
     balance and the momentum of a free chain at every energy sample (~200 per run, as LAMMPS).
@@ -279,19 +156,14 @@ def _solve(
     bilinear = isinstance(law, BilinearLaw)
     inv_m = 1.0 / problem.mass  # 0 for an immovable wall bead
     inv_m0 = float(inv_m[0])
-    mass_ke = np.where(np.isfinite(problem.mass), problem.mass, 0.0)  # the wall neither moves nor counts
+    mass_ke = moving_mass(problem.mass)  # the wall neither moves nor counts
     gamma = float(problem.dashpot)
     dash = {"power": 0.0, "energy": 0.0}  # dashpot power at the last force evaluation, energy so far
 
-    u = np.zeros(n)
-    v = np.zeros(n)
-    v[0] = problem.initial_velocity
-    alpha_hist = np.zeros(n - 1)  # bilinear history alpha_max (frozen within a step)
+    # at rest (bead 1 possibly moving), or precompressed in static equilibrium; alpha_hist: the
+    # bilinear history alpha_max (frozen within a step)
+    u, v, alpha_hist = initial_state(problem)
     f0 = float(problem.precompression)
-    if f0:
-        u[:], alpha0 = static_state(law, f0, n)
-        if bilinear:
-            alpha_hist[:] = alpha0  # the precompression loaded every contact plastically
     free_end = bool(np.isfinite(problem.mass[-1]))
     p_initial = float(np.dot(mass_ke, v))  # (a striker's or bead 1's initial momentum)
     u_init = u.copy()
@@ -359,7 +231,7 @@ def _solve(
 
     amax = u[:-1] - u[1:]  # running peak overlap (refined): the static overlap at t = 0
     tmax = np.where(amax > 0.0, 0.0, np.nan)
-    amin = amax.copy()  # RK4: smallest overlap at a step end since the peak (results.complete_peaks)
+    amin = amax.copy()  # RK4: smallest overlap at a step end since the peak (peaks.complete_peaks)
     lead_f, lead_t = np.full(n - 1, np.nan), np.full(n - 1, np.nan)  # the leading pulse
     lead_done = np.zeros(n - 1, dtype=bool)
     a_int = np.empty(n)
@@ -413,11 +285,7 @@ def _solve(
             h_v[nrec] = v[hist_idx]
             nrec += 1
 
-    e_initial = (
-        0.5 * float(np.dot(mass_ke, v * v))
-        + float(np.sum(law.energy(u[:-1] - u[1:], alpha_hist)))
-        + (float(np.sum(law.dissipated(alpha_hist))) if bilinear else 0.0)
-    )
+    e_initial = state_energy(law, mass_ke, u, v, alpha_hist)  # problem.initial_energy: the deck's too
     record_history(0.0)
     energy_row(0.0)
 
@@ -566,7 +434,7 @@ def _solve(
         alpha_old, adot_old = alpha_new, adot_new
 
     def freeze_leading(ix, force, time) -> None:
-        """The leading pulse (results.leading_pulse): the first maximum of each contact's force that
+        """The leading pulse (peaks.leading_pulse): the first maximum of each contact's force that
         rises more than lead_floor above F0, frozen from then on (the pair styles' d_flead, d_tlead).
         ix: contacts at their first maximum now; force, time: that maximum (refined) and its time."""
         now = force - f0 > lead_floor
@@ -583,7 +451,7 @@ def _solve(
     t_now, t_prev, t_prev2 = 0.0, -math.inf, -math.inf
     fpk = f_now.copy()  # the t = 0 sample (nonzero only with precompression)
     tpk = np.where(fpk > 0.0, 0.0, np.nan)
-    fmin = fpk.copy()  # smallest force sample since the peak (results.complete_peaks), as the pair styles
+    fmin = fpk.copy()  # smallest force sample since the peak (peaks.complete_peaks), as the pair styles
 
     def sample_forces(t1: float) -> None:
         nonlocal f_now, f_prev, f_prev2, t_now, t_prev, t_prev2

@@ -18,9 +18,13 @@ from importlib import resources
 import jinja2
 import numpy as np
 
+from granchain._version import __version__
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
-from granchain.reference.solver import STOP_CHECK_EVERY, step_plan
-from granchain.results import LEAD_FRACTION, PEAK_PASSED_FRACTION, REACHED_FRACTION, scene_hash
+from granchain.peaks import PEAK_PASSED_FRACTION, lead_floor, stop_force_floor
+from granchain.problem import ChainProblem, initial_energy, precompressed_displacements
+from granchain.results import scene_hash
+from granchain.scene import SceneError
+from granchain.schedule import STOP_CHECK_EVERY, dump_stride, history_stride, scene_step_plan
 
 #: steps between two checks of the LAMMPS run watch (the reference checks every 20 steps as well)
 WATCH_EVERY = 20
@@ -119,32 +123,6 @@ def _env() -> jinja2.Environment:
     return env
 
 
-def history_stride(scene) -> int:
-    """Steps between history samples: history_interval / timestep, at least 1 ("auto": the planner's)."""
-    if scene.outputs.history_interval is None:
-        return 1
-    return _stride(scene, scene.outputs.history_interval)
-
-
-def dump_stride(scene) -> int:
-    """Steps between whole-chain dump frames (0: no whole-chain dump; "auto": the planner's)."""
-    if scene.outputs.dump_interval is None:
-        return 0
-    return _stride(scene, scene.outputs.dump_interval)
-
-
-def _stride(scene, interval) -> int:
-    if scene.run.timestep is None:
-        from granchain.errors import UsageError
-
-        raise UsageError('[run] timestep = "auto": plan the scene first (granchain.plan or granchain.run)')
-    if interval == "auto":  # what plan_scene would choose at its default rtol (the same function)
-        from granchain.workflows.plan import highest_frequency, output_stride
-
-        return output_stride(highest_frequency(scene)[0], scene.run.timestep)
-    return max(1, round(interval / scene.run.timestep))
-
-
 def atom_layout(scene) -> dict:
     """Atom IDs and types: an optional striker first (ID 1), beads, an optional wall last.
 
@@ -170,8 +148,6 @@ def precompression_overlaps(scene) -> dict:
     """Static overlaps for the deck: bead-bead contacts, and the wall's (0 without precompression)."""
     if not scene.effects.precompression:
         return {"beads": 0.0, "wall": 0.0}
-    from granchain.reference.solver import precompressed_displacements
-
     alpha0 = precompressed_displacements(scene)[1]
     wall = scene.effects.far_end == "wall"
     return {"beads": float(alpha0[0]), "wall": float(alpha0[-1]) if wall else 0.0}
@@ -192,8 +168,6 @@ def bead_kinds(scene) -> tuple[list[tuple[float, object]], list[int]]:
             kinds.append(key)
         kind_of.append(index[key])
     if len(kinds) > MAX_BEAD_KINDS:
-        from granchain.scene import SceneError
-
         raise SceneError(
             f"{scene.source}: the chain has {len(kinds)} distinct bead kinds (radius, material); the LAMMPS "
             f"backend takes at most {MAX_BEAD_KINDS} (one atom type each); use the reference backend"
@@ -215,8 +189,6 @@ def render_data(scene) -> str:
         atoms.append((lay["types"]["striker"], ds, rho_s, -(ld.striker_radius + scene.chain.radius)))
     u0 = np.zeros(n)
     if scene.effects.precompression:
-        from granchain.reference.solver import precompressed_displacements
-
         u0 = precompressed_displacements(scene)[0]
     if scene.per_bead:  # one atom type per distinct (radius, material): see bead_kinds
         kinds, kind_of = bead_kinds(scene)
@@ -245,36 +217,11 @@ def render_data(scene) -> str:
     return "\n".join(lines) + "\n"
 
 
-def stop_force_floor(scene) -> float:
-    """The smallest peak that counts as the leading wave for [run] stop_after_contact (both backends):
-    the static force plus REACHED_FRACTION of the largest expected force. Round-off forces ahead of
-    the wave (LAMMPS's positions miss D by an ulp: ~1e-11 N on a linear contact) stay far below."""
-    return float(scene.effects.precompression) + reached_floor(scene)
-
-
-def lead_floor(scene) -> float:
-    """The smallest rise above the static force that can be a leading pulse (both backends):
-    results.LEAD_FRACTION of the largest expected force."""
-    from granchain.workflows.plan import expected_peak_force
-
-    return LEAD_FRACTION * expected_peak_force(scene)
-
-
-def reached_floor(scene) -> float:
-    """REACHED_FRACTION of the largest expected force: round-off forces ahead of the wave stay below."""
-    from granchain.workflows.plan import expected_peak_force
-
-    return REACHED_FRACTION * expected_peak_force(scene)
-
-
 def energy_watch_terms(scene) -> dict:
     """What the deck's in-run energy and momentum watch needs (granchain.invariants, same bounds as
-    the reference): the energy at t = 0 (the reference's own bookkeeping, one Verlet step of it),
-    bead 1's and bead N's x at t = 0, and the initial momentum of a free chain."""
-    from granchain.reference.solver import ChainProblem, precompressed_displacements, solve_chain
-
-    dt = scene.run.timestep
-    e0 = float(solve_chain(ChainProblem.from_scene(scene), dt, dt, "verlet").work[0])
+    the reference): the energy at t = 0 (problem.initial_energy, where the reference's bookkeeping
+    starts), bead 1's and bead N's x at t = 0, and the initial momentum of a free chain."""
+    e0 = initial_energy(ChainProblem.from_scene(scene))
     u0 = precompressed_displacements(scene)[0] if scene.effects.precompression else np.zeros(scene.chain.beads)
     x0 = scene.bead_positions if scene.per_bead else np.arange(scene.chain.beads) * scene.diameter
     f0, lay = float(scene.effects.precompression), atom_layout(scene)
@@ -321,12 +268,8 @@ def builtin_granular_deck(deck: str, scene) -> str:
 
 
 def render_deck(scene) -> Deck:
-    from granchain import __version__
-
     ld = scene.loading
-    plan = step_plan(
-        scene.run.end_time, scene.run.timestep, ld.duration if ld.is_force else 0.0, scene.outputs.snapshots
-    )
+    plan = scene_step_plan(scene)
     snaps = {t: k for k, t in enumerate(scene.outputs.snapshots)}
     dt = scene.run.timestep
     segments = [
@@ -391,7 +334,7 @@ def render_deck(scene) -> Deck:
         "results_end": RUN_END_FILE,
         "results_file": RESULTS_DUMP,
         "scene_sha256": scene_hash(scene),
-        # the leading pulse (results.leading_pulse): above the static force plus the reached floor
+        # the leading pulse (peaks.leading_pulse): above the static force plus the reached floor
         "pair_args": f" lead {lead_floor(scene)!r} {float(fx.precompression)!r}"
         + (f" dashpot {fx.dashpot!r}" if fx.dashpot else ""),
         "pair_coeffs": coeffs,

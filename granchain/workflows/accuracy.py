@@ -19,8 +19,9 @@ import numpy as np
 
 from granchain.errors import UsageError
 from granchain.postprocess.observables import fit_wave_speed
+from granchain.problem import ChainProblem
 from granchain.reference.scipy_solver import solve_chain_dop853
-from granchain.reference.solver import ChainProblem, solve_chain
+from granchain.reference.solver import solve_chain
 from granchain.workflows.plan import plan_scene
 
 TARGETS = (1e-2, 1e-3, 1e-4)
@@ -132,7 +133,7 @@ def _dump_interval_errors(scene, dt: float) -> list[tuple[int, float, float]]:
     """Error of dump-derived peaks (raw and parabola-refined) against the in-run peaks, by interval."""
     from granchain.lammps.runner import cleanup, run_lammps
     from granchain.postprocess.dumps import peaks_from_samples, read_dump
-    from granchain.reference.solver import step_plan, step_times
+    from granchain.schedule import step_plan, step_times
 
     sc = replace(
         scene,

@@ -12,9 +12,11 @@ import numpy as np
 
 from granchain.errors import UsageError
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH, InvariantError
-from granchain.reference.solver import ChainProblem, solve_chain
+from granchain.peaks import lead_floor, stop_force_floor
+from granchain.problem import ChainProblem
+from granchain.reference.solver import solve_chain
 from granchain.results import RunResult, check_output_dir, write_run_dir
-from granchain.templates import history_stride, lead_floor, stop_force_floor
+from granchain.schedule import dump_stride, history_stride
 
 BACKENDS = ("reference", "lammps")
 
@@ -189,8 +191,6 @@ def output_sizes(scene) -> dict[str, float]:
     """Estimated bytes of each file a planned scene's run writes in proportion to its length:
     the LAMMPS history and whole-chain dumps and histories.csv (the peak table, energy and
     snapshots are small)."""
-    from granchain.templates import dump_stride, history_stride
-
     steps = scene.run.end_time / scene.run.timestep
     sizes = {}
     if scene.outputs.histories:

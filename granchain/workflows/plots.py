@@ -420,15 +420,11 @@ class SpaceTime:
 def _from_dump(run: Path) -> SpaceTime:
     """The whole-chain LAMMPS dump (chain.dump, written every [outputs] dump_interval)."""
     from granchain.postprocess.dumps import read_dump
-    from granchain.reference.solver import step_plan, step_times
+    from granchain.schedule import scene_step_plan, step_times
     from granchain.templates import atom_layout
 
     scene = _scene(run)
-    ld = scene.loading
-    plan = step_plan(
-        scene.run.end_time, scene.run.timestep, ld.duration if ld.is_force else 0.0, scene.outputs.snapshots
-    )
-    times = step_times(plan, scene.run.timestep)
+    times = step_times(scene_step_plan(scene), scene.run.timestep)
     dd = read_dump(run / "chain.dump", times, columns=("d_fc",))
     o, n = atom_layout(scene)["offset"], scene.chain.beads
     force = dd.columns["d_fc"][:, o : o + n - 1]  # contact i lives on bead i's atom

@@ -24,13 +24,24 @@ import json
 import os
 import re
 import shutil
+import warnings
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
 from granchain.errors import GranchainError
+from granchain.lammps.runner import (
+    LammpsError,
+    LammpsRunResult,
+    ResultsError,
+    invariant_from_lammps,
+    lammps_result,
+    output_files,
+)
 from granchain.results import RunDirError, RunResult, pid_alive, scene_hash, write_run_dir
+from granchain.scene import load_scene, parse_scene
 from granchain.templates import RESULTS_DUMP, RUN_END_FILE, render_deck
+from granchain.workflows.plan import Plan, PlanChoice, refined_plan
 
 #: what granchain render --out writes (plan.json only when something was planned)
 RENDER_FILES = ("deck.lmp", "chain.data", "scene.toml")
@@ -74,8 +85,6 @@ def plan_to_dict(plan) -> dict | None:
 def plan_from_dict(data: dict | None, scene):
     if data is None:
         return None
-    from granchain.workflows.plan import Plan, PlanChoice
-
     return Plan(
         scene=scene,
         rtol=float(data["rtol"]),
@@ -162,7 +171,7 @@ def read_log(path: Path) -> LammpsLog:
 
 
 @dataclass
-class CollectedRunResult(RunResult):
+class CollectedRunResult(LammpsRunResult):
     """A RunResult made from a plain-LAMMPS run: its provenance says so ("collected")."""
 
     collected: dict = field(default_factory=dict)
@@ -217,8 +226,6 @@ def _check_finished(d: Path, scene, log: LammpsLog | None) -> None:
             f"{d}: LAMMPS has not run here (no {LOG_FILE}, no {RESULTS_DUMP}); run 'lmp -in deck.lmp' "
             "(or 'mpirun -np N lmp -in deck.lmp') in this directory, then collect it"
         )
-    from granchain.lammps.runner import LammpsError, invariant_from_lammps
-
     why = ""
     broken = invariant_from_lammps(LammpsError(log.tail(40), log.tail(40)), scene)
     if broken is not None:
@@ -242,9 +249,6 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
     snapshots.csv) are added to run_dir itself, beside LAMMPS's; otherwise a new run directory out
     is written as `granchain run --out` writes one (overwrite: replace it). Returns the RunResult.
     """
-    from granchain.lammps.runner import ResultsError, lammps_result, output_files
-    from granchain.scene import load_scene
-
     d = Path(run_dir)
     _check_is_render_dir(d)
     scene = load_scene(d / "scene.toml")
@@ -316,11 +320,6 @@ def _refinement(d: Path, record: dict | None, plan, result) -> dict | None:
     {"timestep", "reason"} for the provenance. A plain-LAMMPS run is run once."""
     if plan is None or not record or not record.get("scene_as_given"):
         return None
-    import warnings
-
-    from granchain.scene import parse_scene
-    from granchain.workflows.plan import refined_plan
-
     given = parse_scene(record["scene_as_given"], source=f"{d / PLAN_FILE} (scene as given)")
     refined = refined_plan(given, plan, result.solution)
     if refined is None:

@@ -1,0 +1,111 @@
+"""What a peak is, in one place for both backends, the deck and the observables.
+
+A contact is reached once its peak rises above REACHED_FRACTION of the chain's largest (unreached_as_nan);
+its peak is complete once its force has fallen to PEAK_PASSED_FRACTION of it since (complete_peaks); its
+leading pulse is its first maximum rising above LEAD_FRACTION of the largest expected force
+(leading_pulse). The floors below turn those fractions into forces for a scene (stop_force_floor,
+lead_floor, reached_floor), from the planner's largest expected force (physics.estimates).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from granchain.physics.estimates import expected_peak_force
+
+#: A contact counts as reached by the wave when its peak force exceeds this fraction of the largest
+#: peak in the chain. Below it a "peak" is round-off: LAMMPS places bead i at x = (i-1) D, and the
+#: difference of two such positions misses D by an ulp, a spurious overlap of ~1e-18 m.
+REACHED_FRACTION = 1e-9
+
+
+def unreached_as_nan(peak_force: np.ndarray, time_of_peak: np.ndarray, static_force: float = 0.0) -> np.ndarray:
+    """time_of_peak with nan where the contact was not reached (see REACHED_FRACTION).
+
+    static_force: a precompression F0 every contact starts at; reached means rising above it.
+    """
+    rise = np.asarray(peak_force) - static_force
+    floor = REACHED_FRACTION * float(np.max(rise, initial=0.0))
+    return np.where(rise > floor, time_of_peak, np.nan)
+
+
+#: A contact's peak is complete once the contact's force has fallen to at most this fraction of its
+#: peak (both counted above the static force F0) at some sample after the peak. It is the fraction
+#: by which [run] stop_after_contact decides that the leading wave has passed a contact (the
+#: reference's wave_passed and the deck's v_wave_passed), so a run stopped by it ends with its stop
+#: contact complete. Why this value:
+#: - A peak that is not complete is the force at the end of the run (still rising), or a maximum so
+#:   recent that the next samples might still exceed it; neither converges with the time step.
+#: - A fall to half the peak cannot be round-off or integration noise, nor a flat top: the peak is a
+#:   genuine local maximum with samples on both sides, refined inside its step (Hermite / parabola),
+#:   so its value converges at the method's order.
+#: - It is checked on the minimum since the peak, not on the force at the end: behind a long load's
+#:   front the force oscillates (elastic-step-40N: between 0.01 and 0.85 of the peak at the end of
+#:   the run), and the force at the end alone would mark 39 of that scene's 151 window contacts,
+#:   passed long before, as incomplete. Every one of them fell below 0.03 of its peak.
+#: - A later, larger peak (a reflection, a second wave) moves the peak and restarts the minimum.
+PEAK_PASSED_FRACTION = 0.5
+
+
+#: A leading pulse must rise above this fraction of the planner's largest expected force. Ahead of a
+#: front, dispersive precursors make maxima: on a 500-bead steel bilinear chain (2 kN step) they
+#: reached 1e-5 N, 3e-9 of the expected 3.4 kN, 0.6 ms before the 50 N front, and taken as the first
+#: maximum they moved the wave speed by 3% between two time steps. Leading pulses
+#: decay along a chain by far less than 1e6 (the same chain: 46x over 374 contacts); one that decays
+#: more is reported as not measured, with the reason.
+LEAD_FRACTION = 1e-6
+
+
+def leading_pulse(
+    flead: np.ndarray, tlead: np.ndarray, time_of_peak: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """The leading pulse of each contact, read back from a backend's frozen values (0: none yet).
+
+    Definition (docs/observables.md): the first maximum of a contact's force whose rise above the
+    static force F0 exceeds LEAD_FRACTION of the largest expected force, frozen from then on: the
+    first sample above both neighbours, refined by the vertex of the parabola through the three (as
+    the running peak), in both backends at every step (RK4: the first maximum of the overlap inside a
+    step, on its Hermite interpolant, and the force there). Its time is the front's arrival at the
+    contact. In a forming wave train this is the first pulse, whatever larger pulses follow; on a
+    front that rises to a plateau it is the plateau's first overshoot, not the largest of the
+    oscillations that follow (those do not converge with the time step: docs/observables.md).
+    Measured limit: a shoulder on the rise whose slope only just turns negative is a maximum at one
+    time step and not at another.
+    """
+    flead = np.asarray(flead, dtype=float)
+    done = flead > 0.0
+    if time_of_peak is not None:  # a contact that counts as not reached (unreached_as_nan) has no pulse
+        done &= np.isfinite(time_of_peak)
+    return np.where(done, flead, np.nan), np.where(done, np.asarray(tlead, dtype=float), np.nan)
+
+
+def complete_peaks(
+    peak_force: np.ndarray, force_min_after_peak: np.ndarray, time_of_peak: np.ndarray, static_force: float = 0.0
+) -> np.ndarray:
+    """Which contacts' peaks are complete: the one definition, used by every backend.
+
+    force_min_after_peak: the smallest force sample of each contact since (the sample of) its peak;
+    time_of_peak: nan for contacts the wave has not reached (see unreached_as_nan), never complete.
+    Complete: reached and min - F0 <= PEAK_PASSED_FRACTION (peak - F0) (see PEAK_PASSED_FRACTION).
+    """
+    rise = np.asarray(peak_force, dtype=float) - static_force
+    fell = np.asarray(force_min_after_peak, dtype=float) - static_force <= PEAK_PASSED_FRACTION * rise
+    return np.isfinite(time_of_peak) & fell
+
+
+def stop_force_floor(scene) -> float:
+    """The smallest peak that counts as the leading wave for [run] stop_after_contact (both backends):
+    the static force plus REACHED_FRACTION of the largest expected force. Round-off forces ahead of
+    the wave (LAMMPS's positions miss D by an ulp: ~1e-11 N on a linear contact) stay far below."""
+    return float(scene.effects.precompression) + reached_floor(scene)
+
+
+def lead_floor(scene) -> float:
+    """The smallest rise above the static force that can be a leading pulse (both backends):
+    LEAD_FRACTION of the largest expected force."""
+    return LEAD_FRACTION * expected_peak_force(scene)
+
+
+def reached_floor(scene) -> float:
+    """REACHED_FRACTION of the largest expected force: round-off forces ahead of the wave stay below."""
+    return REACHED_FRACTION * expected_peak_force(scene)

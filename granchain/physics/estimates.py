@@ -1,0 +1,126 @@
+"""Estimates from the paper's models that the planner, the deck, the peak floors and the regimes need
+before anything runs: the step load a loading acts like, the largest contact force to expect, the
+stiffest tangent of a contact and the highest frequency (and dashpot decay rate) of the chain.
+
+Every function reads a scene (granchain.scene.Scene) for its numbers; none imports the scene.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from granchain.physics import models
+from granchain.physics.contact import BilinearLaw, HertzLaw, hertz_tangent_stiffness
+
+
+def step_equivalent(scene) -> tuple[float, float] | None:
+    """(A, T) of the step load a scene's loading acts like, or None for a velocity kick of bead 1.
+
+    Force loads: their own A and T. A striker of mass M at speed V pushes like a piston at V for as
+    long as it carries momentum: A = models.piston_step_amplitude (Eqs. 12 and 19), for T = M V / A.
+    A light striker gives a short T, and the short-pulse model (Eq. 8 with I = M V) takes over
+    through the min below.
+    """
+    ld = scene.loading
+    if ld.is_force:
+        return ld.amplitude, ld.duration
+    if ld.kind != "striker":
+        return None
+    linear = scene.contact.law != "hertz"  # the bilinear loading line
+    a = models.piston_step_amplitude(ld.velocity, scene.stiffness, scene.mass, scene.diameter, linear=linear)
+    return a, scene.striker_mass * ld.velocity / a
+
+
+def expected_peak_force(scene) -> float:
+    """An upper estimate of the largest contact force of the run (N), from the paper's models."""
+    m, d, k = scene.mass, scene.diameter, scene.stiffness
+    impulse = scene.input_impulse
+    step = step_equivalent(scene)
+    if scene.contact.law == "hertz":
+        f = models.short_load_peak_force(impulse, m, scene.e_star, scene.r_star)  # Eq. 8
+        if step is not None:
+            amp = step[0]
+            fu = models.solitary_wave_peak_force(models.front_speed_upper(amp, k, m, d), k, m, d)
+            f = min(f, max(fu, amp))  # Fig. 3: the smaller of the two regimes' peaks
+        return 1.5 * f  # the first contacts peak above the formed wave (up to ~1.2x measured)
+    beta = scene.contact.unloading_coeff
+    f = models.linear_chain_impulse_response(impulse, k, m, beta)["F_p"]  # Eq. A2
+    if step is not None:
+        f = min(f, 2.0 * step[0])  # a long load cannot push a linear contact past 2 A
+    return 1.5 * f
+
+
+def max_stiffness(scene) -> float:
+    """The nominal contact's stiffest tangent (N/m): Hertz at the expected peak force, bilinear k_u."""
+    if scene.contact.law == "hertz":
+        return float(hertz_tangent_stiffness(expected_peak_force(scene), scene.stiffness))
+    return float(scene.unloading_stiffness)
+
+
+def _tangent(scene, k, force: float) -> np.ndarray:
+    """The stiffest tangent of contacts of stiffness k at the force they are expected to reach: the
+    law's own max_stiffness (physics.contact: Hertz 3/2 k^(2/3) F^(1/3), bilinear k_u)."""
+    k = np.asarray(k, dtype=float)
+    if scene.contact.law == "hertz":
+        return np.asarray(HertzLaw(k).max_stiffness(force), dtype=float)
+    return np.asarray(BilinearLaw(k, scene.contact.unloading_coeff).max_stiffness(force), dtype=float)
+
+
+def damping_rate(scene) -> float:
+    """The fastest decay rate (1/s) a dashpot gives any mode: the Gershgorin bound of M^-1/2 C M^-1/2
+    (see highest_frequency); 0 without a dashpot."""
+    return highest_frequency(scene, return_damping=True) if scene.effects.dashpot else 0.0
+
+
+def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
+    """An upper bound of the chain's highest frequency (rad/s) over every contact the scene has, and
+    the node that sets it.
+
+    The linearised chain at the stiffest tangents K_t has frequencies sqrt(eig(M^-1/2 K_t M^-1/2)); by
+    Gershgorin's theorem the largest is at most the largest row sum,
+    (k_l + k_r) / m_i + k_l / sqrt(m_(i-1) m_i) + k_r / sqrt(m_i m_(i+1)), which for a uniform chain is
+    exactly omega_max = 2 sqrt(k_t / m) (the linear chain's cut-off). Every effect enters where it acts:
+    per-bead masses and pair stiffnesses (taper, materials), the wall (an infinite mass; its contact is
+    stiffer, k_w, and sees the reflected wave, up to twice the force), a striker (its mass and pair
+    stiffness on bead 1), precompression (every contact carries F0 on top of the wave), a dashpot (the
+    overdamped modes decay at up to the Gershgorin bound of M^-1/2 C M^-1/2, and an explicit integrator
+    must resolve that rate like a frequency).
+    """
+    force = float(scene.effects.precompression) + expected_peak_force(scene)
+    # beads = "auto" (a uniform chain: no per-bead lists): three beads hold every kind of node
+    n = scene.chain.beads or 3
+    m = scene.bead_masses if scene.per_bead else np.full(n, scene.mass)
+    k = scene.contact_stiffnesses if scene.per_bead else np.full(n - 1, scene.stiffness)
+    kt = _tangent(scene, k, force)
+    # neighbours as (stiffness, neighbour mass) on each side; a missing neighbour adds nothing
+    kl, ml = np.concatenate(([0.0], kt)), np.concatenate(([np.inf], m[:-1]))
+    kr, mr = np.concatenate((kt, [0.0])), np.concatenate((m[1:], [np.inf]))
+    gamma = float(scene.effects.dashpot)
+    gl = np.where(np.arange(n) > 0, gamma, 0.0)
+    gr = np.where(np.arange(n) < n - 1, gamma, 0.0)
+    extra = {}
+    if scene.effects.far_end == "wall":  # a neighbour of infinite mass: only the diagonal term
+        kw = float(_tangent(scene, scene.wall_stiffness, float(scene.effects.precompression) + 2.0 * force))
+        kr[-1], mr[-1], gr[-1] = kw, np.inf, gamma
+        extra["wall"] = kw
+    if scene.loading.kind == "striker":
+        ms, ks = scene.striker_mass, float(_tangent(scene, scene.striker_stiffness, force))
+        kl[0], ml[0], gl[0] = ks, ms, gamma
+        extra["striker"] = ks / ms + ks / math.sqrt(ms * m[0])
+        extra["striker_damp"] = gamma / ms + gamma / math.sqrt(ms * m[0])
+    rows = (kl + kr) / m + kl / np.sqrt(m * ml) + kr / np.sqrt(m * mr)
+    damp = (gl + gr) / m + gl / np.sqrt(m * ml) + gr / np.sqrt(m * mr)
+    if return_damping:
+        return float(max(np.max(damp), extra.get("striker_damp", 0.0)))
+    i = int(np.argmax(np.maximum(np.sqrt(rows), damp)))
+    omega = float(max(np.sqrt(rows[i]), damp[i]))
+    where = f"bead {i + 1}"
+    if "striker" in extra and max(math.sqrt(extra["striker"]), 0.0) > omega:
+        omega, where = math.sqrt(extra["striker"]), "the striker"
+    if damp[i] > np.sqrt(rows[i]):
+        where += f" (the dashpot's decay rate {damp[i]:.3g} 1/s)"
+    elif "wall" in extra and i == n - 1:
+        where += " (on the wall)"
+    return omega, where

@@ -1,0 +1,96 @@
+"""The run's schedule, the same for every backend: the step plan (segments between breakpoints, so
+that the load's end, every snapshot and the end time are step boundaries), the time after every
+step, how often a stop condition is checked, and the sampling strides of histories and dumps.
+
+Both backends and the deck builder read it, so their steps, stop checks and samples coincide.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from granchain.errors import UsageError
+from granchain.physics.estimates import highest_frequency
+
+STOP_CHECK_EVERY = 10  # steps between checks of a stop condition (the decks' fix halt uses the same)
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A stretch of the run between two breakpoints (load end, snapshot, end), in equal steps.
+
+    ``steps`` steps: all of length dt except the last, of length ``last`` (<= dt), which lands
+    exactly on ``end``. ``loaded``: the step load acts over the whole segment.
+    """
+
+    start: float
+    end: float
+    steps: int
+    last: float
+    loaded: bool
+
+
+def step_plan(end_time: float, dt: float, load_duration: float = 0.0, snapshots=()) -> list[Segment]:
+    """Split a run into segments so that T (if a load ends inside the run), every snapshot time and
+    the end time are step boundaries. Used by every backend, so their steps coincide."""
+    pts = {float(end_time)}
+    if 0.0 < load_duration < end_time:
+        pts.add(float(load_duration))
+    pts.update(float(s) for s in snapshots if 0.0 < s < end_time)
+    plan, start = [], 0.0
+    for bp in sorted(pts):
+        n = max(1, math.ceil((bp - start) / dt * (1.0 - 1e-12)))
+        last = (bp - start) - (n - 1) * dt
+        if abs(last - dt) <= 1e-9 * dt:  # a whole number of steps up to round-off: keep dt exactly
+            last = dt
+        plan.append(Segment(start, bp, n, last, load_duration > 0.0 and start < load_duration))
+        start = bp
+    return plan
+
+
+def step_times(plan: list[Segment], dt: float) -> np.ndarray:
+    """Time after every step of a plan, index = step number (0 = start): maps dump steps to times."""
+    times = [0.0]
+    for g in plan:
+        times.extend(g.start + (j + 1) * dt for j in range(g.steps - 1))
+        times.append(g.end)
+    return np.asarray(times)
+
+
+def scene_step_plan(scene) -> list[Segment]:
+    """The step plan of a scene's run: breakpoints at the end of a force load, every snapshot and the end."""
+    ld = scene.loading
+    return step_plan(
+        scene.run.end_time, scene.run.timestep, ld.duration if ld.is_force else 0.0, scene.outputs.snapshots
+    )
+
+
+def output_stride(omega_max: float, timestep: float, rtol: float = 1e-3) -> int:
+    """Steps between output samples: the largest whose three-point-parabola peaks stay within rtol
+    at the chain's highest frequency ((omega_max D)^4 / 16 <= rtol, see workflows.plan.plan_scene)."""
+    return max(1, math.floor((16.0 * rtol) ** 0.25 / omega_max / timestep))
+
+
+def history_stride(scene) -> int:
+    """Steps between history samples: history_interval / timestep, at least 1 ("auto": the planner's)."""
+    if scene.outputs.history_interval is None:
+        return 1
+    return _stride(scene, scene.outputs.history_interval)
+
+
+def dump_stride(scene) -> int:
+    """Steps between whole-chain dump frames (0: no whole-chain dump; "auto": the planner's)."""
+    if scene.outputs.dump_interval is None:
+        return 0
+    return _stride(scene, scene.outputs.dump_interval)
+
+
+def _stride(scene, interval) -> int:
+    if scene.run.timestep is None:
+        raise UsageError('[run] timestep = "auto": plan the scene first (granchain.plan or granchain.run)')
+    if interval == "auto":  # what plan_scene would choose at its default rtol (the same function)
+        return output_stride(highest_frequency(scene)[0], scene.run.timestep)
+    return max(1, round(interval / scene.run.timestep))
