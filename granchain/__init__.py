@@ -72,7 +72,15 @@ def plan(scene, rtol: float | None = None, method: str = "rk4"):
     return plan_scene(scene, rtol=rtol, method=integrator("reference", method))
 
 
-def run(scene, backend: str = "reference", method: str | None = None, rtol: float | None = None, out=None, **kw):
+def run(
+    scene,
+    backend: str = "reference",
+    method: str | None = None,
+    rtol: float | None = None,
+    out=None,
+    error_estimate: bool = False,
+    **kw,
+):
     """Run a scene and return its result.
 
     Parameters
@@ -88,6 +96,10 @@ def run(scene, backend: str = "reference", method: str | None = None, rtol: floa
         1e-3 and an ``AccuracyWarning`` says when the planner's error model predicts it misses).
     out : str or pathlib.Path, optional
         Write a run directory there (refused before the run if it exists; ``overwrite=True``).
+    error_estimate : bool, default False
+        Also run the scene at 2 dt and 4 dt and give every peak and observable a measured error
+        estimate (``result.errors``; the ``*_error`` columns of peaks.csv). ``granchain run``
+        does this by default.
     **kw
         ``overwrite``, ``np_`` (LAMMPS MPI ranks), ``oversubscribe``, ``force`` (run above the
         predicted stability limit).
@@ -101,4 +113,4 @@ def run(scene, backend: str = "reference", method: str | None = None, rtol: floa
     """
     from granchain.workflows.run import run_scene
 
-    return run_scene(scene, backend=backend, method=method, rtol=rtol, out=out, **kw)
+    return run_scene(scene, backend=backend, method=method, rtol=rtol, out=out, error_estimate=error_estimate, **kw)

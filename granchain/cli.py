@@ -87,6 +87,7 @@ def cmd_run(args) -> int:
         force=args.force,
         oversubscribe=args.oversubscribe,
         rtol=args.rtol,
+        error_estimate=args.error_estimate == "on",
     )
     print_result(result, out)
     return 0
@@ -102,10 +103,15 @@ def print_result(result, out) -> None:
         f"{s['wall_time']:.3g} s wall"
     )
     missing = s.get("observables_missing", {})
+    errors = (s.get("errors") or {}).get("observables", {})
     for k, v in s["observables"].items():
         label = f"{k} ({OBSERVABLE_UNITS.get(k, '?')})"
         why = f"   not measured: {missing[k]}" if v is None and k in missing else ""
-        print(f"  {label:38s} {_fmt(v)}{why}")
+        bar = ""
+        if v is not None and k in errors:  # the measured error bar, or why there is none
+            e = errors[k]
+            bar = f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})"
+        print(f"  {label:38s} {_fmt(v)}{bar}{why}")
     c = s["conservation"]
     ld = scene.loading
     if ld.is_force:
@@ -120,6 +126,21 @@ def print_result(result, out) -> None:
     )
     err = _fmt(c["energy_balance_error_relative"])
     print(f"  {'energy balance error (1)':38s} {err}   (relative to the energy put in)")
+    e = s.get("errors")
+    if e is not None:
+        if e["why_none"]:
+            print(f"  {'error estimate':38s} none: {e['why_none']}")
+        else:
+            worst = e["error_estimate"]
+            where = f" at contact {e['error_estimate_contact']}" if worst is not None else ""
+            n_bad = len(e["unreliable_contacts"])
+            print(
+                f"  {'largest peak-force error (1)':38s} {_fmt(worst)}{where}   (measured: runs at "
+                + ", ".join(f"{t:g}" for t in e["companion_timesteps"])
+                + f" s, {e['companion_wall_time']:.3g} s more)"
+            )
+            if n_bad:
+                print(f"  {'peaks without an estimate':38s} {n_bad}   (peaks.csv error_status says why)")
     print(f"run directory: {out}")
 
 
@@ -311,6 +332,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     r.add_argument("--out", help="run directory (default runs/<scene>-lammps or runs/<scene>-reference-<method>)")
     r.add_argument("--overwrite", action="store_true", help="replace an existing run directory")
+    r.add_argument(
+        "--error-estimate",
+        default="on",
+        choices=["on", "off"],
+        help="also run at 2 dt and 4 dt and give every number a measured error (default on; about 0.75x a run more)",
+    )
     r.set_defaults(func=cmd_run)
 
     q = sub.add_parser("predict", help="print the paper's analytic predictions for a scene")

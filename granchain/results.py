@@ -115,7 +115,8 @@ class RunResult:
     planned. started_utc: when the run started, if the caller knows (otherwise the provenance
     estimates it as finished_utc minus the run's elapsed time, and says so). finished_utc: when the
     result was made, i.e. the end of the run. command: the command line that made the run (default:
-    this Python process's sys.argv when the summary is written).
+    this Python process's sys.argv when the summary is written). errors: the run's measured error
+    estimates (granchain.workflows.errors.ErrorReport), None when none were made.
     """
 
     scene: object  # granchain.scene.Scene
@@ -126,6 +127,7 @@ class RunResult:
     started_utc: datetime | None = None
     finished_utc: datetime = field(default_factory=_now_utc)
     command: list[str] | None = None
+    errors: object | None = None  # granchain.workflows.errors.ErrorReport
 
     def observables(self) -> dict:
         return measure_observables(self.scene, self.solution)
@@ -205,6 +207,10 @@ class RunResult:
                 else {}
             ),
             **({"extra": extra} if extra else {}),
+            # the largest relative error of a measured peak, and every number's error and how it
+            # was obtained (granchain.workflows.errors); none without companion runs
+            "error_estimate": None if self.errors is None else self.errors.error_estimate,
+            "errors": None if self.errors is None else self.errors.summary(s.wall_time),
             "provenance": self.provenance(),
         }
 
@@ -391,6 +397,8 @@ def _write_csv(path: Path, header: list[str], rows) -> None:
 
 
 def _fmt(x) -> str:
+    if isinstance(x, str):
+        return x
     if isinstance(x, (int, np.integer)):
         return str(int(x))
     x = float(x)
@@ -444,28 +452,31 @@ def _write_contents(result: RunResult, d: Path, extra_files: dict) -> None:
     (d / "scene.toml").write_text(sc.source_text if sc.source_text else sc.to_toml())
     contacts = np.asarray(sc.peak_contacts, dtype=int)
     idx = contacts - 1
-    _write_csv(
-        d / "peaks.csv",
-        [
-            "contact",
-            "peak_force",
-            "time_of_peak",
-            "peak_force_nondim",
-            "complete",
-            "leading_pulse_force",
-            "arrival_time",
-        ],
-        zip(
-            contacts,
-            s.peak_force[idx],
-            s.time_of_peak[idx],
-            s.peak_force[idx] / sc.force_scale,
-            s.complete[idx].astype(int),
-            s.leading_pulse_force[idx],
-            s.leading_pulse_time[idx],
-            strict=True,
-        ),
-    )
+    header = [
+        "contact",
+        "peak_force",
+        "time_of_peak",
+        "peak_force_nondim",
+        "complete",
+        "leading_pulse_force",
+        "arrival_time",
+    ]
+    columns = [
+        contacts,
+        s.peak_force[idx],
+        s.time_of_peak[idx],
+        s.peak_force[idx] / sc.force_scale,
+        s.complete[idx].astype(int),
+        s.leading_pulse_force[idx],
+        s.leading_pulse_time[idx],
+    ]
+    e = result.errors
+    if e is not None and e.peak_force is not None:
+        # nan where there is no estimate; error_status says why (granchain.errorbars)
+        header += ["peak_force_error", "time_of_peak_error", "error_status"]
+        status = [str(x).replace(",", ";") for x in e.peak_force.status[idx]]  # one CSV cell each
+        columns += [e.peak_force.error[idx], e.time_of_peak.error[idx], status]
+    _write_csv(d / "peaks.csv", header, zip(*columns, strict=True))
     if s.history_contacts:
         cols = [f"force_{i + 1}" for i in s.history_contacts] + [f"velocity_{i + 1}" for i in s.history_contacts]
         _write_csv(
@@ -510,7 +521,7 @@ def _json_default(o):
 
 def read_peaks(run_dir: str | Path) -> dict[str, np.ndarray]:
     """peaks.csv of a run directory as arrays (contact is 1-based; complete, where present, is bool)."""
-    data = np.genfromtxt(Path(run_dir) / "peaks.csv", delimiter=",", names=True, ndmin=1)
+    data = np.genfromtxt(Path(run_dir) / "peaks.csv", delimiter=",", names=True, ndmin=1, dtype=None, encoding="utf-8")
     out = {name: np.asarray(data[name]) for name in data.dtype.names}
     if "complete" in out:
         out["complete"] = out["complete"] == 1

@@ -129,7 +129,23 @@ def test_collected_plain_lammps_run_equals_granchain_run(tmp_path, scene, capsys
     assert main(["collect", str(job)]) == 0
     assert "run directory:" in capsys.readouterr().out
     ref = tmp_path / "run"
-    assert main(["run", scene_arg(tmp_path, scene), "--backend", "lammps", "--out", str(ref), "-q"]) == 0
+    # the same single run (a plain-LAMMPS run has no companions to estimate errors from)
+    assert (
+        main(
+            [
+                "run",
+                scene_arg(tmp_path, scene),
+                "--backend",
+                "lammps",
+                "--out",
+                str(ref),
+                "-q",
+                "--error-estimate",
+                "off",
+            ]
+        )
+        == 0
+    )
     assert (job / "deck.lmp").read_text() == (ref / "deck.lmp").read_text()  # the same deck
     assert_same_run(job, ref)
     # every file of granchain run's directory is in the collected one
@@ -180,7 +196,23 @@ def test_mpirun_np2_collects_to_the_serial_run(tmp_path):
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     collect(job)
     ref = tmp_path / "run"
-    assert main(["run", scene_arg(tmp_path, scene), "--backend", "lammps", "--out", str(ref), "-q"]) == 0
+    # the same single run (a plain-LAMMPS run has no companions to estimate errors from)
+    assert (
+        main(
+            [
+                "run",
+                scene_arg(tmp_path, scene),
+                "--backend",
+                "lammps",
+                "--out",
+                str(ref),
+                "-q",
+                "--error-estimate",
+                "off",
+            ]
+        )
+        == 0
+    )
     assert_same_run(job, ref, rtol=1e-9)
     prov = read_summary(job)["provenance"]
     assert prov["lammps"]["ranks"] == prov["collected"]["ranks"] == 2

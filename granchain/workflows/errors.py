@@ -24,6 +24,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from granchain.errorbars import ORDER, ErrorBars, richardson
+from granchain.errors import GranchainError
 from granchain.postprocess.observables import measure_observables
 
 #: scalar observables that get an error estimate, and the time each is measured at (for the check
@@ -45,7 +46,8 @@ class ErrorReport:
     observables: dict[str, dict] = field(default_factory=dict)  # name -> value, error, status
     error_estimate: float | None = None  # largest relative peak-force error over the measured contacts
     error_estimate_contact: int | None = None
-    why_none: str | None = None  # why nothing was estimated (2 dt unstable)
+    why_none: str | None = None  # why nothing was estimated (2 dt unstable, or its run failed)
+    why_none_4dt: str | None = None  # why the order was not checked (the 4 dt run failed)
     unreliable_contacts: list[int] = field(default_factory=list)  # measured contacts without an estimate
 
     def summary(self, main_wall_time: float) -> dict:
@@ -67,6 +69,7 @@ class ErrorReport:
             "peak_status_counts": counts,
             "observables": self.observables,
             "why_none": self.why_none,
+            "why_no_order_check": self.why_none_4dt,
         }
 
 
@@ -117,7 +120,15 @@ def estimate_errors(result, run_one, method: str, stable_timestep: float) -> Err
                 return report
             break
         t0 = time.perf_counter()
-        runs.append(run_one(companion_scene(scene, factor)).solution)
+        try:
+            runs.append(run_one(companion_scene(scene, factor)).solution)
+        except GranchainError as e:  # a coarser run broke an invariant: the run itself stands
+            first_line = str(e).splitlines()[0] if str(e) else type(e).__name__
+            if factor == 2.0:
+                report.why_none = f"the 2 dt companion run failed ({first_line}): no estimate"
+                return report
+            report.why_none_4dt = f"the 4 dt companion run failed ({first_line}): order not checked"
+            break
         report.wall_times.append(time.perf_counter() - t0)
         report.timesteps.append(factor * dt)
     coarse = runs[0]
@@ -172,16 +183,8 @@ def estimate_errors(result, run_one, method: str, stable_timestep: float) -> Err
         times = None
         if name.startswith("leading_peak_force"):
             times = tuple(None if s is None else float(s.leading_pulse_time[b]) for s in (sol, coarse, coarser))
-        elif name == "max_peak_force":
-            times = tuple(
-                None if s is None else float(s.time_of_peak[o["max_peak_contact"] - 1])
-                for s, o in zip((sol, coarse, coarser), obs + [None] * (3 - len(obs)), strict=True)
-                if s is None or o.get("max_peak_contact") is not None
-            )
-            if len(times) < 3:
-                times = None  # a run without a complete peak: nothing to compare
-            if len({o.get("max_peak_contact") for o in obs}) > 1:
-                times = (0.0, jump * 10, None)  # another contact: another pulse
+        # max_peak_force: the largest over contacts is continuous in the runs even where its contact
+        # changes (a steady wave peaks alike everywhere), so no pulse check; wave_speed: a fit
         bars = richardson([v[0]], [v[1]], None if v[2] is None else [v[2]], p, times=times, jump_time=jump)
         report.observables[name] = {
             "value": vals[0],

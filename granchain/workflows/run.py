@@ -176,6 +176,23 @@ def _refined(given, plan, result):
     return refined_plan(given, plan, result.solution)
 
 
+def _estimate_errors(result, plan, backend: str, method: str, np_: int):
+    """The run's companions at 2 dt and 4 dt and its ErrorReport (granchain.workflows.errors)."""
+    from granchain.lammps.runner import cleanup
+    from granchain.workflows.errors import estimate_errors
+    from granchain.workflows.plan import plan_scene
+
+    stable = (plan if plan is not None else plan_scene(result.scene, method=method)).stable_timestep
+
+    def run_one(scene):
+        companion, work = _execute(scene, backend, method, np_)
+        if work is not None:
+            cleanup(work)
+        return companion
+
+    return estimate_errors(result, run_one, method, stable)
+
+
 class OutputSizeWarning(UserWarning):
     """The requested dumps or history files will be larger than OUTPUT_WARN_BYTES."""
 
@@ -255,6 +272,7 @@ def run_scene(
     force: bool = False,
     rtol: float | None = None,
     oversubscribe: bool = False,
+    error_estimate: bool = False,
 ) -> RunResult:
     """Run a scene on a backend; if out is given, write the run directory (checked before the run).
 
@@ -265,6 +283,8 @@ def run_scene(
     says misses rtol (default 1e-3) gives an AccuracyWarning before the run.
     keep_files (lammps): keep LAMMPS's work directory and list its files in result.extra["_files"]
     and ["_work"], for a caller that writes the run directory itself and then removes "_work".
+    error_estimate: also run the scene at 2 dt and 4 dt and estimate every number's error
+    (granchain.workflows.errors; result.errors, peaks.csv's *_error columns, summary.json).
     """
     started = datetime.now(UTC)
     method = integrator(backend, method)
@@ -303,6 +323,8 @@ def run_scene(
             warnings.warn(msg, OutputSizeWarning, stacklevel=2)
         result, work = _execute(scene, backend, method, np_)
     result.plan, result.started_utc = plan, started
+    if error_estimate:
+        result.errors = _estimate_errors(result, plan, backend, method, np_)
     if backend == "reference":
         if out is not None:
             write_run_dir(result, out, overwrite=overwrite)

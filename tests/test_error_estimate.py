@@ -1,0 +1,177 @@
+"""Issue 15: every run carries a measured error estimate (companion runs at 2 dt and 4 dt)."""
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from granchain.cli import main, resolve_scene
+from granchain.results import read_peaks
+from granchain.scene import parse_scene
+from granchain.workflows.errors import companion_scene
+from granchain.workflows.run import plan_for, run_scene
+
+WALL_CHAIN = """
+title = "invented: 40 aluminium beads, a short pulse, a far-end wall"
+[chain]
+beads = 40
+radius = 3e-3
+material = "aluminium-6061-t6"
+[contact]
+law = "hertz"
+[loading]
+kind = "impulse"
+impulse = 0.02
+duration = 2e-6
+[boundary]
+far_end = "wall"
+[run]
+timestep = "auto"
+end_time = "auto"
+[outputs]
+peak_force = true
+histories = [1, 20]
+"""
+
+
+@pytest.mark.parametrize("backend", ["lammps", "reference"])
+def test_granchain_run_gives_every_peak_an_error_by_default(tmp_path, backend, capsys):
+    p = tmp_path / "wall.toml"
+    p.write_text(WALL_CHAIN)
+    out = tmp_path / "run"
+    assert main(["run", str(p), "--backend", backend, "--out", str(out), "--quiet"]) == 0
+    peaks = read_peaks(out)
+    assert {"peak_force_error", "time_of_peak_error", "error_status"} <= set(peaks)
+    s = json.loads((out / "summary.json").read_text())
+    e = s["errors"]
+    assert e["order"] == (2 if backend == "lammps" else 4)
+    assert len(e["companion_timesteps"]) == 2
+    assert e["companion_timesteps"][0] == pytest.approx(2 * s["timestep"])
+    assert s["error_estimate"] is not None and 0 < s["error_estimate"] < 1e-2
+    # every complete peak has an estimate or a status that says why not; never a silent blank
+    done = peaks["complete"]
+    has = np.isfinite(peaks["peak_force_error"][done])
+    statuses = peaks["error_status"][done]
+    assert all(st.startswith(("nominal", "observed", "round-off")) for st in statuses[has])
+    assert all(st.startswith(("unreliable", "not measured", "order not checked")) for st in statuses[~has])
+    assert s["errors"]["observables"]["leading_peak_force"]["status"]
+    printed = capsys.readouterr().out
+    assert "largest peak-force error" in printed and "+-" in printed
+
+
+def test_error_estimate_off_runs_no_companion(tmp_path):
+    p = tmp_path / "wall.toml"
+    p.write_text(WALL_CHAIN)
+    out = tmp_path / "run"
+    assert main(["run", str(p), "--backend", "lammps", "--out", str(out), "--quiet", "--error-estimate", "off"]) == 0
+    assert "peak_force_error" not in read_peaks(out)
+    s = json.loads((out / "summary.json").read_text())
+    assert s["errors"] is None and s["error_estimate"] is None
+
+
+def test_companions_change_only_the_step_and_drop_unneeded_outputs():
+    sc, _ = plan_for(parse_scene(WALL_CHAIN, source="wall.toml"), "lammps", None, 1e-3)
+    c = companion_scene(sc, 4.0)
+    assert c.run.timestep == 4 * sc.run.timestep and c.run.end_time == sc.run.end_time
+    assert c.run.stop_after_contact == sc.run.stop_after_contact
+    assert c.outputs.histories == () and c.outputs.snapshots == ()
+    assert replace(c, run=sc.run, outputs=sc.outputs) == sc
+
+
+def test_verlet_with_a_dashpot_is_estimated_at_first_order():
+    """Velocity Verlet's dashpot sees half-step velocities: order 1 (order 2 underestimated 3x)."""
+    sc, _ = plan_for(resolve_scene("effect-dashpot"), "reference", "verlet", 1e-3)
+    got = run_scene(sc, method="verlet", error_estimate=True)
+    assert got.errors.order == 1
+    fine = run_scene(replace(sc, run=replace(sc.run, timestep=sc.run.timestep / 16)), method="verlet").solution
+    ok = got.errors.peak_force.reliable & got.solution.complete & fine.complete
+    true = np.abs(got.solution.peak_force[ok] - fine.peak_force[ok])
+    ratio = got.errors.peak_force.error[ok] / true
+    assert ok.sum() > 50 and np.all((ratio > 1 / 3) & (ratio < 3))
+
+
+CASES = (
+    [
+        (name, integ)
+        for name in ("default", "effect-striker", "effect-tapered", "effect-wall", "effect-precompression")
+        for integ in ("lammps", "verlet", "rk4")
+    ]
+    + [
+        pytest.param(
+            "plastic-short-impulse",
+            integ,
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="measured: bilinear kinks make the peak errors non-smooth in dt (the peak parabola "
+                "straddles the turn); most estimates say 'unreliable', and of the rest some are outside 1/3-3",
+            ),
+        )
+        for integ in ("lammps", "verlet", "rk4")
+    ]
+    + [
+        pytest.param(
+            "effect-dashpot",
+            "rk4",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="measured: RK4 does not locate where the dashpot's clipped force reaches zero, so it "
+                "converges at order ~1.6 and every estimate says 'unreliable'",
+            ),
+        ),
+        ("effect-dashpot", "verlet"),
+        ("effect-dashpot", "lammps"),
+    ]
+)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name,integ", CASES)
+def test_estimated_error_is_within_a_factor_3_of_the_true_error(name, integ):
+    """Issue 15's validation: estimated / true error (true: a run at dt / 16) in [1/3, 3] wherever
+    the true error is above round-off and an estimate is given, and an estimate for most peaks."""
+    backend, method = ("lammps", None) if integ == "lammps" else ("reference", integ)
+    sc, _ = plan_for(resolve_scene(name), backend, method, 1e-3)
+    sc = replace(sc, outputs=replace(sc.outputs, histories=(), snapshots=(), history_interval=None))
+    got = run_scene(sc, backend=backend, method=method, error_estimate=True)
+    fine = run_scene(replace(sc, run=replace(sc.run, timestep=sc.run.timestep / 16)), backend=backend, method=method)
+    a, b = got.solution, fine.solution
+    measured = a.complete & b.complete
+    true = np.abs(a.peak_force - b.peak_force)
+    above = measured & (true > 1e3 * np.spacing(np.abs(a.peak_force)))
+    est = got.errors.peak_force
+    ok = above & est.reliable
+    assert ok.sum() >= 0.5 * above.sum(), f"{ok.sum()} of {above.sum()} peaks have an estimate"
+    ratio = est.error[ok] / true[ok]
+    assert np.all((ratio >= 1 / 3) & (ratio <= 3)), f"ratios {np.sort(ratio)[[0, -1]]}"
+
+
+def test_a_companion_that_breaks_an_invariant_leaves_the_run_standing():
+    """A coarser companion may blow up where the run did not: the run keeps its numbers, and the
+    report says which companion failed and what that costs (no estimate, or no order check)."""
+    from granchain.errors import GranchainError
+    from granchain.workflows.errors import estimate_errors
+
+    sc, plan = plan_for(parse_scene(WALL_CHAIN, source="wall.toml"), "reference", "verlet", 1e-2)
+    got = run_scene(sc, method="verlet")
+    calls = []
+
+    def fails_at(factor):
+        def run_one(s):
+            calls.append(s.run.timestep / sc.run.timestep)
+            if calls[-1] == factor:
+                raise GranchainError("energy balance broken at step 12")
+            return run_scene(s, method="verlet")
+
+        return run_one
+
+    none = estimate_errors(got, fails_at(2.0), "verlet", plan.stable_timestep)
+    assert none.peak_force is None and "2 dt companion run failed" in none.why_none
+    calls.clear()
+    no_order = estimate_errors(got, fails_at(4.0), "verlet", plan.stable_timestep)
+    assert "4 dt companion run failed" in no_order.why_none_4dt
+    done = got.solution.complete
+    assert all(
+        s in ("order not checked", "round-off") or s.startswith("not measured")
+        for s in no_order.peak_force.status[done]
+    )
