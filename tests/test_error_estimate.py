@@ -175,3 +175,19 @@ def test_a_companion_that_breaks_an_invariant_leaves_the_run_standing():
         s in ("order not checked", "round-off") or s.startswith("not measured")
         for s in no_order.peak_force.status[done]
     )
+
+
+def test_a_measured_error_above_rtol_is_said_after_the_run():
+    """A fixed step far too coarse for rtol: the companions measure the error and the run says so."""
+    import warnings
+
+    from granchain.workflows.run import AccuracyWarning
+
+    sc, _ = plan_for(parse_scene(WALL_CHAIN, source="wall.toml"), "reference", "verlet", 1e-3)
+    coarse = replace(sc, run=replace(sc.run, timestep=sc.run.timestep * 8), outputs=replace(sc.outputs, histories=()))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = run_scene(coarse, method="verlet", error_estimate=True)
+    assert got.errors.error_estimate > 1e-3
+    said = [str(w.message) for w in caught if issubclass(w.category, AccuracyWarning) and "measured" in str(w.message)]
+    assert len(said) == 1 and f"contact {got.errors.error_estimate_contact}" in said[0]

@@ -325,6 +325,15 @@ def run_scene(
     result.plan, result.started_utc = plan, started
     if error_estimate:
         result.errors = _estimate_errors(result, plan, backend, method, np_)
+        worst, target = result.errors.error_estimate, (plan.rtol if plan is not None else rtol or 1e-3)
+        if worst is not None and worst > target:  # measured, not predicted: say so after the run
+            warnings.warn(
+                f"{scene.source}: the measured error of the peak force at contact "
+                f"{result.errors.error_estimate_contact} is {worst:.2g}, above rtol {target:g} (peaks.csv "
+                f"peak_force_error; a smaller [run] timestep or --rtol brings it down)",
+                AccuracyWarning,
+                stacklevel=2,
+            )
     if backend == "reference":
         if out is not None:
             write_run_dir(result, out, overwrite=overwrite)
