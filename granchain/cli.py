@@ -188,7 +188,13 @@ def cmd_compare(args) -> int:
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
     out = args.out or f"runs/{name}-compare-{args.method}"
     rows, lam, ref = compare_scene(
-        scene, rtol=args.rtol, out=out, overwrite=args.overwrite, method=args.method, np_=args.np
+        scene,
+        rtol=args.rtol,
+        out=out,
+        overwrite=args.overwrite,
+        method=args.method,
+        np_=args.np,
+        error_estimate=args.error_estimate == "on",
     )
     print(f"scene      {scene.title or scene.source}")
     print(f"lammps     verlet, dt = {lam.solution.timestep:g} s, {lam.solution.wall_time:.3g} s wall")
@@ -358,6 +364,13 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--np", type=int, default=1, help="MPI ranks for LAMMPS")
     c.add_argument("--out", help="output directory (default runs/<scene>-compare-<method>)")
     c.add_argument("--overwrite", action="store_true", help="replace an existing output directory")
+    c.add_argument(
+        "--error-estimate",
+        default="on",
+        choices=["on", "off"],
+        help="give both runs measured error bars (companions at 2 dt and 4 dt); a difference fails only "
+        "beyond rtol plus both errors (default on)",
+    )
     c.set_defaults(func=cmd_compare)
 
     pl = sub.add_parser("plot", help="make the figures of a run directory or of a compare directory")

@@ -191,3 +191,27 @@ def test_a_measured_error_above_rtol_is_said_after_the_run():
     assert got.errors.error_estimate > 1e-3
     said = [str(w.message) for w in caught if issubclass(w.category, AccuracyWarning) and "measured" in str(w.message)]
     assert len(said) == 1 and f"contact {got.errors.error_estimate_contact}" in said[0]
+
+
+def test_compare_counts_a_difference_only_beyond_rtol_plus_both_errors():
+    from granchain.postprocess.compare import CompareRow
+
+    def row(ea, eb):
+        return CompareRow("q", "N", 100.0, 100.5, None, "", 1e-3, None, None, ea, eb)
+
+    assert not row(None, None).ok  # 0.5% apart, rtol 0.1%: a disagreement
+    assert not row(0.1, 0.1).ok  # 0.5 > 0.1 + 0.1 + 0.1005
+    assert row(0.3, 0.2).ok  # within rtol plus both measured errors
+    assert row(0.3, 0.2).verdict == "yes"
+
+
+def test_granchain_compare_shows_both_error_bars(tmp_path, capsys):
+    p = tmp_path / "wall.toml"
+    p.write_text(WALL_CHAIN)
+    assert main(["compare", str(p), "--out", str(tmp_path / "c"), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "lammps_error" in out and "reference_error" in out
+    header = (tmp_path / "c" / "compare.csv").read_text().splitlines()[0].split(",")
+    rows = [line.split(",") for line in (tmp_path / "c" / "compare.csv").read_text().splitlines()[1:]]
+    lead = next(r for r in rows if r[0] == "leading_peak_force")
+    assert float(lead[header.index("lammps_error")]) > 0 and float(lead[header.index("reference_error")]) > 0

@@ -19,6 +19,7 @@ def compare_scene(
     method: str = "rk4",
     np_: int = 1,
     reference_scene=None,
+    error_estimate: bool = False,
 ):
     """Run LAMMPS and the reference on a scene; returns (rows, lammps result, reference result).
 
@@ -26,6 +27,8 @@ def compare_scene(
     Verlet; the reference: method), the time step for rtol / 2 each; lam.scene and ref.scene are
     the scenes each one ran.
 
+    error_estimate: give each run its measured error bars (companions at 2 dt and 4 dt); a
+    difference then fails only beyond rtol plus both runs' errors, and the table shows them.
     reference_scene: give the reference a different scene (only to show that a physics mismatch is
     caught; `granchain compare` never does this). out: a directory with lammps/, reference/,
     compare.csv and compare.md, written atomically.
@@ -40,10 +43,12 @@ def compare_scene(
     lam_scene, _ = plan_for(scene, "lammps", None, plan_rtol)
     plan_for(reference_scene or scene, "reference", method, plan_rtol)  # a bad scene fails before any run
     check_resources(lam_scene, "lammps", np_)
-    lam = run_scene(scene, backend="lammps", np_=np_, keep_files=True, rtol=plan_rtol)
+    lam = run_scene(scene, backend="lammps", np_=np_, keep_files=True, rtol=plan_rtol, error_estimate=error_estimate)
     files, work = lam.extra.pop("_files"), lam.extra.pop("_work")
     try:
-        ref = run_scene(reference_scene or scene, backend="reference", method=method, rtol=plan_rtol)
+        ref = run_scene(
+            reference_scene or scene, backend="reference", method=method, rtol=plan_rtol, error_estimate=error_estimate
+        )
         rows = compare_runs(lam, ref, rtol)
         if out is not None:
             out = Path(out)
