@@ -14,18 +14,25 @@ from granchain.scene import parse_scene
 
 
 @st.composite
-def scene_texts(draw, *, max_beads: int = 60, auto: bool = True) -> str:
-    law = draw(st.sampled_from(["hertz", "bilinear"]))
+def scene_texts(
+    draw, *, max_beads: int = 60, auto: bool = True, law: str | None = None, precompressed: bool = False
+) -> str:
+    """law: "hertz" or "bilinear" (default: drawn); precompressed: always a precompression (then
+    neither a striker nor a per-bead chain, which the scene refuses with it)."""
+    law = law or draw(st.sampled_from(["hertz", "bilinear"]))
     radius = draw(st.floats(2e-3, 1e-2))
     beads = draw(st.integers(12, max_beads))
-    kind = draw(st.sampled_from(["step", "impulse", "velocity", "striker"]))
-    per_bead = draw(st.sampled_from([None, "taper", "materials"])) if kind != "striker" else None
+    kind = draw(st.sampled_from(["step", "impulse", "velocity"] + ([] if precompressed else ["striker"])))
+    if precompressed:
+        per_bead = None
+    else:
+        per_bead = draw(st.sampled_from([None, "taper", "materials"])) if kind != "striker" else None
     if law == "bilinear" and per_bead == "materials":
         per_bead = "taper"
     wall = pre = False
     if per_bead is None:
         wall = draw(st.booleans())
-        pre = kind != "striker" and draw(st.booleans())
+        pre = precompressed or (kind != "striker" and draw(st.booleans()))
     dashpot = draw(st.one_of(st.just(0.0), st.floats(0.1, 20.0)))
 
     chain = f"beads = {beads}\nradius = {radius!r}\n"

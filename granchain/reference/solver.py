@@ -42,6 +42,19 @@ from granchain.results import ChainSolution
 from granchain.schedule import STOP_CHECK_EVERY, step_plan
 
 METHODS = ("rk4", "verlet")
+EPS = float(np.finfo(float).eps)
+# RK4 event location (first_kink_crossing): a contact closer to a kink of its law than
+# KINK_ROUNDOFF eps (|u_i| + |u_i+1| + |kink|) is at it (an overlap is a difference of two
+# displacements and carries their round-off); and no step is split more often than
+# MAX_SPLITS_PER_CONTACT per contact + MAX_SPLITS_BASE (each crossing takes one split, rarely two
+# or three while the located point converges), else EventLocationError: a bug, not a slow run.
+KINK_ROUNDOFF = 16.0
+MAX_SPLITS_PER_CONTACT = 8
+MAX_SPLITS_BASE = 64
+
+
+class EventLocationError(RuntimeError):
+    """RK4 event location could not get past a kink: the step was split more than the cap allows."""
 
 
 def _hermite_max(t0, t1, a0, a1, d0, d1):
@@ -355,12 +368,29 @@ def _solve(
         unloading at a new alpha_max and the return of reloading to the loading line at alpha_max
         (the slope changes between k and k_u). Located on the cubic
         Hermite interpolant of alpha over the tentative step.
+
+        A contact counts only if it crosses the kink by more than its overlap's round-off (both
+        ends of the step farther than KINK_ROUNDOFF eps (|u_i| + |u_i+1| + |level|) from it, a
+        turn's maximum that far above alpha_max): within that it is at the kink already, the slope
+        change acts over no overlap that double precision can hold, and a step split there need not
+        move the overlap at all, so the same crossing would be found again after the split. A
+        crossing within 1e-6 of the step from either end is not split either (that contact only).
+        The contact and kind of the crossing returned are left in last_event (the split cap's error).
         """
         a_new = u[:-1] - u[1:]
         adot_new = v[:-1] - v[1:]
-        candidates = []
+        # an overlap is the difference of two displacements: round-off of order eps (|u_i| + |u_i+1|)
+        scale = KINK_ROUNDOFF * EPS * (np.abs(u_save[:-1]) + np.abs(u_save[1:]) + np.abs(u[:-1]) + np.abs(u[1:]))
+        found: list[tuple[np.ndarray, np.ndarray, str]] = []
 
-        def first_root(idx: np.ndarray, level) -> None:
+        def crossing(level) -> np.ndarray:
+            """Contacts that cross `level` from one side to the other, beyond round-off at both ends."""
+            tol = scale + KINK_ROUNDOFF * EPS * np.abs(level)
+            below0, above0 = alpha_old < level - tol, alpha_old > level + tol
+            below1, above1 = a_new < level - tol, a_new > level + tol
+            return np.flatnonzero((below0 & above1) | (above0 & below1))
+
+        def first_root(idx: np.ndarray, level, kind: str) -> None:
             a0, a1 = alpha_old[idx] - level, a_new[idx] - level
             d0, d1 = h * adot_old[idx], h * adot_new[idx]
             lo, hi = np.zeros(idx.size), np.ones(idx.size)
@@ -376,31 +406,40 @@ def _solve(
                 left = np.sign(p) == np.sign(a0)
                 lo = np.where(left, mid, lo)
                 hi = np.where(left, hi, mid)
-            candidates.append(np.min(0.5 * (lo + hi)))
+            found.append((0.5 * (lo + hi), idx, kind))
 
         # the force reaches zero: overlap 0 (Hertz) or beta alpha_max (bilinear), either way
-        level = beta * alpha_hist if bilinear else 0.0
-        idx = np.flatnonzero((alpha_old - level) * (a_new - level) < 0.0)
-        if idx.size:
-            first_root(idx, level[idx] if bilinear else 0.0)
         if bilinear:
-            # reloading meets the loading line again at alpha_max (slope k_u -> k)
-            idx = np.flatnonzero((alpha_old < alpha_hist) & (a_new > alpha_hist) & (alpha_hist > 0.0))
+            level = beta * alpha_hist
+            idx = crossing(level)
             if idx.size:
-                first_root(idx, alpha_hist[idx])
-        if bilinear:
+                first_root(idx, level[idx], "zero force at beta alpha_max")
+            # reloading meets the loading line again at alpha_max (slope k_u -> k)
+            idx = crossing(alpha_hist)
+            idx = idx[(alpha_old[idx] < alpha_hist[idx]) & (alpha_hist[idx] > 0.0)]
+            if idx.size:
+                first_root(idx, alpha_hist[idx], "reloading meets alpha_max")
             turn = np.flatnonzero((adot_old > 0.0) & (adot_new < 0.0) & (a_new > 0.0))
             if turn.size:
                 p, sp = _hermite_max(0.0, 1.0, alpha_old[turn], a_new[turn], adot_old[turn] * h, adot_new[turn] * h)
-                loading = p > alpha_hist[turn]
+                loading = p > alpha_hist[turn] + scale[turn] + KINK_ROUNDOFF * EPS * alpha_hist[turn]
                 if loading.any():
-                    candidates.append(np.min(sp[loading]))
-        if not candidates:
+                    found.append((sp[loading], turn[loading], "turn above alpha_max"))
+        else:
+            idx = crossing(0.0)
+            if idx.size:
+                first_root(idx, 0.0, "zero overlap")
+        best = None
+        for s_arr, idx, kind in found:
+            inside = (s_arr * h >= 1e-6 * timestep) & (s_arr <= 1.0 - 1e-6)
+            if inside.any():
+                j = int(np.argmin(np.where(inside, s_arr, np.inf)))
+                if best is None or s_arr[j] < best[0]:
+                    best = (float(s_arr[j]), int(idx[j]), kind)
+        if best is None:
             return None
-        s = float(min(candidates))
-        if s * h < 1e-6 * timestep or s > 1.0 - 1e-6:
-            return None
-        return s
+        last_event["contact"], last_event["kind"] = best[1], best[2]
+        return best[0]
 
     def track_peaks(t0: float, t1: float) -> None:
         """Running peak of every contact's overlap, refined inside the step [t0, t1]."""
@@ -525,6 +564,8 @@ def _solve(
     stopped = False
     step = 0
     extra_steps = 0
+    max_splits = MAX_SPLITS_BASE + MAX_SPLITS_PER_CONTACT * (n - 1)  # per step (EventLocationError)
+    last_event = {"contact": -1, "kind": ""}  # the crossing first_kink_crossing located last
     t = 0.0
     alpha_old = u[:-1] - u[1:]
     adot_old = v[:-1] - v[1:]
@@ -550,6 +591,7 @@ def _solve(
             elif event_location:
                 # RK4 with the step split where a contact crosses a kink of its law, so that no
                 # step integrates across a discontinuity of the force's derivative
+                splits = 0
                 while True:
                     h_sub = t_new - t
                     u_save[:] = u
@@ -559,6 +601,16 @@ def _solve(
                     s_ev = first_kink_crossing(h_sub)
                     if s_ev is None:
                         break
+                    splits += 1
+                    if splits > max_splits:
+                        raise EventLocationError(
+                            f"RK4 event location split step {step + 1} (t = {t:.6g} s, time step "
+                            f"{timestep:.6g} s) {max_splits} times and still finds a kink: contact "
+                            f"{last_event['contact'] + 1} ({last_event['kind']}) at s = {s_ev:.3g} of "
+                            f"the remaining {h_sub:.3g} s. This is a bug of the reference solver: please "
+                            "report it with the scene; meanwhile method 'verlet' (--method verlet) runs "
+                            "without event location"
+                        )
                     u[:] = u_save
                     v[:] = v_save
                     dash["energy"] = e_save
