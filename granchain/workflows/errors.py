@@ -138,16 +138,9 @@ def estimate_errors(result, run_one, method: str, stable_timestep: float) -> Err
     jump = np.pi / highest_frequency(scene)[0]  # half the shortest period of the chain
     n = len(sol.peak_force)
 
-    def per_contact(name: str, time_name: str | None) -> ErrorBars:
-        vals = [np.asarray(getattr(s, name), dtype=float)[:n] for s in (sol, coarse)]
-        vals.append(None if coarser is None else np.asarray(getattr(coarser, name), dtype=float)[:n])
-        times = None
-        if time_name is not None:
-            runs3 = (sol, coarse, coarser)
-            times = tuple(None if s is None else np.asarray(getattr(s, time_name), dtype=float)[:n] for s in runs3)
-        return richardson(vals[0], vals[1], vals[2], p, times=times, jump_time=jump)
-
-    def masked(name: str, complete_only: bool) -> list:
+    def values(name: str, complete_only: bool = False) -> list:
+        """One per-contact quantity from the run and its companions (None: no such companion);
+        complete_only: nan where that run's peak is not complete."""
         out = []
         for s in (sol, coarse, coarser):
             if s is None:
@@ -159,11 +152,12 @@ def estimate_errors(result, run_one, method: str, stable_timestep: float) -> Err
             out.append(v)
         return out
 
-    pf, tp = masked("peak_force", True), masked("time_of_peak", True)
-    report.peak_force = richardson(pf[0], pf[1], pf[2], p, times=(tp[0], tp[1], tp[2]), jump_time=jump)
-    report.time_of_peak = richardson(tp[0], tp[1], tp[2], p, times=(tp[0], tp[1], tp[2]), jump_time=jump)
-    report.leading_pulse_force = per_contact("leading_pulse_force", "leading_pulse_time")
-    report.arrival_time = per_contact("leading_pulse_time", "leading_pulse_time")
+    pf, tp = values("peak_force", True), values("time_of_peak", True)
+    lf, lt = values("leading_pulse_force"), values("leading_pulse_time")
+    report.peak_force = richardson(*pf, p, times=tuple(tp), jump_time=jump)
+    report.time_of_peak = richardson(*tp, p, times=tuple(tp), jump_time=jump)
+    report.leading_pulse_force = richardson(*lf, p, times=tuple(lt), jump_time=jump)
+    report.arrival_time = richardson(*lt, p, times=tuple(lt), jump_time=jump)
 
     measured = measured_contacts(scene, sol)
     rel = np.full(n, np.nan)
