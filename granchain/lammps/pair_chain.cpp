@@ -1,6 +1,9 @@
-/* granchain: chain/hertz and chain/bilinear pair styles. See pair_chain.h. */
+/* granchain: the chain/<law> pair styles, PairChain<Law> over the kernels of law_*.h. See pair_chain.h. */
 
 #include "pair_chain.h"
+
+#include "law_bilinear.h"
+#include "law_hertz.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -15,32 +18,33 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <string>
 
 using namespace LAMMPS_NS;
 
-PairChain::PairChain(LAMMPS *lmp, bool is_bilinear) :
-    Pair(lmp), bilinear(is_bilinear), gamma(0.0), lead(false), kcoeff(nullptr), d0(nullptr), beta(nullptr),
+/* ---------------------------------------------------------------------- the shared machinery */
+
+PairChainBase::PairChainBase(LAMMPS *lmp, bool has_history, const char *law_vectors) :
+    Pair(lmp), history(has_history), vectors(law_vectors), gamma(0.0), lead(false), d0(nullptr),
     t_fc(-std::numeric_limits<double>::infinity()), t_fprev(-std::numeric_limits<double>::infinity()),
     t_fprev2(-std::numeric_limits<double>::infinity()), amax_comm(nullptr)
 {
-  single_enable = 0;
+  single_enable = 1;
   restartinfo = 0;
   writedata = 0;
   comm_forward = 1;    // alpha_max of owned beads to their ghost copies
 }
 
-PairChain::~PairChain()
+PairChainBase::~PairChainBase()
 {
   if (allocated) {
     memory->destroy(setflag);
     memory->destroy(cutsq);
-    memory->destroy(kcoeff);
     memory->destroy(d0);
-    memory->destroy(beta);
   }
 }
 
-void PairChain::allocate()
+void PairChainBase::allocate_base()
 {
   allocated = 1;
   int n = atom->ntypes + 1;
@@ -48,12 +52,10 @@ void PairChain::allocate()
   for (int i = 0; i < n; i++)
     for (int j = 0; j < n; j++) setflag[i][j] = 0;
   memory->create(cutsq, n, n, "pair:cutsq");
-  memory->create(kcoeff, n, n, "pair:k");
   memory->create(d0, n, n, "pair:d0");
-  memory->create(beta, n, n, "pair:beta");
 }
 
-void PairChain::settings(int narg, char **arg)
+void PairChainBase::settings(int narg, char **arg)
 {
   gamma = 0.0;
   lead = false;
@@ -76,46 +78,19 @@ void PairChain::settings(int narg, char **arg)
   }
 }
 
-void PairChain::coeff(int narg, char **arg)
-{
-  const int want = bilinear ? 5 : 4;
-  if (narg != want)
-    error->all(FLERR, "pair_coeff for {} needs: I J k d0{}", force->pair_style, bilinear ? " beta" : "");
-  if (!allocated) allocate();
-  int ilo, ihi, jlo, jhi;
-  utils::bounds(FLERR, arg[0], 1, atom->ntypes, ilo, ihi, error);
-  utils::bounds(FLERR, arg[1], 1, atom->ntypes, jlo, jhi, error);
-  double k = utils::numeric(FLERR, arg[2], false, lmp);
-  double d = utils::numeric(FLERR, arg[3], false, lmp);
-  double b = bilinear ? utils::numeric(FLERR, arg[4], false, lmp) : 0.0;
-  if (k <= 0.0) error->all(FLERR, "pair_coeff k must be > 0, got {}", k);
-  if (d <= 0.0) error->all(FLERR, "pair_coeff d0 must be > 0, got {}", d);
-  if (b < 0.0 || b >= 1.0) error->all(FLERR, "pair_coeff beta must be in [0, 1), got {}", b);
-  int count = 0;
-  for (int i = ilo; i <= ihi; i++)
-    for (int j = MAX(jlo, i); j <= jhi; j++) {
-      kcoeff[i][j] = k;
-      d0[i][j] = d;
-      beta[i][j] = b;
-      setflag[i][j] = 1;
-      count++;
-    }
-  if (count == 0) error->all(FLERR, "Incorrect args for pair coefficients");
-}
-
-double *PairChain::custom(const char *name)
+double *PairChainBase::custom(const char *name)
 {
   int flag, cols;
   int idx = atom->find_custom(name, flag, cols);
   if (idx < 0 || flag != 1 || cols != 0)
     error->all(FLERR,
                "pair {} needs the per-atom vector d_{}: add 'fix ID all property/atom d_fc d_fprev d_fprev2 "
-               "d_fpeak d_tpeak{} d_fmin ghost yes' before the run (granchain's decks do)",
-               force->pair_style, name, bilinear ? " d_amax d_edis" : "");
+               "d_fpeak d_tpeak{}{} d_fmin ghost yes' before the run (granchain's decks do)",
+               force->pair_style, name, *vectors ? " " : "", vectors);
   return atom->dvector[idx];
 }
 
-void PairChain::init_style()
+void PairChainBase::init_style()
 {
   if (force->newton_pair)
     error->all(FLERR, "pair {} requires 'newton off' (contact data live on the left bead of each pair)",
@@ -127,7 +102,10 @@ void PairChain::init_style()
     custom("flead");
     custom("tlead");
   }
-  if (bilinear) custom("amax");
+  if (history) {
+    custom("amax");
+    custom("edis");
+  }
   if (gamma > 0.0) {
     custom("edash");
     if (!comm->ghost_velocity)
@@ -136,44 +114,12 @@ void PairChain::init_style()
   neighbor->add_request(this);
 }
 
-double PairChain::init_one(int i, int j)
+// the start of a force evaluation at elapsed time t: a new sample shifts the owned contacts' force
+// samples (fc -> fprev -> fprev2); fc restarts at 0. A run's setup recomputes the forces of the state
+// the previous run ended in, which is not a new sample
+bool PairChainBase::begin_sample(double t, double *fc, double *fprev, double *fprev2)
 {
-  if (setflag[i][j] == 0) error->all(FLERR, "All pair coeffs are not set (pair {} {})", i, j);
-  kcoeff[j][i] = kcoeff[i][j];
-  d0[j][i] = d0[i][j];
-  beta[j][i] = beta[i][j];
-  return d0[i][j];
-}
-
-void PairChain::compute(int eflag, int vflag)
-{
-  ev_init(eflag, vflag);
-  double **x = atom->x;
-  double **f = atom->f;
-  const int *type = atom->type;
-  const tagint *tag = atom->tag;
   const int nlocal = atom->nlocal;
-  const int newton_pair = force->newton_pair;
-
-  double *fc = custom("fc");
-  double *fprev = custom("fprev");
-  double *fprev2 = custom("fprev2");
-  double *fpeak = custom("fpeak");
-  double *tpeak = custom("tpeak");
-  double *fmin = custom("fmin");
-  double *amax = bilinear ? custom("amax") : nullptr;
-  double *edis = bilinear ? custom("edis") : nullptr;
-  double *edash = gamma > 0.0 ? custom("edash") : nullptr;
-  double **v = atom->v;
-
-  if (bilinear) {
-    amax_comm = amax;
-    comm->forward_comm(this);    // ghosts get the owners' alpha_max of the previous step
-  }
-
-  // elapsed time of this force evaluation; a run's setup recomputes the forces of the state the
-  // previous run ended in, which is not a new sample
-  const double t = update->atime + (update->ntimestep - update->atimestep) * update->dt;
   const bool new_sample = t > t_fc;
   if (new_sample) {
     for (int i = 0; i < nlocal; i++) {
@@ -185,74 +131,19 @@ void PairChain::compute(int eflag, int vflag)
     t_fc = t;
   }
   for (int i = 0; i < nlocal; i++) fc[i] = 0.0;
+  return new_sample;
+}
 
-  const int inum = list->inum;
-  const int *ilist = list->ilist;
-  const int *numneigh = list->numneigh;
-  int **firstneigh = list->firstneigh;
-
-  for (int ii = 0; ii < inum; ii++) {
-    const int i = ilist[ii];
-    const int *jlist = firstneigh[i];
-    const int jnum = numneigh[i];
-    for (int jj = 0; jj < jnum; jj++) {
-      const int j = jlist[jj] & NEIGHMASK;
-      const int itype = type[i], jtype = type[j];
-      const double delx = x[i][0] - x[j][0];
-      const double dely = x[i][1] - x[j][1];
-      const double delz = x[i][2] - x[j][2];
-      const double rsq = delx * delx + dely * dely + delz * delz;
-      if (rsq >= cutsq[itype][jtype]) continue;
-      const double r = sqrt(rsq);
-      const double alpha = d0[itype][jtype] - r;
-      const tagint ti = tag[i], tj = tag[j];
-      if (ti - tj != 1 && tj - ti != 1)
-        error->one(FLERR, "beads {} and {} overlap but are not neighbours in the chain: beads passed through "
-                   "each other (time step too large for this load?)", ti, tj);
-      const int left = ti < tj ? i : j;
-      const double k = kcoeff[itype][jtype];
-      double fmag, energy = 0.0;
-      if (bilinear) {
-        const double b = beta[itype][jtype];
-        const double ku = k / (1.0 - b);
-        const double am = MAX(amax[left], alpha);
-        const double d = alpha - b * am;
-        fmag = d > 0.0 ? ku * d : 0.0;
-        if (eflag) energy = d > 0.0 ? 0.5 * ku * d * d : 0.0;
-        if (left < nlocal) {
-          amax[left] = am;
-          edis[left] = 0.5 * b * k * am * am;
-        }
-      } else {
-        const double sa = sqrt(alpha);
-        fmag = k * alpha * sa;
-        if (eflag) energy = 0.4 * k * alpha * alpha * sa;
-      }
-      if (gamma > 0.0) {
-        // dashpot on the overlap rate: d(alpha)/dt = -dr/dt; the total force never pulls
-        const double rate =
-            -(delx * (v[i][0] - v[j][0]) + dely * (v[i][1] - v[j][1]) + delz * (v[i][2] - v[j][2])) / r;
-        const double felastic = fmag;
-        fmag = MAX(felastic + gamma * rate, 0.0);
-        if (new_sample && left < nlocal) edash[left] += (fmag - felastic) * rate * update->dt;
-      }
-      if (left < nlocal) fc[left] = fmag;
-      const double fpair = fmag / r;    // repulsive: pushes i away from j
-      f[i][0] += delx * fpair;
-      f[i][1] += dely * fpair;
-      f[i][2] += delz * fpair;
-      if (newton_pair || j < nlocal) {
-        f[j][0] -= delx * fpair;
-        f[j][1] -= dely * fpair;
-        f[j][2] -= delz * fpair;
-      }
-      if (evflag) ev_tally(i, j, nlocal, newton_pair, energy, 0.0, fpair, delx, dely, delz);
-    }
-  }
-
-  // running peak of every owned contact: the largest sample, refined by the vertex of the parabola
-  // through the last three samples when the middle one is a local maximum; and the smallest sample
-  // since the peak (granchain.results.complete_peaks), restarted by every new peak
+// running peak of every owned contact: the largest sample, refined by the vertex of the parabola
+// through the last three samples when the middle one is a local maximum; and the smallest sample
+// since the peak (granchain.results.complete_peaks), restarted by every new peak
+void PairChainBase::track_peaks(double t, bool new_sample, const double *fc, const double *fprev,
+                                const double *fprev2)
+{
+  const int nlocal = atom->nlocal;
+  double *fpeak = custom("fpeak");
+  double *tpeak = custom("tpeak");
+  double *fmin = custom("fmin");
   const bool refine = new_sample && std::isfinite(t_fprev2);
   const double a = t_fprev2 - t_fprev, b = t_fc - t_fprev;    // sample times relative to the middle one
   const double det = a * b * (b - a);
@@ -289,25 +180,201 @@ void PairChain::compute(int eflag, int vflag)
       tlead[i] = tpeak[i];
     }
   }
-  if (vflag_fdotr) virial_fdotr_compute();
 }
 
-int PairChain::pack_forward_comm(int n, int *list_, double *buf, int, int *)
+int PairChainBase::pack_forward_comm(int n, int *list_, double *buf, int, int *)
 {
   for (int i = 0; i < n; i++) buf[i] = amax_comm[list_[i]];
   return n;
 }
 
-void PairChain::unpack_forward_comm(int n, int first, double *buf)
+void PairChainBase::unpack_forward_comm(int n, int first, double *buf)
 {
   for (int i = 0; i < n; i++) amax_comm[first + i] = buf[i];
 }
 
-void *PairChain::extract(const char *str, int &dim)
+/* ---------------------------------------------------------------------- one law */
+
+template <class Law> PairChain<Law>::PairChain(LAMMPS *lmp) : PairChainBase(lmp, Law::history, Law::vectors)
+{
+  for (int m = 0; m < Law::ncoeff; m++) coeffs[m] = nullptr;
+}
+
+template <class Law> PairChain<Law>::~PairChain()
+{
+  if (allocated)
+    for (int m = 0; m < Law::ncoeff; m++) memory->destroy(coeffs[m]);
+}
+
+template <class Law> void PairChain<Law>::allocate()
+{
+  allocate_base();
+  int n = atom->ntypes + 1;
+  for (int m = 0; m < Law::ncoeff; m++) memory->create(coeffs[m], n, n, "pair:coeff");
+}
+
+template <class Law> void PairChain<Law>::coeff(int narg, char **arg)
+{
+  constexpr int nc = Law::ncoeff;
+  if (narg != 3 + nc) {
+    std::string extras;
+    for (int m = 1; m < nc; m++) extras += std::string(" ") + Law::coeff_names[m];
+    error->all(FLERR, "pair_coeff for {} needs: I J k d0{}", force->pair_style, extras);
+  }
+  if (!allocated) allocate();
+  int ilo, ihi, jlo, jhi;
+  utils::bounds(FLERR, arg[0], 1, atom->ntypes, ilo, ihi, error);
+  utils::bounds(FLERR, arg[1], 1, atom->ntypes, jlo, jhi, error);
+  double c[nc];
+  c[0] = utils::numeric(FLERR, arg[2], false, lmp);
+  double d = utils::numeric(FLERR, arg[3], false, lmp);
+  for (int m = 1; m < nc; m++) c[m] = utils::numeric(FLERR, arg[3 + m], false, lmp);
+  const char *requirement = "";
+  const int bad = Law::check(c, &requirement);
+  if (bad == 0) error->all(FLERR, "pair_coeff k {}, got {}", requirement, c[0]);
+  if (d <= 0.0) error->all(FLERR, "pair_coeff d0 must be > 0, got {}", d);
+  if (bad > 0) error->all(FLERR, "pair_coeff {} {}, got {}", Law::coeff_names[bad], requirement, c[bad]);
+  int count = 0;
+  for (int i = ilo; i <= ihi; i++)
+    for (int j = MAX(jlo, i); j <= jhi; j++) {
+      for (int m = 0; m < nc; m++) coeffs[m][i][j] = c[m];
+      d0[i][j] = d;
+      setflag[i][j] = 1;
+      count++;
+    }
+  if (count == 0) error->all(FLERR, "Incorrect args for pair coefficients");
+}
+
+template <class Law> double PairChain<Law>::init_one(int i, int j)
+{
+  if (setflag[i][j] == 0) error->all(FLERR, "All pair coeffs are not set (pair {} {})", i, j);
+  for (int m = 0; m < Law::ncoeff; m++) coeffs[m][j][i] = coeffs[m][i][j];
+  d0[j][i] = d0[i][j];
+  return d0[i][j];
+}
+
+template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
+{
+  ev_init(eflag, vflag);
+  double **x = atom->x;
+  double **f = atom->f;
+  const int *type = atom->type;
+  const tagint *tag = atom->tag;
+  const int nlocal = atom->nlocal;
+  const int newton_pair = force->newton_pair;
+
+  double *fc = custom("fc");
+  double *fprev = custom("fprev");
+  double *fprev2 = custom("fprev2");
+  double *amax = Law::history ? custom("amax") : nullptr;
+  double *edis = Law::history ? custom("edis") : nullptr;
+  double *edash = gamma > 0.0 ? custom("edash") : nullptr;
+  double **v = atom->v;
+
+  if constexpr (Law::history) {
+    amax_comm = amax;
+    comm->forward_comm(this);    // ghosts get the owners' alpha_max of the previous step
+  }
+
+  // elapsed time of this force evaluation
+  const double t = update->atime + (update->ntimestep - update->atimestep) * update->dt;
+  const bool new_sample = begin_sample(t, fc, fprev, fprev2);
+
+  const int inum = list->inum;
+  const int *ilist = list->ilist;
+  const int *numneigh = list->numneigh;
+  int **firstneigh = list->firstneigh;
+
+  for (int ii = 0; ii < inum; ii++) {
+    const int i = ilist[ii];
+    const int *jlist = firstneigh[i];
+    const int jnum = numneigh[i];
+    for (int jj = 0; jj < jnum; jj++) {
+      const int j = jlist[jj] & NEIGHMASK;
+      const int itype = type[i], jtype = type[j];
+      const double delx = x[i][0] - x[j][0];
+      const double dely = x[i][1] - x[j][1];
+      const double delz = x[i][2] - x[j][2];
+      const double rsq = delx * delx + dely * dely + delz * delz;
+      if (rsq >= cutsq[itype][jtype]) continue;
+      const double r = sqrt(rsq);
+      const double alpha = d0[itype][jtype] - r;
+      const tagint ti = tag[i], tj = tag[j];
+      if (ti - tj != 1 && tj - ti != 1)
+        error->one(FLERR, "beads {} and {} overlap but are not neighbours in the chain: beads passed through "
+                   "each other (time step too large for this load?)", ti, tj);
+      const int left = ti < tj ? i : j;
+      double c[Law::ncoeff];
+      for (int m = 0; m < Law::ncoeff; m++) c[m] = coeffs[m][itype][jtype];
+      double energy = 0.0;
+      double fmag;
+      if constexpr (Law::history) {
+        const double am = MAX(amax[left], alpha);
+        if (left < nlocal) {
+          fmag = Law::force(alpha, am, c, eflag ? &energy : nullptr, &edis[left]);
+          amax[left] = am;
+        } else {
+          fmag = Law::force(alpha, am, c, eflag ? &energy : nullptr, nullptr);
+        }
+      } else {
+        fmag = Law::force(alpha, alpha, c, eflag ? &energy : nullptr, nullptr);
+      }
+      if (gamma > 0.0) {
+        // dashpot on the overlap rate: d(alpha)/dt = -dr/dt; the total force never pulls
+        const double rate =
+            -(delx * (v[i][0] - v[j][0]) + dely * (v[i][1] - v[j][1]) + delz * (v[i][2] - v[j][2])) / r;
+        const double felastic = fmag;
+        fmag = MAX(felastic + gamma * rate, 0.0);
+        if (new_sample && left < nlocal) edash[left] += (fmag - felastic) * rate * update->dt;
+      }
+      if (left < nlocal) fc[left] = fmag;
+      const double fpair = fmag / r;    // repulsive: pushes i away from j
+      f[i][0] += delx * fpair;
+      f[i][1] += dely * fpair;
+      f[i][2] += delz * fpair;
+      if (newton_pair || j < nlocal) {
+        f[j][0] -= delx * fpair;
+        f[j][1] -= dely * fpair;
+        f[j][2] -= delz * fpair;
+      }
+      if (evflag) ev_tally(i, j, nlocal, newton_pair, energy, 0.0, fpair, delx, dely, delz);
+    }
+  }
+
+  track_peaks(t, new_sample, fc, fprev, fprev2);
+  if (vflag_fdotr) virial_fdotr_compute();
+}
+
+// the stored energy of the pair and fforce = F / r, for its current overlap and the history of its left
+// bead (lower ID); no dashpot (no velocities here); nothing is written. compute() refuses beads that
+// overlap without being neighbours; single() does not look (pair_write calls it for atoms 0 and 1)
+template <class Law>
+double PairChain<Law>::single(int i, int j, int itype, int jtype, double rsq, double, double, double &fforce)
+{
+  fforce = 0.0;
+  const double r = sqrt(rsq);
+  const double alpha = d0[itype][jtype] - r;
+  if (!(alpha > 0.0)) return 0.0;
+  double c[Law::ncoeff];
+  for (int m = 0; m < Law::ncoeff; m++) c[m] = coeffs[m][itype][jtype];
+  double am = alpha;
+  if constexpr (Law::history) am = MAX(custom("amax")[atom->tag[i] < atom->tag[j] ? i : j], alpha);
+  double energy = 0.0;
+  const double fmag = Law::force(alpha, am, c, &energy, nullptr);
+  fforce = fmag / r;
+  return energy;
+}
+
+template <class Law> void *PairChain<Law>::extract(const char *str, int &dim)
 {
   dim = 2;
-  if (strcmp(str, "k") == 0) return (void *) kcoeff;
   if (strcmp(str, "d0") == 0) return (void *) d0;
-  if (bilinear && strcmp(str, "beta") == 0) return (void *) beta;
+  for (int m = 0; m < Law::ncoeff; m++)
+    if (strcmp(str, Law::coeff_names[m]) == 0) return (void *) coeffs[m];
   return nullptr;
 }
+
+namespace LAMMPS_NS {
+template class PairChain<LawHertz>;
+template class PairChain<LawBilinear>;
+}    // namespace LAMMPS_NS

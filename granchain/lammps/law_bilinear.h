@@ -1,0 +1,50 @@
+/* granchain contact law kernel: bilinear elastoplastic, Walton-Braun (pair_style chain/bilinear).
+ * See pair_chain.h for what a law header provides; the numpy twin is granchain.physics.laws.bilinear
+ * (tests/test_kernels.py compares them through LAMMPS).
+ *
+ *   history am = alpha_max, the largest overlap so far (including this step)
+ *   loading F = k alpha (alpha = am), un/reloading F = k_u (alpha - beta am) >= 0, k_u = k / (1 - beta);
+ *   stored E = k_u/2 (alpha - beta am)^2, dissipated beta k am^2 / 2 (paper Eq. 20).
+ *   pair_coeff I J k d0 beta      k in N/m, 0 <= beta < 1
+ */
+
+#ifndef GRANCHAIN_LAW_BILINEAR_H
+#define GRANCHAIN_LAW_BILINEAR_H
+
+namespace LAMMPS_NS {
+
+struct LawBilinear {
+  static constexpr const char *style = "chain/bilinear";
+  static constexpr const char *info = "granchain bilinear (Walton-Braun) elastoplastic contacts for 1D sphere chains";
+  static constexpr int ncoeff = 2;
+  static constexpr const char *coeff_names[ncoeff] = {"k", "beta"};
+  static constexpr bool history = true;
+  static constexpr const char *vectors = "d_amax d_edis";
+
+  static int check(const double *c, const char **requirement)
+  {
+    if (!(c[0] > 0.0)) {
+      *requirement = "must be > 0";
+      return 0;
+    }
+    if (!(c[1] >= 0.0 && c[1] < 1.0)) {
+      *requirement = "must be in [0, 1)";
+      return 1;
+    }
+    return -1;
+  }
+
+  static inline double force(double alpha, double am, const double *c, double *energy, double *dissipated)
+  {
+    const double k = c[0], b = c[1];
+    const double ku = k / (1.0 - b);
+    const double d = alpha - b * am;
+    if (energy) *energy = d > 0.0 ? 0.5 * ku * d * d : 0.0;
+    if (dissipated) *dissipated = 0.5 * b * k * am * am;
+    return d > 0.0 ? ku * d : 0.0;
+  }
+};
+
+}    // namespace LAMMPS_NS
+
+#endif
