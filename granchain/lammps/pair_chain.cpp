@@ -4,6 +4,7 @@
 
 #include "law_bilinear.h"
 #include "law_hertz.h"
+#include "law_thornton.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -377,4 +378,5 @@ template <class Law> void *PairChain<Law>::extract(const char *str, int &dim)
 namespace LAMMPS_NS {
 template class PairChain<LawHertz>;
 template class PairChain<LawBilinear>;
+template class PairChain<LawThornton>;
 }    // namespace LAMMPS_NS

@@ -5,13 +5,15 @@
  *                                loading F = k alpha, un/reloading F = k_u (alpha - beta alpha_max) >= 0,
  *                                k_u = k / (1 - beta); stored E = k_u/2 (alpha - beta alpha_max)^2,
  *                                dissipated beta k alpha_max^2 / 2 (paper Eq. 20).
+ *   pair_style chain/thornton    Thornton (1997) elastic-perfectly-plastic spheres with   (law_thornton.h)
+ *                                history alpha_max and yield overlap d_y
  *   pair_style chain/<law> dashpot gamma   adds gamma * d(alpha)/dt while beads overlap (the total
  *                                never pulls); needs 'comm_modify vel yes' and the vector d_edash,
  *                                the dashpot energy of each contact so far
  *   pair_style chain/<law> lead floor F0   tracks the leading pulse (d_flead, d_tlead)
- *   pair_coeff I J k d0 [extras] k in N/m^1.5 (hertz) or N/m (bilinear), d0 = contact distance
+ *   pair_coeff I J k d0 [extras] k in N/m^1.5 (hertz, thornton) or N/m (bilinear), d0 = contact distance
  *                                (R_I + R_J), then the law's extras: beta the unloading coefficient
- *                                (bilinear).
+ *                                (bilinear), d_y the yield overlap in m (thornton).
  *
  * Each law is a header (law_<name>.h) with a struct of static inline functions:
  *   style, info                  the pair style's name and the plugin's description of it

@@ -7,6 +7,7 @@
 
 #include "law_bilinear.h"
 #include "law_hertz.h"
+#include "law_thornton.h"
 
 using namespace LAMMPS_NS;
 
@@ -36,6 +37,7 @@ void lammpsplugin_init(void *, void *, void *);
 // PairChain<Law> is instantiated for every law in pair_chain.cpp
 extern template class LAMMPS_NS::PairChain<LawHertz>;
 extern template class LAMMPS_NS::PairChain<LawBilinear>;
+extern template class LAMMPS_NS::PairChain<LawThornton>;
 
 template <class Law> static Pair *creator(LAMMPS *lmp) { return new PairChain<Law>(lmp); }
 
@@ -57,4 +59,5 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   plugin.handle = handle;
   register_law<LawHertz>(plugin, reg, lmp);
   register_law<LawBilinear>(plugin, reg, lmp);
+  register_law<LawThornton>(plugin, reg, lmp);
 }

@@ -1,0 +1,72 @@
+/* granchain contact law kernel: Thornton (1997) elastic-perfectly-plastic spheres
+ * (pair_style chain/thornton). See pair_chain.h for what a law header provides; the numpy twin is
+ * granchain.physics.laws.thornton (tests/test_kernels.py compares them through LAMMPS).
+ *
+ *   pair_coeff I J k d0 d_y      k = 4/3 E* sqrt(R*) in N/m^1.5, d_y > 0 the yield overlap in m
+ *   history am = alpha_max, the largest overlap so far (including this step)
+ *   Fy = k d_y^(3/2) the yield force, S = 3/2 k d_y^(1/2) = pi p_y R* the plastic slope (the Hertz
+ *   slope at d_y, so the virgin curve has a continuous slope).
+ *   am <= d_y (elastic): F = k alpha^(3/2), stored E = 2/5 k alpha^(5/2), nothing dissipated.
+ *   am >  d_y: the virgin curve at am is Fmax = Fy + S (am - d_y); un/reloading is Hertz with the
+ *     enlarged radius R_p = R* (Fy/Fmax) ((2 Fmax + Fy) / (3 Fy))^(3/2), kp = k sqrt(R_p/R*), from the
+ *     residual overlap dp = am - (Fmax/kp)^(2/3):  s = alpha - dp,  F = kp s^(3/2) (0 for s <= 0),
+ *     stored E = 2/5 F s, dissipated W(am) - 2/5 Fmax (am - dp) with W(am) = 2/5 k d_y^(5/2)
+ *     + Fy (am - d_y) + S/2 (am - d_y)^2 the work along the virgin curve.
+ *   At alpha = am the un/reloading curve gives Fmax, so one expression serves loading and unloading.
+ */
+
+#ifndef GRANCHAIN_LAW_THORNTON_H
+#define GRANCHAIN_LAW_THORNTON_H
+
+#include <cmath>
+
+namespace LAMMPS_NS {
+
+struct LawThornton {
+  static constexpr const char *style = "chain/thornton";
+  static constexpr const char *info = "granchain Thornton elastic-perfectly-plastic contacts for 1D sphere chains";
+  static constexpr int ncoeff = 2;
+  static constexpr const char *coeff_names[ncoeff] = {"k", "d_y"};
+  static constexpr bool history = true;
+  static constexpr const char *vectors = "d_amax d_edis";
+
+  static int check(const double *c, const char **requirement)
+  {
+    if (!(c[0] > 0.0)) {
+      *requirement = "must be > 0";
+      return 0;
+    }
+    if (!(c[1] > 0.0)) {
+      *requirement = "must be > 0";
+      return 1;
+    }
+    return -1;
+  }
+
+  static inline double force(double alpha, double am, const double *c, double *energy, double *dissipated)
+  {
+    const double k = c[0], dy = c[1];
+    if (am <= dy) {
+      const double sa = sqrt(alpha);
+      if (energy) *energy = 0.4 * k * alpha * alpha * sa;
+      if (dissipated) *dissipated = 0.0;
+      return k * alpha * sa;
+    }
+    const double sy = sqrt(dy);
+    const double fy = k * dy * sy;
+    const double slope = 1.5 * k * sy;
+    const double da = am - dy;
+    const double fmax = fy + slope * da;
+    const double kp = k * sqrt((fy / fmax) * pow((2.0 * fmax + fy) / (3.0 * fy), 1.5));
+    const double dp = am - pow(fmax / kp, 2.0 / 3.0);
+    const double s = alpha - dp;
+    const double f = s > 0.0 ? kp * s * sqrt(s) : 0.0;
+    if (energy) *energy = s > 0.0 ? 0.4 * f * s : 0.0;
+    if (dissipated) *dissipated = 0.4 * k * dy * dy * sy + fy * da + 0.5 * slope * da * da - 0.4 * fmax * (am - dp);
+    return f;
+  }
+};
+
+}    // namespace LAMMPS_NS
+
+#endif
