@@ -12,7 +12,7 @@ import sys
 
 import numpy as np
 
-from granchain.physics.contact import BilinearLaw, HertzLaw
+from granchain.physics.laws import BilinearLaw, HertzLaw
 from granchain.physics.materials import MATERIALS, bead_mass, hertz_stiffness
 from granchain.reference.solver import ChainProblem, solve_chain
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from granchain.physics.contact import BilinearLaw, HertzLaw
+from granchain.physics.laws import ContactLaw
 
 
 @dataclass(frozen=True)
@@ -17,13 +17,13 @@ class ChainProblem:
     """A chain of point masses joined by contact springs, loaded at bead 1."""
 
     mass: np.ndarray  # (N,) kg
-    law: HertzLaw | BilinearLaw
+    law: ContactLaw  # over the N-1 contacts (parameters scalar or one per contact)
     amplitude: float = 0.0  # A, N
     duration: float = 0.0  # T, s
     initial_velocity: float = 0.0  # m/s of bead 1 at t = 0
-    wall_stiffness: float | None = None  # far end: None free, else bead N on a rigid flat (same law)
+    wall_law: ContactLaw | None = None  # far end: None free, else bead N on a rigid flat (same law)
     striker_mass: float | None = None  # a striker before bead 1 (moving at initial_velocity), or None
-    striker_stiffness: float | None = None  # its contact with bead 1
+    striker_law: ContactLaw | None = None  # its contact with bead 1
     dashpot: float = 0.0  # gamma, N s/m, while beads overlap; the total force never pulls
     precompression: float = 0.0  # F0, N: every contact starts in equilibrium at F0 (bead 1 pushed
     # by F0; the far end held by the wall, or pulled by F0 on bead N when free)
@@ -36,40 +36,38 @@ class ChainProblem:
     def from_scene(cls, scene) -> ChainProblem:
         n = scene.chain.beads
         mass = scene.bead_masses if scene.per_bead else np.full(n, scene.mass)
-        k = scene.contact_stiffnesses if scene.per_bead else scene.stiffness
-        if scene.contact.law == "hertz":
-            law: HertzLaw | BilinearLaw = HertzLaw(k=k)
-        else:
-            law = BilinearLaw(k=k, beta=scene.contact.unloading_coeff)
+        law = scene.law
+        if scene.per_bead:
+            law = type(law).join([(c, 1) for c in scene.contact_laws])
         ld = scene.loading
         fx = scene.effects
         extra = {
-            "wall_stiffness": scene.wall_stiffness if fx.far_end == "wall" else None,
+            "wall_law": scene.wall_law if fx.far_end == "wall" else None,
             "dashpot": fx.dashpot,
             "precompression": fx.precompression,
         }
         if ld.kind == "striker":
-            extra.update(striker_mass=scene.striker_mass, striker_stiffness=scene.striker_stiffness)
+            extra.update(striker_mass=scene.striker_mass, striker_law=scene.striker_law)
         if ld.is_force:
             return cls(mass=mass, law=law, amplitude=ld.amplitude, duration=ld.duration, **extra)
         return cls(mass=mass, law=law, initial_velocity=ld.velocity, **extra)
 
     def with_ends(self) -> ChainProblem:
         """The chain a solver integrates: a striker as an extra first bead (moving at initial_velocity;
-        its contact has the striker-bead stiffness) and a wall as an immovable extra last bead (zero
-        inverse mass; its contact has the wall's stiffness). Itself when it has neither."""
-        wall, striker = self.wall_stiffness is not None, self.striker_mass is not None
+        its contact has the striker-bead law) and a wall as an immovable extra last bead (zero
+        inverse mass; its contact has the wall's law). Itself when it has neither."""
+        wall, striker = self.wall_law is not None, self.striker_mass is not None
         if not (wall or striker):
             return self
-        n = self.beads
-        law = self.law
-        k = np.broadcast_to(np.asarray(law.k, dtype=float), (n - 1,))
+        parts = [(self.law, self.beads - 1)]
         mass = self.mass
-        if striker:  # an extra bead in front, moving; its contact has the striker-bead stiffness
-            k, mass = np.concatenate(([self.striker_stiffness], k)), np.concatenate(([self.striker_mass], mass))
+        if striker:  # an extra bead in front, moving; its contact has the striker-bead law
+            parts.insert(0, (self.striker_law, 1))
+            mass = np.concatenate(([self.striker_mass], mass))
         if wall:  # an immovable extra bead at the end (zero inverse mass)
-            k, mass = np.append(k, self.wall_stiffness), np.append(mass, np.inf)
-        law_x = HertzLaw(k=k) if isinstance(law, HertzLaw) else BilinearLaw(k=k, beta=law.beta)
+            parts.append((self.wall_law, 1))
+            mass = np.append(mass, np.inf)
+        law_x = type(self.law).join(parts)
         return ChainProblem(
             mass=mass,
             law=law_x,
@@ -81,11 +79,11 @@ class ChainProblem:
         )
 
 
-def static_state(law, force: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+def static_state(law: ContactLaw, force: float, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Displacements (n,) and overlaps (n-1,) of a chain whose every contact carries `force` in static
-    equilibrium, the last bead (or wall) at u = 0: Hertz alpha0 = (F0/k)^(2/3), bilinear F0/k."""
-    k_c = np.broadcast_to(np.asarray(law.k, dtype=float), (n - 1,))
-    alpha0 = force / k_c if isinstance(law, BilinearLaw) else (force / k_c) ** (2.0 / 3.0)
+    equilibrium, the last bead (or wall) at u = 0: the law's virgin curve at F0 (Hertz (F0/k)^(2/3),
+    bilinear F0/k)."""
+    alpha0 = np.broadcast_to(np.asarray(law.per_contact(n - 1).static_overlap(force), dtype=float), (n - 1,))
     u = np.zeros(n)
     u[:-1] = np.cumsum(alpha0[::-1])[::-1]
     return u, alpha0
@@ -95,29 +93,28 @@ def precompressed_displacements(scene) -> tuple[np.ndarray, np.ndarray]:
     """Static displacements of the scene's beads and overlaps of its contacts (the wall's last)."""
     p = ChainProblem.from_scene(scene)
     n = p.beads
-    k = np.broadcast_to(np.asarray(p.law.k, dtype=float), (n - 1,))
-    if p.wall_stiffness is not None:
-        k = np.append(k, p.wall_stiffness)
+    parts = [(p.law, n - 1)]
+    if p.wall_law is not None:
+        parts.append((p.wall_law, 1))
         n += 1
-    law = HertzLaw(k=k) if isinstance(p.law, HertzLaw) else BilinearLaw(k=k, beta=p.law.beta)
-    u, alpha0 = static_state(law, p.precompression, n)
+    u, alpha0 = static_state(type(p.law).join(parts), p.precompression, n)
     return u[: p.beads], alpha0
 
 
 def initial_state(problem: ChainProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(u, v, alpha_max) at t = 0 of a chain without wall or striker beads (ChainProblem.with_ends):
     at rest but for bead 1's initial velocity; with precompression every contact in static
-    equilibrium at F0 (bilinear: loaded plastically to it, so alpha_max is the static overlap)."""
+    equilibrium at F0 (a law with history was loaded to it: alpha_max is the static overlap)."""
     n = problem.beads
     u = np.zeros(n)
     v = np.zeros(n)
     v[0] = problem.initial_velocity
-    alpha_hist = np.zeros(n - 1)  # bilinear history alpha_max
+    alpha_hist = np.zeros(n - 1)  # the history alpha_max (laws with history)
     f0 = float(problem.precompression)
     if f0:
         u[:], alpha0 = static_state(problem.law, f0, n)
-        if isinstance(problem.law, BilinearLaw):
-            alpha_hist[:] = alpha0  # the precompression loaded every contact plastically
+        if problem.law.history:
+            alpha_hist[:] = alpha0  # the precompression loaded every contact to it
     return u, v, alpha_hist
 
 
@@ -126,12 +123,12 @@ def moving_mass(mass: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(mass), mass, 0.0)
 
 
-def state_energy(law, mass_ke: np.ndarray, u: np.ndarray, v: np.ndarray, alpha_hist: np.ndarray) -> float:
+def state_energy(law: ContactLaw, mass_ke: np.ndarray, u: np.ndarray, v: np.ndarray, alpha_hist: np.ndarray) -> float:
     """Kinetic + stored + dissipated energy of a state (mass_ke: moving_mass)."""
     return (
         0.5 * float(np.dot(mass_ke, v * v))
         + float(np.sum(law.energy(u[:-1] - u[1:], alpha_hist)))
-        + (float(np.sum(law.dissipated(alpha_hist))) if isinstance(law, BilinearLaw) else 0.0)
+        + (float(np.sum(law.dissipated(alpha_hist))) if law.history else 0.0)
     )
 
 

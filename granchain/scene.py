@@ -18,9 +18,11 @@ import numpy as np
 
 from granchain.errors import GranchainError
 from granchain.physics import materials as mat
-from granchain.physics.contact import unloading_stiffness
+from granchain.physics.laws import LAWS as LAW_REGISTRY
+from granchain.physics.laws import ContactLaw, law_class
 
-LAWS = ("hertz", "bilinear")
+LAWS = tuple(LAW_REGISTRY)  # the registered laws' names (granchain.physics.laws.LAWS)
+
 LOADING_KINDS = ("step", "impulse", "velocity", "striker")
 
 
@@ -43,9 +45,16 @@ class Chain:
 
 @dataclass(frozen=True)
 class Contact:
-    law: str  # "hertz" | "bilinear"
+    """The [contact] section: the law (a name in granchain.physics.laws.LAWS) and its keys."""
+
+    law: str
     unloading_coeff: float | None = None  # beta, bilinear only
     plastic_stiffness: float | None = None  # k in N/m, bilinear only (explicit or from yield)
+    yield_pressure: float | None = None  # p_y in Pa, thornton only
+
+    @property
+    def law_class(self) -> type[ContactLaw]:
+        return law_class(self.law)
 
 
 @dataclass(frozen=True)
@@ -155,12 +164,19 @@ class Scene:
     def impulse_scale(self) -> float:
         return mat.impulse_scale(self.chain.material, self.chain.radius)
 
+    def pair_law(self, e_star: float, r_star: float) -> ContactLaw:
+        """The contact law of two bodies of effective modulus E* and radius R* (the law's for_pair)."""
+        return self.contact.law_class.for_pair(self.contact, e_star, r_star, self.r_star)
+
+    @property
+    def law(self) -> ContactLaw:
+        """The nominal bead-bead contact's law (bead 1's material and radius)."""
+        return self.pair_law(self.e_star, self.r_star)
+
     @property
     def stiffness(self) -> float:
-        """Contact stiffness k: Hertz k = 4 E* sqrt(R*)/3, or the bilinear plastic slope."""
-        if self.contact.law == "hertz":
-            return mat.hertz_stiffness(self.chain.material, self.chain.radius)
-        return float(self.contact.plastic_stiffness)
+        """Contact stiffness k of the nominal pair: Hertz k = 4 E* sqrt(R*)/3, the bilinear plastic slope."""
+        return float(self.law.k)
 
     @property
     def per_bead(self) -> bool:
@@ -189,18 +205,24 @@ class Scene:
         r = self.bead_radii
         return np.concatenate(([0.0], np.cumsum(r[:-1] + r[1:])))
 
+    def bead_pair_law(self, r1: float, m1, r2: float, m2) -> ContactLaw:
+        """The law of two beads (radius, material each): Hertz 4/3 E*_pair sqrt(R*_pair) (Johnson);
+        bilinear: the plastic k scaled by R*_pair / R* of the nominal beads (k = 18.5 sigma_y R*)."""
+        return self.pair_law(mat.pair_effective_modulus(m1, m2), mat.pair_effective_radius(r1, r2))
+
     def pair_stiffness(self, r1: float, m1, r2: float, m2) -> float:
-        """k of two beads: Hertz 4/3 E*_pair sqrt(R*_pair) (Johnson); bilinear: the plastic k scaled by
-        R*_pair / R* of the nominal beads (k = 18.5 sigma_y R*, same material)."""
-        rs = mat.pair_effective_radius(r1, r2)
-        if self.contact.law == "hertz":
-            return mat.hertz_contact_stiffness(mat.pair_effective_modulus(m1, m2), rs)
-        return self.stiffness * rs / self.r_star
+        """k of two beads (bead_pair_law)."""
+        return float(self.bead_pair_law(r1, m1, r2, m2).k)
+
+    @property
+    def contact_laws(self) -> list[ContactLaw]:
+        """The law of every bead-bead contact, in chain order."""
+        r, m = self.bead_radii, self.bead_materials
+        return [self.bead_pair_law(r[i], m[i], r[i + 1], m[i + 1]) for i in range(len(r) - 1)]
 
     @property
     def contact_stiffnesses(self) -> np.ndarray:
-        r, m = self.bead_radii, self.bead_materials
-        return np.array([self.pair_stiffness(r[i], m[i], r[i + 1], m[i + 1]) for i in range(len(r) - 1)])
+        return np.array([float(law.k) for law in self.contact_laws])
 
     @property
     def input_impulse(self) -> float:
@@ -234,24 +256,30 @@ class Scene:
         return ld.striker_mass if ld.striker_mass is not None else mat.bead_mass(ld.striker_material, ld.striker_radius)
 
     @property
-    def striker_stiffness(self) -> float:
-        """Striker on bead 1: the pair stiffness of the striker and a bead (see pair_stiffness)."""
+    def striker_law(self) -> ContactLaw:
+        """Striker on bead 1: the law of the striker and a bead (see bead_pair_law)."""
         ld, c = self.loading, self.chain
-        return self.pair_stiffness(ld.striker_radius, ld.striker_material, c.radius, c.material)
+        return self.bead_pair_law(ld.striker_radius, ld.striker_material, c.radius, c.material)
+
+    @property
+    def striker_stiffness(self) -> float:
+        return float(self.striker_law.k)
+
+    @property
+    def wall_law(self) -> ContactLaw:
+        """Bead N on the rigid flat: R* = R and E* = E/(1-nu^2) (Hertz, Thornton); bilinear, k = 18.5
+        sigma_y R* with R* = R, i.e. twice the bead-bead k."""
+        return self.pair_law(mat.flat_effective_modulus(self.chain.material), self.chain.radius)
 
     @property
     def wall_stiffness(self) -> float:
-        """Stiffness of bead N on the rigid flat: Hertz, R* = R and E* = E/(1-nu^2) (a rigid flat);
-        bilinear, k = 18.5 sigma_y R* with R* = R, i.e. twice the bead-bead k."""
-        if self.contact.law == "hertz":
-            return mat.hertz_contact_stiffness(mat.flat_effective_modulus(self.chain.material), self.chain.radius)
-        return 2.0 * self.stiffness
+        return float(self.wall_law.k)
 
     @property
     def unloading_stiffness(self) -> float | None:
-        if self.contact.law != "bilinear":
-            return None
-        return float(unloading_stiffness(self.stiffness, self.contact.unloading_coeff))
+        """k_u of the nominal contact (bilinear), else None."""
+        ku = getattr(self.law, "k_unloading", None)
+        return None if ku is None else float(ku)
 
     @property
     def peak_contacts(self) -> tuple[int, ...]:
@@ -295,6 +323,10 @@ class _Section:
             raise SceneError(f"{file}: [{name}] must be a table, got {table!r}; write it as a [{name}] section")
         self.table = dict(table)
         self.used: set[str] = set()
+
+    def error(self, message: str) -> SceneError:
+        """A SceneError about this file (message names the section, key and fix)."""
+        return SceneError(f"{self.file}: {message}")
 
     def fail(self, key: str, value: Any, allowed: str) -> SceneError:
         return SceneError(f"{self.file}: [{self.name}] {key} = {value!r} is invalid: {allowed}")
@@ -496,11 +528,9 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
         ]
         if others:
             raise SceneError(f"{source}: per-bead radius or material with {', '.join(others)} is not available yet")
-        if chain.materials is not None and contact.law == "bilinear":
-            raise SceneError(
-                f"{source}: [chain] material as a list with the bilinear law is not available yet "
-                "(the plastic stiffness is scaled by radius only); use one material"
-            )
+        why = contact.law_class.unsupported(chain)
+        if why:
+            raise SceneError(f"{source}: {why}")
     return Scene(
         effects=effects,
         chain=chain,
@@ -617,36 +647,7 @@ def _read_chain(s: _Section, source: str) -> Chain:
 
 def _read_contact(s: _Section, chain: Chain) -> Contact:
     law = s.choice("law", LAWS)
-    if law == "hertz":
-        s.forbid(
-            ("unloading_coeff", "plastic_stiffness"),
-            'only the bilinear law has them; set law = "bilinear" or remove them',
-        )
-        s.finish(("law",))
-        return Contact(law=law)
-    beta = s.number(
-        "unloading_coeff",
-        low=0.0,
-        low_open=False,
-        high=1.0,
-        what="beta, the residual-to-maximum overlap ratio: 0 <= beta < 1",
-    )
-    k = s.number("plastic_stiffness", required=False, low=0.0, what="plastic loading stiffness k in N/m")
-    ys = chain.material.yield_strength
-    if k is None and ys is None:
-        raise SceneError(
-            f"{s.file}: [contact] law = 'bilinear' needs a stiffness: give plastic_stiffness (N/m) or "
-            f"the material's yield_strength (Pa) in [chain.material], from which k = 18.5 sigma_y R*"
-        )
-    if k is not None and ys is not None and chain.material_name is None:  # a built-in's yield gives way to k
-        raise SceneError(
-            f"{s.file}: [contact] plastic_stiffness = {k!r} and [chain.material] yield_strength = {ys!r} "
-            f"both set k; give only one"
-        )
-    if k is None:
-        k = mat.plastic_stiffness_from_yield(ys, chain.radius)
-    s.finish(("law", "unloading_coeff", "plastic_stiffness"))
-    return Contact(law=law, unloading_coeff=beta, plastic_stiffness=k)
+    return Contact(law=law, **law_class(law).read_contact(s, chain))
 
 
 def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
@@ -858,11 +859,7 @@ def scene_to_dict(scene: Scene) -> dict:
         "radius": list(c.radii) if c.radii else c.radius,
         "material": list(c.materials) if c.materials else material,
     }
-    contact: dict[str, Any] = {"law": scene.contact.law}
-    if scene.contact.law == "bilinear":
-        contact["unloading_coeff"] = scene.contact.unloading_coeff
-        contact["plastic_stiffness"] = scene.contact.plastic_stiffness
-    d["contact"] = contact
+    d["contact"] = scene.contact.law_class.contact_to_dict(scene.contact)
     ld = scene.loading
     if ld.kind == "step":
         d["loading"] = {"kind": "step", "amplitude": ld.amplitude, "duration": ld.duration}

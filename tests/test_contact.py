@@ -4,15 +4,9 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from granchain.physics.contact import (
-    bilinear_dissipated,
-    bilinear_energy,
-    bilinear_force,
-    dissipation_per_cycle,
-    hertz_energy,
-    hertz_force,
-    unloading_stiffness,
-)
+from granchain.physics.laws.bilinear import bilinear_dissipated, bilinear_energy, bilinear_force, unloading_stiffness
+from granchain.physics.laws.hertz import hertz_energy, hertz_force
+from granchain.physics.models import dissipation_per_cycle
 
 overlap = st.floats(-1e-3, 1e-3, allow_nan=False)
 positive_overlap = st.floats(1e-9, 1e-3)

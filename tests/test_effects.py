@@ -80,7 +80,7 @@ def test_undeclared_effects_leave_no_trace():
         assert word not in deck, word
     assert "2 atom types" not in render_deck(plain).data
     p = ChainProblem.from_scene(plain)
-    assert p.wall_stiffness is None and p.dashpot == 0.0
+    assert p.wall_law is None and p.dashpot == 0.0
     sol = run_reference(plain, "rk4").solution
     assert sol.wall_peak_force is None and sol.dissipated[-1] == 0.0
     walled = render_deck(scene("hertz", "wall", end_time=4e-4, timestep=1e-8))

@@ -13,8 +13,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from granchain.cli import main, resolve_scene
-from granchain.physics.contact import hertz_tangent_stiffness, unloading_stiffness
 from granchain.physics.estimates import expected_peak_force, highest_frequency
+from granchain.physics.laws.bilinear import unloading_stiffness
+from granchain.physics.laws.hertz import hertz_tangent_stiffness
 from granchain.results import read_summary
 from granchain.scene import parse_scene
 from granchain.workflows import run as run_mod

@@ -12,7 +12,6 @@ import math
 import numpy as np
 
 from granchain.physics import models
-from granchain.physics.contact import BilinearLaw, HertzLaw, hertz_tangent_stiffness
 
 
 def step_equivalent(scene) -> tuple[float, float] | None:
@@ -28,44 +27,25 @@ def step_equivalent(scene) -> tuple[float, float] | None:
         return ld.amplitude, ld.duration
     if ld.kind != "striker":
         return None
-    linear = scene.contact.law != "hertz"  # the bilinear loading line
+    linear = scene.contact.law_class.loading_is_linear()  # the bilinear loading line
     a = models.piston_step_amplitude(ld.velocity, scene.stiffness, scene.mass, scene.diameter, linear=linear)
     return a, scene.striker_mass * ld.velocity / a
 
 
 def expected_peak_force(scene) -> float:
     """An upper estimate of the largest contact force of the run (N), from the paper's models."""
-    m, d, k = scene.mass, scene.diameter, scene.stiffness
-    impulse = scene.input_impulse
-    step = step_equivalent(scene)
-    if scene.contact.law == "hertz":
-        f = models.short_load_peak_force(impulse, m, scene.e_star, scene.r_star)  # Eq. 8
-        if step is not None:
-            amp = step[0]
-            fu = models.solitary_wave_peak_force(models.front_speed_upper(amp, k, m, d), k, m, d)
-            f = min(f, max(fu, amp))  # Fig. 3: the smaller of the two regimes' peaks
-        return 1.5 * f  # the first contacts peak above the formed wave (up to ~1.2x measured)
-    beta = scene.contact.unloading_coeff
-    f = models.linear_chain_impulse_response(impulse, k, m, beta)["F_p"]  # Eq. A2
-    if step is not None:
-        f = min(f, 2.0 * step[0])  # a long load cannot push a linear contact past 2 A
-    return 1.5 * f
+    return scene.contact.law_class.expected_peak_force(scene, scene.input_impulse, step_equivalent(scene))
 
 
 def max_stiffness(scene) -> float:
-    """The nominal contact's stiffest tangent (N/m): Hertz at the expected peak force, bilinear k_u."""
-    if scene.contact.law == "hertz":
-        return float(hertz_tangent_stiffness(expected_peak_force(scene), scene.stiffness))
-    return float(scene.unloading_stiffness)
+    """The nominal contact's stiffest tangent (N/m) at the expected peak force (Hertz), k_u (bilinear)."""
+    return float(scene.law.tangent_stiffness(expected_peak_force(scene)))
 
 
-def _tangent(scene, k, force: float) -> np.ndarray:
-    """The stiffest tangent of contacts of stiffness k at the force they are expected to reach: the
-    law's own max_stiffness (physics.contact: Hertz 3/2 k^(2/3) F^(1/3), bilinear k_u)."""
-    k = np.asarray(k, dtype=float)
-    if scene.contact.law == "hertz":
-        return np.asarray(HertzLaw(k).max_stiffness(force), dtype=float)
-    return np.asarray(BilinearLaw(k, scene.contact.unloading_coeff).max_stiffness(force), dtype=float)
+def _tangent(law, force: float) -> np.ndarray:
+    """The stiffest tangent of contacts at the force they are expected to reach: the law's own
+    tangent_stiffness (granchain.physics.laws: Hertz 3/2 k^(2/3) F^(1/3), bilinear k_u)."""
+    return np.asarray(law.tangent_stiffness(force), dtype=float)
 
 
 def damping_rate(scene) -> float:
@@ -92,8 +72,8 @@ def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
     # beads = "auto" (a uniform chain: no per-bead lists): three beads hold every kind of node
     n = scene.chain.beads or 3
     m = scene.bead_masses if scene.per_bead else np.full(n, scene.mass)
-    k = scene.contact_stiffnesses if scene.per_bead else np.full(n - 1, scene.stiffness)
-    kt = _tangent(scene, k, force)
+    law = type(scene.law).join([(c, 1) for c in scene.contact_laws]) if scene.per_bead else scene.law.per_contact(n - 1)
+    kt = np.broadcast_to(_tangent(law, force), (n - 1,))
     # neighbours as (stiffness, neighbour mass) on each side; a missing neighbour adds nothing
     kl, ml = np.concatenate(([0.0], kt)), np.concatenate(([np.inf], m[:-1]))
     kr, mr = np.concatenate((kt, [0.0])), np.concatenate((m[1:], [np.inf]))
@@ -102,11 +82,11 @@ def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
     gr = np.where(np.arange(n) < n - 1, gamma, 0.0)
     extra = {}
     if scene.effects.far_end == "wall":  # a neighbour of infinite mass: only the diagonal term
-        kw = float(_tangent(scene, scene.wall_stiffness, float(scene.effects.precompression) + 2.0 * force))
+        kw = float(_tangent(scene.wall_law, float(scene.effects.precompression) + 2.0 * force))
         kr[-1], mr[-1], gr[-1] = kw, np.inf, gamma
         extra["wall"] = kw
     if scene.loading.kind == "striker":
-        ms, ks = scene.striker_mass, float(_tangent(scene, scene.striker_stiffness, force))
+        ms, ks = scene.striker_mass, float(_tangent(scene.striker_law, force))
         kl[0], ml[0], gl[0] = ks, ms, gamma
         extra["striker"] = ks / ms + ks / math.sqrt(ms * m[0])
         extra["striker_damp"] = gamma / ms + gamma / math.sqrt(ms * m[0])

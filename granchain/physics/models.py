@@ -14,6 +14,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 #: Eq. 8's constant, fitted by the paper's authors from numerical experiments.
 EQ8_CONSTANT = 0.719
 
@@ -192,3 +194,15 @@ def long_load_bilinear(
     f2 = mass * vt / diameter / (1.0 / c + 1.0 / cu)
     v2 = vt / (1.0 + c / cu)
     return {"c": c, "c_u": cu, "F_1": f1, "v_1": v1, "v_t": vt, "x_t": xt, "T_t": xt / c, "F_2": f2, "v_2": v2}
+
+
+def dissipation_per_cycle(peak_force, k, beta):
+    """Eq. 20: energy dissipated at a contact loaded to peak force F, F^2/2 (1/k - 1/k_u) = beta F^2 / (2k).
+
+    The paper prints the last form of Eq. 20 as beta F^2 / (2k (1 - beta)), which does not follow
+    from its own first form (1/k - 1/k_u = beta/k) and disagrees with the area of the
+    load-unload loop; we use the first form (checked against the loop's area in the tests).
+    """
+    k = np.asarray(k)
+    ku = k / (1.0 - np.asarray(beta))
+    return 0.5 * np.asarray(peak_force) ** 2 * (1.0 / k - 1.0 / ku)

@@ -9,7 +9,6 @@ from dataclasses import asdict, dataclass, replace
 from typing import NamedTuple
 
 from granchain.physics import models
-from granchain.physics.contact import dissipation_per_cycle
 from granchain.physics.regimes import loading_regime
 
 
@@ -254,7 +253,7 @@ def _predict(scene) -> list[Prediction]:
         Prediction("trailing_velocity", lin["v_t"], "m/s", "Eq. A4", short_valid),
         Prediction(
             "dissipation_first_contact",
-            float(dissipation_per_cycle(lin["F_p"], k, beta)),
+            float(models.dissipation_per_cycle(lin["F_p"], k, beta)),
             "J",
             "Eq. 20",
             "energy dissipated at a contact loaded to the first contact's peak force",

@@ -61,7 +61,7 @@ def loading_regime(scene) -> LoadingRegime:
     load = ""
     if ld.kind == "striker":
         load = f"the striker (M = {scene.striker_mass / scene.mass:.3g} m) pushes like a step A = {amp:.3g} N, "
-    if scene.contact.law == "hertz":
+    if not scene.contact.law_class.loading_is_linear():  # Hertz; Thornton by its elastic (Hertz) onset
         m, d, k = scene.mass, scene.diameter, scene.stiffness
         f_short = models.short_load_peak_force(amp * dur, m, scene.e_star, scene.r_star)
         f_long = models.solitary_wave_peak_force(models.front_speed_upper(amp, k, m, d), k, m, d)

@@ -11,7 +11,7 @@ import time
 import numpy as np
 
 from granchain.peaks import unreached_as_nan
-from granchain.physics.contact import HertzLaw
+from granchain.physics.laws import HertzLaw
 from granchain.problem import ChainProblem
 from granchain.reference.solver import _hermite_max
 from granchain.results import ChainSolution

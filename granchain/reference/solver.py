@@ -35,7 +35,6 @@ import numpy as np
 
 from granchain.invariants import InvariantError, energy_violation, momentum_violation
 from granchain.peaks import PEAK_PASSED_FRACTION, complete_peaks, unreached_as_nan
-from granchain.physics.contact import BilinearLaw
 from granchain.problem import ChainProblem, initial_state, moving_mass, state_energy
 from granchain.progress import Progress
 from granchain.results import ChainSolution
@@ -85,7 +84,7 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
     if "progress" not in kw:  # progress on stderr for a long run (granchain.progress); closed if the run raises
         with Progress(None, f"reference {method}") as progress:
             return solve_chain(problem, end_time, timestep, method, progress=progress, **kw)
-    wall, striker = problem.wall_stiffness is not None, problem.striker_mass is not None
+    wall, striker = problem.wall_law is not None, problem.striker_mass is not None
     if not (wall or striker):
         return _solve(problem, end_time, timestep, method, **kw)
     n = problem.beads
@@ -166,7 +165,7 @@ def _solve(
     t_wall = time.perf_counter()
     n = problem.beads
     law = problem.law
-    bilinear = isinstance(law, BilinearLaw)
+    history = law.history  # the law keeps alpha_max per contact
     inv_m = 1.0 / problem.mass  # 0 for an immovable wall bead
     inv_m0 = float(inv_m[0])
     mass_ke = moving_mass(problem.mass)  # the wall neither moves nor counts
@@ -174,7 +173,7 @@ def _solve(
     dash = {"power": 0.0, "energy": 0.0}  # dashpot power at the last force evaluation, energy so far
 
     # at rest (bead 1 possibly moving), or precompressed in static equilibrium; alpha_hist: the
-    # bilinear history alpha_max (frozen within a step)
+    # law's history alpha_max (frozen within a step)
     u, v, alpha_hist = initial_state(problem)
     f0 = float(problem.precompression)
     free_end = bool(np.isfinite(problem.mass[-1]))
@@ -191,28 +190,12 @@ def _solve(
             fp[n] = f0  # ... held by an equal pull on bead N when there is no wall
     alpha = np.empty(n - 1)
     tmp = np.empty(n - 1)
-    if bilinear:
-        kk, beta, ku = law.k, law.beta, law.k_unloading
-    else:
-        kk = law.k
-
     fe = np.empty(n - 1) if gamma else None
 
     def accel(uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None) -> np.ndarray:
         np.subtract(uu[:-1], uu[1:], out=alpha)
         np.maximum(alpha, 0.0, out=alpha)
-        if bilinear:
-            # F = max(k_u (alpha - beta max(alpha_max, alpha)), 0); with alpha_max frozen this is
-            # the loading line k alpha wherever alpha >= alpha_max.
-            np.maximum(alpha_hist, alpha, out=tmp)
-            np.multiply(tmp, beta, out=tmp)
-            np.subtract(alpha, tmp, out=fc)
-            np.multiply(fc, ku, out=fc)
-            np.maximum(fc, 0.0, out=fc)
-        else:
-            np.sqrt(alpha, out=tmp)
-            np.multiply(alpha, tmp, out=fc)
-            np.multiply(fc, kk, out=fc)
+        law.force_into(alpha, alpha_hist, fc, tmp)  # with alpha_max frozen within the step
         if gamma:
             # dashpot gamma * d(alpha)/dt while the beads overlap; the total never pulls
             rate = vv[:-1] - vv[1:]
@@ -276,7 +259,7 @@ def _solve(
         a_now = u[:-1] - u[1:]
         ke = 0.5 * float(np.dot(mass_ke, v * v))
         pe = float(np.sum(law.energy(a_now, alpha_hist)))
-        de = (float(np.sum(law.dissipated(alpha_hist))) if bilinear else 0.0) + dash["energy"]
+        de = (float(np.sum(law.dissipated(alpha_hist))) if history else 0.0) + dash["energy"]
         w = work_now(t)
         e_rows.append((t, ke, pe, de, w))
         if energy_watch is not None:
@@ -408,27 +391,27 @@ def _solve(
                 hi = np.where(left, hi, mid)
             found.append((0.5 * (lo + hi), idx, kind))
 
-        # the force reaches zero: overlap 0 (Hertz) or beta alpha_max (bilinear), either way
-        if bilinear:
-            level = beta * alpha_hist
+        # the law's kinks (granchain.physics.laws: Hertz zero overlap; bilinear zero force at
+        # beta alpha_max and reloading meeting alpha_max; ...) and a turn above its turn level
+        for kink in law.kinks(alpha_hist):
+            level = np.broadcast_to(kink.level, alpha_old.shape)
             idx = crossing(level)
+            if kink.from_below:
+                idx = idx[alpha_old[idx] < level[idx]]
+            if kink.where is not None:
+                idx = idx[np.broadcast_to(kink.where, alpha_old.shape)[idx]]
             if idx.size:
-                first_root(idx, level[idx], "zero force at beta alpha_max")
-            # reloading meets the loading line again at alpha_max (slope k_u -> k)
-            idx = crossing(alpha_hist)
-            idx = idx[(alpha_old[idx] < alpha_hist[idx]) & (alpha_hist[idx] > 0.0)]
-            if idx.size:
-                first_root(idx, alpha_hist[idx], "reloading meets alpha_max")
+                first_root(idx, level[idx], kink.kind)
+        turn_level = law.turn_level(alpha_hist)
+        if turn_level is not None:
+            turn_level = np.broadcast_to(turn_level, alpha_old.shape)
             turn = np.flatnonzero((adot_old > 0.0) & (adot_new < 0.0) & (a_new > 0.0))
             if turn.size:
                 p, sp = _hermite_max(0.0, 1.0, alpha_old[turn], a_new[turn], adot_old[turn] * h, adot_new[turn] * h)
-                loading = p > alpha_hist[turn] + scale[turn] + KINK_ROUNDOFF * EPS * alpha_hist[turn]
+                lv = turn_level[turn]
+                loading = p > lv + scale[turn] + KINK_ROUNDOFF * EPS * lv
                 if loading.any():
                     found.append((sp[loading], turn[loading], "turn above alpha_max"))
-        else:
-            idx = crossing(0.0)
-            if idx.size:
-                first_root(idx, 0.0, "zero overlap")
         best = None
         for s_arr, idx, kind in found:
             inside = (s_arr * h >= 1e-6 * timestep) & (s_arr <= 1.0 - 1e-6)
@@ -468,8 +451,8 @@ def _solve(
                 # whole-chain evaluation: per-contact stiffness arrays broadcast only against those
                 f_at = np.asarray(law.force(np.maximum(amax, 0.0), alpha_hist), dtype=float)[turning]
                 freeze_leading(turning[first], f_at[first], tmax[turning][first])
-        if bilinear and method == "rk4":
-            np.maximum(alpha_hist, amax, out=alpha_hist)
+        if history and method == "rk4":
+            law.update_history(alpha_hist, amax)
         alpha_old, adot_old = alpha_new, adot_new
 
     def freeze_leading(ix, force, time) -> None:
@@ -586,8 +569,8 @@ def _solve(
                 dash["energy"] += h * dash["power"]
                 v += 0.5 * h * a_int
                 v[0] += 0.5 * h * a_ext
-                if bilinear:
-                    np.maximum(alpha_hist, u[:-1] - u[1:], out=alpha_hist)
+                if history:
+                    law.update_history(alpha_hist, u[:-1] - u[1:])
             elif event_location:
                 # RK4 with the step split where a contact crosses a kink of its law, so that no
                 # step integrates across a discontinuity of the force's derivative

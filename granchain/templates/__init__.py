@@ -1,8 +1,8 @@
 """Jinja2 LAMMPS decks: a base chain deck plus one block per effect the scene declares.
 
-render_deck(scene) returns the deck text and the data file it reads (chain.data). Blocks:
-contact_<law> (hertz | bilinear), loading_<force | velocity>, energy, histories (only when asked
-for), and a snapshot write_dump at each snapshot time. Every number is written with repr(), the
+render_deck(scene) returns the deck text and the data file it reads (chain.data). Blocks: contact
+(the scene's law: its pair style and coefficients), loading_<force | velocity>, energy, histories
+(only when asked for), and a snapshot write_dump at each snapshot time. Every number is written with repr(), the
 shortest text that reads back to the same double. StrictUndefined: a missing value is an error.
 Free text (title, file name) enters a deck only through the `comment` filter, as an inert comment;
 any other template value that is not one line of printable text is an error.
@@ -10,6 +10,7 @@ any other template value that is not one line of printable text is an error.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from dataclasses import dataclass
@@ -36,8 +37,8 @@ LAMMPS_FILES = ("deck.lmp", "chain.data")
 #: granchain.lammps.runner.read_results reads them back by the dump's own column names, for runs
 #: through the Python module and for plain-LAMMPS runs (granchain collect) alike; a column added
 #: here is written by every deck rendered from now on and read by both. Each is a dump custom
-#: column; a per-atom vector d_NAME is written only when the deck declares it (d_amax: bilinear
-#: law; the built-in granular yardstick has d_fpeak and d_tpeak only) and is read as NAME.
+#: column; a per-atom vector d_NAME is written only when the deck declares it (d_amax: a law with
+#: history; the built-in granular yardstick has d_fpeak and d_tpeak only) and is read as NAME.
 RESULT_COLUMNS = (
     "x",  # final position (m)
     "vx",  # final velocity (m/s)
@@ -46,7 +47,7 @@ RESULT_COLUMNS = (
     "d_fmin",  # the smallest force since that peak (complete peaks)
     "d_flead",  # the leading pulse: the contact's first maximum above the floor (N)
     "d_tlead",  # its time (s)
-    "d_amax",  # bilinear law: the largest overlap so far (m)
+    "d_amax",  # a law with history: the largest overlap so far (m)
 )
 
 #: the deck's results dump (RESULT_COLUMNS) and the run's last step and time ("step time"); the
@@ -242,6 +243,11 @@ def energy_watch_terms(scene) -> dict:
     }
 
 
+def law_parameters(law) -> dict:
+    """The nominal pair's law parameters (the deck's comment names them)."""
+    return {f.name: float(getattr(law, f.name)) for f in dataclasses.fields(law)}
+
+
 def builtin_granular_deck(deck: str, scene) -> str:
     """The same deck with LAMMPS's built-in pair_style granular (hertz/material, no damping, no
     tangential force) instead of chain/hertz: the yardstick our pair style is tested and timed
@@ -287,44 +293,43 @@ def render_deck(scene) -> Deck:
     total = sum(g.steps for g in plan)
     fx = scene.effects
     wall = fx.far_end == "wall"
-    bilinear = scene.contact.law == "bilinear"
+    law_cls = scene.contact.law_class
     peratom = ["d_fc", "d_fprev", "d_fprev2", "d_fpeak", "d_tpeak"]
-    peratom += ["d_amax", "d_edis"] if bilinear else []
+    peratom += ["d_amax", "d_edis"] if law_cls.history else []  # alpha_max and the energy it dissipated
     peratom += ["d_edash"] if fx.dashpot else []
     peratom += ["d_fmin", "d_flead", "d_tlead"]  # completion; the leading pulse
     r = scene.chain.radius
     lay = atom_layout(scene)
     tw, ts = lay["types"].get("wall"), lay["types"].get("striker")
-    coeffs = [{"i": 1, "j": 1, "k": scene.stiffness, "d0": scene.diameter}]
+    pairs = [(1, 1, scene.law, scene.diameter)]  # (type I, type J, the pair's law, contact distance d0)
     if scene.per_bead:
         kinds, _ = bead_kinds(scene)
-        coeffs = [
-            {
-                "i": a + 1,
-                "j": b + 1,
-                "k": scene.pair_stiffness(kinds[a][0], kinds[a][1], kinds[b][0], kinds[b][1]),
-                "d0": kinds[a][0] + kinds[b][0],
-            }
+        pairs = [
+            (
+                a + 1,
+                b + 1,
+                scene.bead_pair_law(kinds[a][0], kinds[a][1], kinds[b][0], kinds[b][1]),
+                kinds[a][0] + kinds[b][0],
+            )
             for a in range(len(kinds))
             for b in range(a, len(kinds))
         ]
     if wall:  # bead-wall contact: distance from the bead's centre to the flat, R
-        coeffs += [
-            {"i": 1, "j": tw, "k": scene.wall_stiffness, "d0": r},
-            {"i": tw, "j": tw, "k": scene.wall_stiffness, "d0": r},
-        ]
+        pairs += [(1, tw, scene.wall_law, r), (tw, tw, scene.wall_law, r)]
     if ts:  # striker-bead contact at R_s + R; striker-wall never meet (coefficients are required)
         rs = scene.loading.striker_radius
-        coeffs += [
-            {"i": 1, "j": ts, "k": scene.striker_stiffness, "d0": rs + r},
-            {"i": ts, "j": ts, "k": scene.striker_stiffness, "d0": 2 * rs},
-        ]
+        pairs += [(1, ts, scene.striker_law, rs + r), (ts, ts, scene.striker_law, 2 * rs)]
         if wall:
-            coeffs.append({"i": tw, "j": ts, "k": scene.striker_stiffness, "d0": rs})
+            pairs.append((tw, ts, scene.striker_law, rs))
+    # pair_coeff I J k d0 [the law's other coefficients] (granchain.physics.laws.base, rule 5)
+    coeffs = []
+    for i, j, law, d0 in pairs:
+        k, *extra = law.pair_coefficients()
+        coeffs.append({"i": i, "j": j, "args": [k, d0, *extra]})
     # the run watch's force bound: the largest force any contact can have at OVERLAP_WATCH x the
-    # smallest radius (Hertz k a^1.5; bilinear: its loading line k a)
+    # smallest radius (on its virgin curve: Hertz k a^1.5, bilinear k a, ...)
     a_watch = OVERLAP_WATCH * float(min(scene.bead_radii))
-    watch_force = max(c["k"] for c in coeffs) * a_watch ** (1.0 if bilinear else 1.5)
+    watch_force = max(float(law.loading_force(a_watch)) for _, _, law, _ in pairs)
     ctx = {
         **energy_watch_terms(scene),
         "watch_force": watch_force,
@@ -339,7 +344,7 @@ def render_deck(scene) -> Deck:
         + (f" dashpot {fx.dashpot!r}" if fx.dashpot else ""),
         "pair_coeffs": coeffs,
         "dashpot": fx.dashpot,
-        "dissipation_terms": (["d_edis"] if bilinear else []) + (["d_edash"] if fx.dashpot else []),
+        "dissipation_terms": (["d_edis"] if law_cls.history else []) + (["d_edash"] if fx.dashpot else []),
         "wall": wall,
         "wall_k": scene.wall_stiffness if wall else 0.0,
         "beads": scene.chain.beads,
@@ -347,9 +352,9 @@ def render_deck(scene) -> Deck:
         "source": scene.source or "<scene>",
         "version": __version__,
         "law": scene.contact.law,
-        "k": scene.stiffness,
-        "d0": scene.diameter,
-        "beta": scene.contact.unloading_coeff if scene.contact.law == "bilinear" else 0.0,
+        "pair_style": law_cls.pair_style,
+        "law_history": law_cls.history,
+        "law_parameters": ", ".join(f"{k} = {v!r}" for k, v in law_parameters(scene.law).items()),
         "skin": 0.2 * 2.0 * float(min(scene.bead_radii)) if scene.per_bead else 0.2 * scene.diameter,
         "dt": dt,
         "loading": "force" if ld.is_force else ld.kind,

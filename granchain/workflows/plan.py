@@ -31,7 +31,6 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from granchain.errors import UsageError
-from granchain.physics import models
 from granchain.physics.estimates import (
     damping_rate,
     expected_peak_force,
@@ -173,29 +172,12 @@ def accurate_timestep(method: str, omega_max: float, rate: float, rtol: float) -
 
 def leading_edge_speed(scene) -> float:
     """The fastest a disturbance can enter the undisturbed chain, m/s (see the module docstring)."""
-    if scene.contact.law == "hertz":
-        return wave_speeds(scene)[1]
-    return models.linear_sound_speed(scene.stiffness, scene.mass, scene.diameter)
+    return scene.contact.law_class.leading_edge_speed(scene, expected_peak_force(scene), step_equivalent(scene))
 
 
 def wave_speeds(scene) -> tuple[float, float]:
-    """(slowest leading-wave speed, fastest wave speed) expected, m/s."""
-    m, d, k = scene.mass, scene.diameter, scene.stiffness
-    if scene.contact.law == "hertz":
-        fast = models.solitary_wave_speed(expected_peak_force(scene), k, m, d)
-        step = step_equivalent(scene)
-        if step is not None:
-            slow = min(
-                models.front_speed_lower(step[0], k, m, d),
-                models.solitary_wave_speed(expected_peak_force(scene) / 1.5, k, m, d),
-            )
-        else:
-            slow = models.solitary_wave_speed(expected_peak_force(scene) / 1.5, k, m, d)
-        # leading waves decay while they form; allow the slower speed of a wave at a tenth the force
-        return slow * 0.1 ** (1 / 6), fast
-    # c = D sqrt(k/m) is the fastest plastic loading signal; the peak of the dispersing leading pulse
-    # travels slower (measured 0.8 c for beta = 0.8, Sec. III A scene): plan with 0.6 c
-    return 0.6 * models.linear_sound_speed(k, m, d), models.linear_sound_speed(scene.unloading_stiffness, m, d)
+    """(slowest leading-wave speed, fastest wave speed) expected, m/s (the law's estimate)."""
+    return scene.contact.law_class.wave_speeds(scene, expected_peak_force(scene), step_equivalent(scene))
 
 
 def last_measured_contact(scene) -> int | None:
@@ -236,7 +218,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
         why = (
             f"{method}: error model {c:g} (omega_max dt)^{p} <= rtol {rtol_plan:g} with omega_max = "
             f"{omega:.4g} rad/s at {stiffest} (nominal contact {k_t:.4g} N/m at the expected peak force"
-            f"{'' if scene.contact.law == 'bilinear' else f' {expected_peak_force(scene):.4g} N'}); "
+            f"{'' if scene.contact.law_class.loading_is_linear() else f' {expected_peak_force(scene):.4g} N'}); "
             f"stability limit {stable:.3g} s"
         )
         if method == "verlet" and rate > 0:

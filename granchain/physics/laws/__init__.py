@@ -1,0 +1,22 @@
+"""Contact laws: one module each, registered here (LAWS is the only list of laws).
+
+See granchain.physics.laws.base for what a law supplies and the rules for writing a new one.
+"""
+
+from __future__ import annotations
+
+from granchain.physics.laws.base import REGISTRY, ContactLaw, Kink
+from granchain.physics.laws.bilinear import BilinearLaw
+from granchain.physics.laws.hertz import HertzLaw
+from granchain.physics.laws.thornton import ThorntonLaw
+
+#: name (the scene's [contact] law) -> law class
+LAWS: dict[str, type[ContactLaw]] = REGISTRY
+LAWS.update({cls.name: cls for cls in (HertzLaw, BilinearLaw, ThorntonLaw)})
+
+__all__ = ["LAWS", "BilinearLaw", "ContactLaw", "HertzLaw", "Kink", "ThorntonLaw", "law_class"]
+
+
+def law_class(name: str) -> type[ContactLaw]:
+    """The registered law called `name` (a scene's [contact] law, validated when the scene was read)."""
+    return LAWS[name]

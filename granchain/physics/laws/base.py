@@ -1,0 +1,171 @@
+"""The base class of a contact law, and the rules for writing a new one.
+
+A contact law is one module of this package plus one C++ header in granchain/lammps (law_<name>.h).
+The overlap of contact i (between bead i and bead i+1) is alpha = u_i - u_{i+1} (Eq. 2); alpha <= 0
+means the beads are apart and the force is zero. A law instance holds its per-contact parameters
+(dataclass fields, each a float or one value per contact) and every method is vectorised over
+contacts.
+
+Rules for writing a new law (the reference solver, the LAMMPS deck, the planner and the checks rely
+on them; tests/test_laws.py and tests/test_kernels.py check them for every registered law):
+
+1. Subclass ContactLaw as a frozen dataclass whose fields are the per-contact parameters, the first
+   one ``k`` (the stiffness the planner and the deck's watch scale by). Set the class attributes:
+   ``name`` (the scene's ``[contact] law``), ``pair_style`` (the C++ style, ``chain/<name>``),
+   ``history`` (True when the force depends on alpha_max, the largest overlap so far: the only
+   history a law may keep; the backends store it per contact, d_amax in LAMMPS, and update it as
+   alpha_max = max(alpha_max, alpha) after every step), ``scene_keys`` (the ``[contact]`` keys it
+   reads besides ``law``), ``parameter_ranges`` (valid values of each parameter, for the tests).
+2. ``force(alpha, alpha_max)`` with alpha_max the history *before* this step: the law takes
+   max(alpha_max, alpha) itself, so a stale history below alpha gives the loading curve. The force
+   is never negative. ``force_into`` is the same into preallocated arrays (the solver's inner loop;
+   alpha already clipped at 0). ``energy`` is the stored (recoverable) energy and ``dissipated``
+   what the contact has dissipated once it reached alpha_max; energy + dissipated = the work done
+   on the contact, whatever path led there (the energy balance checks it).
+3. ``loading_force(alpha)``: the virgin curve, the force at a contact's largest overlap (its peak
+   force); ``static_overlap(force)``: its inverse (precompression, on the virgin curve: a law with
+   history starts with alpha_max = that overlap); ``tangent_stiffness(force)``: the stiffest dF/dalpha
+   a contact loaded to that force can show (the planner's omega_max and the stability check).
+4. ``kinks(alpha_max)``: where dF/dalpha (or a higher derivative) jumps, for RK4's event location:
+   overlaps (one per contact) with where they apply; ``turn_level(alpha_max)``: a contact whose
+   overlap turns (from rising to falling) above this level starts unloading on another curve (None:
+   the law has no such kink).
+5. ``pair_coefficients()``: the numbers of ``pair_coeff I J k d0 [extras]`` after d0, k first and
+   d0 inserted by the deck: the C++ kernel reads them in this order.
+6. ``read_contact(section, chain)`` reads and validates its scene keys (section: scene._Section) and
+   returns the Contact fields; ``for_pair(contact, e_star, r_star, nominal_r_star)`` the law of one
+   pair of bodies (bead-bead, bead-wall with the flat's E* and R* = R, striker-bead).
+7. Register the class in granchain/physics/laws/__init__.py (LAWS, the only list of laws) and the C++
+   kernel in granchain/lammps/plugin.cpp; the planner's estimates (expected_peak_force, wave speeds)
+   are class methods over a scene.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, ClassVar, NamedTuple
+
+import numpy as np
+
+ArrayLike = np.ndarray | float
+
+
+class Kink(NamedTuple):
+    """An overlap level per contact where a law's force has a kink (RK4 event location)."""
+
+    level: np.ndarray  # one per contact
+    kind: str  # what happens there, in words (the event-location error message names it)
+    where: np.ndarray | None = None  # contacts the kink applies to (bool per contact); None: all
+    from_below: bool = False  # only a crossing from below counts (the overlap rising through it)
+
+
+@dataclass(frozen=True)
+class ContactLaw:
+    """A normal contact law of a bead pair: per-contact parameters and vectorised functions."""
+
+    name: ClassVar[str] = ""
+    pair_style: ClassVar[str] = ""
+    history: ClassVar[bool] = False
+    scene_keys: ClassVar[tuple[str, ...]] = ()
+    #: a range of valid values of each parameter (SI), from which the registry's tests draw laws
+    parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {}
+
+    k: ArrayLike
+
+    # ---- the law itself
+    def force(self, alpha: ArrayLike, alpha_max: ArrayLike | None = None) -> np.ndarray:
+        raise NotImplementedError
+
+    def force_into(self, alpha: np.ndarray, alpha_max: np.ndarray, out: np.ndarray, tmp: np.ndarray) -> None:
+        """force() into out (alpha >= 0; tmp a scratch array of the same shape)."""
+        out[:] = self.force(alpha, alpha_max)
+
+    def energy(self, alpha: ArrayLike, alpha_max: ArrayLike | None = None) -> np.ndarray:
+        raise NotImplementedError
+
+    def dissipated(self, alpha_max: ArrayLike) -> np.ndarray:
+        return np.zeros_like(np.asarray(alpha_max, dtype=float))
+
+    def update_history(self, alpha_max: np.ndarray, alpha: np.ndarray) -> None:
+        """alpha_max = max(alpha_max, alpha), in place (laws with history)."""
+        np.maximum(alpha_max, alpha, out=alpha_max)
+
+    def loading_force(self, alpha: ArrayLike) -> np.ndarray:
+        """The virgin loading curve: the force at a contact's largest overlap."""
+        raise NotImplementedError
+
+    def force_at_peak_overlap(self, alpha_peak: ArrayLike) -> np.ndarray:
+        """The peak force of a contact whose largest overlap was alpha_peak (the virgin curve)."""
+        return self.loading_force(alpha_peak)
+
+    def static_overlap(self, force: ArrayLike) -> np.ndarray:
+        """The overlap at which the virgin curve carries `force` (precompression)."""
+        raise NotImplementedError
+
+    def tangent_stiffness(self, force: ArrayLike) -> np.ndarray:
+        """The stiffest dF/dalpha of a contact loaded up to `force` (planner, stability)."""
+        raise NotImplementedError
+
+    def max_stiffness(self, force: ArrayLike) -> np.ndarray:
+        return self.tangent_stiffness(force)
+
+    def kinks(self, alpha_max: np.ndarray) -> list[Kink]:
+        raise NotImplementedError
+
+    def turn_level(self, alpha_max: np.ndarray) -> np.ndarray | None:
+        return None
+
+    def pair_coefficients(self) -> list[float]:
+        """pair_coeff numbers after d0 in the C++ kernel's order (k first; the deck inserts d0)."""
+        return [float(getattr(self, f.name)) for f in dataclasses.fields(self)]
+
+    # ---- building laws
+    @classmethod
+    def join(cls, parts: list[tuple[ContactLaw, int]]) -> ContactLaw:
+        """One law over consecutive groups of contacts: (law, number of contacts) each."""
+        fields = [f.name for f in dataclasses.fields(cls)]
+        values: dict[str, Any] = {}
+        for f in fields:
+            values[f] = np.concatenate(
+                [np.broadcast_to(np.asarray(getattr(law, f), dtype=float), (n,)) for law, n in parts]
+            )
+        return cls(**values)
+
+    def per_contact(self, n: int) -> ContactLaw:
+        """The same law with every parameter as an array of n contacts."""
+        return type(self).join([(self, n)])
+
+    @classmethod
+    def read_contact(cls, section, chain) -> dict:
+        """Read and validate this law's [contact] keys; the Contact fields (besides law)."""
+        forbid_others(section, cls)
+        section.finish(("law", *cls.scene_keys))
+        return {}
+
+    @classmethod
+    def unsupported(cls, chain) -> str | None:
+        """Why a chain (scene.Chain) cannot have this law, or None."""
+        return None
+
+    @classmethod
+    def for_pair(cls, contact, e_star: float, r_star: float, nominal_r_star: float) -> ContactLaw:
+        raise NotImplementedError
+
+    @classmethod
+    def contact_to_dict(cls, contact) -> dict:
+        """The [contact] table of a scene file for this law (scene_to_dict)."""
+        return {"law": cls.name, **{k: getattr(contact, k) for k in cls.scene_keys}}
+
+
+#: the registered laws, name -> class (granchain.physics.laws.LAWS fills it: the only list of laws)
+REGISTRY: dict[str, type[ContactLaw]] = {}
+
+
+def forbid_others(section, cls: type[ContactLaw]) -> None:
+    """Reject [contact] keys of other laws, naming the law that has them."""
+    for key in sorted({k for c in REGISTRY.values() for k in c.scene_keys}):
+        if key in cls.scene_keys:
+            continue
+        owners = [name for name, c in REGISTRY.items() if key in c.scene_keys]
+        section.forbid((key,), f'only the {" or ".join(owners)} law has it; set law = "{owners[0]}" or remove it')

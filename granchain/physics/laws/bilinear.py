@@ -1,0 +1,191 @@
+"""Bilinear elastoplastic contacts, Walton-Braun (Sec. III, Fig. 4), with alpha_max the largest
+overlap so far:
+
+    loading      (alpha >= alpha_max):  F = k alpha
+    un/reloading (alpha <  alpha_max):  F = k_u (alpha - beta alpha_max), never negative,
+    k_u = k / (1 - beta).  The residual overlap after full unloading is beta alpha_max.
+    Stored (recoverable) energy:  k_u/2 (alpha - beta alpha_max)^2 where positive.
+    Dissipated energy:            beta k alpha_max^2 / 2 = F^2/2 (1/k - 1/k_u)   (Eq. 20, first form).
+    These two add up to the work done on the contact, whatever path led to (alpha, alpha_max).
+
+k = 18.5 sigma_y R* (Sec. III) for the nominal pair, scaled by R*_pair / R* for other pairs (a bead on
+the rigid flat, R* = R, has twice the bead-bead k).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import ClassVar
+
+import numpy as np
+
+from granchain.physics import materials as mat
+from granchain.physics import models
+from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, forbid_others
+
+
+def unloading_stiffness(k: ArrayLike, beta: ArrayLike) -> np.ndarray:
+    """k_u = k / (1 - beta): slope of the unloading/reloading line (Sec. III)."""
+    return np.asarray(k) / (1.0 - np.asarray(beta))
+
+
+def bilinear_force(alpha: ArrayLike, alpha_max: ArrayLike, k: ArrayLike, beta: ArrayLike) -> np.ndarray:
+    """Walton-Braun force for the current overlap and the largest overlap so far.
+
+    Where alpha exceeds alpha_max the contact is on the loading line F = k alpha (this does not
+    depend on alpha_max, so a stale alpha_max below alpha gives the right force).
+    """
+    alpha = np.asarray(alpha, dtype=float)
+    am = np.maximum(alpha_max, alpha)
+    ku = unloading_stiffness(k, beta)
+    return np.maximum(ku * (alpha - beta * am), 0.0)
+
+
+def bilinear_energy(alpha: ArrayLike, alpha_max: ArrayLike, k: ArrayLike, beta: ArrayLike) -> np.ndarray:
+    """Recoverable energy stored in the contact: k_u/2 (alpha - beta alpha_max)^2, alpha_max >= alpha."""
+    alpha = np.asarray(alpha, dtype=float)
+    am = np.maximum(alpha_max, alpha)
+    ku = unloading_stiffness(k, beta)
+    d = np.maximum(alpha - beta * am, 0.0)
+    return 0.5 * ku * d * d
+
+
+def bilinear_dissipated(alpha_max: ArrayLike, k: ArrayLike, beta: ArrayLike) -> np.ndarray:
+    """Energy dissipated once the contact has reached alpha_max: beta k alpha_max^2 / 2.
+
+    Equal to Eq. 20, F^2/2 (1/k - 1/k_u), with F = k alpha_max the peak force.
+    """
+    am = np.maximum(alpha_max, 0.0)
+    return 0.5 * np.asarray(beta) * np.asarray(k) * am * am
+
+
+@dataclass(frozen=True)
+class BilinearLaw(ContactLaw):
+    """Walton-Braun bilinear elastoplastic contacts (plastic stiffness k, unloading coefficient beta)."""
+
+    name: ClassVar[str] = "bilinear"
+    pair_style: ClassVar[str] = "chain/bilinear"
+    history: ClassVar[bool] = True
+    scene_keys: ClassVar[tuple[str, ...]] = ("unloading_coeff", "plastic_stiffness")
+    parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "beta": (0.0, 0.99)}
+
+    beta: ArrayLike
+
+    @cached_property
+    def k_unloading(self):
+        """k_u = k / (1 - beta), computed once (the solver's inner loop reads it every step)."""
+        return unloading_stiffness(self.k, self.beta)
+
+    def force(self, alpha, alpha_max=None):
+        return bilinear_force(alpha, 0.0 if alpha_max is None else alpha_max, self.k, self.beta)
+
+    def force_into(self, alpha, alpha_max, out, tmp):
+        # F = max(k_u (alpha - beta max(alpha_max, alpha)), 0); with alpha_max frozen this is the
+        # loading line k alpha wherever alpha >= alpha_max
+        np.maximum(alpha_max, alpha, out=tmp)
+        np.multiply(tmp, self.beta, out=tmp)
+        np.subtract(alpha, tmp, out=out)
+        np.multiply(out, self.k_unloading, out=out)
+        np.maximum(out, 0.0, out=out)
+
+    def energy(self, alpha, alpha_max=None):
+        return bilinear_energy(alpha, 0.0 if alpha_max is None else alpha_max, self.k, self.beta)
+
+    def dissipated(self, alpha_max):
+        return bilinear_dissipated(alpha_max, self.k, self.beta)
+
+    def loading_force(self, alpha):
+        """The force never exceeds the loading line: the peak is k alpha_max."""
+        return np.asarray(self.k) * np.maximum(alpha, 0.0)
+
+    def static_overlap(self, force):
+        return np.asarray(force, dtype=float) / np.asarray(self.k, dtype=float)
+
+    def tangent_stiffness(self, force=None):
+        """k_u at any force: unloading is the stiffer line."""
+        return np.asarray(self.k_unloading)
+
+    def kinks(self, alpha_max):
+        return [
+            # the force reaches zero at beta alpha_max (F' jumps from k_u to 0)
+            Kink(self.beta * alpha_max, "zero force at beta alpha_max"),
+            # reloading meets the loading line again at alpha_max (slope k_u -> k)
+            Kink(alpha_max, "reloading meets alpha_max", where=alpha_max > 0.0, from_below=True),
+        ]
+
+    def turn_level(self, alpha_max):
+        # a turn from loading to unloading at a new alpha_max (slope k -> k_u)
+        return alpha_max
+
+    @classmethod
+    def read_contact(cls, s, chain) -> dict:
+        forbid_others(s, cls)
+        beta = s.number(
+            "unloading_coeff",
+            low=0.0,
+            low_open=False,
+            high=1.0,
+            what="beta, the residual-to-maximum overlap ratio: 0 <= beta < 1",
+        )
+        k = s.number("plastic_stiffness", required=False, low=0.0, what="plastic loading stiffness k in N/m")
+        ys = chain.material.yield_strength
+        if k is None and ys is None:
+            raise s.error(
+                "[contact] law = 'bilinear' needs a stiffness: give plastic_stiffness (N/m) or "
+                "the material's yield_strength (Pa) in [chain.material], from which k = 18.5 sigma_y R*"
+            )
+        if k is not None and ys is not None and chain.material_name is None:  # a built-in's yield gives way
+            raise s.error(
+                f"[contact] plastic_stiffness = {k!r} and [chain.material] yield_strength = {ys!r} both set k; "
+                "give only one"
+            )
+        if k is None:
+            k = mat.plastic_stiffness_from_yield(ys, chain.radius)
+        s.finish(("law", *cls.scene_keys))
+        return {"unloading_coeff": beta, "plastic_stiffness": k}
+
+    @classmethod
+    def for_pair(cls, contact, e_star, r_star, nominal_r_star):
+        k = float(contact.plastic_stiffness)
+        return cls(k=k if r_star == nominal_r_star else k * (r_star / nominal_r_star), beta=contact.unloading_coeff)
+
+    @classmethod
+    def unsupported(cls, chain) -> str | None:
+        """Why a chain cannot have this law (None: it can)."""
+        if chain.materials is not None:
+            return (
+                "[chain] material as a list with the bilinear law is not available yet "
+                "(the plastic stiffness is scaled by radius only); use one material"
+            )
+        return None
+
+    # ---- the planner's estimates
+    @classmethod
+    def expected_peak_force(cls, scene, impulse: float, step) -> float:
+        """Eq. A2 for an impulse; a long load cannot push a linear contact past 2 A; x1.5 margin."""
+        k, m = scene.stiffness, scene.mass
+        f = models.linear_chain_impulse_response(impulse, k, m, scene.contact.unloading_coeff)["F_p"]  # Eq. A2
+        if step is not None:
+            f = min(f, 2.0 * step[0])
+        return 1.5 * f
+
+    @classmethod
+    def loading_is_linear(cls) -> bool:
+        return True
+
+    @classmethod
+    def wave_speeds(cls, scene, expected_force: float, step) -> tuple[float, float]:
+        """c = D sqrt(k/m) is the fastest plastic loading signal; the peak of the dispersing leading
+        pulse travels slower (measured 0.8 c for beta = 0.8, Sec. III A scene): plan with 0.6 c.
+        The fastest wave is unloading, D sqrt(k_u/m)."""
+        m, d = scene.mass, scene.diameter
+        return 0.6 * models.linear_sound_speed(scene.stiffness, m, d), models.linear_sound_speed(
+            scene.unloading_stiffness, m, d
+        )
+
+    @classmethod
+    def leading_edge_speed(cls, scene, expected_force: float, step) -> float:
+        """The loading line's sound speed D sqrt(k/m), the largest group velocity of a linear chain
+        (the faster unloading speed only exists behind the front)."""
+        return models.linear_sound_speed(scene.stiffness, scene.mass, scene.diameter)

@@ -1,0 +1,199 @@
+"""Thornton's elastic-perfectly-plastic spheres (Thornton 1997, J. Appl. Mech. 64, 383).
+
+Per contact, with k = 4/3 E* sqrt(R*) the Hertz stiffness of the pair and p_y the limiting contact
+pressure (not the tensile yield strength):
+
+    yield overlap  d_y = (pi p_y / (2 E*))^2 R*,   F_y = k d_y^(3/2) = (2/3) pi p_y R* d_y
+    virgin curve   F = k d^(3/2) up to d_y, then the plastic line F = F_y + S (d - d_y), S = pi p_y R*
+                   (= 3/2 k d_y^(1/2), the Hertz slope at d_y: the slope is continuous at yield)
+    unloading and reloading below d_max (the largest overlap so far) once d_max > d_y: Hertz with the
+                   enlarged radius R_p = R* (F_y/F_max) ((2 F_max + F_y)/(3 F_y))^(3/2), i.e.
+                   k_p = k sqrt(R_p/R*), F = k_p (d - d_p)^(3/2) for d > d_p, else 0, with
+                   F_max = F_y + S (d_max - d_y) and d_p = max(d_max - (F_max/k_p)^(2/3), 0) (the max only
+                   catches round-off just above d_y, where d_p -> 0); beyond d_max the
+                   plastic line again. A contact that never passed d_y stays Hertzian.
+    stored energy  (2/5) F (d - d_p) on the unloading curve
+    dissipated     the area between the loading path and the unloading curve of d_max:
+                   W(d_max) - (2/5) F_max (d_max - d_p), W the work along the virgin curve.
+
+The per-contact parameters are k and d_y (F_y, S, F_max, k_p and d_p follow), so a wall contact
+(E* of the flat, R* = R) and a striker follow the same law with their own pair's E* and R*. The C++
+twin is granchain/lammps/law_thornton.h.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from granchain.physics import materials as mat
+from granchain.physics import models
+from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, forbid_others
+from granchain.physics.laws.hertz import HertzLaw, hertz_force
+
+
+def yield_overlap(yield_pressure: float, e_star: float, r_star: float) -> float:
+    """d_y = (pi p_y / (2 E*))^2 R*: the overlap at which the peak pressure of a Hertz contact,
+    2 E* a / (pi R*) with a = sqrt(R* d), reaches p_y (Thornton 1997)."""
+    return (math.pi * yield_pressure / (2.0 * e_star)) ** 2 * r_star
+
+
+@dataclass(frozen=True)
+class ThorntonLaw(ContactLaw):
+    """Thornton's elastic-perfectly-plastic contacts: Hertz stiffness k, yield overlap d_y."""
+
+    name: ClassVar[str] = "thornton"
+    pair_style: ClassVar[str] = "chain/thornton"
+    history: ClassVar[bool] = True
+    scene_keys: ClassVar[tuple[str, ...]] = ("yield_pressure",)
+    parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "yield_overlap": (1e-9, 1e-4)}
+
+    yield_overlap: ArrayLike
+
+    # ---- derived per-contact constants
+    @property
+    def yield_force(self) -> np.ndarray:
+        """F_y = k d_y^(3/2)."""
+        dy = np.asarray(self.yield_overlap, dtype=float)
+        return np.asarray(self.k) * dy * np.sqrt(dy)
+
+    @property
+    def plastic_slope(self) -> np.ndarray:
+        """S = 3/2 k d_y^(1/2) = pi p_y R*."""
+        return 1.5 * np.asarray(self.k) * np.sqrt(np.asarray(self.yield_overlap, dtype=float))
+
+    def unloading(self, alpha_max: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(plastic, F_max, k_p, d_p) of contacts whose largest overlap is alpha_max: plastic where
+        alpha_max > d_y; elsewhere F_max on the Hertz curve, k_p = k and d_p = 0."""
+        am = np.asarray(alpha_max, dtype=float)
+        k = np.broadcast_to(np.asarray(self.k, dtype=float), am.shape)
+        dy = np.broadcast_to(np.asarray(self.yield_overlap, dtype=float), am.shape)
+        plastic = am > dy
+        fy = k * dy * np.sqrt(dy)
+        ap = np.maximum(am, dy)  # the plastic formulas at d_y where the contact is still elastic
+        fmax_p = fy + 1.5 * k * np.sqrt(dy) * (ap - dy)
+        kp = k * np.sqrt((fy / fmax_p) * ((2.0 * fmax_p + fy) / (3.0 * fy)) ** 1.5)
+        dp = np.maximum(ap - (fmax_p / kp) ** (2.0 / 3.0), 0.0)  # >= 0 (round-off just above d_y)
+        amc = np.maximum(am, 0.0)
+        fmax = np.where(plastic, fmax_p, k * amc * np.sqrt(amc))
+        return plastic, fmax, np.where(plastic, kp, k), np.where(plastic, dp, 0.0)
+
+    # ---- the law
+    def force(self, alpha, alpha_max=None):
+        a = np.maximum(np.asarray(alpha, dtype=float), 0.0)
+        am = a if alpha_max is None else np.maximum(alpha_max, a)
+        _, _, kp, dp = self.unloading(am)
+        s = np.maximum(a - dp, 0.0)
+        return kp * s * np.sqrt(s)
+
+    def force_into(self, alpha, alpha_max, out, tmp):
+        out[:] = self.force(alpha, alpha_max)
+
+    def energy(self, alpha, alpha_max=None):
+        a = np.maximum(np.asarray(alpha, dtype=float), 0.0)
+        am = a if alpha_max is None else np.maximum(alpha_max, a)
+        _, _, kp, dp = self.unloading(am)
+        s = np.maximum(a - dp, 0.0)
+        return 0.4 * kp * s * s * np.sqrt(s)
+
+    def dissipated(self, alpha_max):
+        am = np.maximum(np.asarray(alpha_max, dtype=float), 0.0)
+        plastic, fmax, _, dp = self.unloading(am)
+        k = np.asarray(self.k, dtype=float)
+        dy = np.asarray(self.yield_overlap, dtype=float)
+        fy, s = self.yield_force, self.plastic_slope
+        x = np.maximum(am - dy, 0.0)
+        work = 0.4 * k * dy * dy * np.sqrt(dy) + fy * x + 0.5 * s * x * x  # along the virgin curve
+        return np.where(plastic, work - 0.4 * fmax * (am - dp), 0.0)
+
+    def loading_force(self, alpha):
+        a = np.maximum(np.asarray(alpha, dtype=float), 0.0)
+        dy = np.asarray(self.yield_overlap, dtype=float)
+        return np.where(a > dy, self.yield_force + self.plastic_slope * (a - dy), hertz_force(a, self.k))
+
+    def static_overlap(self, force):
+        f = np.asarray(force, dtype=float)
+        fy = self.yield_force
+        hertz = (f / np.asarray(self.k, dtype=float)) ** (2.0 / 3.0)
+        return np.where(f > fy, np.asarray(self.yield_overlap) + (f - fy) / self.plastic_slope, hertz)
+
+    def tangent_stiffness(self, force):
+        """Unloading from F_max = force is the stiffest: 3/2 k_p^(2/3) F^(1/3) (the plastic line's S and
+        the Hertz slope below it are smaller: R_p >= R*)."""
+        f = np.maximum(np.asarray(force, dtype=float), 0.0)
+        am = self.static_overlap(f)
+        _, _, kp, _ = self.unloading(am)
+        return 1.5 * np.cbrt(kp * kp * f)
+
+    def kinks(self, alpha_max):
+        am = np.asarray(alpha_max, dtype=float)
+        dy = np.broadcast_to(np.asarray(self.yield_overlap, dtype=float), am.shape)
+        _, _, _, dp = self.unloading(am)
+        return [
+            # the force reaches zero at d_p (0 for an elastic contact): F'' is infinite there
+            Kink(dp, "zero force at d_p"),
+            # reloading meets the plastic line again at d_max (slope of the unloading curve -> S)
+            Kink(am, "reloading meets d_max", where=am > dy, from_below=True),
+            # first yield: Hertz -> the plastic line (F' continuous, F'' jumps)
+            Kink(np.array(dy), "yield at d_y", where=am < dy, from_below=True),
+        ]
+
+    def turn_level(self, alpha_max):
+        # a turn above d_max and d_y leaves the plastic line for a new unloading curve
+        return np.maximum(alpha_max, self.yield_overlap)
+
+    # ---- scenes
+    @classmethod
+    def read_contact(cls, s, chain) -> dict:
+        forbid_others(s, cls)
+        if not s.has("yield_pressure"):
+            raise s.error(
+                "[contact] law = 'thornton' needs yield_pressure: Thornton's limiting contact pressure p_y "
+                "in Pa, the largest pressure plastic flow lets the contact hold. It is not the tensile yield "
+                "strength sigma_y: a Hertz contact starts to yield at a peak pressure of about 1.6 sigma_y"
+            )
+        p_y = s.number(
+            "yield_pressure", low=0.0, what="Thornton's limiting contact pressure p_y in Pa (not the yield strength)"
+        )
+        s.finish(("law", *cls.scene_keys))
+        return {"yield_pressure": p_y}
+
+    @classmethod
+    def for_pair(cls, contact, e_star, r_star, nominal_r_star):
+        return cls(
+            k=mat.hertz_contact_stiffness(e_star, r_star),
+            yield_overlap=yield_overlap(contact.yield_pressure, e_star, r_star),
+        )
+
+    @classmethod
+    def unsupported(cls, chain) -> str | None:
+        return None
+
+    # ---- the planner's estimates: the virgin curve is Hertz up to F_y and softer beyond, and the
+    # contacts dissipate, so Hertz's estimates bound the force from above
+    @classmethod
+    def expected_peak_force(cls, scene, impulse: float, step) -> float:
+        return HertzLaw.expected_peak_force(scene, impulse, step)
+
+    @classmethod
+    def loading_is_linear(cls) -> bool:
+        return False
+
+    @classmethod
+    def wave_speeds(cls, scene, expected_force: float, step) -> tuple[float, float]:
+        """Hertz's solitary-wave speeds, widened: a plastic front is slower (plan with 0.6 D sqrt(S/m), S
+        the plastic slope, like the bilinear law's 0.6 c) and unloading is faster (D sqrt(k_t/m) at the
+        stiffest unloading tangent)."""
+        slow, fast = HertzLaw.wave_speeds(scene, expected_force, step)
+        law, m, d = scene.law, scene.mass, scene.diameter
+        if float(expected_force) > float(law.yield_force):
+            slow = min(slow, 0.6 * models.linear_sound_speed(float(law.plastic_slope), m, d))
+            fast = max(fast, models.linear_sound_speed(float(law.tangent_stiffness(expected_force)), m, d))
+        return slow, fast
+
+    @classmethod
+    def leading_edge_speed(cls, scene, expected_force: float, step) -> float:
+        return cls.wave_speeds(scene, expected_force, step)[1]

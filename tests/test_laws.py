@@ -1,0 +1,196 @@
+"""Every registered contact law (granchain.physics.laws.LAWS) keeps the rules of laws/base.py, for
+every parameter set in its ranges and every overlap and history (hypothesis)."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from granchain.physics.laws import LAWS, ThorntonLaw
+from granchain.physics.laws.hertz import hertz_force
+
+LAW_NAMES = sorted(LAWS)
+
+
+def law_strategy(name):
+    cls = LAWS[name]
+    fields = [f.name for f in dataclasses.fields(cls)]
+    lo_hi = cls.parameter_ranges
+    assert set(lo_hi) == set(fields), f"{name}: parameter_ranges must cover {fields}"
+    parts = {}
+    for f in fields:
+        lo, hi = lo_hi[f]
+        if lo > 0:  # log-uniform over decades
+            parts[f] = st.floats(math.log10(lo), math.log10(hi)).map(lambda x: 10.0**x)
+        else:
+            parts[f] = st.floats(lo, hi)
+    return st.fixed_dictionaries(parts).map(lambda kw: cls(**kw))
+
+
+def overlap_scale(law):
+    """An overlap where the law is doing something: its yield overlap, else a typical 1e-6 m."""
+    return float(getattr(law, "yield_overlap", 1e-6))
+
+
+@st.composite
+def law_and_state(draw, name):
+    law = draw(law_strategy(name))
+    s = overlap_scale(law)
+    amax = s * draw(st.one_of(st.just(0.0), st.floats(1e-6, 20.0)))  # no subnormal overlaps
+    frac = draw(st.floats(0.0, 1.0))
+    return law, amax, frac
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+def test_registry_entry_is_complete(name):
+    cls = LAWS[name]
+    assert cls.name == name and cls.pair_style == f"chain/{name}"
+    assert dataclasses.fields(cls)[0].name == "k"
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+@settings(max_examples=60, deadline=None)
+@given(data=st.data())
+def test_force_never_negative_and_zero_when_apart(name, data):
+    law, amax, frac = data.draw(law_and_state(name))
+    a = np.array([-1e-3, -1e-12, 0.0, frac * amax, amax, 1.5 * amax + 1e-9])
+    f = law.force(a, amax)
+    assert np.all(f >= 0.0) and np.all(np.isfinite(f))
+    assert f[0] == f[1] == f[2] == 0.0
+    assert np.all(law.energy(a[:3], amax) == 0.0)
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+@settings(max_examples=60, deadline=None)
+@given(data=st.data())
+def test_loading_and_history(name, data):
+    """At alpha >= alpha_max the force is the virgin curve (a stale history gives the loading force);
+    static_overlap inverts it; the force is continuous at alpha_max."""
+    law, amax, _ = data.draw(law_and_state(name))
+    a = amax * 1.3 + 1e-9
+    assert np.isclose(law.force(a, amax), law.loading_force(a), rtol=1e-12)
+    assert np.isclose(law.force(amax, amax), law.loading_force(amax), rtol=1e-12, atol=0)
+    f = float(law.loading_force(a))
+    assert np.isclose(law.static_overlap(f), a, rtol=1e-9)
+    eps = 1e-9 * amax
+    left, right = float(law.force(amax - eps, amax)), float(law.force(amax + eps, amax))
+    assert abs(right - left) <= 1e-6 * max(f, 1e-300) + float(law.tangent_stiffness(f)) * 2 * eps
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+@settings(max_examples=40, deadline=None)
+@given(data=st.data())
+def test_energy_balance_of_a_load_unload_path(name, data):
+    """Load on the virgin curve to alpha_max, unload to alpha: the work done equals the stored energy
+    at alpha plus what the contact dissipated (rule 2), to quadrature accuracy."""
+    law, amax, frac = data.draw(law_and_state(name))
+    if amax <= 0.0:
+        return
+    alpha = frac * amax
+    x_in = np.linspace(0.0, amax, 20001)
+    w_in = np.trapezoid(law.loading_force(x_in), x_in)
+    x_out = np.linspace(alpha, amax, 20001)
+    w_out = np.trapezoid(law.force(x_out, amax), x_out)
+    stored = float(law.energy(alpha, amax))
+    lost = float(law.dissipated(amax))
+    assert lost >= -1e-12 * w_in
+    # trapezoid error ~ F'' h^2 (and the sqrt at zero force): 1e-6 of the work is far above it
+    assert math.isclose(w_in - w_out, stored + lost, rel_tol=1e-6, abs_tol=1e-9 * w_in)
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+@settings(max_examples=40, deadline=None)
+@given(data=st.data())
+def test_energy_is_the_integral_of_the_unloading_force(name, data):
+    law, amax, frac = data.draw(law_and_state(name))
+    if amax <= 0.0:
+        return
+    a = min(max(frac, 0.05), 0.95) * amax  # away from the kink at alpha_max
+    h = 1e-6 * amax
+    de = (float(law.energy(a + h, amax)) - float(law.energy(a - h, amax))) / (2 * h)
+    f = float(law.force(a, amax))
+    assert math.isclose(de, f, rel_tol=1e-4, abs_tol=1e-6 * float(law.loading_force(amax)))
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+@settings(max_examples=40, deadline=None)
+@given(data=st.data())
+def test_tangent_stiffness_bounds_every_slope(name, data):
+    """The planner's stiffest tangent at force F bounds the slope of the virgin curve up to F and of
+    the unloading curve from F (finite differences)."""
+    law, amax, _ = data.draw(law_and_state(name))
+    if amax <= 0.0:
+        return
+    f = float(law.loading_force(amax))
+    kt = float(law.tangent_stiffness(f))
+    x = np.linspace(0.0, amax, 401)
+    slopes = np.diff(law.force(x, amax)) / np.diff(x)
+    virgin = np.diff(law.loading_force(x)) / np.diff(x)
+    assert np.all(slopes <= kt * (1 + 1e-6)) and np.all(virgin <= kt * (1 + 1e-6))
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+@settings(max_examples=40, deadline=None)
+@given(data=st.data())
+def test_zero_force_kink_is_where_the_force_vanishes(name, data):
+    """The first kink of every law is where the force reaches zero (RK4 event location)."""
+    law, amax, _ = data.draw(law_and_state(name))
+    level = float(np.broadcast_to(law.kinks(np.array([amax]))[0].level, (1,))[0])
+    assert float(law.force(level, amax)) <= 1e-9 * max(float(law.loading_force(amax)), 1e-300)
+    above = level + 0.01 * max(amax - level, 1e-12)
+    if amax > 0:
+        assert float(law.force(above, amax)) > 0.0
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+def test_join_keeps_each_group(name):
+    cls = LAWS[name]
+    a = law_strategy(name).example()
+    b = law_strategy(name).example()
+    j = cls.join([(a, 2), (b, 3)])
+    alpha = np.full(5, overlap_scale(a))
+    f = j.force(alpha, np.zeros(5))
+    assert np.allclose(f[:2], a.force(alpha[:2], 0.0)) and np.allclose(f[2:], b.force(alpha[2:], 0.0))
+
+
+# ---- Thornton (1997): the law as written in issue 14
+
+
+@settings(max_examples=60, deadline=None)
+@given(law=law_strategy("thornton"), x=st.floats(0.0, 1.0), m=st.floats(1.0, 50.0))
+def test_thornton_is_hertz_below_yield_and_its_enlarged_radius(law, x, m):
+    dy = float(law.yield_overlap)
+    a = x * dy
+    assert math.isclose(float(law.force(a, dy)), float(hertz_force(a, law.k)), rel_tol=1e-12, abs_tol=0)
+    # the plastic line continues Hertz with the same slope at d_y (S = 3/2 k d_y^(1/2) = pi p_y R*)
+    assert math.isclose(float(law.plastic_slope), 1.5 * float(law.k) * math.sqrt(dy), rel_tol=1e-14)
+    # unloading from d_max = m d_y: R_p = 4 E* a_p^3 / (3 F_max), a_p^2 = R* d_max, and k = 4/3 E* sqrt(R*)
+    # give k_p / k = sqrt(R_p / R*) = sqrt(k d_max^(3/2) / F_max) (E* and R* cancel)
+    dmax = m * dy
+    _, fmax, kp, dp = law.unloading(np.array([dmax]))
+    assert math.isclose(float(fmax[0]), float(law.yield_force) + float(law.plastic_slope) * (dmax - dy), rel_tol=1e-12)
+    assert math.isclose(float(kp[0]), float(law.k) * math.sqrt(float(law.k) * dmax**1.5 / float(fmax[0])), rel_tol=1e-9)
+    assert 0.0 <= float(dp[0]) < dmax
+
+
+def test_thornton_scene_needs_the_limiting_pressure():
+    from granchain.scene import SceneError, scene_from_dict
+
+    d = {
+        "chain": {"beads": 10, "radius": 0.00476, "material": "brass"},
+        "contact": {"law": "thornton"},
+        "loading": {"kind": "velocity", "velocity": 1.0},
+        "run": {"end_time": 1e-4, "timestep": 1e-8},
+    }
+    with pytest.raises(SceneError, match="not the tensile yield") as e:
+        scene_from_dict(d, source="t.toml")
+    assert "yield_pressure" in str(e.value)
+    d["contact"]["yield_pressure"] = 1e9
+    sc = scene_from_dict(d, source="t.toml")
+    assert isinstance(sc.law, ThorntonLaw)
+    d["contact"]["unloading_coeff"] = 0.5
+    with pytest.raises(SceneError, match="only the bilinear law"):
+        scene_from_dict(d, source="t.toml")
