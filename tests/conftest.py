@@ -3,6 +3,7 @@ import textwrap
 
 import pytest
 
+from granchain.physics.laws import LAWS
 from granchain.scene import parse_scene
 
 ISSUE_SCENE = """
@@ -31,8 +32,12 @@ snapshots = [2e-3]
 
 
 def make_scene_text(
-    *, beads=30, law="hertz", contact_extra="", loading=None, end_time=2e-4, timestep=1e-8, outputs=""
+    *, beads=30, law="hertz", contact_extra=None, loading=None, end_time=2e-4, timestep=1e-8, outputs=""
 ) -> str:
+    if contact_extra is None:
+        contact_extra = law_example(law)
+    if contact_extra is None:
+        contact_extra = law_example(law)
     loading = loading or 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
     if "histories" in outputs and "history_interval" not in outputs:
         # these tests compare histories sample by sample: every step (the scene's default is "auto")
@@ -64,7 +69,17 @@ def make_scene(**kw):
     return parse_scene(make_scene_text(**kw), source="test.toml")
 
 
-BILINEAR = "unloading_coeff = 0.8\nplastic_stiffness = 2.43e7\n"
+def law_example(law: str) -> str:
+    """The [contact] lines (besides law) of the registered law's example (brass, R = 4.76 mm)."""
+    return "".join(f"{k} = {v!r}\n" for k, v in LAWS[law].example_contact.items())
+
+
+#: every registered contact law (granchain.physics.laws.LAWS): tests that hold for any law run over it
+LAW_NAMES = sorted(LAWS)
+#: the laws with history (alpha_max)
+PLASTIC_LAWS = [n for n in LAW_NAMES if LAWS[n].history]
+
+BILINEAR = law_example("bilinear")
 
 
 @pytest.fixture

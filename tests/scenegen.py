@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from hypothesis import strategies as st
 
+from granchain.physics.laws import LAWS
 from granchain.physics.materials import MATERIALS
 from granchain.scene import parse_scene
 
@@ -17,9 +18,9 @@ from granchain.scene import parse_scene
 def scene_texts(
     draw, *, max_beads: int = 60, auto: bool = True, law: str | None = None, precompressed: bool = False
 ) -> str:
-    """law: "hertz" or "bilinear" (default: drawn); precompressed: always a precompression (then
+    """law: a registered law's name (default: drawn); precompressed: always a precompression (then
     neither a striker nor a per-bead chain, which the scene refuses with it)."""
-    law = law or draw(st.sampled_from(["hertz", "bilinear"]))
+    law = law or draw(st.sampled_from(sorted(LAWS)))
     radius = draw(st.floats(2e-3, 1e-2))
     beads = draw(st.integers(12, max_beads))
     kind = draw(st.sampled_from(["step", "impulse", "velocity"] + ([] if precompressed else ["striker"])))
@@ -27,7 +28,7 @@ def scene_texts(
         per_bead = None
     else:
         per_bead = draw(st.sampled_from([None, "taper", "materials"])) if kind != "striker" else None
-    if law == "bilinear" and per_bead == "materials":
+    if per_bead == "materials" and LAWS[law].unsupported(_materials_chain()):
         per_bead = "taper"
     wall = pre = False
     if per_bead is None:
@@ -44,10 +45,8 @@ def scene_texts(
     if per_bead == "taper":
         chain += f"taper = {draw(st.floats(0.95, 0.995))!r}\n"
     contact = f'law = "{law}"\n'
-    if law == "bilinear":
-        contact += (
-            f"unloading_coeff = {draw(st.floats(0.0, 0.9))!r}\nplastic_stiffness = {draw(st.floats(1e6, 1e8))!r}\n"
-        )
+    for key, (lo, hi) in LAWS[law].scene_key_ranges.items():
+        contact += f"{key} = {draw(st.floats(lo, hi))!r}\n"
     if kind == "step":
         loading = f"amplitude = {draw(st.floats(1.0, 1e4))!r}\nduration = {draw(st.floats(1e-6, 2e-4))!r}\n"
     elif kind == "impulse":
@@ -74,13 +73,19 @@ def scene_texts(
     return text
 
 
+def _materials_chain():
+    """A chain with per-bead materials (whether a law takes one: its unsupported())."""
+    from types import SimpleNamespace
+
+    return SimpleNamespace(materials=("brass", "steel"), radii=None)
+
+
 def overlap_fraction(scene) -> float:
     """The overlap at the planner's largest expected force, as a fraction of the smallest radius."""
     from granchain.physics.estimates import expected_peak_force
 
     f = float(scene.effects.precompression) + expected_peak_force(scene)
-    k = scene.stiffness
-    alpha = (f / k) ** (2.0 / 3.0) if scene.contact.law == "hertz" else f / k
+    alpha = float(scene.law.static_overlap(f))  # on the virgin curve
     radii = scene.bead_radii if scene.chain.beads else [scene.chain.radius]
     return float(alpha / min(radii))
 

@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 from granchain.cli import bundled_scenes, main
 from granchain.physics import models
+from granchain.physics.laws import LAWS
 from granchain.physics.predictions import MODEL_DOMAINS, SCENE_QUANTITIES, applicability, predict
 from granchain.physics.regimes import HERTZ_LONG_ABOVE, HERTZ_SHORT_BELOW, loading_regime
 from granchain.postprocess.compare import CompareRow, compare_runs, format_table
@@ -21,7 +22,7 @@ from granchain.workflows.plan import plan_scene
 from granchain.workflows.plots import model_curves
 from granchain.workflows.run import run_scene
 
-from .conftest import make_scene_text
+from .conftest import LAW_NAMES, make_scene_text
 
 
 def bundled(name):
@@ -166,7 +167,7 @@ def test_compare_keeps_eq8_beside_a_short_pulse_that_reached_the_window():
 
 
 def _scene_dicts():
-    law = st.sampled_from(["hertz", "bilinear"])
+    law = st.sampled_from(LAW_NAMES)
     loading = st.one_of(
         st.builds(
             lambda a, t: {"kind": "step", "amplitude": a, "duration": t},
@@ -193,8 +194,9 @@ def _scene_dicts():
             "loading": loading,
             "run": {"end_time": max(1e-3, loading.get("duration", 0.0)), "timestep": 1e-8},
         }
-        if law == "bilinear":
-            d["contact"].update(unloading_coeff=beta, plastic_stiffness=2.43e7)
+        d["contact"].update(LAWS[law].example_contact)
+        if "unloading_coeff" in d["contact"]:
+            d["contact"]["unloading_coeff"] = beta
         if dashpot:
             d["damping"] = {"dashpot": dashpot}
         if pre and loading["kind"] != "striker":  # not combined yet

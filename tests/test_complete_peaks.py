@@ -24,7 +24,7 @@ from granchain.results import read_peaks, read_summary
 from granchain.scene import parse_scene
 from granchain.workflows.run import run_reference, run_scene
 
-from .conftest import BILINEAR, make_scene, make_scene_text
+from .conftest import LAW_NAMES, make_scene, make_scene_text
 
 SHORT = 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
 
@@ -108,7 +108,7 @@ def test_no_complete_peak_means_no_observables_and_reasons():
 @st.composite
 def small_scenes(draw):
     beads = draw(st.integers(6, 18))
-    law = draw(st.sampled_from(["hertz", "bilinear"]))
+    law = draw(st.sampled_from(LAW_NAMES))
     if draw(st.booleans()):
         loading = f'kind = "impulse"\nimpulse = {draw(st.floats(0.005, 0.1))!r}\nduration = 1e-6'
     else:
@@ -118,7 +118,6 @@ def small_scenes(draw):
     text = make_scene_text(
         beads=beads,
         law=law,
-        contact_extra=BILINEAR if law == "bilinear" else "",
         loading=loading,
         end_time=end_time,
         timestep=1e-8,
@@ -185,7 +184,6 @@ def test_lammps_and_reference_agree_on_complete(law, extra):
     text = make_scene_text(
         beads=40,
         law=law,
-        contact_extra=BILINEAR if law == "bilinear" else "",
         loading=SHORT,
         end_time=1.6e-4,
         timestep=1e-8,
@@ -214,14 +212,12 @@ def _kinetic(scene, velocity):
     return 0.5 * float(np.sum(scene.mass * velocity**2))
 
 
-@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+@pytest.mark.parametrize("law", LAW_NAMES)
 def test_final_energies_are_the_end_of_run_state(law):
     """12370 steps, energy samples every 61: LAMMPS's last periodic sample is 48 steps before the end."""
     from granchain.lammps.runner import run_lammps
 
-    sc = make_scene(
-        beads=30, law=law, contact_extra=BILINEAR if law == "bilinear" else "", end_time=1.237e-4, timestep=1e-8
-    )
+    sc = make_scene(beads=30, law=law, end_time=1.237e-4, timestep=1e-8)
     lam, _ = run_lammps(sc)
     ref = run_reference(sc, "verlet")
     for res in (lam, ref):

@@ -9,7 +9,7 @@ from granchain.reference.solver import ChainProblem
 from granchain.templates import render_deck
 from granchain.workflows.run import run_reference
 
-from .conftest import BILINEAR, make_scene
+from .conftest import LAW_NAMES, make_scene
 
 SHORT = 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
 EFFECTS = {
@@ -31,7 +31,6 @@ def scene(law, effect, **kw):
     return make_scene(
         beads=30,
         law=law,
-        contact_extra=BILINEAR if law == "bilinear" else "",
         loading=SHORT,
         outputs="histories = [1, 29]\nsnapshots = [2e-4]\n" + EFFECTS[effect],
         **kw,
@@ -39,7 +38,7 @@ def scene(law, effect, **kw):
 
 
 @pytest.mark.parametrize("effect", list(EFFECTS))
-@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+@pytest.mark.parametrize("law", LAW_NAMES)
 def test_effect_lammps_equals_reference_verlet(law, effect):
     sc = scene(law, effect, end_time=4e-4, timestep=1e-8)
     lam = run_lammps(sc)[0].solution
@@ -63,7 +62,7 @@ def test_effect_lammps_equals_reference_verlet(law, effect):
 
 
 @pytest.mark.parametrize("effect", list(EFFECTS))
-@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+@pytest.mark.parametrize("law", LAW_NAMES)
 def test_effect_energy_balance_rk4(law, effect):
     sc = scene(law, effect, end_time=4e-4, timestep=1e-8)
     sol = run_reference(sc, "rk4").solution
@@ -95,12 +94,11 @@ STRIKERS = {
 
 
 @pytest.mark.parametrize("striker", list(STRIKERS))
-@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+@pytest.mark.parametrize("law", LAW_NAMES)
 def test_striker_both_backends(law, striker):
     sc = make_scene(
         beads=30,
         law=law,
-        contact_extra=BILINEAR if law == "bilinear" else "",
         loading=STRIKERS[striker],
         end_time=4e-4,
         timestep=1e-8,
@@ -129,13 +127,12 @@ def test_no_striker_no_trace():
 
 
 @pytest.mark.parametrize("far_end", ["free", "wall"])
-@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+@pytest.mark.parametrize("law", LAW_NAMES)
 def test_precompressed_chain_is_in_static_equilibrium(law, far_end):
     """Without a load nothing moves: the initial overlaps balance F0 in both backends."""
     sc = make_scene(
         beads=20,
         law=law,
-        contact_extra=BILINEAR if law == "bilinear" else "",
         loading='kind = "velocity"\nvelocity = 1e-12',
         end_time=2e-5,
         timestep=1e-8,
@@ -150,7 +147,6 @@ def _per_bead_scene(kind, law="hertz"):
     base = make_scene(
         beads=30,
         law=law,
-        contact_extra=BILINEAR if law == "bilinear" else "",
         loading=SHORT,
         end_time=4e-4,
         timestep=1e-8,

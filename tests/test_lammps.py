@@ -16,7 +16,7 @@ from granchain.reference.solver import ChainProblem, solve_chain
 from granchain.templates import builtin_granular_deck, render_deck
 from granchain.workflows.run import run_reference
 
-from .conftest import BILINEAR, make_scene
+from .conftest import BILINEAR, LAW_NAMES, law_example, make_scene
 
 SHORT = 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
 LONG_H = 'kind = "step"\namplitude = 200.0\nduration = 1e-4'  # T/tau ~ 130: a wave train
@@ -52,9 +52,9 @@ def test_hertz_matches_builtin_granular(tmp_path):
     assert rel(ra["vx"], rb["vx"]) < 1e-10
 
 
-@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+@pytest.mark.parametrize("law", LAW_NAMES)
 def test_lammps_equals_reference_verlet(law):
-    extra = BILINEAR if law == "bilinear" else ""
+    extra = law_example(law)
     sc = make_scene(
         beads=40,
         law=law,
@@ -94,7 +94,7 @@ CONVERGED = [
     "law,loading,end,dt", CONVERGED, ids=["hertz-short", "hertz-long", "bilinear-short", "bilinear-long"]
 )
 def test_lammps_vs_converged_rk4(law, loading, end, dt):
-    extra = BILINEAR if law == "bilinear" else ""
+    extra = law_example(law)
     sc = make_scene(beads=60, law=law, contact_extra=extra, loading=loading, end_time=end, timestep=dt)
     lam, _ = run_lammps(sc)
     rk4 = solve_chain(ChainProblem.from_scene(sc), end, dt / 2, "rk4")
@@ -105,11 +105,11 @@ def test_lammps_vs_converged_rk4(law, loading, end, dt):
     assert err < 1e-3
 
 
-@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+@pytest.mark.parametrize("law", LAW_NAMES)
 def test_mpi_two_ranks_equals_serial(law, tmp_path):
     # beta = 0.3: elastic enough that the far end flies off and beads change rank as the shrink-wrapped
     # box grows (with beta = 0.8 the chain ends up moving almost rigidly)
-    extra = BILINEAR.replace("0.8", "0.3") if law == "bilinear" else ""
+    extra = law_example(law).replace("unloading_coeff = 0.8", "unloading_coeff = 0.3")
     sc = make_scene(
         beads=24,
         law=law,

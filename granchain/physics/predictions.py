@@ -9,6 +9,7 @@ from dataclasses import asdict, dataclass, replace
 from typing import NamedTuple
 
 from granchain.physics import models
+from granchain.physics.laws import LAWS
 from granchain.physics.regimes import loading_regime
 
 
@@ -72,6 +73,8 @@ MODEL_DOMAINS: dict[str, tuple[str, str]] = {
     **{n: ("hertz", "any") for n in _HERTZ_ANY},
     **{n: ("bilinear", "short") for n in _BILINEAR_SHORT},
     **{n: ("bilinear", "long") for n in _BILINEAR_LONG},
+    # a law's own models (granchain.physics.laws: ContactLaw.model_domains)
+    **{n: (name, needs) for name, cls in LAWS.items() for n, needs in cls.model_domains.items()},
 }
 
 #: (model, measured quantity) pairs where the run measures something other than what the model
@@ -140,6 +143,13 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
         if scene.effects.far_end == "wall"
         else ""
     )
+    if needs == "collision":
+        if ld.kind != "velocity" or scene.chain.beads != 2 or scene.effects.far_end != "free":
+            why_not.append(
+                "a two-body impact model: it needs two beads, bead 1 given a velocity and a free far end "
+                f"(this scene: {scene.chain.beads} beads, a {ld.kind} load, far end {scene.effects.far_end})"
+            )
+        needs = "any"
     regime = loading_regime(scene) if scene.contact.law == law else None
     if regime is not None and needs != "any" and regime.regime != needs:
         why_not.append(f"{regime.text}; the model is for a {needs} load")
@@ -239,6 +249,11 @@ def _predict(scene) -> list[Prediction]:
                     nondim=min(fp, fu) / fs,
                 ),
             ]
+        return out
+
+    # ---- the law's own models (granchain.physics.laws)
+    out += [Prediction(**d) for d in scene.contact.law_class.predictions(scene)]
+    if scene.contact.law != "bilinear":
         return out
 
     # ---- bilinear (Sec. III)

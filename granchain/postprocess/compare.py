@@ -159,7 +159,7 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
         ("final_kinetic_energy", "J", float(sa.kinetic[-1]), float(sb.kinetic[-1])),
         ("momentum", "N s", sa.momentum, sb.momentum),
     ]
-    if scene.contact.law == "bilinear" or scene.effects.dashpot:
+    if scene.contact.law_class.history or scene.effects.dashpot:
         rows.append(("dissipated_energy", "J", float(sa.dissipated[-1]), float(sb.dissipated[-1])))
     if scene.effects.far_end == "wall":
         # a wall the wave has not reached holds round-off (1e-218 N), not a peak: unreached as for

@@ -269,7 +269,7 @@ def model_curves(scene, contacts: np.ndarray, skipped: dict[str, str] | None = N
                 curves[label] = np.full(
                     contacts.shape, models.solitary_wave_peak_force(fn(ld.amplitude, k, m, d), k, m, d)
                 )
-    else:
+    elif scene.contact.law == "bilinear":
         beta = scene.contact.unloading_coeff
         f1 = models.linear_chain_impulse_response(impulse, k, m, beta)["F_p"]
         lam = models.exponential_decay_rate(k, m, beta)

@@ -70,6 +70,10 @@ class ContactLaw:
     scene_keys: ClassVar[tuple[str, ...]] = ()
     #: a range of valid values of each parameter (SI), from which the registry's tests draw laws
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {}
+    #: the [contact] keys (besides law) of an example: brass beads of R = 4.76 mm (docs and tests)
+    example_contact: ClassVar[dict[str, float]] = {}
+    #: a range of sensible values of each [contact] key for such beads (generated test scenes)
+    scene_key_ranges: ClassVar[dict[str, tuple[float, float]]] = {}
 
     k: ArrayLike
 
@@ -119,6 +123,15 @@ class ContactLaw:
     def pair_coefficients(self) -> list[float]:
         """pair_coeff numbers after d0 in the C++ kernel's order (k first; the deck inserts d0)."""
         return [float(getattr(self, f.name)) for f in dataclasses.fields(self)]
+
+    # ---- analytic predictions of the law itself (granchain.physics.predictions adds them): model name
+    # -> what it needs ("any": every chain of this law; "collision": two beads, bead 1 given a velocity)
+    model_domains: ClassVar[dict[str, str]] = {}
+
+    @classmethod
+    def predictions(cls, scene) -> list[dict]:
+        """Prediction fields (name, value, unit, equation, valid[, nondim]) for this law's own models."""
+        return []
 
     # ---- building laws
     @classmethod

@@ -69,6 +69,11 @@ class BilinearLaw(ContactLaw):
     history: ClassVar[bool] = True
     scene_keys: ClassVar[tuple[str, ...]] = ("unloading_coeff", "plastic_stiffness")
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "beta": (0.0, 0.99)}
+    example_contact: ClassVar[dict[str, float]] = {"unloading_coeff": 0.8, "plastic_stiffness": 2.43e7}
+    scene_key_ranges: ClassVar[dict[str, tuple[float, float]]] = {
+        "unloading_coeff": (0.0, 0.9),
+        "plastic_stiffness": (1e6, 1e8),
+    }
 
     beta: ArrayLike
 

@@ -41,6 +41,8 @@ class HertzLaw(ContactLaw):
     history: ClassVar[bool] = False
     scene_keys: ClassVar[tuple[str, ...]] = ()
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12)}
+    example_contact: ClassVar[dict[str, float]] = {}
+    scene_key_ranges: ClassVar[dict[str, tuple[float, float]]] = {}
 
     def force(self, alpha, alpha_max=None):
         return hertz_force(alpha, self.k)

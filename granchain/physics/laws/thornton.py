@@ -41,6 +41,19 @@ def yield_overlap(yield_pressure: float, e_star: float, r_star: float) -> float:
     return (math.pi * yield_pressure / (2.0 * e_star)) ** 2 * r_star
 
 
+def restitution_coefficient(v0: float, vy: float) -> float:
+    """Thornton's (1997) coefficient of restitution of an impact at relative velocity v0, yield
+    velocity vy (see ThorntonLaw.predictions); 1 at and below vy."""
+    if v0 <= vy:
+        return 1.0
+    r = vy / v0
+    return (
+        math.sqrt(6.0 * math.sqrt(3.0) / 5.0)
+        * math.sqrt(1.0 - r * r / 6.0)
+        * (r / (r + 2.0 * math.sqrt(6.0 / 5.0 - r * r / 5.0))) ** 0.25
+    )
+
+
 @dataclass(frozen=True)
 class ThorntonLaw(ContactLaw):
     """Thornton's elastic-perfectly-plastic contacts: Hertz stiffness k, yield overlap d_y."""
@@ -50,6 +63,10 @@ class ThorntonLaw(ContactLaw):
     history: ClassVar[bool] = True
     scene_keys: ClassVar[tuple[str, ...]] = ("yield_pressure",)
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "yield_overlap": (1e-9, 1e-4)}
+    #: brass beads of R = 4.76 mm: p_y = k / (pi R*) makes the plastic slope S = pi p_y R* equal the
+    #: paper's bilinear plastic stiffness k = 2.43e7 N/m (the bilinear example), so the two laws load alike
+    example_contact: ClassVar[dict[str, float]] = {"yield_pressure": 3.25e9}
+    scene_key_ranges: ClassVar[dict[str, tuple[float, float]]] = {"yield_pressure": (3e8, 1e10)}
 
     yield_overlap: ArrayLike
 
@@ -144,6 +161,62 @@ class ThorntonLaw(ContactLaw):
     def turn_level(self, alpha_max):
         # a turn above d_max and d_y leaves the plastic line for a new unloading curve
         return np.maximum(alpha_max, self.yield_overlap)
+
+    # ---- analytic predictions (granchain.physics.predictions asks every law for its own)
+    #: model name -> what it needs: "any" (every Thornton chain) or "collision" (two beads, bead 1 given
+    #: a velocity, the far end free: a two-body impact)
+    model_domains: ClassVar[dict[str, str]] = {
+        "yield_force": "any",
+        "yield_overlap": "any",
+        "yield_velocity": "any",
+        "restitution_coefficient": "collision",
+    }
+
+    @classmethod
+    def predictions(cls, scene) -> list[dict]:
+        """Thornton's (1997) closed forms for the nominal bead pair: F_y, d_y, the impact velocity at
+        which the contact first yields, (1/2) m* v_y^2 = (2/5) F_y d_y (the Hertz energy at d_y; m* = m/2
+        for two equal beads), and his coefficient of restitution for an impact at v0 > v_y,
+            e = sqrt(6 sqrt(3) / 5) sqrt(1 - (v_y/v0)^2 / 6)
+                * [ (v_y/v0) / ((v_y/v0) + 2 sqrt(6/5 - (v_y/v0)^2 / 5)) ]^(1/4),
+        Thornton 1997, J. Appl. Mech. 64, 383, Eq. 43 as quoted in Thornton and Ning (1998), Powder
+        Technol. 99, 154 (e = 1 up to v_y). He derived it with the unloading curve used here but an
+        approximate loading stage, so it is a model, not an identity, for our runs."""
+        law = scene.law
+        fy, dy = float(law.yield_force), float(law.yield_overlap)
+        m_star = scene.mass / 2.0
+        vy = math.sqrt(2.0 * 0.4 * fy * dy / m_star)
+        fs = scene.force_scale
+        out = [
+            dict(
+                name="yield_force",
+                value=fy,
+                unit="N",
+                equation="F_y = 4/3 E* sqrt(R*) d_y^(3/2) (Thornton 1997)",
+                valid="the force at which a contact first yields",
+                nondim=fy / fs,
+            ),
+            dict(name="yield_overlap", value=dy, unit="m", equation="d_y = (pi p_y / (2 E*))^2 R*", valid="always"),
+            dict(
+                name="yield_velocity",
+                value=vy,
+                unit="m/s",
+                equation="(1/2) m* v_y^2 = (2/5) F_y d_y, m* = m/2",
+                valid="two equal beads: the relative impact velocity at which their contact first yields",
+            ),
+        ]
+        ld = scene.loading
+        if ld.kind == "velocity":
+            out.append(
+                dict(
+                    name="restitution_coefficient",
+                    value=restitution_coefficient(ld.velocity, vy),
+                    unit="-",
+                    equation="Thornton 1997 (e = 1 below v_y)",
+                    valid="a two-body impact of equal beads at the relative velocity v0 of bead 1",
+                )
+            )
+        return out
 
     # ---- scenes
     @classmethod
