@@ -177,6 +177,33 @@ def cmd_predict(args) -> int:
     return 0
 
 
+def cmd_compare_laws(args) -> int:
+    from granchain.results import check_output_dir
+    from granchain.workflows.laws import compare_laws, write_law_comparison
+
+    scene = resolve_scene(args.scene)
+    name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
+    out = args.out or f"runs/{name}-laws"
+    check_output_dir(out, args.overwrite)  # before any run
+    laws = tuple(x.strip() for x in args.laws.split(",") if x.strip())
+    cmp = compare_laws(scene, laws, backend=args.backend, rtol=args.rtol, error_estimate=args.error_estimate == "on")
+    write_law_comparison(cmp, out, overwrite=args.overwrite)
+    print(f"scene      {scene.title or scene.source}")
+    print(f"{'law':10} {'contact':44} {'F_1 (N)':>10} {'F_last (N)':>10} {'trans.':>6} {'lambda':>8} {'p':>6}")
+    for row in cmp.table():
+        contact = ", ".join(f"{k}={v:.4g}" for k, v in row["contact"].items() if k != "law")
+        fit = (
+            f"{row['transition_contact']:>6} {row['decay_per_contact']:>8.3g} {row['inverse_power']:>6.3g}"
+            if row["transition_contact"]
+            else f"  no fit: {row['why_no_fit']}"
+        )
+        first = row["first_peak_force"] or float("nan")
+        last = row["last_peak_force"] or float("nan")
+        print(f"{row['law']:10} {contact:44} {first:>10.4g} {last:>10.4g} {fit}")
+    print(f"laws directory: {out}")
+    return 0
+
+
 def cmd_compare(args) -> int:
     from granchain.postprocess.compare import format_table
     from granchain.workflows.compare import compare_scene
@@ -372,6 +399,18 @@ def build_parser() -> argparse.ArgumentParser:
         "beyond rtol plus both errors (default on)",
     )
     c.set_defaults(func=cmd_compare)
+
+    cl = sub.add_parser("compare-laws", help="run a scene under two contact laws and compare their peak-force decay")
+    cl.add_argument("scene", nargs="?", help="scene file or bundled scene name")
+    cl.add_argument(
+        "--laws", default="thornton,bilinear", help="comma-separated contact laws (default thornton,bilinear)"
+    )
+    cl.add_argument("--backend", default="lammps", choices=["lammps", "reference"], help="backend (default lammps)")
+    cl.add_argument("--rtol", type=float, default=None, help="plan every run for this tolerance")
+    cl.add_argument("--out", help="output directory (default runs/<scene>-laws)")
+    cl.add_argument("--overwrite", action="store_true", help="replace an existing output directory")
+    cl.add_argument("--error-estimate", default="on", choices=["on", "off"], help="error bars (default on)")
+    cl.set_defaults(func=cmd_compare_laws)
 
     pl = sub.add_parser("plot", help="make the figures of a run directory or of a compare directory")
     pl.add_argument("run_dir", help="a run directory (granchain run) or a compare directory (granchain compare)")

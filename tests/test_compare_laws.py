@@ -1,0 +1,59 @@
+"""granchain compare-laws (issue 14): one scene under two contact laws, side by side."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from granchain.cli import main, resolve_scene
+from granchain.errors import UsageError
+from granchain.physics.laws import LAWS
+from granchain.workflows.laws import compare_laws, equivalent_contact, scene_with_law, write_law_comparison
+
+from .conftest import make_scene
+
+
+@pytest.mark.parametrize("start", ["thornton", "bilinear"])
+def test_equivalent_laws_have_the_same_plastic_slope(start):
+    sc = make_scene(law=start)
+    other = "bilinear" if start == "thornton" else "thornton"
+    twin = scene_with_law(sc, equivalent_contact(sc, other))
+    laws = {s.contact.law: s.law for s in (sc, twin)}
+    assert math.isclose(float(laws["thornton"].plastic_slope), float(laws["bilinear"].k), rel_tol=1e-12)
+    # and back again: the round trip gives the scene's own contact
+    back = scene_with_law(twin, equivalent_contact(twin, start))
+    if start == "thornton":
+        assert math.isclose(back.contact.yield_pressure, sc.contact.yield_pressure, rel_tol=1e-12)
+    else:
+        assert math.isclose(back.contact.plastic_stiffness, sc.contact.plastic_stiffness, rel_tol=1e-12)
+
+
+def test_compare_laws_on_the_reference_writes_one_table_and_one_figure(tmp_path):
+    sc = make_scene(beads=30, law="thornton", end_time=2e-4, timestep=2e-8)
+    cmp = compare_laws(sc, ("thornton", "bilinear"), backend="reference", error_estimate=False)
+    assert [r.law for r in cmp.runs] == ["thornton", "bilinear"]
+    for r in cmp.runs:
+        assert r.result.scene.contact.law == r.law
+        assert r.peak_force.size >= 6 and np.all(np.isfinite(r.peak_force))
+        # the decay curve: no holes, from contact 1
+        assert list(r.contacts) == list(range(1, r.contacts.size + 1))
+    out = write_law_comparison(cmp, tmp_path / "laws")
+    assert {p.name for p in out.iterdir()} == {"laws.csv", "laws.json", "laws.png"}
+    table = json.loads((out / "laws.json").read_text())["laws"]
+    assert [t["law"] for t in table] == ["thornton", "bilinear"]
+    header = (out / "laws.csv").read_text().splitlines()[0].split(",")
+    assert header == ["contact", *[f"peak_force{s}_{law}" for law in ("thornton", "bilinear") for s in ("", "_error")]]
+
+
+def test_bad_laws_fail_before_any_run(tmp_path, capsys):
+    assert main(["compare-laws", "plastic-short-impulse", "--laws", "thornton,nope", "--out", str(tmp_path / "x")]) == 2
+    assert "nope" in capsys.readouterr().err and not (tmp_path / "x").exists()
+    with pytest.raises(UsageError, match="two different"):
+        compare_laws(resolve_scene("plastic-short-impulse"), ("bilinear", "bilinear"))
+
+
+def test_every_law_can_be_set_up_from_every_scene():
+    sc = resolve_scene("plastic-short-impulse")
+    for law in LAWS:
+        assert scene_with_law(sc, equivalent_contact(sc, law)).contact.law == law
