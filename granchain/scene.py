@@ -243,14 +243,6 @@ class Scene:
         return 0.0
 
     @property
-    def input_energy(self) -> float | None:
-        """Kinetic energy put in by a velocity or striker load (None for force loads)."""
-        ld = self.loading
-        if ld.is_force:
-            return None
-        return 0.5 * (self.striker_mass if ld.kind == "striker" else self.mass) * ld.velocity**2
-
-    @property
     def striker_mass(self) -> float:
         ld = self.loading
         return ld.striker_mass if ld.striker_mass is not None else mat.bead_mass(ld.striker_material, ld.striker_radius)
@@ -762,6 +754,34 @@ def _int_list(s: _Section, key: str, low: int, high: int, what: str) -> tuple[in
     return tuple(sorted(v))
 
 
+def _read_snapshots(s: _Section, run: Run) -> tuple[float, ...]:
+    if not s.has("snapshots"):
+        return ()
+    v = s.raw("snapshots")
+    end = run.end_time if run.end_time is not None else math.inf
+    allowed = f"a list of times in s with 0 < t <= end_time = {end:g}"
+    if not isinstance(v, list) or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v):
+        raise s.fail("snapshots", v, allowed)
+    if any(not (0.0 < x <= end) for x in v):
+        raise s.fail("snapshots", v, allowed)
+    return tuple(sorted({float(x) for x in v}))
+
+
+def _read_window(s: _Section, nc: int) -> tuple[int, int] | None:
+    if not s.has("window"):
+        return None
+    v = s.raw("window")
+    allowed = f"[first, last] contacts with 1 <= first < last <= {nc}"
+    if (
+        not isinstance(v, list)
+        or len(v) != 2
+        or any(isinstance(x, bool) or not isinstance(x, int) for x in v)
+        or not 1 <= v[0] < v[1] <= nc
+    ):
+        raise s.fail("window", v, allowed)
+    return (v[0], v[1])
+
+
 def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
     nc = chain.beads - 1 if chain.beads is not None else 10**9  # beads = "auto": the planner checks
     contacts = f"contact i is between bead i and i+1; this chain has contacts 1..{nc}"
@@ -775,28 +795,8 @@ def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
         else:
             raise s.fail("peak_force", v, f"true, false, or a list of contacts ({contacts})")
     histories = _int_list(s, "histories", 1, nc, contacts) if s.has("histories") else ()
-    snapshots: tuple[float, ...] = ()
-    if s.has("snapshots"):
-        v = s.raw("snapshots")
-        end = run.end_time if run.end_time is not None else math.inf
-        allowed = f"a list of times in s with 0 < t <= end_time = {end:g}"
-        if not isinstance(v, list) or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v):
-            raise s.fail("snapshots", v, allowed)
-        if any(not (0.0 < x <= end) for x in v):
-            raise s.fail("snapshots", v, allowed)
-        snapshots = tuple(sorted({float(x) for x in v}))
-    window = None
-    if s.has("window"):
-        v = s.raw("window")
-        allowed = f"[first, last] contacts with 1 <= first < last <= {nc}"
-        if (
-            not isinstance(v, list)
-            or len(v) != 2
-            or any(isinstance(x, bool) or not isinstance(x, int) for x in v)
-            or not 1 <= v[0] < v[1] <= nc
-        ):
-            raise s.fail("window", v, allowed)
-        window = (v[0], v[1])
+    snapshots = _read_snapshots(s, run)
+    window = _read_window(s, nc)
 
     def interval_or_auto(key: str, what: str):
         if s.table.get(key) == AUTO:
@@ -840,6 +840,33 @@ def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
 # ------------------------------------------------------------------------------- writing
 
 
+def _loading_to_dict(ld: Loading) -> dict[str, Any]:
+    if ld.kind == "step":
+        return {"kind": "step", "amplitude": ld.amplitude, "duration": ld.duration}
+    if ld.kind == "impulse":
+        return {"kind": "impulse", "impulse": ld.impulse, "duration": ld.duration}
+    if ld.kind == "velocity":
+        return {"kind": "velocity", "velocity": ld.velocity}
+    st: dict[str, Any] = {"kind": "striker", "velocity": ld.velocity, "radius": ld.striker_radius}
+    st["material"] = ld.striker_material_name or {
+        "density": ld.striker_material.density,
+        "youngs_modulus": ld.striker_material.youngs_modulus,
+        "poisson_ratio": ld.striker_material.poisson_ratio,
+    }
+    if ld.striker_mass is not None:
+        st["mass"] = ld.striker_mass
+    return st
+
+
+def _outputs_to_dict(o: Outputs) -> dict[str, Any]:
+    out: dict[str, Any] = {"peak_force": o.peak_force if isinstance(o.peak_force, bool) else list(o.peak_force)}
+    lists = (("histories", o.histories), ("snapshots", o.snapshots), ("window", o.window))
+    out.update({k: list(v) for k, v in lists if v})
+    scalars = (("history_interval", o.history_interval), ("dump_interval", o.dump_interval))
+    out.update({k: v for k, v in scalars if v is not None})
+    return out
+
+
 def scene_to_dict(scene: Scene) -> dict:
     c = scene.chain
     material: Any = c.material_name
@@ -860,41 +887,13 @@ def scene_to_dict(scene: Scene) -> dict:
         "material": list(c.materials) if c.materials else material,
     }
     d["contact"] = scene.contact.law_class.contact_to_dict(scene.contact)
-    ld = scene.loading
-    if ld.kind == "step":
-        d["loading"] = {"kind": "step", "amplitude": ld.amplitude, "duration": ld.duration}
-    elif ld.kind == "impulse":
-        d["loading"] = {"kind": "impulse", "impulse": ld.impulse, "duration": ld.duration}
-    elif ld.kind == "striker":
-        st: dict[str, Any] = {"kind": "striker", "velocity": ld.velocity, "radius": ld.striker_radius}
-        st["material"] = ld.striker_material_name or {
-            "density": ld.striker_material.density,
-            "youngs_modulus": ld.striker_material.youngs_modulus,
-            "poisson_ratio": ld.striker_material.poisson_ratio,
-        }
-        if ld.striker_mass is not None:
-            st["mass"] = ld.striker_mass
-        d["loading"] = st
-    else:
-        d["loading"] = {"kind": "velocity", "velocity": ld.velocity}
+    d["loading"] = _loading_to_dict(scene.loading)
     d["run"] = {
         k: AUTO if v is None else v for k, v in (("end_time", scene.run.end_time), ("timestep", scene.run.timestep))
     }
     if scene.run.stop_after_contact is not None:
         d["run"]["stop_after_contact"] = scene.run.stop_after_contact
-    o = scene.outputs
-    out: dict[str, Any] = {"peak_force": o.peak_force if isinstance(o.peak_force, bool) else list(o.peak_force)}
-    if o.histories:
-        out["histories"] = list(o.histories)
-    if o.snapshots:
-        out["snapshots"] = list(o.snapshots)
-    if o.window is not None:
-        out["window"] = list(o.window)
-    if o.history_interval is not None:
-        out["history_interval"] = o.history_interval
-    if o.dump_interval is not None:
-        out["dump_interval"] = o.dump_interval
-    d["outputs"] = out
+    d["outputs"] = _outputs_to_dict(scene.outputs)
     if scene.effects.far_end != "free":
         d["boundary"] = {"far_end": scene.effects.far_end}
     if scene.effects.dashpot:

@@ -114,6 +114,37 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
     why_not: list[str] = []
     if scene.contact.law != law:
         why_not.append(f"a {law} model; this chain's contact law is {scene.contact.law}")
+    why_not += _outside_the_papers_chain(scene)
+    ld = scene.loading
+    if needs == "collision":
+        if ld.kind != "velocity" or scene.chain.beads != 2 or scene.effects.far_end != "free":
+            why_not.append(
+                "a two-body impact model: it needs two beads, bead 1 given a velocity and a free far end "
+                f"(this scene: {scene.chain.beads} beads, a {ld.kind} load, far end {scene.effects.far_end})"
+            )
+        needs = "any"
+    wall = (
+        "; with the far-end wall: for the incident wave, at contacts the wall's reflection has not yet reached"
+        if scene.effects.far_end == "wall"
+        else ""
+    )
+    regime = loading_regime(scene) if scene.contact.law == law else None
+    if regime is not None and needs != "any" and regime.regime != needs:
+        why_not.append(f"{regime.text}; the model is for a {needs} load")
+    if why_not:
+        return Applicability(False, "; ".join(why_not))
+    if quantity is not None and (name, quantity) in MEASURES_OTHER:
+        return Applicability(False, MEASURES_OTHER[(name, quantity)])
+    chain = f"uniform {'Hertz' if law == 'hertz' else law} chain, no dashpot, no precompression"
+    if needs == "any":
+        return Applicability(True, f"{chain}, any loading time{wall}")
+    return Applicability(True, f"{regime.text}; {chain}{wall}")
+
+
+def _outside_the_papers_chain(scene) -> list[str]:
+    """Why the scene is not the paper's chain (uniform beads, no dashpot or precompression, the
+    paper's loading), one reason each; empty when it is."""
+    why_not: list[str] = []
     if scene.per_bead:
         r = scene.chain.radii or (scene.chain.radius,)
         differ = [f"radii {min(r) * 1e3:.3g} to {max(r) * 1e3:.3g} mm: tapered or decorated"] if len(set(r)) > 1 else []
@@ -136,31 +167,9 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
             why_not.append(
                 f"a striker (M = {ratio:.3g} m at {ld.velocity:g} m/s) is not the paper's loading (a force "
                 "f(t), Eq. 4, or bead 1's velocity): a lighter one rebounds, a heavier one pushes on"
-                + ("" if scene.contact.law == "hertz" else ", and its bilinear contact dissipates")
+                + ("" if scene.contact.law == "hertz" else f", and its {scene.contact.law} contact dissipates")
             )
-    wall = (
-        "; with the far-end wall: for the incident wave, at contacts the wall's reflection has not yet reached"
-        if scene.effects.far_end == "wall"
-        else ""
-    )
-    if needs == "collision":
-        if ld.kind != "velocity" or scene.chain.beads != 2 or scene.effects.far_end != "free":
-            why_not.append(
-                "a two-body impact model: it needs two beads, bead 1 given a velocity and a free far end "
-                f"(this scene: {scene.chain.beads} beads, a {ld.kind} load, far end {scene.effects.far_end})"
-            )
-        needs = "any"
-    regime = loading_regime(scene) if scene.contact.law == law else None
-    if regime is not None and needs != "any" and regime.regime != needs:
-        why_not.append(f"{regime.text}; the model is for a {needs} load")
-    if why_not:
-        return Applicability(False, "; ".join(why_not))
-    if quantity is not None and (name, quantity) in MEASURES_OTHER:
-        return Applicability(False, MEASURES_OTHER[(name, quantity)])
-    chain = f"uniform {'Hertz' if law == 'hertz' else law} chain, no dashpot, no precompression"
-    if needs == "any":
-        return Applicability(True, f"{chain}, any loading time{wall}")
-    return Applicability(True, f"{regime.text}; {chain}{wall}")
+    return why_not
 
 
 def predict(scene) -> list[Prediction]:

@@ -195,6 +195,32 @@ def last_measured_contact(scene) -> int | None:
     return max(cands) if cands else None
 
 
+def _timestep_choice(scene, method: str, rtol_plan: float, omega: float, stiffest: str, stable: float) -> PlanChoice:
+    """The time step: the error model's for rtol_plan, within the stability limit, resolving the load."""
+    k_t = max_stiffness(scene)
+    c, p = CALIBRATION[method]
+    rate = damping_rate(scene)
+    dt_acc = accurate_timestep(method, omega, rate, rtol_plan)
+    dt_new = min(dt_acc, 0.5 * stable)
+    why = (
+        f"{method}: error model {c:g} (omega_max dt)^{p} <= rtol {rtol_plan:g} with omega_max = "
+        f"{omega:.4g} rad/s at {stiffest} (nominal contact {k_t:.4g} N/m at the expected peak force"
+        f"{'' if scene.contact.law_class.loading_is_linear() else f' {expected_peak_force(scene):.4g} N'}); "
+        f"stability limit {stable:.3g} s"
+    )
+    if method == "verlet" and rate > 0:
+        why += f"; the dashpot's first-order error {DASHPOT_VERLET:g} x rate {rate:.3g} 1/s x dt (Verlet)"
+    ld = scene.loading
+    if ld.is_force and ld.duration < dt_new:
+        # the step plan ends a step at T exactly and f is constant within it: one step is the
+        # whole pulse, integrated like any other (a 1e-10 s pulse does not force 1e-11 s steps)
+        why += f"; the pulse (T = {ld.duration:.3g} s) is one step of its own"
+    elif ld.is_force and ld.duration < dt_new * 4:
+        dt_new = ld.duration / 4
+        why += f"; resolves the load (T/4 = {dt_new:.3g} s)"
+    return PlanChoice("timestep", dt_new, why)
+
+
 def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", peak_ratio: float = 1.0) -> Plan:
     """Fill "auto" values (and the time step, when rtol is given) with the reasons.
 
@@ -206,33 +232,13 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     rtol_eff = 1e-3 if rtol is None else rtol
     rtol_plan = rtol_eff / peak_ratio  # what the step must meet at the run's force scale
     choices: list[PlanChoice] = []
-    k_t = max_stiffness(scene)
     omega, stiffest = highest_frequency(scene)
     stable = STABILITY[method] / omega
     dt = scene.run.timestep
     if dt is None or rtol is not None:
-        c, p = CALIBRATION[method]
-        rate = damping_rate(scene)
-        dt_acc = accurate_timestep(method, omega, rate, rtol_plan)
-        dt_new = min(dt_acc, 0.5 * stable)
-        why = (
-            f"{method}: error model {c:g} (omega_max dt)^{p} <= rtol {rtol_plan:g} with omega_max = "
-            f"{omega:.4g} rad/s at {stiffest} (nominal contact {k_t:.4g} N/m at the expected peak force"
-            f"{'' if scene.contact.law_class.loading_is_linear() else f' {expected_peak_force(scene):.4g} N'}); "
-            f"stability limit {stable:.3g} s"
-        )
-        if method == "verlet" and rate > 0:
-            why += f"; the dashpot's first-order error {DASHPOT_VERLET:g} x rate {rate:.3g} 1/s x dt (Verlet)"
-        ld = scene.loading
-        if ld.is_force and ld.duration < dt_new:
-            # the step plan ends a step at T exactly and f is constant within it: one step is the
-            # whole pulse, integrated like any other (a 1e-10 s pulse does not force 1e-11 s steps)
-            why += f"; the pulse (T = {ld.duration:.3g} s) is one step of its own"
-        elif ld.is_force and ld.duration < dt_new * 4:
-            dt_new = ld.duration / 4
-            why += f"; resolves the load (T/4 = {dt_new:.3g} s)"
-        dt = dt_new
-        choices.append(PlanChoice("timestep", dt, why))
+        choice = _timestep_choice(scene, method, rtol_plan, omega, stiffest, stable)
+        dt = choice.value
+        choices.append(choice)
     last = last_measured_contact(scene)
     slow, fast = wave_speeds(scene)
     end = scene.run.end_time
