@@ -4,7 +4,9 @@ A backend (reference solver or LAMMPS) fills a :class:`ChainSolution`; :func:`wr
 turns it into a run directory:
 
     scene.toml      the scene as given
-    summary.json    backend, method, timestep, steps, wall_time, observables (and why any is missing),
+    summary.json    backend, method, timestep, steps, wall_time, price (RunResult.price: start-up,
+                    plugin build, setup, integration, output, bead-steps, ns per bead-step),
+                    observables (and why any is missing),
                     peak status counts, conservation checks (the state at the end of the run), and
                     provenance (see :func:`provenance`: versions, command, times, host, scene hash, plan)
     peaks.csv       contact,peak_force,time_of_peak,peak_force_nondim,complete,leading_pulse_force,
@@ -211,7 +213,62 @@ class RunResult:
             # was obtained (granchain.workflows.errors); none without companion runs
             "error_estimate": None if self.errors is None else self.errors.error_estimate,
             "errors": None if self.errors is None else self.errors.summary(s.wall_time),
+            # what the run cost, split by where the time went (RunResult.price)
+            "price": self.price(),
             "provenance": self.provenance(),
+        }
+
+    def price(self) -> dict:
+        """What the run cost (summary.json's "price"), in s unless named otherwise:
+
+        start_up      LAMMPS: starting its process, Python, the LAMMPS instance and loading the plugin
+                      (the parent's clock around the process minus the deck's own time; 0 in process)
+        plugin_build  compiling the plugin (0 when it was cached)
+        setup         LAMMPS: the deck outside its run loops (data file, each run's setup, snapshot and
+                      results dumps)
+        integration   the time-stepping loops without their output (LAMMPS: "Loop time" minus the
+                      "Output" rows of its timing breakdown; reference: the solver, whose histories
+                      and energy samples are recorded inside its loop and counted here)
+        output        LAMMPS: dumps and thermo during the runs plus reading the results back
+        error_estimate  the companion runs at 2 dt and 4 dt (granchain.workflows.errors), when made
+        steps, bead_steps (steps x moving beads, striker included), ns_per_bead_step (integration)
+        A part the backend does not time is None, with the reason in "not_timed".
+        """
+        s, sc, ex = self.solution, self.scene, self.extra
+        steps = int(s.steps) + int(s.extra_steps or 0)
+        beads = int(sc.chain.beads) + (1 if sc.loading.kind == "striker" else 0)
+        not_timed: dict[str, str] = {}
+        if self.backend == "lammps":
+            loop, out_t = ex.get("loop_time"), ex.get("output_time")
+            # the process from its start to the deck's first command (the worker times only the part
+            # after Python started): what a user waits before LAMMPS integrates anything
+            proc = ex.get("process_time")
+            start = ex.get("startup_time") if proc is None else max(float(proc) - float(s.wall_time), 0.0)
+            integration = None if loop is None else loop - (out_t or 0.0)
+            setup = None if loop is None else max(float(s.wall_time) - loop, 0.0)
+            output = None if out_t is None else out_t + float(ex.get("read_time") or 0.0)
+            if loop is None:
+                not_timed["integration"] = not_timed["setup"] = "no timing breakdown in log.lammps"
+            if start is None:
+                not_timed["start_up"] = "not run through granchain's worker (a plain-LAMMPS run collected)"
+            plugin = float(ex.get("plugin_build_time") or 0.0)
+        else:
+            start, plugin, setup, integration, output = 0.0, 0.0, 0.0, float(s.wall_time), None
+            not_timed["output"] = "recorded inside the integration loop (histories, energy samples): counted there"
+        parts = [start, plugin, setup, integration, output]
+        companions = None if self.errors is None else float(sum(self.errors.wall_times))
+        return {
+            "wall_time": float(sum(p for p in parts if p is not None)),
+            "start_up": start,
+            "plugin_build": plugin,
+            "setup": setup,
+            "integration": integration,
+            "output": output,
+            "error_estimate": companions,
+            "steps": steps,
+            "bead_steps": steps * beads,
+            "ns_per_bead_step": None if integration is None or steps == 0 else 1e9 * integration / (steps * beads),
+            **({"not_timed": not_timed} if not_timed else {}),
         }
 
     def provenance(self) -> dict:

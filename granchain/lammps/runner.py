@@ -291,16 +291,36 @@ class LammpsRunResult(RunResult):
         }
 
 
+def log_timing(text: str) -> dict:
+    """LAMMPS's own timing of a deck's runs, from its log: loop_time (every run command's "Loop time",
+    added up) and output_time (the "Output" rows of the MPI task timing breakdown, average over
+    ranks: dumps and thermo written during the runs). None where the log has none."""
+    loops = re.findall(r"^Loop time of (\S+) on \d+ procs", text, re.M)
+    outputs = re.findall(r"^Output\s*\|\s*\S+\s*\|\s*(\S+)\s*\|", text, re.M)
+    return {
+        "loop_time": sum(float(t) for t in loops) if loops else None,
+        "output_time": sum(float(t) for t in outputs) if outputs else None,
+    }
+
+
 def lammps_result(scene, work: Path, wall_time: float, extra: dict | None = None) -> RunResult:
     """A deck's output files in a directory (templates.RESULTS_DUMP and the rest) -> its RunResult.
 
     The one post-processing path: run_lammps calls it on its work directory, granchain collect on a
-    directory that plain LAMMPS ran. The run's invariants are checked (InvariantError).
+    directory that plain LAMMPS ran. The run's invariants are checked (InvariantError). extra gets
+    LAMMPS's loop and output times from log.lammps (log_timing) and the time taken to read the
+    results back (read_time), for the run's price (RunResult.price).
     """
+    t0 = time.perf_counter()
     steps, end_time = read_run_end(work)
     sol = read_solution(scene, work, steps, wall_time, end_time)
     check_solution(scene, sol)
-    return LammpsRunResult(scene=scene, backend="lammps", solution=sol, extra=dict(extra or {}))
+    extra = dict(extra or {})
+    log = Path(work) / "log.lammps"
+    if log.exists():
+        extra.update(log_timing(log.read_text(errors="replace")))
+    extra["read_time"] = time.perf_counter() - t0
+    return LammpsRunResult(scene=scene, backend="lammps", solution=sol, extra=extra)
 
 
 class ResultsError(GranchainError, RuntimeError):
