@@ -366,3 +366,27 @@ def test_a_dollar_in_the_title_is_text_not_mathtext(compare_dir, tmp_path):
     toml = (r / "scene.toml").read_text()
     (r / "scene.toml").write_text('title = "costs $5 and $F_{x$"\n' + toml)
     assert plot_run(r)  # an unbalanced $...$ would make matplotlib's mathtext raise
+
+
+def test_error_bars_only_where_larger_than_the_marker():
+    """Issue 15 item 6: an error bar is drawn where it reaches beyond the marker, in display space."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from granchain.workflows.plots import _error_bars
+
+    fig, ax = plt.subplots(figsize=(6, 4), dpi=100)
+    x = np.arange(1.0, 6.0)
+    y = np.array([100.0, 80.0, 60.0, 40.0, 20.0])
+    ax.set_xlim(0, 6)
+    ax.set_ylim(0, 120)
+    # 1 pixel is 120 N / ~300 px = 0.4 N: 1e-3 N hides in the marker, 10 N does not; nan: no estimate
+    err = np.array([1e-3, 10.0, np.nan, 0.0, 30.0])
+    assert _error_bars(ax, x, y, err, "k") == 2
+    assert _error_bars(ax, x, y, None, "k") == 0
+    ax.set_yscale("log")
+    ax.set_ylim(1.0, 1e3)
+    assert _error_bars(ax, x, y, np.full(5, 1e-2), "k") == 0  # 0.01% of the value: inside the marker
+    plt.close(fig)

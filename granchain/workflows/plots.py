@@ -148,6 +148,7 @@ class Peaks:
     time_of_peak: np.ndarray  # s; nan where the wave never reached the contact
     complete: np.ndarray  # bool; all True when the file has no complete column
     has_complete: bool  # whether the file has a complete column
+    error: np.ndarray | None = None  # peak_force_error (N; nan where not estimated), None without the column
 
     @property
     def reached(self) -> np.ndarray:
@@ -160,7 +161,31 @@ def load_peaks(run_dir: str | Path) -> Peaks:
     cols = _columns(Path(run_dir) / "peaks.csv")
     has = "complete" in cols
     complete = cols["complete"] == 1 if has else np.ones(cols["contact"].shape, bool)
-    return Peaks(cols["contact"], cols["peak_force"], cols["time_of_peak"], complete, has)
+    error = cols.get("peak_force_error")
+    return Peaks(cols["contact"], cols["peak_force"], cols["time_of_peak"], complete, has, error)
+
+
+#: marker size (points) of the peak-force markers; an error bar is drawn where it reaches beyond one
+MARKER_SIZE = 3.0
+
+
+def _error_bars(ax, x: np.ndarray, y: np.ndarray, err: np.ndarray | None, color, label: str = "") -> int:
+    """Error bars of the measured peak-force errors (granchain.workflows.errors) where they reach beyond
+    the marker, decided in display space once the axes' limits are final; returns how many were drawn."""
+    if err is None:
+        return 0
+    ok = np.isfinite(err) & np.isfinite(y) & (err > 0)
+    if not ok.any():
+        return 0
+    fig = ax.figure
+    radius = 0.5 * MARKER_SIZE * fig.dpi / 72.0  # pixels
+    lo = np.where(ok, np.maximum(y - np.where(ok, err, 0.0), np.finfo(float).tiny), y)
+    pts = lambda v: ax.transData.transform(np.column_stack([x, v]))[:, 1]  # noqa: E731
+    centre, top, bottom = pts(y), pts(np.where(ok, y + np.where(ok, err, 0.0), y)), pts(lo)
+    big = ok & ((top - centre > radius) | (centre - bottom > radius))
+    if big.any():
+        ax.errorbar(x[big], y[big], yerr=err[big], fmt="none", ecolor=color, elinewidth=0.8, capsize=2, label=label)
+    return int(big.sum())
 
 
 def _summary(run: Path) -> dict:
@@ -294,7 +319,7 @@ def _peak_markers(
     """Peak forces of the reached contacts as markers: filled where the peak is complete, open where it
     is not (when known)."""
     full = reached & complete
-    (line,) = ax.plot(contacts[full], peak[full], "o", ms=3, color=color, label=label)
+    (line,) = ax.plot(contacts[full], peak[full], "o", ms=MARKER_SIZE, color=color, label=label)
     part = reached & ~complete
     if has_complete and part.any():
         ax.plot(
@@ -356,8 +381,13 @@ def plot_peaks(run: Path, log: bool = True, formats=("png",)) -> list[Path]:
         fig.tight_layout(rect=(0, 0.025 * (len(skipped) + 1), 1, 1))
     else:
         fig.tight_layout()
+    err = None if pk.error is None else np.where(pk.reached, pk.error, np.nan)
+    if _error_bars(ax, contacts, peak, err, "0.25", "measured error (dt, 2 dt, 4 dt), where beyond the marker"):
+        ax.legend(fontsize=8)
     made = _save(fig, run / "peaks", formats)
     header, cols = ["contact", "peak_force"], [contacts, peak]
+    if pk.error is not None:
+        header, cols = [*header, "peak_force_error"], [*cols, pk.error]
     if pk.has_complete:
         header, cols = [*header, "complete"], [*cols, pk.complete.astype(float)]
     _write_csv(run / "peaks_plot.csv", [*header, *curves], [*cols, *curves.values()])
@@ -603,6 +633,7 @@ class PeakOverlay:
     reached: np.ndarray  # reached in both runs (Peaks.reached)
     complete: np.ndarray  # complete in both runs (all True without the complete column)
     has_complete: bool  # either peaks.csv has a complete column
+    lammps_error: np.ndarray | None = None  # LAMMPS's measured peak-force errors (None: not estimated)
 
 
 def _spline(t: np.ndarray, f: np.ndarray, at: np.ndarray) -> np.ndarray:
@@ -663,7 +694,14 @@ def compare_peaks(compare_dir: str | Path) -> PeakOverlay:
     with np.errstate(divide="ignore", invalid="ignore"):
         rel = np.where(reached, (fa - fb) / fb, np.nan)
     return PeakOverlay(
-        contacts.astype(int), fa, fb, rel, reached, a.complete[ia] & b.complete[ib], a.has_complete or b.has_complete
+        contacts.astype(int),
+        fa,
+        fb,
+        rel,
+        reached,
+        a.complete[ia] & b.complete[ib],
+        a.has_complete or b.has_complete,
+        None if a.error is None else a.error[ia],
     )
 
 
@@ -768,6 +806,9 @@ def _plot_compare_peaks(d: Path, la: str, lr: str, formats) -> list[Path]:
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3, which="both")
     fig.tight_layout()
+    err = None if p.lammps_error is None else np.where(reached, p.lammps_error, np.nan)
+    if _error_bars(ax1, p.contact, p.lammps, err, "C0", "LAMMPS measured error, where beyond the marker"):
+        ax1.legend(fontsize=8)
     made = _save(fig, d / "compare_peaks", formats)
     header = ["contact", "lammps", "reference", "relative_difference"]
     cols = [p.contact, p.lammps, p.reference, p.relative_difference]
