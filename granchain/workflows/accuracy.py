@@ -25,6 +25,8 @@ from granchain.reference.solver import solve_chain
 from granchain.workflows.plan import plan_scene
 
 TARGETS = (1e-2, 1e-3, 1e-4)
+#: the tolerance whose planned time step is marked on the diagram (the planner's default)
+PLAN_RTOL = 1e-3
 
 
 @dataclass
@@ -46,6 +48,7 @@ class AccuracyStudy:
     points: list[Point] = field(default_factory=list)
     one_time: dict = field(default_factory=dict)
     dump_errors: list[tuple[int, float, float]] = field(default_factory=list)  # (stride, raw, refined)
+    plan_points: list[Point] = field(default_factory=list)  # each method at the step planned for PLAN_RTOL
 
     def orders(self) -> dict[str, float]:
         out = {}
@@ -107,26 +110,35 @@ def accuracy_study(
         else:
             settings = [ladders[m] / 2**j for j in range(levels)]
         for s in settings:
-            walls, sol = [], None
-            for _ in range(repeats):
-                if m == "lammps":
-                    from granchain.lammps.runner import cleanup, run_lammps
-
-                    res, work = run_lammps(replace(scene, run=replace(scene.run, timestep=s)))
-                    cleanup(work)
-                    sol = res.solution
-                    study.one_time.setdefault("lammps_startup_time", res.extra.get("startup_time"))
-                    study.one_time.setdefault("plugin_build_time", res.extra.get("plugin_build_time"))
-                elif m == "dop853":
-                    sol = solve_chain_dop853(problem, end, s)
-                else:
-                    sol = solve_chain(problem, end, s, m)
-                walls.append(sol.wall_time)
-            e, es = _errors(scene, sol, ref, idx)
-            study.points.append(Point(m, s, sol.steps, statistics.median(walls), e, es))
+            study.points.append(_measure(study, scene, problem, m, s, repeats, ref, idx))
+        if m != "dop853":
+            # the current plan's point: the step the planner chooses for PLAN_RTOL with this integrator
+            dt_plan = plan_scene(scene, rtol=PLAN_RTOL, method="verlet" if m in ("lammps", "verlet") else "rk4")
+            study.plan_points.append(_measure(study, scene, problem, m, dt_plan.scene.run.timestep, repeats, ref, idx))
     if dump_intervals and "lammps" in methods:
         study.dump_errors = _dump_interval_errors(scene, ladders["lammps"] / 4)
     return study
+
+
+def _measure(study: AccuracyStudy, scene, problem, m: str, s: float, repeats: int, ref, idx) -> Point:
+    """One point of the diagram: method m at setting s (time step, or DOP853's rtol), median wall time."""
+    walls, sol = [], None
+    for _ in range(repeats):
+        if m == "lammps":
+            from granchain.lammps.runner import cleanup, run_lammps
+
+            res, work = run_lammps(replace(scene, run=replace(scene.run, timestep=s)))
+            cleanup(work)
+            sol = res.solution
+            study.one_time.setdefault("lammps_startup_time", res.extra.get("startup_time"))
+            study.one_time.setdefault("plugin_build_time", res.extra.get("plugin_build_time"))
+        elif m == "dop853":
+            sol = solve_chain_dop853(problem, scene.run.end_time, s)
+        else:
+            sol = solve_chain(problem, scene.run.end_time, s, m)
+        walls.append(sol.wall_time)
+    e, es = _errors(scene, sol, ref, idx)
+    return Point(m, s, sol.steps, statistics.median(walls), e, es)
 
 
 def _dump_interval_errors(scene, dt: float) -> list[tuple[int, float, float]]:
@@ -173,10 +185,10 @@ def write_study(study: AccuracyStudy, out: str | Path) -> list[Path]:
     with open(out / "accuracy.csv", "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["method", "setting", "steps", "wall_time", "error_peak_force", "error_wave_speed"])
-        for p in study.points:
+        for p in [*study.points, *study.plan_points]:
             w.writerow(
                 [
-                    p.method,
+                    p.method + (" (planned)" if p in study.plan_points else ""),
                     repr(p.setting),
                     p.steps,
                     repr(p.wall_time),
@@ -193,8 +205,19 @@ def write_study(study: AccuracyStudy, out: str | Path) -> list[Path]:
             "verlet": "reference Verlet",
             "dop853": "SciPy DOP853 (rtol ladder)",
         }[m]
-        ax.loglog([p.wall_time for p in pts], [max(p.error_peak, 1e-16) for p in pts], "o-", label=label)
+        (line,) = ax.loglog([p.wall_time for p in pts], [max(p.error_peak, 1e-16) for p in pts], "o-", label=label)
+        for q in (q for q in study.plan_points if q.method == m):
+            ax.loglog(
+                [q.wall_time],
+                [max(q.error_peak, 1e-16)],
+                "*",
+                ms=13,
+                mec="k",
+                color=line.get_color(),
+                label=f"{label}: planned for rtol {PLAN_RTOL:g} (dt {q.setting:.3g} s)",
+            )
     ax.axhline(study.reference_error, color="gray", ls=":", label="converged reference's own error (Richardson)")
+    ax.axhline(PLAN_RTOL, color="0.5", ls="--", lw=0.8, label=f"rtol {PLAN_RTOL:g}")
     ax.set_xlabel("wall time (s, median of repeats; LAMMPS start-up excluded)")
     ax.set_ylabel("max relative error of peak forces")
     import textwrap
@@ -229,6 +252,19 @@ def summary_text(study: AccuracyStudy) -> str:
         else:
             setting = f"rtol {p.setting:g}" if p.method == "dop853" else f"dt {p.setting:.3g} s"
             lines.append(f"| {t:g} | {p.method} | {setting} | {p.wall_time:.3g} | {p.error_peak:.1e} |")
+    if study.plan_points:
+        lines += [
+            "",
+            f"The planner's choice for rtol {PLAN_RTOL:g} (the stars on the diagram), measured:",
+            "",
+            "| method | planned dt (s) | wall time (s) | error | meets rtol |",
+            "|---|---|---|---|---|",
+        ]
+        lines += [
+            f"| {q.method} | {q.setting:.3g} | {q.wall_time:.3g} | {q.error_peak:.1e} | "
+            f"{'yes' if q.error_peak <= PLAN_RTOL else 'no'} |"
+            for q in study.plan_points
+        ]
     if study.one_time:
         lines += [
             "",
