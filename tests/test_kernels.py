@@ -11,17 +11,18 @@ law declares (Thornton's yield overlap among them), over three type pairs with t
 - compute(), through ``run 0``: the per-atom d_fc (force), d_edis (dissipated), d_amax (history after
   the step) and the total potential energy.
 
-Tolerance: both sides evaluate the same formula on the same doubles (the twin gets LAMMPS's own
-overlap, d0 - dist), so they differ only by the rounding of differently ordered operations (pow vs
-sqrt, a few ulp) and by r * (F/r) in compute pair/local (2 ulp). Where a formula subtracts nearly equal
-numbers (the force near its zero, s = alpha - d_p; Thornton's dissipated energy just past yield,
-W - 2/5 F_max (am - d_p)) that rounding is of the size of the larger terms, so every value is compared
-as |cpp - twin| <= 1e-12 (|twin| + scale), the scale being the same quantity at the top of the
-contact's current curve (the force and energy at alpha = am, the work done to reach am). Measured:
-at most 3e-16 on that measure (relative to |twin| alone up to 5e-15 here, but 1.6e-4 for the
-dissipation just past yield with other coefficients: why the scale), so 1e-12 leaves three orders of
-magnitude for other compilers and libm; a wrong expression shows far above it (changing Thornton's
-exponent 3/2 in k_p to 1.4, or am^2 to am alpha in the bilinear dissipation, fails at 1e-2 and more).
+Tolerance: both sides evaluate the same formula on the same doubles (the twin gets LAMMPS's own overlap,
+d0 - dist), so they differ only by the rounding of differently ordered operations (pow vs sqrt, cbrt vs
+pow: a few ulp) and by r * (F/r) in compute pair/local (2 ulp). Where a formula subtracts nearly equal
+numbers (the force near its zero, s = alpha - d_p; Thornton's dissipated energy just past yield, W - 2/5
+F_max (am - d_p)) that rounding is of the size of the larger terms, so every value is compared as |cpp -
+twin| <= 1e-12 (|twin| + scale), the scale being the same quantity at the top of the contact's current
+curve (the force and energy at alpha = am, the work done to reach am). Measured: at most 1.2e-15 on that
+measure (Thornton; Hertz and bilinear 2e-16), while relative to |twin| alone Thornton's force next to
+its zero differs by 2e-6 and its dissipation just past yield by 1.3e-3: the cancellations above, hence
+the scale. 1e-12 leaves almost three orders of magnitude for other compilers and libm; a wrong
+expression shows far above it (changing Thornton's exponent 3/2 in k_p to 1.4, or am^2 to am alpha in
+the bilinear dissipation, fails at 1e-2 and more).
 
 The other tests: the registry's laws are the plugin's pair styles; pair_coeff and the per-atom vectors
 are checked with LAMMPS errors; a chain of every law runs the same on one and on two MPI ranks (history
