@@ -1,0 +1,621 @@
+"""Campaign files: what varies over a base scene, read and validated before anything runs.
+
+A campaign file is TOML::
+
+    [campaign]
+    base = "elastic-short-pulse"       # a bundled scene, a path (relative to this file), or an inline [scene]
+    backend = "lammps"                 # or "reference" (with method = "rk4" | "verlet")
+    rtol = 1e-3                        # optional: plan every point for this tolerance
+    error_estimate = true              # default: every observable gets its measured error (2 dt, 4 dt runs)
+    regime_contact = 20                # optional: the contact whose force history gives the table's
+                                       # pulse count and regime (default: the last of [outputs] histories)
+
+    [vary]                             # a grid: the product of every key's values
+    "loading.amplitude" = { log = [1e2, 1e6], num = 9 }
+    "loading.duration" = [1e-6, 1e-5, 1e-4]
+    # { linear = [a, b], num = n } spaces evenly; a plain list is taken as it is
+
+    [zip]                              # keys that vary together (equal lengths): one more axis of the grid
+    "chain.beads" = [20, 40]
+    "run.end_time" = [1e-4, 2e-4]
+
+    [derive]                           # a key computed from others (+ - * / ** and parentheses)
+    "loading.duration" = "impulse / amplitude"
+
+A dotted key is a scene key (``section.key``, ``chain.material.density``); a key without a dot is a
+free parameter: it is not a scene key, it only feeds [derive] (``impulse = [0.1, 0.4]``). An
+expression reads a varied key by its full name or, when that is unambiguous, by its last part
+(``amplitude``), a derived key set above it, or a number of the base scene by its full name
+(``chain.radius``).
+
+The search kind adds a [search] table: for each point of the grid (the outer keys; no [vary] is one
+search), bisect one key until a predicate of the run flips, to a tolerance::
+
+    [search]
+    key = "loading.duration"
+    range = [1e-7, 1e-4]
+    scale = "log"                      # or "linear"
+    tolerance = 0.01                   # log: the bracket's hi/lo - 1; linear: its width, in the key's unit
+    predicate = { quantity = "pulses", contact = 20, op = ">", value = 1 }
+
+``quantity`` is ``pulses`` (distinct pulses in the force history of ``contact``, which must be one of
+the scene's [outputs] histories; granchain.postprocess.regimes.count_pulses) or an observable of
+summary.json (``leading_peak_force``, ``wave_speed``, ...).
+
+Every problem is a :class:`CampaignError` naming the file, the table, the key and the fix; every
+point is made and validated as a scene (and planned, and its time step checked) before anything runs.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from granchain.campaigns import expr
+from granchain.errors import GranchainError
+from granchain.scene import SECTIONS, Scene, SceneError, load_scene, scene_from_dict, scene_to_dict
+
+KINDS = ("grid", "search")
+BACKENDS = ("reference", "lammps")
+CAMPAIGN_KEYS = ("base", "backend", "method", "rtol", "error_estimate", "regime_contact", "title", "kind")
+TABLES = ("campaign", "scene", "vary", "zip", "derive", "search")
+SEARCH_KEYS = ("key", "range", "scale", "tolerance", "predicate")
+PREDICATE_KEYS = ("quantity", "contact", "op", "value")
+#: the observables of summary.json a predicate may test (granchain.postprocess.observables)
+OBSERVABLES = (
+    "leading_peak_force",
+    "leading_peak_force_nondim",
+    "leading_peak_contact",
+    "wave_speed",
+    "wave_speed_stderr",
+    "wave_speed_contacts",
+    "max_peak_force",
+    "max_peak_contact",
+)
+OPS = (">", ">=", "<", "<=", "==", "!=")
+#: the most points a campaign may have (a typo in num can ask for millions)
+MAX_POINTS = 100_000
+
+
+class CampaignError(GranchainError, ValueError):
+    """A campaign file or one of its points is invalid; the message names the key and the fix."""
+
+
+def _num_text(v: Any) -> str:
+    return f"{v:.6g}" if isinstance(v, float) else repr(v) if isinstance(v, str) else str(v)
+
+
+def params_text(params: dict) -> str:
+    """'loading.amplitude = 100, loading.duration = 1e-05': a point's parameters, for messages."""
+    return ", ".join(f"{k} = {_num_text(v)}" for k, v in params.items())
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One axis of the grid: a single [vary] key, or the keys of [zip] (values: one tuple per step)."""
+
+    keys: tuple[str, ...]
+    values: tuple[tuple, ...]
+
+
+@dataclass(frozen=True)
+class Predicate:
+    """quantity op value, on one run: ``pulses at contact 20 > 1``."""
+
+    quantity: str
+    op: str
+    value: float
+    contact: int | None = None
+
+    @property
+    def text(self) -> str:
+        where = f" at contact {self.contact}" if self.contact is not None else ""
+        return f"{self.quantity}{where} {self.op} {_num_text(self.value)}"
+
+    def holds(self, x: float) -> bool:
+        v = self.value
+        return {
+            ">": x > v,
+            ">=": x >= v,
+            "<": x < v,
+            "<=": x <= v,
+            "==": x == v,
+            "!=": x != v,
+        }[self.op]
+
+
+@dataclass(frozen=True)
+class Search:
+    key: str
+    low: float
+    high: float
+    scale: str  # "log" | "linear"
+    tolerance: float
+    predicate: Predicate
+
+    def midpoint(self, lo: float, hi: float) -> float:
+        return math.sqrt(lo * hi) if self.scale == "log" else 0.5 * (lo + hi)
+
+    def converged(self, lo: float, hi: float) -> bool:
+        a, b = min(lo, hi), max(lo, hi)
+        return (b / a - 1.0 <= self.tolerance) if self.scale == "log" else (b - a <= self.tolerance)
+
+    def width(self, lo: float, hi: float) -> float:
+        """The bracket's width in the tolerance's measure."""
+        a, b = min(lo, hi), max(lo, hi)
+        return b / a - 1.0 if self.scale == "log" else b - a
+
+
+@dataclass(frozen=True)
+class Point:
+    """One point: its parameters (varied, free and derived keys) and its validated scene."""
+
+    index: int
+    params: dict
+    scene: Scene
+
+    @property
+    def scene_dict(self) -> dict:
+        """The canonical scene (granchain.scene.scene_to_dict of the validated scene)."""
+        return scene_to_dict(self.scene)
+
+
+@dataclass(frozen=True)
+class Derived:
+    key: str
+    text: str
+    tree: object
+
+
+@dataclass(frozen=True)
+class Campaign:
+    """A validated campaign file (see the module docstring)."""
+
+    source: str
+    text: str
+    base: dict  # the base scene, canonical (granchain.scene.scene_to_dict)
+    base_source: str
+    backend: str
+    method: str | None
+    rtol: float | None
+    error_estimate: bool
+    kind: str
+    axes: tuple[Axis, ...]
+    derive: tuple[Derived, ...]
+    search: Search | None = None
+    regime_contact: int | None = None
+    title: str = ""
+
+    @property
+    def varied_keys(self) -> tuple[str, ...]:
+        """Every key of a point's parameters, in table order: the grid's, the searched one, the derived."""
+        keys = [k for a in self.axes for k in a.keys]
+        if self.search is not None:
+            keys.append(self.search.key)
+        return (*keys, *(d.key for d in self.derive))
+
+    @property
+    def outer_keys(self) -> tuple[str, ...]:
+        return tuple(k for a in self.axes for k in a.keys)
+
+    def grid(self) -> list[dict]:
+        """The grid's parameter sets (before [derive]), in order: the last axis varies fastest."""
+        if not self.axes:
+            return [{}]
+        out = []
+        for combo in itertools.product(*(a.values for a in self.axes)):
+            params: dict = {}
+            for axis, values in zip(self.axes, combo, strict=True):
+                params.update(zip(axis.keys, values, strict=True))
+            out.append(params)
+        return out
+
+    def point(self, params: dict, index: int = 0, count: int = 1) -> Point:
+        """Make and validate one point from its grid parameters (the searched key among them for a
+        search): apply [derive], set the scene keys on the base scene, read it as a scene."""
+        full = dict(params)
+        where = f"{self.source}: point {index + 1} of {count} ({params_text(params)})"
+        values = self._values(full)
+        for d in self.derive:
+            try:
+                v = expr.evaluate(d.tree, values, d.text)
+            except expr.ExpressionError as e:
+                raise CampaignError(f"{where}: [derive] {d.key!r}: {e}") from None
+            full[d.key] = v
+            values = self._values(full)
+        data = _deep_copy(self.base)
+        for key, value in full.items():
+            if "." in key:
+                _set_key(data, key, value, where)
+        try:
+            scene = scene_from_dict(data, source=f"campaign point ({params_text(full)})")
+        except SceneError as e:
+            msg = str(e).split(": ", 1)[-1] if str(e).startswith("campaign point (") else str(e)
+            raise CampaignError(f"{where} is not a valid scene: {msg}") from None
+        return Point(index=index, params=full, scene=scene)
+
+    def _values(self, params: dict) -> dict:
+        """Names an expression may read: the base scene's numbers, the parameters, their short names."""
+        values = _numbers(self.base)
+        values.update(params)
+        shorts: dict[str, list[str]] = {}
+        for k in params:
+            shorts.setdefault(k.rsplit(".", 1)[-1], []).append(k)
+        for short, keys in shorts.items():
+            if len(keys) == 1 and short not in params:
+                values[short] = params[keys[0]]
+        return values
+
+    def points(self) -> list[Point]:
+        """Every point of a grid campaign, each validated; a search's outer points with the searched
+        key at both ends of its range are validated by :func:`check_search_points`."""
+        grid = self.grid()
+        return [self.point(p, i, len(grid)) for i, p in enumerate(grid)]
+
+
+def _deep_copy(d):
+    if isinstance(d, dict):
+        return {k: _deep_copy(v) for k, v in d.items()}
+    if isinstance(d, list):
+        return [_deep_copy(v) for v in d]
+    return d
+
+
+def _numbers(d: dict, prefix: str = "") -> dict[str, float]:
+    out = {}
+    for k, v in d.items():
+        name = f"{prefix}{k}"
+        if isinstance(v, dict):
+            out.update(_numbers(v, name + "."))
+        elif isinstance(v, (int, float)) and not isinstance(v, bool):
+            out[name] = v
+    return out
+
+
+def _set_key(data: dict, key: str, value: Any, where: str) -> None:
+    parts = key.split(".")
+    node = data
+    for i, part in enumerate(parts[:-1]):
+        nxt = node.get(part)
+        if nxt is None:
+            nxt = node[part] = {}
+        if not isinstance(nxt, dict):
+            head = ".".join(parts[: i + 1])
+            raise CampaignError(
+                f"{where}: cannot set {key!r}: {head} is {nxt!r} in the base scene, not a table (set {head!r} itself)"
+            )
+        node = nxt
+    node[parts[-1]] = value
+
+
+# ------------------------------------------------------------------------------------- reading
+
+
+def load_campaign_file(path: str | Path) -> Campaign:
+    """Read and validate a campaign file (a base scene path is relative to the file)."""
+    p = Path(path)
+    if not p.is_file():
+        raise CampaignError(f"{p}: no such campaign file; give the path of a .toml campaign (docs/campaigns.md)")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise CampaignError(f"{p}: cannot be read as UTF-8 text ({e})") from None
+    return parse_campaign(text, source=str(p), base_dir=p.parent)
+
+
+def parse_campaign(text: str, source: str = "<campaign>", base_dir: str | Path | None = None) -> Campaign:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise CampaignError(f"{source}: is not valid TOML: {e}") from None
+    return campaign_from_dict(data, source=source, base_dir=base_dir, text=text)
+
+
+def campaign_from_dict(
+    data: dict, source: str = "<campaign>", base_dir: str | Path | None = None, text: str | None = None
+) -> Campaign:
+    """A validated campaign from its tables (the TOML file's content as a dict)."""
+    if not isinstance(data, dict):
+        raise CampaignError(f"{source}: a campaign is a table with [campaign] and [vary] (or [search])")
+    for key in data:
+        if key not in TABLES:
+            raise CampaignError(
+                f"{source}: unknown table or key {key!r}; {_did_you_mean(key, TABLES)}allowed: {', '.join(TABLES)}"
+            )
+        if not isinstance(data[key], dict):
+            raise CampaignError(f"{source}: {key} = {data[key]!r} must be a table: write it as a [{key}] section")
+    c = dict(data.get("campaign", {}))
+    for key in c:
+        if key not in CAMPAIGN_KEYS:
+            raise CampaignError(
+                f"{source}: [campaign] has unknown key {key!r}; {_did_you_mean(key, CAMPAIGN_KEYS)}"
+                f"allowed keys: {', '.join(CAMPAIGN_KEYS)}"
+            )
+    base, base_source = _read_base(c, data.get("scene"), source, base_dir)
+    backend = c.get("backend", "reference")
+    if backend not in BACKENDS:
+        raise CampaignError(f"{source}: [campaign] backend = {backend!r} is invalid: one of 'reference', 'lammps'")
+    method = c.get("method")
+    if backend == "lammps" and method not in (None, "verlet"):
+        raise CampaignError(
+            f"{source}: [campaign] method = {method!r}: the LAMMPS backend integrates with velocity Verlet only "
+            "(drop method)"
+        )
+    if method not in (None, "rk4", "verlet"):
+        raise CampaignError(f"{source}: [campaign] method = {method!r} is invalid: 'rk4' or 'verlet'")
+    rtol = c.get("rtol")
+    if rtol is not None and (isinstance(rtol, bool) or not isinstance(rtol, (int, float)) or not 0 < rtol < 1):
+        raise CampaignError(f"{source}: [campaign] rtol = {rtol!r} is invalid: a number between 0 and 1, e.g. 1e-3")
+    ee = c.get("error_estimate", True)
+    if not isinstance(ee, bool):
+        raise CampaignError(f"{source}: [campaign] error_estimate = {ee!r} is invalid: true or false")
+    rc = c.get("regime_contact")
+    if rc is not None and (isinstance(rc, bool) or not isinstance(rc, int) or rc < 1):
+        raise CampaignError(f"{source}: [campaign] regime_contact = {rc!r} is invalid: a contact number >= 1")
+    title = c.get("title", "")
+    if not isinstance(title, str):
+        raise CampaignError(f"{source}: [campaign] title = {title!r} is invalid: a string")
+    kind = c.get("kind", "search" if "search" in data else "grid")
+    if kind not in KINDS:
+        raise CampaignError(f"{source}: [campaign] kind = {kind!r} is invalid: 'grid' or 'search'")
+    if kind == "search" and "search" not in data:
+        raise CampaignError(f"{source}: [campaign] kind = 'search' needs a [search] table (key, range, predicate)")
+    if kind == "grid" and "search" in data:
+        raise CampaignError(f"{source}: a [search] table with kind = 'grid': drop kind (or set kind = 'search')")
+
+    axes = []
+    for name in ("vary", "zip"):
+        if name in data and not data[name]:
+            raise CampaignError(f"{source}: [{name}] is empty: the grid has no points; give each key a list of values")
+    for key, spec in data.get("vary", {}).items():
+        _check_key(key, "vary", source)
+        values = _values_of(spec, f"{source}: [vary] {key!r}")
+        axes.append(Axis((key,), tuple((v,) for v in values)))
+    if "zip" in data:
+        cols = {}
+        for key, spec in data["zip"].items():
+            _check_key(key, "zip", source)
+            if key in {a.keys[0] for a in axes}:
+                raise CampaignError(f"{source}: {key!r} is in both [vary] and [zip]; keep it in one")
+            cols[key] = _values_of(spec, f"{source}: [zip] {key!r}")
+        lengths = {k: len(v) for k, v in cols.items()}
+        if len(set(lengths.values())) > 1:
+            raise CampaignError(
+                f"{source}: [zip] keys vary together and need equal lengths; got "
+                + ", ".join(f"{k}: {n}" for k, n in lengths.items())
+            )
+        axes.append(Axis(tuple(cols), tuple(zip(*cols.values(), strict=True))))
+    search = _read_search(data["search"], source) if kind == "search" else None
+    if kind == "grid" and not axes:
+        raise CampaignError(
+            f'{source}: nothing varies: the grid is empty; add a [vary] table, e.g. "loading.amplitude" = [10.0, 100.0]'
+        )
+    count = math.prod(len(a.values) for a in axes)
+    if count > MAX_POINTS:
+        raise CampaignError(f"{source}: the grid has {count} points, more than {MAX_POINTS}; reduce num or the lists")
+    grid_keys = [k for a in axes for k in a.keys]
+    if search is not None and search.key in grid_keys:
+        raise CampaignError(f"{source}: [search] key {search.key!r} is also varied in [vary]/[zip]; drop it there")
+    derive = _read_derive(data.get("derive", {}), grid_keys + ([search.key] if search else []), base, source)
+    campaign = Campaign(
+        source=source,
+        text=text if text is not None else "",
+        base=base,
+        base_source=base_source,
+        backend=backend,
+        method=method,
+        rtol=None if rtol is None else float(rtol),
+        error_estimate=ee,
+        kind=kind,
+        axes=tuple(axes),
+        derive=tuple(derive),
+        search=search,
+        regime_contact=rc,
+        title=title,
+    )
+    return campaign
+
+
+def _did_you_mean(key: str, known) -> str:
+    import difflib
+
+    close = difflib.get_close_matches(str(key), list(known), n=1, cutoff=0.6)
+    return f"did you mean {close[0]!r}? " if close else ""
+
+
+def _read_base(c: dict, inline: dict | None, source: str, base_dir) -> tuple[dict, str]:
+    base = c.get("base")
+    if base is not None and inline is not None:
+        raise CampaignError(f"{source}: both [campaign] base = {base!r} and an inline [scene]: keep one")
+    if inline is not None:
+        try:
+            scene = scene_from_dict(inline, source=f"{source} [scene]")
+        except SceneError as e:
+            raise CampaignError(str(e)) from None
+        return scene_to_dict(scene), f"{source} [scene]"
+    if base is None:
+        raise CampaignError(
+            f"{source}: no base scene: set [campaign] base = a bundled scene name or a path, or give an inline [scene]"
+        )
+    if not isinstance(base, str):
+        raise CampaignError(f"{source}: [campaign] base = {base!r} is invalid: a scene name or a path (a string)")
+    path = Path(base)
+    if base_dir is not None and not path.is_absolute() and (Path(base_dir) / path).exists():
+        path = Path(base_dir) / path
+    try:
+        scene = load_scene(path if path.exists() else base)
+    except SceneError as e:
+        raise CampaignError(f"{source}: [campaign] base = {base!r}: {e}") from None
+    return scene_to_dict(scene), str(path if path.exists() else base)
+
+
+def _check_key(key: str, table: str, source: str) -> None:
+    if "." not in key:
+        if not key.isidentifier():
+            raise CampaignError(
+                f"{source}: [{table}] {key!r} is neither a scene key (section.key) nor a free parameter name "
+                "(letters, digits, _)"
+            )
+        return  # a free parameter: it feeds [derive]
+    section = key.split(".", 1)[0]
+    if section not in SECTIONS or section == "title" or not all(key.split(".")):
+        raise CampaignError(
+            f"{source}: [{table}] has unknown key {key!r}: {section!r} is not a scene section; "
+            f"{_did_you_mean(section, SECTIONS)}a scene key is section.key with section one of "
+            f"{', '.join(s for s in SECTIONS if s != 'title')}"
+        )
+
+
+def _values_of(spec: Any, where: str) -> list:
+    if isinstance(spec, list):
+        if not spec:
+            raise CampaignError(f"{where} = []: an empty list makes an empty grid; give at least one value")
+        return list(spec)
+    if isinstance(spec, dict):
+        kinds = [k for k in ("log", "linear") if k in spec]
+        unknown = [k for k in spec if k not in ("log", "linear", "num")]
+        if unknown or len(kinds) != 1 or "num" not in spec:
+            raise CampaignError(
+                f"{where} = {spec!r} is invalid: a list of values, {{ log = [a, b], num = n }} or "
+                "{ linear = [a, b], num = n }"
+            )
+        kind = kinds[0]
+        ends, num = spec[kind], spec["num"]
+        if (
+            not isinstance(ends, list)
+            or len(ends) != 2
+            or any(isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) for x in ends)
+        ):
+            raise CampaignError(f"{where}: {kind} = {ends!r} is invalid: two finite numbers [first, last]")
+        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+            raise CampaignError(f"{where}: num = {num!r} is invalid: a whole number >= 1 (0 makes an empty grid)")
+        a, b = (float(x) for x in ends)
+        if kind == "log":
+            if a <= 0 or b <= 0:
+                raise CampaignError(
+                    f"{where}: log = {ends!r}: both ends must be > 0 (use linear for zero or negatives)"
+                )
+            if num == 1:
+                return [a]
+            la, lb = math.log10(a), math.log10(b)
+            vals = [10 ** (la + (lb - la) * i / (num - 1)) for i in range(num)]
+            vals[0], vals[-1] = a, b
+            return [float(f"{v:.12g}") for v in vals]  # 1e2..1e6 in 9 steps: 100, 316.227766017, 1000, ...
+        if num == 1:
+            return [a]
+        return [float(f"{a + (b - a) * i / (num - 1):.12g}") for i in range(num)]
+    raise CampaignError(
+        f"{where} = {spec!r} is invalid: a list of values, {{ log = [a, b], num = n }} or "
+        "{ linear = [a, b], num = n }"
+    )
+
+
+def _read_derive(table: dict, varied: list[str], base: dict, source: str) -> list[Derived]:
+    out: list[Derived] = []
+    known = set(varied) | set(_numbers(base))
+    shorts: dict[str, list[str]] = {}
+    for k in varied:
+        shorts.setdefault(k.rsplit(".", 1)[-1], []).append(k)
+    for key, text in table.items():
+        _check_key(key, "derive", source)
+        if key in varied:
+            raise CampaignError(f"{source}: [derive] {key!r} is also varied ([vary], [zip] or [search]); keep one")
+        if not isinstance(text, str):
+            raise CampaignError(
+                f"{source}: [derive] {key!r} = {text!r} is invalid: an expression as a string, e.g. "
+                '"impulse / amplitude"'
+            )
+        try:
+            tree = expr.parse(text)
+        except expr.ExpressionError as e:
+            raise CampaignError(f"{source}: [derive] {key!r}: {e}") from None
+        readable = known | {s for s, ks in shorts.items() if len(ks) == 1 and s not in known}
+        for name in sorted(expr.names(tree)):
+            if name not in readable:
+                amb = shorts.get(name, [])
+                why = (
+                    f"it is ambiguous ({', '.join(amb)}): write the full name"
+                    if len(amb) > 1
+                    else f"{_did_you_mean(name, sorted(readable))}it is not a varied key, a derived key above it "
+                    "or a number of the base scene"
+                )
+                raise CampaignError(f"{source}: [derive] {key!r} = {text!r} reads {name!r}: {why}")
+        out.append(Derived(key, text, tree))
+        known.add(key)
+        shorts.setdefault(key.rsplit(".", 1)[-1], []).append(key)
+    return out
+
+
+def _read_search(s: dict, source: str) -> Search:
+    for key in s:
+        if key not in SEARCH_KEYS:
+            raise CampaignError(
+                f"{source}: [search] has unknown key {key!r}; {_did_you_mean(key, SEARCH_KEYS)}"
+                f"allowed keys: {', '.join(SEARCH_KEYS)}"
+            )
+    for key in ("key", "range", "predicate"):
+        if key not in s:
+            raise CampaignError(f"{source}: [search] is missing {key!r} (key, range, predicate; docs/campaigns.md)")
+    key = s["key"]
+    if not isinstance(key, str) or "." not in key:
+        raise CampaignError(f"{source}: [search] key = {key!r} is invalid: a scene key, e.g. 'loading.duration'")
+    _check_key(key, "search", source)
+    rng = s["range"]
+    if (
+        not isinstance(rng, list)
+        or len(rng) != 2
+        or any(isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) for x in rng)
+        or rng[0] == rng[1]
+    ):
+        raise CampaignError(f"{source}: [search] range = {rng!r} is invalid: two different finite numbers [low, high]")
+    low, high = sorted(float(x) for x in rng)
+    scale = s.get("scale", "log")
+    if scale not in ("log", "linear"):
+        raise CampaignError(f"{source}: [search] scale = {scale!r} is invalid: 'log' or 'linear'")
+    if scale == "log" and low <= 0:
+        raise CampaignError(f"{source}: [search] range = {rng!r}: a log search needs both ends > 0")
+    tol = s.get("tolerance", 0.01)
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not tol > 0:
+        raise CampaignError(
+            f"{source}: [search] tolerance = {tol!r} is invalid: a number > 0 (log: the bracket's hi/lo - 1; "
+            "linear: its width)"
+        )
+    return Search(key, low, high, scale, float(tol), _read_predicate(s["predicate"], source))
+
+
+def _read_predicate(p: Any, source: str) -> Predicate:
+    form = '{ quantity = "pulses", contact = 20, op = ">", value = 1 }'
+    if not isinstance(p, dict):
+        raise CampaignError(f"{source}: [search] predicate = {p!r} is invalid: a table such as {form}")
+    for key in p:
+        if key not in PREDICATE_KEYS:
+            raise CampaignError(
+                f"{source}: [search] predicate has unknown key {key!r}; {_did_you_mean(key, PREDICATE_KEYS)}"
+                f"allowed keys: {', '.join(PREDICATE_KEYS)}"
+            )
+    q = p.get("quantity")
+    if q != "pulses" and q not in OBSERVABLES:
+        raise CampaignError(
+            f"{source}: [search] predicate quantity = {q!r} is invalid: 'pulses' (at a contact) or an observable: "
+            + ", ".join(OBSERVABLES)
+        )
+    contact = p.get("contact")
+    if q == "pulses":
+        if isinstance(contact, bool) or not isinstance(contact, int) or contact < 1:
+            raise CampaignError(
+                f"{source}: [search] predicate contact = {contact!r} is invalid: the pulse count needs a contact "
+                "number >= 1 that is in the scene's [outputs] histories"
+            )
+    elif contact is not None:
+        raise CampaignError(f"{source}: [search] predicate contact: {q} is one number per run; drop contact")
+    op = p.get("op")
+    if op not in OPS:
+        raise CampaignError(f"{source}: [search] predicate op = {op!r} is invalid: one of {' '.join(OPS)}")
+    v = p.get("value")
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise CampaignError(f"{source}: [search] predicate value = {v!r} is invalid: a finite number")
+    return Predicate(q, op, float(v) if isinstance(v, float) else v, contact)
