@@ -1,0 +1,150 @@
+"""A campaign from a file or a dict, run into a workspace, and its table (the API behind
+``granchain.campaign`` / ``granchain.load_campaign`` and ``granchain campaign ...``)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from granchain.campaigns import workspace as wsp
+from granchain.campaigns.execute import Executor, Runner, preflight, run_grid
+from granchain.campaigns.search import run_search
+from granchain.campaigns.spec import Campaign, CampaignError, campaign_from_dict, load_campaign_file, params_text
+from granchain.campaigns.table import build_search_table, build_table, write_tables
+
+
+def as_campaign(spec) -> Campaign:
+    """A Campaign from a Campaign, a campaign file's path, or a dict of its tables."""
+    if isinstance(spec, Campaign):
+        return spec
+    if isinstance(spec, dict):
+        return campaign_from_dict(spec, source="<campaign dict>")
+    if isinstance(spec, (str, Path)):
+        return load_campaign_file(spec)
+    raise CampaignError(f"campaign = {spec!r}: give a campaign file's path or a dict of its tables")
+
+
+def validate(campaign: Campaign) -> list:
+    """Every point made, validated as a scene, planned and its time step checked, before anything runs.
+    A search's outer points are checked with the searched key at both ends of its range (and its
+    predicate's contact among the scene's histories). Returns the grid's points (a search's: [])."""
+    if campaign.kind == "grid":
+        points = campaign.points()
+        preflight(campaign, points)
+        return points
+    s = campaign.search
+    grid = campaign.grid()
+    ends = [campaign.point({**outer, s.key: v}, i, len(grid)) for i, outer in enumerate(grid) for v in (s.low, s.high)]
+    preflight(campaign, ends)
+    if s.predicate.quantity == "pulses":
+        for p in ends:
+            if s.predicate.contact not in p.scene.outputs.histories:
+                raise CampaignError(
+                    f"{campaign.source}: [search] predicate contact = {s.predicate.contact} is not among the "
+                    f"scene's [outputs] histories {list(p.scene.outputs.histories)} at point "
+                    f"({params_text(p.params)}); add it there (the pulse count needs its force history)"
+                )
+    return []
+
+
+def write_record(ws: Path, campaign: Campaign, runner: Runner, entries: list[dict], search_rows=None) -> None:
+    record = {
+        "schema": wsp.RECORD_SCHEMA,
+        "kind": campaign.kind,
+        "source": campaign.source,
+        "title": campaign.title,
+        "base_source": campaign.base_source,
+        "backend": campaign.backend,
+        "method": runner.method,
+        "rtol": campaign.rtol,
+        "error_estimate": campaign.error_estimate,
+        "regime_contact": campaign.regime_contact,
+        "code": runner.code,
+        "varied": list(campaign.varied_keys),
+        "search": None
+        if campaign.search is None
+        else {
+            "key": campaign.search.key,
+            "range": [campaign.search.low, campaign.search.high],
+            "scale": campaign.search.scale,
+            "tolerance": campaign.search.tolerance,
+            "predicate": campaign.search.predicate.text,
+        },
+        "points": entries,
+        "search_results": search_rows,
+    }
+    wsp.write_json(ws / wsp.RECORD, record)
+
+
+def run_campaign(
+    spec,
+    out,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    rerun: bool = False,
+    retry_failed: bool = False,
+    stream=None,
+):
+    """Run a campaign into the workspace `out`; returns (its table as a DataFrame, the RunReport).
+
+    Nothing runs unless every point is valid. Points complete in the workspace are not run again
+    (``rerun`` forces them; ``retry_failed`` runs the failed ones again). Ctrl-C stops the workers,
+    writes the table of what is complete, and re-raises KeyboardInterrupt.
+    """
+    campaign = as_campaign(spec)
+    stream = sys.stderr if stream is None else stream
+    points = validate(campaign)
+    ws = Path(out)
+    ex = Executor(workers=workers, scheduler=scheduler)
+    runner = Runner(campaign, ws, ex, rerun=rerun, retry_failed=retry_failed, stream=stream)
+    if campaign.text:
+        (ws / "campaign.toml").write_text(campaign.text)
+    from granchain.scene import scene_from_dict
+
+    (ws / "base.toml").write_text(scene_from_dict(campaign.base, source=campaign.base_source).to_toml())
+    entries: list[dict] = []
+    search_rows = None
+    try:
+        if campaign.kind == "grid":
+            entries = [{"params": p.params, "job": runner.job(p).id} for p in points]
+            write_record(ws, campaign, runner, entries)  # the table can be read while the points run
+            run_grid(campaign, runner, points)
+        else:
+            write_record(ws, campaign, runner, entries)
+            evaluated, search_rows = run_search(campaign, runner)
+            evaluated.sort(key=lambda e: (e[2], e[0].params[campaign.search.key]))
+            entries = [{"params": p.params, "job": job} for p, job, _ in evaluated]
+            write_record(ws, campaign, runner, entries, search_rows)
+    except KeyboardInterrupt:
+        ex.close()
+        if campaign.kind == "grid":
+            write_tables(ws)
+        runner.say(
+            "campaign interrupted: the points in flight are lost, the complete ones are kept; run the "
+            "same command again to complete only what is missing"
+        )
+        raise
+    finally:
+        ex.close()
+    tables = write_tables(ws)
+    r = runner.report
+    for params, message in r.messages[:20]:
+        runner.say(f"campaign: point ({params_text(params)}) failed: {message}")
+    if len(r.messages) > 20:
+        runner.say(f"campaign: ... {len(r.messages) - 20} more failures (table.csv, column message)")
+    return tables, r
+
+
+def load_campaign(ws, table: str | None = None):
+    """A workspace's table as a pandas DataFrame: table="points" (one row per point), "search" (one
+    row per outer point of a search, its transition), or None: a search's transitions, a grid's points."""
+    from granchain.campaigns.table import read_record
+
+    kind = read_record(Path(ws)).get("kind")
+    if table is None:
+        table = "search" if kind == "search" else "points"
+    if table == "points":
+        return build_table(ws)
+    if table == "search":
+        return build_search_table(ws)
+    raise CampaignError(f"table = {table!r}: 'points' or 'search'")

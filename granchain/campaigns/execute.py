@@ -1,0 +1,413 @@
+"""Running a campaign's points on Dask: a local cluster of worker processes, or an existing scheduler.
+
+Each task runs one point (:func:`run_point`, in a worker process) and writes the point's run directory
+into the workspace itself (the workspace is on a filesystem every worker sees: a laptop's disk, a
+cluster's shared filesystem), then returns a small status dict. The driver only submits, counts and
+reads the workspace back; it keeps no result that is not on disk. Hence:
+
+* a point whose run directory is complete is not run again (``rerun`` forces it);
+* a failing point (bad physics, a broken invariant, a LAMMPS error, a bug) is recorded in its job
+  directory with a one-line message (failure.json) and the campaign goes on; it is not retried
+  unless ``retry_failed`` (or ``rerun``);
+* Ctrl-C cancels what is queued and stops the workers; kill -9 of the driver takes its local workers
+  with it (Dask's worker processes exit when their parent dies); a killed worker loses the point it was
+  running (Dask resubmits it elsewhere; after three lost workers the point is reported as lost, not
+  failed); in every case the next run completes only what is missing, and since a run directory is
+  written aside and renamed into place, an interrupted point never looks complete.
+
+One LAMMPS instance at a time per worker: a local cluster has one thread per worker process, and each
+LAMMPS run is a child process of its worker (granchain.lammps.runner).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import sys
+import time
+import traceback
+import uuid
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from tqdm import tqdm
+
+from granchain import progress
+from granchain.campaigns import workspace as wsp
+from granchain.campaigns.spec import Campaign, CampaignError, Point, params_text
+from granchain.errors import GranchainError
+
+# ------------------------------------------------------------------------------------ the task
+
+
+def run_point(payload: dict) -> dict:
+    """Run one point in a worker: write its run directory into its job directory, or failure.json.
+
+    payload: job_dir, scene (canonical dict), source, backend, method, rtol, error_estimate, code.
+    Returns {"job", "status": "done" | "failed", "message", "wall_time", "warnings", "host"}.
+    """
+    t0 = time.perf_counter()
+    job = Path(payload["job_dir"])
+    caught: list[str] = []
+    status, message, detail = "done", None, None
+    try:
+        mine = wsp.code_version(payload["backend"])
+        if mine != payload["code"]:
+            raise CampaignError(
+                f"this worker ({socket.gethostname()}) runs {wsp.code_text(mine)}, the campaign "
+                f"{wsp.code_text(payload['code'])}: install the same granchain on every worker"
+            )
+        from granchain.scene import scene_from_dict
+        from granchain.workflows.run import run_scene
+
+        with progress.quiet(), warnings.catch_warnings(record=True) as w:
+            warnings.simplefilter("always")
+            scene = scene_from_dict(payload["scene"], source=payload["source"])
+            run_scene(
+                scene,
+                backend=payload["backend"],
+                method=payload["method"],
+                rtol=payload["rtol"],
+                error_estimate=payload["error_estimate"],
+                out=job / wsp.RUN_DIR,
+                overwrite=True,
+            )
+        caught = [str(x.message).splitlines()[0] for x in w]
+        (job / wsp.FAILURE).unlink(missing_ok=True)
+    except Exception as e:  # noqa: BLE001 - recorded with its message; the campaign goes on
+        status, message = "failed", one_line(e)
+        if not isinstance(e, GranchainError):  # a bug: keep where it happened
+            detail = traceback.format_exc()
+        wsp.write_json(
+            job / wsp.FAILURE,
+            {"message": message, "type": type(e).__name__, "traceback": detail, "host": socket.gethostname()},
+        )
+    wall = time.perf_counter() - t0
+    record = {
+        "job": job.name,
+        "status": status,
+        "message": message,
+        "wall_time": wall,
+        "warnings": caught,
+        "host": socket.gethostname(),
+        "pid": os.getpid(),
+    }
+    try:
+        wsp.write_json(job / wsp.TASK, record)
+    except OSError:  # the record is a courtesy; the run directory is what counts
+        pass
+    return record
+
+
+def one_line(e: BaseException) -> str:
+    """An exception as one line: a GranchainError's message; anything else with its type."""
+    text = " ".join(str(e).split()) or type(e).__name__
+    return text if isinstance(e, GranchainError) else f"{type(e).__name__}: {text}"
+
+
+# -------------------------------------------------------------------------------- the progress
+
+
+class CampaignProgress:
+    """done / running / failed with an ETA on stderr: a tqdm bar on a terminal, a line every
+    progress.LINE_EVERY seconds otherwise; nothing when quiet (granchain.progress)."""
+
+    def __init__(self, total: int, desc: str = "campaign", stream=None, workers: int = 1):
+        self.stream = sys.stderr if stream is None else stream
+        self.disabled = progress.is_quiet() or self.stream is None
+        self.tty = bool(not self.disabled and getattr(self.stream, "isatty", lambda: False)())
+        self.total, self.done, self.failed, self.pending, self.workers = total, 0, 0, 0, max(1, workers)
+        self.desc = f"granchain: {desc}"
+        self.t0 = time.perf_counter()
+        self._next_line = self.t0 + progress.DELAY
+        self._bar = None
+        if self.tty:
+            self._bar = tqdm(total=total, desc=self.desc, unit="pt", file=self.stream, dynamic_ncols=True, leave=True)
+
+    @property
+    def running(self) -> int:
+        return min(self.pending, self.workers)
+
+    def _postfix(self) -> str:
+        return f"done {self.done}, running {self.running}, failed {self.failed}"
+
+    def update(self, done: int = 0, failed: int = 0, pending: int | None = None, total: int | None = None) -> None:
+        self.done += done
+        self.failed += failed
+        if pending is not None:
+            self.pending = pending
+        if total is not None:
+            self.total = total
+        if self.disabled:
+            return
+        n = self.done + self.failed
+        if self._bar is not None:
+            if total is not None:
+                self._bar.total = total
+            self._bar.set_postfix_str(self._postfix(), refresh=False)
+            self._bar.update(n - self._bar.n)
+            return
+        now = time.perf_counter()
+        if now >= self._next_line:
+            self._line(now)
+            self._next_line = now + progress.LINE_EVERY
+
+    def _line(self, now: float) -> None:
+        n = self.done + self.failed
+        text = tqdm.format_meter(n, self.total or None, now - self.t0, prefix=self.desc, unit="pt")
+        try:
+            print(f"{text} ({self._postfix()})", file=self.stream, flush=True)
+        except (OSError, ValueError):
+            self.disabled = True
+
+    def close(self) -> None:
+        if self.disabled:
+            return
+        if self._bar is not None:
+            self._bar.set_postfix_str(self._postfix())
+            self._bar.close()
+            self._bar = None
+        elif time.perf_counter() - self.t0 >= progress.DELAY:
+            self._line(time.perf_counter())
+
+
+# -------------------------------------------------------------------------------- the executor
+
+
+class Executor:
+    """A Dask client made on first use: a LocalCluster of `workers` processes (one thread each) or
+    the scheduler at `scheduler`."""
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None):
+        if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+            raise CampaignError(f"--workers = {workers!r}: give a whole number of worker processes >= 1")
+        if workers is not None and scheduler is not None:
+            raise CampaignError("--workers and --scheduler: the scheduler's cluster has its own workers; give one")
+        self.workers, self.scheduler = workers, scheduler
+        self.client = None
+        self.cluster = None
+
+    @property
+    def nworkers(self) -> int:
+        if self.client is not None:
+            try:
+                return max(1, sum(self.client.nthreads().values()))
+            except Exception:  # noqa: BLE001 - only for the progress display
+                return 1
+        return self.workers or _cores()
+
+    def start(self):
+        if self.client is not None:
+            return self.client
+        from distributed import Client, LocalCluster
+
+        if self.scheduler is not None:
+            try:
+                self.client = Client(self.scheduler, timeout="20s")
+            except (OSError, TimeoutError) as e:
+                raise CampaignError(
+                    f"--scheduler {self.scheduler}: cannot connect ({e}); is the scheduler running "
+                    "(dask scheduler, or a dask-jobqueue cluster's scheduler_address)?"
+                ) from None
+            return self.client
+        self.cluster = LocalCluster(
+            n_workers=self.workers or _cores(),
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
+        self.client = Client(self.cluster)
+        return self.client
+
+    def submit(self, payload: dict):
+        client = self.start()
+        key = f"granchain-point-{Path(payload['job_dir']).name[:12]}-{uuid.uuid4().hex[:8]}"
+        return client.submit(run_point, payload, key=key, pure=False)
+
+    def close(self) -> None:
+        for thing in (self.client, self.cluster):
+            if thing is not None:
+                try:
+                    thing.close()
+                except Exception:  # noqa: BLE001 - closing after Ctrl-C may find it half gone
+                    pass
+        self.client = self.cluster = None
+
+
+def _cores() -> int:
+    from granchain.workflows.run import available_cores
+
+    return available_cores()
+
+
+# ------------------------------------------------------------------------------------ the run
+
+
+@dataclass
+class RunReport:
+    """What one `campaign run` did (counts are points)."""
+
+    points: int = 0
+    cached: int = 0  # complete before this run, not run again
+    ran: int = 0  # submitted to Dask by this run
+    done: int = 0  # completed by this run
+    failed: int = 0  # failed in this run (failure.json)
+    failed_before: int = 0  # failed before and not retried
+    lost: int = 0  # no result (a worker lost three times)
+    stale: int = 0  # computed before by other code: run again
+    stale_codes: list = field(default_factory=list)
+    messages: list = field(default_factory=list)  # (params, message) of the failures
+
+
+class Runner:
+    """The driver's side of one `campaign run`: jobs for points, what to submit, what is cached."""
+
+    def __init__(self, campaign: Campaign, ws, executor: Executor, rerun=False, retry_failed=False, stream=None):
+        self.c, self.ws = campaign, Path(ws)
+        self.ex = executor
+        self.rerun, self.retry_failed = rerun, retry_failed
+        self.stream = sys.stderr if stream is None else stream
+        self.method = _method(campaign)
+        self.code = wsp.code_version(campaign.backend)
+        self.project = wsp.create_workspace(ws)
+        self._stale = wsp.stale_versions(self.project, self.code)
+        self.report = RunReport()
+
+    def job(self, point: Point):
+        sp = wsp.statepoint(
+            point.scene_dict, self.c.backend, self.method, self.c.rtol, self.c.error_estimate, self.code
+        )
+        job = self.project.open_job(sp)
+        job.init()
+        return job
+
+    def needs_run(self, job) -> bool:
+        """Whether this point must run now (and count what is cached, failed or stale)."""
+        state = wsp.job_state(job.path)
+        if self.rerun:
+            return True
+        if state == "done":
+            self.report.cached += 1
+            return False
+        if state == "failed" and not self.retry_failed:
+            self.report.failed_before += 1
+            return False
+        other = self._stale.get(wsp.point_key(job.cached_statepoint))
+        if other is not None:
+            self.report.stale += 1
+            if other not in self.report.stale_codes:
+                self.report.stale_codes.append(other)
+        return True
+
+    def payload(self, job, point: Point) -> dict:
+        return {
+            "job_dir": str(Path(job.path).resolve()),
+            "scene": point.scene_dict,
+            "source": f"campaign point ({params_text(point.params)})",
+            "backend": self.c.backend,
+            "method": self.method,
+            "rtol": self.c.rtol,
+            "error_estimate": self.c.error_estimate,
+            "code": self.code,
+        }
+
+    def prepare(self) -> None:
+        """Before any run: the LAMMPS plugin is built here once (not by each local worker at once)."""
+        if self.c.backend == "lammps" and self.ex.scheduler is None:
+            from granchain.lammps.build import build_plugin
+
+            build_plugin()
+
+    def collect(self, future, params: dict, prog: CampaignProgress) -> dict:
+        """A finished future's status (a lost task counts as lost, not failed)."""
+        try:
+            r = future.result()
+        except Exception as e:  # noqa: BLE001 - a worker died (KilledWorker) or the task was cancelled
+            r = {"status": "lost", "message": one_line(e)}
+        if r["status"] == "done":
+            self.report.done += 1
+            prog.update(done=1)
+        elif r["status"] == "failed":
+            self.report.failed += 1
+            self.report.messages.append((params, r["message"]))
+            prog.update(failed=1)
+        else:
+            self.report.lost += 1
+            self.report.messages.append((params, r["message"]))
+            prog.update(failed=1)
+        return r
+
+    def say(self, text: str) -> None:
+        if not progress.is_quiet():
+            print(f"granchain: {text}", file=self.stream, flush=True)
+
+    def say_plan(self, todo: int) -> None:
+        r = self.report
+        parts = [f"{r.points} points", f"{r.cached} complete", f"{todo} to run"]
+        if r.failed_before:
+            parts.append(f"{r.failed_before} failed before (not retried: --retry-failed)")
+        self.say("campaign: " + ", ".join(parts))
+        if r.stale:
+            codes = "; ".join(wsp.code_text(c) for c in r.stale_codes)
+            self.say(
+                f"campaign: {r.stale} of them are stale: computed by other code ({codes}), not by "
+                f"{wsp.code_text(self.code)}; they run again"
+            )
+
+
+def _method(c: Campaign) -> str:
+    from granchain.workflows.run import integrator
+
+    return integrator(c.backend, c.method)
+
+
+def preflight(campaign: Campaign, points: list[Point]) -> None:
+    """Plan every point and check its time step against the stability limit before anything runs:
+    one bad point is reported with its parameters and nothing starts."""
+    from granchain.workflows.run import check_timestep, integrator, plan_for
+
+    method = integrator(campaign.backend, campaign.method)
+    for p in points:
+        try:
+            scene, _ = plan_for(p.scene, campaign.backend, method, campaign.rtol)
+            check_timestep(scene, method)
+        except GranchainError as e:
+            raise CampaignError(
+                f"{campaign.source}: point {p.index + 1} ({params_text(p.params)}) cannot run: {e}"
+            ) from None
+
+
+def run_grid(campaign: Campaign, runner: Runner, points: list[Point]) -> RunReport:
+    """Run every point of a grid that is not complete yet."""
+    from distributed import as_completed
+
+    r = runner.report
+    r.points = len(points)
+    todo = []
+    for p in points:
+        job = runner.job(p)
+        if runner.needs_run(job):
+            todo.append((p, job))
+    runner.say_plan(len(todo))
+    if not todo:
+        return r
+    runner.prepare()
+    prog = CampaignProgress(len(todo), "campaign", runner.stream, workers=runner.ex.nworkers)
+    futures = {}
+    try:
+        for p, job in todo:
+            futures[runner.ex.submit(runner.payload(job, p))] = p
+        r.ran = len(futures)
+        prog.workers = runner.ex.nworkers
+        prog.update(pending=len(futures))
+        pending = len(futures)
+        for fut in as_completed(list(futures)):
+            pending -= 1
+            prog.pending = pending
+            runner.collect(fut, futures[fut].params, prog)
+    finally:
+        prog.close()
+    return r
