@@ -20,7 +20,7 @@ from __future__ import annotations
 from granchain._version import __version__
 from granchain.errors import GranchainError
 
-__all__ = ["GranchainError", "__version__", "load_scene", "plan", "run"]
+__all__ = ["GranchainError", "__version__", "campaign", "load_campaign", "load_scene", "plan", "run"]
 
 
 def load_scene(path_or_name):
@@ -114,3 +114,53 @@ def run(
     from granchain.workflows.run import run_scene
 
     return run_scene(scene, backend=backend, method=method, rtol=rtol, out=out, error_estimate=error_estimate, **kw)
+
+
+def campaign(
+    spec,
+    out,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    rerun: bool = False,
+    retry_failed: bool = False,
+):
+    """Run a campaign (a sweep or a search over scenes) into a workspace and return its table.
+
+    Parameters
+    ----------
+    spec : str, pathlib.Path or dict
+        A campaign file (TOML; docs/campaigns.md), or the same tables as a dict, e.g.
+        ``{"campaign": {"base": "default", "backend": "reference"}, "vary": {"loading.impulse": [0.1, 0.4]}}``.
+    out : str or pathlib.Path
+        The workspace (a signac project; one job directory per point). Points complete there are not
+        run again.
+    workers : int, optional
+        Local Dask worker processes (default: the cores this process may use).
+    scheduler : str, optional
+        Address of a running Dask scheduler (e.g. one started by dask-jobqueue) instead of a local cluster.
+    rerun : bool
+        Run every point again. ``retry_failed``: run the points that failed before again.
+
+    Returns
+    -------
+    pandas.DataFrame
+        A grid: one row per point (its parameters, status, pulse count and regime, every observable
+        with its error, wall time and bead-steps). A search: one row per outer point with the transition
+        (``load_campaign(out, "points")`` has every run). Every point is validated before anything runs
+        (a ``GranchainError`` names the bad point); failing points are recorded, not raised.
+    """
+    from granchain.campaigns.api import run_campaign
+
+    tables, _ = run_campaign(spec, out, workers=workers, scheduler=scheduler, rerun=rerun, retry_failed=retry_failed)
+    return tables.get("search", tables["table"])
+
+
+def load_campaign(ws, table: str | None = None):
+    """The table of a campaign workspace as a pandas DataFrame, read from its run directories.
+
+    ``table``: "points" (one row per point), "search" (a search's transitions), or None (a search's
+    transitions, a grid's points).
+    """
+    from granchain.campaigns.api import load_campaign as _load
+
+    return _load(ws, table)

@@ -143,6 +143,7 @@ class Bisection:
         row[f"{s.key}_low"] = self.a if done else None
         row[f"{s.key}_high"] = self.b if done else None
         row["transition"] = s.midpoint(self.a, self.b) if done else None
+        row["transition_error"] = abs(self.b - self.a) / 2 if done else None  # the bracket's half width
         row["width"] = s.width(self.a, self.b) if done else None
         row["predicate"] = s.predicate.text
         row["quantity_low"] = self.quantity_a if self.a is not None else None

@@ -1,0 +1,106 @@
+"""Figures of a campaign table: an observable against a key, one line per value of the other varied
+keys (with error bars from ``<observable>_error``), or a 2D map over two keys.
+
+Axes are logarithmic when the values are positive and span at least a factor LOG_SPAN. The plotted
+numbers are written beside each figure (``<figure>.csv``).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from granchain.campaigns.spec import CampaignError
+from granchain.campaigns.table import build_search_table, build_table, read_record
+
+FORMATS = ("png", "pdf", "svg")
+#: values spanning this factor (all > 0) get a log axis
+LOG_SPAN = 30.0
+
+
+def _log_axis(values) -> bool:
+    v = [float(x) for x in values if x is not None and not (isinstance(x, float) and math.isnan(x))]
+    return bool(v) and min(v) > 0 and max(v) / min(v) >= LOG_SPAN
+
+
+def _label(key: str, value) -> str:
+    return f"{key} = {value:.4g}" if isinstance(value, float) else f"{key} = {value}"
+
+
+def _check_columns(df, ws, **cols) -> None:
+    for what, col in cols.items():
+        if col is not None and col not in df.columns:
+            numeric = [c for c in df.columns if df[c].dtype.kind in "if"]
+            raise CampaignError(f"{ws}: --{what} {col!r} is not a column of the table; columns: {', '.join(numeric)}")
+
+
+def plot_campaign(ws, x: str, y: str, hue: str | None = None, map_key: str | None = None, out=None, formats=("png",)):
+    """Draw y against x (lines, one per value of the other varied keys; hue first) or, with map_key,
+    a 2D map of y over (x, map_key); returns the paths written."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    ws = Path(ws)
+    for f in formats:
+        if f not in FORMATS:
+            raise CampaignError(f"--format {f!r}: one of {', '.join(FORMATS)}")
+    record = read_record(ws)
+    df = build_table(ws)
+    varied = [k for k in record.get("varied", []) if k in df.columns]
+    if y not in df.columns and record.get("kind") == "search":  # a search's transition against its outer keys
+        df = build_search_table(ws)
+        df["status"] = df["status"].replace({"found": "done"})
+        varied = [k for k in varied if k in df.columns]
+    _check_columns(df, ws, x=x, y=y, hue=hue, map=map_key)
+    done = df[(df["status"] == "done") & df[y].notna()]
+    if done.empty:
+        raise CampaignError(f"{ws}: no complete point has a value of {y!r}; nothing to plot")
+    err = f"{y}_error" if f"{y}_error" in df.columns else None
+    stem = f"{y}-vs-{x}" + (f"-map-{map_key}" if map_key else f"-by-{hue}" if hue else "")
+    base = str(out) if out is not None else str(ws / "plots" / stem)  # keys have dots: no with_suffix
+    Path(base).parent.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(6.4, 4.6), layout="constrained")
+    if map_key is not None:
+        grid = done.pivot_table(index=map_key, columns=x, values=y, aggfunc="mean")
+        xs, ys = grid.columns.to_numpy(dtype=float), grid.index.to_numpy(dtype=float)
+        mesh = ax.pcolormesh(xs, ys, grid.to_numpy(dtype=float), shading="nearest")
+        fig.colorbar(mesh, ax=ax, label=y)
+        ax.set_ylabel(map_key)
+        if _log_axis(ys):
+            ax.set_yscale("log")
+        done[[x, map_key, y] + ([err] if err else [])].to_csv(Path(base + ".csv"), index=False)
+    else:
+        groups = [k for k in ([hue] if hue else []) + [k for k in varied if k not in (x, hue)]]
+        groups = [k for k in groups if done[k].nunique() > 1]
+        parts = done.groupby(groups, sort=True, dropna=False) if groups else [((), done)]
+        for key, part in parts:
+            key = key if isinstance(key, tuple) else (key,)
+            part = part.sort_values(x)
+            yerr = part[err].to_numpy(dtype=float) if err else None
+            if yerr is not None and np.all(np.isnan(yerr)):
+                yerr = None
+            label = ", ".join(_label(k, v) for k, v in zip(groups, key, strict=True)) or None
+            ax.errorbar(part[x], part[y], yerr=yerr, marker="o", ms=4, capsize=3, label=label)
+        if groups:
+            ax.legend(fontsize="small")
+        ax.set_ylabel(y)
+        if _log_axis(done[y]):
+            ax.set_yscale("log")
+        cols = [x, *groups, y] + ([err] if err else [])
+        done[cols].to_csv(Path(base + ".csv"), index=False)
+    ax.set_xlabel(x)
+    if _log_axis(done[x]):
+        ax.set_xscale("log")
+    title = record.get("title")
+    if title:
+        ax.set_title(title, fontsize="medium")
+    paths = []
+    for f in formats:
+        p = Path(f"{base}.{f}")
+        fig.savefig(p, dpi=150)
+        paths.append(p)
+    plt.close(fig)
+    return paths
