@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 
 from granchain.campaigns import workspace as wsp
@@ -116,7 +117,9 @@ def run_campaign(
             entries = [{"params": p.params, "job": job} for p, job, _ in evaluated]
             write_record(ws, campaign, runner, entries, search_rows)
     except KeyboardInterrupt:
+        interrupted = time.time()
         ex.close()
+        runner.forget_interrupted(interrupted)
         if campaign.kind == "grid":
             write_tables(ws)
         runner.say(

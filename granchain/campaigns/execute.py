@@ -32,6 +32,7 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from distributed.diagnostics.plugin import WorkerPlugin
 from tqdm import tqdm
 
 from granchain import progress
@@ -176,6 +177,28 @@ class CampaignProgress:
 # -------------------------------------------------------------------------------- the executor
 
 
+def _ignore_sigint(signum, frame) -> None:
+    """A worker's SIGINT handler: Ctrl-C belongs to the driver, which stops the cluster."""
+
+
+class QuietInterrupt(WorkerPlugin):
+    """Dask worker plugin: Ctrl-C on a terminal reaches every process of the foreground group; a local
+    worker ignores it (no traceback; the driver stops the cluster) through a Python handler, which
+    exec resets, so the LAMMPS run a worker has started as a child process still stops at once."""
+
+    name = "granchain-quiet-interrupt"
+
+    def setup(self, worker) -> None:
+        import signal
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGINT, _ignore_sigint)
+
+    def teardown(self, worker) -> None:
+        pass
+
+
 class Executor:
     """A Dask client made on first use: a LocalCluster of `workers` processes (one thread each) or
     the scheduler at `scheduler`."""
@@ -220,6 +243,7 @@ class Executor:
             silence_logs=logging.ERROR,
         )
         self.client = Client(self.cluster)
+        self.client.register_plugin(QuietInterrupt())
         return self.client
 
     def submit(self, payload: dict):
@@ -275,6 +299,24 @@ class Runner:
         self.project = wsp.create_workspace(ws)
         self._stale = wsp.stale_versions(self.project, self.code)
         self.report = RunReport()
+        self.in_flight: dict = {}  # future key -> job directory
+
+    def submit(self, job, point: Point):
+        """Submit one point's run (the job directory counts as in flight until collected)."""
+        fut = self.ex.submit(self.payload(job, point))
+        self.in_flight[fut.key] = Path(job.path)
+        return fut
+
+    def forget_interrupted(self, since: float) -> None:
+        """After Ctrl-C: a point in flight whose run was stopped by it (a LAMMPS child gets the signal
+        too) is missing, not failed: remove the failure.json written since the interrupt."""
+        for job_dir in self.in_flight.values():
+            f = job_dir / wsp.FAILURE
+            try:
+                if f.stat().st_mtime >= since - 1.0:
+                    f.unlink()
+            except OSError:
+                pass
 
     def job(self, point: Point):
         sp = wsp.statepoint(
@@ -323,6 +365,7 @@ class Runner:
 
     def collect(self, future, params: dict, prog: CampaignProgress) -> dict:
         """A finished future's status (a lost task counts as lost, not failed)."""
+        self.in_flight.pop(future.key, None)
         try:
             r = future.result()
         except Exception as e:  # noqa: BLE001 - a worker died (KilledWorker) or the task was cancelled
@@ -399,7 +442,7 @@ def run_grid(campaign: Campaign, runner: Runner, points: list[Point]) -> RunRepo
     futures = {}
     try:
         for p, job in todo:
-            futures[runner.ex.submit(runner.payload(job, p))] = p
+            futures[runner.submit(job, p)] = p
         r.ran = len(futures)
         prog.workers = runner.ex.nworkers
         prog.update(pending=len(futures))

@@ -190,7 +190,7 @@ def run_search(campaign: Campaign, runner) -> tuple[list, list[dict]]:
         if not prepared:
             runner.prepare()
             prepared = True
-        fut = runner.ex.submit(runner.payload(job, point))
+        fut = runner.submit(job, point)
         runner.report.ran += 1
         waiting[fut] = (b, value, point, job)
         if ac is None:
