@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import textwrap
+from pathlib import Path
 
 import pytest
 
@@ -191,3 +192,443 @@ def test_log_grid_values_are_readable_and_exact_at_the_ends():
     vals = [p["loading.amplitude"] for p in c.grid()]
     assert vals[0] == 100.0 and vals[-1] == 1e6 and vals[2] == 1000.0
     assert all(math.isclose(b / a, math.sqrt(10), rel_tol=1e-11) for a, b in zip(vals, vals[1:], strict=False))
+
+
+def test_a_point_above_the_stability_limit_is_refused_before_anything_runs(tmp_path):
+    from granchain.campaigns.api import run_campaign
+
+    text = campaign_text('[vary]\n"run.timestep" = [5e-8, 5e-5]\n')
+    with pytest.raises(CampaignError, match=r"point 2 \(run.timestep = 5e-05\) cannot run: .*stability limit"):
+        run_campaign(parse_campaign(text), tmp_path / "ws", workers=1)
+    assert not (tmp_path / "ws").exists()  # nothing started, not even the workspace
+
+
+# ------------------------------------------------------------------------------ running points
+
+
+def peaks_text(run_dir) -> str:
+    return (run_dir / "peaks.csv").read_text()
+
+
+def job_dirs(ws):
+    return sorted((ws / "workspace").iterdir())
+
+
+def complete_jobs(ws) -> set[str]:
+    return {d.name for d in job_dirs(ws) if (d / "run" / "summary.json").is_file()}
+
+
+REFERENCE_GRID = """
+[vary]
+"loading.amplitude" = { log = [1.0, 100.0], num = 3 }
+"loading.duration" = [1e-6, 2e-6]
+[zip]
+"chain.beads" = [16, 20]
+"outputs.histories" = [[4], [5]]
+"""
+
+
+def test_reference_grid_equals_run_scene_bit_for_bit(tmp_path):
+    """12 points on the reference solver (with error estimates): each run directory's peaks.csv is
+    the one run_scene writes for the same scene, to the bit; the table has every row; a second run
+    runs nothing; the workspace is a signac project."""
+    import signac
+
+    import granchain
+    from granchain.campaigns.api import run_campaign
+    from granchain.scene import scene_from_dict
+    from granchain.workflows.run import run_scene
+
+    c = parse_campaign(campaign_text(REFERENCE_GRID, campaign='backend = "reference"\nmethod = "verlet"\nrtol = 1e-3'))
+    ws = tmp_path / "ws"
+    tables, report = run_campaign(c, ws, workers=2)
+    df = tables["table"]
+    assert (report.points, report.ran, report.done, report.failed) == (12, 12, 12, 0)
+    assert len(df) == 12 and set(df["status"]) == {"done"}
+    assert list(df.columns[:4]) == ["loading.amplitude", "loading.duration", "chain.beads", "outputs.histories"]
+    assert df["bead_steps"].gt(0).all() and df["wall_time"].gt(0).all()
+    assert set(df["regime"]) == {"single solitary wave"}
+    assert df["max_peak_force_error"].notna().any()
+    project = signac.get_project(str(ws), search=False)
+    assert len(project) == 12
+    for job in project:
+        sp = job.statepoint()
+        assert (
+            sp["backend"] == "reference"
+            and sp["method"] == "verlet"
+            and sp["code"] == {"granchain": granchain.__version__}
+        )
+        scene = scene_from_dict(sp["scene"])
+        out = tmp_path / f"direct-{job.id}"
+        run_scene(scene, backend="reference", method="verlet", rtol=1e-3, error_estimate=True, out=out)
+        assert peaks_text(Path(job.path) / "run") == peaks_text(out), job.id
+    again, report2 = run_campaign(c, ws, workers=2)
+    assert (report2.cached, report2.ran) == (12, 0)
+    assert again["table"].equals(df)
+    assert granchain.load_campaign(ws).equals(df)
+    assert (ws / "table.csv").is_file() and (ws / "table.parquet").is_file()
+
+
+def test_failures_are_recorded_and_the_campaign_goes_on(tmp_path):
+    """A point that breaks an invariant is recorded with its one-line message; the others complete;
+    a rerun does not retry it unless asked; the CLI exits 1 and names it."""
+    from granchain.campaigns.api import run_campaign
+    from granchain.cli import main
+
+    path = tmp_path / "c.toml"
+    path.write_text(
+        campaign_text(
+            '[vary]\n"loading.amplitude" = [10.0, 1e9]\n',
+            campaign='backend = "reference"\nmethod = "verlet"\nerror_estimate = false',
+        )
+    )
+    ws = tmp_path / "ws"
+    tables, report = run_campaign(path, ws, workers=1)
+    df = tables["table"]
+    assert (report.done, report.failed) == (1, 1)
+    assert list(df["status"]) == ["done", "failed"]
+    assert df["message"][1].startswith("invariant 'overlap far below the radius' broken")
+    assert (ws / "workspace" / df["job"][1] / "failure.json").is_file()
+    _, again = run_campaign(path, ws, workers=1)
+    assert (again.cached, again.failed_before, again.ran) == (1, 1, 0)
+    assert main(["campaign", "run", str(path), "--out", str(ws), "--retry-failed", "-q"]) == 1
+
+
+def test_stale_points_are_reported_and_run_again(tmp_path):
+    """A point computed by another granchain version is not reused: the table says stale, the next
+    run says so and computes it anew."""
+    import shutil
+
+    import signac
+
+    from granchain.campaigns.api import run_campaign
+
+    c = parse_campaign(
+        campaign_text(
+            '[vary]\n"loading.amplitude" = [10.0, 20.0]\n',
+            campaign='backend = "reference"\nmethod = "verlet"\nerror_estimate = false',
+        )
+    )
+    ws = tmp_path / "ws"
+    run_campaign(c, ws, workers=1)
+    project = signac.get_project(str(ws), search=False)
+    for job in list(project):
+        sp = job.statepoint()
+        sp["code"] = {"granchain": "0.0.1"}
+        old = project.open_job(sp)
+        old.init()
+        shutil.copytree(Path(job.path) / "run", Path(old.path) / "run")
+        job.remove()
+    import granchain
+
+    df = granchain.load_campaign(ws)
+    assert list(df["status"]) == ["stale", "stale"]
+    assert df["message"][0] == "computed by other code: granchain 0.0.1"
+    tables, report = run_campaign(c, ws, workers=1)
+    assert (report.stale, report.ran, report.done) == (2, 2, 2)
+    assert report.stale_codes == [{"granchain": "0.0.1"}]
+    assert list(tables["table"]["status"]) == ["done", "done"]
+
+
+SEARCH = """
+[vary]
+"loading.amplitude" = {amplitudes}
+[search]
+key = "loading.duration"
+range = {range}
+scale = "log"
+tolerance = {tolerance}
+predicate = {{ quantity = "pulses", contact = 20, op = ">", value = 1 }}
+"""
+
+SEARCH_SCENE = """
+[chain]
+beads = 40
+radius = 4.76e-3
+material = "brass"
+[contact]
+law = "hertz"
+[loading]
+kind = "step"
+amplitude = 10.0
+duration = 1e-5
+[run]
+end_time = "auto"
+timestep = "auto"
+[outputs]
+peak_force = true
+histories = [20]
+"""
+
+
+def test_a_search_whose_predicate_never_flips_says_so(tmp_path):
+    from granchain.campaigns.api import run_campaign
+
+    c = parse_campaign(
+        campaign_text(
+            SEARCH.format(amplitudes="[100.0]", range="[1e-6, 1e-5]", tolerance=0.01),
+            scene=SEARCH_SCENE,
+            campaign='backend = "reference"\nrtol = 1e-3\nerror_estimate = false',
+        )
+    )
+    tables, report = run_campaign(c, tmp_path / "ws", workers=1)
+    row = tables["search"].iloc[0]
+    assert row["status"] == "no flip" and row["runs"] == 2 and report.ran == 2
+    assert row["message"] == (
+        "pulses at contact 20 > 1 is false at both ends of loading.duration's range [1e-06, 1e-05] "
+        "(pulses = 1 and 1; loading.amplitude = 100): it never flips in the range; widen [search] range"
+    )
+
+
+def test_search_predicate_contact_must_be_recorded(tmp_path):
+    from granchain.campaigns.api import run_campaign
+
+    c = parse_campaign(
+        campaign_text(
+            SEARCH.format(amplitudes="[100.0]", range="[1e-6, 1e-5]", tolerance=0.01).replace(
+                "contact = 20", "contact = 7"
+            ),
+            scene=SEARCH_SCENE,
+        )
+    )
+    with pytest.raises(
+        CampaignError, match=r"predicate contact = 7 is not among the scene's \[outputs\] histories \[20\]"
+    ):
+        run_campaign(c, tmp_path / "ws", workers=1)
+
+
+def test_cli_table_and_plot(tmp_path, capsys):
+    """granchain campaign run / table / plot on a small grid made through the Python API from a dict."""
+    import tomllib
+
+    import granchain
+    from granchain.cli import main
+
+    data = tomllib.loads(
+        campaign_text(
+            '[vary]\n"loading.amplitude" = [10.0, 20.0]\n"loading.duration" = [1e-6, 2e-6]\n',
+            campaign='backend = "reference"\nmethod = "verlet"',
+        )
+    )
+    ws = tmp_path / "ws"
+    df = granchain.campaign(data, ws, workers=2)
+    assert len(df) == 4 and set(df["status"]) == {"done"}
+    capsys.readouterr()
+    assert main(["campaign", "table", str(ws), "--csv"]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[0].startswith("loading.amplitude,loading.duration,status,pulses,regime,")
+    assert len(out.splitlines()) == 5
+    assert (
+        main(
+            [
+                "campaign",
+                "plot",
+                str(ws),
+                "--x",
+                "loading.amplitude",
+                "--y",
+                "max_peak_force",
+                "--hue",
+                "loading.duration",
+            ]
+        )
+        == 0
+    )
+    png = Path(capsys.readouterr().out.strip())
+    assert png.name == "max_peak_force-vs-loading.amplitude-by-loading.duration.png" and png.stat().st_size > 1000
+    assert main(["campaign", "plot", str(ws), "--x", "loading.amplitude", "--y", "wave_sped"]) == 2
+    assert "--y 'wave_sped' is not a column of the table" in capsys.readouterr().err
+    assert main(["campaign", "table", str(tmp_path)]) == 2
+    assert "is not a campaign workspace" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------- the acceptance (slow)
+
+
+@pytest.mark.slow
+def test_lammps_grid_of_27_points_equals_granchain_run_bit_for_bit(tmp_path):
+    """27 LAMMPS points (3 x 3 x 3) on two local workers; each run directory's peaks.csv is the one
+    `granchain run --backend lammps` writes for the same scene (run_scene here), to the bit."""
+    import signac
+
+    from granchain.campaigns.api import run_campaign
+    from granchain.scene import scene_from_dict
+    from granchain.workflows.run import run_scene
+
+    body = """
+    [vary]
+    "loading.amplitude" = { log = [1.0, 100.0], num = 3 }
+    "loading.duration" = [1e-6, 2e-6, 4e-6]
+    "chain.beads" = [16, 18, 20]
+    """
+    c = parse_campaign(campaign_text(body, campaign='backend = "lammps"\nerror_estimate = false'))
+    ws = tmp_path / "ws"
+    tables, report = run_campaign(c, ws, workers=2)
+    df = tables["table"]
+    assert (report.points, report.done, report.failed) == (27, 27, 0)
+    assert len(df) == 27 and set(df["status"]) == {"done"} and df["bead_steps"].gt(0).all()
+    project = signac.get_project(str(ws), search=False)
+    assert len(project) == 27
+    for job in project:
+        assert set(job.statepoint()["code"]) == {"granchain", "plugin"}
+        scene = scene_from_dict(job.statepoint()["scene"])
+        out = tmp_path / f"direct-{job.id}"
+        run_scene(scene, backend="lammps", out=out)
+        assert peaks_text(Path(job.path) / "run") == peaks_text(out), job.id
+
+
+def _table_without_timing(df):
+    from granchain.campaigns.table import TIMING_COLUMNS
+
+    return df.drop(columns=list(TIMING_COLUMNS))
+
+
+FORTY = """
+[vary]
+"loading.amplitude" = { log = [1.0, 100.0], num = 8 }
+"loading.duration" = { linear = [1e-6, 5e-6], num = 5 }
+"""
+
+
+@pytest.mark.slow
+def test_kill_9_of_the_driver_then_rerun_runs_only_the_missing_points(tmp_path):
+    """kill -9 of `granchain campaign run` in the middle of 40 points: its local workers go with it,
+    nothing half-written looks complete; the rerun runs exactly the missing points, and the final table
+    equals an uninterrupted campaign's (but for the wall times)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from granchain.campaigns.api import run_campaign
+
+    path = tmp_path / "forty.toml"
+    path.write_text(campaign_text(FORTY, campaign='backend = "reference"\nmethod = "verlet"'))
+    ws = tmp_path / "ws"
+    cmd = [sys.executable, "-m", "granchain.cli", "campaign", "run", str(path), "--out", str(ws), "--workers", "2"]
+    p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    deadline = time.time() + 300
+    while time.time() < deadline and (not (ws / "workspace").is_dir() or len(complete_jobs(ws)) < 12):
+        time.sleep(0.05)
+    os.kill(p.pid, signal.SIGKILL)
+    p.wait()
+    time.sleep(3)  # the workers notice their parent is gone
+    left = subprocess.run(["ps", "-o", "pid=", "-g", str(p.pid)], capture_output=True, text=True).stdout.split()
+    assert left == [], "worker processes outlived the driver"
+    before = complete_jobs(ws)
+    assert 12 <= len(before) < 40, len(before)
+    mtimes = {j: (ws / "workspace" / j / "run" / "summary.json").stat().st_mtime_ns for j in before}
+    tables, report = run_campaign(path, ws, workers=2)
+    assert report.cached == len(before)
+    assert report.ran == 40 - len(before)  # only the missing points ran
+    assert report.done == 40 - len(before)
+    assert all((ws / "workspace" / j / "run" / "summary.json").stat().st_mtime_ns == t for j, t in mtimes.items())
+    clean, _ = run_campaign(path, tmp_path / "clean", workers=2)
+    assert _table_without_timing(tables["table"]).equals(_table_without_timing(clean["table"]))
+
+
+@pytest.mark.slow
+def test_an_external_dask_scheduler_and_two_workers_give_the_same_table(tmp_path):
+    """`dask scheduler` and two `dask worker` processes on localhost; `granchain campaign run
+    --scheduler` gives the table a local cluster gives (but for the wall times)."""
+    import json
+    import os
+    import shutil
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from granchain.campaigns.api import run_campaign
+    from granchain.cli import main
+
+    dask = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
+    assert dask, "the dask command (dask[distributed]) is not installed"
+    path = tmp_path / "c.toml"
+    path.write_text(campaign_text(REFERENCE_GRID, campaign='backend = "reference"\nmethod = "verlet"'))
+    sfile = tmp_path / "scheduler.json"
+    procs = []
+    try:
+        procs.append(
+            subprocess.Popen(
+                [
+                    dask,
+                    "scheduler",
+                    "--host",
+                    "127.0.0.1",
+                    "--port",
+                    "0",
+                    "--no-dashboard",
+                    "--scheduler-file",
+                    str(sfile),
+                ],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+                start_new_session=True,
+            )
+        )
+        deadline = time.time() + 60
+        while not sfile.is_file() and time.time() < deadline:
+            time.sleep(0.1)
+        address = json.loads(sfile.read_text())["address"]
+        for _ in range(2):
+            procs.append(
+                subprocess.Popen(
+                    [dask, "worker", address, "--nthreads", "1", "--nworkers", "1", "--no-dashboard"],
+                    stdout=subprocess.DEVNULL,
+                    stderr=subprocess.DEVNULL,
+                    start_new_session=True,
+                )
+            )
+        ws = tmp_path / "remote"
+        assert main(["campaign", "run", str(path), "--out", str(ws), "--scheduler", address, "-q"]) == 0
+        import granchain
+
+        remote = granchain.load_campaign(ws)
+        hosts = {json.loads((ws / "workspace" / j / "task.json").read_text())["pid"] for j in remote["job"]}
+        assert len(hosts) == 2, "both workers ran points"
+    finally:
+        for p in procs:
+            os.killpg(p.pid, signal.SIGTERM)
+        for p in procs:
+            p.wait(timeout=30)
+    local, _ = run_campaign(path, tmp_path / "local", workers=2)
+    assert _table_without_timing(remote).equals(_table_without_timing(local["table"]))
+
+
+@pytest.mark.slow
+def test_search_finds_the_single_wave_to_train_transition_following_a_to_the_minus_one_sixth(tmp_path):
+    """Fig. 1's search (the bundled granchain/campaigns/fig1-transition.toml): at three amplitudes
+    (10, 100, 1000 N) bisect the loading time T until the pulse count at contact 20 goes from 1 to more,
+    to 0.2%; T_c(A) ~ A^(-1/6) within 2% in the exponent
+    (measured: -0.16661, 0.03% off; a Hertz chain is self-similar under F -> A F, t -> A^(-1/6) t)."""
+    from importlib import resources
+
+    import numpy as np
+
+    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.spec import load_campaign_file
+
+    c = load_campaign_file(resources.files("granchain.campaigns") / "fig1-transition.toml")
+    tables, report = run_campaign(c, tmp_path / "ws", workers=2)
+    s = tables["search"]
+    assert list(s["status"]) == ["found"] * 3
+    assert (s["width"] <= 0.002).all()
+    assert list(s["quantity_low"]) == [1.0] * 3 and (s["quantity_high"] >= 2).all()
+    slope = np.polyfit(np.log(s["loading.amplitude"]), np.log(s["transition"]), 1)[0]
+    assert abs(slope / (-1 / 6) - 1) < 0.02, slope
+    assert len(tables["table"]) == report.points == s["runs"].sum()
+    again, report2 = run_campaign(c, tmp_path / "ws", workers=2)  # every bisection step from the cache
+    assert report2.ran == 0 and again["search"].equals(s)
+
+
+def test_the_bundled_fig1_campaign_reads():
+    from importlib import resources
+
+    from granchain.campaigns.api import validate
+    from granchain.campaigns.spec import load_campaign_file
+
+    c = load_campaign_file(resources.files("granchain.campaigns") / "fig1-transition.toml")
+    assert c.kind == "search" and c.outer_keys == ("loading.amplitude",)
+    validate(c)
