@@ -107,14 +107,18 @@ def run_campaign(
     search_rows = None
     try:
         if campaign.kind == "grid":
-            entries = [{"params": p.params, "job": runner.job(p).id} for p in points]
+            jobs = [runner.job(p) for p in points]
+            entries = [
+                {"params": p.params, "job": j.id, "key": wsp.point_key(j.cached_statepoint)}
+                for p, j in zip(points, jobs, strict=True)
+            ]
             write_record(ws, campaign, runner, entries)  # the table can be read while the points run
             run_grid(campaign, runner, points)
         else:
             write_record(ws, campaign, runner, entries)
             evaluated, search_rows = run_search(campaign, runner)
             evaluated.sort(key=lambda e: (e[2], e[0].params[campaign.search.key]))
-            entries = [{"params": p.params, "job": job} for p, job, _ in evaluated]
+            entries = [{"params": p.params, "job": job, "key": key} for p, job, _, key in evaluated]
             write_record(ws, campaign, runner, entries, search_rows)
     except KeyboardInterrupt:
         interrupted = time.time()

@@ -155,7 +155,8 @@ class Bisection:
 
 
 def run_search(campaign: Campaign, runner) -> tuple[list, list[dict]]:
-    """Run a search campaign; returns (the evaluated points as (point, job id), one row per outer point)."""
+    """Run a search campaign; returns (the evaluated points as (point, job id, outer index, point key),
+    one row per outer point)."""
     from distributed import as_completed
 
     from granchain.campaigns.execute import CampaignProgress
@@ -181,7 +182,7 @@ def run_search(campaign: Campaign, runner) -> tuple[list, list[dict]]:
             return
         job = runner.job(point)
         runner.report.points += 1
-        evaluated.append((point, job.id, b.index))
+        evaluated.append((point, job.id, b.index, wsp.point_key(job.cached_statepoint)))
         if not runner.needs_run(job):
             q, why = _quantity(job.path, s.predicate)
             prog.update(done=1)

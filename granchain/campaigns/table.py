@@ -53,11 +53,12 @@ def point_row(ws: Path, record: dict, entry: dict, stale: dict) -> dict:
     job_dir = ws / "workspace" / entry["job"]
     state = wsp.job_state(job_dir)
     sp = wsp.read_json(job_dir / "signac_statepoint.json") or {}
-    if state == "missing" and sp and wsp.point_key(sp) in stale:
+    key = entry.get("key") or (wsp.point_key(sp) if sp else None)
+    if state == "missing" and key in stale:
         state = "stale"
     row["status"] = state
     summary = wsp.read_json(job_dir / wsp.RUN_DIR / "summary.json") if state == "done" else None
-    contact = regime_contact(record, sp.get("scene", {}))
+    contact = regime_contact(record, sp.get("scene", {}))  # the scene's histories, when the job is there
     row["pulses"], row["regime"] = None, None
     if summary is not None and contact is not None:
         force = read_history(job_dir / wsp.RUN_DIR, contact)
@@ -78,12 +79,12 @@ def point_row(ws: Path, record: dict, entry: dict, stale: dict) -> dict:
     wall = price.get("wall_time")
     row["wall_time"] = None if wall is None else wall + (price.get("error_estimate") or 0.0)
     task = wsp.read_json(job_dir / wsp.TASK) or {}
-    row["warnings"] = " | ".join(task.get("warnings") or []) or None if state == "done" else None
+    row["warnings"] = (" | ".join(task.get("warnings") or []) or None) if state == "done" else None
     message = None
     if state == "failed":
         message = (wsp.read_json(job_dir / wsp.FAILURE) or {}).get("message")
     elif state == "stale":
-        message = "computed by other code: " + wsp.code_text(stale[wsp.point_key(sp)])
+        message = "computed by other code: " + wsp.code_text(stale[key])
     row["message"] = message
     row["job"] = entry["job"]
     return row
