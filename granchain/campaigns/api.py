@@ -116,9 +116,19 @@ def run_campaign(
             run_grid(campaign, runner, points)
         else:
             write_record(ws, campaign, runner, entries)
-            evaluated, search_rows = run_search(campaign, runner)
-            evaluated.sort(key=lambda e: (e[2], e[0].params[campaign.search.key]))
-            entries = [{"params": p.params, "job": job, "key": key} for p, job, _, key in evaluated]
+            last = [time.monotonic()]
+
+            def search_entries(evaluated):
+                ordered = sorted(evaluated, key=lambda e: (e[2], e[0].params[campaign.search.key]))
+                return [{"params": p.params, "job": job, "key": key} for p, job, _, key in ordered]
+
+            def save(evaluated, rows):  # at most every 2 s: the record of a search in progress
+                if time.monotonic() - last[0] >= 2.0:
+                    write_record(ws, campaign, runner, search_entries(evaluated), rows)
+                    last[0] = time.monotonic()
+
+            evaluated, search_rows = run_search(campaign, runner, on_progress=save)
+            entries = search_entries(evaluated)
             write_record(ws, campaign, runner, entries, search_rows)
     except KeyboardInterrupt:
         interrupted = time.time()

@@ -47,12 +47,13 @@ def run_point(payload: dict) -> dict:
     """Run one point in a worker: write its run directory into its job directory, or failure.json.
 
     payload: job_dir, scene (canonical dict), source, backend, method, rtol, error_estimate, code.
-    Returns {"job", "status": "done" | "failed", "message", "wall_time", "warnings", "host"}.
+    Returns {"job", "status": "done" | "failed", "message", "wall_time", "run_time", "warnings", "host", "pid"}
+    (also written to the job directory's task.json).
     """
     t0 = time.perf_counter()
     job = Path(payload["job_dir"])
     caught: list[str] = []
-    status, message, detail = "done", None, None
+    status, message, detail, run_time = "done", None, None, None
     try:
         mine = wsp.code_version(payload["backend"])
         if mine != payload["code"]:
@@ -66,6 +67,7 @@ def run_point(payload: dict) -> dict:
         with progress.quiet(), warnings.catch_warnings(record=True) as w:
             warnings.simplefilter("always")
             scene = scene_from_dict(payload["scene"], source=payload["source"])
+            t_run = time.perf_counter()
             run_scene(
                 scene,
                 backend=payload["backend"],
@@ -75,6 +77,7 @@ def run_point(payload: dict) -> dict:
                 out=job / wsp.RUN_DIR,
                 overwrite=True,
             )
+        run_time = time.perf_counter() - t_run
         caught = [str(x.message).splitlines()[0] for x in w]
         (job / wsp.FAILURE).unlink(missing_ok=True)
     except Exception as e:  # noqa: BLE001 - recorded with its message; the campaign goes on
@@ -91,6 +94,7 @@ def run_point(payload: dict) -> dict:
         "status": status,
         "message": message,
         "wall_time": wall,
+        "run_time": run_time,  # run_scene alone (the run and its run directory); the rest is the machinery's
         "warnings": caught,
         "host": socket.gethostname(),
         "pid": os.getpid(),
@@ -240,6 +244,8 @@ class Executor:
             threads_per_worker=1,
             processes=True,
             dashboard_address=None,
+            # no dashboard; the scheduler's HTTP routes on a free port (the default 8787 may be taken)
+            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
             silence_logs=logging.ERROR,
         )
         self.client = Client(self.cluster)

@@ -154,9 +154,10 @@ class Bisection:
         return row
 
 
-def run_search(campaign: Campaign, runner) -> tuple[list, list[dict]]:
+def run_search(campaign: Campaign, runner, on_progress=None) -> tuple[list, list[dict]]:
     """Run a search campaign; returns (the evaluated points as (point, job id, outer index, point key),
-    one row per outer point)."""
+    one row per outer point). on_progress(evaluated, rows) is called after each finished run (the
+    caller keeps the workspace's record current, so a killed driver leaves a readable table)."""
     from distributed import as_completed
 
     from granchain.campaigns.execute import CampaignProgress
@@ -225,6 +226,8 @@ def run_search(campaign: Campaign, runner) -> tuple[list, list[dict]]:
                 q, why = None, r.get("message")
             b.record(value, q, why)
             advance(b)
+            if on_progress is not None:
+                on_progress(evaluated, [x.row() for x in bis])
     finally:
         prog.close()
     return evaluated, [b.row() for b in bis]

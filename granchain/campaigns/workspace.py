@@ -24,6 +24,7 @@ signac's own tools (``signac.get_project(WS)``, ``project.find_jobs(...)``) and 
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from pathlib import Path
@@ -40,13 +41,19 @@ RECORD_SCHEMA = 1
 
 
 def code_version(backend: str) -> dict:
-    """The code that computes a point: granchain's version, and the LAMMPS plugin's hash for LAMMPS."""
+    """The code that computes a point: granchain's version, and the LAMMPS plugin's hash for LAMMPS
+    (hashed once per process: a worker checks it for every point)."""
+    return dict(_code_version(backend))
+
+
+@functools.cache
+def _code_version(backend: str) -> tuple:
     code = {"granchain": __version__}
     if backend == "lammps":
         from granchain.lammps.build import plugin_key
 
         code["plugin"] = plugin_key()
-    return code
+    return tuple(code.items())
 
 
 def statepoint(scene_dict: dict, backend: str, method: str, rtol: float | None, error_estimate: bool, code: dict):

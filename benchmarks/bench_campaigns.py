@@ -1,0 +1,165 @@
+"""What campaigns cost (issue 16): the speed-up of 2 local Dask workers over 1, and the machinery's
+own time per point.
+
+Run by hand:  python benchmarks/bench_campaigns.py [--points 40] [--trivial 200] [--reps 1] [--skip-lammps]
+
+1. speed-up: a campaign of --points small LAMMPS points (a 20-bead Hertz chain, 2000 steps, no error
+   estimate; about 1 s each, mostly LAMMPS's process start-up), run into a fresh workspace with
+   --workers 1 and --workers 2, in turns (--reps times each); the wall time of run_campaign from the
+   call to the table written (the local cluster's start included) and the sum of the points' own
+   run_scene times (task.json run_time).
+2. overhead: a campaign of --trivial trivial points (a 2-bead chain, 10 reference Verlet steps) on one
+   worker: the wall time, split into validation (every point made, read as a scene, planned, its
+   time step checked), the cluster's start, and per point: the rest minus the runs themselves
+   (run_scene, run directory included), i.e. job directory, submission, the task's bookkeeping
+   (task.json), result collection, progress and the table; then the same campaign again, all cached
+   (no cluster: the check that everything is complete, and the table).
+Prints one markdown table per part (the figures in benchmarks/RESULTS.md come from here).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+from granchain.campaigns import execute
+from granchain.campaigns.api import run_campaign, validate
+from granchain.campaigns.spec import parse_campaign
+
+SMALL = """
+[chain]
+beads = 20
+radius = 4.76e-3
+material = "brass"
+[contact]
+law = "hertz"
+[loading]
+kind = "step"
+amplitude = 10.0
+duration = 1e-6
+[run]
+end_time = 1e-4
+timestep = 5e-8
+[outputs]
+peak_force = true
+histories = [5]
+"""
+
+TRIVIAL = """
+[chain]
+beads = 2
+radius = 4.76e-3
+material = "brass"
+[contact]
+law = "hertz"
+[loading]
+kind = "step"
+amplitude = 10.0
+duration = 1e-7
+[run]
+end_time = 1e-7
+timestep = 1e-8
+[outputs]
+peak_force = true
+"""
+
+
+def campaign(scene: str, backend: str, n: int):
+    inline = scene.replace("\n[", "\n[scene.")
+    method = "" if backend == "lammps" else 'method = "verlet"\n'
+    text = (
+        f'[campaign]\nbackend = "{backend}"\n{method}error_estimate = false\n'
+        f'[vary]\n"loading.amplitude" = {{ linear = [1.0, 100.0], num = {n} }}\n[scene]\n{inline}'
+    )
+    return parse_campaign(text, source=f"<bench {backend} {n}>")
+
+
+def run_times(ws: Path) -> list[float]:
+    out = []
+    for d in (ws / "workspace").iterdir():
+        rec = json.loads((d / "task.json").read_text())
+        out.append(rec["run_time"])
+    return out
+
+
+def timed(c, ws: Path, workers: int) -> tuple[float, object]:
+    t = time.perf_counter()
+    _, report = run_campaign(c, ws, workers=workers)
+    return time.perf_counter() - t, report
+
+
+def cluster_start(workers: int) -> float:
+    ex = execute.Executor(workers=workers)
+    t = time.perf_counter()
+    ex.start()
+    ex.client.wait_for_workers(workers)
+    dt = time.perf_counter() - t
+    ex.close()
+    return dt
+
+
+def speedup(n: int, reps: int, root: Path) -> None:
+    c = campaign(SMALL, "lammps", n)
+    rows = []
+    for rep in range(reps):
+        for workers in (1, 2):
+            ws = root / f"lammps-{workers}-{rep}"
+            wall, report = timed(c, ws, workers)
+            assert report.done == n, report
+            rows.append((workers, wall, sum(run_times(ws))))
+    print(f"\n### {n} LAMMPS points (20 beads, 2000 steps each), {os.cpu_count()} cores\n")
+    print("| workers | wall (s) | sum of runs (s) | points/s |")
+    print("|---|---|---|---|")
+    for workers, wall, runs in rows:
+        print(f"| {workers} | {wall:.1f} | {runs:.1f} | {n / wall:.2f} |")
+    best = {w: min(r[1] for r in rows if r[0] == w) for w in (1, 2)}
+    print(f"\nspeed-up (best of {reps}): {best[1] / best[2]:.2f}")
+
+
+def overhead(n: int, root: Path) -> None:
+    c = campaign(TRIVIAL, "reference", n)
+    t = time.perf_counter()
+    validate(c)
+    t_validate = time.perf_counter() - t
+    t_start = cluster_start(1)
+    ws = root / "trivial"
+    wall, report = timed(c, ws, 1)
+    assert report.done == n, report
+    runs = sum(run_times(ws))
+    cached, report2 = timed(c, ws, 1)
+    assert report2.ran == 0
+    per = (wall - t_start - runs) / n
+    print(f"\n### {n} trivial points (2 beads, 10 reference Verlet steps), 1 worker\n")
+    print("| part | s | per point (ms) |")
+    print("|---|---|---|")
+    print(f"| campaign run, wall | {wall:.2f} | {1e3 * wall / n:.1f} |")
+    print(f"| of which validation (points made, planned, checked) | {t_validate:.2f} | {1e3 * t_validate / n:.2f} |")
+    print(f"| of which the local cluster's start (measured apart) | {t_start:.2f} | - |")
+    print(f"| of which the runs themselves (run_scene + run directory) | {runs:.2f} | {1e3 * runs / n:.1f} |")
+    print(f"| the machinery: wall - cluster start - runs | {wall - t_start - runs:.2f} | {1e3 * per:.1f} |")
+    print(f"| the same campaign again, all {n} cached | {cached:.2f} | {1e3 * cached / n:.1f} |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--points", type=int, default=40)
+    ap.add_argument("--trivial", type=int, default=200)
+    ap.add_argument("--reps", type=int, default=1)
+    ap.add_argument("--skip-lammps", action="store_true")
+    args = ap.parse_args()
+    os.environ.setdefault("GRANCHAIN_QUIET", "1")
+    with tempfile.TemporaryDirectory(prefix="bench-campaigns-") as tmp:
+        root = Path(tmp)
+        print(f"load average before: {os.getloadavg()[0]:.2f}")
+        overhead(args.trivial, root)
+        if not args.skip_lammps:
+            speedup(args.points, args.reps, root)
+        print(f"\nload average after: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
