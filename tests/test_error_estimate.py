@@ -5,12 +5,15 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
 
 from granchain.cli import main, resolve_scene
 from granchain.results import read_peaks
 from granchain.scene import parse_scene
 from granchain.workflows.errors import companion_scene
 from granchain.workflows.run import plan_for, run_scene
+
+from .scenegen import scenes
 
 WALL_CHAIN = """
 title = "invented: 40 aluminium beads, a short pulse, a far-end wall"
@@ -215,3 +218,27 @@ def test_granchain_compare_shows_both_error_bars(tmp_path, capsys):
     rows = [line.split(",") for line in (tmp_path / "c" / "compare.csv").read_text().splitlines()[1:]]
     lead = next(r for r in rows if r[0] == "leading_peak_force")
     assert float(lead[header.index("lammps_error")]) > 0 and float(lead[header.index("reference_error")]) > 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("integ", ["verlet", "lammps"])
+@settings(max_examples=8, deadline=None, suppress_health_check=list(HealthCheck), database=None)
+@given(sc=scenes(law="hertz", max_beads=30).filter(lambda s: not s.effects.dashpot))
+def test_estimates_hold_on_generated_hertz_scenes(integ, sc):
+    """Issue 15 item 3 on generated scenes (walls, strikers, precompression, tapers, materials): the
+    bar of the bundled scenes. Measured over 12 generated scenes per case (README, the note): Hertz
+    without a dashpot meets it with Verlet and LAMMPS (ratios 0.96-1.6); with a dashpot (Verlet's
+    first order), with the plastic laws' kinks and with RK4 (Hertz onsets from touching beads are
+    order 2.5, dashpot clips) a few percent of the peaks fall outside, so those are not claimed."""
+    backend, method = ("lammps", None) if integ == "lammps" else ("reference", integ)
+    sc, _ = plan_for(sc, backend, method, 1e-3)
+    sc = replace(sc, outputs=replace(sc.outputs, histories=(), snapshots=(), history_interval=None, dump_interval=None))
+    got = run_scene(sc, backend=backend, method=method, error_estimate=True)
+    fine = run_scene(replace(sc, run=replace(sc.run, timestep=sc.run.timestep / 16)), backend=backend, method=method)
+    a, b = got.solution, fine.solution
+    true = np.abs(a.peak_force - b.peak_force)
+    above = a.complete & b.complete & (true > 1e3 * np.spacing(np.abs(a.peak_force)))
+    est = got.errors.peak_force
+    ok = above & est.reliable
+    ratio = est.error[ok] / true[ok]
+    assert np.all((ratio >= 1 / 3) & (ratio <= 3)), f"ratios {np.sort(ratio)[[0, -1]]}"
