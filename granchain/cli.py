@@ -372,7 +372,14 @@ def cmd_campaign_run(args) -> int:
         + (f", {r.stale} stale run again" if r.stale else "")
     )
     print(f"workspace  {out} (table.csv, table.parquet" + (", search.csv" if "search" in tables else "") + ")")
-    return 0 if not (r.failed or r.lost or r.failed_before) else 1
+    unfound = []
+    if "search" in tables:
+        unfound = [
+            m for st, m in zip(tables["search"]["status"], tables["search"]["message"], strict=True) if st != "found"
+        ]
+        for message in unfound:
+            print(f"granchain: search: {message}", file=sys.stderr)
+    return 0 if not (r.failed or r.lost or r.failed_before or unfound) else 1
 
 
 def cmd_campaign_table(args) -> int:

@@ -361,23 +361,29 @@ histories = [20]
 """
 
 
-def test_a_search_whose_predicate_never_flips_says_so(tmp_path):
+def test_a_search_whose_predicate_never_flips_says_so(tmp_path, capsys):
     from granchain.campaigns.api import run_campaign
+    from granchain.cli import main
 
-    c = parse_campaign(
+    path = tmp_path / "noflip.toml"
+    path.write_text(
         campaign_text(
             SEARCH.format(amplitudes="[100.0]", range="[1e-6, 1e-5]", tolerance=0.01),
             scene=SEARCH_SCENE,
             campaign='backend = "reference"\nrtol = 1e-3\nerror_estimate = false',
         )
     )
-    tables, report = run_campaign(c, tmp_path / "ws", workers=1)
+    tables, report = run_campaign(path, tmp_path / "ws", workers=1)
     row = tables["search"].iloc[0]
     assert row["status"] == "no flip" and row["runs"] == 2 and report.ran == 2
-    assert row["message"] == (
+    message = (
         "pulses at contact 20 > 1 is false at both ends of loading.duration's range [1e-06, 1e-05] "
         "(pulses = 1 and 1; loading.amplitude = 100): it never flips in the range; widen [search] range"
     )
+    assert row["message"] == message
+    capsys.readouterr()
+    assert main(["campaign", "run", str(path), "--out", str(tmp_path / "ws"), "-q"]) == 1  # cached: no cluster
+    assert f"granchain: search: {message}" in capsys.readouterr().err
 
 
 def test_search_predicate_contact_must_be_recorded(tmp_path):
