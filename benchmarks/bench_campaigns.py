@@ -2,6 +2,7 @@
 own time per point.
 
 Run by hand:  python benchmarks/bench_campaigns.py [--points 40] [--trivial 200] [--reps 1] [--skip-lammps]
+              [--skip-overhead]
 
 1. speed-up: a campaign of --points small LAMMPS points (a 20-bead Hertz chain, 2000 steps, no error
    estimate; about 1 s each, mostly LAMMPS's process start-up), run into a fresh workspace with
@@ -150,12 +151,14 @@ def main() -> None:
     ap.add_argument("--trivial", type=int, default=200)
     ap.add_argument("--reps", type=int, default=1)
     ap.add_argument("--skip-lammps", action="store_true")
+    ap.add_argument("--skip-overhead", action="store_true")
     args = ap.parse_args()
     os.environ.setdefault("GRANCHAIN_QUIET", "1")
     with tempfile.TemporaryDirectory(prefix="bench-campaigns-") as tmp:
         root = Path(tmp)
         print(f"load average before: {os.getloadavg()[0]:.2f}")
-        overhead(args.trivial, root)
+        if not args.skip_overhead:
+            overhead(args.trivial, root)
         if not args.skip_lammps:
             speedup(args.points, args.reps, root)
         print(f"\nload average after: {os.getloadavg()[0]:.2f}")

@@ -535,6 +535,46 @@ def test_kill_9_of_the_driver_then_rerun_runs_only_the_missing_points(tmp_path):
 
 
 @pytest.mark.slow
+def test_kill_9_of_a_worker_loses_only_its_point_in_flight(tmp_path):
+    """kill -9 of one local worker process in the middle of 40 points: Dask starts another and runs
+    the lost point again; the campaign completes every point."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    path = tmp_path / "forty.toml"
+    path.write_text(campaign_text(FORTY, campaign='backend = "reference"\nmethod = "verlet"\nerror_estimate = false'))
+    ws = tmp_path / "ws"
+    cmd = [
+        sys.executable,
+        "-m",
+        "granchain.cli",
+        "campaign",
+        "run",
+        str(path),
+        "--out",
+        str(ws),
+        "--workers",
+        "2",
+        "-q",
+    ]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    deadline = time.time() + 300
+    while time.time() < deadline and (not (ws / "workspace").is_dir() or len(complete_jobs(ws)) < 8):
+        time.sleep(0.05)
+    ps = subprocess.run(["ps", "-ww", "-o", "pid=,args=", "-g", str(p.pid)], capture_output=True, text=True).stdout
+    workers = [int(line.split()[0]) for line in ps.splitlines() if "spawn_main" in line]
+    assert len(workers) == 2, ps
+    os.kill(workers[0], signal.SIGKILL)
+    out, err = p.communicate(timeout=300)
+    assert p.returncode == 0, err
+    assert "40 points: 0 complete before, 40 run now, 0 failed" in out
+    assert len(complete_jobs(ws)) == 40
+
+
+@pytest.mark.slow
 def test_an_external_dask_scheduler_and_two_workers_give_the_same_table(tmp_path):
     """`dask scheduler` and two `dask worker` processes on localhost; `granchain campaign run
     --scheduler` gives the table a local cluster gives (but for the wall times)."""
