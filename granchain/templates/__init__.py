@@ -1,12 +1,16 @@
 """Jinja2 LAMMPS decks: a base chain deck plus one block per effect the scene declares.
 
-render_deck(scene) returns the deck text and the data file it reads (chain.data). Blocks: contact
-(the scene's law: its pair style and coefficients), loading_<force | velocity>, energy, histories
-(only when asked for), and a snapshot write_dump at each snapshot time. Every number is written with repr(), the
-shortest text that reads back to the same double. StrictUndefined: a missing value is an error.
-Free text (title, file name) enters a deck only through the `comment` filter, as an inert comment;
-any other template value that is not one line of printable text is an error.
-"""
+render_deck(scene) returns the deck text and the data file it reads (chain.data). chain.lmp.j2 includes
+a piece per effect: contact (the scene's law: its pair style and coefficients), damping, dissipation,
+wall, loading_<force | velocity | striker>, precompression, energy, the run watch, histories, dumps, a
+stop check, and a snapshot write_dump at each snapshot time.
+
+The templates read the scene's own objects (scene.loading, scene.effects, scene.law, ...) and a few
+computed ones: layout (AtomLayout), schedule (Schedule), per_atom (PerAtom), pair_coeffs (PairCoeff),
+watch (Watch), stop (StopCheck). Every number is written with repr(), the shortest text that reads
+back to the same double. StrictUndefined: a missing value is an error. Free text (title, file name)
+enters a deck only through the `comment` filter, as an inert comment; any other template value that
+is not one line of printable text is an error."""
 
 from __future__ import annotations
 
@@ -22,6 +26,7 @@ import numpy as np
 from granchain._version import __version__
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
 from granchain.peaks import PEAK_PASSED_FRACTION, lead_floor, stop_force_floor
+from granchain.physics.laws import ContactLaw
 from granchain.problem import ChainProblem, initial_energy, precompressed_displacements
 from granchain.results import scene_hash
 from granchain.scene import SceneError
@@ -33,7 +38,7 @@ WATCH_EVERY = 20
 LAMMPS_FILES = ("deck.lmp", "chain.data")
 
 #: The per-atom results a LAMMPS run ends with: the one list. The deck's last command writes them,
-#: by atom ID at full precision, into RESULTS_DUMP (results_dump_command), and
+#: by atom ID at full precision, into RESULTS_DUMP (the results block of chain.lmp.j2), and
 #: granchain.lammps.runner.read_results reads them back by the dump's own column names, for runs
 #: through the Python module and for plain-LAMMPS runs (granchain collect) alike; a column added
 #: here is written by every deck rendered from now on and read by both. Each is a dump custom
@@ -59,11 +64,6 @@ RUN_END_FILE = "run_end.txt"
 def result_columns(declared) -> list[str]:
     """RESULT_COLUMNS that a deck declaring these per-atom vectors (d_NAME) can write."""
     return [c for c in RESULT_COLUMNS if not c.startswith("d_") or c in set(declared)]
-
-
-def results_dump_command(columns) -> str:
-    """The deck's write_dump of the results (RESULT_COLUMNS), by atom ID, %.17g (round-trip doubles)."""
-    return f"write_dump      all custom {RESULTS_DUMP} id {' '.join(columns)} modify format float %.17g sort id"
 
 
 @dataclass(frozen=True)
@@ -109,6 +109,11 @@ def _one_line(value):
     return value
 
 
+def law_parameters(law) -> dict:
+    """The law's parameters, name -> value (the deck's comment on the nominal pair names them)."""
+    return {f.name: float(getattr(law, f.name)) for f in dataclasses.fields(law)}
+
+
 def _env() -> jinja2.Environment:
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(resources.files("granchain") / "templates")),
@@ -121,28 +126,68 @@ def _env() -> jinja2.Environment:
     )
     env.filters["g"] = _g
     env.filters["comment"] = comment
+    env.filters["parameters"] = law_parameters
+    env.globals.update(RESULTS_DUMP=RESULTS_DUMP, RUN_END_FILE=RUN_END_FILE)
     return env
 
 
-def atom_layout(scene) -> dict:
+@dataclass(frozen=True)
+class AtomLayout:
     """Atom IDs and types: an optional striker first (ID 1), beads, an optional wall last.
 
     Contact i (beads i and i+1) lives on the atom of bead i, ID i + offset.
     """
-    striker = scene.loading.kind == "striker"
-    wall = scene.effects.far_end == "wall"
-    types = {"bead": 1}
-    if wall:
-        types["wall"] = len(types) + 1
-    if striker:
-        types["striker"] = len(types) + 1
-    return {
-        "offset": int(striker),
-        "striker": striker,
-        "wall": wall,
-        "types": types,
-        "natoms": scene.chain.beads + striker + wall,
-    }
+
+    beads: int
+    striker: bool
+    wall: bool
+    skin: float  # neighbor skin: 0.2 x the smallest bead diameter
+
+    @classmethod
+    def of(cls, scene) -> AtomLayout:
+        skin = 0.2 * 2.0 * float(min(scene.bead_radii)) if scene.per_bead else 0.2 * scene.diameter
+        return cls(scene.chain.beads, scene.loading.kind == "striker", scene.effects.far_end == "wall", skin)
+
+    @property
+    def offset(self) -> int:
+        return int(self.striker)
+
+    @property
+    def types(self) -> dict[str, int]:
+        types = {"bead": 1}
+        if self.wall:
+            types["wall"] = len(types) + 1
+        if self.striker:
+            types["striker"] = len(types) + 1
+        return types
+
+    @property
+    def natoms(self) -> int:
+        return self.beads + self.striker + self.wall
+
+    @property
+    def first_id(self) -> int:
+        """Bead 1's atom."""
+        return 1 + self.offset
+
+    @property
+    def last_id(self) -> int:
+        """Bead N's atom."""
+        return self.beads + self.offset
+
+    @property
+    def wall_id(self) -> int:
+        return self.last_id + 1
+
+    def ids(self, contacts) -> list[int]:
+        """The atoms contacts live on (bead i's)."""
+        return [i + self.offset for i in contacts]
+
+
+def atom_layout(scene) -> dict:
+    """AtomLayout as a dict: offset, striker, wall, types, natoms."""
+    lay = AtomLayout.of(scene)
+    return {"offset": lay.offset, "striker": lay.striker, "wall": lay.wall, "types": lay.types, "natoms": lay.natoms}
 
 
 def precompression_overlaps(scene) -> dict:
@@ -218,34 +263,163 @@ def render_data(scene) -> str:
     return "\n".join(lines) + "\n"
 
 
-def energy_watch_terms(scene) -> dict:
-    """What the deck's in-run energy and momentum watch needs (granchain.invariants, same bounds as
-    the reference): the energy at t = 0 (problem.initial_energy, where the reference's bookkeeping
-    starts), bead 1's and bead N's x at t = 0, and the initial momentum of a free chain."""
-    e0 = initial_energy(ChainProblem.from_scene(scene))
-    u0 = precompressed_displacements(scene)[0] if scene.effects.precompression else np.zeros(scene.chain.beads)
-    x0 = scene.bead_positions if scene.per_bead else np.arange(scene.chain.beads) * scene.diameter
-    f0, lay = float(scene.effects.precompression), atom_layout(scene)
-    static_work = ""  # the static forces' work: the push on bead 1 and, without a wall, the pull on bead N
-    if f0:
-        static_work = f" + {f0!r}*(x[{1 + lay['offset']}] - {float(x0[0] + u0[0])!r})"
-        if scene.effects.far_end != "wall":
-            static_work += f" - {f0!r}*(x[{scene.chain.beads + lay['offset']}] - {float(x0[-1] + u0[-1])!r})"
-    return {
-        "watch_static_work": static_work,
-        "energy_watch": ENERGY_WATCH,
-        "momentum_watch": MOMENTUM_WATCH,
-        "e0": e0,
-        "x1_0": float(x0[0] + u0[0]),
-        "xn_0": float(x0[-1] + u0[-1]),
-        "p0": scene.initial_momentum,
-        "watch_momentum": scene.effects.far_end == "free" and not scene.effects.precompression,
-    }
+@dataclass(frozen=True)
+class Watch:
+    """The run watch's bounds (granchain.invariants, the same as the reference's) and what its energy
+    and momentum balances start from: the energy at t = 0 (problem.initial_energy, where the
+    reference's bookkeeping starts), bead 1's and bead N's x at t = 0, the initial momentum."""
+
+    force: float  # the largest force any contact can have at OVERLAP_WATCH x the smallest radius
+    e0: float
+    x1_0: float
+    xn_0: float
+    p0: float
+    momentum: bool  # a free chain without precompression: its momentum is the impulse delivered
+    every: int = WATCH_EVERY
+    energy_bound: float = ENERGY_WATCH
+    momentum_bound: float = MOMENTUM_WATCH
+
+    @classmethod
+    def of(cls, scene, pairs) -> Watch:
+        e0 = initial_energy(ChainProblem.from_scene(scene))
+        u0 = precompressed_displacements(scene)[0] if scene.effects.precompression else np.zeros(scene.chain.beads)
+        x0 = scene.bead_positions if scene.per_bead else np.arange(scene.chain.beads) * scene.diameter
+        # on each contact's virgin curve: Hertz k a^1.5, bilinear k a, ...
+        a_watch = OVERLAP_WATCH * float(min(scene.bead_radii))
+        return cls(
+            force=max(float(p.law.loading_force(a_watch)) for p in pairs),
+            e0=e0,
+            x1_0=float(x0[0] + u0[0]),
+            xn_0=float(x0[-1] + u0[-1]),
+            p0=scene.initial_momentum,
+            momentum=scene.effects.far_end == "free" and not scene.effects.precompression,
+        )
 
 
-def law_parameters(law) -> dict:
-    """The nominal pair's law parameters (the deck's comment names them)."""
-    return {f.name: float(getattr(law, f.name)) for f in dataclasses.fields(law)}
+@dataclass(frozen=True)
+class PairCoeff:
+    """One pair_coeff line: atom types I and J, their contact's law and contact distance d0."""
+
+    i: int
+    j: int
+    law: ContactLaw
+    d0: float
+
+    @property
+    def args(self) -> list[float]:
+        """pair_coeff I J k d0 [the law's other coefficients] (granchain.physics.laws.base, rule 5)."""
+        k, *extra = self.law.pair_coefficients()
+        return [k, self.d0, *extra]
+
+
+def pair_coeffs(scene, layout: AtomLayout) -> list[PairCoeff]:
+    """Every type pair's contact: beads (one type per bead kind of a per-bead chain), the wall's
+    (distance from the bead's centre to the flat, R) and the striker's (R_s + R; striker and wall
+    never meet, but their coefficients are required)."""
+    pairs = [PairCoeff(1, 1, scene.law, scene.diameter)]
+    if scene.per_bead:
+        kinds, _ = bead_kinds(scene)
+        pairs = [
+            PairCoeff(a + 1, b + 1, scene.bead_pair_law(*kinds[a], *kinds[b]), kinds[a][0] + kinds[b][0])
+            for a in range(len(kinds))
+            for b in range(a, len(kinds))
+        ]
+    r, types = scene.chain.radius, layout.types
+    if layout.wall:
+        tw = types["wall"]
+        pairs += [PairCoeff(1, tw, scene.wall_law, r), PairCoeff(tw, tw, scene.wall_law, r)]
+    if layout.striker:
+        ts, rs = types["striker"], scene.loading.striker_radius
+        pairs += [PairCoeff(1, ts, scene.striker_law, rs + r), PairCoeff(ts, ts, scene.striker_law, 2 * rs)]
+        if layout.wall:
+            pairs.append(PairCoeff(types["wall"], ts, scene.striker_law, rs))
+    return pairs
+
+
+@dataclass(frozen=True)
+class PerAtom:
+    """The per-atom vectors a deck declares (fix contact ... property/atom) and, of them, the
+    energies dissipated so far; the results dump writes the RESULT_COLUMNS among them."""
+
+    vectors: tuple[str, ...]
+    dissipated: tuple[str, ...] = ()
+
+    @classmethod
+    def of(cls, scene) -> PerAtom:
+        """The chain deck's: force, its last two values, running peak and its time; a law with history:
+        alpha_max and the energy it dissipated; a dashpot: its energy; completion; the leading pulse."""
+        history = scene.contact.law_class.history
+        dissipated = (["d_edis"] if history else []) + (["d_edash"] if scene.effects.dashpot else [])
+        vectors = ["d_fc", "d_fprev", "d_fprev2", "d_fpeak", "d_tpeak"] + (["d_amax"] if history else [])
+        return cls((*vectors, *dissipated, "d_fmin", "d_flead", "d_tlead"), tuple(dissipated))
+
+    @property
+    def results(self) -> list[str]:
+        return result_columns(self.vectors)
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """The deck's steps: the step plan (granchain.schedule: its segments end at the load's end, every
+    snapshot and the end time) and the strides of the samples."""
+
+    segments: list  # schedule.Segment
+    dump_stride: int  # 0: no whole-chain dump
+    history_stride: int
+
+    @classmethod
+    def of(cls, scene) -> Schedule:
+        return cls(scene_step_plan(scene), dump_stride(scene), history_stride(scene))
+
+    @property
+    def total(self) -> int:
+        return sum(g.steps for g in self.segments)
+
+    @property
+    def energy_every(self) -> int:
+        return max(1, self.total // 200)
+
+    @property
+    def thermo_every(self) -> int:
+        return max(1, self.total // 20)
+
+
+@dataclass(frozen=True)
+class StopCheck:
+    """[run] stop_after_contact: the wave has passed the contact once its force is back below
+    PEAK_PASSED_FRACTION of its rise above F0, after a peak above the floor."""
+
+    contact: int
+    atom: int
+    floor: float
+    every: int = STOP_CHECK_EVERY
+    fraction: float = PEAK_PASSED_FRACTION
+
+
+def render_deck(scene) -> Deck:
+    per_atom = PerAtom.of(scene)
+    schedule, layout = Schedule.of(scene), AtomLayout.of(scene)
+    pairs = pair_coeffs(scene, layout)
+    stop = scene.run.stop_after_contact
+    deck = (
+        _env()
+        .get_template("chain.lmp.j2")
+        .render(
+            scene=scene,
+            version=__version__,
+            scene_sha256=scene_hash(scene),
+            layout=layout,
+            schedule=schedule,
+            pair_coeffs=pairs,
+            # the leading pulse (peaks.leading_pulse): above the static force plus the reached floor
+            lead_floor=lead_floor(scene),
+            per_atom=per_atom,
+            static_overlaps=precompression_overlaps(scene),
+            watch=Watch.of(scene, pairs),
+            stop=StopCheck(stop, stop + layout.offset, stop_force_floor(scene)) if stop else None,
+        )
+    )
+    return Deck(deck=deck, data=render_data(scene), total_steps=schedule.total)
 
 
 def builtin_granular_deck(deck: str, scene) -> str:
@@ -256,7 +430,8 @@ def builtin_granular_deck(deck: str, scene) -> str:
     builtin = ("d_fc", "d_fprev", "d_fprev2", "d_fpeak", "d_tpeak")
     deck = re.sub(
         rf"^write_dump\s+all custom {re.escape(RESULTS_DUMP)} .*$",
-        results_dump_command(result_columns(builtin)),
+        f"write_dump      all custom {RESULTS_DUMP} id {' '.join(result_columns(builtin))} "
+        "modify format float %.17g sort id",
         deck,
         flags=re.M,
     )
@@ -271,118 +446,3 @@ def builtin_granular_deck(deck: str, scene) -> str:
         + "comm_modify     vel yes\n\n"
         + deck[end:]
     ).replace("\nfix             watch_energy", "\n# (no energy tallied) fix watch_energy")
-
-
-def render_deck(scene) -> Deck:
-    ld = scene.loading
-    plan = scene_step_plan(scene)
-    snaps = {t: k for k, t in enumerate(scene.outputs.snapshots)}
-    dt = scene.run.timestep
-    segments = [
-        {
-            "start": g.start,
-            "end": g.end,
-            "steps": g.steps,
-            "last": g.last,
-            "last_is_dt": g.last == dt,
-            "load_ends": ld.is_force and g.end == ld.duration,
-            "snapshot": snaps.get(g.end),
-        }
-        for g in plan
-    ]
-    total = sum(g.steps for g in plan)
-    fx = scene.effects
-    wall = fx.far_end == "wall"
-    law_cls = scene.contact.law_class
-    peratom = ["d_fc", "d_fprev", "d_fprev2", "d_fpeak", "d_tpeak"]
-    peratom += ["d_amax", "d_edis"] if law_cls.history else []  # alpha_max and the energy it dissipated
-    peratom += ["d_edash"] if fx.dashpot else []
-    peratom += ["d_fmin", "d_flead", "d_tlead"]  # completion; the leading pulse
-    r = scene.chain.radius
-    lay = atom_layout(scene)
-    tw, ts = lay["types"].get("wall"), lay["types"].get("striker")
-    pairs = [(1, 1, scene.law, scene.diameter)]  # (type I, type J, the pair's law, contact distance d0)
-    if scene.per_bead:
-        kinds, _ = bead_kinds(scene)
-        pairs = [
-            (
-                a + 1,
-                b + 1,
-                scene.bead_pair_law(kinds[a][0], kinds[a][1], kinds[b][0], kinds[b][1]),
-                kinds[a][0] + kinds[b][0],
-            )
-            for a in range(len(kinds))
-            for b in range(a, len(kinds))
-        ]
-    if wall:  # bead-wall contact: distance from the bead's centre to the flat, R
-        pairs += [(1, tw, scene.wall_law, r), (tw, tw, scene.wall_law, r)]
-    if ts:  # striker-bead contact at R_s + R; striker-wall never meet (coefficients are required)
-        rs = scene.loading.striker_radius
-        pairs += [(1, ts, scene.striker_law, rs + r), (ts, ts, scene.striker_law, 2 * rs)]
-        if wall:
-            pairs.append((tw, ts, scene.striker_law, rs))
-    # pair_coeff I J k d0 [the law's other coefficients] (granchain.physics.laws.base, rule 5)
-    coeffs = []
-    for i, j, law, d0 in pairs:
-        k, *extra = law.pair_coefficients()
-        coeffs.append({"i": i, "j": j, "args": [k, d0, *extra]})
-    # the run watch's force bound: the largest force any contact can have at OVERLAP_WATCH x the
-    # smallest radius (on its virgin curve: Hertz k a^1.5, bilinear k a, ...)
-    a_watch = OVERLAP_WATCH * float(min(scene.bead_radii))
-    watch_force = max(float(law.loading_force(a_watch)) for _, _, law, _ in pairs)
-    ctx = {
-        **energy_watch_terms(scene),
-        "watch_force": watch_force,
-        "watch_every": WATCH_EVERY,
-        "peratom": peratom,
-        "results_dump": results_dump_command(result_columns(peratom)),
-        "results_end": RUN_END_FILE,
-        "results_file": RESULTS_DUMP,
-        "scene_sha256": scene_hash(scene),
-        # the leading pulse (peaks.leading_pulse): above the static force plus the reached floor
-        "pair_args": f" lead {lead_floor(scene)!r} {float(fx.precompression)!r}"
-        + (f" dashpot {fx.dashpot!r}" if fx.dashpot else ""),
-        "pair_coeffs": coeffs,
-        "dashpot": fx.dashpot,
-        "dissipation_terms": (["d_edis"] if law_cls.history else []) + (["d_edash"] if fx.dashpot else []),
-        "wall": wall,
-        "wall_k": scene.wall_stiffness if wall else 0.0,
-        "beads": scene.chain.beads,
-        "title": scene.title or "(untitled scene)",
-        "source": scene.source or "<scene>",
-        "version": __version__,
-        "law": scene.contact.law,
-        "pair_style": law_cls.pair_style,
-        "law_history": law_cls.history,
-        "law_parameters": ", ".join(f"{k} = {v!r}" for k, v in law_parameters(scene.law).items()),
-        "skin": 0.2 * 2.0 * float(min(scene.bead_radii)) if scene.per_bead else 0.2 * scene.diameter,
-        "dt": dt,
-        "loading": "force" if ld.is_force else ld.kind,
-        "amplitude": ld.amplitude,
-        "duration": ld.duration,
-        "velocity": ld.velocity,
-        "energy_every": max(1, total // 200),
-        "thermo_every": max(1, total // 20),
-        "histories": list(scene.outputs.histories),
-        "history_ids": [i + lay["offset"] for i in scene.outputs.histories],
-        "offset": lay["offset"],
-        "striker": lay["striker"],
-        "striker_mass": scene.striker_mass if lay["striker"] else 0.0,
-        "wall_id": scene.chain.beads + lay["offset"] + 1,
-        "snapshots": list(scene.outputs.snapshots),
-        "dump_stride": dump_stride(scene),
-        "history_stride": history_stride(scene),
-        "segments": segments,
-        "precompression": fx.precompression,
-        "pre_alpha": precompression_overlaps(scene),
-        "first_id": 1 + lay["offset"],
-        "last_id": scene.chain.beads + lay["offset"],
-        "stop_after": scene.run.stop_after_contact,
-        "stop_id": (scene.run.stop_after_contact or 0) + lay["offset"],
-        "stop_every": STOP_CHECK_EVERY,
-        "stop_floor": stop_force_floor(scene) if scene.run.stop_after_contact else 0.0,
-        "stop_f0": float(fx.precompression),  # the wave has passed: its force back below half its rise
-        "stop_fraction": PEAK_PASSED_FRACTION,
-    }
-    deck = _env().get_template("chain.lmp.j2").render(**ctx)
-    return Deck(deck=deck, data=render_data(scene), total_steps=total)
