@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 from granchain.cli import bundled_scenes
 from granchain.physics import materials as mat
 from granchain.scene import FAR_ENDS, LAWS, LOADING_KINDS, SceneError, parse_scene, scene_from_dict
-from granchain.templates import builtin_granular_deck, render_deck
+from granchain.templates import render_deck
 
 from .conftest import make_scene
 
@@ -149,11 +149,12 @@ def test_known_exploits_are_comments(title):
 
 
 def test_builtin_granular_yardstick_ignores_the_title():
-    """builtin_granular_deck splices the deck at command lines, not at words a title may hold."""
+    """The yardstick deck (render_deck(scene, yardstick="builtin")) has the same commands whatever words
+    a title holds (the deck it extends splits at blocks, never at the text)."""
     words = "neighbor # ---- contact law fix             watch_energy"
     evil = replace(BASE, title=words, source=words)
     plain = replace(BASE, title="plain title", source="plain.toml")
-    d, p = builtin_granular_deck(render_deck(evil).deck, evil), builtin_granular_deck(PLAIN.deck, plain)
+    d, p = render_deck(evil, yardstick="builtin").deck, render_deck(plain, yardstick="builtin").deck
     assert commands(d) == commands(p) and len(d.splitlines()) == len(p.splitlines())
     assert "pair_style      granular" in commands(d)
 

@@ -13,7 +13,7 @@ from granchain.lammps import build
 from granchain.lammps.runner import LammpsError, read_results, run_deck, run_lammps
 from granchain.postprocess.dumps import read_dump
 from granchain.reference.solver import ChainProblem, solve_chain
-from granchain.templates import builtin_granular_deck, render_deck
+from granchain.templates import render_deck
 from granchain.workflows.run import run_reference
 
 from .conftest import BILINEAR, LAW_NAMES, law_example, make_scene
@@ -40,7 +40,7 @@ def test_hertz_matches_builtin_granular(tmp_path):
     sc = make_scene(beads=30, loading=SHORT, end_time=1e-4, timestep=2e-8, outputs="histories = [1, 5, 10, 20]")
     deck = render_deck(sc)
     ours, w1 = run_deck(deck.deck, deck.data, work_dir=tmp_path / "ours")
-    builtin = builtin_granular_deck(deck.deck, sc)
+    builtin = render_deck(sc, yardstick="builtin").deck
     _, w2 = run_deck(builtin, deck.data, work_dir=tmp_path / "builtin")
     a, b = read_dump(w1 / "histories.dump"), read_dump(w2 / "histories.dump")
     assert len(a.step) == len(b.step) == 5001

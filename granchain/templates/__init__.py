@@ -3,7 +3,9 @@
 render_deck(scene) returns the deck text and the data file it reads (chain.data). chain.lmp.j2 includes
 a piece per effect: contact (the scene's law: its pair style and coefficients), damping, dissipation,
 wall, loading_<force | velocity | striker>, precompression, energy, the run watch, histories, dumps, a
-stop check, and a snapshot write_dump at each snapshot time.
+stop check, and a snapshot write_dump at each snapshot time. Its blocks (contact, energy_watch,
+results) are what a yardstick overrides: render_deck(scene, yardstick="builtin") renders
+builtin_granular.lmp.j2, which {% extends %} it with LAMMPS's built-in pair_style granular.
 
 The templates read the scene's own objects (scene.loading, scene.effects, scene.law, ...) and a few
 computed ones: layout (AtomLayout), schedule (Schedule), per_atom (PerAtom), pair_coeffs (PairCoeff),
@@ -16,7 +18,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import re
 from dataclasses import dataclass
 from importlib import resources
 
@@ -24,6 +25,7 @@ import jinja2
 import numpy as np
 
 from granchain._version import __version__
+from granchain.errors import UsageError
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
 from granchain.peaks import PEAK_PASSED_FRACTION, lead_floor, stop_force_floor
 from granchain.physics.laws import ContactLaw
@@ -396,14 +398,50 @@ class StopCheck:
     fraction: float = PEAK_PASSED_FRACTION
 
 
-def render_deck(scene) -> Deck:
-    per_atom = PerAtom.of(scene)
+#: the per-atom vectors of the built-in granular yardstick: the chain deck's first five, which its
+#: run watch, stop check and results dump read (pair_style granular fills none of them)
+BUILTIN_GRANULAR_PER_ATOM = PerAtom(("d_fc", "d_fprev", "d_fprev2", "d_fpeak", "d_tpeak"))
+
+
+def builtin_granular_refusal(scene) -> str | None:
+    """Why LAMMPS's built-in pair_style granular cannot run this scene as our pair style would, or
+    None: the yardstick is an elastic Hertz chain of one material (pair_coeff * * hertz/material E 0 nu)."""
+    materials = set(scene.bead_materials)
+    if scene.loading.kind == "striker":
+        materials.add(scene.loading.striker_material)
+    why = {
+        f"the {scene.contact.law} law (the yardstick is Hertz)": scene.contact.law != "hertz",
+        "a dashpot (the yardstick has no damping)": bool(scene.effects.dashpot),
+        "a wall (the yardstick would see a sphere)": scene.effects.far_end == "wall",
+        "beads or a striker of another material (the yardstick takes one E and nu)": len(materials) > 1,
+    }
+    refused = [k for k, v in why.items() if v]
+    return "the built-in granular yardstick cannot run a chain with " + "; ".join(refused) if refused else None
+
+
+def _template(scene, yardstick: str | None) -> tuple[str, PerAtom]:
+    """The deck's template and the per-atom vectors it declares."""
+    if yardstick is None:
+        return "chain.lmp.j2", PerAtom.of(scene)
+    if yardstick != "builtin":
+        raise UsageError(f"yardstick = {yardstick!r} is unknown: the yardstick is 'builtin' (pair_style granular)")
+    why = builtin_granular_refusal(scene)
+    if why:
+        raise SceneError(f"{scene.source or '<scene>'}: {why}")
+    return "builtin_granular.lmp.j2", BUILTIN_GRANULAR_PER_ATOM
+
+
+def render_deck(scene, yardstick: str | None = None) -> Deck:
+    """The scene's deck (chain.lmp.j2: our pair style) and its data file. yardstick="builtin": the
+    same chain with LAMMPS's built-in pair_style granular instead (builtin_granular.lmp.j2 extends
+    chain.lmp.j2), the yardstick chain/hertz is tested and timed against."""
+    template, per_atom = _template(scene, yardstick)
     schedule, layout = Schedule.of(scene), AtomLayout.of(scene)
     pairs = pair_coeffs(scene, layout)
     stop = scene.run.stop_after_contact
     deck = (
         _env()
-        .get_template("chain.lmp.j2")
+        .get_template(template)
         .render(
             scene=scene,
             version=__version__,
@@ -423,26 +461,8 @@ def render_deck(scene) -> Deck:
 
 
 def builtin_granular_deck(deck: str, scene) -> str:
-    """The same deck with LAMMPS's built-in pair_style granular (hertz/material, no damping, no
-    tangential force) instead of chain/hertz: the yardstick our pair style is tested and timed
-    against. The built-in style tallies no contact energy, so the energy watch is left out."""
-    m = scene.chain.material
-    builtin = ("d_fc", "d_fprev", "d_fprev2", "d_fpeak", "d_tpeak")
-    deck = re.sub(
-        rf"^write_dump\s+all custom {re.escape(RESULTS_DUMP)} .*$",
-        f"write_dump      all custom {RESULTS_DUMP} id {' '.join(result_columns(builtin))} "
-        "modify format float %.17g sort id",
-        deck,
-        flags=re.M,
-    )
-    start = deck.index("\n# ---- contact law") + 1  # at a line start: a title may hold these words
-    end = deck.index("\nneighbor ", start) + 1
-    return (
-        deck[:start]
-        + f"fix             contact all property/atom {' '.join(builtin)} ghost yes\n"
-        + "pair_style      granular\n"
-        + f"pair_coeff      * * hertz/material {m.youngs_modulus!r} 0.0 {m.poisson_ratio!r} "
-        + "tangential linear_nohistory 0.0 0.0 damping viscoelastic\n"
-        + "comm_modify     vel yes\n\n"
-        + deck[end:]
-    ).replace("\nfix             watch_energy", "\n# (no energy tallied) fix watch_energy")
+    """render_deck(scene, yardstick="builtin").deck, for callers that hold the scene's deck text
+    (benchmarks/bench_lammps.py): the deck must be the scene's own."""
+    if deck != render_deck(scene).deck:
+        raise ValueError("builtin_granular_deck: the deck given is not this scene's (render_deck(scene).deck)")
+    return render_deck(scene, yardstick="builtin").deck
