@@ -14,7 +14,6 @@ from hypothesis import strategies as st
 
 from granchain.cli import main, resolve_scene
 from granchain.physics.estimates import expected_peak_force, highest_frequency
-from granchain.physics.laws.bilinear import unloading_stiffness
 from granchain.physics.laws.hertz import hertz_tangent_stiffness
 from granchain.results import read_summary
 from granchain.scene import parse_scene
@@ -130,21 +129,18 @@ def _linearised_highest_frequency(scene) -> float:
     """The largest frequency of the chain linearised at the planner's forces, by a dense eigensolve:
     what the Gershgorin bound must never undercut."""
     force = float(scene.effects.precompression) + expected_peak_force(scene)
-    law = scene.contact.law
 
-    def tangent(k, f):
-        return (
-            hertz_tangent_stiffness(f, k) if law == "hertz" else unloading_stiffness(k, scene.contact.unloading_coeff)
-        )
+    def tangent(law, f) -> float:  # the law's stiffest tangent at the force (tested in test_laws.py)
+        return float(law.tangent_stiffness(f))
 
     m = list(scene.bead_masses)
-    k = list(tangent(scene.contact_stiffnesses, force))
+    k = [tangent(law, force) for law in scene.contact_laws]
     wall = 0.0
     if scene.effects.far_end == "wall":
-        wall = float(tangent(scene.wall_stiffness, float(scene.effects.precompression) + 2.0 * force))
+        wall = tangent(scene.wall_law, float(scene.effects.precompression) + 2.0 * force)
     if scene.loading.kind == "striker":
         m = [scene.striker_mass, *m]
-        k = [float(tangent(scene.striker_stiffness, force)), *k]
+        k = [tangent(scene.striker_law, force), *k]
     n = len(m)
     kmat = np.zeros((n, n))
     for i, ki in enumerate(k):
