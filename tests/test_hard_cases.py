@@ -97,8 +97,8 @@ def three_runs(sc, lammps=True):
         assert lam.steps == ver.steps
         verlet_error = rel_peaks(ver.peak_force, rk4.peak_force, sc)
         f = float(np.min(ver.peak_force[np.asarray(sc.peak_contacts) - 1]))  # the smallest measured peak
-        k = float(np.max(sc.contact_stiffnesses)) if sc.per_bead else sc.stiffness
-        alpha = (f / k) ** (2 / 3) if sc.contact.law == "hertz" else f / k
+        stiffest = max(sc.contact_laws, key=lambda law: float(law.k)) if sc.per_bead else sc.law
+        alpha = float(stiffest.static_overlap(f))  # the overlap at that force, on the virgin curve
         length = sc.chain.beads * sc.diameter
         bound = max(1e-9, 100 * EPS * length / alpha, 1e-3 * verlet_error)
         got = rel_peaks(lam.peak_force, ver.peak_force, sc)
