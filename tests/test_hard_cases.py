@@ -180,8 +180,10 @@ def transitions(force_history):
         ("hertz", "", 'kind = "velocity"\nvelocity = 1.0', '[boundary]\nfar_end = "wall"\n'),
         # plastic free flight (Sec. III A): beads separate behind the wave and recollide
         ("bilinear", "unloading_coeff = 0.8\nplastic_stiffness = 2.43e7", None, ""),
+        # the same with Thornton's law (issue 14): yield, Hertzian unloading with the enlarged radius
+        ("thornton", "yield_pressure = 3.25e9", None, ""),
     ],
-    ids=["hertz-rebound", "plastic-free-flight"],
+    ids=["hertz-rebound", "plastic-free-flight", "thornton-free-flight"],
 )
 def test_contacts_open_and_close_again(case):
     law, contact, loading, extra = case
