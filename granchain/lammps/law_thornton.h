@@ -62,7 +62,10 @@ struct LawThornton {
     const double x = (2.0 * fmax + fy) / (3.0 * fy);
     const double kp = k * sqrt((fy / fmax) * (x * sqrt(x)));
     const double y = fmax / kp;
-    const double dp = am - cbrt(y * y);
+    // d_p >= 0: just above d_y round-off can put am - (Fmax/kp)^(2/3) a few ulps below 0, which would
+    // leave a force at zero overlap (the numpy twin clips the same way)
+    const double dp0 = am - cbrt(y * y);
+    const double dp = dp0 > 0.0 ? dp0 : 0.0;
     const double s = alpha - dp;
     const double f = s > 0.0 ? kp * s * sqrt(s) : 0.0;
     if (energy) *energy = s > 0.0 ? 0.4 * f * s : 0.0;

@@ -92,8 +92,11 @@ class ThorntonLaw(ContactLaw):
         fy = k * dy * np.sqrt(dy)
         ap = np.maximum(am, dy)  # the plastic formulas at d_y where the contact is still elastic
         fmax_p = fy + 1.5 * k * np.sqrt(dy) * (ap - dy)
-        kp = k * np.sqrt((fy / fmax_p) * ((2.0 * fmax_p + fy) / (3.0 * fy)) ** 1.5)
-        dp = np.maximum(ap - (fmax_p / kp) ** (2.0 / 3.0), 0.0)  # >= 0 (round-off just above d_y)
+        # x^(3/2) as x sqrt(x) and y^(2/3) as cbrt(y^2), as the C++ kernel (law_thornton.h)
+        x = (2.0 * fmax_p + fy) / (3.0 * fy)
+        kp = k * np.sqrt((fy / fmax_p) * (x * np.sqrt(x)))
+        y = fmax_p / kp
+        dp = np.maximum(ap - np.cbrt(y * y), 0.0)  # >= 0 (round-off just above d_y)
         amc = np.maximum(am, 0.0)
         fmax = np.where(plastic, fmax_p, k * amc * np.sqrt(amc))
         return plastic, fmax, np.where(plastic, kp, k), np.where(plastic, dp, 0.0)
