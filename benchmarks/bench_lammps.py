@@ -15,7 +15,7 @@ from pathlib import Path
 
 from granchain.lammps.runner import run_deck
 from granchain.scene import parse_scene
-from granchain.templates import builtin_granular_deck, render_deck
+from granchain.templates import render_deck
 
 SCENE = """
 [chain]
@@ -46,7 +46,7 @@ def main() -> None:
         deck = render_deck(sc)
         res = {"ours": [], "builtin": []}
         for _ in range(3):
-            for name, text in (("ours", deck.deck), ("builtin", builtin_granular_deck(deck.deck, sc))):
+            for name, text in (("ours", deck.deck), ("builtin", render_deck(sc, yardstick="builtin").deck)):
                 with tempfile.TemporaryDirectory() as tmp:
                     _, work = run_deck(text, deck.data, work_dir=tmp)
                     res[name].append(loop_time(work) / (n * steps) * 1e9)

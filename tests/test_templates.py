@@ -12,7 +12,7 @@ from hypothesis import given
 from granchain.cli import resolve_scene
 from granchain.errors import UsageError
 from granchain.scene import SceneError, parse_scene
-from granchain.templates import _env, builtin_granular_deck, render_deck
+from granchain.templates import _env, render_deck
 
 from .conftest import make_scene, make_scene_text
 from .test_deck_safety import BASE, FAST, NASTY, assert_same_commands
@@ -83,14 +83,6 @@ def test_yardstick_refuses_a_second_material():
         render_deck(mixed, yardstick="builtin")
     with pytest.raises(UsageError, match="yardstick = 'lj' is unknown"):
         render_deck(sc, yardstick="lj")
-
-
-def test_builtin_granular_deck_wrapper():
-    """The old call (deck text, scene) gives the yardstick's deck of that scene, and only of that scene."""
-    sc = make_scene(beads=12)
-    assert builtin_granular_deck(render_deck(sc).deck, sc) == render_deck(sc, yardstick="builtin").deck
-    with pytest.raises(ValueError, match="not this scene's"):
-        builtin_granular_deck(render_deck(sc).deck.replace("run ", "run  "), sc)
 
 
 PLAIN_YARDSTICK = render_deck(replace(BASE, title="plain title", source="plain.toml"), yardstick="builtin")

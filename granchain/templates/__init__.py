@@ -458,11 +458,3 @@ def render_deck(scene, yardstick: str | None = None) -> Deck:
         )
     )
     return Deck(deck=deck, data=render_data(scene), total_steps=schedule.total)
-
-
-def builtin_granular_deck(deck: str, scene) -> str:
-    """render_deck(scene, yardstick="builtin").deck, for callers that hold the scene's deck text
-    (benchmarks/bench_lammps.py): the deck must be the scene's own."""
-    if deck != render_deck(scene).deck:
-        raise ValueError("builtin_granular_deck: the deck given is not this scene's (render_deck(scene).deck)")
-    return render_deck(scene, yardstick="builtin").deck
