@@ -1,0 +1,372 @@
+"""The reference solver's integrators: velocity Verlet, and classical RK4 with event location.
+
+Each advances a ChainState (granchain.reference.state) by one step of the step plan, with the step
+load constant over the step (f enters as a_ext, its acceleration of bead 1), and writes the law's
+history alpha_max once per accepted step:
+
+* Verlet raises alpha_max to alpha at the step's end, which is what a LAMMPS pair style does at each
+  force evaluation, so the two agree step for step.
+* RK4 freezes alpha_max over its stages (trial points, not states of the trajectory) and raises it
+  after each accepted piece to the maximum of the cubic Hermite interpolant of alpha over the piece,
+  so the history misses the true maximum by O(h^4), not O(h^2). With event location a step that
+  crosses a kink of the contact law (law.kinks, law.turn_level) is split there, so that no piece
+  integrates across a jump in the force's derivatives.
+
+An integrator also says what "the contact forces now" are for outputs (contact_forces): Verlet's are
+the last force evaluation, at the step's end, which is what LAMMPS dumps.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import NamedTuple
+
+import numpy as np
+
+from granchain.physics.laws import ContactLaw
+from granchain.reference.hermite import hermite_max, hermite_root
+from granchain.reference.state import ChainState
+
+EPS = float(np.finfo(float).eps)
+# RK4 event location (first_kink_crossing): a contact closer to a kink of its law than
+# KINK_ROUNDOFF eps (|u_i| + |u_i+1| + |kink|) is at it (an overlap is a difference of two
+# displacements and carries their round-off)
+KINK_ROUNDOFF = 16.0
+
+#: called after every piece of an RK4 step that event location split off, but the last: (state, t0, t1)
+SplitHook = Callable[[ChainState, float, float], None]
+#: (s, contacts, kind): kink crossings found in a piece, s the fraction of the piece per contact
+Crossings = list[tuple[np.ndarray, np.ndarray, str]]
+
+
+class EventLocationError(RuntimeError):
+    """RK4 event location could not get past a kink: the step was split more than the cap allows."""
+
+
+class Integrator:
+    """What the driver asks of an integrator (granchain.reference.solver._drive)."""
+
+    name = ""
+    extra_steps = 0  # steps beyond the plan's: rejected and split steps (RK4 event location)
+
+    def start(self, state: ChainState) -> None:
+        """The run begins at state (t = 0)."""
+
+    def start_segment(self, state: ChainState, seg_start: float) -> None:
+        """A segment of the step plan begins at seg_start (a new LAMMPS run in the deck)."""
+
+    def step(
+        self, state: ChainState, t0: float, t1: float, h: float, a_ext: float, on_split: Sequence[SplitHook]
+    ) -> float:
+        """Advance from t0 to t1 (h = t1 - t0 as the plan has it); return where the last piece began."""
+        raise NotImplementedError
+
+    def contact_forces(self, state: ChainState) -> np.ndarray:
+        """The contact forces of the current state, as histories and snapshots record them (a new array)."""
+        raise NotImplementedError
+
+
+class VerletIntegrator(Integrator):
+    """Velocity Verlet as LAMMPS's fix nve runs it: half kick, drift, force, half kick."""
+
+    name = "verlet"
+
+    def __init__(self, state: ChainState) -> None:
+        self.history = state.law.history
+
+    def start_segment(self, state: ChainState, seg_start: float) -> None:
+        if state.gamma and seg_start > 0.0:
+            # LAMMPS starts each run by recomputing forces with the full-step velocities; the dashpot
+            # is the only force that notices, and the reference does the same to stay step for step
+            state.accel(state.u, state.a_int, state.v)
+
+    def step(
+        self, state: ChainState, t0: float, t1: float, h: float, a_ext: float, on_split: Sequence[SplitHook]
+    ) -> float:
+        u, v, a_int = state.u, state.v, state.a_int
+        v += 0.5 * h * a_int
+        v[0] += 0.5 * h * a_ext
+        u += h * v
+        state.dash_energy += h * state.accel(u, a_int, v)  # the dashpot sees the half-step velocity, as in LAMMPS
+        v += 0.5 * h * a_int
+        v[0] += 0.5 * h * a_ext
+        if self.history:
+            state.law.update_history(state.alpha_hist, u[:-1] - u[1:])
+        return t0
+
+    def contact_forces(self, state: ChainState) -> np.ndarray:
+        return state.fc.copy()  # the last force evaluation, at this step's end: what LAMMPS dumps
+
+
+class RK4Integrator(Integrator):
+    """Classical RK4 on (u, v), with the step split where a contact crosses a kink of its law.
+
+    Parameters
+    ----------
+    state : ChainState
+        The run's state (sizes, dashpot).
+    timestep : float
+        The plan's step: a crossing closer than 1e-6 of it to a piece's start is not split off.
+    event_location : bool
+        Split steps at kinks (else every step is one piece of length h).
+    max_splits : int
+        The most splits of one step before EventLocationError: a bug, not a slow run.
+    """
+
+    name = "rk4"
+
+    def __init__(self, state: ChainState, timestep: float, event_location: bool, max_splits: int) -> None:
+        n = state.n
+        self.timestep = timestep
+        self.event_location = event_location
+        self.max_splits = max_splits
+        self.extra_steps = 0
+        self.k1v, self.k2v, self.k3v, self.k4v = (np.empty(n) for _ in range(4))
+        self.ut = np.empty(n)
+        self.vt = np.empty(n) if state.gamma else None  # stage velocities, needed only by the dashpot
+        self.u_save, self.v_save = np.empty(n), np.empty(n)
+        self.history = state.law.history
+        self.history_floor: np.ndarray | None = None
+
+    def start(self, state: ChainState) -> None:
+        # alpha_max follows the running maximum of the overlap since t = 0, whose start is the t = 0
+        # overlap (precompressed: a few units of round-off off the static alpha_max); it joins the
+        # history at the first step's end, so the first step sees the history the problem set
+        self.history_floor = state.alpha_now.copy() if self.history else None
+
+    def step(
+        self, state: ChainState, t0: float, t1: float, h: float, a_ext: float, on_split: Sequence[SplitHook]
+    ) -> float:
+        if not self.event_location:
+            self.rk4(state, h, a_ext)
+            self.end_piece(state, t0, t1, state.u[:-1] - state.u[1:], state.v[:-1] - state.v[1:])
+            return t0
+        return self.located_step(state, t0, t1, a_ext, on_split)
+
+    def located_step(
+        self, state: ChainState, t0: float, t1: float, a_ext: float, on_split: Sequence[SplitHook]
+    ) -> float:
+        """One plan step with event location: try the rest of the step; while it crosses a kink, take
+        the piece up to the first crossing instead and try again from there. Returns the last piece's start."""
+        u, v = state.u, state.v
+        t = t0
+        splits = 0
+        while True:
+            h_sub = t1 - t
+            self.u_save[:] = u
+            self.v_save[:] = v
+            e_save = state.dash_energy
+            self.rk4(state, h_sub, a_ext)
+            a_new, adot_new = u[:-1] - u[1:], v[:-1] - v[1:]
+            piece = Piece(state.alpha_now, state.adot_now, a_new, adot_new, roundoff(self.u_save, u), h_sub)
+            crossing = first_kink_crossing(state.law, state.alpha_hist, piece, self.timestep)
+            if crossing is None:
+                break
+            s_ev, contact, kind = crossing
+            splits += 1
+            if splits > self.max_splits:
+                raise EventLocationError(
+                    f"RK4 event location split step {state.step + 1} (t = {t:.6g} s, time step "
+                    f"{self.timestep:.6g} s) {self.max_splits} times and still finds a kink: contact "
+                    f"{contact + 1} ({kind}) at s = {s_ev:.3g} of "
+                    f"the remaining {h_sub:.3g} s. This is a bug of the reference solver: please "
+                    "report it with the scene; meanwhile method 'verlet' (--method verlet) runs "
+                    "without event location"
+                )
+            u[:] = self.u_save
+            v[:] = self.v_save
+            state.dash_energy = e_save
+            self.rk4(state, s_ev * h_sub, a_ext)
+            self.extra_steps += 2  # the rejected try and the split piece
+            t_split = t + s_ev * h_sub
+            self.end_piece(state, t, t_split, u[:-1] - u[1:], v[:-1] - v[1:])
+            for hook in on_split:
+                hook(state, t, t_split)
+            t = t_split
+        self.end_piece(state, t, t1, a_new, adot_new)
+        return t
+
+    def rk4(self, state: ChainState, h: float, a_ext: float) -> None:
+        """Classical RK4 on (u, v) in place; the external load is constant over the step."""
+        u, v, accel, gamma = state.u, state.v, state.accel, state.gamma
+        k1v, k2v, k3v, k4v, ut, vt = self.k1v, self.k2v, self.k3v, self.k4v, self.ut, self.vt
+        power = 0.0
+        power += accel(u, k1v, v)
+        k1v[0] += a_ext
+        np.multiply(v, 0.5 * h, out=ut)
+        ut += u
+        if gamma:
+            np.multiply(k1v, 0.5 * h, out=vt)
+            vt += v
+        power += 2.0 * accel(ut, k2v, vt)
+        k2v[0] += a_ext
+        # stage 3 position: u + h/2 (v + h/2 k1v)
+        np.multiply(k1v, 0.25 * h * h, out=ut)
+        ut += u
+        ut += 0.5 * h * v
+        if gamma:
+            np.multiply(k2v, 0.5 * h, out=vt)
+            vt += v
+        power += 2.0 * accel(ut, k3v, vt)
+        k3v[0] += a_ext
+        # stage 4 position: u + h (v + h/2 k2v)
+        np.multiply(k2v, 0.5 * h * h, out=ut)
+        ut += u
+        ut += h * v
+        if gamma:
+            np.multiply(k3v, h, out=vt)
+            vt += v
+        power += accel(ut, k4v, vt)
+        k4v[0] += a_ext
+        if gamma:
+            state.dash_energy += h / 6.0 * power  # dashpot energy with the method's own weights
+        # u += h/6 (k1u + 2 k2u + 2 k3u + k4u) with k1u = v, k2u = v + h/2 k1v,
+        # k3u = v + h/2 k2v, k4u = v + h k3v  =>  u += h v + h^2/6 (k1v + k2v + k3v)
+        ut[:] = k1v
+        ut += k2v
+        ut += k3v
+        u += h * v
+        u += (h * h / 6.0) * ut
+        # v += h/6 (k1v + 2 k2v + 2 k3v + k4v)
+        ut += k2v
+        ut += k3v
+        ut += k4v
+        v += (h / 6.0) * ut
+
+    def end_piece(self, state: ChainState, t0: float, t1: float, alpha_new: np.ndarray, adot_new: np.ndarray) -> None:
+        """Accept the piece [t0, t1]: its dense output into the state (overlaps and rates at its end,
+        the contacts that turned inside it and their Hermite maxima), and the history raised to them."""
+        alpha_old, adot_old = state.alpha_now, state.adot_now
+        turning = np.flatnonzero((adot_old > 0.0) & (adot_new <= 0.0) & (alpha_new > 0.0))
+        if turning.size:
+            p, tp = hermite_max(t0, t1, alpha_old[turning], alpha_new[turning], adot_old[turning], adot_new[turning])
+        else:
+            p = tp = _EMPTY
+        state.alpha_now, state.adot_now = alpha_new, adot_new
+        state.turning, state.turn_peak, state.turn_time = turning, p, tp
+        if not self.history:
+            return
+        # alpha_max = max(alpha_max, the piece's largest overlap): its end, or the interpolant's
+        # maximum where the overlap turned inside it (whole-chain arrays: the law may hold per-contact ones)
+        peak = alpha_new
+        if turning.size:
+            peak = alpha_new.copy()
+            peak[turning] = np.maximum(alpha_new[turning], p)
+        state.law.update_history(state.alpha_hist, peak)
+        if self.history_floor is not None:
+            state.law.update_history(state.alpha_hist, self.history_floor)
+            self.history_floor = None
+
+    def contact_forces(self, state: ChainState) -> np.ndarray:
+        law, u, v = state.law, state.u, state.v
+        alpha = u[:-1] - u[1:]
+        f = law.force(alpha, state.alpha_hist)
+        if state.gamma:
+            f = np.where(alpha > 0.0, np.maximum(f + state.gamma * (v[:-1] - v[1:]), 0.0), f)
+        return f
+
+
+_EMPTY = np.empty(0)
+
+
+# ---- event location: where a tentative RK4 piece first meets a kink of the contact law
+
+
+class Piece(NamedTuple):
+    """A tentative RK4 piece of length h: each overlap and its rate at both ends, and its round-off."""
+
+    a0: np.ndarray
+    d0: np.ndarray
+    a1: np.ndarray
+    d1: np.ndarray
+    scale: np.ndarray  # KINK_ROUNDOFF eps (|u_i| + |u_i+1|) over both ends
+    h: float
+
+
+def roundoff(u_old: np.ndarray, u_new: np.ndarray) -> np.ndarray:
+    """KINK_ROUNDOFF eps (|u_i| + |u_i+1|) at both ends of a piece: an overlap is the difference of
+    two displacements, and carries their round-off."""
+    return KINK_ROUNDOFF * EPS * (np.abs(u_old[:-1]) + np.abs(u_old[1:]) + np.abs(u_new[:-1]) + np.abs(u_new[1:]))
+
+
+def first_kink_crossing(
+    law: ContactLaw, alpha_hist: np.ndarray, piece: Piece, timestep: float
+) -> tuple[float, int, str] | None:
+    """Where in the piece the first contact meets a kink of its force law, or None.
+
+    Kinks (the law's kinks(alpha_max): Hertz zero overlap, where F'' is infinite; bilinear zero force
+    at beta alpha_max and reloading meeting alpha_max; Thornton's yield, ...) and a turn from rising
+    to falling above the law's turn_level (a new alpha_max: the slope changes to the unloading
+    curve's). Located on the cubic Hermite interpolant of alpha over the piece.
+
+    A contact counts only if it crosses the kink by more than its overlap's round-off (both ends of
+    the piece farther than KINK_ROUNDOFF eps (|u_i| + |u_i+1| + |level|) from it, a turn's maximum
+    that far above the level): within that it is at the kink already, the slope change acts over no
+    overlap that double precision can hold, and a step split there need not move the overlap at all,
+    so the same crossing would be found again after the split. A crossing within 1e-6 of the step
+    from either end is not split either (that contact only).
+
+    Returns
+    -------
+    (s, contact, kind) or None
+        The fraction s of the piece, the 0-based contact and the kink's name (the split cap's error).
+    """
+    found = kink_roots(law.kinks(alpha_hist), piece)
+    turn_level = law.turn_level(alpha_hist)
+    if turn_level is not None:
+        found += turns_above(turn_level, piece)
+    return earliest(found, piece.h, timestep)
+
+
+def crossing(piece: Piece, level: np.ndarray) -> np.ndarray:
+    """Contacts that cross `level` from one side to the other, beyond round-off at both ends."""
+    tol = piece.scale + KINK_ROUNDOFF * EPS * np.abs(level)
+    below0, above0 = piece.a0 < level - tol, piece.a0 > level + tol
+    below1, above1 = piece.a1 < level - tol, piece.a1 > level + tol
+    return np.flatnonzero((below0 & above1) | (above0 & below1))
+
+
+def kink_roots(kinks: Sequence, piece: Piece) -> Crossings:
+    """(s, contacts, kind) of every kink some contact crosses in the piece (s: the first root per contact)."""
+    found = []
+    shape = piece.a0.shape
+    for kink in kinks:
+        level = np.broadcast_to(kink.level, shape)
+        idx = crossing(piece, level)
+        if kink.from_below:
+            idx = idx[piece.a0[idx] < level[idx]]
+        if kink.where is not None:
+            idx = idx[np.broadcast_to(kink.where, shape)[idx]]
+        if idx.size:
+            lv = level[idx]
+            s = hermite_root(piece.a0[idx] - lv, piece.a1[idx] - lv, piece.h * piece.d0[idx], piece.h * piece.d1[idx])
+            found.append((s, idx, kink.kind))
+    return found
+
+
+def turns_above(turn_level: np.ndarray, piece: Piece) -> Crossings:
+    """(s, contacts, kind) of the contacts whose overlap turns inside the piece above the turn level
+    (beyond round-off): they start unloading on a new curve there."""
+    turn_level = np.broadcast_to(turn_level, piece.a0.shape)
+    turn = np.flatnonzero((piece.d0 > 0.0) & (piece.d1 < 0.0) & (piece.a1 > 0.0))
+    if not turn.size:
+        return []
+    h = piece.h
+    p, sp = hermite_max(0.0, 1.0, piece.a0[turn], piece.a1[turn], piece.d0[turn] * h, piece.d1[turn] * h)
+    lv = turn_level[turn]
+    loading = p > lv + piece.scale[turn] + KINK_ROUNDOFF * EPS * lv
+    if not loading.any():
+        return []
+    return [(sp[loading], turn[loading], "turn above alpha_max")]
+
+
+def earliest(found: Crossings, h: float, timestep: float) -> tuple[float, int, str] | None:
+    """The first crossing of all found that lies inside the piece (not within 1e-6 of either end)."""
+    best = None
+    for s_arr, idx, kind in found:
+        inside = (s_arr * h >= 1e-6 * timestep) & (s_arr <= 1.0 - 1e-6)
+        if inside.any():
+            j = int(np.argmin(np.where(inside, s_arr, np.inf)))
+            if best is None or s_arr[j] < best[0]:
+                best = (float(s_arr[j]), int(idx[j]), kind)
+    return best

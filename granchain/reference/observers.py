@@ -1,0 +1,476 @@
+"""What the reference solver records and checks while it runs: observers of the state.
+
+The driver (granchain.reference.solver._drive) calls every observer at the same points of the run:
+
+* ``start(state)`` once, at t = 0, before the first step;
+* ``after_step(state, t0, t1)`` after every ``every``-th step (0: never), in list order; [t0, t1] is
+  the step's last piece (an RK4 step split by event location ends with a shorter one); a True
+  return stops the run once every observer has seen this step;
+* ``after_split(state, t0, t1)`` after every other piece of a split RK4 step (peak tracking only);
+* ``end_segment(state)`` once a segment's steps are done (or the run stopped), before
+* ``at_breakpoint(state, stopped)``: the time is a breakpoint (the load's end, a snapshot, the end)
+  or the stop;
+* ``finish(state)`` once at the end, in list order: fields of ChainSolution.
+
+Observers only read the state (u, v, alpha_max, the force buffer, RK4's dense output); what they
+compute for each other they hand over by reference (the leading pulse asks the peak tracker for its
+peaks, the early stop for a contact's force and peak, the run watch checks each energy row).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from granchain.invariants import InvariantError, energy_violation, momentum_violation
+from granchain.peaks import PEAK_PASSED_FRACTION, complete_peaks, unreached_as_nan
+from granchain.problem import state_energy
+from granchain.reference.state import ChainState
+
+#: (t, kinetic, stored, dissipated, work) of one energy sample
+EnergyRow = tuple[float, float, float, float, float]
+
+
+class Observer:
+    """The common interface: every hook does nothing unless an observer overrides it."""
+
+    every = 0  # after_step every `every` steps; 0: never
+
+    def start(self, state: ChainState) -> None:
+        """The run begins (t = 0)."""
+
+    def after_split(self, state: ChainState, t0: float, t1: float) -> None:
+        """An RK4 piece [t0, t1] that event location split off a step (not the step's last)."""
+
+    def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
+        """A step ended at t1 (its last piece began at t0). True: stop the run after this step."""
+        return False
+
+    def end_segment(self, state: ChainState) -> None:
+        """The steps of a segment are done, or the run stopped."""
+
+    def at_breakpoint(self, state: ChainState, stopped: bool) -> None:
+        """The state is at a breakpoint of the step plan (stopped: at the early stop instead)."""
+
+    def finish(self, state: ChainState) -> dict[str, Any]:
+        """The fields of ChainSolution this observer fills."""
+        return {}
+
+
+# ---- peaks
+
+
+class PeakTracker(Observer):
+    """Running peak of every contact, its time and the smallest force since (peaks.complete_peaks).
+
+    Tells its ``listeners`` (state, contacts) when contacts reach a local maximum, after the running
+    peak took it in (the leading pulse freezes the first one).
+    """
+
+    every = 1
+
+    def __init__(self, state: ChainState) -> None:
+        self.f0 = state.f0
+        self.amax = state.overlap()  # the running peak overlap: the static overlap at t = 0
+        self.listeners: list[Callable[[ChainState, np.ndarray], None]] = []
+        self.time_of_peak = np.empty(0)  # set by finish
+
+    def peak_at(self, state: ChainState, ix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The running peak force and its time of contacts ix."""
+        raise NotImplementedError
+
+    def now_and_peak(self, state: ChainState, c: int) -> tuple[float, float]:
+        """Contact c's force now and its running peak force."""
+        raise NotImplementedError
+
+    def peak_fields(self, peak_force: np.ndarray, tmax: np.ndarray, force_min: np.ndarray) -> dict[str, Any]:
+        self.time_of_peak = unreached_as_nan(peak_force, tmax, self.f0)
+        return {
+            "peak_overlap": self.amax,
+            "peak_force": peak_force,
+            "time_of_peak": self.time_of_peak,
+            "force_min_after_peak": force_min,
+            "complete": complete_peaks(peak_force, force_min, self.time_of_peak, self.f0),
+        }
+
+
+class HermitePeaks(PeakTracker):
+    """RK4: the running maximum of each overlap at piece ends, refined inside a piece where the overlap
+    turns by the maximum of the Hermite interpolant (the integrator's dense output). Every law is
+    monotone in alpha on its loading path, so the peak force is the virgin curve at the peak overlap.
+    """
+
+    def __init__(self, state: ChainState) -> None:
+        super().__init__(state)
+        self.tmax = np.where(self.amax > 0.0, 0.0, np.nan)
+        self.amin = self.amax.copy()  # smallest overlap at a piece end since the peak
+
+    def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
+        alpha_new = state.alpha_now
+        amax, amin, tmax = self.amax, self.amin, self.tmax
+        np.minimum(amin, alpha_new, out=amin)
+        rising = alpha_new > amax
+        if rising.any():
+            amax[rising] = alpha_new[rising]
+            tmax[rising] = t1
+            amin[rising] = alpha_new[rising]
+        turning = state.turning
+        if turning.size:
+            p, tp = state.turn_peak, state.turn_time
+            better = p > amax[turning]
+            ix = turning[better]
+            amax[ix] = p[better]
+            tmax[ix] = tp[better]
+            amin[ix] = alpha_new[ix]  # the peak lies inside this piece: only its end comes after it
+            for listener in self.listeners:
+                listener(state, turning)
+        return False
+
+    def after_split(self, state: ChainState, t0: float, t1: float) -> None:
+        self.after_step(state, t0, t1)
+
+    def peak_at(self, state: ChainState, ix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # at a contact's maximum its running peak is that maximum; the force there: F is monotone in
+        # the overlap at a fixed history. Whole-chain evaluation: per-contact stiffness arrays
+        # (striker, wall, per-bead chains) broadcast only against whole-chain arrays
+        f = np.asarray(state.law.force(np.maximum(self.amax, 0.0), state.alpha_hist), dtype=float)
+        return f[ix], self.tmax[ix]
+
+    def now_and_peak(self, state: ChainState, c: int) -> tuple[float, float]:
+        # whole-chain evaluation (every STOP_CHECK_EVERY steps), as in peak_at
+        now = float(state.law.force(state.overlap(), state.alpha_hist)[c])
+        return now, float(state.law.force_at_peak_overlap(self.amax)[c])
+
+    def finish(self, state: ChainState) -> dict[str, Any]:
+        law = state.law
+        peak_force = np.asarray(law.force_at_peak_overlap(self.amax), dtype=float)
+        force_min = np.asarray(law.force(np.maximum(self.amin, 0.0), state.alpha_hist), dtype=float)
+        return self.peak_fields(peak_force, self.tmax, force_min)
+
+
+class ForceSamplePeaks(PeakTracker):
+    """Verlet: the peak tracking of granchain's LAMMPS pair styles, so that the two agree step for
+    step: the running maximum of the force samples at step ends, refined by the vertex of the parabola
+    through three consecutive samples where the middle one is a local maximum."""
+
+    def __init__(self, state: ChainState) -> None:
+        super().__init__(state)
+        n = state.n
+        self.f_now = state.fc.copy()  # the t = 0 sample (nonzero only with precompression)
+        self.f_prev, self.f_prev2 = np.zeros(n - 1), np.zeros(n - 1)
+        self.t_now, self.t_prev, self.t_prev2 = 0.0, -math.inf, -math.inf
+        self.fpk = self.f_now.copy()
+        self.tpk = np.where(self.fpk > 0.0, 0.0, np.nan)
+        self.fmin = self.fpk.copy()  # smallest force sample since the peak, as the pair styles
+
+    def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
+        self.f_prev2, self.f_prev, self.f_now = self.f_prev, self.f_now, state.fc.copy()
+        self.t_prev2, self.t_prev, self.t_now = self.t_prev, self.t_now, t1
+        f_now, fpk = self.f_now, self.fpk
+        np.maximum(self.amax, state.u[:-1] - state.u[1:], out=self.amax)
+        np.minimum(self.fmin, f_now, out=self.fmin)
+        rising = f_now > fpk
+        fpk[rising] = f_now[rising]
+        self.tpk[rising] = t1
+        self.fmin[rising] = f_now[rising]
+        if not math.isfinite(self.t_prev2):
+            return False
+        ix = np.flatnonzero((self.f_prev > f_now) & (self.f_prev >= self.f_prev2) & (self.f_prev > 0.0))
+        if ix.size:
+            self.refine(state, ix)
+        return False
+
+    def refine(self, state: ChainState, ix: np.ndarray) -> None:
+        """The middle sample of contacts ix is a local maximum: its value is the vertex of the parabola
+        through the three samples where that opens downwards, else the sample itself (as the pair styles)."""
+        a, b = self.t_prev2 - self.t_prev, self.t_now - self.t_prev
+        det = a * b * (b - a)
+        f_prev, fpk, tpk = self.f_prev, self.fpk, self.tpk
+        fa, fb = self.f_prev2[ix] - f_prev[ix], self.f_now[ix] - f_prev[ix]
+        c1 = (fa * b * b - fb * a * a) / det
+        c2 = (a * fb - b * fa) / det
+        ok = c2 < 0.0
+        sv = np.zeros(ix.size)
+        sv[ok] = np.clip(-c1[ok] / (2.0 * c2[ok]), a, b)
+        val = f_prev[ix].copy()
+        val[ok] += (c1[ok] + c2[ok] * sv[ok]) * sv[ok]
+        better = ok & (val > fpk[ix])
+        fpk[ix[better]] = val[better]
+        tpk[ix[better]] = self.t_prev + sv[better]
+        self.fmin[ix[better]] = self.f_now[ix[better]]  # the refined peak lies before this sample
+        for listener in self.listeners:
+            listener(state, ix)
+
+    def peak_at(self, state: ChainState, ix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return self.fpk[ix], self.tpk[ix]
+
+    def now_and_peak(self, state: ChainState, c: int) -> tuple[float, float]:
+        return state.fc[c], self.fpk[c]
+
+    def finish(self, state: ChainState) -> dict[str, Any]:
+        return self.peak_fields(self.fpk, self.tpk, self.fmin)
+
+
+class LeadingPulse(Observer):
+    """The leading pulse (peaks.leading_pulse): the first maximum of each contact's force that rises
+    more than lead_floor above F0, frozen from then on (the pair styles' d_flead, d_tlead).
+
+    It listens to the peak tracker, which finds the maxima; at a contact's first maximum the running
+    peak is that maximum (before it the force only rose; a maximum at a split step's end is the
+    running peak already).
+    """
+
+    def __init__(self, state: ChainState, peaks: PeakTracker, lead_floor: float) -> None:
+        self.peaks = peaks
+        self.f0 = state.f0
+        self.lead_floor = lead_floor
+        self.force = np.full(state.n - 1, np.nan)
+        self.time = np.full(state.n - 1, np.nan)
+        self.done = np.zeros(state.n - 1, dtype=bool)
+        peaks.listeners.append(self.at_maximum)
+
+    def at_maximum(self, state: ChainState, ix: np.ndarray) -> None:
+        """Contacts ix are at a local maximum: freeze the first that rises far enough above F0."""
+        first = ~self.done[ix]
+        if not first.any():
+            return
+        j = ix[first]
+        force, time = self.peaks.peak_at(state, j)
+        now = force - self.f0 > self.lead_floor
+        if now.any():
+            k = j[now]
+            self.force[k], self.time[k] = force[now], time[now]
+            self.done[k] = True
+
+    def finish(self, state: ChainState) -> dict[str, Any]:
+        reached = np.isfinite(self.peaks.time_of_peak)  # the peak tracker finished first
+        return {
+            "leading_pulse_force": np.where(reached, self.force, np.nan),
+            "leading_pulse_time": np.where(reached, self.time, np.nan),
+        }
+
+
+# ---- recording
+
+
+class Recorder(Observer):
+    """Histories (the force of chosen contacts and the velocity of their left bead, every
+    history_stride steps from t = 0) and snapshots (whole-chain profiles at breakpoints).
+
+    No extra history row at the end: the samples are every history_stride steps from t = 0 in both
+    backends (LAMMPS's dump writes only those), so the two tables have the same rows.
+    """
+
+    def __init__(
+        self,
+        state: ChainState,
+        forces: Callable[[ChainState], np.ndarray],
+        histories: Sequence[int],
+        history_stride: int,
+        snapshots: Sequence[float],
+        total_steps: int,
+    ) -> None:
+        self.forces = forces  # the integrator's contact_forces
+        self.n = state.n
+        self.idx = np.asarray(histories, dtype=int)
+        self.every = history_stride if len(self.idx) else 0
+        rows = (total_steps // history_stride + 2) if len(self.idx) else 0
+        self.h_t = np.empty(rows)
+        self.h_f = np.empty((rows, len(self.idx)))
+        self.h_v = np.empty((rows, len(self.idx)))
+        self.rows = 0
+        self.snapshot_times = {float(s) for s in snapshots}
+        self.snaps: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+    def record(self, state: ChainState, t: float) -> None:
+        self.h_t[self.rows] = t
+        self.h_f[self.rows] = self.forces(state)[self.idx]
+        self.h_v[self.rows] = state.v[self.idx]
+        self.rows += 1
+
+    def start(self, state: ChainState) -> None:
+        if self.every:
+            self.record(state, 0.0)
+
+    def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
+        self.record(state, t1)
+        return False
+
+    def at_breakpoint(self, state: ChainState, stopped: bool) -> None:
+        if not stopped and state.t in self.snapshot_times:
+            self.snaps[state.t] = (state.u.copy(), state.v.copy(), self.forces(state))
+
+    def finish(self, state: ChainState) -> dict[str, Any]:
+        n, snaps = self.n, self.snaps
+        snap_t = np.asarray(sorted(snaps))
+        return {
+            "history_contacts": tuple(int(i) for i in self.idx),
+            "history_time": self.h_t[: self.rows].copy(),
+            "history_force": self.h_f[: self.rows].copy(),
+            "history_velocity": self.h_v[: self.rows].copy(),
+            "snapshot_time": snap_t,
+            "snapshot_displacement": np.array([snaps[s][0] for s in snap_t]).reshape(len(snap_t), n),
+            "snapshot_velocity": np.array([snaps[s][1] for s in snap_t]).reshape(len(snap_t), n),
+            "snapshot_force": np.array([snaps[s][2] for s in snap_t]).reshape(len(snap_t), n - 1),
+        }
+
+
+class EnergyLedger(Observer):
+    """Energy samples (~energy_samples per run, and at every breakpoint): kinetic, stored, dissipated
+    (the law's, from alpha_max, plus the dashpot's) and the energy put in: the initial energy, the work
+    of the step load (exactly A times the displacement of bead 1 while it acts: f is constant over
+    every step) and of the precompression's static forces on bead 1 and a free bead N.
+
+    Tells its ``listeners`` (state, row) about every row as it is taken (the run watch checks it).
+    """
+
+    def __init__(self, state: ChainState, energy_every: int) -> None:
+        self.every = energy_every
+        self.problem = state.problem
+        self.u_init = state.u.copy()
+        self.u0_at_load_end: float | None = None  # bead 1's displacement when the load stopped
+        # kinetic + stored + dissipated at t = 0 (problem.initial_energy: the deck's too)
+        self.e_initial = state_energy(state.law, state.mass_ke, state.u, state.v, state.alpha_hist)
+        self.rows: list[EnergyRow] = []
+        self.listeners: list[Callable[[ChainState, EnergyRow], None]] = []
+
+    def work(self, state: ChainState) -> float:
+        """Energy put in: the initial energy, the work of f(t) and of the static forces."""
+        p, u, f0 = self.problem, state.u, state.f0
+        w = self.e_initial
+        if p.amplitude:
+            u0 = u[0] if self.u0_at_load_end is None else self.u0_at_load_end
+            w += p.amplitude * (u0 - self.u_init[0])
+        if f0:
+            w += f0 * (u[0] - self.u_init[0]) - (f0 * (u[-1] - self.u_init[-1]) if state.free_end else 0.0)
+        return w
+
+    def row(self, state: ChainState, t: float) -> None:
+        law, v = state.law, state.v
+        ke = 0.5 * float(np.dot(state.mass_ke, v * v))
+        pe = float(np.sum(law.energy(state.overlap(), state.alpha_hist)))
+        de = (float(np.sum(law.dissipated(state.alpha_hist))) if law.history else 0.0) + state.dash_energy
+        row = (t, ke, pe, de, self.work(state))
+        self.rows.append(row)
+        for listener in self.listeners:
+            listener(state, row)
+
+    def start(self, state: ChainState) -> None:
+        self.row(state, 0.0)
+
+    def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
+        if t1 < state.seg_end:  # a breakpoint takes its own row
+            self.row(state, t1)
+        return False
+
+    def at_breakpoint(self, state: ChainState, stopped: bool) -> None:
+        p = self.problem
+        if not stopped and p.amplitude and state.t == p.duration:
+            self.u0_at_load_end = float(state.u[0])
+        self.row(state, state.t)
+
+    def finish(self, state: ChainState) -> dict[str, Any]:
+        e = np.asarray(self.rows)
+        # remove duplicate times (a breakpoint may coincide with a periodic sample)
+        _, keep = np.unique(e[:, 0], return_index=True)
+        e = e[np.sort(keep)]
+        names = ("energy_time", "kinetic", "potential", "dissipated", "work")
+        return {name: e[:, i] for i, name in enumerate(names)}
+
+
+# ---- checks
+
+
+class RunWatch(Observer):
+    """The run watch (granchain.invariants): InvariantError on a broken invariant.
+
+    A finite state and overlaps below max_overlap every watch_every steps and at the end of every
+    segment (so a short run is watched too); the energy balance (against the largest energy put in
+    so far) and the momentum of a free chain without precompression at every energy row.
+    None switches a check off.
+    """
+
+    def __init__(
+        self,
+        state: ChainState,
+        ledger: EnergyLedger,
+        watch_every: int,
+        max_overlap: float | None,
+        energy_watch: float | None,
+        momentum_watch: float | None,
+    ) -> None:
+        self.every = watch_every
+        self.max_overlap = max_overlap
+        self.energy_watch = energy_watch
+        self.momentum_watch = momentum_watch if state.free_end and not state.f0 else None
+        self.p_initial = float(np.dot(state.mass_ke, state.v))  # (a striker's or bead 1's initial momentum)
+        self.put_in = 0.0  # the largest energy put in so far (the energy watch's scale)
+        if self.energy_watch is not None or self.momentum_watch is not None:
+            ledger.listeners.append(self.check_energy)
+
+    def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
+        self.check_state(state, t1)
+        return False
+
+    def end_segment(self, state: ChainState) -> None:
+        self.check_state(state, state.t)
+
+    def check_state(self, state: ChainState, t: float) -> None:
+        """A finite state, overlaps below max_overlap."""
+        u, v = state.u, state.v
+        if not np.isfinite(u.sum() + v.sum()):
+            bad = int(np.flatnonzero(~(np.isfinite(u) & np.isfinite(v)))[0])
+            raise InvariantError(
+                "finite state",
+                t,
+                state.step,
+                min(bad, state.n - 2) + 1,
+                f"displacement or velocity of bead {bad + 1} is not finite",
+            )
+        if self.max_overlap is not None:
+            a = state.overlap()
+            i = int(np.argmax(a))
+            if a[i] > self.max_overlap:
+                raise InvariantError(
+                    "overlap far below the radius",
+                    t,
+                    state.step,
+                    i + 1,
+                    f"overlap {a[i]:.3g} m exceeds {self.max_overlap:.3g} m (half the radius)",
+                )
+
+    def check_energy(self, state: ChainState, row: EnergyRow) -> None:
+        """The energy balance and the momentum at an energy row."""
+        t, ke, pe, de, w = row
+        if self.energy_watch is not None:
+            self.put_in = max(self.put_in, abs(w), ke + pe)
+            detail = energy_violation(ke + pe + de - w, self.put_in, self.energy_watch)
+            if detail:
+                raise InvariantError("energy balance", t, state.step, int(np.argmax(state.overlap())) + 1, detail)
+        if self.momentum_watch is not None:
+            p = state.problem
+            delivered = p.amplitude * min(p.duration, t)
+            momentum = float(np.dot(state.mass_ke, state.v))
+            detail = momentum_violation(momentum, self.p_initial + delivered, self.momentum_watch)
+            if detail:
+                raise InvariantError("momentum", t, state.step, int(np.argmax(state.overlap())) + 1, detail)
+
+
+class EarlyStop(Observer):
+    """Stop once contact c's force has fallen below half its peak (checked every every steps, as
+    LAMMPS's fix halt does): the leading wave has passed it. Only a peak above stop_floor counts
+    (round-off forces ahead of the wave must not stop the run)."""
+
+    def __init__(self, state: ChainState, peaks: PeakTracker, contact: int, every: int, stop_floor: float) -> None:
+        self.peaks = peaks
+        self.contact = contact
+        self.every = every
+        self.stop_floor = stop_floor
+        self.f0 = state.f0
+
+    def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
+        now, peak = self.peaks.now_and_peak(state, self.contact)
+        return peak > self.stop_floor and now - self.f0 < PEAK_PASSED_FRACTION * (peak - self.f0)

@@ -1,0 +1,124 @@
+"""The state a reference integrator advances and its observers read.
+
+One object per run holds the chain's displacements u, velocities v and the law's history alpha_max,
+the padded contact-force buffer and the work arrays the force evaluation writes into (allocated once:
+the inner loop allocates as little as numpy lets it), the dashpot's energy, the time and step count,
+and the last accepted piece's overlaps, rates and turning contacts (RK4's dense output, which the
+peak tracking reads instead of computing it again).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from granchain.physics.laws import ContactLaw
+from granchain.problem import ChainProblem, initial_state, moving_mass
+
+#: accel(u, out, v) -> dashpot power: the accelerations of the state (u, v) into out; also leaves the
+#: contact forces in the state's force buffer
+Accel = Callable[[np.ndarray, np.ndarray, np.ndarray | None], float]
+
+
+class ChainState:
+    """(u, v, alpha_max) of a chain and what a step needs preallocated.
+
+    Attributes
+    ----------
+    u, v : ndarray (N,)
+        Displacements and velocities, updated in place (observers may hold references).
+    alpha_hist : ndarray (N-1,)
+        The law's history alpha_max, frozen within a step and raised once per accepted step.
+    fp, fc : ndarray
+        The padded force buffer: fp[0] the static push on bead 1, fc = fp[1:N] the contact forces of
+        the last force evaluation, fp[N] the pull on a free bead N; a = (fp[:-1] - fp[1:]) / m.
+    a_int : ndarray (N,)
+        Accelerations of the last full-step evaluation (velocity Verlet's second half-kick).
+    accel : Accel
+        The force evaluation over these buffers.
+    dash_energy : float
+        Energy the dashpot has taken out so far.
+    t, step, seg_end : float, int, float
+        Time and steps taken (set by the driver after each step), and the end of the current segment.
+    alpha_now, adot_now : ndarray (N-1,)
+        Overlaps and their rates at the end of the last accepted piece (RK4; the t = 0 values before).
+    turning, turn_peak, turn_time : ndarray
+        Contacts whose overlap turned from rising to falling within that piece, and the maximum of
+        the Hermite interpolant there and its time (RK4).
+    """
+
+    def __init__(self, problem: ChainProblem) -> None:
+        n = problem.beads
+        self.problem = problem
+        self.law: ContactLaw = problem.law
+        self.n = n
+        self.inv_m = 1.0 / problem.mass  # 0 for an immovable wall bead
+        self.mass_ke = moving_mass(problem.mass)  # the wall neither moves nor counts
+        self.gamma = float(problem.dashpot)
+        self.f0 = float(problem.precompression)
+        self.free_end = bool(np.isfinite(problem.mass[-1]))
+        # at rest (bead 1 possibly moving), or precompressed in static equilibrium
+        self.u, self.v, self.alpha_hist = initial_state(problem)
+        self.t = 0.0
+        self.step = 0
+        self.seg_end = 0.0
+        self.dash_energy = 0.0
+        self.fp = np.zeros(n + 1)
+        self.fc = self.fp[1:n]
+        if self.f0:
+            self.fp[0] = self.f0  # the static push on bead 1
+            if self.free_end:
+                self.fp[n] = self.f0  # ... held by an equal pull on bead N when there is no wall
+        self.accel = make_accel(self.law, self.inv_m, self.gamma, self.fp, self.alpha_hist)
+        self.a_int = np.empty(n)
+        self.accel(self.u, self.a_int, self.v)  # the forces at t = 0 (Verlet's first kick, the first force sample)
+        self.alpha_now = self.u[:-1] - self.u[1:]
+        self.adot_now = self.v[:-1] - self.v[1:]
+        self.turning = np.empty(0, dtype=np.intp)
+        self.turn_peak = self.turn_time = np.empty(0)
+
+    def overlap(self) -> np.ndarray:
+        """alpha = u_i - u_i+1 of every contact, now (a new array)."""
+        return self.u[:-1] - self.u[1:]
+
+
+def make_accel(law: ContactLaw, inv_m: np.ndarray, gamma: float, fp: np.ndarray, alpha_hist: np.ndarray) -> Accel:
+    """The force evaluation of a run: a closure over the preallocated buffers.
+
+    A closure rather than a method: the inner loop calls it four times per RK4 step, and reading the
+    buffers from cells costs less than from attributes. The contact forces land in fc = fp[1:-1]
+    (with alpha_max frozen: the history is the caller's, see ChainState); the returned float is the
+    dashpot's power at this evaluation (0 without one), which the integrator weights into its energy.
+    """
+    n = fp.size - 1
+    fc = fp[1:n]
+    alpha = np.empty(n - 1)
+    tmp = np.empty(n - 1)
+
+    def accel(uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None) -> float:
+        np.subtract(uu[:-1], uu[1:], out=alpha)
+        np.maximum(alpha, 0.0, out=alpha)
+        law.force_into(alpha, alpha_hist, fc, tmp)  # with alpha_max frozen within the step
+        np.subtract(fp[:-1], fp[1:], out=out)
+        out *= inv_m
+        return 0.0
+
+    if not gamma:
+        return accel
+    fe = np.empty(n - 1)
+
+    def accel_dashpot(uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None) -> float:
+        np.subtract(uu[:-1], uu[1:], out=alpha)
+        np.maximum(alpha, 0.0, out=alpha)
+        law.force_into(alpha, alpha_hist, fc, tmp)
+        # dashpot gamma * d(alpha)/dt while the beads overlap; the total never pulls
+        rate = vv[:-1] - vv[1:]
+        fe[:] = fc
+        fc[:] = np.where(uu[:-1] - uu[1:] > 0.0, np.maximum(fc + gamma * rate, 0.0), fc)
+        power = float(np.dot(fc - fe, rate))
+        np.subtract(fp[:-1], fp[1:], out=out)
+        out *= inv_m
+        return power
+
+    return accel_dashpot
