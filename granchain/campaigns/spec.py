@@ -336,6 +336,42 @@ def campaign_from_dict(
                 f"allowed keys: {', '.join(CAMPAIGN_KEYS)}"
             )
     base, base_source = _read_base(c, data.get("scene"), source, base_dir)
+    settings = _read_settings(c, source)
+    kind = c.get("kind", "search" if "search" in data else "grid")
+    if kind not in KINDS:
+        raise CampaignError(f"{source}: [campaign] kind = {kind!r} is invalid: 'grid' or 'search'")
+    if kind == "search" and "search" not in data:
+        raise CampaignError(f"{source}: [campaign] kind = 'search' needs a [search] table (key, range, predicate)")
+    if kind == "grid" and "search" in data:
+        raise CampaignError(f"{source}: a [search] table with kind = 'grid': drop kind (or set kind = 'search')")
+    axes = _read_axes(data, source)
+    search = _read_search(data["search"], source) if kind == "search" else None
+    if kind == "grid" and not axes:
+        raise CampaignError(
+            f'{source}: nothing varies: the grid is empty; add a [vary] table, e.g. "loading.amplitude" = [10.0, 100.0]'
+        )
+    count = math.prod(len(a.values) for a in axes)
+    if count > MAX_POINTS:
+        raise CampaignError(f"{source}: the grid has {count} points, more than {MAX_POINTS}; reduce num or the lists")
+    grid_keys = [k for a in axes for k in a.keys]
+    if search is not None and search.key in grid_keys:
+        raise CampaignError(f"{source}: [search] key {search.key!r} is also varied in [vary]/[zip]; drop it there")
+    derive = _read_derive(data.get("derive", {}), grid_keys + ([search.key] if search else []), base, source)
+    return Campaign(
+        source=source,
+        text=text if text is not None else "",
+        base=base,
+        base_source=base_source,
+        kind=kind,
+        axes=tuple(axes),
+        derive=tuple(derive),
+        search=search,
+        **settings,
+    )
+
+
+def _read_settings(c: dict, source: str) -> dict:
+    """[campaign] backend, method, rtol, error_estimate, regime_contact, title, checked."""
     backend = c.get("backend", "reference")
     if backend not in BACKENDS:
         raise CampaignError(f"{source}: [campaign] backend = {backend!r} is invalid: one of 'reference', 'lammps'")
@@ -359,14 +395,18 @@ def campaign_from_dict(
     title = c.get("title", "")
     if not isinstance(title, str):
         raise CampaignError(f"{source}: [campaign] title = {title!r} is invalid: a string")
-    kind = c.get("kind", "search" if "search" in data else "grid")
-    if kind not in KINDS:
-        raise CampaignError(f"{source}: [campaign] kind = {kind!r} is invalid: 'grid' or 'search'")
-    if kind == "search" and "search" not in data:
-        raise CampaignError(f"{source}: [campaign] kind = 'search' needs a [search] table (key, range, predicate)")
-    if kind == "grid" and "search" in data:
-        raise CampaignError(f"{source}: a [search] table with kind = 'grid': drop kind (or set kind = 'search')")
+    return {
+        "backend": backend,
+        "method": method,
+        "rtol": None if rtol is None else float(rtol),
+        "error_estimate": ee,
+        "regime_contact": rc,
+        "title": title,
+    }
 
+
+def _read_axes(data: dict, source: str) -> list[Axis]:
+    """The grid's axes: one per [vary] key, and one for the [zip] keys together."""
     axes = []
     for name in ("vary", "zip"):
         if name in data and not data[name]:
@@ -389,35 +429,7 @@ def campaign_from_dict(
                 + ", ".join(f"{k}: {n}" for k, n in lengths.items())
             )
         axes.append(Axis(tuple(cols), tuple(zip(*cols.values(), strict=True))))
-    search = _read_search(data["search"], source) if kind == "search" else None
-    if kind == "grid" and not axes:
-        raise CampaignError(
-            f'{source}: nothing varies: the grid is empty; add a [vary] table, e.g. "loading.amplitude" = [10.0, 100.0]'
-        )
-    count = math.prod(len(a.values) for a in axes)
-    if count > MAX_POINTS:
-        raise CampaignError(f"{source}: the grid has {count} points, more than {MAX_POINTS}; reduce num or the lists")
-    grid_keys = [k for a in axes for k in a.keys]
-    if search is not None and search.key in grid_keys:
-        raise CampaignError(f"{source}: [search] key {search.key!r} is also varied in [vary]/[zip]; drop it there")
-    derive = _read_derive(data.get("derive", {}), grid_keys + ([search.key] if search else []), base, source)
-    campaign = Campaign(
-        source=source,
-        text=text if text is not None else "",
-        base=base,
-        base_source=base_source,
-        backend=backend,
-        method=method,
-        rtol=None if rtol is None else float(rtol),
-        error_estimate=ee,
-        kind=kind,
-        axes=tuple(axes),
-        derive=tuple(derive),
-        search=search,
-        regime_contact=rc,
-        title=title,
-    )
-    return campaign
+    return axes
 
 
 def _did_you_mean(key: str, known) -> str:
