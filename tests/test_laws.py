@@ -110,6 +110,9 @@ def test_energy_is_the_integral_of_the_unloading_force(name, data):
         return
     a = min(max(frac, 0.05), 0.95) * amax  # away from the kink at alpha_max
     h = 1e-6 * amax
+    levels = [float(np.broadcast_to(k.level, (1,))[0]) for k in law.kinks(np.array([amax]))]
+    if any(abs(a - lv) < 2 * h for lv in levels):
+        return  # a central difference across a kink of the law is not its derivative
     de = (float(law.energy(a + h, amax)) - float(law.energy(a - h, amax))) / (2 * h)
     f = float(law.force(a, amax))
     assert math.isclose(de, f, rel_tol=1e-4, abs_tol=1e-6 * float(law.loading_force(amax)))
