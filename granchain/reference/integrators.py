@@ -58,7 +58,12 @@ class Integrator:
     def step(
         self, state: ChainState, t0: float, t1: float, h: float, a_ext: float, on_split: Sequence[SplitHook]
     ) -> float:
-        """Advance from t0 to t1 (h = t1 - t0 as the plan has it); return where the last piece began."""
+        """Advance from t0 to t1; return where the step's last piece began (t0 unless it was split).
+
+        h is the step's length as the plan has it (timestep, or the segment's last step); RK4 with
+        event location steps t1 - t0 instead, which may differ from h in the last bit (as it always did).
+        on_split: called after every piece but the last of a split step (the RK4 peak tracking).
+        """
         raise NotImplementedError
 
     def contact_forces(self, state: ChainState) -> np.ndarray:
