@@ -53,7 +53,6 @@ class ChainSolution:
     steps: int
     wall_time: float
     end_time: float
-    peak_overlap: np.ndarray  # (N-1,) m, 0 for contacts never compressed
     peak_force: np.ndarray  # (N-1,) N
     time_of_peak: np.ndarray  # (N-1,) s, nan for contacts never compressed
     history_contacts: tuple[int, ...] = ()
@@ -88,6 +87,9 @@ class ChainSolution:
     # contact first completed (see leading_pulse); nan where it has not completed
     leading_pulse_force: np.ndarray = field(default_factory=lambda: np.zeros(0))
     leading_pulse_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    # (N-1,) m, the largest overlap of each contact (0 if never compressed); the reference tracks it,
+    # LAMMPS does not (None: its results dump has no such column)
+    peak_overlap: np.ndarray | None = None
 
     def __post_init__(self):
         for name in ("leading_pulse_force", "leading_pulse_time"):

@@ -293,7 +293,6 @@ def _synthetic_run(scene, reach: float, scale: float) -> RunResult:
         steps=1,
         wall_time=0.0,
         end_time=1e-3,
-        peak_overlap=np.zeros(n),
         peak_force=peak,
         time_of_peak=top,
         kinetic=np.array([scale]),

@@ -487,7 +487,6 @@ def read_solution(
         steps=total_steps,
         wall_time=wall_time,
         end_time=scene.run.end_time if end_time is None else end_time,
-        peak_overlap=np.zeros(n - 1),
         peak_force=fpeak,
         time_of_peak=tpeak,
         force_min_after_peak=fmin,
