@@ -53,6 +53,9 @@ def study(sc):
     rows.append(
         {
             "ratios": r,
+            "statuses": [str(x) for x in est.status[ok]],
+            "all_statuses": [str(x) for x in est.status[measured]],
+            "relative_true": (true[ok] / np.abs(a.peak_force[ok])).tolist(),
             "above": int(above.sum()),
             "estimated": int(ok.sum()),
             "dashpot": sc.effects.dashpot,

@@ -222,14 +222,17 @@ def test_granchain_compare_shows_both_error_bars(tmp_path, capsys):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("integ", ["verlet", "lammps"])
-@settings(max_examples=8, deadline=None, suppress_health_check=list(HealthCheck), database=None)
+@settings(max_examples=8, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
 @given(sc=scenes(law="hertz", max_beads=30).filter(lambda s: not s.effects.dashpot))
 def test_estimates_hold_on_generated_hertz_scenes(integ, sc):
     """Issue 15 item 3 on generated scenes (walls, strikers, precompression, tapers, materials): the
     bar of the bundled scenes. Measured over 12 generated scenes per case (README, the note): Hertz
     without a dashpot meets it with Verlet and LAMMPS (ratios 0.96-1.6); with a dashpot (Verlet's
     first order), with the plastic laws' kinks and with RK4 (Hertz onsets from touching beads are
-    order 2.5, dashpot clips) a few percent of the peaks fall outside, so those are not claimed."""
+    order 2.5, dashpot clips) a few percent of the peaks fall outside, so those are not claimed.
+    Derandomized (the same 8 draws every CI run, like the planner property); random draws are
+    explored by docs/measure_error_ratios.py (a random draw found the 13x case behind
+    highest_trusted_order)."""
     backend, method = ("lammps", None) if integ == "lammps" else ("reference", integ)
     sc, _ = plan_for(sc, backend, method, 1e-3)
     sc = replace(sc, outputs=replace(sc.outputs, histories=(), snapshots=(), history_interval=None, dump_interval=None))
