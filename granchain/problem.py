@@ -6,9 +6,11 @@ the energy it holds at t = 0. Both backends and the deck builder start from thes
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from granchain.physics.effects import EFFECTS, active_effects
 from granchain.physics.laws import ContactLaw
 
 
@@ -34,43 +36,29 @@ class ChainProblem:
 
     @classmethod
     def from_scene(cls, scene) -> ChainProblem:
-        n = scene.chain.beads
-        mass = scene.bead_masses if scene.per_bead else np.full(n, scene.mass)
-        law = scene.law
-        if scene.per_bead:
-            law = type(law).join([(c, 1) for c in scene.contact_laws])
+        """The scene's chain: uniform beads and the nominal law, changed by every effect it declares
+        (granchain.physics.effects: masses, contact laws, wall, striker, dashpot, precompression)."""
+        fields: dict[str, Any] = {"mass": np.full(scene.chain.beads, scene.mass), "law": scene.law}
+        for effect in active_effects(scene):
+            effect.problem_fields(scene, fields)
         ld = scene.loading
-        fx = scene.effects
-        extra = {
-            "wall_law": scene.wall_law if fx.far_end == "wall" else None,
-            "dashpot": fx.dashpot,
-            "precompression": fx.precompression,
-        }
-        if ld.kind == "striker":
-            extra.update(striker_mass=scene.striker_mass, striker_law=scene.striker_law)
         if ld.is_force:
-            return cls(mass=mass, law=law, amplitude=ld.amplitude, duration=ld.duration, **extra)
-        return cls(mass=mass, law=law, initial_velocity=ld.velocity, **extra)
+            return cls(amplitude=ld.amplitude, duration=ld.duration, **fields)
+        return cls(initial_velocity=ld.velocity, **fields)
 
     def with_ends(self) -> ChainProblem:
-        """The chain a solver integrates: a striker as an extra first bead (moving at initial_velocity;
-        its contact has the striker-bead law) and a wall as an immovable extra last bead (zero
-        inverse mass; its contact has the wall's law). Itself when it has neither."""
-        wall, striker = self.wall_law is not None, self.striker_mass is not None
-        if not (wall or striker):
-            return self
+        """The chain a solver integrates: the extra beads of the effects (Effect.ends: a striker as an
+        extra first bead moving at initial_velocity with the striker-bead law, a wall as an immovable
+        extra last bead with the wall's law). Itself when it has none."""
         parts = [(self.law, self.beads - 1)]
         mass = self.mass
-        if striker:  # an extra bead in front, moving; its contact has the striker-bead law
-            parts.insert(0, (self.striker_law, 1))
-            mass = np.concatenate(([self.striker_mass], mass))
-        if wall:  # an immovable extra bead at the end (zero inverse mass)
-            parts.append((self.wall_law, 1))
-            mass = np.append(mass, np.inf)
-        law_x = type(self.law).join(parts)
+        for effect in EFFECTS.values():
+            mass = effect.ends(self, parts, mass)
+        if len(parts) == 1:
+            return self
         return ChainProblem(
             mass=mass,
-            law=law_x,
+            law=type(self.law).join(parts),
             amplitude=self.amplitude,
             duration=self.duration,
             initial_velocity=self.initial_velocity,

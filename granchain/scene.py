@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, make_dataclass
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +18,8 @@ import numpy as np
 
 from granchain.errors import GranchainError
 from granchain.physics import materials as mat
+from granchain.physics.effects import FAR_ENDS as FAR_ENDS  # the [boundary] far_end choices
+from granchain.physics.effects import active_effects, effect_fields, refusal, sections
 from granchain.physics.laws import LAWS as LAW_REGISTRY
 from granchain.physics.laws import ContactLaw, law_class
 
@@ -97,16 +99,16 @@ class Outputs:
     dump_interval: float | str | None = None  # s between whole-chain LAMMPS dump frames (default: none; "auto")
 
 
-FAR_ENDS = ("free", "wall")
-
-
-@dataclass(frozen=True)
-class Effects:
-    """Effects beyond the paper's bare chain; each is absent unless the scene declares it."""
-
-    far_end: str = "free"  # "free" or "wall": a fixed rigid flat touching bead N at t = 0
-    dashpot: float = 0.0  # N s/m: gamma * relative velocity added while beads overlap ([damping])
-    precompression: float = 0.0  # N: static force F0 on every contact, equilibrated before the load
+#: Effects beyond the paper's bare chain (granchain.physics.effects): one attribute per field of a
+#: registered effect (far_end "free" | "wall", dashpot gamma in N s/m, precompression F0 in N ...), each
+#: at its absent value unless the scene declares the effect
+Effects = make_dataclass(
+    "Effects",
+    [(name, type(absent), field(default=absent)) for name, absent in effect_fields().items()],
+    frozen=True,
+)
+Effects.__module__ = __name__
+Effects.__doc__ = "Effects beyond the paper's bare chain; each is absent unless the scene declares it."
 
 
 @dataclass(frozen=True)
@@ -483,7 +485,7 @@ def _with_source(scene: Scene, source: str, text: str) -> Scene:
     return replace(scene, source=source, source_text=text)
 
 
-SECTIONS = ("title", "chain", "contact", "loading", "run", "outputs", "boundary", "damping", "precompression")
+SECTIONS = ("title", "chain", "contact", "loading", "run", "outputs", *sections())
 
 
 def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
@@ -508,22 +510,7 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
     run = _read_run(_Section(source, "run", data["run"]), loading)
     outputs = _read_outputs(_Section(source, "outputs", data.get("outputs", {})), chain, run)
     effects = _read_effects(source, data)
-    if chain.radii is not None or chain.materials is not None:
-        others = [
-            n
-            for n, on in (
-                ('[boundary] far_end = "wall"', effects.far_end == "wall"),
-                ("[precompression]", bool(effects.precompression)),
-                ("a striker", loading.kind == "striker"),
-            )
-            if on
-        ]
-        if others:
-            raise SceneError(f"{source}: per-bead radius or material with {', '.join(others)} is not available yet")
-        why = contact.law_class.unsupported(chain)
-        if why:
-            raise SceneError(f"{source}: {why}")
-    return Scene(
+    scene = Scene(
         effects=effects,
         chain=chain,
         contact=contact,
@@ -533,36 +520,22 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
         title=title,
         source=source,
     )
+    why = refusal(active_effects(scene))
+    if why:
+        raise SceneError(f"{source}: {why}")
+    why = contact.law_class.unsupported(chain) if scene.per_bead else None
+    if why:
+        raise SceneError(f"{source}: {why}")
+    return scene
 
 
 def _read_effects(source: str, data: dict) -> Effects:
-    far_end, dashpot = "free", 0.0
-    if "boundary" in data:
-        b = _Section(source, "boundary", data["boundary"])
-        far_end = b.choice("far_end", FAR_ENDS)
-        b.finish(("far_end",))
-    if "damping" in data:
-        d = _Section(source, "damping", data["damping"])
-        dashpot = d.number(
-            "dashpot", low=0.0, what="gamma in N s/m: force gamma x relative velocity while beads overlap"
-        )
-        d.finish(("dashpot",))
-    pre = 0.0
-    if "precompression" in data:
-        p = _Section(source, "precompression", data["precompression"])
-        pre = p.number(
-            "force",
-            low=0.0,
-            what="static force F0 in N on every contact, pushing bead 1 and held at the "
-            "far end by the wall or by an equal force on bead N",
-        )
-        p.finish(("force",))
-        if data.get("loading", {}).get("kind") == "striker":
-            raise SceneError(
-                f"{source}: [precompression] with a striker is not available yet; use a force or "
-                "velocity load, or remove [precompression]"
-            )
-    return Effects(far_end=far_end, dashpot=dashpot, precompression=pre)
+    """The sections of the registered effects (granchain.physics.effects) the scene has."""
+    fields: dict[str, Any] = {}
+    for name, effect in sections().items():
+        if name in data:
+            fields.update(effect.read(_Section(source, name, data[name])))
+    return Effects(**fields)
 
 
 def _read_material(s: _Section, source: str, required: bool = True) -> tuple[mat.Material | None, str | None]:
@@ -894,12 +867,10 @@ def scene_to_dict(scene: Scene) -> dict:
     if scene.run.stop_after_contact is not None:
         d["run"]["stop_after_contact"] = scene.run.stop_after_contact
     d["outputs"] = _outputs_to_dict(scene.outputs)
-    if scene.effects.far_end != "free":
-        d["boundary"] = {"far_end": scene.effects.far_end}
-    if scene.effects.dashpot:
-        d["damping"] = {"dashpot": scene.effects.dashpot}
-    if scene.effects.precompression:
-        d["precompression"] = {"force": scene.effects.precompression}
+    for name, effect in sections().items():
+        section = effect.to_dict(scene.effects)
+        if section is not None:
+            d[name] = section
     return d
 
 

@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from granchain.physics import models
+from granchain.physics.effects import Bounds, active_effects
 
 
 def step_equivalent(scene) -> tuple[float, float] | None:
@@ -66,30 +67,25 @@ def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
     stiffer, k_w, and sees the reflected wave, up to twice the force), a striker (its mass and pair
     stiffness on bead 1), precompression (every contact carries F0 on top of the wave), a dashpot (the
     overdamped modes decay at up to the Gershgorin bound of M^-1/2 C M^-1/2, and an explicit integrator
-    must resolve that rate like a frequency).
+    must resolve that rate like a frequency). Each effect says what it changes
+    (granchain.physics.effects: chain_bounds along the chain, end_bounds at its ends).
     """
-    force = float(scene.effects.precompression) + expected_peak_force(scene)
     # beads = "auto" (a uniform chain: no per-bead lists): three beads hold every kind of node
     n = scene.chain.beads or 3
-    m = scene.bead_masses if scene.per_bead else np.full(n, scene.mass)
-    law = type(scene.law).join([(c, 1) for c in scene.contact_laws]) if scene.per_bead else scene.law.per_contact(n - 1)
-    kt = np.broadcast_to(_tangent(law, force), (n - 1,))
+    b = Bounds(force=expected_peak_force(scene), mass=np.full(n, scene.mass), law=scene.law.per_contact(n - 1))
+    active = active_effects(scene)
+    for effect in active:  # along the chain: masses, laws, the force level, the dashpot
+        effect.chain_bounds(scene, b)
+    m = b.mass
+    kt = np.broadcast_to(_tangent(b.law, b.force), (n - 1,))
     # neighbours as (stiffness, neighbour mass) on each side; a missing neighbour adds nothing
-    kl, ml = np.concatenate(([0.0], kt)), np.concatenate(([np.inf], m[:-1]))
-    kr, mr = np.concatenate((kt, [0.0])), np.concatenate((m[1:], [np.inf]))
-    gamma = float(scene.effects.dashpot)
-    gl = np.where(np.arange(n) > 0, gamma, 0.0)
-    gr = np.where(np.arange(n) < n - 1, gamma, 0.0)
-    extra = {}
-    if scene.effects.far_end == "wall":  # a neighbour of infinite mass: only the diagonal term
-        kw = float(_tangent(scene.wall_law, float(scene.effects.precompression) + 2.0 * force))
-        kr[-1], mr[-1], gr[-1] = kw, np.inf, gamma
-        extra["wall"] = kw
-    if scene.loading.kind == "striker":
-        ms, ks = scene.striker_mass, float(_tangent(scene.striker_law, force))
-        kl[0], ml[0], gl[0] = ks, ms, gamma
-        extra["striker"] = ks / ms + ks / math.sqrt(ms * m[0])
-        extra["striker_damp"] = gamma / ms + gamma / math.sqrt(ms * m[0])
+    b.kl, b.ml = np.concatenate(([0.0], kt)), np.concatenate(([np.inf], m[:-1]))
+    b.kr, b.mr = np.concatenate((kt, [0.0])), np.concatenate((m[1:], [np.inf]))
+    b.gl = np.where(np.arange(n) > 0, b.gamma, 0.0)
+    b.gr = np.where(np.arange(n) < n - 1, b.gamma, 0.0)
+    for effect in active:  # the ends: a wall's contact, a striker's mass and contact
+        effect.end_bounds(scene, b)
+    kl, ml, kr, mr, gl, gr, extra = b.kl, b.ml, b.kr, b.mr, b.gl, b.gr, b.extra
     rows = (kl + kr) / m + kl / np.sqrt(m * ml) + kr / np.sqrt(m * mr)
     damp = (gl + gr) / m + gl / np.sqrt(m * ml) + gr / np.sqrt(m * mr)
     if return_damping:

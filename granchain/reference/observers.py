@@ -27,6 +27,7 @@ import numpy as np
 
 from granchain.invariants import InvariantError, energy_violation, momentum_violation
 from granchain.peaks import PEAK_PASSED_FRACTION, complete_peaks, unreached_as_nan
+from granchain.physics.effects import EFFECTS, momentum_kept
 from granchain.problem import state_energy
 from granchain.reference.state import ChainState
 
@@ -322,7 +323,8 @@ class EnergyLedger(Observer):
     """Energy samples (~energy_samples per run, and at every breakpoint): kinetic, stored, dissipated
     (the law's, from alpha_max, plus the dashpot's) and the energy put in: the initial energy, the work
     of the step load (exactly A times the displacement of bead 1 while it acts: f is constant over
-    every step) and of the precompression's static forces on bead 1 and a free bead N.
+    every step) and of the effects' external forces (Effect.work: precompression's static forces on
+    bead 1 and a free bead N).
 
     Tells its ``listeners`` (state, row) about every row as it is taken (the run watch checks it).
     """
@@ -339,13 +341,13 @@ class EnergyLedger(Observer):
 
     def work(self, state: ChainState) -> float:
         """Energy put in: the initial energy, the work of f(t) and of the static forces."""
-        p, u, f0 = self.problem, state.u, state.f0
+        p, u = self.problem, state.u
         w = self.e_initial
         if p.amplitude:
             u0 = u[0] if self.u0_at_load_end is None else self.u0_at_load_end
             w += p.amplitude * (u0 - self.u_init[0])
-        if f0:
-            w += f0 * (u[0] - self.u_init[0]) - (f0 * (u[-1] - self.u_init[-1]) if state.free_end else 0.0)
+        for effect in EFFECTS.values():  # the effects' external forces (precompression's static ones)
+            w += effect.work(p, u[0] - self.u_init[0], u[-1] - self.u_init[-1])
         return w
 
     def row(self, state: ChainState, t: float) -> None:
@@ -405,7 +407,7 @@ class RunWatch(Observer):
         self.every = watch_every
         self.max_overlap = max_overlap
         self.energy_watch = energy_watch
-        self.momentum_watch = momentum_watch if state.free_end and not state.f0 else None
+        self.momentum_watch = momentum_watch if momentum_kept(state.problem) else None
         self.p_initial = float(np.dot(state.mass_ke, state.v))  # (a striker's or bead 1's initial momentum)
         self.put_in = 0.0  # the largest energy put in so far (the energy watch's scale)
         if self.energy_watch is not None or self.momentum_watch is not None:

@@ -13,6 +13,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from granchain.physics.effects import EFFECTS
 from granchain.physics.laws import ContactLaw
 from granchain.problem import ChainProblem, initial_state, moving_mass
 
@@ -66,11 +67,9 @@ class ChainState:
         self.dash_energy = 0.0
         self.fp = np.zeros(n + 1)
         self.fc = self.fp[1:n]
-        if self.f0:
-            self.fp[0] = self.f0  # the static push on bead 1
-            if self.free_end:
-                self.fp[n] = self.f0  # ... held by an equal pull on bead N when there is no wall
-        self.accel = make_accel(self.law, self.inv_m, self.gamma, self.fp, self.alpha_hist)
+        for effect in EFFECTS.values():  # the static push on bead 1 and pull on a free bead N (precompression)
+            effect.static_forces(problem, self.fp)
+        self.accel = make_accel(problem, self.law, self.inv_m, self.fp, self.alpha_hist)
         self.a_int = np.empty(n)
         self.accel(self.u, self.a_int, self.v)  # the forces at t = 0 (Verlet's first kick, the first force sample)
         self.alpha_now = self.u[:-1] - self.u[1:]
@@ -83,14 +82,21 @@ class ChainState:
         return self.u[:-1] - self.u[1:]
 
 
-def make_accel(law: ContactLaw, inv_m: np.ndarray, gamma: float, fp: np.ndarray, alpha_hist: np.ndarray) -> Accel:
+def make_accel(
+    problem: ChainProblem, law: ContactLaw, inv_m: np.ndarray, fp: np.ndarray, alpha_hist: np.ndarray
+) -> Accel:
     """The force evaluation of a run: a closure over the preallocated buffers.
 
     A closure rather than a method: the inner loop calls it four times per RK4 step, and reading the
     buffers from cells costs less than from attributes. The contact forces land in fc = fp[1:-1]
     (with alpha_max frozen: the history is the caller's, see ChainState); the returned float is the
     dashpot's power at this evaluation (0 without one), which the integrator weights into its energy.
+    An effect that changes the contact forces supplies its own (Effect.reference_accel: the dashpot).
     """
+    for effect in EFFECTS.values():
+        accel_effect = effect.reference_accel(problem, law, inv_m, fp, alpha_hist)
+        if accel_effect is not None:
+            return accel_effect
     n = fp.size - 1
     fc = fp[1:n]
     alpha = np.empty(n - 1)
@@ -104,21 +110,4 @@ def make_accel(law: ContactLaw, inv_m: np.ndarray, gamma: float, fp: np.ndarray,
         out *= inv_m
         return 0.0
 
-    if not gamma:
-        return accel
-    fe = np.empty(n - 1)
-
-    def accel_dashpot(uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None) -> float:
-        np.subtract(uu[:-1], uu[1:], out=alpha)
-        np.maximum(alpha, 0.0, out=alpha)
-        law.force_into(alpha, alpha_hist, fc, tmp)
-        # dashpot gamma * d(alpha)/dt while the beads overlap; the total never pulls
-        rate = vv[:-1] - vv[1:]
-        fe[:] = fc
-        fc[:] = np.where(uu[:-1] - uu[1:] > 0.0, np.maximum(fc + gamma * rate, 0.0), fc)
-        power = float(np.dot(fc - fe, rate))
-        np.subtract(fp[:-1], fp[1:], out=out)
-        out *= inv_m
-        return power
-
-    return accel_dashpot
+    return accel

@@ -1,0 +1,76 @@
+"""Effects beyond the paper's bare chain: one module each, registered here (EFFECTS is the only list
+of effects; its order is the order every hook runs in and refusals are checked in).
+
+See granchain.physics.effects.base for what an effect supplies and the rules for writing a new one.
+"""
+
+from __future__ import annotations
+
+from granchain.physics.effects.base import REGISTRY, Bounds, Effect
+from granchain.physics.effects.dashpot import DashpotEffect
+from granchain.physics.effects.per_bead import PerBeadEffect
+from granchain.physics.effects.precompression import PrecompressionEffect
+from granchain.physics.effects.striker import StrikerEffect
+from granchain.physics.effects.wall import FAR_ENDS, WallEffect
+
+#: name -> effect class, in the order every hook runs
+EFFECTS: dict[str, type[Effect]] = REGISTRY
+EFFECTS.update(
+    {cls.name: cls for cls in (WallEffect, DashpotEffect, PrecompressionEffect, StrikerEffect, PerBeadEffect)}
+)
+
+__all__ = [
+    "EFFECTS",
+    "FAR_ENDS",
+    "Bounds",
+    "Effect",
+    "active_effects",
+    "effect_fields",
+    "momentum_kept",
+    "refusal",
+    "sections",
+    "work",
+]
+
+
+def active_effects(scene) -> list[type[Effect]]:
+    """The registered effects the scene declares, in registry order."""
+    return [e for e in EFFECTS.values() if e.active(scene)]
+
+
+def effect_fields() -> dict[str, object]:
+    """Every scene.Effects attribute -> its absent value (the fields of the registered effects)."""
+    return {f: v for e in EFFECTS.values() for f, v in e.fields.items()}
+
+
+def sections() -> dict[str, type[Effect]]:
+    """Scene sections of the effects that have one -> the effect."""
+    return {e.section: e for e in EFFECTS.values() if e.section}
+
+
+def momentum_kept(problem) -> bool:
+    """No effect the problem carries exerts external forces: its momentum is the initial one plus the
+    load's impulse (the run watches check it)."""
+    return all(e.momentum_kept(problem) for e in EFFECTS.values())
+
+
+def work(problem, dx_first, dx_last):
+    """The work of the effects' forces since t = 0 (dx: bead 1's and bead N's displacement since;
+    floats or arrays)."""
+    w = 0.0
+    for e in EFFECTS.values():
+        w = w + e.work(problem, dx_first, dx_last)
+    return w
+
+
+def refusal(active: list[type[Effect]]) -> str | None:
+    """Why these effects cannot go together yet (the first effect that words a refusal), or None."""
+    names = {e.name for e in active}
+    for e in active:
+        partners = [o for o in active if o.name in names and e.incompatible.get(o.name) is not None]
+        if partners:
+            fix = e.incompatible[partners[0].name]
+            return f"{e.label} with {', '.join(o.label for o in partners)} is not available yet" + (
+                f"; {fix}" if fix else ""
+            )
+    return None

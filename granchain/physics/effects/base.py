@@ -1,0 +1,189 @@
+"""The base class of an effect, and the rules for writing a new one.
+
+An effect is something beyond the paper's bare chain (a free chain of equal beads with a load on
+bead 1) that a scene declares: a far-end wall, a dashpot, a static precompression, a striker, per-bead
+radii or materials. Each is one module of this package, a subclass of Effect whose class methods the
+rest of granchain calls for every registered effect, in registry order; none of them names an effect.
+An effect a scene does not declare leaves no trace: ``active(scene)`` is False and nothing of it runs.
+
+Rules for writing a new effect (tests/test_effects.py checks them for every registered effect):
+
+1. Subclass Effect and set ``name`` (the registry's key) and ``label`` (how a message names it, e.g.
+   ``"[damping] dashpot"``). An effect with a section of its own sets ``section`` (the scene's
+   ``[section]``), ``scene_keys`` (its keys), ``fields`` (the ``scene.Effects`` attributes it owns,
+   name -> the value that means absent: ``scene.Effects`` is built from the registry's fields) and
+   ``example`` / ``invalid`` (a valid section, and per key values the scene must refuse, with a
+   message naming the key: the tests read them). An effect declared elsewhere in the scene (a striker
+   is a ``[loading] kind``, per-bead radii are ``[chain]`` lists) leaves ``section`` None; that
+   section's reader validates it.
+2. ``read(section)``: read and validate the keys of its section (section: scene._Section, whose
+   number/choice/finish raise a SceneError naming the file, the key, the value and what is
+   allowed); returns its ``fields``. ``to_dict(effects)``: its section for a scene file (None when
+   absent); read back by ``read`` to equal fields. ``active(scene)``: the scene declares it.
+3. Compatibility: ``incompatible`` maps every effect it cannot go with yet to the fix this effect's
+   refusal suggests ("" none), or None where the other effect words the refusal. Both sides list
+   the pair (the relation is symmetric) and exactly one side words it.
+4. The problem (granchain.problem.ChainProblem): ``problem_fields(scene, fields)`` updates the fields
+   the chain is built from (mass, law, wall_law, dashpot, ...); ``ends(problem, parts, mass)`` adds
+   the extra beads a solver integrates (a striker in front, an immovable wall at the end);
+   ``static_forces(problem, fp)`` the constant external forces on the end beads (precompression);
+   ``reference_accel(...)`` the reference's force evaluation when it changes the contact force law
+   (the dashpot: a closure over preallocated buffers, as fast as the plain one).
+5. The planner's and the stability check's bounds (granchain.physics.estimates.highest_frequency):
+   ``chain_bounds(scene, b)`` changes what holds along the chain (masses, contact laws, the force
+   level, the dashpot's gamma) before the contacts' tangents are taken; ``end_bounds(scene, b)`` the
+   nodes at the chain's ends (a wall's contact, a striker's mass and contact).
+6. Energy: the work of its forces since t = 0, ``work(problem, dx_first, dx_last)`` (numpy arrays or
+   floats: the reference's ledger and the LAMMPS read-back call the same function), the same as a
+   LAMMPS expression for the deck's run watch, ``watch_work(problem, x_first, x_last)`` (x_first,
+   x_last: expressions of bead 1's and bead N's displacement since t = 0), and the energy columns
+   its deck adds (``energy_columns(layout)``: name -> LAMMPS expression; granchain.lammps.runner reads
+   them back by name). ``conserves_momentum`` False: its forces are external (the run watches skip
+   the momentum check where ``in_problem(problem)``: the problem carries the effect). Energy it
+   dissipates is a per-atom vector its pair style fills (``dissipated_vectors``), summed into the
+   deck's dissipated energy.
+7. The deck: ``deck_blocks`` maps a slot of templates/chain.lmp.j2 ("interactions": after the pair
+   style; "forces": after the load) to its template in granchain/templates; ``pair_style_args``
+   what it adds to the pair_style line; ``pair_coeffs(scene, types)`` the pair_coeff lines of its
+   atom types (i, j, law, contact distance); ``yardstick`` why LAMMPS's built-in granular pair style
+   cannot run it (None: it can).
+8. Register the class in granchain/physics/effects/__init__.py (EFFECTS, the only list of effects).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+
+@dataclass
+class Bounds:
+    """What highest_frequency bounds over: the Gershgorin rows of the linearised chain.
+
+    Set along the chain by the effects' chain_bounds (mass, law, force, static_force, gamma), then
+    the neighbours of each node (k: contact tangent; m: neighbour mass; g: dashpot) on the left (l)
+    and right (r), which end_bounds changes at the ends; extra: effects' own nodes (the striker).
+    """
+
+    force: float  # the largest force a bead-bead contact is expected to carry (N)
+    mass: np.ndarray  # (n,) kg
+    law: Any  # ContactLaw over the n-1 contacts
+    static_force: float = 0.0  # F0 on every contact (precompression)
+    gamma: float = 0.0  # the dashpot's N s/m
+    kl: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    ml: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    kr: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    mr: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    gl: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    gr: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    extra: dict[str, float] = field(default_factory=dict)
+
+
+class Effect:
+    """One effect beyond the bare chain: every hook does nothing unless an effect overrides it."""
+
+    name: ClassVar[str] = ""
+    label: ClassVar[str] = ""
+    section: ClassVar[str | None] = None
+    scene_keys: ClassVar[tuple[str, ...]] = ()
+    #: scene.Effects attributes this effect owns -> the value that means absent
+    fields: ClassVar[dict[str, Any]] = {}
+    #: a valid section (tests), and per key values the scene refuses
+    example: ClassVar[dict[str, Any]] = {}
+    invalid: ClassVar[dict[str, tuple[Any, ...]]] = {}
+    #: other effect's name -> the fix this effect's refusal suggests ("" none), None: the other words it
+    incompatible: ClassVar[dict[str, str | None]] = {}
+    conserves_momentum: ClassVar[bool] = True
+    dissipated_vectors: ClassVar[tuple[str, ...]] = ()
+    deck_blocks: ClassVar[dict[str, str]] = {}
+    yardstick: ClassVar[str | None] = None
+
+    # ---- the scene
+    @classmethod
+    def active(cls, scene) -> bool:
+        """The scene declares this effect."""
+        return any(getattr(scene.effects, f) != v for f, v in cls.fields.items())
+
+    @classmethod
+    def read(cls, section) -> dict[str, Any]:
+        """Read and validate this effect's section: its fields."""
+        section.finish(cls.scene_keys)
+        return {}
+
+    @classmethod
+    def to_dict(cls, effects) -> dict[str, Any] | None:
+        """Its section of a scene file, or None when absent."""
+        return None
+
+    # ---- the problem
+    @classmethod
+    def problem_fields(cls, scene, fields: dict[str, Any]) -> None:
+        """Update the ChainProblem fields (in place) for this effect."""
+
+    @classmethod
+    def ends(cls, problem, parts: list, mass: np.ndarray) -> np.ndarray:
+        """Extra beads a solver integrates: insert (law, contacts) into parts, return the masses."""
+        return mass
+
+    @classmethod
+    def static_forces(cls, problem, fp: np.ndarray) -> None:
+        """External forces constant over the run into the reference's padded force buffer: fp[0] on
+        bead 1 (pushing), fp[-1] on bead N (pulling when positive)."""
+
+    @classmethod
+    def reference_accel(cls, problem, law, inv_m: np.ndarray, fp: np.ndarray, alpha_hist: np.ndarray):
+        """The reference's force evaluation when this effect changes the contact forces (the
+        dashpot; see granchain.reference.state.make_accel), else None."""
+        return None
+
+    # ---- planner bounds
+    @classmethod
+    def chain_bounds(cls, scene, b: Bounds) -> None:
+        """Change masses, laws, force level or gamma along the chain (before the tangents)."""
+
+    @classmethod
+    def end_bounds(cls, scene, b: Bounds) -> None:
+        """Change the nodes at the chain's ends (after the tangents)."""
+
+    # ---- energy
+    @classmethod
+    def in_problem(cls, problem) -> bool:
+        """The problem (a ChainProblem, also after with_ends) carries this effect."""
+        return False
+
+    @classmethod
+    def momentum_kept(cls, problem) -> bool:
+        """The chain's momentum is the initial one plus the load's impulse, as far as this effect goes."""
+        return cls.conserves_momentum or not cls.in_problem(problem)
+
+    @classmethod
+    def work(cls, problem, dx_first, dx_last):
+        """The work its forces did since t = 0 (dx: bead 1's and bead N's displacement since)."""
+        return 0.0
+
+    @classmethod
+    def watch_work(cls, problem, x_first: str, x_last: str) -> str:
+        """work() as a LAMMPS expression (" + ..." terms; "" none)."""
+        return ""
+
+    @classmethod
+    def energy_columns(cls, layout) -> dict[str, str]:
+        """Columns it adds to the deck's energy samples: name -> LAMMPS expression."""
+        return {}
+
+    # ---- the deck
+    @classmethod
+    def pair_style_args(cls, scene) -> str:
+        """Words it adds to the pair_style line ("" none)."""
+        return ""
+
+    @classmethod
+    def pair_coeffs(cls, scene, types: dict[str, int]) -> list[tuple[int, int, Any, float]]:
+        """(I, J, law, contact distance) of the pair_coeff lines of its atom types."""
+        return []
+
+
+#: the registered effects, name -> class (granchain.physics.effects fills it: the only list of effects)
+REGISTRY: dict[str, type[Effect]] = {}

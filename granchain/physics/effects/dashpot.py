@@ -1,0 +1,93 @@
+"""Viscous dissipation between overlapping beads ([damping] dashpot = gamma, N s/m).
+
+The contact force becomes max(F(alpha) + gamma d(alpha)/dt, 0) while the beads overlap (the total
+never pulls); the energy it takes out is dissipated (the pair style's d_edash, the reference's
+integrated power). Its overdamped modes decay at up to the Gershgorin bound of M^-1/2 C M^-1/2,
+which an explicit integrator must resolve like a frequency.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from granchain.physics.effects.base import Bounds, Effect
+
+
+class DashpotEffect(Effect):
+    name = "dashpot"
+    label = "[damping] dashpot"
+    section = "damping"
+    scene_keys = ("dashpot",)
+    fields = {"dashpot": 0.0}
+    example = {"dashpot": 3.0}
+    invalid = {"dashpot": (0.0, -1.0, "strong", float("inf"))}
+    dissipated_vectors = ("d_edash",)
+    deck_blocks = {"interactions": "damping.lmp.j2"}
+    yardstick = "a dashpot (the yardstick has no damping)"
+
+    @classmethod
+    def active(cls, scene) -> bool:
+        return bool(scene.effects.dashpot)
+
+    @classmethod
+    def in_problem(cls, problem) -> bool:
+        return bool(problem.dashpot)
+
+    @classmethod
+    def read(cls, section) -> dict[str, Any]:
+        gamma = section.number(
+            "dashpot", low=0.0, what="gamma in N s/m: force gamma x relative velocity while beads overlap"
+        )
+        section.finish(cls.scene_keys)
+        return {"dashpot": gamma}
+
+    @classmethod
+    def to_dict(cls, effects) -> dict[str, Any] | None:
+        return {"dashpot": effects.dashpot} if effects.dashpot else None
+
+    @classmethod
+    def problem_fields(cls, scene, fields: dict[str, Any]) -> None:
+        fields["dashpot"] = scene.effects.dashpot
+
+    @classmethod
+    def chain_bounds(cls, scene, b: Bounds) -> None:
+        b.gamma = float(scene.effects.dashpot)
+
+    @classmethod
+    def reference_accel(cls, problem, law, inv_m: np.ndarray, fp: np.ndarray, alpha_hist: np.ndarray):
+        gamma = float(problem.dashpot)
+        return dashpot_accel(law, inv_m, gamma, fp, alpha_hist) if gamma else None
+
+    @classmethod
+    def pair_style_args(cls, scene) -> str:
+        return f" dashpot {float(scene.effects.dashpot)!r}"
+
+
+def dashpot_accel(
+    law, inv_m: np.ndarray, gamma: float, fp: np.ndarray, alpha_hist: np.ndarray
+) -> Callable[[np.ndarray, np.ndarray, np.ndarray | None], float]:
+    """The reference's force evaluation with a dashpot (granchain.reference.state.make_accel): the
+    accelerations into out, the contact forces into fp[1:-1], returns the dashpot's power."""
+    n = fp.size - 1
+    fc = fp[1:n]
+    alpha = np.empty(n - 1)
+    tmp = np.empty(n - 1)
+    fe = np.empty(n - 1)
+
+    def accel_dashpot(uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None) -> float:
+        np.subtract(uu[:-1], uu[1:], out=alpha)
+        np.maximum(alpha, 0.0, out=alpha)
+        law.force_into(alpha, alpha_hist, fc, tmp)
+        # dashpot gamma * d(alpha)/dt while the beads overlap; the total never pulls
+        rate = vv[:-1] - vv[1:]
+        fe[:] = fc
+        fc[:] = np.where(uu[:-1] - uu[1:] > 0.0, np.maximum(fc + gamma * rate, 0.0), fc)
+        power = float(np.dot(fc - fe, rate))
+        np.subtract(fp[:-1], fp[1:], out=out)
+        out *= inv_m
+        return power
+
+    return accel_dashpot

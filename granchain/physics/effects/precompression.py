@@ -1,0 +1,94 @@
+"""Static precompression ([precompression] force = F0, N).
+
+Every contact starts at F0 in static equilibrium (on its law's virgin curve; a law with history was
+loaded to it), bead 1 is pushed by F0 for the whole run and the far end is held by the wall or by an
+equal pull on bead N. Those static forces are external: they do work (F0 times bead 1's displacement,
+minus F0 times a free bead N's) and the chain's momentum is not conserved.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from granchain.physics.effects.base import Bounds, Effect
+
+
+class PrecompressionEffect(Effect):
+    name = "precompression"
+    label = "[precompression]"
+    section = "precompression"
+    scene_keys = ("force",)
+    fields = {"precompression": 0.0}
+    example = {"force": 50.0}
+    invalid = {"force": (0.0, -5.0, "50 N", float("nan"))}
+    incompatible = {"striker": "use a force or velocity load, or remove [precompression]", "per_bead": None}
+    conserves_momentum = False
+    deck_blocks = {"forces": "precompression.lmp.j2"}
+
+    @classmethod
+    def active(cls, scene) -> bool:
+        return bool(scene.effects.precompression)
+
+    @classmethod
+    def in_problem(cls, problem) -> bool:
+        return bool(problem.precompression)
+
+    @classmethod
+    def read(cls, section) -> dict[str, Any]:
+        f0 = section.number(
+            "force",
+            low=0.0,
+            what="static force F0 in N on every contact, pushing bead 1 and held at the "
+            "far end by the wall or by an equal force on bead N",
+        )
+        section.finish(cls.scene_keys)
+        return {"precompression": f0}
+
+    @classmethod
+    def to_dict(cls, effects) -> dict[str, Any] | None:
+        return {"force": effects.precompression} if effects.precompression else None
+
+    @classmethod
+    def problem_fields(cls, scene, fields: dict[str, Any]) -> None:
+        fields["precompression"] = scene.effects.precompression
+
+    @classmethod
+    def chain_bounds(cls, scene, b: Bounds) -> None:
+        b.static_force = float(scene.effects.precompression)
+        b.force = b.static_force + b.force  # every contact carries F0 on top of the wave
+
+    @staticmethod
+    def _free_end(problem) -> bool:
+        """Bead N is free (not held by a wall, as a law or as the immovable bead of with_ends)."""
+        return problem.wall_law is None and bool(np.isfinite(problem.mass[-1]))
+
+    @classmethod
+    def static_forces(cls, problem, fp: np.ndarray) -> None:
+        f0 = float(problem.precompression)
+        if f0:
+            fp[0] = f0  # the static push on bead 1
+            if cls._free_end(problem):
+                fp[-1] = f0  # ... held by an equal pull on bead N when there is no wall
+
+    @classmethod
+    def work(cls, problem, dx_first, dx_last):
+        f0 = problem.precompression
+        if not f0:
+            return 0.0
+        return f0 * dx_first - (f0 * dx_last if cls._free_end(problem) else 0.0)
+
+    @classmethod
+    def watch_work(cls, problem, x_first: str, x_last: str) -> str:
+        f0 = problem.precompression
+        if not f0:
+            return ""
+        text = f" + {float(f0)!r}*({x_first})"
+        if cls._free_end(problem):
+            text += f" - {float(f0)!r}*({x_last})"
+        return text
+
+    @classmethod
+    def energy_columns(cls, layout) -> dict[str, str]:
+        return {"xN": f"x[{layout.last_id}]"}

@@ -1,0 +1,59 @@
+"""A striker ([loading] kind = "striker"): a sphere of its own radius, material and mass hits bead 1
+at a velocity instead of a force f(t). The [loading] section reads it (scene._read_loading).
+
+For the solvers the striker is an extra first bead moving at the velocity; its contact with bead 1
+has the pair's law (scene.striker_law: Johnson's E* and R* of striker and bead).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from granchain.physics.effects.base import Bounds, Effect
+
+
+class StrikerEffect(Effect):
+    name = "striker"
+    label = "a striker"
+    incompatible = {"precompression": None, "per_bead": None}
+    deck_blocks = {}  # its load is the loading_striker block (scene.loading.kind)
+
+    @classmethod
+    def active(cls, scene) -> bool:
+        return scene.loading.kind == "striker"
+
+    @classmethod
+    def in_problem(cls, problem) -> bool:
+        return problem.striker_mass is not None
+
+    @classmethod
+    def problem_fields(cls, scene, fields: dict[str, Any]) -> None:
+        fields.update(striker_mass=scene.striker_mass, striker_law=scene.striker_law)
+
+    @classmethod
+    def ends(cls, problem, parts: list, mass: np.ndarray) -> np.ndarray:
+        if problem.striker_mass is None:
+            return mass
+        parts.insert(0, (problem.striker_law, 1))  # an extra bead in front, moving
+        return np.concatenate(([problem.striker_mass], mass))
+
+    @classmethod
+    def end_bounds(cls, scene, b: Bounds) -> None:
+        ms = scene.striker_mass
+        ks = float(np.asarray(scene.striker_law.tangent_stiffness(b.force), dtype=float))
+        b.kl[0], b.ml[0], b.gl[0] = ks, ms, b.gamma
+        m0, gamma = b.mass[0], b.gamma
+        b.extra["striker"] = ks / ms + ks / math.sqrt(ms * m0)
+        b.extra["striker_damp"] = gamma / ms + gamma / math.sqrt(ms * m0)
+
+    @classmethod
+    def pair_coeffs(cls, scene, types: dict[str, int]) -> list[tuple[int, int, Any, float]]:
+        ts, rs, r = types["striker"], scene.loading.striker_radius, scene.chain.radius
+        law = scene.striker_law
+        pairs = [(1, ts, law, rs + r), (ts, ts, law, 2 * rs)]
+        if "wall" in types:  # striker and wall never meet, but their coefficients are required
+            pairs.append((types["wall"], ts, law, rs))
+        return pairs

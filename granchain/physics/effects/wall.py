@@ -1,0 +1,72 @@
+"""The far end: free (the default) or a rigid flat touching bead N at t = 0 ([boundary] far_end = "wall").
+
+The wall is an immovable extra bead for the solvers (zero inverse mass) whose contact with bead N has
+the wall's law (scene.wall_law: Hertz with R* = R and E* = E/(1-nu^2); bilinear with twice the
+bead-bead k). It takes momentum: a walled chain does not conserve it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from granchain.physics.effects.base import Bounds, Effect
+
+FAR_ENDS = ("free", "wall")
+
+
+class WallEffect(Effect):
+    name = "wall"
+    label = '[boundary] far_end = "wall"'
+    section = "boundary"
+    scene_keys = ("far_end",)
+    fields = {"far_end": "free"}
+    example = {"far_end": "wall"}
+    invalid = {"far_end": ("rigid", 1, True)}
+    incompatible = {"per_bead": None}
+    conserves_momentum = False
+    deck_blocks = {"interactions": "wall.lmp.j2"}
+    yardstick = "a wall (the yardstick would see a sphere)"
+
+    @classmethod
+    def active(cls, scene) -> bool:
+        return scene.effects.far_end == "wall"
+
+    @classmethod
+    def in_problem(cls, problem) -> bool:
+        return problem.wall_law is not None or not bool(np.isfinite(problem.mass[-1]))
+
+    @classmethod
+    def read(cls, section) -> dict[str, Any]:
+        far_end = section.choice("far_end", FAR_ENDS)
+        section.finish(cls.scene_keys)
+        return {"far_end": far_end}
+
+    @classmethod
+    def to_dict(cls, effects) -> dict[str, Any] | None:
+        return {"far_end": effects.far_end} if effects.far_end != "free" else None
+
+    @classmethod
+    def problem_fields(cls, scene, fields: dict[str, Any]) -> None:
+        fields["wall_law"] = scene.wall_law
+
+    @classmethod
+    def ends(cls, problem, parts: list, mass: np.ndarray) -> np.ndarray:
+        if problem.wall_law is None:
+            return mass
+        parts.append((problem.wall_law, 1))  # an immovable extra bead at the end (zero inverse mass)
+        return np.append(mass, np.inf)
+
+    @classmethod
+    def end_bounds(cls, scene, b: Bounds) -> None:
+        # a neighbour of infinite mass: only the diagonal term; its contact sees the reflected wave,
+        # up to twice the force
+        kw = float(np.asarray(scene.wall_law.tangent_stiffness(b.static_force + 2.0 * b.force), dtype=float))
+        b.kr[-1], b.mr[-1], b.gr[-1] = kw, np.inf, b.gamma
+        b.extra["wall"] = kw
+
+    @classmethod
+    def pair_coeffs(cls, scene, types: dict[str, int]) -> list[tuple[int, int, Any, float]]:
+        tw, r = types["wall"], scene.chain.radius  # contact distance: bead centre to the flat
+        return [(1, tw, scene.wall_law, r), (tw, tw, scene.wall_law, r)]
