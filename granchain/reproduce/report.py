@@ -1,0 +1,122 @@
+"""report.md and a self-contained report.html (figures embedded as base64 PNG) from the sections."""
+
+from __future__ import annotations
+
+import base64
+import html
+import math
+from pathlib import Path
+
+from granchain.reproduce.common import SectionResult
+
+ROW_HEADER = ["key", "quantity", "unit", "paper", "ours", "+-", "model", "verdict", "tolerance", "reason"]
+
+
+def fmt(x, digits: int = 4) -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return ""
+    if isinstance(x, (int, float)):
+        return f"{x:.{digits}g}"
+    return str(x)
+
+
+def row_cells(r) -> list[str]:
+    tol = f"{r.tol:.3g} ({r.tol_source})" if r.tol is not None else "printed precision"
+    paper = r.paper_text or fmt(r.paper)
+    return [r.key, r.quantity, r.unit, paper, fmt(r.ours), fmt(r.ours_error, 2), fmt(r.model), r.verdict, tol, r.reason]
+
+
+def cost_cells(s: SectionResult) -> list[str]:
+    c = s.cost or {}
+    return [
+        s.title,
+        str(c.get("runs", "")),
+        fmt(c.get("wall_time"), 3),
+        fmt(c.get("bead_steps"), 3),
+        s.paper_cost,
+        fmt(s.paper_bead_steps, 3),
+    ]
+
+
+COST_HEADER = ["section", "our runs", "our wall time (s)", "our bead-steps", "the paper's setup", "paper bead-steps"]
+
+
+def _md_table(header, rows) -> list[str]:
+    esc = [[str(c).replace("|", "\\|").replace("\n", " ") for c in r] for r in rows]
+    return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header), *("| " + " | ".join(r) + " |" for r in esc)]
+
+
+def write_markdown(out: Path, sections: list[SectionResult], meta: dict) -> Path:
+    lines = [
+        "# Reproducing Pal & Geubelle, *Wave propagation in elastic and elastoplastic granular chains*",
+        "",
+        f"Mode: **{meta['mode']}**; granchain {meta['version']}; {meta['when']}. "
+        f"Runs this call: {meta['ran']} (cached: {meta['cached']}). Wall time of this call: {meta['elapsed']:.1f} s.",
+        "",
+        "A verdict compares our value with the printed one within the paper's own stated error where it states "
+        "one (the tolerance column says which), else within the precision of the printed number, plus our "
+        "error bar. Nothing here is tuned to a printed value. Models are the paper's equations as derived "
+        "(granchain.physics.models; docs/paper-discrepancies.md).",
+        "",
+        "## Every printed number",
+        "",
+        *_md_table(ROW_HEADER, [row_cells(r) for s in sections for r in s.rows]),
+        "",
+    ]
+    for s in sections:
+        lines += [f"## {s.title}", ""]
+        if not s.reproduced:
+            lines += ["**Not yet reproduced.**", ""]
+        for n in s.notes:
+            lines += [n, ""]
+        if s.rows:
+            lines += [*_md_table(ROW_HEADER, [row_cells(r) for r in s.rows]), ""]
+        for f in s.figures:
+            lines += [f"![{f.name}](figures/{f.name}.png)", "", f"*{f.caption}*", ""]
+    lines += ["## Cost", "", *_md_table(COST_HEADER, [cost_cells(s) for s in sections if s.cost or s.paper_cost]), ""]
+    path = out / "report.md"
+    path.write_text("\n".join(lines))
+    return path
+
+
+def _html_table(header, rows) -> str:
+    h = "".join(f"<th>{html.escape(c)}</th>" for c in header)
+    body = "".join(
+        "<tr>" + "".join(f"<td class='{_cls(c)}'>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows
+    )
+    return f"<table><tr>{h}</tr>{body}</table>"
+
+
+def _cls(c) -> str:
+    return {"agrees": "ok", "disagrees": "bad", "not yet reproduced": "todo"}.get(str(c), "")
+
+
+def write_html(out: Path, sections: list[SectionResult], meta: dict) -> Path:
+    parts = [
+        "<!doctype html><html><head><meta charset='utf-8'><title>granchain reproduce</title><style>",
+        "body{font-family:sans-serif;max-width:1200px;margin:auto}table{border-collapse:collapse;font-size:12px}"
+        "td,th{border:1px solid #ccc;padding:2px 4px;vertical-align:top}.ok{background:#dfd}.bad{background:#fdd}"
+        ".todo{background:#eee}img{max-width:100%}",
+        "</style></head><body>",
+        "<h1>Reproducing Pal &amp; Geubelle, wave propagation in granular chains</h1>",
+        f"<p>Mode: <b>{meta['mode']}</b>; granchain {html.escape(meta['version'])}; {meta['when']}. "
+        f"Runs this call: {meta['ran']} (cached: {meta['cached']}). Wall time: {meta['elapsed']:.1f} s.</p>",
+        "<h2>Every printed number</h2>",
+        _html_table(ROW_HEADER, [row_cells(r) for s in sections for r in s.rows]),
+    ]
+    for s in sections:
+        parts.append(f"<h2>{html.escape(s.title)}</h2>")
+        if not s.reproduced:
+            parts.append("<p><b>Not yet reproduced.</b></p>")
+        parts += [f"<p>{html.escape(n)}</p>" for n in s.notes]
+        for f in s.figures:
+            data = base64.b64encode((out / "figures" / f"{f.name}.png").read_bytes()).decode()
+            parts.append(
+                f"<figure><img alt='{f.name}' src='data:image/png;base64,{data}'>"
+                f"<figcaption>{html.escape(f.caption)}</figcaption></figure>"
+            )
+    parts += ["<h2>Cost</h2>", _html_table(COST_HEADER, [cost_cells(s) for s in sections if s.cost or s.paper_cost])]
+    parts.append("</body></html>")
+    path = out / "report.html"
+    path.write_text("\n".join(parts))
+    return path
