@@ -21,7 +21,10 @@ def fmt(x, digits: int = 4) -> str:
 
 
 def row_cells(r) -> list[str]:
-    tol = f"{r.tol:.3g} ({r.tol_source})" if r.tol is not None else "printed precision"
+    if r.paper is None:
+        tol = ""
+    else:
+        tol = f"{r.tol:.3g} ({r.tol_source})" if r.tol is not None else "printed precision"
     paper = r.paper_text or fmt(r.paper)
     return [r.key, r.quantity, r.unit, paper, fmt(r.ours), fmt(r.ours_error, 2), fmt(r.model), r.verdict, tol, r.reason]
 
