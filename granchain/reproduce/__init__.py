@@ -35,6 +35,16 @@ SECTIONS = (
 )
 
 
+def campaign_specs(quick: bool) -> dict[str, dict]:
+    """Every campaign `reproduce` runs in a mode, by workspace name (DIR/ws/<mode>-<name>)."""
+    mode = "quick" if quick else "full"
+    out = {}
+    for name, _ in SECTIONS:
+        mod = importlib.import_module(f"granchain.reproduce.{name}")
+        out.update({f"{mode}-{k}": v for k, v in mod.campaign_specs(quick).items()})
+    return out
+
+
 def run_section(ctx: Context, name: str, title: str) -> SectionResult:
     try:
         mod = importlib.import_module(f"granchain.reproduce.{name}")

@@ -172,3 +172,8 @@ def run(ctx: Context) -> SectionResult:
     res.paper_bead_steps = 120 * 7e-4 / 5e-9 + 40 * 1e-4 / 5e-9 * 2
     res.notes.append(__doc__.split("\n\n", 1)[1].strip())
     return res
+
+
+def campaign_specs(quick: bool) -> dict[str, dict]:
+    """The section's campaigns by workspace name (without the mode prefix)."""
+    return {"eq8": eq8_campaign(quick), "appendix": linear_campaign(quick)}

@@ -85,9 +85,8 @@ def _figure(ctx: Context, fits: dict, data: dict) -> Figure:
 
 def run(ctx: Context) -> SectionResult:
     res = SectionResult(KEY, TITLE)
-    contacts = [MAIN_CONTACT, 10] if ctx.quick else [MAIN_CONTACT, 10, 30]
     fits, data, tables = {}, {}, []
-    for n in contacts:
+    for n in contacts(ctx.quick):
         ws = ctx.campaign(f"fig1-contact{n}", campaign(ctx.quick, n))
         res.campaigns.append(ws.name)
         tables.append(points(ws))
@@ -134,3 +133,11 @@ def run(ctx: Context) -> SectionResult:
     if data:
         res.figures.append(_figure(ctx, fits, data))
     return res
+
+
+def contacts(quick: bool) -> list[int]:
+    return [MAIN_CONTACT, 10] if quick else [MAIN_CONTACT, 10, 30]
+
+
+def campaign_specs(quick: bool) -> dict[str, dict]:
+    return {f"fig1-contact{n}": campaign(quick, n) for n in contacts(quick)}

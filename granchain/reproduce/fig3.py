@@ -137,3 +137,7 @@ def run(ctx: Context) -> SectionResult:
             "window and the planner's per-point steps leave a little)")
     )  # fmt: skip
     return res
+
+
+def campaign_specs(quick: bool) -> dict[str, dict]:
+    return {"fig3": campaign(quick)}

@@ -118,3 +118,7 @@ def _figure(ctx: Context, curves, fits) -> Figure:
         "Peak force along the chain under Thornton's law and the bilinear law with the same plastic slope "
         "(log-log: the inverse regime is a straight line). Both show the two regimes; Thornton's decays more slowly.",
     )
+
+
+def campaign_specs(quick: bool) -> dict[str, dict]:
+    return {f"laws-{law}": spec for law, spec in campaigns().items()}

@@ -257,3 +257,7 @@ def run(ctx: Context) -> SectionResult:
         res.figures.append(fig8(ctx, runs[0.9]))
     _rows(res, runs, eq27)
     return res
+
+
+def campaign_specs(quick: bool) -> dict[str, dict]:
+    return {"plastic": campaign(quick)}

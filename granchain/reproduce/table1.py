@@ -154,3 +154,7 @@ def run(ctx: Context) -> SectionResult:
         )
     )
     return res
+
+
+def campaign_specs(quick: bool) -> dict[str, dict]:
+    return {"table1": campaign(quick)}
