@@ -13,7 +13,8 @@ energy balance    |kinetic + stored + dissipated - work| <= ENERGY_WATCH x the l
                   predicted stability limit): Verlet 0.4% / 1.9% / 9% at 0.25 / 0.5 / 0.9 of it and
                   38% at the limit; RK4 loses energy instead (1.9% at 0.25, 34% at 0.5: its damping
                   of the stiffest contact's frequency), while planned steps keep both below 1e-4.
-momentum          a chain without wall or precompression: total momentum = initial momentum + the
+momentum          a chain without an effect that exerts external forces (wall, precompression:
+                  Effect.conserves_momentum): total momentum = initial momentum + the
                   impulse delivered so far, to MOMENTUM_WATCH of the larger of the two (forces
                   between beads are equal and opposite, so this holds to round-off in both backends)
 """
@@ -23,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from granchain.errors import GranchainError
+from granchain.physics.effects import active_effects
 from granchain.schedule import step_plan, step_times
 
 ENERGY_WATCH = 0.05
@@ -94,7 +96,7 @@ def check_solution(scene, sol, steps: int | None = None) -> None:
             )
             step = int(np.searchsorted(grid, t * (1 - 1e-12)))
             raise InvariantError("energy balance", t, step, _busiest_contact(sol), detail)
-    if scene.effects.far_end == "free" and not scene.effects.precompression:
+    if all(e.conserves_momentum for e in active_effects(scene)):  # no effect exerts external forces
         detail = momentum_violation(sol.momentum, scene.initial_momentum + sol.impulse_delivered)
         if detail:
             raise InvariantError("momentum", sol.end_time, steps, _busiest_contact(sol), detail)

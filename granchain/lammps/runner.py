@@ -30,12 +30,14 @@ from granchain.errors import GranchainError
 from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution
 from granchain.lammps.build import PLUGIN_NAME, build_plugin, mpich_file, plugin_dir, plugin_env, plugin_key
 from granchain.peaks import complete_peaks, leading_pulse, unreached_as_nan
+from granchain.physics.effects import active_effects
+from granchain.physics.effects import work as effects_work
 from granchain.postprocess.dumps import read_dump
-from granchain.problem import precompressed_displacements
+from granchain.problem import ChainProblem, precompressed_displacements
 from granchain.progress import Progress
 from granchain.results import ChainSolution, RunResult, distribution_version, pid_alive
 from granchain.schedule import scene_step_plan, step_times
-from granchain.templates import RESULT_COLUMNS, RESULTS_DUMP, RUN_END_FILE, atom_layout, render_deck
+from granchain.templates import RESULT_COLUMNS, RESULTS_DUMP, RUN_END_FILE, AtomLayout, atom_layout, render_deck
 
 #: files of a LAMMPS work directory that are copied into the run directory
 OUTPUT_GLOBS = ("deck.lmp", "chain.data", "log.lammps", "*.dump", "energy.txt", "load_end.txt", RUN_END_FILE)
@@ -418,6 +420,18 @@ def x1_static(scene) -> float:
     return float(precompressed_displacements(scene)[0][0])
 
 
+def energy_column_names(path: Path, scene) -> list[str]:
+    """The columns of a deck's energy samples: its title line ("# time kinetic potential [dissipated]
+    x1 [the effects' columns]", templates/energy.lmp.j2), else what this scene's deck writes."""
+    with open(path, encoding="utf-8") as f:
+        first = f.readline()
+    if first.startswith("#"):
+        return first[1:].split()
+    dissipated = scene.contact.law_class.history or any(e.dissipated_vectors for e in active_effects(scene))
+    extra = [k for e in active_effects(scene) for k in e.energy_columns(AtomLayout.of(scene))]
+    return ["time", "kinetic", "potential", *(["dissipated"] if dissipated else []), "x1", *extra]
+
+
 def read_solution(
     scene, work: Path, total_steps: int, wall_time: float, end_time: float | None = None
 ) -> ChainSolution:
@@ -444,10 +458,12 @@ def read_solution(
     keep = np.append(e[1:, 0] != e[:-1, 0], True)
     e = e[keep]
     f0 = scene.effects.precompression
-    dis_col = "d_edis" in (work / "deck.lmp").read_text() or scene.effects.dashpot > 0
-    if not dis_col:  # no dissipation column: an elastic law without a dashpot
+    names = energy_column_names(work / "energy.txt", scene)
+    if "dissipated" not in names:  # no dissipation column: an elastic law without a dashpot
         e = np.insert(e, 3, 0.0, axis=1)
-    et, ke, pe, ed, x1 = (e[:, k] for k in range(5))
+        names.insert(3, "dissipated")
+    col = {name: e[:, k] for k, name in enumerate(names)}
+    et, ke, pe, ed, x1 = (col[k] for k in ("time", "kinetic", "potential", "dissipated", "x1"))
     x1_0 = x1[0] if et[0] == 0.0 else float(x1_static(scene))
     # energy put in: the initial kinetic + stored + dissipated energy, the work of f(t) (A times bead
     # 1's displacement while it acts), and the work of the static precompression forces
@@ -458,11 +474,9 @@ def read_solution(
             x1_end = float(np.loadtxt(work / "load_end.txt", ndmin=1)[1])
             dx = np.where(et > ld.duration, x1_end - x1_0, dx)
         work_done = work_done + ld.amplitude * dx
-    if f0:
-        xn = e[:, 5]
-        work_done = work_done + f0 * (x1 - x1_0)
-        if scene.effects.far_end != "wall":
-            work_done = work_done - f0 * (xn - xn[0])
+    # the work of the effects' external forces (Effect.work: precompression's static ones)
+    xn = col.get("xN", x1)  # bead N's x where an effect needs it (energy_columns)
+    work_done = work_done + effects_work(ChainProblem.from_scene(scene), x1 - x1_0, xn - xn[0])
 
     times = step_times_of(scene)
     hist = tuple(i - 1 for i in scene.outputs.histories)

@@ -28,6 +28,7 @@ from granchain._version import __version__
 from granchain.errors import UsageError
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
 from granchain.peaks import PEAK_PASSED_FRACTION, lead_floor, stop_force_floor
+from granchain.physics.effects import active_effects
 from granchain.physics.laws import ContactLaw
 from granchain.problem import ChainProblem, initial_energy, precompressed_displacements
 from granchain.results import scene_hash
@@ -276,7 +277,8 @@ class Watch:
     x1_0: float
     xn_0: float
     p0: float
-    momentum: bool  # a free chain without precompression: its momentum is the impulse delivered
+    momentum: bool  # no effect exerts external forces: the momentum is the impulse delivered
+    effects_work: str  # the effects' work as LAMMPS expression terms (Effect.watch_work)
     every: int = WATCH_EVERY
     energy_bound: float = ENERGY_WATCH
     momentum_bound: float = MOMENTUM_WATCH
@@ -288,13 +290,17 @@ class Watch:
         x0 = scene.bead_positions if scene.per_bead else np.arange(scene.chain.beads) * scene.diameter
         # on each contact's virgin curve: Hertz k a^1.5, bilinear k a, ...
         a_watch = OVERLAP_WATCH * float(min(scene.bead_radii))
+        problem, layout = ChainProblem.from_scene(scene), AtomLayout.of(scene)
+        x1_0, xn_0 = float(x0[0] + u0[0]), float(x0[-1] + u0[-1])
+        x_first, x_last = f"x[{layout.first_id}] - {x1_0!r}", f"x[{layout.last_id}] - {xn_0!r}"
         return cls(
             force=max(float(p.law.loading_force(a_watch)) for p in pairs),
             e0=e0,
-            x1_0=float(x0[0] + u0[0]),
-            xn_0=float(x0[-1] + u0[-1]),
+            x1_0=x1_0,
+            xn_0=xn_0,
             p0=scene.initial_momentum,
-            momentum=scene.effects.far_end == "free" and not scene.effects.precompression,
+            momentum=all(e.conserves_momentum for e in active_effects(scene)),
+            effects_work="".join(e.watch_work(problem, x_first, x_last) for e in active_effects(scene)),
         )
 
 
@@ -326,15 +332,8 @@ def pair_coeffs(scene, layout: AtomLayout) -> list[PairCoeff]:
             for a in range(len(kinds))
             for b in range(a, len(kinds))
         ]
-    r, types = scene.chain.radius, layout.types
-    if layout.wall:
-        tw = types["wall"]
-        pairs += [PairCoeff(1, tw, scene.wall_law, r), PairCoeff(tw, tw, scene.wall_law, r)]
-    if layout.striker:
-        ts, rs = types["striker"], scene.loading.striker_radius
-        pairs += [PairCoeff(1, ts, scene.striker_law, rs + r), PairCoeff(ts, ts, scene.striker_law, 2 * rs)]
-        if layout.wall:
-            pairs.append(PairCoeff(types["wall"], ts, scene.striker_law, rs))
+    for effect in active_effects(scene):  # the effects' atom types (Effect.pair_coeffs)
+        pairs += [PairCoeff(*c) for c in effect.pair_coeffs(scene, layout.types)]
     return pairs
 
 
@@ -351,7 +350,7 @@ class PerAtom:
         """The chain deck's: force, its last two values, running peak and its time; a law with history:
         alpha_max and the energy it dissipated; a dashpot: its energy; completion; the leading pulse."""
         history = scene.contact.law_class.history
-        dissipated = (["d_edis"] if history else []) + (["d_edash"] if scene.effects.dashpot else [])
+        dissipated = (["d_edis"] if history else []) + [v for e in active_effects(scene) for v in e.dissipated_vectors]
         vectors = ["d_fc", "d_fprev", "d_fprev2", "d_fpeak", "d_tpeak"] + (["d_amax"] if history else [])
         return cls((*vectors, *dissipated, "d_fmin", "d_flead", "d_tlead"), tuple(dissipated))
 
@@ -411,8 +410,7 @@ def builtin_granular_refusal(scene) -> str | None:
         materials.add(scene.loading.striker_material)
     why = {
         f"the {scene.contact.law} law (the yardstick is Hertz)": scene.contact.law != "hertz",
-        "a dashpot (the yardstick has no damping)": bool(scene.effects.dashpot),
-        "a wall (the yardstick would see a sphere)": scene.effects.far_end == "wall",
+        **{e.yardstick: True for e in active_effects(scene) if e.yardstick},
         "beads or a striker of another material (the yardstick takes one E and nu)": len(materials) > 1,
     }
     refused = [k for k, v in why.items() if v]
@@ -429,6 +427,22 @@ def _template(scene, yardstick: str | None) -> tuple[str, PerAtom]:
     if why:
         raise SceneError(f"{scene.source or '<scene>'}: {why}")
     return "builtin_granular.lmp.j2", BUILTIN_GRANULAR_PER_ATOM
+
+
+#: where chain.lmp.j2 includes the effects' blocks: after the pair style (interactions), after the
+#: dissipated-energy sum (ends: extra atoms' groups), after the load (forces)
+DECK_SLOTS = ("interactions", "ends", "forces")
+
+
+def effect_blocks(scene) -> dict[str, list[str]]:
+    """slot -> the deck blocks (templates) of the effects the scene declares, in registry order."""
+    active = active_effects(scene)
+    return {slot: [e.deck_blocks[slot] for e in active if slot in e.deck_blocks] for slot in DECK_SLOTS}
+
+
+def energy_columns(scene, layout: AtomLayout) -> dict[str, tuple[str, str]]:
+    """The energy samples' columns after x1 that the effects add: name -> (LAMMPS expression, words)."""
+    return {k: v for e in active_effects(scene) for k, v in e.energy_columns(layout).items()}
 
 
 def render_deck(scene, yardstick: str | None = None) -> Deck:
@@ -454,6 +468,9 @@ def render_deck(scene, yardstick: str | None = None) -> Deck:
             per_atom=per_atom,
             static_overlaps=precompression_overlaps(scene),
             watch=Watch.of(scene, pairs),
+            effect_blocks=effect_blocks(scene),
+            pair_style_args="".join(e.pair_style_args(scene) for e in active_effects(scene)),
+            energy_columns=energy_columns(scene, layout),
             stop=StopCheck(stop, stop + layout.offset, stop_force_floor(scene)) if stop else None,
         )
     )

@@ -37,15 +37,16 @@ Rules for writing a new effect (tests/test_effects.py checks them for every regi
    floats: the reference's ledger and the LAMMPS read-back call the same function), the same as a
    LAMMPS expression for the deck's run watch, ``watch_work(problem, x_first, x_last)`` (x_first,
    x_last: expressions of bead 1's and bead N's displacement since t = 0), and the energy columns
-   its deck adds (``energy_columns(layout)``: name -> LAMMPS expression; granchain.lammps.runner reads
-   them back by name). ``conserves_momentum`` False: its forces are external (the run watches skip
-   the momentum check where ``in_problem(problem)``: the problem carries the effect). Energy it
-   dissipates is a per-atom vector its pair style fills (``dissipated_vectors``), summed into the
-   deck's dissipated energy.
+   its deck adds (``energy_columns(layout)``: name -> (LAMMPS expression, words);
+   granchain.lammps.runner reads them back by name). ``conserves_momentum`` False: its forces are
+   external (the run watches skip the momentum check where ``in_problem(problem)``: the problem
+   carries the effect). Energy it dissipates is a per-atom vector its pair style fills
+   (``dissipated_vectors``), summed into the deck's dissipated energy.
 7. The deck: ``deck_blocks`` maps a slot of templates/chain.lmp.j2 ("interactions": after the pair
-   style; "forces": after the load) to its template in granchain/templates; ``pair_style_args``
-   what it adds to the pair_style line; ``pair_coeffs(scene, types)`` the pair_coeff lines of its
-   atom types (i, j, law, contact distance); ``yardstick`` why LAMMPS's built-in granular pair style
+   style; "ends": after the dissipated-energy sum, for extra atoms' groups; "forces": after the
+   load) to its template in granchain/templates; ``pair_style_args`` what it adds to the
+   pair_style line; ``pair_coeffs(scene, types)`` the pair_coeff lines of its atom types (i, j,
+   law, contact distance); ``yardstick`` why LAMMPS's built-in granular pair style
    cannot run it (None: it can).
 8. Register the class in granchain/physics/effects/__init__.py (EFFECTS, the only list of effects).
 """
@@ -169,8 +170,8 @@ class Effect:
         return ""
 
     @classmethod
-    def energy_columns(cls, layout) -> dict[str, str]:
-        """Columns it adds to the deck's energy samples: name -> LAMMPS expression."""
+    def energy_columns(cls, layout) -> dict[str, tuple[str, str]]:
+        """Columns it adds to the deck's energy samples: name -> (LAMMPS expression, what it is)."""
         return {}
 
     # ---- the deck

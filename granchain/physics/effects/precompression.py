@@ -90,5 +90,5 @@ class PrecompressionEffect(Effect):
         return text
 
     @classmethod
-    def energy_columns(cls, layout) -> dict[str, str]:
-        return {"xN": f"x[{layout.last_id}]"}
+    def energy_columns(cls, layout) -> dict[str, tuple[str, str]]:
+        return {"xN": (f"x[{layout.last_id}]", "x of bead N")}

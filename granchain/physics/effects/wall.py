@@ -26,7 +26,7 @@ class WallEffect(Effect):
     invalid = {"far_end": ("rigid", 1, True)}
     incompatible = {"per_bead": None}
     conserves_momentum = False
-    deck_blocks = {"interactions": "wall.lmp.j2"}
+    deck_blocks = {"ends": "wall.lmp.j2"}
     yardstick = "a wall (the yardstick would see a sphere)"
 
     @classmethod
