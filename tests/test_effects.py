@@ -1,15 +1,28 @@
 """Opt-in effects (far-end wall, dashpot): both backends agree, energy balances, and an undeclared
-effect leaves no trace in the deck or in the solver."""
+effect leaves no trace in the deck or in the solver. The second half: properties of every effect of
+the registry (granchain.physics.effects), drawn over it."""
+
+import dataclasses
+import itertools
+import tomllib
+from importlib import resources
+from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from granchain.lammps.runner import run_lammps
+from granchain.physics.effects import EFFECTS as REGISTRY
+from granchain.physics.effects import active_effects, effect_fields, refusal
+from granchain.physics.estimates import damping_rate, highest_frequency
 from granchain.reference.solver import ChainProblem
-from granchain.templates import render_deck
+from granchain.scene import SECTIONS, Effects, SceneError, scene_from_dict
+from granchain.templates import DECK_SLOTS, effect_blocks, render_deck
 from granchain.workflows.run import run_reference
 
-from .conftest import LAW_NAMES, make_scene
+from .conftest import LAW_NAMES, make_scene, make_scene_text
 
 SHORT = 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
 EFFECTS = {
@@ -190,3 +203,133 @@ def test_per_bead_material_list_and_uniform_lists():
     assert not sc.per_bead  # a uniform list is the plain chain
     deck = render_deck(make_scene())
     assert "taper" not in deck.deck and "1 atom types" in deck.data
+
+
+# ---- the effect registry (granchain.physics.effects, issue 13 item 2): properties every registered
+# effect has, drawn over the registry (a new effect is tested by registering it)
+
+
+TEMPLATES = Path(str(resources.files("granchain") / "templates"))
+SECTIONED = [e for e in REGISTRY.values() if e.section]
+PROPERTY = settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck))
+
+
+def base_data(beads=12):
+    """A plain chain with a velocity load, as scene tables (effects are merged into it)."""
+    text = make_scene_text(beads=beads, loading='kind = "velocity"\nvelocity = 1.0', end_time=1e-4, timestep=1e-8)
+    return tomllib.loads(text)
+
+
+def with_effects(effects, beads=12):
+    data = base_data(beads)
+    for e in effects:
+        for table, keys in e.declaration.items():
+            data[table] = {**data.get(table, {}), **keys}
+    return data
+
+
+def test_the_registry_is_the_only_list():
+    assert len({e.name for e in REGISTRY.values()}) == len(REGISTRY) and all(e.label for e in REGISTRY.values())
+    assert [e.section for e in SECTIONED] == [s for s in SECTIONS if s in {e.section for e in SECTIONED}]
+    assert set(SECTIONS) >= {e.section for e in SECTIONED}
+    assert [f.name for f in dataclasses.fields(Effects)] == list(effect_fields())
+    assert Effects() == Effects(**effect_fields())  # every field at its absent value by default
+    for e in REGISTRY.values():
+        assert e.declaration, e.name
+        for slot, template in e.deck_blocks.items():
+            assert slot in DECK_SLOTS and (TEMPLATES / template).is_file(), (e.name, slot, template)
+
+
+@PROPERTY
+@given(data=st.data())
+def test_every_declared_key_is_validated_with_a_message_naming_it(data):
+    e = data.draw(st.sampled_from(SECTIONED), label="effect")
+    assert set(e.example) == set(e.scene_keys) and set(e.invalid) <= set(e.scene_keys)
+    key = data.draw(st.sampled_from(sorted(e.invalid)), label="key")
+    bad = data.draw(st.sampled_from(e.invalid[key]), label="value")
+    scene_data = base_data()
+    scene_data[e.section] = {**e.example, key: bad}
+    with pytest.raises(SceneError, match=rf"\[{e.section}\] {key} = "):
+        scene_from_dict(scene_data, source="fx.toml")
+    # an unknown key in its section is named too
+    unknown = data.draw(st.from_regex(r"[a-z]{3,10}", fullmatch=True).filter(lambda k: k not in e.scene_keys))
+    scene_data[e.section] = {**e.example, unknown: 1.0}
+    with pytest.raises(SceneError, match=rf"\[{e.section}\] has unknown key '{unknown}'"):
+        scene_from_dict(scene_data, source="fx.toml")
+    # a missing key is named
+    scene_data[e.section] = {k: v for k, v in e.example.items() if k != key}
+    with pytest.raises(SceneError, match=rf"\[{e.section}\] is missing '{key}'"):
+        scene_from_dict(scene_data, source="fx.toml")
+
+
+def test_compatibility_is_symmetric_and_worded_once():
+    for a, b in itertools.permutations(REGISTRY.values(), 2):
+        assert (b.name in a.incompatible) == (a.name in b.incompatible), (a.name, b.name)
+        if b.name in a.incompatible:
+            worded = [x for x, y in ((a, b), (b, a)) if x.incompatible[y.name] is not None]
+            assert len(worded) == 1, (a.name, b.name)
+        assert set(a.incompatible) <= set(REGISTRY), a.name
+
+
+@PROPERTY
+@given(chosen=st.sets(st.sampled_from(sorted(REGISTRY))))
+def test_any_combination_is_refused_or_gives_exactly_its_effects(chosen):
+    effects = [REGISTRY[n] for n in REGISTRY if n in chosen]  # registry order
+    clash = [(a, b) for a, b in itertools.combinations(effects, 2) if b.name in a.incompatible]
+    if clash:
+        with pytest.raises(SceneError, match="is not available yet") as err:
+            scene_from_dict(with_effects(effects), source="fx.toml")
+        assert any(a.label in str(err.value) and b.label in str(err.value) for a, b in clash)
+        assert refusal(effects) is not None
+        return
+    assert refusal(effects) is None
+    sc = scene_from_dict(with_effects(effects), source="fx.toml")
+    assert [e.name for e in active_effects(sc)] == [e.name for e in effects]
+    again = scene_from_dict(tomllib.loads(sc.to_toml()), source="again.toml")
+    assert again.effects == sc.effects and [e.name for e in active_effects(again)] == [e.name for e in effects]
+    # every active effect's deck blocks are in the deck, no inactive effect's
+    deck = render_deck(sc).deck
+    blocks = effect_blocks(sc)
+    for e in REGISTRY.values():
+        for slot, template in e.deck_blocks.items():
+            assert (template in blocks[slot]) == (e in effects), (e.name, slot)
+            if e in effects:
+                assert block_heading(template) in deck, (e.name, template)
+    omega, _ = highest_frequency(sc)
+    assert np.isfinite(omega) and omega > 0
+
+
+def block_heading(template: str) -> str:
+    """The fixed start of a block's first '# ----' comment line (up to its first template value)."""
+    line = next(x for x in (TEMPLATES / template).read_text().splitlines() if x.startswith("# ----"))
+    return line.split("{{")[0].split("{%")[0]
+
+
+@pytest.mark.parametrize("name", sorted(REGISTRY))
+def test_every_effect_changes_the_planner_bounds_or_says_why_not(name):
+    """Alone, an effect the planner must see (masses, stiffness, force level, damping) moves the
+    highest frequency or the damping rate away from the plain chain's."""
+    e = REGISTRY[name]
+    plain = scene_from_dict(base_data(), source="plain.toml")
+    sc = scene_from_dict(with_effects([e]), source="fx.toml")
+    assert (highest_frequency(sc), damping_rate(sc)) != (highest_frequency(plain), damping_rate(plain)), name
+
+
+@pytest.mark.parametrize("name", sorted(REGISTRY))
+def test_every_effect_closes_the_energy_balance_on_both_backends(name):
+    """Kinetic + stored + dissipated = the energy put in (initial energy, the load's and the
+    effects' work) on the reference (RK4, to 1e-6) and LAMMPS (Verlet, to its own step error),
+    and both backends book the same work and dissipation."""
+    e = REGISTRY[name]
+    sc = scene_from_dict(with_effects([e], beads=16), source="fx.toml")
+    sc = dataclasses.replace(sc, run=dataclasses.replace(sc.run, end_time=6e-5))
+    rk4 = run_reference(sc, "rk4").solution
+    scale = np.max(np.abs(rk4.work))
+    assert np.max(np.abs(rk4.energy_balance_error)) / scale < 1e-6, name
+    verlet = run_reference(sc, "verlet").solution
+    lam = run_lammps(sc)[0].solution
+    for sol in (verlet, lam):
+        assert np.max(np.abs(sol.energy_balance_error)) / scale < 1e-4, name
+    assert lam.work[-1] == pytest.approx(verlet.work[-1], rel=1e-9), name
+    assert lam.dissipated[-1] == pytest.approx(verlet.dissipated[-1], rel=1e-9, abs=1e-12 * scale), name
+    assert rel(lam.peak_force, verlet.peak_force) < 1e-9, name

@@ -13,9 +13,11 @@ Rules for writing a new effect (tests/test_effects.py checks them for every regi
    ``[section]``), ``scene_keys`` (its keys), ``fields`` (the ``scene.Effects`` attributes it owns,
    name -> the value that means absent: ``scene.Effects`` is built from the registry's fields) and
    ``example`` / ``invalid`` (a valid section, and per key values the scene must refuse, with a
-   message naming the key: the tests read them). An effect declared elsewhere in the scene (a striker
-   is a ``[loading] kind``, per-bead radii are ``[chain]`` lists) leaves ``section`` None; that
-   section's reader validates it.
+   message naming the key: the tests read them), and ``declaration`` (the scene tables that declare
+   it, merged key by key into a scene with a velocity load: tests build every combination of
+   effects from them). An effect declared elsewhere in the scene (a striker is a ``[loading]
+   kind``, per-bead radii are ``[chain]`` lists) leaves ``section`` None; that section's reader
+   validates it.
 2. ``read(section)``: read and validate the keys of its section (section: scene._Section, whose
    number/choice/finish raise a SceneError naming the file, the key, the value and what is
    allowed); returns its ``fields``. ``to_dict(effects)``: its section for a scene file (None when
@@ -93,6 +95,8 @@ class Effect:
     fields: ClassVar[dict[str, Any]] = {}
     #: a valid section (tests), and per key values the scene refuses
     example: ClassVar[dict[str, Any]] = {}
+    #: how a scene declares it: tables merged into a scene's (tests build every combination from them)
+    declaration: ClassVar[dict[str, dict[str, Any]]] = {}
     invalid: ClassVar[dict[str, tuple[Any, ...]]] = {}
     #: other effect's name -> the fix this effect's refusal suggests ("" none), None: the other words it
     incompatible: ClassVar[dict[str, str | None]] = {}

@@ -19,6 +19,7 @@ from granchain.physics.effects.base import Bounds, Effect
 class DashpotEffect(Effect):
     name = "dashpot"
     label = "[damping] dashpot"
+    declaration = {"damping": {"dashpot": 3.0}}
     section = "damping"
     scene_keys = ("dashpot",)
     fields = {"dashpot": 0.0}

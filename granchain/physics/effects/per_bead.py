@@ -15,6 +15,7 @@ from granchain.physics.effects.base import Bounds, Effect
 class PerBeadEffect(Effect):
     name = "per_bead"
     label = "per-bead radius or material"
+    declaration = {"chain": {"taper": 0.97}}
     incompatible = {"wall": "", "precompression": "", "striker": ""}
 
     @classmethod

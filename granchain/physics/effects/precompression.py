@@ -18,6 +18,7 @@ from granchain.physics.effects.base import Bounds, Effect
 class PrecompressionEffect(Effect):
     name = "precompression"
     label = "[precompression]"
+    declaration = {"precompression": {"force": 50.0}}
     section = "precompression"
     scene_keys = ("force",)
     fields = {"precompression": 0.0}

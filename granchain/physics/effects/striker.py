@@ -18,6 +18,7 @@ from granchain.physics.effects.base import Bounds, Effect
 class StrikerEffect(Effect):
     name = "striker"
     label = "a striker"
+    declaration = {"loading": {"kind": "striker", "velocity": 2.0}}
     incompatible = {"precompression": None, "per_bead": None}
     deck_blocks = {}  # its load is the loading_striker block (scene.loading.kind)
 

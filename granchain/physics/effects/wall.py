@@ -19,6 +19,7 @@ FAR_ENDS = ("free", "wall")
 class WallEffect(Effect):
     name = "wall"
     label = '[boundary] far_end = "wall"'
+    declaration = {"boundary": {"far_end": "wall"}}
     section = "boundary"
     scene_keys = ("far_end",)
     fields = {"far_end": "free"}
