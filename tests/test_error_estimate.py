@@ -113,15 +113,7 @@ CASES = (
         for integ in ("lammps", "verlet", "rk4")
     ]
     + [
-        pytest.param(
-            "effect-dashpot",
-            "rk4",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="by design: RK4 does not locate where the dashpot's clipped force reaches zero, so its "
-                "error follows no order and no estimate is given (workflows.errors.withheld_because)",
-            ),
-        ),
+        # effect-dashpot with RK4: no estimate by design (test_rk4_with_a_dashpot_runs_no_companion...)
         ("effect-dashpot", "verlet"),
         ("effect-dashpot", "lammps"),
     ]
