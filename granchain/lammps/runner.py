@@ -450,7 +450,6 @@ def read_solution(
         flead, tlead = np.full(n - 1, np.nan), np.full(n - 1, np.nan)
     u = res["x"][o : o + n] - (scene.bead_positions if scene.per_bead else np.arange(n) * d)
     v = res["vx"][o : o + n]
-    wall = lay["wall"]  # bead N's contact is the wall's
     amax = res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1)
 
     e = np.loadtxt(work / "energy.txt", comments="#", ndmin=2)
@@ -495,6 +494,12 @@ def read_solution(
         s_u.append(dd.columns["v_ux"][-1][o : o + n] + u_static)  # displace/atom counts from t = 0
         s_v.append(dd.columns["v_vel"][-1][o : o + n])
         s_f.append(dd.columns["d_fc"][-1][o : o + n - 1])
+    # the extra atoms' results (Effect.end_fields: the wall's contact lives on bead N's atom)
+    ends = {
+        k: v
+        for e in active_effects(scene)
+        for k, v in e.end_fields(res["fpeak"], res["tpeak"], res["vx"], o + n - 1).items()
+    }
     return ChainSolution(
         method="verlet",
         timestep=scene.run.timestep,
@@ -528,11 +533,7 @@ def read_solution(
         else 0.0,
         momentum=float(np.sum((scene.bead_masses if scene.per_bead else m) * v))
         + (scene.striker_mass * float(res["vx"][0]) if o else 0.0),
-        wall_peak_force=float(res["fpeak"][o + n - 1]) if wall else None,
-        wall_time_of_peak=float(res["tpeak"][o + n - 1]) if wall else None,
-        striker_peak_force=float(res["fpeak"][0]) if o else None,
-        striker_time_of_peak=float(res["tpeak"][0]) if o else None,
-        striker_velocity=float(res["vx"][0]) if o else None,
+        **ends,
     )
 
 

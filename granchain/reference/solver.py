@@ -44,6 +44,7 @@ import numpy as np
 
 from granchain.invariants import InvariantError
 from granchain.peaks import complete_peaks, unreached_as_nan
+from granchain.physics.effects import EFFECTS
 from granchain.problem import ChainProblem
 from granchain.progress import Progress
 from granchain.reference.hermite import hermite_max
@@ -98,30 +99,27 @@ _hermite_max = hermite_max
 def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method: str = "rk4", **kw) -> ChainSolution:
     """Integrate the chain from rest (bead 1 possibly moving) to end_time.
 
-    A far-end wall is an immovable extra bead (zero inverse mass) whose contact with bead N has the
-    wall's stiffness; its peak is reported as wall_peak_force. Keywords: see _solve.
+    The effects' extra beads (ChainProblem.with_ends: a far-end wall is an immovable extra bead whose
+    contact with bead N has the wall's law, a striker a moving one in front) are integrated with the
+    chain and reported by Effect.end_fields (wall_peak_force, striker_velocity, ...). Keywords: see _solve.
     """
     if "progress" not in kw:  # progress on stderr for a long run (granchain.progress); closed if the run raises
         with Progress(None, f"reference {method}") as progress:
             return solve_chain(problem, end_time, timestep, method, progress=progress, **kw)
-    wall, striker = problem.wall_law is not None, problem.striker_mass is not None
-    if not (wall or striker):
+    inner = problem.with_ends()  # the effects' extra beads: a striker in front, a wall (immovable) at the end
+    if inner is problem:
         return _solve(problem, end_time, timestep, method, **kw)
     n = problem.beads
-    inner = problem.with_ends()  # the striker an extra bead in front, the wall an immovable one at the end
-    s0 = 1 if striker else 0  # index of bead 1 inside
+    carried = [e for e in EFFECTS.values() if e.in_problem(problem)]
+    s0 = sum(e.beads_in_front for e in carried)  # index of bead 1 inside
     if "histories" in kw:
         kw["histories"] = tuple(i + s0 for i in kw["histories"])
     if kw.get("stop_after") is not None:
         kw["stop_after"] += s0  # contact numbers inside count the striker's contact first
     sol = _solve(inner, end_time, timestep, method, **kw)
-    if wall:
-        sol.wall_peak_force = float(sol.peak_force[-1])
-        sol.wall_time_of_peak = float(sol.time_of_peak[-1])
-    if striker:
-        sol.striker_peak_force = float(sol.peak_force[0])
-        sol.striker_time_of_peak = float(sol.time_of_peak[0])
-        sol.striker_velocity = float(sol.velocity[0])
+    for effect in carried:  # what the results report of the extra beads (Effect.end_fields)
+        for name, value in effect.end_fields(sol.peak_force, sol.time_of_peak, sol.velocity, -1).items():
+            setattr(sol, name, value)
     for name in (
         "peak_overlap",
         "peak_force",

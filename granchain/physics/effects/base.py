@@ -27,7 +27,8 @@ Rules for writing a new effect (tests/test_effects.py checks them for every regi
    the pair (the relation is symmetric) and exactly one side words it.
 4. The problem (granchain.problem.ChainProblem): ``problem_fields(scene, fields)`` updates the fields
    the chain is built from (mass, law, wall_law, dashpot, ...); ``ends(problem, parts, mass)`` adds
-   the extra beads a solver integrates (a striker in front, an immovable wall at the end);
+   the extra beads a solver integrates (a striker in front, an immovable wall at the end; those in
+   front counted by ``beads_in_front``), and ``end_fields`` what the results report of them;
    ``static_forces(problem, fp)`` the constant external forces on the end beads (precompression);
    ``reference_accel(...)`` the reference's force evaluation when it changes the contact force law
    (the dashpot: a closure over preallocated buffers, as fast as the plain one).
@@ -101,6 +102,8 @@ class Effect:
     #: other effect's name -> the fix this effect's refusal suggests ("" none), None: the other words it
     incompatible: ClassVar[dict[str, str | None]] = {}
     conserves_momentum: ClassVar[bool] = True
+    #: extra beads a solver puts in front of bead 1 (a striker: 1; Effect.ends)
+    beads_in_front: ClassVar[int] = 0
     dissipated_vectors: ClassVar[tuple[str, ...]] = ()
     deck_blocks: ClassVar[dict[str, str]] = {}
     yardstick: ClassVar[str | None] = None
@@ -131,6 +134,13 @@ class Effect:
     def ends(cls, problem, parts: list, mass: np.ndarray) -> np.ndarray:
         """Extra beads a solver integrates: insert (law, contacts) into parts, return the masses."""
         return mass
+
+    @classmethod
+    def end_fields(cls, force: np.ndarray, time: np.ndarray, velocity: np.ndarray, last: int) -> dict[str, float]:
+        """ChainSolution fields of its extra beads, from the whole chain's contact peak forces and
+        their times (index 0: a striker's contact; `last`: a wall's) and bead velocities (0: a
+        striker's): the reference (inner chain) and the LAMMPS read-back (by atom) alike."""
+        return {}
 
     @classmethod
     def static_forces(cls, problem, fp: np.ndarray) -> None:

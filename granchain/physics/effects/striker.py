@@ -21,6 +21,7 @@ class StrikerEffect(Effect):
     declaration = {"loading": {"kind": "striker", "velocity": 2.0}}
     incompatible = {"precompression": None, "per_bead": None}
     deck_blocks = {}  # its load is the loading_striker block (scene.loading.kind)
+    beads_in_front = 1
 
     @classmethod
     def active(cls, scene) -> bool:
@@ -40,6 +41,14 @@ class StrikerEffect(Effect):
             return mass
         parts.insert(0, (problem.striker_law, 1))  # an extra bead in front, moving
         return np.concatenate(([problem.striker_mass], mass))
+
+    @classmethod
+    def end_fields(cls, force: np.ndarray, time: np.ndarray, velocity: np.ndarray, last: int) -> dict[str, float]:
+        return {
+            "striker_peak_force": float(force[0]),
+            "striker_time_of_peak": float(time[0]),
+            "striker_velocity": float(velocity[0]),
+        }
 
     @classmethod
     def end_bounds(cls, scene, b: Bounds) -> None:

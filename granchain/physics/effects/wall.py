@@ -60,6 +60,10 @@ class WallEffect(Effect):
         return np.append(mass, np.inf)
 
     @classmethod
+    def end_fields(cls, force: np.ndarray, time: np.ndarray, velocity: np.ndarray, last: int) -> dict[str, float]:
+        return {"wall_peak_force": float(force[last]), "wall_time_of_peak": float(time[last])}
+
+    @classmethod
     def end_bounds(cls, scene, b: Bounds) -> None:
         # a neighbour of infinite mass: only the diagonal term; its contact sees the reflected wave,
         # up to twice the force
