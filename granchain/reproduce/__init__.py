@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
 import sys
 import time
 import traceback
@@ -141,7 +142,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.workers is not None and args.workers < 1:
         print(f"granchain: error: --workers {args.workers}: give 1 or more", file=sys.stderr)
         return 2
-    stream = open("/dev/null", "w") if args.quiet else None  # noqa: SIM115
+    stream = open(os.devnull, "w") if args.quiet else None  # noqa: SIM115
     try:
         meta = reproduce(
             args.out,
