@@ -35,7 +35,7 @@ def eq8_campaign(quick: bool) -> dict:
     beads = 120  # cheap in both modes (3e6 bead-steps)
     return {
         "campaign": {
-            "backend": "reference",  # RK4, the paper's integrator (LAMMPS refused a Hertz velocity load here)
+            "backend": "reference",  # RK4, the paper's integrator, as tests/test_reference.py measures it
             "error_estimate": True,
             "title": "Eq. 8: solitary wave of a velocity load",
         },
