@@ -41,6 +41,33 @@ def planned(scene: Scene, rtol: float | None, backend: str, method: str | None):
     return scene, plan
 
 
+def np_arg(text: str) -> int | str:
+    """--np: a whole number of MPI ranks, or "auto"."""
+    if text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of MPI ranks or 'auto', got {text!r}") from None
+
+
+def auto_np(scene: Scene, backend: str) -> int:
+    """--np auto: one rank where MPI does not pay (the reference backend, a chain shorter than the
+    measured crossover, one core), else granchain.schedule.auto_ranks; said on stderr."""
+    from granchain.schedule import MPI_CROSSOVER_BEADS, auto_ranks
+    from granchain.workflows.run import available_cores
+
+    if backend != "lammps":
+        return 1
+    n = auto_ranks(scene.chain.beads, available_cores())
+    print(
+        f"--np auto: {n} rank{'s' if n > 1 else ''} for {scene.chain.beads} beads on {available_cores()} cores "
+        f"(two ranks pay from {MPI_CROSSOVER_BEADS} beads on)",
+        file=sys.stderr,
+    )
+    return n
+
+
 def cmd_plan(args) -> int:
     from granchain.workflows.plan import plan_scene
 
@@ -69,12 +96,14 @@ def cmd_run(args) -> int:
     method = integrator(args.backend, args.method)
     scene = resolve_scene(args.scene)
     np_ = 1 if args.np is None else args.np
-    if args.np is not None and args.backend != "lammps":  # refused, not ignored
+    if args.np not in (None, "auto") and args.backend != "lammps":  # refused, not ignored
         raise UsageError(
             f"--np = {args.np}: the {args.backend} backend runs in one process; MPI ranks are for "
             "--backend lammps (drop --np)"
         )
-    planned(scene, args.rtol, args.backend, method)  # the plan's notes, before the run (run_scene plans it)
+    concrete, _ = planned(scene, args.rtol, args.backend, method)  # the plan's notes (run_scene plans it)
+    if np_ == "auto":
+        np_ = auto_np(concrete, args.backend)
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
     out = args.out or f"runs/{name}-{args.backend}" + ("" if args.backend == "lammps" else f"-{method}")
     result = run_scene(
@@ -210,8 +239,11 @@ def cmd_compare(args) -> int:
 
     scene = resolve_scene(args.scene)
     plan_rtol = args.rtol / 2 if scene.run.timestep is None else None  # as compare_scene plans
+    np_ = args.np
     for backend, method in (("lammps", None), ("reference", args.method)):
-        planned(scene, plan_rtol, backend, method)  # print each backend's plan (stderr)
+        concrete, _ = planned(scene, plan_rtol, backend, method)  # print each backend's plan (stderr)
+        if backend == "lammps" and np_ == "auto":
+            np_ = auto_np(concrete, backend)
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
     out = args.out or f"runs/{name}-compare-{args.method}"
     rows, lam, ref = compare_scene(
@@ -220,7 +252,7 @@ def cmd_compare(args) -> int:
         out=out,
         overwrite=args.overwrite,
         method=args.method,
-        np_=args.np,
+        np_=np_,
         error_estimate=args.error_estimate == "on",
     )
     print(f"scene      {scene.title or scene.source}")
@@ -455,7 +487,12 @@ def build_parser() -> argparse.ArgumentParser:
         choices=["rk4", "verlet"],
         help="integrator: reference rk4 (default) or verlet; LAMMPS is always verlet",
     )
-    r.add_argument("--np", type=int, default=None, help="MPI ranks for the LAMMPS backend (default 1)")
+    r.add_argument(
+        "--np",
+        type=np_arg,
+        default=None,
+        help="MPI ranks for the LAMMPS backend (default 1); auto: as many as pay for the planned chain length",
+    )
     r.add_argument("--oversubscribe", action="store_true", help="allow more MPI ranks than cores (slower; for testing)")
     r.add_argument("--force", action="store_true", help="run even above the predicted stability limit")
     r.add_argument(
@@ -489,7 +526,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("scene", nargs="?", help="scene file or bundled scene name")
     c.add_argument("--rtol", type=float, default=1e-3, help="tolerance between the two solvers (default 1e-3)")
     c.add_argument("--method", default="rk4", choices=["rk4", "verlet"], help="reference integrator")
-    c.add_argument("--np", type=int, default=1, help="MPI ranks for LAMMPS")
+    c.add_argument("--np", type=np_arg, default=1, help="MPI ranks for LAMMPS (default 1; auto: as many as pay)")
     c.add_argument("--out", help="output directory (default runs/<scene>-compare-<method>)")
     c.add_argument("--overwrite", action="store_true", help="replace an existing output directory")
     c.add_argument(

@@ -94,3 +94,17 @@ def _stride(scene, interval) -> int:
     if interval == "auto":  # what plan_scene would choose at its default rtol (the same function)
         return output_stride(highest_frequency(scene)[0], scene.run.timestep)
     return max(1, round(interval / scene.run.timestep))
+
+
+#: Chain length (beads) at which two MPI ranks first beat one in LAMMPS's loop time: below it the
+#: ranks' synchronisation every step (ghost positions, the neighbour check's reduction) costs more
+#: than halving the chain saves. Measured by `python benchmarks/bench_pair.py mpi` on the 2-core
+#: development machine while other jobs ran (benchmarks/RESULTS.md, issue 18): np 2 / np 1 loop time
+#: 0.85x as fast at 1e5 beads, 1.12x at 3e5, 1.26x at 1e6; log-interpolated crossover 1.8e5.
+MPI_CROSSOVER_BEADS = 200_000
+
+
+def auto_ranks(beads: int, cores: int) -> int:
+    """MPI ranks for `--np auto`: one rank per MPI_CROSSOVER_BEADS / 2 beads (two ranks from the
+    crossover on), at most one per core, at least 1."""
+    return max(1, min(cores, (2 * beads) // MPI_CROSSOVER_BEADS))
