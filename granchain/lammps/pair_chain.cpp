@@ -286,49 +286,33 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
   const int *numneigh = list->numneigh;
   int **firstneigh = list->firstneigh;
 
-  // constants of a single-type chain (every bundled scene but the tapered one) out of the loop
-  const int ntypes = atom->ntypes;
-  const double cutsq11 = cutsq[1][1], d011 = d0[1][1];
-  double c11[Law::ncoeff];
-  for (int m = 0; m < Law::ncoeff; m++) c11[m] = coeffs[m][1][1];
+  // the pair loop as before issue 18 (a branch skips pairs out of contact: measured faster than a
+  // branch-free loop, 1.2-1.3x in Pair time, benchmarks/RESULTS.md), less a square root and a
+  // division for a chain along x: y and z never change there (every force is along x), so
+  // r = |delx| (sqrt(x * x) == |x| in IEEE arithmetic) and the force is +-F along x
   const double dt = update->dt;
-
-  // branch-free over listed pairs (issue 18): a pair out of contact (rsq >= cutsq; in a chain at rest
-  // round-off decides, so a branch there is mispredicted half the time) gets overlap 0, which gives
-  // every law zero force and stored energy, and leaves alpha_max and the dissipated energy as they
-  // were: the same values as skipping it
   for (int ii = 0; ii < inum; ii++) {
     const int i = ilist[ii];
     const int *jlist = firstneigh[i];
     const int jnum = numneigh[i];
-    const int itype = type[i];
-    const double xi = x[i][0], yi = x[i][1], zi = x[i][2];
-    const tagint ti = tag[i];
     for (int jj = 0; jj < jnum; jj++) {
       const int j = jlist[jj] & NEIGHMASK;
-      const int jtype = type[j];
-      const double delx = xi - x[j][0];
-      const double dely = yi - x[j][1];
-      const double delz = zi - x[j][2];
+      const int itype = type[i], jtype = type[j];
+      const double delx = x[i][0] - x[j][0];
+      const double dely = x[i][1] - x[j][1];
+      const double delz = x[i][2] - x[j][2];
       const double rsq = delx * delx + dely * dely + delz * delz;
-      const bool one = ntypes == 1;
-      const double cut = one ? cutsq11 : cutsq[itype][jtype];
-      const double dd = one ? d011 : d0[itype][jtype];
-      const bool touch = rsq < cut;
-      // a chain along x keeps y and z exactly (every force is along x): then r = |delx| without a
-      // square root (sqrt(x * x) == |x| in IEEE arithmetic), and the force is +-F along x
+      if (rsq >= cutsq[itype][jtype]) continue;
       const bool collinear = dely == 0.0 && delz == 0.0;
       const double r = collinear ? fabs(delx) : sqrt(rsq);
-      // (dd - r) x 0 or 1, not 'touch ? dd - r : 0': GCC made that a branch, mispredicted at rest
-      const double alpha = (dd - r) * (double) touch;
-      const tagint tj = tag[j];
-      const bool adjacent = ti - tj == 1 || tj - ti == 1;
-      if (__builtin_expect(!adjacent && touch, 0))
+      const double alpha = d0[itype][jtype] - r;
+      const tagint ti = tag[i], tj = tag[j];
+      if (ti - tj != 1 && tj - ti != 1)
         error->one(FLERR, "beads {} and {} overlap but are not neighbours in the chain: beads passed through "
                    "each other (time step too large for this load?)", ti, tj);
       const int left = ti < tj ? i : j;
       double c[Law::ncoeff];
-      for (int m = 0; m < Law::ncoeff; m++) c[m] = one ? c11[m] : coeffs[m][itype][jtype];
+      for (int m = 0; m < Law::ncoeff; m++) c[m] = coeffs[m][itype][jtype];
       double energy = 0.0;
       double fmag;
       if constexpr (Law::history) {
@@ -347,7 +331,7 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
         const double rate =
             -(delx * (v[i][0] - v[j][0]) + dely * (v[i][1] - v[j][1]) + delz * (v[i][2] - v[j][2])) / r;
         const double felastic = fmag;
-        fmag = touch ? MAX(felastic + gamma * rate, 0.0) : 0.0;
+        fmag = MAX(felastic + gamma * rate, 0.0);
         if (new_sample && left < nlocal) edash[left] += (fmag - felastic) * rate * dt;
       }
       if (left < nlocal) fc[left] = fmag;
