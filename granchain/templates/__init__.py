@@ -17,7 +17,6 @@ is not one line of printable text is an error."""
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 from importlib import resources
 
@@ -136,37 +135,41 @@ def _env() -> jinja2.Environment:
 
 @dataclass(frozen=True)
 class AtomLayout:
-    """Atom IDs and types: an optional striker first (ID 1), beads, an optional wall last.
+    """Atom IDs and types: the atoms of effects with beads in front (a striker, ID 1), the beads, the
+    other effects' atoms (a wall, last); each effect's atom a type of its own (Effect.atom_type), in
+    registry order after the beads'.
 
     Contact i (beads i and i+1) lives on the atom of bead i, ID i + offset.
     """
 
     beads: int
-    striker: bool
-    wall: bool
+    extra_types: tuple[str, ...]  # the effects' atom types, in registry order
+    offset: int  # atoms in front of bead 1 (Effect.beads_in_front)
     skin: float  # neighbor skin: 0.2 x the smallest bead diameter
 
     @classmethod
     def of(cls, scene) -> AtomLayout:
         skin = 0.2 * 2.0 * float(min(scene.bead_radii)) if scene.per_bead else 0.2 * scene.diameter
-        return cls(scene.chain.beads, scene.loading.kind == "striker", scene.effects.far_end == "wall", skin)
+        active = active_effects(scene)
+        extra = tuple(e.atom_type for e in active if e.atom_type)
+        return cls(scene.chain.beads, extra, sum(e.beads_in_front for e in active), skin)
 
     @property
-    def offset(self) -> int:
-        return int(self.striker)
+    def striker(self) -> bool:
+        return "striker" in self.extra_types
+
+    @property
+    def wall(self) -> bool:
+        """A wall atom: the deck integrates the group mobile (all but the wall) instead of all."""
+        return "wall" in self.extra_types
 
     @property
     def types(self) -> dict[str, int]:
-        types = {"bead": 1}
-        if self.wall:
-            types["wall"] = len(types) + 1
-        if self.striker:
-            types["striker"] = len(types) + 1
-        return types
+        return {"bead": 1, **{name: i + 2 for i, name in enumerate(self.extra_types)}}
 
     @property
     def natoms(self) -> int:
-        return self.beads + self.striker + self.wall
+        return self.beads + len(self.extra_types)
 
     @property
     def first_id(self) -> int:
@@ -230,12 +233,11 @@ def render_data(scene) -> str:
     rmax = float(max(scene.bead_radii)) if scene.per_bead else scene.chain.radius
     w = 4.0 * rmax  # periodic y/z sides wider than cutoff + skin, so no bead sees its own image
     rho = scene.chain.material.density
-    atoms = []
-    if lay["striker"]:  # touching bead 1 from the left
-        ld = scene.loading
-        ds = 2.0 * ld.striker_radius
-        rho_s = scene.striker_mass / (math.pi * ds**3 / 6.0)  # the requested mass exactly
-        atoms.append((lay["types"]["striker"], ds, rho_s, -(ld.striker_radius + scene.chain.radius)))
+    front: list[tuple[int, float, float, float]] = []  # the effects' atoms (Effect.data_atoms)
+    back: list[tuple[int, float, float, float]] = []
+    for effect in active_effects(scene):
+        (front if effect.beads_in_front else back).extend(effect.data_atoms(scene, lay["types"]))
+    atoms = list(front)
     u0 = np.zeros(n)
     if scene.effects.precompression:
         u0 = precompressed_displacements(scene)[0]
@@ -245,8 +247,7 @@ def render_data(scene) -> str:
         atoms += [(kind_of[i] + 1, 2.0 * kinds[kind_of[i]][0], kinds[kind_of[i]][1].density, x0[i]) for i in range(n)]
     else:
         atoms += [(1, d, rho, i * d + u0[i]) for i in range(n)]
-    if lay["wall"]:  # the rigid flat: an atom at bead N's surface, never integrated
-        atoms.append((lay["types"]["wall"], d, rho, (n - 1) * d + scene.chain.radius))
+    atoms += back
     xlo = min(a[3] for a in atoms) - 2.0 * rmax
     xhi = max(a[3] for a in atoms) + 2.0 * rmax
     lines = [

@@ -104,6 +104,8 @@ class Effect:
     conserves_momentum: ClassVar[bool] = True
     #: extra beads a solver puts in front of bead 1 (a striker: 1; Effect.ends)
     beads_in_front: ClassVar[int] = 0
+    #: the deck's atom type of its extra atom (data_atoms), or None
+    atom_type: ClassVar[str | None] = None
     dissipated_vectors: ClassVar[tuple[str, ...]] = ()
     deck_blocks: ClassVar[dict[str, str]] = {}
     yardstick: ClassVar[str | None] = None
@@ -193,6 +195,12 @@ class Effect:
     def pair_style_args(cls, scene) -> str:
         """Words it adds to the pair_style line ("" none)."""
         return ""
+
+    @classmethod
+    def data_atoms(cls, scene, types: dict[str, int]) -> list[tuple[int, float, float, float]]:
+        """Its atoms in the deck's data file: (type, diameter, density, x); in front of bead 1 when it
+        has beads_in_front, after bead N otherwise."""
+        return []
 
     @classmethod
     def pair_coeffs(cls, scene, types: dict[str, int]) -> list[tuple[int, int, Any, float]]:

@@ -22,6 +22,7 @@ class StrikerEffect(Effect):
     incompatible = {"precompression": None, "per_bead": None}
     deck_blocks = {}  # its load is the loading_striker block (scene.loading.kind)
     beads_in_front = 1
+    atom_type = "striker"
 
     @classmethod
     def active(cls, scene) -> bool:
@@ -58,6 +59,14 @@ class StrikerEffect(Effect):
         m0, gamma = b.mass[0], b.gamma
         b.extra["striker"] = ks / ms + ks / math.sqrt(ms * m0)
         b.extra["striker_damp"] = gamma / ms + gamma / math.sqrt(ms * m0)
+
+    @classmethod
+    def data_atoms(cls, scene, types: dict[str, int]) -> list[tuple[int, float, float, float]]:
+        # touching bead 1 from the left, of the requested mass exactly
+        rs = scene.loading.striker_radius
+        ds = 2.0 * rs
+        rho_s = scene.striker_mass / (math.pi * ds**3 / 6.0)
+        return [(types["striker"], ds, rho_s, -(rs + scene.chain.radius))]
 
     @classmethod
     def pair_coeffs(cls, scene, types: dict[str, int]) -> list[tuple[int, int, Any, float]]:

@@ -29,6 +29,7 @@ class WallEffect(Effect):
     conserves_momentum = False
     deck_blocks = {"ends": "wall.lmp.j2"}
     yardstick = "a wall (the yardstick would see a sphere)"
+    atom_type = "wall"
 
     @classmethod
     def active(cls, scene) -> bool:
@@ -70,6 +71,12 @@ class WallEffect(Effect):
         kw = float(np.asarray(scene.wall_law.tangent_stiffness(b.static_force + 2.0 * b.force), dtype=float))
         b.kr[-1], b.mr[-1], b.gr[-1] = kw, np.inf, b.gamma
         b.extra["wall"] = kw
+
+    @classmethod
+    def data_atoms(cls, scene, types: dict[str, int]) -> list[tuple[int, float, float, float]]:
+        # the rigid flat: an atom at bead N's surface, never integrated
+        d, n = scene.diameter, scene.chain.beads
+        return [(types["wall"], d, scene.chain.material.density, (n - 1) * d + scene.chain.radius)]
 
     @classmethod
     def pair_coeffs(cls, scene, types: dict[str, int]) -> list[tuple[int, int, Any, float]]:
