@@ -585,6 +585,13 @@ def build_parser() -> argparse.ArgumentParser:
     doc = sub.add_parser("doctor", help="report LAMMPS, MPI and plugin status")
     doc.set_defaults(func=cmd_doctor)
 
+    rp = sub.add_parser(
+        "reproduce",
+        help="regenerate the paper's figures and printed numbers, with verdicts (granchain reproduce --help)",
+        add_help=False,
+    )
+    rp.add_argument("rest", nargs=argparse.REMAINDER)  # main() hands these to granchain.reproduce.main
+
     s = sub.add_parser("scenes", help="list the bundled example scenes, or print one")
     s.add_argument("name", nargs="?", help="print this scene's TOML")
     s.set_defaults(func=cmd_scenes)
@@ -602,6 +609,11 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from granchain import progress
 
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["reproduce"]:  # its own parser (argparse's REMAINDER drops leading options)
+        from granchain import reproduce
+
+        return reproduce.main(argv[1:])
     args = build_parser().parse_args(argv)
 
     def one_line(message, category, filename, lineno, file=None, line=None):

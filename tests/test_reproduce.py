@@ -220,3 +220,15 @@ def test_a_second_call_runs_nothing(quick):
     assert again["ran"] == 0 and again["cached"] > 0
     assert (out / "report.md").stat().st_mtime >= before
     assert _rows(out).keys() and all(math.isfinite(s.cost.get("wall_time", 0.0)) for s in again["sections"])
+
+
+def test_granchain_reproduce_is_a_subcommand_with_its_own_options(tmp_path, capsys):
+    """`granchain reproduce` hands its options to granchain.reproduce.main: a bad section is one
+    line naming the option, exit 2, nothing run and no report written."""
+    from granchain.cli import main as granchain_main
+
+    out = tmp_path / "r"
+    assert granchain_main(["reproduce", "--quick", "--out", str(out), "--section", "fig4"]) == 2
+    err = capsys.readouterr().err
+    assert "--section" in err and "fig4" in err and len(err.strip().splitlines()) == 1
+    assert not (out / "report.md").exists()
