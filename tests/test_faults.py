@@ -21,8 +21,15 @@ LONG = make_scene_text(beads=300, end_time=2e-2, timestep=5e-8)
 SHORT = make_scene_text(beads=20, end_time=5e-5, timestep=5e-8, outputs="histories = [1, 2, 3]")
 
 
-def granchain(args, tmp_path, **kw):
+def granchain(args, tmp_path, preexec_fn=None, **kw):
     env = {**os.environ, "TMPDIR": str(tmp_path / "tmp"), "PYTHONDONTWRITEBYTECODE": "1"}
+
+    def as_from_a_terminal():
+        # a terminal's Ctrl-C: a test runner's worker (pytest-xdist) may ignore SIGINT, which a child inherits
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        if preexec_fn is not None:
+            preexec_fn()
+
     (tmp_path / "tmp").mkdir(exist_ok=True)
     return subprocess.Popen(
         [sys.executable, "-m", "granchain.cli", *args],
@@ -31,6 +38,7 @@ def granchain(args, tmp_path, **kw):
         text=True,
         env=env,
         start_new_session=True,  # its own process group: a signal reaches it and its LAMMPS worker, like a terminal's
+        preexec_fn=as_from_a_terminal,
         **kw,
     )
 
