@@ -62,9 +62,15 @@ void FixChainNVE::refresh()
   cached_dtf = dtf;
 }
 
-void FixChainNVE::initial_integrate(int)
+// dt/m per atom holds until atoms migrate (a neighbour build), their number changes, or dt does
+void FixChainNVE::refresh_if_stale()
 {
   if (neighbor->ncalls != cached_ncalls || atom->nlocal != cached_nlocal || dtf != cached_dtf) refresh();
+}
+
+void FixChainNVE::initial_integrate(int)
+{
+  refresh_if_stale();
   double **x = atom->x;
   double **v = atom->v;
   double **f = atom->f;
@@ -80,7 +86,7 @@ void FixChainNVE::initial_integrate(int)
 
 void FixChainNVE::final_integrate()
 {
-  if (neighbor->ncalls != cached_ncalls || atom->nlocal != cached_nlocal || dtf != cached_dtf) refresh();
+  refresh_if_stale();
   double **v = atom->v;
   double **f = atom->f;
   const int *mask = atom->mask;

@@ -31,6 +31,7 @@ class FixChainNVE : public Fix {
   int cached_nlocal;
   double cached_dtf;
   void refresh();
+  void refresh_if_stale();
 };
 
 }    // namespace LAMMPS_NS
