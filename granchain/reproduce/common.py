@@ -188,3 +188,15 @@ def scene_of(run: Path):
     from granchain.scene import load_scene
 
     return load_scene(Path(run) / "scene.toml")
+
+
+def campaign_section(ctx: Context, key: str, title: str, name: str, spec: dict, doc: str):
+    """A section built on one campaign: its result (campaign named, cost counted, the module's
+    docstring after its first paragraph as notes) and the campaign's points table."""
+    res = SectionResult(key, title)
+    ws = ctx.campaign(name, spec)
+    res.campaigns.append(ws.name)
+    df = points(ws)
+    res.cost = cost_of(df)
+    res.notes.append(doc.split("\n\n", 1)[1].strip())
+    return res, df

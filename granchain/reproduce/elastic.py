@@ -18,10 +18,9 @@ from granchain.reproduce.common import (
     Figure,
     Row,
     SectionResult,
-    cost_of,
+    campaign_section,
     observable,
     peaks,
-    points,
     scene_of,
     snapshots,
 )
@@ -158,14 +157,9 @@ def _figure(ctx: Context, run, sc, fp) -> Figure:
 
 
 def run(ctx: Context) -> SectionResult:
-    res = SectionResult(KEY, TITLE)
-    ws = ctx.campaign("elastic", campaign(ctx.quick))
-    res.campaigns.append(ws.name)
-    df = points(ws)
-    res.cost = cost_of(df)
+    res, df = campaign_section(ctx, KEY, TITLE, "elastic", campaign(ctx.quick), __doc__)
     res.paper_cost = "RK4 at 5e-9 s to t = 100 ms: about 5000 beads (the front at 473 m/s), 2e7 steps"
     res.paper_bead_steps = 5000 * 0.1 / 5e-9
-    res.notes.append(__doc__.split("\n\n", 1)[1].strip())
     res.rows += tau_rows()
     if df["status"].iloc[0] != "done":
         res.notes.append(f"The run failed: {df['message'].iloc[0]}")

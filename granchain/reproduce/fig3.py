@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from granchain.physics import models
-from granchain.reproduce.common import Context, Figure, Row, SectionResult, cost_of, points
+from granchain.reproduce.common import Context, Figure, Row, SectionResult, campaign_section
 
 KEY, TITLE = "fig3", "Fig. 3: peak force over amplitude at fixed impulses, and the master curve"
 BRASS = {"radius": 4.76e-3, "material": "brass"}
@@ -106,13 +106,8 @@ def _figure(ctx: Context, df, scale: float) -> Figure:
 
 
 def run(ctx: Context) -> SectionResult:
-    res = SectionResult(KEY, TITLE)
-    ws = ctx.campaign("fig3", campaign(ctx.quick))
-    res.campaigns.append(ws.name)
-    df = points(ws)
-    res.cost = cost_of(df)
+    res, df = campaign_section(ctx, KEY, TITLE, "fig3", campaign(ctx.quick), __doc__)
     res.paper_cost = "RK4 at 5e-9 s; impulses, amplitudes and chain lengths not given"
-    res.notes.append(__doc__.split("\n\n", 1)[1].strip())
     done = df[df["status"] == "done"].copy()
     if len(done) < len(df):
         res.notes.append(f"{len(df) - len(done)} of {len(df)} points failed: " + "; ".join(

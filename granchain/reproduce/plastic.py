@@ -24,10 +24,9 @@ from granchain.reproduce.common import (
     Figure,
     Row,
     SectionResult,
-    cost_of,
+    campaign_section,
     histories,
     peaks,
-    points,
     scene_of,
     snapshots,
 )
@@ -234,14 +233,9 @@ def _rows(res: SectionResult, runs: dict[float, Beta], eq27_diff: float | None) 
 
 
 def run(ctx: Context) -> SectionResult:
-    res = SectionResult(KEY, TITLE)
-    ws = ctx.campaign("plastic", campaign(ctx.quick))
-    res.campaigns.append(ws.name)
-    df = points(ws)
-    res.cost = cost_of(df)
+    res, df = campaign_section(ctx, KEY, TITLE, "plastic", campaign(ctx.quick), __doc__)
     res.paper_cost = "RK4 at 5e-9 s; chain length not given (60 beads to 1 ms: 2e5 steps, 1.2e7 bead-steps per beta)"
     res.paper_bead_steps = 3 * 60 * 1e-3 / 5e-9
-    res.notes.append(__doc__.split("\n\n", 1)[1].strip())
     runs = {}
     for _, row in df[df["status"] == "done"].iterrows():
         b = Beta(row["run"])

@@ -17,7 +17,7 @@ import numpy as np
 
 from granchain.physics import models
 from granchain.postprocess.fronts import long_load_fronts
-from granchain.reproduce.common import Context, Figure, Row, SectionResult, cost_of, peaks, points, scene_of, snapshots
+from granchain.reproduce.common import Context, Figure, Row, SectionResult, campaign_section, peaks, scene_of, snapshots
 
 KEY, TITLE = "table1", "Table I and Fig. 9: a long load on a bilinear chain"
 
@@ -102,14 +102,9 @@ def _figure(ctx: Context, run, sc, got: dict, model: dict) -> Figure:
 
 
 def run(ctx: Context) -> SectionResult:
-    res = SectionResult(KEY, TITLE)
-    ws = ctx.campaign("table1", campaign(ctx.quick))
-    res.campaigns.append(ws.name)
-    df = points(ws)
-    res.cost = cost_of(df)
+    res, df = campaign_section(ctx, KEY, TITLE, "table1", campaign(ctx.quick), __doc__)
     res.paper_cost = "RK4 at 5e-9 s to 5.2 ms on a chain the fronts do not leave: about 500 beads, 1.04e6 steps"
     res.paper_bead_steps = 500 * 5.2e-3 / 5e-9
-    res.notes.append(__doc__.split("\n\n", 1)[1].strip())
     from granchain.scene import load_scene
 
     base = load_scene("plastic-long-load-table1")
