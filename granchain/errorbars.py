@@ -40,6 +40,16 @@ Statuses (the `*_error_status` columns and summary entries):
     "unreliable: ..."            no estimate; the reason follows (an order outside the range:
                                  the status gives the nominal value, not a bound)
     "not measured: ..."          no estimate; the reason follows
+    "against RK4 ..."            against_reference: the distance to an RK4 run at 2 dt (or dt)
+                                 (a law whose slope jumps where a contact closes, with Verlet)
+
+A law whose force slope jumps where a contact closes (bilinear: dF/dalpha = 0 -> k at alpha = 0,
+and k_u -> 0 at zero force) makes fixed-step Verlet's error depend on where in a step each contact
+closes: it does not follow any order in dt and Richardson fails (plastic-short-impulse, reference
+Verlet: the three runs' differences changed sign on 47 of 59 peaks; |Q(dt) - Q(2 dt)| / 3 alone was
+0.1-33x the true error). RK4 locates those kinks (event location) and is smooth in dt there, so
+against_reference measures Verlet's error as its distance to an RK4 run at 2 dt (dt where 4 dt is
+unstable for RK4), whose own error (from a second RK4 run at twice its step) must be small beside it.
 """
 
 from __future__ import annotations
@@ -193,6 +203,79 @@ def _one(f, c, cc, p, times, jump_time, accepted):
         # nominal (lowest) order overstates a clean order-q error at most MAX_OVERESTIMATE times
         return abs(d1) / (2.0**p - 1.0), float(p), f"nominal order {p} (observed {q:.2g})"
     return abs(d1) / (2.0**q - 1.0), q, f"observed order {q:.2g}"
+
+
+#: RK4's own error, from its runs at h and 2 h, taken at its lowest order on a chain (1 + 3/2 at a
+#: Hertzian onset; workflows.errors.RK4_ONSET_ORDER): the larger, conservative bound
+REFERENCE_ORDER = 2.5
+#: the reference's error may be at most this fraction of the distance it measures: the estimate
+#: (distance + reference error) is then within 1 - 3 times a true error in distance +- reference error
+REFERENCE_SHARE = 0.5
+
+
+def against_reference(
+    values: np.ndarray,
+    reference: np.ndarray,
+    reference_coarse: np.ndarray,
+    times: tuple[np.ndarray, np.ndarray] | None = None,
+    jump_time: float | None = None,
+) -> ErrorBars:
+    """Error estimates of `values` (a Verlet run at dt) from RK4 runs at h and 2 h (module docstring).
+
+    Parameters
+    ----------
+    values : array_like
+        The quantity from the run (nan where not measured).
+    reference, reference_coarse : array_like
+        The same quantity from RK4 (event location) at a step h (2 dt, or dt) and at 2 h.
+    times : (array, array), optional
+        When the run and the RK4 run at dt measured each item: an item whose time differs by more
+        than jump_time is another pulse in one of them, and has no estimate.
+    jump_time : float, optional
+        Half the shortest period of the chain (pi / omega_max).
+
+    Returns
+    -------
+    ErrorBars
+        error = |value - reference| + the reference's own error |reference - reference_coarse| /
+        (2^REFERENCE_ORDER - 1), where that is at most REFERENCE_SHARE of the distance; else none.
+    """
+    v = np.atleast_1d(np.asarray(values, dtype=float))
+    r = np.atleast_1d(np.asarray(reference, dtype=float))
+    rc = np.atleast_1d(np.asarray(reference_coarse, dtype=float))
+    n = v.size
+    err = np.full(n, np.nan)
+    status = np.empty(n, dtype=object)
+    for i in range(n):
+        err[i], status[i] = _against_one(
+            v[i], r[i], rc[i], None if times is None else (float(times[0][i]), float(times[1][i])), jump_time
+        )
+    return ErrorBars(err, status, np.full(n, np.nan))
+
+
+def _against_one(v, r, rc, times, jump_time):
+    if not (np.isfinite(v) and np.isfinite(r) and np.isfinite(rc)):
+        return math.nan, "not measured: missing in the run or an RK4 companion"
+    if times is not None and jump_time is not None:
+        if not all(np.isfinite(times)):
+            return math.nan, "not measured: missing in the run or an RK4 companion"
+        if abs(times[0] - times[1]) > jump_time:
+            return (
+                math.nan,
+                "unreliable: another pulse in the RK4 run (its time moved by more than half the shortest period)",
+            )
+    distance = abs(v - r)
+    ulp = ROUNDOFF_ULPS * np.spacing(max(abs(v), abs(r)))
+    own = abs(r - rc) / (2.0**REFERENCE_ORDER - 1.0)
+    if distance <= ulp and own <= ulp:
+        return float(ulp), "round-off"
+    if own > REFERENCE_SHARE * distance:
+        return (
+            math.nan,
+            f"unreliable: the RK4 run's own error ({own:.3g}) is not small beside its distance to the run "
+            f"({distance:.3g})",
+        )
+    return float(distance + own), f"against RK4 (its own error {own:.2g})"
 
 
 def largest_relative(values: np.ndarray, bars: ErrorBars) -> float | None:

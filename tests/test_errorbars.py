@@ -98,3 +98,40 @@ def test_missing_values_are_not_measured():
     bars = richardson([np.nan, 1.0], [1.0, np.nan], [1.0, 1.0], 2)
     assert all(s.startswith("not measured") for s in bars.status)
     assert np.all(np.isnan(bars.error))
+
+
+@given(
+    q_true=values,
+    rel=rel_errors,
+    ref_share=st.floats(min_value=0.0, max_value=10.0),
+    q=st.floats(min_value=2.5, max_value=6.0),
+    signs=st.tuples(st.sampled_from([-1.0, 1.0]), st.sampled_from([-1.0, 1.0])),
+)
+def test_against_a_reference_the_estimate_is_within_1_to_3_of_the_true_error_or_none(q_true, rel, ref_share, q, signs):
+    """A run with error e and an RK4 reference with a clean order-q error r (2.5 <= q: RK4's lowest
+    order on a chain): where the reference's own error is small enough for a number, that number is
+    1-3 times |e| (errorbars.against_reference); where it is not, no number and the status says why."""
+    from granchain.errorbars import REFERENCE_SHARE, against_reference
+
+    e = signs[0] * rel * q_true
+    r = signs[1] * ref_share * abs(e)
+    bars = against_reference([q_true + e], [q_true + r], [q_true + r * 2**q])
+    own = abs(r) * (2**q - 1) / (2**2.5 - 1)
+    if math.isnan(bars.error[0]):
+        assert bars.status[0].startswith("unreliable: the RK4 run's own error")
+        assert own > REFERENCE_SHARE * abs(e - r) * (1 - 1e-9)
+    else:
+        assert bars.status[0].startswith(("against RK4", "round-off"))
+        ulps = 8 * np.spacing(q_true)  # the values themselves are rounded to q_true's last place
+        assert abs(e) - ulps <= bars.error[0] <= 3 * abs(e) + ulps
+
+
+def test_against_a_reference_another_pulse_or_a_missing_value_has_no_estimate():
+    from granchain.errorbars import against_reference
+
+    v, r, rc = np.array([10.0, 10.0, np.nan]), np.array([10.01, 10.01, 10.0]), np.array([10.01, 10.01, 10.0])
+    t = (np.array([1.0, 1.0, 1.0]), np.array([1.0, 1.3, 1.0]))
+    bars = against_reference(v, r, rc, times=t, jump_time=0.1)
+    assert bars.status[0].startswith("against RK4") and bars.error[0] == pytest.approx(0.01)
+    assert bars.status[1].startswith("unreliable: another pulse") and math.isnan(bars.error[1])
+    assert bars.status[2].startswith("not measured") and math.isnan(bars.error[2])

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from granchain.errorbars import ORDER, ErrorBars, richardson
+from granchain.errorbars import ORDER, ErrorBars, against_reference, richardson
 from granchain.errors import GranchainError
 from granchain.postprocess.observables import measure_observables
 
@@ -49,6 +49,7 @@ class ErrorReport:
     why_none: str | None = None  # why nothing was estimated (2 dt unstable, or its run failed)
     why_none_4dt: str | None = None  # why the order was not checked (the 4 dt run failed)
     unreliable_contacts: list[int] = field(default_factory=list)  # measured contacts without an estimate
+    against: str | None = None  # "rk4": measured against RK4 runs at 2 dt and 4 dt (or dt, 2 dt), not by Richardson
 
     def summary(self, main_wall_time: float) -> dict:
         """The summary.json entry."""
@@ -58,7 +59,11 @@ class ErrorReport:
                 key = s.split(":")[0]
                 counts[key] = counts.get(key, 0) + 1
         return {
-            "method": "Richardson extrapolation over runs at dt, 2 dt and 4 dt (granchain.errorbars)",
+            "method": "Richardson extrapolation over runs at dt, 2 dt and 4 dt (granchain.errorbars)"
+            if self.against is None
+            else "the distance to RK4 (reference, event location) at 2 dt, plus its own error from RK4 at 4 dt "
+            "(granchain.errorbars.against_reference)",
+            "companion_method": self.against,
             "order": self.order,
             "companion_timesteps": self.timesteps,
             "companion_wall_time": sum(self.wall_times),
@@ -131,12 +136,38 @@ def measured_contacts(scene, solution) -> np.ndarray:
     return np.flatnonzero(c)
 
 
-def estimate_errors(result, run_one, method: str, stable_timestep: float) -> ErrorReport:
+def against_rk4_because(method: str, scene) -> str | None:
+    """Why this Verlet run's error is measured against RK4 runs rather than by Richardson, or None.
+
+    A law whose slope jumps where a contact closes (ContactLaw.closes_with_a_slope_jump: bilinear)
+    gives fixed-step Verlet an error that depends on where in a step each contact closes and follows
+    no order in dt (plastic-short-impulse, reference Verlet: Richardson's three runs changed sign on
+    47 of 59 peaks; docs/error-bars.md). RK4 locates those kinks; it cannot with a dashpot
+    (withheld_because), where Richardson stays.
+    """
+    from granchain.physics.laws import law_class
+
+    if method != "verlet" or scene.effects.dashpot:
+        return None
+    if not law_class(scene.contact.law).closes_with_a_slope_jump:
+        return None
+    return (
+        f"the {scene.contact.law} law's slope jumps where a contact closes, so Verlet's error follows no order in dt: "
+        "measured against RK4 (event location) at 2 dt, its own error from RK4 at 4 dt"
+    )
+
+
+def estimate_errors(result, run_one, method: str, stable_timestep: float, run_rk4=None) -> ErrorReport:
     """Run a result's companions with run_one(scene) -> RunResult and estimate every error.
 
     result: the finished run (its scene is concrete, its solution at dt); method: the integrator
-    (rk4 or verlet); stable_timestep: the planner's stability limit for this scene and integrator.
+    (rk4 or verlet); stable_timestep: the planner's stability limit for this scene and integrator;
+    run_rk4(scene) -> RunResult: the reference RK4 run of a scene, for a Verlet run whose law needs it
+    (against_rk4_because; None: Richardson always).
     """
+    scene = result.scene
+    if run_rk4 is not None and against_rk4_because(method, scene):
+        return _against_rk4(result, run_rk4)
     scene, sol = result.scene, result.solution
     p = integrator_order(method, scene)
     dt = scene.run.timestep
@@ -195,15 +226,7 @@ def estimate_errors(result, run_one, method: str, stable_timestep: float) -> Err
     report.leading_pulse_force = richardson(*lf, p, times=tuple(lt), jump_time=jump, orders=orders)
     report.arrival_time = richardson(*lt, p, times=tuple(lt), jump_time=jump, orders=orders)
 
-    measured = measured_contacts(scene, sol)
-    rel = np.full(n, np.nan)
-    ok = report.peak_force.reliable & (np.abs(sol.peak_force) > 0)
-    rel[ok] = report.peak_force.error[ok] / np.abs(sol.peak_force[ok])
-    m = measured[np.isfinite(rel[measured])]
-    if m.size:
-        i = int(m[np.argmax(rel[m])])
-        report.error_estimate, report.error_estimate_contact = float(rel[i]), i + 1
-    report.unreliable_contacts = [int(i) + 1 for i in measured if not np.isfinite(rel[i])]
+    _largest(report, scene, sol)
 
     obs = [measure_observables(scene, s) for s in (sol, coarse) + ((coarser,) if coarser is not None else ())]
     b = scene.window[1] - 1
@@ -224,3 +247,80 @@ def estimate_errors(result, run_one, method: str, stable_timestep: float) -> Err
             "status": str(bars.status[0]),
         }
     return report
+
+
+def _against_rk4(result, run_rk4) -> ErrorReport:
+    """A Verlet run's error report against RK4 runs at 2 dt and 4 dt, or dt and 2 dt (errorbars.against_reference)."""
+    from granchain.workflows.plan import highest_frequency, plan_scene
+
+    scene, sol = result.scene, result.solution
+    dt = scene.run.timestep
+    report = ErrorReport(order=ORDER["verlet"], timesteps=[], wall_times=[], against="rk4")
+    report.why_none = withheld_because("rk4", scene)
+    if report.why_none:
+        return report
+    stable = plan_scene(scene, method="rk4").stable_timestep
+    if 2 * dt > stable:
+        report.why_none = f"2 dt = {2 * dt:.3g} s is above RK4's stability limit: no RK4 companion, no estimate"
+        return report
+    # RK4 at 2 dt and 4 dt where stable (half the price of dt and 2 dt): 4th order with its kinks
+    # located, its error at 2 dt is still far below Verlet's at dt (plastic-short-impulse: 1e-4 of it)
+    runs = []
+    for factor in (2.0, 4.0) if 4 * dt <= stable else (1.0, 2.0):
+        t0 = time.perf_counter()
+        try:
+            runs.append(run_rk4(companion_scene(scene, factor)).solution)
+        except GranchainError as e:
+            first_line = str(e).splitlines()[0] if str(e) else type(e).__name__
+            report.why_none = f"the RK4 companion run at {factor:g} dt failed ({first_line}): no estimate"
+            return report
+        report.wall_times.append(time.perf_counter() - t0)
+        report.timesteps.append(factor * dt)
+    jump = np.pi / highest_frequency(scene)[0]
+    n = len(sol.peak_force)
+
+    def values(name: str, complete_only: bool = False) -> list:
+        out = []
+        for s in (sol, *runs):
+            v = np.asarray(getattr(s, name), dtype=float)[:n].copy()
+            if complete_only:
+                v[~np.asarray(s.complete, dtype=bool)[:n]] = np.nan
+            out.append(v)
+        return out
+
+    pf, tp = values("peak_force", True), values("time_of_peak", True)
+    lf, lt = values("leading_pulse_force"), values("leading_pulse_time")
+    report.peak_force = against_reference(*pf, times=(tp[0], tp[1]), jump_time=jump)
+    report.time_of_peak = against_reference(*tp, times=(tp[0], tp[1]), jump_time=jump)
+    report.leading_pulse_force = against_reference(*lf, times=(lt[0], lt[1]), jump_time=jump)
+    report.arrival_time = against_reference(*lt, times=(lt[0], lt[1]), jump_time=jump)
+    _largest(report, scene, sol)
+    obs = [measure_observables(scene, s) for s in (sol, *runs)]
+    b = scene.window[1] - 1
+    for name in ESTIMATED_OBSERVABLES:
+        vals = [o.get(name) for o in obs]
+        v = [np.nan if x is None else float(x) for x in vals]
+        times = None
+        if name.startswith("leading_peak_force"):
+            times = tuple([float(s.leading_pulse_time[b])] for s in (sol, runs[0]))
+        bars = against_reference([v[0]], [v[1]], [v[2]], times=times, jump_time=jump)
+        report.observables[name] = {
+            "value": vals[0],
+            "error": None if not np.isfinite(bars.error[0]) else float(bars.error[0]),
+            "status": str(bars.status[0]),
+        }
+    return report
+
+
+def _largest(report: ErrorReport, scene, sol) -> None:
+    """The largest relative peak-force error over the measured contacts, and the contacts without one."""
+    n = len(sol.peak_force)
+    measured = measured_contacts(scene, sol)
+    rel = np.full(n, np.nan)
+    ok = report.peak_force.reliable & (np.abs(sol.peak_force) > 0)
+    rel[ok] = report.peak_force.error[ok] / np.abs(sol.peak_force[ok])
+    m = measured[np.isfinite(rel[measured])]
+    if m.size:
+        i = int(m[np.argmax(rel[m])])
+        report.error_estimate, report.error_estimate_contact = float(rel[i]), i + 1
+    report.unreliable_contacts = [int(i) + 1 for i in measured if not np.isfinite(rel[i])]

@@ -190,7 +190,10 @@ def _estimate_errors(result, plan, backend: str, method: str, np_: int):
             cleanup(work)
         return companion
 
-    return estimate_errors(result, run_one, method, stable)
+    def run_rk4(scene):  # the independent reference with event location (errors.against_rk4_because)
+        return _execute(scene, "reference", "rk4", 1)[0]
+
+    return estimate_errors(result, run_one, method, stable, run_rk4=run_rk4)
 
 
 class OutputSizeWarning(UserWarning):
