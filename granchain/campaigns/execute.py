@@ -15,8 +15,10 @@ reads the workspace back; it keeps no result that is not on disk. Hence:
   failed); in every case the next run completes only what is missing, and since a run directory is
   written aside and renamed into place, an interrupted point never looks complete.
 
-One LAMMPS instance at a time per worker: a local cluster has one thread per worker process, and each
-LAMMPS run is a child process of its worker (granchain.lammps.runner).
+One LAMMPS instance per running point: each LAMMPS run is a child process of its worker
+(granchain.lammps.runner), and a worker keeps that child, with its LAMMPS instance and plugin loaded,
+for its next points (:class:`PersistentLammps`, granchain.lammps.server: no start-up per point). A
+child that crashed or reported a LAMMPS error fails its point only; the next point gets a new child.
 """
 
 from __future__ import annotations
@@ -203,9 +205,30 @@ class QuietInterrupt(WorkerPlugin):
         pass
 
 
+class PersistentLammps(WorkerPlugin):
+    """Dask worker plugin: the worker's single-rank LAMMPS runs reuse a LAMMPS child process kept
+    alive between points (granchain.lammps.server), which ends with the worker."""
+
+    name = "granchain-persistent-lammps"
+
+    def setup(self, worker) -> None:
+        from granchain.lammps import server
+
+        server.enable()
+
+    def teardown(self, worker) -> None:
+        from granchain.lammps import server
+
+        server.shutdown()
+
+
 class Executor:
     """A Dask client made on first use: a LocalCluster of `workers` processes (one thread each) or
     the scheduler at `scheduler`."""
+
+    #: workers keep a LAMMPS child for their next points (PersistentLammps); False: a fresh process
+    #: per LAMMPS point, as before (benchmarks/bench_campaigns.py compares the two)
+    reuse_lammps = True
 
     def __init__(self, workers: int | None = None, scheduler: str | None = None):
         if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
@@ -238,6 +261,8 @@ class Executor:
                     f"--scheduler {self.scheduler}: cannot connect ({e}); is the scheduler running "
                     "(dask scheduler, or a dask-jobqueue cluster's scheduler_address)?"
                 ) from None
+            if self.reuse_lammps:
+                self.client.register_plugin(PersistentLammps())
             return self.client
         self.cluster = LocalCluster(
             n_workers=self.workers or _cores(),
@@ -250,6 +275,8 @@ class Executor:
         )
         self.client = Client(self.cluster)
         self.client.register_plugin(QuietInterrupt())
+        if self.reuse_lammps:
+            self.client.register_plugin(PersistentLammps())
         return self.client
 
     def submit(self, payload: dict):
