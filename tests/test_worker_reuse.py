@@ -310,3 +310,59 @@ def test_ctrl_c_mid_run_stops_the_kept_instance_and_leaves_nothing(tmp_path):
     for pid in group:  # the child is gone (not left running on its own)
         with pytest.raises(ProcessLookupError):
             os.kill(pid, 0)
+
+
+CAMPAIGN = """
+[campaign]
+backend = "lammps"
+error_estimate = false
+[vary]
+"loading.amplitude" = [10.0, 1e8, 20.0, 30.0, 40.0]
+[scene]
+[scene.chain]
+beads = 10
+radius = 4.76e-3
+material = "brass"
+[scene.contact]
+law = "hertz"
+[scene.loading]
+kind = "step"
+amplitude = 10.0
+duration = 1e-6
+[scene.run]
+end_time = 2e-5
+timestep = 5e-8
+[scene.outputs]
+peak_force = true
+histories = [3]
+"""
+
+
+def test_a_campaign_worker_keeps_its_lammps_child(tmp_path, monkeypatch):
+    """Five points on one worker, one of them crushing the chain (LAMMPS stops it): that point fails,
+    the others run on kept instances, and every run directory's
+    peaks.csv and histories.csv are those of a campaign with a fresh process per point."""
+    from granchain.campaigns import execute
+    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.spec import parse_campaign
+
+    c = parse_campaign(CAMPAIGN, source="reuse.toml")
+    _, report = run_campaign(c, tmp_path / "kept", workers=1)
+    assert (report.done, report.failed) == (4, 1)
+    assert "LAMMPS failed" in report.messages[0][1]
+    runs = []
+    for d in sorted((tmp_path / "kept" / "workspace").iterdir()):
+        if (d / "run").is_dir():
+            runs.append(json.loads((d / "run" / "summary.json").read_text())["extra"]["instance_run"])
+    assert max(runs) >= 2  # later points ran on a kept instance
+    monkeypatch.setattr(execute.Executor, "reuse_lammps", False)
+    _, report = run_campaign(c, tmp_path / "fresh", workers=1)
+    assert (report.done, report.failed) == (4, 1)
+    for d in sorted((tmp_path / "fresh" / "workspace").iterdir()):
+        kept = tmp_path / "kept" / "workspace" / d.name
+        if (d / "run").is_dir():
+            assert json.loads((d / "run" / "summary.json").read_text())["extra"]["instance_run"] == 1
+            for name in ("peaks.csv", "histories.csv"):
+                assert (kept / "run" / name).read_bytes() == (d / "run" / name).read_bytes(), (d.name, name)
+        else:
+            assert not (kept / "run").exists()
