@@ -4,98 +4,164 @@ Run by hand:  python benchmarks/bench_reference.py
 A short pulse (I = 0.4 N s, T = 1 us) on a Hertz and on a bilinear (beta = 0.8) brass chain,
 dt = 2e-8 s; the number of steps is chosen so that each run takes about a second. Median of 3.
 
-Side by side with another version of the solver (a copy of an older granchain/reference/solver.py,
-imported from its file; it must run against this tree's granchain):
+Side by side with another tree of granchain (an older commit checked out as a worktree):
 
-    git show <commit>:granchain/reference/solver.py > /tmp/solver_old.py
-    python benchmarks/bench_reference.py --compare /tmp/solver_old.py --reps 7
+    git worktree add /tmp/ref_old <commit>
+    python benchmarks/bench_reference.py --compare /tmp/ref_old --reps 5
 
-N = 100 and 10 000, old and new runs alternating (so that load on the machine hits both alike),
-median of --reps each, the ratio of the medians new/old and the median of the ratios of the runs
-taken back to back ("paired": the steadier on a shared machine).
+Each tree runs in its own worker process (this script with --worker and PYTHONPATH set to the tree,
+so that every module of the solver, not only solver.py, is that tree's), kept for the whole
+comparison; the runs alternate between the two (old first in even repetitions, new first in odd
+ones), so that load on a shared machine hits both alike. Per case: the median ns per bead-step of
+each, the ratio of the medians new/old and the median of the ratios of the runs taken back to back
+("paired": the steadier on a shared machine). --scene NAME adds the reference run of a scene as
+granchain compare makes it (wall seconds instead of ns per bead-step).
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib.util
+import json
+import os
 import statistics
+import subprocess
 import sys
+from pathlib import Path
 
-import numpy as np
-
-from granchain.physics.laws import BilinearLaw, HertzLaw
-from granchain.physics.materials import MATERIALS, bead_mass, hertz_stiffness
-from granchain.reference.solver import ChainProblem, solve_chain
-
+#: (law, method, N) -> steps: each run about a second (or less) on a quiet machine
+STEPS = {100: 20000, 1000: 5000, 10000: 1000}
 R = 4.76e-3
-M = bead_mass(MATERIALS["brass"], R)
-LAWS = {"hertz": HertzLaw(k=hertz_stiffness(MATERIALS["brass"], R)), "bilinear": BilinearLaw(k=2.43e7, beta=0.8)}
 
 
-def bench(n: int, law: str, method: str, steps: int, dt: float = 2e-8) -> tuple[float, int]:
-    p = ChainProblem(mass=np.full(n, M), law=LAWS[law], amplitude=4e5 if law == "hertz" else 1e5, duration=1e-6)
-    times, extra = [], 0
-    for _ in range(3):
-        s = solve_chain(p, steps * dt, dt, method)
-        times.append(s.wall_time)
-        extra = s.extra_steps
-    return statistics.median(times) / (steps * n) * 1e9, extra
+def _problem(law: str, n: int):
+    import numpy as np
+
+    from granchain.physics.laws import BilinearLaw, HertzLaw
+    from granchain.physics.materials import MATERIALS, bead_mass, hertz_stiffness
+    from granchain.problem import ChainProblem
+
+    laws = {"hertz": HertzLaw(k=hertz_stiffness(MATERIALS["brass"], R)), "bilinear": BilinearLaw(k=2.43e7, beta=0.8)}
+    m = bead_mass(MATERIALS["brass"], R)
+    return ChainProblem(mass=np.full(n, m), law=laws[law], amplitude=4e5 if law == "hertz" else 1e5, duration=1e-6)
 
 
-def load_solver(path: str):
-    """A solver module (solve_chain, ChainProblem) from a file."""
-    spec = importlib.util.spec_from_file_location("solver_under_comparison", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def run_case(law: str, method: str, n: int, steps: int, dt: float = 2e-8) -> tuple[float, int]:
+    """One run: (ns per bead-step, extra steps)."""
+    from granchain.reference.solver import solve_chain
+
+    s = solve_chain(_problem(law, n), steps * dt, dt, method, progress=None)
+    return s.wall_time / (steps * n) * 1e9, s.extra_steps
 
 
-def compare(old_path: str, reps: int) -> None:
-    """ns per bead-step of the old and this tree's solver, alternating runs, median of reps each."""
-    old = load_solver(old_path)
-    solvers = {"old": old.solve_chain, "new": solve_chain}
-    steps_of = {("rk4", 100): 5000, ("verlet", 100): 20000, ("rk4", 10000): 400, ("verlet", 10000): 2000}
-    heads = ("old ns", "new ns", "new/old", "paired")
-    print(f"{'law':9s} {'method':7s} {'N':>6s} {'steps':>6s} " + " ".join(f"{h:>8s}" for h in heads))
-    for law in LAWS:
+def run_scene(name: str, method: str) -> float:
+    """Wall seconds of a scene's reference run, as granchain compare makes it (run_reference)."""
+    import time
+
+    from granchain.scene import load_scene
+    from granchain.workflows.run import run_reference
+
+    scene = load_scene(name)
+    t = time.perf_counter()
+    run_reference(scene, method)
+    return time.perf_counter() - t
+
+
+def worker() -> None:
+    """Serve runs read from stdin, one JSON list a line; answer one JSON number a line."""
+    import granchain
+
+    print(json.dumps(str(Path(granchain.__file__).parent.parent)), flush=True)  # the tree it imports
+    os.environ["GRANCHAIN_QUIET"] = "1"  # no progress lines from scene runs
+    for line in sys.stdin:
+        job = json.loads(line)
+        if job[0] == "scene":
+            out: float = run_scene(job[1], job[2])
+        else:
+            out = run_case(*job)[0]
+        print(json.dumps(out), flush=True)
+
+
+class Worker:
+    """A worker process importing granchain from `tree`."""
+
+    def __init__(self, tree: str) -> None:
+        env = dict(os.environ, PYTHONPATH=str(Path(tree).resolve()))
+        self.proc = subprocess.Popen(
+            [sys.executable, __file__, "--worker"],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,  # progress of scene runs
+            text=True,
+            env=env,
+            cwd=tree,
+        )
+        self.tree = json.loads(self.proc.stdout.readline())
+
+    def run(self, job: list) -> float:
+        self.proc.stdin.write(json.dumps(job) + "\n")
+        self.proc.stdin.flush()
+        return float(json.loads(self.proc.stdout.readline()))
+
+    def close(self) -> None:
+        self.proc.stdin.close()
+        self.proc.wait()
+
+
+def compare(old_tree: str, reps: int, sizes: list[int], scenes: list[str]) -> None:
+    """The old tree and this one side by side: alternating runs, median of reps each, ratios."""
+    workers = {"old": Worker(old_tree), "new": Worker(str(Path(__file__).resolve().parent.parent))}
+    print(f"old: {workers['old'].tree}\nnew: {workers['new'].tree}")
+    heads = ("old", "new", "new/old", "paired")
+    print(f"{'case':32s} " + " ".join(f"{h:>8s}" for h in heads) + "   (ns per bead-step; scenes: wall s)")
+    cases: list[tuple[str, list]] = []
+    for law in ("hertz", "bilinear"):
         for method in ("rk4", "verlet"):
-            for n in (100, 10000):
-                steps, dt = steps_of[method, n], 2e-8
-                p = ChainProblem(
-                    mass=np.full(n, M), law=LAWS[law], amplitude=4e5 if law == "hertz" else 1e5, duration=1e-6
-                )
-                times: dict[str, list[float]] = {"old": [], "new": []}
-                for rep in range(reps):
-                    # alternate which goes first, so that a drift in the machine's load hits both alike
-                    for name in ("old", "new") if rep % 2 == 0 else ("new", "old"):
-                        times[name].append(solvers[name](p, steps * dt, dt, method, progress=None).wall_time)
-                ns = {k: statistics.median(v) / (steps * n) * 1e9 for k, v in times.items()}
-                # the median of each pair's ratio: a pair ran back to back, under the same load
-                paired = statistics.median(b / a for a, b in zip(times["old"], times["new"], strict=True))
-                print(
-                    f"{law:9s} {method:7s} {n:6d} {steps:6d} {ns['old']:8.1f} {ns['new']:8.1f} "
-                    f"{ns['new'] / ns['old']:8.3f} {paired:8.3f}"
-                )
+            for n in sizes:
+                cases.append((f"{law} {method} N={n}", [law, method, n, STEPS[n]]))
+    for name in scenes:
+        cases.append((f"scene {name}", ["scene", name, "rk4"]))
+    try:
+        for label, job in cases:
+            times: dict[str, list[float]] = {"old": [], "new": []}
+            for rep in range(reps):
+                for name in ("old", "new") if rep % 2 == 0 else ("new", "old"):
+                    times[name].append(workers[name].run(job))
+            med = {k: statistics.median(v) for k, v in times.items()}
+            paired = statistics.median(b / a for a, b in zip(times["old"], times["new"], strict=True))
+            print(f"{label:32s} {med['old']:8.1f} {med['new']:8.1f} {med['new'] / med['old']:8.3f} {paired:8.3f}")
+            sys.stdout.flush()
+    finally:
+        for w in workers.values():
+            w.close()
+
+
+def table() -> None:
+    """The table of this tree: ns per bead-step, median of 3 runs."""
+    print(f"{'law':9s} {'method':7s} {'N':>6s} {'steps':>6s} {'ns/bead-step':>13s} {'extra steps':>11s}")
+    for law in ("hertz", "bilinear"):
+        for method in ("rk4", "verlet"):
+            for n in (100, 1000, 10000):
+                steps = STEPS[n]
+                runs = [run_case(law, method, n, steps) for _ in range(3)]
+                ns = statistics.median(r[0] for r in runs)
+                print(f"{law:9s} {method:7s} {n:6d} {steps:6d} {ns:13.1f} {runs[0][1]:11d}")
                 sys.stdout.flush()
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--compare", metavar="SOLVER_PY", help="an older solver.py to time side by side")
-    parser.add_argument("--reps", type=int, default=5, help="runs of each solver per case (--compare)")
+    parser.add_argument("--compare", metavar="TREE", help="another granchain tree (a worktree) to time side by side")
+    parser.add_argument("--reps", type=int, default=5, help="runs of each tree per case (--compare)")
+    parser.add_argument("--sizes", default="100,1000,10000", help="chain lengths (--compare)")
+    parser.add_argument("--scene", action="append", default=[], help="also a scene's reference run (--compare)")
+    parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
-    if args.compare:
-        compare(args.compare, args.reps)
-        return
-    print(f"{'law':9s} {'method':7s} {'N':>6s} {'steps':>6s} {'ns/bead-step':>13s} {'extra steps':>11s}")
-    for law in LAWS:
-        for method in ("rk4", "verlet"):
-            for n in (100, 1000, 10000):
-                steps = {100: 20000, 1000: 5000, 10000: 1000}[n]
-                ns, extra = bench(n, law, method, steps)
-                print(f"{law:9s} {method:7s} {n:6d} {steps:6d} {ns:13.1f} {extra:11d}")
-                sys.stdout.flush()
+    if args.worker:
+        worker()
+    elif args.compare:
+        compare(args.compare, args.reps, [int(s) for s in args.sizes.split(",")], args.scene)
+    else:
+        table()
 
 
 if __name__ == "__main__":
