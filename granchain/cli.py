@@ -596,7 +596,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("name", nargs="?", help="print this scene's TOML")
     s.set_defaults(func=cmd_scenes)
 
-    for sp in (r, c, acc):
+    for sp in (r, c, acc, cl):
         sp.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
 
     mt = sub.add_parser("materials", help="list the built-in bead materials with their sources")

@@ -57,3 +57,17 @@ def test_every_law_can_be_set_up_from_every_scene():
     sc = resolve_scene("plastic-short-impulse")
     for law in LAWS:
         assert scene_with_law(sc, equivalent_contact(sc, law)).contact.law == law
+
+
+@pytest.mark.parametrize("quiet", [True, False])
+def test_compare_laws_quiet_prints_no_progress(tmp_path, capsys, monkeypatch, quiet):
+    from granchain import progress
+
+    monkeypatch.setattr(progress, "DELAY", 0.0)  # show progress even for a short run
+    monkeypatch.delenv("GRANCHAIN_QUIET", raising=False)
+    p = tmp_path / "s.toml"
+    p.write_text(make_scene(beads=12, law="thornton", end_time=5e-5, timestep=5e-8).to_toml())
+    args = ["compare-laws", str(p), "--backend", "reference", "--error-estimate", "off", "--out", str(tmp_path / "o")]
+    assert main(args + (["--quiet"] if quiet else [])) == 0
+    err = capsys.readouterr().err
+    assert ("%" in err) is not quiet  # the progress line shows a percentage
