@@ -41,11 +41,12 @@ Statuses (the `*_error_status` columns and summary entries):
                                  the status gives the nominal value, not a bound)
     "not measured: ..."          no estimate; the reason follows
     "against RK4 ..."            against_reference: the distance to an RK4 run at 2 dt (or dt)
-                                 (a law whose slope jumps where a contact closes, with Verlet)
+                                 (Verlet on a law with slope kinks)
 
-A law whose force slope jumps where a contact closes (bilinear: dF/dalpha = 0 -> k at alpha = 0,
-and k_u -> 0 at zero force) makes fixed-step Verlet's error depend on where in a step each contact
-closes: it does not follow any order in dt and Richardson fails (plastic-short-impulse, reference
+A law whose force slope jumps at kinks a moving contact crosses (ContactLaw.slope_kinks; bilinear:
+dF/dalpha = 0 -> k at alpha = 0 and k_u -> 0 at zero force; Thornton: reloading past d_max) makes
+fixed-step Verlet's error depend on where in a step each contact crosses them: it does not follow
+any order in dt and Richardson fails (plastic-short-impulse, reference
 Verlet: the three runs' differences changed sign on 47 of 59 peaks; |Q(dt) - Q(2 dt)| / 3 alone was
 0.1-33x the true error). RK4 locates those kinks (event location) and is smooth in dt there, so
 against_reference measures Verlet's error as its distance to an RK4 run at 2 dt (dt where 4 dt is

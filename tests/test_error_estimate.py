@@ -85,15 +85,24 @@ peak_force = true
 """
 
 
+THORNTON_CONTACT = """[contact]
+law = "thornton"
+yield_pressure = 1.2e9
+"""
+
+
 @pytest.mark.parametrize("backend", ["lammps", "reference"])
 @pytest.mark.parametrize("dashpot", [0.0, 5.0])
-def test_a_bilinear_verlet_run_is_measured_against_rk4_unless_rk4_cannot(tmp_path, backend, dashpot):
-    """Bilinear contacts close with a slope jump: Verlet's error is measured against RK4 runs, which
-    the summary names; with a dashpot RK4 cannot locate the clip either, and Richardson stays."""
-    p = tmp_path / "bilinear.toml"
-    p.write_text(
-        BILINEAR_CHAIN.replace("[run]", f"[damping]\ndashpot = {dashpot}\n[run]") if dashpot else BILINEAR_CHAIN
-    )
+@pytest.mark.parametrize("law", ["bilinear", "thornton"])
+def test_a_plastic_verlet_run_is_measured_against_rk4_unless_rk4_cannot(tmp_path, backend, dashpot, law):
+    """Plastic laws' slopes jump at kinks the contacts cross: Verlet's error is measured against RK4
+    runs, which the summary names; with a dashpot RK4 cannot locate the clip either, and Richardson stays."""
+    text = BILINEAR_CHAIN
+    if law == "thornton":
+        start = text.index("[contact]")
+        text = text[:start] + THORNTON_CONTACT + text[text.index("[loading]") :]
+    p = tmp_path / "plastic.toml"
+    p.write_text(text.replace("[run]", f"[damping]\ndashpot = {dashpot}\n[run]") if dashpot else text)
     out = tmp_path / "run"
     args = ["run", str(p), "--backend", backend, "--out", str(out), "--quiet"]
     assert main(args + ([] if backend == "lammps" else ["--method", "verlet"])) == 0
@@ -145,7 +154,7 @@ CASES = (
         for name in ("default", "effect-striker", "effect-tapered", "effect-wall", "effect-precompression")
         for integ in ("lammps", "verlet", "rk4")
     ]
-    # bilinear with Verlet: measured against RK4 (the law's slope jumps where contacts close; Richardson
+    # bilinear with Verlet: measured against RK4 (the law's slope jumps at kinks the contacts cross; Richardson
     # gave 3 of 59 peaks an estimate there before, errors.against_rk4_because)
     + [("plastic-short-impulse", "lammps"), ("plastic-short-impulse", "verlet")]
     # RK4 locates the kinks: 33 of 59 estimated, 0.79-3.0 of the true error (stop 22, the order-range rule)

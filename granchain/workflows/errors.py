@@ -139,20 +139,21 @@ def measured_contacts(scene, solution) -> np.ndarray:
 def against_rk4_because(method: str, scene) -> str | None:
     """Why this Verlet run's error is measured against RK4 runs rather than by Richardson, or None.
 
-    A law whose slope jumps where a contact closes (ContactLaw.closes_with_a_slope_jump: bilinear)
-    gives fixed-step Verlet an error that depends on where in a step each contact closes and follows
-    no order in dt (plastic-short-impulse, reference Verlet: Richardson's three runs changed sign on
-    47 of 59 peaks; docs/error-bars.md). RK4 locates those kinks; it cannot with a dashpot
+    A law whose slope jumps at kinks a moving contact crosses (ContactLaw.slope_kinks: bilinear,
+    Thornton) gives fixed-step Verlet an error that depends on where in a step each contact crosses
+    them and follows no order in dt (plastic-short-impulse, reference Verlet: Richardson's three runs
+    changed sign on 47 of 59 peaks; docs/error-bars.md). RK4 locates those kinks; it cannot with a dashpot
     (withheld_because), where Richardson stays.
     """
     from granchain.physics.laws import law_class
 
     if method != "verlet" or scene.effects.dashpot:
         return None
-    if not law_class(scene.contact.law).closes_with_a_slope_jump:
+    if not law_class(scene.contact.law).slope_kinks:
         return None
     return (
-        f"the {scene.contact.law} law's slope jumps where a contact closes, so Verlet's error follows no order in dt: "
+        f"the {scene.contact.law} law's slope jumps at kinks the contacts cross, so Verlet's error follows no order "
+        "in dt: "
         "measured against RK4 (event location) at 2 dt, its own error from RK4 at 4 dt"
     )
 

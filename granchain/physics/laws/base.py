@@ -68,10 +68,11 @@ class ContactLaw:
     pair_style: ClassVar[str] = ""
     history: ClassVar[bool] = False
     scene_keys: ClassVar[tuple[str, ...]] = ()
-    #: dF/dalpha jumps where a contact closes (or reaches zero force) while the overlap still moves:
-    #: fixed-step Verlet's error then depends on where in a step that happens and follows no order
-    #: in dt, so its error bars come from an RK4 run, which locates the kink (granchain.errorbars)
-    closes_with_a_slope_jump: ClassVar[bool] = False
+    #: dF/dalpha jumps at a kink that a contact's overlap crosses while it moves (bilinear: closing at
+    #: alpha = 0 and reaching zero force; Thornton: reloading past d_max): fixed-step Verlet's error
+    #: then depends on where in a step that happens and follows no order in dt, so its error bars come
+    #: from RK4 runs, which locate the kinks (granchain.errorbars.against_reference)
+    slope_kinks: ClassVar[bool] = False
     #: a range of valid values of each parameter (SI), from which the registry's tests draw laws
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {}
     #: the [contact] keys (besides law) of an example: brass beads of R = 4.76 mm (docs and tests)

@@ -68,7 +68,7 @@ class BilinearLaw(ContactLaw):
     pair_style: ClassVar[str] = "chain/bilinear"
     history: ClassVar[bool] = True
     # F = k alpha from alpha = 0: dF/dalpha jumps 0 -> k as a contact closes, k_u -> 0 at zero force
-    closes_with_a_slope_jump: ClassVar[bool] = True
+    slope_kinks: ClassVar[bool] = True
     scene_keys: ClassVar[tuple[str, ...]] = ("unloading_coeff", "plastic_stiffness")
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "beta": (0.0, 0.99)}
     example_contact: ClassVar[dict[str, float]] = {"unloading_coeff": 0.8, "plastic_stiffness": 2.43e7}

@@ -61,6 +61,10 @@ class ThorntonLaw(ContactLaw):
     name: ClassVar[str] = "thornton"
     pair_style: ClassVar[str] = "chain/thornton"
     history: ClassVar[bool] = True
+    # reloading meets the plastic line at d_max with another slope: Verlet's error follows no order
+    # there (generated scenes, Richardson: 94 of 125 peaks estimated, one 17x off; against RK4: 172 of
+    # 179, 0.97-1.54; docs/error-bars.md)
+    slope_kinks: ClassVar[bool] = True
     scene_keys: ClassVar[tuple[str, ...]] = ("yield_pressure",)
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "yield_overlap": (1e-9, 1e-4)}
     #: brass beads of R = 4.76 mm: p_y = k / (pi R*) makes the plastic slope S = pi p_y R* equal the
