@@ -7,6 +7,8 @@ it is as accurate as the method. The peak tracking, the history update and the e
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -27,6 +29,9 @@ def hermite_max(
     (alpha_max, t_max) : tuple of ndarray
         The interpolant's largest value and where it is taken. p(s) = a s^3 + b s^2 + c s + d on s in [0, 1].
     """
+    if a0.size <= _SCALAR_ROOTS:
+        # a few contacts turn in a step: Python floats, as in hermite_root (the same numbers)
+        return _max_scalar(t0, t1, a0, a1, d0, d1)
     h = t1 - t0
     c = h * d0
     b = 3.0 * (a1 - a0) - 2.0 * h * d0 - h * d1
@@ -36,9 +41,35 @@ def hermite_max(
     disc = np.sqrt(np.maximum(b * b - 3.0 * a * c, 0.0))
     with np.errstate(divide="ignore", invalid="ignore"):
         s = c / (disc - b)
-    s = np.clip(np.nan_to_num(s, nan=1.0, posinf=1.0), 0.0, 1.0)
+    # nan (0/0) and +inf -> 1, -inf -> 0, the rest clipped to [0, 1]: fmin takes 1 over a nan
+    s = np.maximum(np.fmin(s, 1.0), 0.0)
     p = ((a * s + b) * s + c) * s + a0
     return p, t0 + s * h
+
+
+def _max_scalar(
+    t0: float, t1: float, a0: np.ndarray, a1: np.ndarray, d0: np.ndarray, d1: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """hermite_max on Python floats, contact by contact: the same operations in the same order."""
+    h = t1 - t0
+    ps, ts = [], []
+    for x0, x1, y0, y1 in zip(a0.tolist(), a1.tolist(), d0.tolist(), d1.tolist(), strict=True):
+        c = h * y0
+        b = 3.0 * (x1 - x0) - 2.0 * h * y0 - h * y1
+        a = 2.0 * (x0 - x1) + h * y0 + h * y1
+        q = b * b - 3.0 * a * c
+        disc = math.sqrt(q if not q < 0.0 else 0.0)  # np.maximum(q, 0.0): a nan stays nan
+        den = disc - b
+        if den != 0.0 or den != den:
+            s = c / den if den == den else math.nan
+        elif c != 0.0 and c == c:  # c / +-0: +-inf, by the signs of both
+            s = math.copysign(math.inf, c) * math.copysign(1.0, den)
+        else:
+            s = math.nan  # 0 / 0 or nan / 0
+        s = 1.0 if not s <= 1.0 else s if s > 0.0 else 0.0  # nan and > 1 -> 1, < 0 -> 0
+        ps.append(((a * s + b) * s + c) * s + x0)
+        ts.append(t0 + s * h)
+    return np.array(ps), np.array(ts)
 
 
 def hermite_root(a0: np.ndarray, a1: np.ndarray, d0: np.ndarray, d1: np.ndarray) -> np.ndarray:
