@@ -132,6 +132,9 @@ class RK4Integrator(Integrator):
         self.u_save, self.v_save = np.empty(n), np.empty(n)
         self.history = state.law.history
         self.history_floor: np.ndarray | None = None
+        # a law without history has the same kinks all run (its alpha_max is never written): ask once
+        law = state.law
+        self.fixed_kinks = None if law.history else (law.kinks(state.alpha_hist), law.turn_level(state.alpha_hist))
 
     def start(self, state: ChainState) -> None:
         # alpha_max follows the running maximum of the overlap since t = 0, whose start is the t = 0
@@ -163,8 +166,8 @@ class RK4Integrator(Integrator):
             e_save = state.dash_energy
             self.rk4(state, h_sub, a_ext)
             a_new, adot_new = u[:-1] - u[1:], v[:-1] - v[1:]
-            piece = Piece(state.alpha_now, state.adot_now, a_new, adot_new, roundoff(self.u_save, u), h_sub)
-            crossing = first_kink_crossing(state.law, state.alpha_hist, piece, self.timestep)
+            piece = Piece(state.alpha_now, state.adot_now, a_new, adot_new, self.u_save, u, h_sub)
+            crossing = first_kink_crossing(state.law, state.alpha_hist, piece, self.timestep, self.fixed_kinks)
             if crossing is None:
                 break
             s_ev, contact, kind = crossing
@@ -242,7 +245,9 @@ class RK4Integrator(Integrator):
         """Accept the piece [t0, t1]: its dense output into the state (overlaps and rates at its end,
         the contacts that turned inside it and their Hermite maxima), and the history raised to them."""
         alpha_old, adot_old = state.alpha_now, state.adot_now
-        turning = np.flatnonzero((adot_old > 0.0) & (adot_new <= 0.0) & (alpha_new > 0.0))
+        turning = (np.greater(adot_old, 0.0) & np.less_equal(adot_new, 0.0)).nonzero()[0]
+        if turning.size:
+            turning = turning[alpha_new[turning] > 0.0]  # (the few turning) in contact
         if turning.size:
             p, tp = hermite_max(t0, t1, alpha_old[turning], alpha_new[turning], adot_old[turning], adot_new[turning])
         else:
@@ -278,24 +283,39 @@ _EMPTY = np.empty(0)
 
 
 class Piece(NamedTuple):
-    """A tentative RK4 piece of length h: each overlap and its rate at both ends, and its round-off."""
+    """A tentative RK4 piece of length h: each overlap and its rate at both ends, and the displacements
+    at both ends (the overlaps' round-off, roundoff)."""
 
     a0: np.ndarray
     d0: np.ndarray
     a1: np.ndarray
     d1: np.ndarray
-    scale: np.ndarray  # KINK_ROUNDOFF eps (|u_i| + |u_i+1|) over both ends
+    u0: np.ndarray
+    u1: np.ndarray
     h: float
 
 
-def roundoff(u_old: np.ndarray, u_new: np.ndarray) -> np.ndarray:
-    """KINK_ROUNDOFF eps (|u_i| + |u_i+1|) at both ends of a piece: an overlap is the difference of
-    two displacements, and carries their round-off."""
-    return KINK_ROUNDOFF * EPS * (np.abs(u_old[:-1]) + np.abs(u_old[1:]) + np.abs(u_new[:-1]) + np.abs(u_new[1:]))
+def roundoff(piece: Piece, idx: np.ndarray) -> np.ndarray:
+    """KINK_ROUNDOFF eps (|u_i| + |u_i+1|) at both ends of the piece, for contacts idx: an overlap is
+    the difference of two displacements, and carries their round-off. Only for the few contacts a
+    screen left (crossing, turns_above): the same numbers as over the whole chain, element by element."""
+    u0, u1, j = piece.u0, piece.u1, idx + 1
+    return KINK_ROUNDOFF * EPS * (np.abs(u0[idx]) + np.abs(u0[j]) + np.abs(u1[idx]) + np.abs(u1[j]))
+
+
+def _full(x, shape: tuple[int, ...]) -> np.ndarray:
+    """x broadcast to one value per contact (a law may give a scalar); an array of that shape as it is."""
+    if isinstance(x, np.ndarray) and x.shape == shape:
+        return x
+    return np.broadcast_to(x, shape)
 
 
 def first_kink_crossing(
-    law: ContactLaw, alpha_hist: np.ndarray, piece: Piece, timestep: float
+    law: ContactLaw,
+    alpha_hist: np.ndarray,
+    piece: Piece,
+    timestep: float,
+    fixed: tuple[Sequence, np.ndarray | None] | None = None,
 ) -> tuple[float, int, str] | None:
     """Where in the piece the first contact meets a kink of its force law, or None.
 
@@ -311,24 +331,38 @@ def first_kink_crossing(
     so the same crossing would be found again after the split. A crossing within 1e-6 of the step
     from either end is not split either (that contact only).
 
+    fixed: (kinks, turn_level) when they do not depend on alpha_max (a law without history), else
+    None: asked of the law.
+
     Returns
     -------
     (s, contact, kind) or None
         The fraction s of the piece, the 0-based contact and the kink's name (the split cap's error).
     """
-    found = kink_roots(law.kinks(alpha_hist), piece)
-    turn_level = law.turn_level(alpha_hist)
+    kinks, turn_level = fixed if fixed is not None else (law.kinks(alpha_hist), law.turn_level(alpha_hist))
+    found = kink_roots(kinks, piece)
     if turn_level is not None:
         found += turns_above(turn_level, piece)
-    return earliest(found, piece.h, timestep)
+    return earliest(found, piece.h, timestep) if found else None
 
 
 def crossing(piece: Piece, level: np.ndarray) -> np.ndarray:
-    """Contacts that cross `level` from one side to the other, beyond round-off at both ends."""
-    tol = piece.scale + KINK_ROUNDOFF * EPS * np.abs(level)
-    below0, above0 = piece.a0 < level - tol, piece.a0 > level + tol
-    below1, above1 = piece.a1 < level - tol, piece.a1 > level + tol
-    return np.flatnonzero((below0 & above1) | (above0 & below1))
+    """Contacts that cross `level` (one per contact) from one side to the other, beyond round-off at
+    both ends.
+
+    Most pieces cross no kink: a screen of the contacts whose ends lie strictly on both sides of the
+    level (a superset: a tolerance is never negative, so beyond it means beyond the level) leaves a
+    handful or none, and only those are tested against their round-off.
+    """
+    a0, a1 = piece.a0, piece.a1
+    idx = (np.less(a0, level) ^ np.less(a1, level)).nonzero()[0]
+    if not idx.size:
+        return idx
+    lv, a0, a1 = level[idx], a0[idx], a1[idx]
+    tol = roundoff(piece, idx) + KINK_ROUNDOFF * EPS * np.abs(lv)
+    below0, above0 = a0 < lv - tol, a0 > lv + tol
+    below1, above1 = a1 < lv - tol, a1 > lv + tol
+    return idx[(below0 & above1) | (above0 & below1)]
 
 
 def kink_roots(kinks: Sequence, piece: Piece) -> Crossings:
@@ -336,12 +370,14 @@ def kink_roots(kinks: Sequence, piece: Piece) -> Crossings:
     found = []
     shape = piece.a0.shape
     for kink in kinks:
-        level = np.broadcast_to(kink.level, shape)
+        level = _full(kink.level, shape)
         idx = crossing(piece, level)
+        if not idx.size:
+            continue
         if kink.from_below:
             idx = idx[piece.a0[idx] < level[idx]]
         if kink.where is not None:
-            idx = idx[np.broadcast_to(kink.where, shape)[idx]]
+            idx = idx[_full(kink.where, shape)[idx]]
         if idx.size:
             lv = level[idx]
             s = hermite_root(piece.a0[idx] - lv, piece.a1[idx] - lv, piece.h * piece.d0[idx], piece.h * piece.d1[idx])
@@ -352,14 +388,15 @@ def kink_roots(kinks: Sequence, piece: Piece) -> Crossings:
 def turns_above(turn_level: np.ndarray, piece: Piece) -> Crossings:
     """(s, contacts, kind) of the contacts whose overlap turns inside the piece above the turn level
     (beyond round-off): they start unloading on a new curve there."""
-    turn_level = np.broadcast_to(turn_level, piece.a0.shape)
-    turn = np.flatnonzero((piece.d0 > 0.0) & (piece.d1 < 0.0) & (piece.a1 > 0.0))
+    turn = (np.greater(piece.d0, 0.0) & np.less(piece.d1, 0.0)).nonzero()[0]
+    if turn.size:
+        turn = turn[piece.a1[turn] > 0.0]
     if not turn.size:
         return []
     h = piece.h
     p, sp = hermite_max(0.0, 1.0, piece.a0[turn], piece.a1[turn], piece.d0[turn] * h, piece.d1[turn] * h)
-    lv = turn_level[turn]
-    loading = p > lv + piece.scale[turn] + KINK_ROUNDOFF * EPS * lv
+    lv = _full(turn_level, piece.a0.shape)[turn]
+    loading = p > lv + roundoff(piece, turn) + KINK_ROUNDOFF * EPS * lv
     if not loading.any():
         return []
     return [(sp[loading], turn[loading], "turn above alpha_max")]
