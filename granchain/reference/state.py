@@ -99,14 +99,23 @@ def make_accel(
             return accel_effect
     n = fp.size - 1
     fc = fp[1:n]
+    fp_left, fp_right = fp[:-1], fp[1:]
     alpha = np.empty(n - 1)
     tmp = np.empty(n - 1)
+    # the two views uu[:-1], uu[1:] of the arrays accel is called with (the state's u and RK4's stage
+    # positions: a few, all run long), made once: slicing costs as much as a small ufunc call
+    views: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
     def accel(uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None) -> float:
-        np.subtract(uu[:-1], uu[1:], out=alpha)
+        view = views.get(id(uu))
+        if view is None or view[0] is not uu:  # (the entry holds uu: its id is not reused while cached)
+            view = (uu, uu[:-1], uu[1:])
+            if len(views) < 8:
+                views[id(uu)] = view
+        np.subtract(view[1], view[2], out=alpha)
         np.maximum(alpha, 0.0, out=alpha)
         law.force_into(alpha, alpha_hist, fc, tmp)  # with alpha_max frozen within the step
-        np.subtract(fp[:-1], fp[1:], out=out)
+        np.subtract(fp_left, fp_right, out=out)
         out *= inv_m
         return 0.0
 
