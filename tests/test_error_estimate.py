@@ -159,6 +159,19 @@ CASES = (
     + [("plastic-short-impulse", "lammps"), ("plastic-short-impulse", "verlet")]
     # RK4 locates the kinks: 33 of 59 estimated, 0.79-3.0 of the true error (stop 22, the order-range rule)
     + [("plastic-short-impulse", "rk4")]
+    + [("thornton-short-impulse", "lammps"), ("thornton-short-impulse", "verlet")]
+    + [
+        pytest.param(
+            "thornton-short-impulse",
+            "rk4",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="measured: 1 of 34 estimates 6.3x the true error (contact 6, 'nominal order 4', a true "
+                "error 4e-9 of the peak; the onset's order 2.5 mixing with 4 so that the three runs look like one "
+                "order: docs/error-bars.md)",
+            ),
+        )
+    ]
     + [
         # effect-dashpot with RK4: no estimate by design (test_rk4_with_a_dashpot_runs_no_companion...)
         ("effect-dashpot", "verlet"),
@@ -171,12 +184,25 @@ CASES = (
 @pytest.mark.parametrize("name,integ", CASES)
 def test_estimated_error_is_within_a_factor_3_of_the_true_error(name, integ):
     """Issue 15's validation: estimated / true error (true: a run at dt / 16) in [1/3, 3] wherever
-    the true error is above round-off and an estimate is given, and an estimate for most peaks."""
+    the true error is above round-off and an estimate is given, and an estimate for most peaks.
+
+    On a law with slope kinks Verlet's error follows no order (errors.against_rk4_because), so its run
+    at dt / 16 need not be converged: thornton-short-impulse, contact 34, reference Verlet minus RK4 at
+    dt / 4 was -5.8e-5 N at dt, -9.8e-4 at dt / 4, -6.0e-5 at dt / 16, -3.6e-6 at dt / 64, and against
+    dt / 16 the estimate looked 39x too large (1.5x against dt / 64). There the truth is RK4 (event
+    location) at dt / 4, converged far beyond Verlet's error."""
+    from granchain.physics.laws import law_class
+
     backend, method = ("lammps", None) if integ == "lammps" else ("reference", integ)
     sc, _ = plan_for(resolve_scene(name), backend, method, 1e-3)
     sc = replace(sc, outputs=replace(sc.outputs, histories=(), snapshots=(), history_interval=None))
     got = run_scene(sc, backend=backend, method=method, error_estimate=True)
-    fine = run_scene(replace(sc, run=replace(sc.run, timestep=sc.run.timestep / 16)), backend=backend, method=method)
+    if integ != "rk4" and law_class(sc.contact.law).slope_kinks and not sc.effects.dashpot:
+        fine = run_scene(replace(sc, run=replace(sc.run, timestep=sc.run.timestep / 4)), method="rk4")
+    else:
+        fine = run_scene(
+            replace(sc, run=replace(sc.run, timestep=sc.run.timestep / 16)), backend=backend, method=method
+        )
     a, b = got.solution, fine.solution
     measured = a.complete & b.complete
     true = np.abs(a.peak_force - b.peak_force)
