@@ -107,15 +107,23 @@ class Worker:
         self.proc.wait()
 
 
-def compare(old_tree: str, reps: int, sizes: list[int], scenes: list[str]) -> None:
-    """The old tree and this one side by side: alternating runs, median of reps each, ratios."""
-    workers = {"old": Worker(old_tree), "new": Worker(str(Path(__file__).resolve().parent.parent))}
+def compare(
+    old_tree: str,
+    reps: int,
+    sizes: list[int],
+    scenes: list[str],
+    new_tree: str | None = None,
+    methods=("rk4", "verlet"),
+) -> None:
+    """The old tree and the new one (default this one) side by side: alternating runs, median of reps
+    each, ratios."""
+    workers = {"old": Worker(old_tree), "new": Worker(new_tree or str(Path(__file__).resolve().parent.parent))}
     print(f"old: {workers['old'].tree}\nnew: {workers['new'].tree}")
     heads = ("old", "new", "new/old", "paired")
     print(f"{'case':32s} " + " ".join(f"{h:>8s}" for h in heads) + "   (ns per bead-step; scenes: wall s)")
     cases: list[tuple[str, list]] = []
     for law in ("hertz", "bilinear"):
-        for method in ("rk4", "verlet"):
+        for method in methods:
             for n in sizes:
                 cases.append((f"{law} {method} N={n}", [law, method, n, STEPS[n]]))
     for name in scenes:
@@ -154,12 +162,15 @@ def main() -> None:
     parser.add_argument("--reps", type=int, default=5, help="runs of each tree per case (--compare)")
     parser.add_argument("--sizes", default="100,1000,10000", help="chain lengths (--compare)")
     parser.add_argument("--scene", action="append", default=[], help="also a scene's reference run (--compare)")
+    parser.add_argument("--new", metavar="TREE", help="the tree to compare with --compare's (default: this one)")
+    parser.add_argument("--methods", default="rk4,verlet", help="integrators (--compare)")
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker:
         worker()
     elif args.compare:
-        compare(args.compare, args.reps, [int(s) for s in args.sizes.split(",")], args.scene)
+        sizes = [int(s) for s in args.sizes.split(",")]
+        compare(args.compare, args.reps, sizes, args.scene, args.new, tuple(args.methods.split(",")))
     else:
         table()
 

@@ -78,6 +78,8 @@ class VerletIntegrator(Integrator):
 
     def __init__(self, state: ChainState) -> None:
         self.history = state.law.history
+        self.kick = np.empty(state.n)  # h/2 a and h v, into a preallocated buffer
+        self.alpha = np.empty(state.n - 1)  # the overlaps at the step's end (the history)
 
     def start_segment(self, state: ChainState, seg_start: float) -> None:
         if state.gamma and seg_start > 0.0:
@@ -88,15 +90,20 @@ class VerletIntegrator(Integrator):
     def step(
         self, state: ChainState, t0: float, t1: float, h: float, a_ext: float, on_split: Sequence[SplitHook]
     ) -> float:
-        u, v, a_int = state.u, state.v, state.a_int
-        v += 0.5 * h * a_int
-        v[0] += 0.5 * h * a_ext
-        u += h * v
+        u, v, a_int, kick = state.u, state.v, state.a_int, self.kick
+        half = 0.5 * h
+        np.multiply(a_int, half, out=kick)
+        v += kick
+        v[0] += half * a_ext
+        np.multiply(v, h, out=kick)
+        u += kick
         state.dash_energy += h * state.accel(u, a_int, v)  # the dashpot sees the half-step velocity, as in LAMMPS
-        v += 0.5 * h * a_int
-        v[0] += 0.5 * h * a_ext
+        np.multiply(a_int, half, out=kick)
+        v += kick
+        v[0] += half * a_ext
         if self.history:
-            state.law.update_history(state.alpha_hist, u[:-1] - u[1:])
+            np.subtract(u[:-1], u[1:], out=self.alpha)
+            state.law.update_history(state.alpha_hist, self.alpha)
         return t0
 
     def contact_forces(self, state: ChainState) -> np.ndarray:

@@ -108,16 +108,17 @@ class HermitePeaks(PeakTracker):
         super().__init__(state)
         self.tmax = np.where(self.amax > 0.0, 0.0, np.nan)
         self.amin = self.amax.copy()  # smallest overlap at a piece end since the peak
+        self.rising = np.empty(self.amax.shape, dtype=bool)
 
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
         alpha_new = state.alpha_now
         amax, amin, tmax = self.amax, self.amin, self.tmax
         np.minimum(amin, alpha_new, out=amin)
-        rising = alpha_new > amax
-        if rising.any():
-            amax[rising] = alpha_new[rising]
-            tmax[rising] = t1
-            amin[rising] = alpha_new[rising]
+        rising = np.greater(alpha_new, amax, out=self.rising)
+        # where the overlap rises above its running peak (copyto with where=: no temporaries)
+        np.copyto(amax, alpha_new, where=rising)
+        np.copyto(tmax, t1, where=rising)
+        np.copyto(amin, alpha_new, where=rising)
         turning = state.turning
         if turning.size:
             p, tp = state.turn_peak, state.turn_time
@@ -166,20 +167,31 @@ class ForceSamplePeaks(PeakTracker):
         self.fpk = self.f_now.copy()
         self.tpk = np.where(self.fpk > 0.0, 0.0, np.nan)
         self.fmin = self.fpk.copy()  # smallest force sample since the peak, as the pair styles
+        self.alpha = np.empty(n - 1)  # work arrays of after_step
+        self.rising = np.empty(n - 1, dtype=bool)
 
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
-        self.f_prev2, self.f_prev, self.f_now = self.f_prev, self.f_now, state.fc.copy()
+        # the three samples rotate through three arrays (the oldest is overwritten with the new one)
+        f_now = self.f_prev2
+        np.copyto(f_now, state.fc)
+        self.f_prev2, self.f_prev, self.f_now = self.f_prev, self.f_now, f_now
         self.t_prev2, self.t_prev, self.t_now = self.t_prev, self.t_now, t1
-        f_now, fpk = self.f_now, self.fpk
-        np.maximum(self.amax, state.u[:-1] - state.u[1:], out=self.amax)
+        fpk, f_prev = self.fpk, self.f_prev
+        u = state.u
+        np.subtract(u[:-1], u[1:], out=self.alpha)
+        np.maximum(self.amax, self.alpha, out=self.amax)
         np.minimum(self.fmin, f_now, out=self.fmin)
-        rising = f_now > fpk
-        fpk[rising] = f_now[rising]
-        self.tpk[rising] = t1
-        self.fmin[rising] = f_now[rising]
+        rising = np.greater(f_now, fpk, out=self.rising)
+        # where the sample rises above the running peak (copyto with where=: no temporaries)
+        np.copyto(fpk, f_now, where=rising)
+        np.copyto(self.tpk, t1, where=rising)
+        np.copyto(self.fmin, f_now, where=rising)
         if not math.isfinite(self.t_prev2):
             return False
-        ix = np.flatnonzero((self.f_prev > f_now) & (self.f_prev >= self.f_prev2) & (self.f_prev > 0.0))
+        # a local maximum in the middle sample: screened on the fall to the last sample first
+        ix = np.greater(f_prev, f_now, out=self.rising).nonzero()[0]
+        if ix.size:
+            ix = ix[(f_prev[ix] >= self.f_prev2[ix]) & (f_prev[ix] > 0.0)]
         if ix.size:
             self.refine(state, ix)
         return False
