@@ -15,7 +15,9 @@ comparison; the runs alternate between the two (old first in even repetitions, n
 ones), so that load on a shared machine hits both alike. Per case: the median ns per bead-step of
 each, the ratio of the medians new/old and the median of the ratios of the runs taken back to back
 ("paired": the steadier on a shared machine). --scene NAME adds the reference run of a scene as
-granchain compare makes it (wall seconds instead of ns per bead-step).
+granchain compare makes it (seconds instead of ns per bead-step). --clock cpu times each run by
+its process's CPU time instead of the wall clock: steadier when more processes than cores compete
+(helpers, CI), and what a single-threaded numpy solver costs when it has a core to itself.
 """
 
 from __future__ import annotations
@@ -45,25 +47,32 @@ def _problem(law: str, n: int):
     return ChainProblem(mass=np.full(n, m), law=laws[law], amplitude=4e5 if law == "hertz" else 1e5, duration=1e-6)
 
 
-def run_case(law: str, method: str, n: int, steps: int, dt: float = 2e-8) -> tuple[float, int]:
-    """One run: (ns per bead-step, extra steps)."""
+def run_case(law: str, method: str, n: int, steps: int, dt: float = 2e-8, clock: str = "wall") -> tuple[float, int]:
+    """One run: (ns per bead-step, extra steps); clock "wall" (the solution's wall_time) or "cpu"
+    (this process's CPU time around the call: steadier when more processes than cores compete)."""
+    import time
+
     from granchain.reference.solver import solve_chain
 
-    s = solve_chain(_problem(law, n), steps * dt, dt, method, progress=None)
-    return s.wall_time / (steps * n) * 1e9, s.extra_steps
+    problem = _problem(law, n)
+    c0 = time.process_time()
+    s = solve_chain(problem, steps * dt, dt, method, progress=None)
+    seconds = s.wall_time if clock == "wall" else time.process_time() - c0
+    return seconds / (steps * n) * 1e9, s.extra_steps
 
 
-def run_scene(name: str, method: str) -> float:
-    """Wall seconds of a scene's reference run, as granchain compare makes it (run_reference)."""
+def run_scene(name: str, method: str, clock: str = "wall") -> float:
+    """Seconds (wall or cpu) of a scene's reference run, as granchain compare makes it (run_reference)."""
     import time
 
     from granchain.scene import load_scene
     from granchain.workflows.run import run_reference
 
     scene = load_scene(name)
-    t = time.perf_counter()
+    timer = time.perf_counter if clock == "wall" else time.process_time
+    t = timer()
     run_reference(scene, method)
-    return time.perf_counter() - t
+    return timer() - t
 
 
 def worker() -> None:
@@ -74,10 +83,11 @@ def worker() -> None:
     os.environ["GRANCHAIN_QUIET"] = "1"  # no progress lines from scene runs
     for line in sys.stdin:
         job = json.loads(line)
+        clock = job.pop()
         if job[0] == "scene":
-            out: float = run_scene(job[1], job[2])
+            out: float = run_scene(job[1], job[2], clock)
         else:
-            out = run_case(*job)[0]
+            out = run_case(*job, clock=clock)[0]
         print(json.dumps(out), flush=True)
 
 
@@ -114,13 +124,14 @@ def compare(
     scenes: list[str],
     new_tree: str | None = None,
     methods=("rk4", "verlet"),
+    clock: str = "wall",
 ) -> None:
     """The old tree and the new one (default this one) side by side: alternating runs, median of reps
     each, ratios."""
     workers = {"old": Worker(old_tree), "new": Worker(new_tree or str(Path(__file__).resolve().parent.parent))}
     print(f"old: {workers['old'].tree}\nnew: {workers['new'].tree}")
     heads = ("old", "new", "new/old", "paired")
-    print(f"{'case':32s} " + " ".join(f"{h:>8s}" for h in heads) + "   (ns per bead-step; scenes: wall s)")
+    print(f"{'case':32s} " + " ".join(f"{h:>8s}" for h in heads) + f"   ({clock}: ns per bead-step; scenes: s)")
     cases: list[tuple[str, list]] = []
     for law in ("hertz", "bilinear"):
         for method in methods:
@@ -133,7 +144,7 @@ def compare(
             times: dict[str, list[float]] = {"old": [], "new": []}
             for rep in range(reps):
                 for name in ("old", "new") if rep % 2 == 0 else ("new", "old"):
-                    times[name].append(workers[name].run(job))
+                    times[name].append(workers[name].run([*job, clock]))
             med = {k: statistics.median(v) for k, v in times.items()}
             paired = statistics.median(b / a for a, b in zip(times["old"], times["new"], strict=True))
             print(f"{label:32s} {med['old']:8.1f} {med['new']:8.1f} {med['new'] / med['old']:8.3f} {paired:8.3f}")
@@ -143,14 +154,14 @@ def compare(
             w.close()
 
 
-def table() -> None:
+def table(clock: str = "wall") -> None:
     """The table of this tree: ns per bead-step, median of 3 runs."""
     print(f"{'law':9s} {'method':7s} {'N':>6s} {'steps':>6s} {'ns/bead-step':>13s} {'extra steps':>11s}")
     for law in ("hertz", "bilinear"):
         for method in ("rk4", "verlet"):
             for n in (100, 1000, 10000):
                 steps = STEPS[n]
-                runs = [run_case(law, method, n, steps) for _ in range(3)]
+                runs = [run_case(law, method, n, steps, clock=clock) for _ in range(3)]
                 ns = statistics.median(r[0] for r in runs)
                 print(f"{law:9s} {method:7s} {n:6d} {steps:6d} {ns:13.1f} {runs[0][1]:11d}")
                 sys.stdout.flush()
@@ -164,15 +175,21 @@ def main() -> None:
     parser.add_argument("--scene", action="append", default=[], help="also a scene's reference run (--compare)")
     parser.add_argument("--new", metavar="TREE", help="the tree to compare with --compare's (default: this one)")
     parser.add_argument("--methods", default="rk4,verlet", help="integrators (--compare)")
+    parser.add_argument(
+        "--clock",
+        choices=("wall", "cpu"),
+        default="wall",
+        help="wall time, or the process's CPU time (steadier under load)",
+    )
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker:
         worker()
     elif args.compare:
         sizes = [int(s) for s in args.sizes.split(",")]
-        compare(args.compare, args.reps, sizes, args.scene, args.new, tuple(args.methods.split(",")))
+        compare(args.compare, args.reps, sizes, args.scene, args.new, tuple(args.methods.split(",")), args.clock)
     else:
-        table()
+        table(args.clock)
 
 
 if __name__ == "__main__":

@@ -136,6 +136,9 @@ class RK4Integrator(Integrator):
         self.k1v, self.k2v, self.k3v, self.k4v = (np.empty(n) for _ in range(4))
         self.ut = np.empty(n)
         self.hv = np.empty(n)  # h/2 v, h v, and the updates' products
+        # the factors of rk4 per step length: a step is t1 - t0 with event location, which takes a
+        # handful of values a few ulps apart (the times are sums of steps), each thousands of times
+        self.consts: dict[float, tuple[np.ndarray, ...]] = {}
         self.vt = np.empty(n) if state.gamma else None  # stage velocities, needed only by the dashpot
         self.u_save, self.v_save = np.empty(n), np.empty(n)
         self.history = state.law.history
@@ -208,35 +211,44 @@ class RK4Integrator(Integrator):
         Every product lands in a preallocated buffer (out=) and a product two stages need is taken
         once (hv: h/2 v for stages 2 and 3, then h v for stage 4 and the update); the sums are the
         textbook's, term by term in the same order, so the numbers are those of the plain expressions.
+        The step's scalar factors are 0-d arrays, made once per step length (consts): numpy takes a
+        Python float operand at about half again the cost of the whole call on a short chain.
         """
         u, v, accel, gamma = state.u, state.v, state.accel, state.gamma
         k1v, k2v, k3v, k4v, ut, vt, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.ut, self.vt, self.hv
+        consts = self.consts.get(h)
+        if consts is None:
+            if len(self.consts) >= 32:  # split pieces: lengths seen once
+                self.consts.clear()
+            consts = tuple(np.array(c) for c in (0.5 * h, 0.25 * h * h, h, 0.5 * h * h, h * h / 6.0, h / 6.0))
+            self.consts[h] = consts
+        half_h, quarter_h2, h_, half_h2, h2_6, h_6 = consts
         power = 0.0
         power += accel(u, k1v, v)
         k1v[0] += a_ext
-        np.multiply(v, 0.5 * h, out=hv)
+        np.multiply(v, half_h, out=hv)
         np.add(hv, u, out=ut)
         if gamma:
-            np.multiply(k1v, 0.5 * h, out=vt)
+            np.multiply(k1v, half_h, out=vt)
             vt += v
         power += 2.0 * accel(ut, k2v, vt)
         k2v[0] += a_ext
         # stage 3 position: u + h/2 (v + h/2 k1v)
-        np.multiply(k1v, 0.25 * h * h, out=ut)
+        np.multiply(k1v, quarter_h2, out=ut)
         ut += u
         ut += hv
         if gamma:
-            np.multiply(k2v, 0.5 * h, out=vt)
+            np.multiply(k2v, half_h, out=vt)
             vt += v
         power += 2.0 * accel(ut, k3v, vt)
         k3v[0] += a_ext
         # stage 4 position: u + h (v + h/2 k2v)
-        np.multiply(v, h, out=hv)
-        np.multiply(k2v, 0.5 * h * h, out=ut)
+        np.multiply(v, h_, out=hv)
+        np.multiply(k2v, half_h2, out=ut)
         ut += u
         ut += hv
         if gamma:
-            np.multiply(k3v, h, out=vt)
+            np.multiply(k3v, h_, out=vt)
             vt += v
         power += accel(ut, k4v, vt)
         k4v[0] += a_ext
@@ -247,20 +259,20 @@ class RK4Integrator(Integrator):
         np.add(k1v, k2v, out=ut)
         ut += k3v
         u += hv
-        np.multiply(ut, h * h / 6.0, out=hv)
+        np.multiply(ut, h2_6, out=hv)
         u += hv
         # v += h/6 (k1v + 2 k2v + 2 k3v + k4v)
         ut += k2v
         ut += k3v
         ut += k4v
-        np.multiply(ut, h / 6.0, out=hv)
+        np.multiply(ut, h_6, out=hv)
         v += hv
 
     def end_piece(self, state: ChainState, t0: float, t1: float, alpha_new: np.ndarray, adot_new: np.ndarray) -> None:
         """Accept the piece [t0, t1]: its dense output into the state (overlaps and rates at its end,
         the contacts that turned inside it and their Hermite maxima), and the history raised to them."""
         alpha_old, adot_old = state.alpha_now, state.adot_now
-        turning = (np.greater(adot_old, 0.0) & np.less_equal(adot_new, 0.0)).nonzero()[0]
+        turning = (np.greater(adot_old, _ZERO) & np.less_equal(adot_new, _ZERO)).nonzero()[0]
         if turning.size:
             turning = turning[alpha_new[turning] > 0.0]  # (the few turning) in contact
         if turning.size:
@@ -292,6 +304,7 @@ class RK4Integrator(Integrator):
 
 
 _EMPTY = np.empty(0)
+_ZERO = np.array(0.0)  # 0-d: a cheaper operand than the Python float (RK4Integrator.rk4)
 
 
 # ---- event location: where a tentative RK4 piece first meets a kink of the contact law
@@ -403,7 +416,7 @@ def kink_roots(kinks: Sequence, piece: Piece) -> Crossings:
 def turns_above(turn_level: np.ndarray, piece: Piece) -> Crossings:
     """(s, contacts, kind) of the contacts whose overlap turns inside the piece above the turn level
     (beyond round-off): they start unloading on a new curve there."""
-    turn = (np.greater(piece.d0, 0.0) & np.less(piece.d1, 0.0)).nonzero()[0]
+    turn = (np.greater(piece.d0, _ZERO) & np.less(piece.d1, _ZERO)).nonzero()[0]
     if turn.size:
         turn = turn[piece.a1[turn] > 0.0]
     if not turn.size:
