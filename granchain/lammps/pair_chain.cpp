@@ -20,6 +20,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <type_traits>
 
 using namespace LAMMPS_NS;
 
@@ -254,6 +255,14 @@ template <class Law> double PairChain<Law>::init_one(int i, int j)
   if (setflag[i][j] == 0) error->all(FLERR, "All pair coeffs are not set (pair {} {})", i, j);
   for (int m = 0; m < Law::ncoeff; m++) coeffs[m][j][i] = coeffs[m][i][j];
   d0[j][i] = d0[i][j];
+  // the pair's constants as one record for compute(); cutsq as Pair::init computes it from the cutoff
+  const int nt = atom->ntypes + 1;
+  if ((int) table.size() != nt * nt) table.assign(nt * nt, Coef{});
+  Coef cf;
+  cf.d0 = d0[i][j];
+  cf.cutsq = cf.d0 * cf.d0;
+  for (int m = 0; m < Law::ncoeff; m++) cf.c[m] = coeffs[m][i][j];
+  table[i * nt + j] = table[j * nt + i] = cf;
   return d0[i][j];
 }
 
@@ -305,75 +314,92 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
   const int *ilist = list->ilist;
   const int *numneigh = list->numneigh;
   int **firstneigh = list->firstneigh;
+  if (inum == 0) {
+    track_peaks(ps, fc, fprev, fprev2);
+    return;
+  }
+  // x, f, v are contiguous n x 3 blocks: index them as such (no row pointer to load per access)
+  const double(*const xx)[3] = (const double(*)[3]) x[0];
+  double(*const ff)[3] = (double(*)[3]) f[0];
+  const double(*const vv)[3] = (const double(*)[3]) v[0];
+  const Coef *const tab = table.data();
+  const int nt = atom->ntypes + 1;
 
   // the pair loop as before issue 18 (a branch skips pairs out of contact: measured faster than a
   // branch-free loop, 1.2-1.3x in Pair time, benchmarks/RESULTS.md), less a square root and a
   // division for a chain along x: y and z never change there (every force is along x), so
-  // r = |delx| (sqrt(x * x) == |x| in IEEE arithmetic) and the force is +-F along x
+  // r = |delx| (sqrt(x * x) == |x| in IEEE arithmetic) and the force is +-F along x. Each type pair's
+  // constants are one record (init_one); with one atom type, one record for the whole loop
   const double dt = update->dt;
-  for (int ii = 0; ii < inum; ii++) {
-    const int i = ilist[ii];
-    const int *jlist = firstneigh[i];
-    const int jnum = numneigh[i];
-    for (int jj = 0; jj < jnum; jj++) {
-      const int j = jlist[jj] & NEIGHMASK;
-      const int itype = type[i], jtype = type[j];
-      const double delx = x[i][0] - x[j][0];
-      const double dely = x[i][1] - x[j][1];
-      const double delz = x[i][2] - x[j][2];
-      const double rsq = delx * delx + dely * dely + delz * delz;
-      if (rsq >= cutsq[itype][jtype]) continue;
-      const bool collinear = dely == 0.0 && delz == 0.0;
-      const double r = collinear ? fabs(delx) : sqrt(rsq);
-      const double alpha = d0[itype][jtype] - r;
-      const tagint ti = tag[i], tj = tag[j];
-      if (ti - tj != 1 && tj - ti != 1)
-        error->one(FLERR, "beads {} and {} overlap but are not neighbours in the chain: beads passed through "
-                   "each other (time step too large for this load?)", ti, tj);
-      const int left = ti < tj ? i : j;
-      double c[Law::ncoeff];
-      for (int m = 0; m < Law::ncoeff; m++) c[m] = coeffs[m][itype][jtype];
-      double energy = 0.0;
-      double fmag;
-      if constexpr (Law::history) {
-        const double am = MAX(amax[left], alpha);
-        if (left < nlocal) {
-          fmag = Law::force(alpha, am, c, eflag ? &energy : nullptr, &edis[left]);
-          amax[left] = am;
+  auto loop = [&](auto one_type) {
+    constexpr bool ONE = decltype(one_type)::value;
+    const Coef &cf1 = tab[nt + 1];    // types 1 1
+    for (int ii = 0; ii < inum; ii++) {
+      const int i = ilist[ii];
+      const int *jlist = firstneigh[i];
+      const int jnum = numneigh[i];
+      for (int jj = 0; jj < jnum; jj++) {
+        const int j = jlist[jj] & NEIGHMASK;
+        const Coef &cf = ONE ? cf1 : tab[type[i] * nt + type[j]];
+        const double delx = xx[i][0] - xx[j][0];
+        const double dely = xx[i][1] - xx[j][1];
+        const double delz = xx[i][2] - xx[j][2];
+        const double rsq = delx * delx + dely * dely + delz * delz;
+        if (rsq >= cf.cutsq) continue;
+        const bool collinear = dely == 0.0 && delz == 0.0;
+        const double r = collinear ? fabs(delx) : sqrt(rsq);
+        const double alpha = cf.d0 - r;
+        const tagint ti = tag[i], tj = tag[j];
+        if (ti - tj != 1 && tj - ti != 1)
+          error->one(FLERR, "beads {} and {} overlap but are not neighbours in the chain: beads passed through "
+                     "each other (time step too large for this load?)", ti, tj);
+        const int left = ti < tj ? i : j;
+        double energy = 0.0;
+        double fmag;
+        if constexpr (Law::history) {
+          const double am = MAX(amax[left], alpha);
+          if (left < nlocal) {
+            fmag = Law::force(alpha, am, cf.c, eflag ? &energy : nullptr, &edis[left]);
+            amax[left] = am;
+          } else {
+            fmag = Law::force(alpha, am, cf.c, eflag ? &energy : nullptr, nullptr);
+          }
         } else {
-          fmag = Law::force(alpha, am, c, eflag ? &energy : nullptr, nullptr);
+          fmag = Law::force(alpha, alpha, cf.c, eflag ? &energy : nullptr, nullptr);
         }
-      } else {
-        fmag = Law::force(alpha, alpha, c, eflag ? &energy : nullptr, nullptr);
-      }
-      if (gamma > 0.0) {
-        // dashpot on the overlap rate: d(alpha)/dt = -dr/dt; the total force never pulls
-        const double rate =
-            -(delx * (v[i][0] - v[j][0]) + dely * (v[i][1] - v[j][1]) + delz * (v[i][2] - v[j][2])) / r;
-        const double felastic = fmag;
-        fmag = MAX(felastic + gamma * rate, 0.0);
-        if (new_sample && left < nlocal) edash[left] += (fmag - felastic) * rate * dt;
-      }
-      if (left < nlocal) fc[left] = fmag;
-      // repulsive: pushes i away from j
-      if (collinear) {
-        const double fx = delx > 0.0 ? fmag : -fmag;
-        f[i][0] += fx;
-        if (newton_pair || j < nlocal) f[j][0] -= fx;
-      } else {
-        const double fpair = fmag / r;
-        f[i][0] += delx * fpair;
-        f[i][1] += dely * fpair;
-        f[i][2] += delz * fpair;
-        if (newton_pair || j < nlocal) {
-          f[j][0] -= delx * fpair;
-          f[j][1] -= dely * fpair;
-          f[j][2] -= delz * fpair;
+        if (gamma > 0.0) {
+          // dashpot on the overlap rate: d(alpha)/dt = -dr/dt; the total force never pulls
+          const double rate =
+              -(delx * (vv[i][0] - vv[j][0]) + dely * (vv[i][1] - vv[j][1]) + delz * (vv[i][2] - vv[j][2])) / r;
+          const double felastic = fmag;
+          fmag = MAX(felastic + gamma * rate, 0.0);
+          if (new_sample && left < nlocal) edash[left] += (fmag - felastic) * rate * dt;
         }
+        if (left < nlocal) fc[left] = fmag;
+        // repulsive: pushes i away from j (newton_pair is off: init_style)
+        if (collinear) {
+          const double fx = delx > 0.0 ? fmag : -fmag;
+          ff[i][0] += fx;
+          if (j < nlocal) ff[j][0] -= fx;
+        } else {
+          const double fpair = fmag / r;
+          ff[i][0] += delx * fpair;
+          ff[i][1] += dely * fpair;
+          ff[i][2] += delz * fpair;
+          if (j < nlocal) {
+            ff[j][0] -= delx * fpair;
+            ff[j][1] -= dely * fpair;
+            ff[j][2] -= delz * fpair;
+          }
+        }
+        if (evflag) ev_tally(i, j, nlocal, newton_pair, energy, 0.0, fmag / r, delx, dely, delz);
       }
-      if (evflag) ev_tally(i, j, nlocal, newton_pair, energy, 0.0, fmag / r, delx, dely, delz);
     }
-  }
+  };
+  if (atom->ntypes == 1)
+    loop(std::true_type{});
+  else
+    loop(std::false_type{});
 
   track_peaks(ps, fc, fprev, fprev2);
   if (vflag_fdotr) virial_fdotr_compute();

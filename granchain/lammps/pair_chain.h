@@ -156,6 +156,10 @@ template <class Law> class PairChain : public PairChainBase {
 
  protected:
   double **coeffs[Law::ncoeff];    // the law's pair_coeff numbers per type pair, k first
+  struct Coef {
+    double cutsq, d0, c[Law::ncoeff];
+  };
+  std::vector<Coef> table;    // per type pair (itype * (ntypes + 1) + jtype), filled by init_one
   void allocate();
 };
 
