@@ -334,19 +334,20 @@ def lmp_run(deck: str, data: str, plugin_dir: str) -> tuple[str, float]:
     with tempfile.TemporaryDirectory() as tmp:
         Path(tmp, "deck.lmp").write_text(deck)
         Path(tmp, "chain.data").write_text(data)
-        proc = subprocess.Popen(
-            [str(binary), "-in", "deck.lmp", "-screen", "none", "-log", "log"],
+        # GNU time measures lmp's own peak: a child forked from this Python process would count this
+        # process's pages in its max RSS (Linux keeps the pre-exec high-water mark)
+        proc = subprocess.run(
+            ["/usr/bin/time", "-f", "%M", "-o", "rss.txt", str(binary), "-in", "deck.lmp", "-screen", "none"]
+            + ["-log", "log"],
             cwd=tmp,
             env=env,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
         )
-        _, status, usage = os.wait4(proc.pid, 0)
-        proc.returncode = os.waitstatus_to_exitcode(status)
         log = Path(tmp, "log").read_text()
         if proc.returncode != 0 or plugin_dir not in log:
             raise SystemExit(f"lmp failed (exit {proc.returncode}) or did not load {plugin_dir}:\n{log[-2000:]}")
-        return log, usage.ru_maxrss / 1024
+        return log, float(Path(tmp, "rss.txt").read_text().split()[-1]) / 1024
 
 
 def cmd_scaling(args) -> None:

@@ -63,11 +63,11 @@ def test_every_step_on_two_ranks(tmp_path):
     assert np.array_equal(steps, np.arange(len(steps)))
 
 
-def test_a_halted_run_leaves_a_whole_file_of_its_finished_runs(tmp_path):
-    """The run watch stops the deck in its second run (a low force bound): histories.npy is the whole
-    file the first run's end wrote, the text dump's first samples, and no .part is left. (The samples
-    after it are written only if the LAMMPS instance is closed after the error: granchain's worker
-    exits without.) A run that did not finish writes no results dump, which is what marks a finished one."""
+def test_a_halted_run_leaves_a_whole_file(tmp_path):
+    """The run watch stops the deck in its second run (a low force bound): histories.npy is a whole file
+    holding the text dump's first samples: those of the finished first run, or all up to the halt when
+    the LAMMPS instance was closed after the error (the fix writes them when deleted); no .part is left.
+    A run that did not finish writes no results dump, which is what marks a finished one."""
     sc = load_scene("default")
     d = render_deck(sc, options=NPY)
     low = re.sub(r"\(c_watch_max\[1\] > \S+\)", "(c_watch_max[1] > 2000.0)", both(d.deck))
@@ -76,7 +76,7 @@ def test_a_halted_run_leaves_a_whole_file_of_its_finished_runs(tmp_path):
     steps, ids, f, v = read_history_table(tmp_path / "histories.npy")
     dd = read_dump(tmp_path / "histories.dump")
     k = len(steps)
-    assert 0 < k < len(dd.step) and np.array_equal(steps, dd.step[:k]) and np.array_equal(ids, dd.ids)
+    assert 0 < k <= len(dd.step) and np.array_equal(steps, dd.step[:k]) and np.array_equal(ids, dd.ids)
     assert np.array_equal(f, dd.columns["d_fc"][:k]) and np.array_equal(v, dd.columns["v_vel"][:k])
     assert not list(tmp_path.glob("*.part")) and not (tmp_path / "peaks.dump").exists()
 

@@ -42,7 +42,7 @@ def legacy(deck: str) -> str:
     """The deck with LAMMPS's built-ins in place of the plugin's pieces and a neighbour check every step."""
     assert deck.count(WATCH_NEW) == 1 and deck.count(MOMENTUM_NEW) <= 1  # no momentum watch with a wall or F0
     deck = deck.replace(WATCH_NEW, WATCH_OLD).replace(MOMENTUM_NEW, MOMENTUM_OLD)
-    deck = _sub(r"^neigh_modify\s+every \d+ delay 0 check yes$", "neigh_modify    every 1 delay 0 check yes", deck)
+    deck = _sub(r"^neigh_modify\s+every \d+ delay 0 check yes", "neigh_modify    every 1 delay 0 check yes", deck)
     if "chain/nve" in deck:
         deck = _sub(r"^(fix\s+integrate\s+\S+\s+)chain/nve$", r"\1nve", deck)
     commands = "\n".join(_commands(deck))
@@ -61,8 +61,8 @@ def test_the_deck_uses_the_plugin_pieces():
     deck = render_deck(load_scene("default"), options=PLUGIN).deck
     assert WATCH_NEW in deck and MOMENTUM_NEW in deck
     assert not re.search(r"^compute\s+watch\w*\s+\S+\s+reduce", deck, re.M)
-    assert re.search(r"^neigh_modify\s+every 10 delay 0 check yes$", deck, re.M)
-    assert re.search(r"^neigh_modify\s+every 10 delay 0 check yes$", render_deck(load_scene("default")).deck, re.M)
+    assert re.search(r"^neigh_modify\s+every 10 delay 0 check yes binsize \S+$", deck, re.M)
+    assert re.search(r"^neigh_modify\s+every 10 delay 0 check yes", render_deck(load_scene("default")).deck, re.M)
     builtins = render_deck(load_scene("default"), options=DeckOptions(neigh_every=1)).deck
     assert _commands(legacy(deck)) == _commands(builtins)  # legacy() is the deck with the built-ins
 
@@ -179,6 +179,6 @@ def test_dangerous_build_fails_the_run(tmp_path):
 
 def test_sparse_check_needs_the_distance_check(tmp_path):
     d = render_deck(load_scene("default"))
-    deck = _sub(r"^neigh_modify\s+every 10 delay 0 check yes$", "neigh_modify    every 10 delay 0 check no", d.deck)
+    deck = _sub(r"^neigh_modify\s+every 10 delay 0 check yes", "neigh_modify    every 10 delay 0 check no", d.deck)
     with pytest.raises(LammpsError, match="needs 'check yes'"):
         run_deck(deck, d.data, work_dir=tmp_path)

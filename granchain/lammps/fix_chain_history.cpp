@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <mpi.h>
+#include <unistd.h>
 
 using namespace LAMMPS_NS;
 using namespace FixConst;
@@ -22,7 +23,13 @@ FixChainHistory::FixChainHistory(LAMMPS *lmp, int narg, char **arg) :
   if (narg != 5) error->all(FLERR, "Illegal fix chain/history command: fix ID group chain/history N file");
   nevery = utils::inumeric(FLERR, arg[3], false, lmp);
   if (nevery <= 0) error->all(FLERR, "fix chain/history N must be > 0, got {}", nevery);
+  // the file's absolute path, fixed now: the fix may write it when deleted (a LAMMPS instance closed after
+  // an error), by when the caller may have changed directory
   file = arg[4];
+  if (!file.empty() && file[0] != '/') {
+    char cwd[4096];
+    if (getcwd(cwd, sizeof(cwd))) file = std::string(cwd) + "/" + file;
+  }
   if (atom->map_style == Atom::MAP_NONE)
     error->all(FLERR, "fix chain/history needs an atom map (atom_modify map array or hash)");
 }

@@ -182,13 +182,22 @@ class AtomLayout:
     extra_types: tuple[str, ...]  # the effects' atom types, in registry order
     offset: int  # atoms in front of bead 1 (Effect.beads_in_front)
     skin: float  # neighbor skin: 0.2 x the smallest bead diameter
+    rmax: float  # the largest bead radius
 
     @classmethod
     def of(cls, scene) -> AtomLayout:
         skin = 0.2 * 2.0 * float(min(scene.bead_radii)) if scene.per_bead else 0.2 * scene.diameter
+        rmax = float(max(scene.bead_radii)) if scene.per_bead else float(scene.chain.radius)
         active = active_effects(scene)
         extra = tuple(e.atom_type for e in active if e.atom_type)
-        return cls(scene.chain.beads, extra, sum(e.beads_in_front for e in active), skin)
+        return cls(scene.chain.beads, extra, sum(e.beads_in_front for e in active), skin, rmax)
+
+    @property
+    def binsize(self) -> float:
+        """Bins for neighbour builds and atom sorting: 2 x (the contact distance + skin), wider than
+        LAMMPS's default half of it. A chain along x needs few bins across; at the default 1e6 beads
+        took 83 million bins (a third of a GB)."""
+        return 2.0 * (2.0 * self.rmax + self.skin)
 
     @property
     def striker(self) -> bool:
