@@ -83,7 +83,7 @@ def test_a_halted_run_leaves_a_whole_file(tmp_path):
 
 def test_the_text_dump_is_read_without_a_table(tmp_path):
     sc = make_scene(beads=10, end_time=2e-6, timestep=2e-8, outputs="histories = [1, 5]")
-    d = render_deck(sc)
+    d = render_deck(sc, options=DeckOptions(history_file="dump"))
     assert "chain/history" not in d.deck and "histories.dump" in d.deck
     _, work = run_deck(d.deck, d.data, work_dir=tmp_path)
     t, f, v = read_histories(work)

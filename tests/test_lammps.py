@@ -14,7 +14,7 @@ from granchain.lammps.runner import LammpsError, read_results, run_deck, run_lam
 from granchain.physics.laws import LAWS
 from granchain.postprocess.dumps import read_dump
 from granchain.reference.solver import ChainProblem, solve_chain
-from granchain.templates import render_deck
+from granchain.templates import DeckOptions, render_deck
 from granchain.workflows.run import run_reference
 
 from .conftest import BILINEAR, LAW_NAMES, law_example, make_scene
@@ -39,9 +39,12 @@ def test_plugin_builds_and_loads():
 def test_hertz_matches_builtin_granular(tmp_path):
     """Same chain, our chain/hertz vs pair_style granular hertz/material (no damping, no tangential)."""
     sc = make_scene(beads=30, loading=SHORT, end_time=1e-4, timestep=2e-8, outputs="histories = [1, 5, 10, 20]")
-    deck = render_deck(sc)
+    # text histories (with the displacement column) from both; the plugin's own pieces against these
+    # built-ins: tests/test_plugin_watch.py
+    legacy = DeckOptions(history_file="dump")
+    deck = render_deck(sc, options=legacy)
     ours, w1 = run_deck(deck.deck, deck.data, work_dir=tmp_path / "ours")
-    builtin = render_deck(sc, yardstick="builtin").deck
+    builtin = render_deck(sc, yardstick="builtin", options=legacy).deck
     _, w2 = run_deck(builtin, deck.data, work_dir=tmp_path / "builtin")
     a, b = read_dump(w1 / "histories.dump"), read_dump(w2 / "histories.dump")
     assert len(a.step) == len(b.step) == 5001
@@ -122,8 +125,8 @@ def test_mpi_two_ranks_equals_serial(law, tmp_path):
     deck = render_deck(sc)
     # record which rank owns each bead at the start and the end (test only)
     text = deck.deck.replace(
-        "fix             integrate all nve",
-        "fix             integrate all nve\nwrite_dump all custom owner_start.dump id x y z proc",
+        "fix             integrate all chain/nve",
+        "fix             integrate all chain/nve\nwrite_dump all custom owner_start.dump id x y z proc",
     )
     text += "write_dump all custom owner_end.dump id x y z proc\n"
     serial, w1 = run_deck(text, deck.data, 1, tmp_path / "np1")
@@ -180,7 +183,7 @@ def test_decks_declare_only_their_effects():
     vel = render_deck(make_scene(loading='kind = "velocity"\nvelocity = 5.0')).deck
     assert "addforce" not in vel and "set             atom 1 vx 5.0" in vel
     hist = render_deck(make_scene(outputs="histories = [2]")).deck
-    assert "dump            history history custom 1 histories.dump" in hist
+    assert "fix             history history chain/history 1 histories.npy" in hist
 
 
 def test_rendered_deck_runs_with_plain_lmp(tmp_path):

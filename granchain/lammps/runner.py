@@ -35,6 +35,7 @@ from granchain.peaks import complete_peaks, leading_pulse, unreached_as_nan
 from granchain.physics.effects import active_effects
 from granchain.physics.effects import work as effects_work
 from granchain.postprocess.dumps import read_dump
+from granchain.postprocess.histories import read_histories
 from granchain.problem import ChainProblem, precompressed_displacements
 from granchain.progress import Progress
 from granchain.results import ChainSolution, RunResult, distribution_version, pid_alive
@@ -42,7 +43,16 @@ from granchain.schedule import scene_step_plan, step_times
 from granchain.templates import RESULT_COLUMNS, RESULTS_DUMP, RUN_END_FILE, AtomLayout, atom_layout, render_deck
 
 #: files of a LAMMPS work directory that are copied into the run directory
-OUTPUT_GLOBS = ("deck.lmp", "chain.data", "log.lammps", "*.dump", "energy.txt", "load_end.txt", RUN_END_FILE)
+OUTPUT_GLOBS = (
+    "deck.lmp",
+    "chain.data",
+    "log.lammps",
+    "*.dump",
+    "histories.npy",
+    "energy.txt",
+    "load_end.txt",
+    RUN_END_FILE,
+)
 
 
 class LammpsError(GranchainError, RuntimeError):
@@ -524,8 +534,7 @@ def read_solution(
     h_t = np.zeros(0)
     h_f = h_v = np.zeros((0, len(hist)))
     if hist:
-        dd = read_dump(work / "histories.dump", times)
-        h_t, h_f, h_v = dd.time, dd.columns["d_fc"], dd.columns["v_vel"]
+        h_t, h_f, h_v = read_histories(work, times)  # histories.npy (fix chain/history) or histories.dump
     snaps = scene.outputs.snapshots
     s_u, s_v, s_f = [], [], []
     u_static = np.zeros(n)

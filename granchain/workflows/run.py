@@ -216,7 +216,7 @@ def output_sizes(scene) -> dict[str, float]:
     if scene.outputs.histories:
         frames = steps / history_stride(scene) + 1
         n = len(scene.outputs.histories)
-        sizes["histories.dump"] = frames * (DUMP_FRAME_HEADER_BYTES + n * DUMP_LINE_BYTES)
+        sizes["histories.npy"] = 8 * (1 + frames) * (1 + 2 * n)  # LAMMPS: float64 time, forces, velocities
         sizes["histories.csv"] = frames * (1 + 2 * n) * 24
     if dump_stride(scene):
         frames = steps / dump_stride(scene) + 1
