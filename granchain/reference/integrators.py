@@ -80,6 +80,8 @@ class VerletIntegrator(Integrator):
         self.history = state.law.history
         self.kick = np.empty(state.n)  # h/2 a and h v, into a preallocated buffer
         self.alpha = np.empty(state.n - 1)  # the overlaps at the step's end (the history)
+        self.u_left, self.u_right = state.u[:-1], state.u[1:]
+        self.consts: dict[float, tuple[np.ndarray, np.ndarray]] = {}
 
     def start_segment(self, state: ChainState, seg_start: float) -> None:
         if state.gamma and seg_start > 0.0:
@@ -92,17 +94,21 @@ class VerletIntegrator(Integrator):
     ) -> float:
         u, v, a_int, kick = state.u, state.v, state.a_int, self.kick
         half = 0.5 * h
-        np.multiply(a_int, half, out=kick)
+        consts = self.consts.get(h)
+        if consts is None:  # the plan's step and a segment's last: 0-d arrays, cheaper operands than floats
+            consts = self.consts[h] = (np.array(half), np.array(h))
+        half_h, h_ = consts
+        np.multiply(a_int, half_h, out=kick)
         v += kick
         v[0] += half * a_ext
-        np.multiply(v, h, out=kick)
+        np.multiply(v, h_, out=kick)
         u += kick
         state.dash_energy += h * state.accel(u, a_int, v)  # the dashpot sees the half-step velocity, as in LAMMPS
-        np.multiply(a_int, half, out=kick)
+        np.multiply(a_int, half_h, out=kick)
         v += kick
         v[0] += half * a_ext
         if self.history:
-            np.subtract(u[:-1], u[1:], out=self.alpha)
+            np.subtract(self.u_left, self.u_right, out=self.alpha)
             state.law.update_history(state.alpha_hist, self.alpha)
         return t0
 
@@ -141,6 +147,7 @@ class RK4Integrator(Integrator):
         self.consts: dict[float, tuple[np.ndarray, ...]] = {}
         self.vt = np.empty(n) if state.gamma else None  # stage velocities, needed only by the dashpot
         self.u_save, self.v_save = np.empty(n), np.empty(n)
+        self.views = (state.u[:-1], state.u[1:], state.v[:-1], state.v[1:])  # (u and v change in place)
         self.history = state.law.history
         self.history_floor: np.ndarray | None = None
         # a law without history has the same kinks all run (its alpha_max is never written): ask once
@@ -168,15 +175,16 @@ class RK4Integrator(Integrator):
         """One plan step with event location: try the rest of the step; while it crosses a kink, take
         the piece up to the first crossing instead and try again from there. Returns the last piece's start."""
         u, v = state.u, state.v
+        u_left, u_right, v_left, v_right = self.views
         t = t0
         splits = 0
         while True:
             h_sub = t1 - t
-            self.u_save[:] = u
-            self.v_save[:] = v
+            np.copyto(self.u_save, u)
+            np.copyto(self.v_save, v)
             e_save = state.dash_energy
             self.rk4(state, h_sub, a_ext)
-            a_new, adot_new = u[:-1] - u[1:], v[:-1] - v[1:]
+            a_new, adot_new = np.subtract(u_left, u_right), np.subtract(v_left, v_right)
             piece = Piece(state.alpha_now, state.adot_now, a_new, adot_new, self.u_save, u, h_sub)
             crossing = first_kink_crossing(state.law, state.alpha_hist, piece, self.timestep, self.fixed_kinks)
             if crossing is None:
@@ -192,13 +200,13 @@ class RK4Integrator(Integrator):
                     "report it with the scene; meanwhile method 'verlet' (--method verlet) runs "
                     "without event location"
                 )
-            u[:] = self.u_save
-            v[:] = self.v_save
+            np.copyto(u, self.u_save)
+            np.copyto(v, self.v_save)
             state.dash_energy = e_save
             self.rk4(state, s_ev * h_sub, a_ext)
             self.extra_steps += 2  # the rejected try and the split piece
             t_split = t + s_ev * h_sub
-            self.end_piece(state, t, t_split, u[:-1] - u[1:], v[:-1] - v[1:])
+            self.end_piece(state, t, t_split, np.subtract(u_left, u_right), np.subtract(v_left, v_right))
             for hook in on_split:
                 hook(state, t, t_split)
             t = t_split

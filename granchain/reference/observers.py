@@ -168,6 +168,7 @@ class ForceSamplePeaks(PeakTracker):
         self.tpk = np.where(self.fpk > 0.0, 0.0, np.nan)
         self.fmin = self.fpk.copy()  # smallest force sample since the peak, as the pair styles
         self.alpha = np.empty(n - 1)  # work arrays of after_step
+        self.u_left, self.u_right = state.u[:-1], state.u[1:]  # (u changes in place)
         self.rising = np.empty(n - 1, dtype=bool)
 
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
@@ -177,8 +178,7 @@ class ForceSamplePeaks(PeakTracker):
         self.f_prev2, self.f_prev, self.f_now = self.f_prev, self.f_now, f_now
         self.t_prev2, self.t_prev, self.t_now = self.t_prev, self.t_now, t1
         fpk, f_prev = self.fpk, self.f_prev
-        u = state.u
-        np.subtract(u[:-1], u[1:], out=self.alpha)
+        np.subtract(self.u_left, self.u_right, out=self.alpha)
         np.maximum(self.amax, self.alpha, out=self.amax)
         np.minimum(self.fmin, f_now, out=self.fmin)
         rising = np.greater(f_now, fpk, out=self.rising)
