@@ -136,6 +136,21 @@ def measured_contacts(scene, solution) -> np.ndarray:
     return np.flatnonzero(c)
 
 
+def per_contact(solutions, name: str, n: int, complete_only: bool = False) -> list:
+    """One per-contact quantity (the first n contacts) of each solution (None stays None: no such
+    companion); complete_only: nan where that run's peak is not complete."""
+    out = []
+    for s in solutions:
+        if s is None:
+            out.append(None)
+            continue
+        v = np.asarray(getattr(s, name), dtype=float)[:n].copy()
+        if complete_only:
+            v[~np.asarray(s.complete, dtype=bool)[:n]] = np.nan
+        out.append(v)
+    return out
+
+
 def against_rk4_because(method: str, scene) -> str | None:
     """Why this Verlet run's error is measured against RK4 runs rather than by Richardson, or None.
 
@@ -206,18 +221,7 @@ def estimate_errors(result, run_one, method: str, stable_timestep: float, run_rk
     n = len(sol.peak_force)
 
     def values(name: str, complete_only: bool = False) -> list:
-        """One per-contact quantity from the run and its companions (None: no such companion);
-        complete_only: nan where that run's peak is not complete."""
-        out = []
-        for s in (sol, coarse, coarser):
-            if s is None:
-                out.append(None)
-                continue
-            v = np.asarray(getattr(s, name), dtype=float)[:n].copy()
-            if complete_only:
-                v[~np.asarray(s.complete, dtype=bool)[:n]] = np.nan
-            out.append(v)
-        return out
+        return per_contact((sol, coarse, coarser), name, n, complete_only)
 
     pf, tp = values("peak_force", True), values("time_of_peak", True)
     lf, lt = values("leading_pulse_force"), values("leading_pulse_time")
@@ -281,13 +285,7 @@ def _against_rk4(result, run_rk4) -> ErrorReport:
     n = len(sol.peak_force)
 
     def values(name: str, complete_only: bool = False) -> list:
-        out = []
-        for s in (sol, *runs):
-            v = np.asarray(getattr(s, name), dtype=float)[:n].copy()
-            if complete_only:
-                v[~np.asarray(s.complete, dtype=bool)[:n]] = np.nan
-            out.append(v)
-        return out
+        return per_contact((sol, *runs), name, n, complete_only)
 
     pf, tp = values("peak_force", True), values("time_of_peak", True)
     lf, lt = values("leading_pulse_force"), values("leading_pulse_time")
