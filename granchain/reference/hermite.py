@@ -96,17 +96,20 @@ def hermite_root(a0: np.ndarray, a1: np.ndarray, d0: np.ndarray, d1: np.ndarray)
     lo, hi = np.zeros(a0.size), np.ones(a0.size)
     for _ in range(40):  # bisection on the Hermite cubic, which brackets a root
         mid = 0.5 * (lo + hi)
-        m2 = mid * mid
-        p = (
-            (2 * m2 * mid - 3 * m2 + 1) * a0
-            + (m2 * mid - 2 * m2 + mid) * d0
-            + (-2 * m2 * mid + 3 * m2) * a1
-            + (m2 * mid - m2) * d1
-        )
+        p = _cubic(mid, a0, a1, d0, d1)
         left = np.sign(p) == np.sign(a0)
         lo = np.where(left, mid, lo)
         hi = np.where(left, hi, mid)
     return 0.5 * (lo + hi)
+
+
+def _cubic(s, a0, a1, d0, d1):
+    """The Hermite cubic through (a0, d0) at s = 0 and (a1, d1) at s = 1, at s (floats or arrays alike:
+    the same operations in the same order, so both bisections give the same bits)."""
+    m2 = s * s
+    return (
+        (2 * m2 * s - 3 * m2 + 1) * a0 + (m2 * s - 2 * m2 + s) * d0 + (-2 * m2 * s + 3 * m2) * a1 + (m2 * s - m2) * d1
+    )
 
 
 #: hermite_root on Python floats up to this many contacts, on numpy arrays beyond
@@ -124,13 +127,7 @@ def _root(a0: float, a1: float, d0: float, d1: float) -> float:
     s0 = _sign(a0)
     for _ in range(40):
         mid = 0.5 * (lo + hi)
-        m2 = mid * mid
-        p = (
-            (2 * m2 * mid - 3 * m2 + 1) * a0
-            + (m2 * mid - 2 * m2 + mid) * d0
-            + (-2 * m2 * mid + 3 * m2) * a1
-            + (m2 * mid - m2) * d1
-        )
+        p = _cubic(mid, a0, a1, d0, d1)
         if _sign(p) == s0:  # nan never equals: as np.sign(nan) == np.sign(x), False
             lo = mid
         else:
