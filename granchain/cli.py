@@ -164,7 +164,9 @@ def print_result(result, out) -> None:
             where = f" at contact {e['error_estimate_contact']}" if worst is not None else ""
             n_bad = len(e["unreliable_contacts"])
             print(
-                f"  {'largest peak-force error (1)':38s} {_fmt(worst)}{where}   (measured: runs at "
+                f"  {'largest peak-force error (1)':38s} {_fmt(worst)}{where}   (measured: "
+                + ("reference RK4 " if e.get("companion_method") == "rk4" else "")
+                + "runs at "
                 + ", ".join(f"{t:g}" for t in e["companion_timesteps"])
                 + f" s, {e['companion_wall_time']:.3g} s more)"
             )
