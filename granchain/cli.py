@@ -53,16 +53,19 @@ def np_arg(text: str) -> int | str:
 
 def auto_np(scene: Scene, backend: str) -> int:
     """--np auto: one rank where MPI does not pay (the reference backend, a chain shorter than the
-    measured crossover, one core), else granchain.schedule.auto_ranks; said on stderr."""
-    from granchain.schedule import MPI_CROSSOVER_BEADS, auto_ranks
+    measured crossover, one idle core), else granchain.schedule.auto_ranks over the idle cores; said
+    on stderr."""
+    from granchain.schedule import MPI_CROSSOVER_BEADS, auto_ranks, idle_cores
     from granchain.workflows.run import available_cores
 
     if backend != "lammps":
         return 1
-    n = auto_ranks(scene.chain.beads, available_cores())
+    cores = available_cores()
+    idle = idle_cores(cores)
+    n = auto_ranks(scene.chain.beads, idle)
     print(
-        f"--np auto: {n} rank{'s' if n > 1 else ''} for {scene.chain.beads} beads on {available_cores()} cores "
-        f"(two ranks pay from {MPI_CROSSOVER_BEADS} beads on)",
+        f"--np auto: {n} rank{'s' if n > 1 else ''} for {scene.chain.beads} beads on {idle} idle of {cores} cores "
+        f"(two ranks pay from {MPI_CROSSOVER_BEADS} beads on idle cores)",
         file=sys.stderr,
     )
     return n

@@ -8,6 +8,7 @@ Both backends and the deck builder read it, so their steps, stop checks and samp
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -96,15 +97,37 @@ def _stride(scene, interval) -> int:
     return max(1, round(interval / scene.run.timestep))
 
 
-#: Chain length (beads) at which two MPI ranks first beat one in LAMMPS's loop time: below it the
-#: ranks' synchronisation every step (ghost positions, the neighbour check's reduction) costs more
-#: than halving the chain saves. Measured by `python benchmarks/bench_pair.py mpi` on the 2-core
-#: development machine while other jobs ran (benchmarks/RESULTS.md, issue 18): np 2 / np 1 loop time
-#: 0.85x as fast at 1e5 beads, 1.12x at 3e5, 1.26x at 1e6; log-interpolated crossover 1.8e5.
-MPI_CROSSOVER_BEADS = 200_000
+#: Chain length (beads) at which two MPI ranks first beat one in LAMMPS's loop time on two otherwise
+#: idle cores: below it the ranks' synchronisation every step (ghost positions, the neighbour check's
+#: reduction) costs more than halving the chain saves. Measured by `python benchmarks/bench_pair.py mpi`
+#: on the 2-core development machine at load average 0.1-0.8 (benchmarks/RESULTS.md, issue 18, stop
+#: 24): np 1 / np 2 loop time 1.12-1.24x at 1e3-3e3 beads (within the noise of 1), 1.67x at 1e4,
+#: 1.86-2.12x at 3e4-3e5, 1.51x at 1e6. On cores that are busy with other work the ranks wait for each
+#: other every step and the crossover moves far out (0.85x at 1e5, 1.12x at 3e5 at load 4-7), which
+#: is why auto_ranks counts only idle cores.
+MPI_CROSSOVER_BEADS = 10_000
+
+
+def idle_cores(cores: int, load: float | None = None) -> int:
+    """Cores not already busy: `cores` less the 1-minute load average (rounded), at least 1.
+
+    Parameters
+    ----------
+    cores : int
+        Cores this process may run on.
+    load : float, optional
+        Runnable processes averaged over the last minute; by default the OS's (os.getloadavg),
+        taken as 0 where the OS has none.
+    """
+    if load is None:
+        try:
+            load = os.getloadavg()[0]
+        except (AttributeError, OSError):  # pragma: no cover - not on a Unix
+            load = 0.0
+    return max(1, cores - round(load))
 
 
 def auto_ranks(beads: int, cores: int) -> int:
     """MPI ranks for `--np auto`: one rank per MPI_CROSSOVER_BEADS / 2 beads (two ranks from the
-    crossover on), at most one per core, at least 1."""
+    crossover on), at most one per (idle) core, at least 1."""
     return max(1, min(cores, (2 * beads) // MPI_CROSSOVER_BEADS))

@@ -41,3 +41,20 @@ def test_auto_np_of_a_bundled_scene_is_one_rank():
     scene = load_scene("default")  # 100 beads: far below the crossover
     assert auto_np(scene, "lammps") == 1
     assert auto_np(scene, "reference") == 1
+
+
+def test_idle_cores_count_only_cores_without_other_work():
+    from granchain.schedule import idle_cores
+
+    assert idle_cores(2, load=0.1) == 2
+    assert idle_cores(2, load=1.4) == 1
+    assert idle_cores(2, load=6.0) == 1  # never below one
+    assert idle_cores(16, load=3.6) == 12
+    assert 1 <= idle_cores(2) <= 2  # the OS's own load average
+
+
+def test_busy_cores_get_one_rank_even_for_a_long_chain():
+    from granchain.schedule import idle_cores
+
+    assert auto_ranks(10**6, cores=idle_cores(2, load=1.2)) == 1
+    assert auto_ranks(10**6, cores=idle_cores(2, load=0.2)) == 2
