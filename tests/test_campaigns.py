@@ -644,6 +644,77 @@ def test_an_external_dask_scheduler_and_two_workers_give_the_same_table(tmp_path
 
 
 @pytest.mark.slow
+def test_a_worker_running_another_granchain_is_named_before_any_point(tmp_path):
+    """A `dask worker` whose granchain lacks this one's worker plugin (an older install): one
+    CampaignError naming the fix when the executor connects, not distributed's bare traceback."""
+    import json
+    import os
+    import shutil
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from granchain.campaigns.execute import Executor
+    from granchain.campaigns.spec import CampaignError
+
+    old = tmp_path / "old-install" / "granchain"
+    (old / "campaigns").mkdir(parents=True)
+    (old / "__init__.py").write_text('__version__ = "0.0.1"\n')
+    (old / "campaigns" / "__init__.py").write_text("")
+    (old / "campaigns" / "execute.py").write_text("def run_point(payload):\n    return {}\n")
+    dask = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
+    assert dask, "the dask command (dask[distributed]) is not installed"
+    sfile = tmp_path / "scheduler.json"
+    procs = []
+    try:
+        procs.append(
+            subprocess.Popen(
+                [
+                    dask,
+                    "scheduler",
+                    "--host",
+                    "127.0.0.1",
+                    "--port",
+                    "0",
+                    "--no-dashboard",
+                    "--scheduler-file",
+                    str(sfile),
+                ],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+                start_new_session=True,
+            )
+        )
+        deadline = time.time() + 60
+        while not sfile.is_file() and time.time() < deadline:
+            time.sleep(0.1)
+        address = json.loads(sfile.read_text())["address"]
+        procs.append(
+            subprocess.Popen(
+                [dask, "worker", address, "--nthreads", "1", "--no-dashboard"],
+                env=dict(os.environ, PYTHONPATH=str(old.parent)),
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+                start_new_session=True,
+            )
+        )
+        from distributed import Client
+
+        with Client(address, timeout="30s") as c:
+            c.wait_for_workers(1, timeout=60)
+        ex = Executor(scheduler=address)
+        with pytest.raises(CampaignError, match="install the same granchain on every worker"):
+            ex.start()
+        assert ex.client is None, "the executor let go of the scheduler"
+    finally:
+        for p in procs:
+            os.killpg(p.pid, signal.SIGTERM)
+        for p in procs:
+            p.wait(timeout=30)
+
+
+@pytest.mark.slow
 def test_search_finds_the_single_wave_to_train_transition_following_a_to_the_minus_one_sixth(tmp_path):
     """Fig. 1's search (the bundled granchain/campaigns/fig1-transition.toml): at three amplitudes
     (10, 100, 1000 N) bisect the loading time T until the pulse count at contact 20 goes from 1 to more,

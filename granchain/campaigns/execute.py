@@ -262,7 +262,16 @@ class Executor:
                     "(dask scheduler, or a dask-jobqueue cluster's scheduler_address)?"
                 ) from None
             if self.reuse_lammps:
-                self.client.register_plugin(PersistentLammps())
+                try:
+                    self.client.register_plugin(PersistentLammps())
+                except Exception as e:  # distributed re-raises a worker's failure as a bare Exception
+                    if "PersistentLammps" not in str(e) and "granchain" not in str(e):
+                        raise
+                    self.close()
+                    raise CampaignError(
+                        f"--scheduler {self.scheduler}: a worker cannot load this granchain's worker plugin "
+                        f"({e}): it runs another granchain; install the same granchain on every worker"
+                    ) from None
             return self.client
         self.cluster = LocalCluster(
             n_workers=self.workers or _cores(),
