@@ -326,3 +326,27 @@ def test_estimates_hold_on_generated_hertz_scenes(integ, sc):
     ok = above & est.reliable
     ratio = est.error[ok] / true[ok]
     assert np.all((ratio >= 1 / 3) & (ratio <= 3)), f"ratios {np.sort(ratio)[[0, -1]]}"
+
+
+def test_compare_makes_each_rk4_companion_once(tmp_path, monkeypatch):
+    """A bilinear scene with a fixed step: LAMMPS's RK4 companions (errors.against_rk4_because) are
+    the reference's own at 2 dt and 4 dt, so compare makes them once (shared_reference_runs)."""
+    import granchain.workflows.run as run_module
+
+    sc, _ = plan_for(parse_scene(BILINEAR_CHAIN, source="b.toml"), "lammps", None, 1e-3)
+    p = tmp_path / "b.toml"
+    p.write_text(BILINEAR_CHAIN.replace('timestep = "auto"', f"timestep = {sc.run.timestep!r}"))
+    made = []
+    real = run_module.run_reference
+
+    def counted(scene, method="rk4"):
+        made.append((scene.run.timestep, method))
+        return real(scene, method)
+
+    monkeypatch.setattr(run_module, "run_reference", counted)
+    assert main(["compare", str(p), "--out", str(tmp_path / "c"), "--quiet"]) == 0
+    dt = sc.run.timestep
+    assert sorted(made) == [(dt, "rk4"), (2 * dt, "rk4"), (4 * dt, "rk4")]
+    errors = [json.loads((tmp_path / "c" / b / "summary.json").read_text())["errors"] for b in ("lammps", "reference")]
+    assert errors[0]["companion_method"] == "rk4"
+    assert errors[0]["companion_timesteps"] == errors[1]["companion_timesteps"] == [2 * dt, 4 * dt]

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from granchain.postprocess.compare import compare_runs, write_compare
 from granchain.results import check_output_dir, write_run_dir
-from granchain.workflows.run import check_resources, plan_for, run_scene
+from granchain.workflows.run import check_resources, plan_for, run_scene, shared_reference_runs
 
 
 def compare_scene(
@@ -43,27 +43,36 @@ def compare_scene(
     lam_scene, _ = plan_for(scene, "lammps", None, plan_rtol)
     plan_for(reference_scene or scene, "reference", method, plan_rtol)  # a bad scene fails before any run
     check_resources(lam_scene, "lammps", np_)
-    lam = run_scene(scene, backend="lammps", np_=np_, keep_files=True, rtol=plan_rtol, error_estimate=error_estimate)
-    files, work = lam.extra.pop("_files"), lam.extra.pop("_work")
-    try:
-        ref = run_scene(
-            reference_scene or scene, backend="reference", method=method, rtol=plan_rtol, error_estimate=error_estimate
+    # LAMMPS's RK4 error-bar companions are the reference's own when both run the same step (a
+    # bilinear or Thornton scene with a fixed step): each made once (shared_reference_runs)
+    with shared_reference_runs():
+        lam = run_scene(
+            scene, backend="lammps", np_=np_, keep_files=True, rtol=plan_rtol, error_estimate=error_estimate
         )
-        rows = compare_runs(lam, ref, rtol)
-        if out is not None:
-            out = Path(out)
-            tmp = out.resolve().parent / f".{out.name}.partial-{os.getpid()}"
-            shutil.rmtree(tmp, ignore_errors=True)
-            try:
-                tmp.mkdir(parents=True)
-                write_run_dir(lam, tmp / "lammps", extra_files=files)
-                write_run_dir(ref, tmp / "reference")
-                write_compare(rows, tmp)
-                if out.exists():
-                    shutil.rmtree(out)
-                os.replace(tmp, out)
-            finally:
+        files, work = lam.extra.pop("_files"), lam.extra.pop("_work")
+        try:
+            ref = run_scene(
+                reference_scene or scene,
+                backend="reference",
+                method=method,
+                rtol=plan_rtol,
+                error_estimate=error_estimate,
+            )
+            rows = compare_runs(lam, ref, rtol)
+            if out is not None:
+                out = Path(out)
+                tmp = out.resolve().parent / f".{out.name}.partial-{os.getpid()}"
                 shutil.rmtree(tmp, ignore_errors=True)
-    finally:
-        shutil.rmtree(work, ignore_errors=True)
+                try:
+                    tmp.mkdir(parents=True)
+                    write_run_dir(lam, tmp / "lammps", extra_files=files)
+                    write_run_dir(ref, tmp / "reference")
+                    write_compare(rows, tmp)
+                    if out.exists():
+                        shutil.rmtree(out)
+                    os.replace(tmp, out)
+                finally:
+                    shutil.rmtree(tmp, ignore_errors=True)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
     return rows, lam, ref

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import warnings
 from contextlib import contextmanager
+from dataclasses import replace
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -157,10 +158,36 @@ class PlanRefinedWarning(UserWarning):
     (granchain.workflows.plan.refined_plan says why)."""
 
 
+#: (scene, method) -> RunResult of the reference runs made inside shared_reference_runs(), else None
+_shared_runs: dict | None = None
+
+
+@contextmanager
+def shared_reference_runs():
+    """Inside this block a reference run of a scene and integrator made once is not made again.
+
+    granchain compare needs the same RK4 runs twice: the reference's error-bar companions at 2 dt and
+    4 dt, and LAMMPS's (a bilinear or Thornton Verlet run is measured against RK4 at 2 dt and 4 dt,
+    errors.against_rk4_because): the same companion scene, integrator and step, so the same numbers.
+    Each caller gets its own RunResult (a shallow copy) around the shared solution.
+    """
+    global _shared_runs
+    outer, _shared_runs = _shared_runs, ({} if _shared_runs is None else _shared_runs)
+    try:
+        yield
+    finally:
+        _shared_runs = outer
+
+
 def _execute(scene, backend: str, method: str, np_: int):
     """(result, LAMMPS work directory or None): one run of a concrete scene."""
     if backend == "reference":
-        return run_reference(scene, method), None
+        if _shared_runs is None:
+            return run_reference(scene, method), None
+        key = (scene, method)
+        if key not in _shared_runs:
+            _shared_runs[key] = run_reference(scene, method)
+        return replace(_shared_runs[key], extra=dict(_shared_runs[key].extra)), None
     from granchain.lammps.runner import run_lammps
 
     with _with_fix(scene, "verlet"):
