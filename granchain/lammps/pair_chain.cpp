@@ -150,18 +150,23 @@ bool PairChainBase::advance_time(double t)
   return new_sample;
 }
 
-void PairChainBase::shift_all(bool new_sample, double *fc, double *fprev, double *fprev2)
+void PairChainBase::shift_all(bool new_sample, double *&fc, double *&fprev, double *&fprev2)
 {
-  const int nlocal = atom->nlocal;
+  // a new sample rotates the three vectors' arrays (fix property/atom reaches them through
+  // atom->dvector at every use; all three have the same length): fprev2 <- fprev <- fc <- the old
+  // fprev2, which becomes fc and is cleared. Copying the samples instead, a pass reading two arrays and
+  // writing three, took 5-7% of a 1000-10 000-bead run's time (perf)
   if (new_sample) {
-    for (int i = 0; i < nlocal; i++) {
-      fprev2[i] = fprev[i];
-      fprev[i] = fc[i];
-      fc[i] = 0.0;
-    }
-  } else {
-    for (int i = 0; i < nlocal; i++) fc[i] = 0.0;
+    double **dv = atom->dvector;
+    double *const oldest = dv[idx[FPREV2]];
+    dv[idx[FPREV2]] = dv[idx[FPREV]];
+    dv[idx[FPREV]] = dv[idx[FC]];
+    dv[idx[FC]] = oldest;
+    fc = dv[idx[FC]];
+    fprev = dv[idx[FPREV]];
+    fprev2 = dv[idx[FPREV2]];
   }
+  if (atom->nlocal > 0) memset(fc, 0, sizeof(double) * atom->nlocal);
 }
 
 // running peak of every owned contact (track_one in pair_chain.h)

@@ -91,7 +91,7 @@ class PairChainBase : public Pair {
   int index_of(const char *name);
   double *custom(const char *name);
   bool advance_time(double t);
-  void shift_all(bool new_sample, double *fc, double *fprev, double *fprev2);
+  void shift_all(bool new_sample, double *&fc, double *&fprev, double *&fprev2);
 
   // the peak bookkeeping of one step: sample times, whether to refine, the per-atom vectors
   struct PeakStep {
