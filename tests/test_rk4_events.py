@@ -128,3 +128,21 @@ def test_precompressed_bilinear_rk4_splits_stay_few(scene):
     with time_limit(60):
         sol = run_scene(scene, backend="reference", method="rk4", rtol=RTOL).solution
     assert sol.extra_steps < 4 * sol.steps, f"{sol.extra_steps} extra steps for {sol.steps}\n{scene.to_toml()}"
+
+
+def test_hermite_root_is_the_same_on_python_floats_and_arrays():
+    """The event location's bisection on Python floats (a few crossings, _root) gives the bits the
+    numpy one gives (many): each must split a step at the same place whichever path it takes."""
+    from granchain.reference import hermite
+
+    rng = np.random.default_rng(18)
+    n = 1200
+    a0 = rng.uniform(1e-12, 1e-6, n) * rng.choice([-1.0, 1.0], n)
+    a1 = -np.sign(a0) * rng.uniform(1e-12, 1e-6, n)
+    d0, d1 = rng.normal(0.0, 1e-6, n), rng.normal(0.0, 1e-6, n)
+    a0[:5], d0[5:10] = 0.0, 0.0  # a zero end and zero slopes
+    vectorised = hermite.hermite_root(a0, a1, d0, d1)  # above _SCALAR_ROOTS: numpy
+    assert n > hermite._SCALAR_ROOTS
+    scalar = np.array([hermite._root(*x) for x in zip(a0.tolist(), a1.tolist(), d0.tolist(), d1.tolist(), strict=True)])
+    assert np.array_equal(vectorised, scalar)
+    assert np.all((vectorised >= 0.0) & (vectorised <= 1.0))

@@ -122,13 +122,23 @@ def _sign(x: float) -> float:
 
 
 def _root(a0: float, a1: float, d0: float, d1: float) -> float:
-    """hermite_root of one contact, on Python floats: the same bisection step by step."""
+    """hermite_root of one contact, on Python floats: the same bisection step by step.
+
+    _cubic and _sign written out in the loop (the same operations in the same order: the same bits;
+    tests/test_rk4_events checks them against the numpy path): a call costs as much as the cubic."""
     lo, hi = 0.0, 1.0
     s0 = _sign(a0)
     for _ in range(40):
         mid = 0.5 * (lo + hi)
-        p = _cubic(mid, a0, a1, d0, d1)
-        if _sign(p) == s0:  # nan never equals: as np.sign(nan) == np.sign(x), False
+        m2 = mid * mid
+        p = (
+            (2 * m2 * mid - 3 * m2 + 1) * a0
+            + (m2 * mid - 2 * m2 + mid) * d0
+            + (-2 * m2 * mid + 3 * m2) * a1
+            + (m2 * mid - m2) * d1
+        )
+        # _sign(p) == s0; nan never equals: as np.sign(nan) == np.sign(x), False
+        if (1.0 if p > 0.0 else -1.0 if p < 0.0 else p) == s0:
             lo = mid
         else:
             hi = mid
