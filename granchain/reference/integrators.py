@@ -216,14 +216,14 @@ class RK4Integrator(Integrator):
     def rk4(self, state: ChainState, h: float, a_ext: float) -> None:
         """Classical RK4 on (u, v) in place; the external load is constant over the step.
 
-        Every product lands in a preallocated buffer (out=) and a product two stages need is taken
+        Every product lands in a preallocated buffer (its out, by position) and a product two stages need is taken
         once (hv: h/2 v for stages 2 and 3, then h v for stage 4 and the update); the sums are the
         textbook's, term by term in the same order, so the numbers are those of the plain expressions.
         The step's scalar factors are 0-d arrays, made once per step length (consts): numpy takes a
         Python float operand at about half again the cost of the whole call on a short chain.
         """
         u, v, accel, gamma = state.u, state.v, state.accel, state.gamma
-        k1v, k2v, k3v, k4v, ut, vt, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.ut, self.vt, self.hv
+        k1v, k2v, k3v, k4v, ut, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.ut, self.hv
         consts = self.consts.get(h)
         if consts is None:
             if len(self.consts) >= 32:  # split pieces: lengths seen once
@@ -231,23 +231,67 @@ class RK4Integrator(Integrator):
             consts = tuple(np.array(c) for c in (0.5 * h, 0.25 * h * h, h, 0.5 * h * h, h * h / 6.0, h / 6.0))
             self.consts[h] = consts
         half_h, quarter_h2, h_, half_h2, h2_6, h_6 = consts
+        add, mul = _add, _multiply
+        if gamma:
+            self.rk4_dashpot(state, h, a_ext, consts)
+            return
+        accel(u, k1v, v)
+        if a_ext:  # (x + 0.0 is x: an unloaded segment skips the four)
+            k1v[0] += a_ext
+        mul(v, half_h, hv)
+        add(hv, u, ut)
+        accel(ut, k2v, None)
+        if a_ext:
+            k2v[0] += a_ext
+        # stage 3 position: u + h/2 (v + h/2 k1v)
+        mul(k1v, quarter_h2, ut)
+        add(ut, u, ut)
+        add(ut, hv, ut)
+        accel(ut, k3v, None)
+        if a_ext:
+            k3v[0] += a_ext
+        # stage 4 position: u + h (v + h/2 k2v)
+        mul(v, h_, hv)
+        mul(k2v, half_h2, ut)
+        add(ut, u, ut)
+        add(ut, hv, ut)
+        accel(ut, k4v, None)
+        if a_ext:
+            k4v[0] += a_ext
+        # u += h/6 (k1u + 2 k2u + 2 k3u + k4u) with k1u = v, k2u = v + h/2 k1v,
+        # k3u = v + h/2 k2v, k4u = v + h k3v  =>  u += h v + h^2/6 (k1v + k2v + k3v)
+        add(k1v, k2v, ut)
+        add(ut, k3v, ut)
+        add(u, hv, u)
+        mul(ut, h2_6, hv)
+        add(u, hv, u)
+        # v += h/6 (k1v + 2 k2v + 2 k3v + k4v)
+        add(ut, k2v, ut)
+        add(ut, k3v, ut)
+        add(ut, k4v, ut)
+        mul(ut, h_6, hv)
+        add(v, hv, v)
+
+    def rk4_dashpot(self, state: ChainState, h: float, a_ext: float, consts: tuple[np.ndarray, ...]) -> None:
+        """rk4 with a dashpot: the stage velocities too (the dashpot force), and its energy."""
+        u, v, accel = state.u, state.v, state.accel
+        k1v, k2v, k3v, k4v, ut, vt, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.ut, self.vt, self.hv
+        half_h, quarter_h2, h_, half_h2, h2_6, h_6 = consts
         power = 0.0
         power += accel(u, k1v, v)
         k1v[0] += a_ext
         np.multiply(v, half_h, out=hv)
         np.add(hv, u, out=ut)
-        if gamma:
-            np.multiply(k1v, half_h, out=vt)
-            vt += v
+        np.multiply(k1v, half_h, out=vt)
+        vt += v
         power += 2.0 * accel(ut, k2v, vt)
         k2v[0] += a_ext
         # stage 3 position: u + h/2 (v + h/2 k1v)
         np.multiply(k1v, quarter_h2, out=ut)
         ut += u
         ut += hv
-        if gamma:
-            np.multiply(k2v, half_h, out=vt)
-            vt += v
+        np.multiply(k2v, half_h, out=vt)
+        vt += v
         power += 2.0 * accel(ut, k3v, vt)
         k3v[0] += a_ext
         # stage 4 position: u + h (v + h/2 k2v)
@@ -255,21 +299,16 @@ class RK4Integrator(Integrator):
         np.multiply(k2v, half_h2, out=ut)
         ut += u
         ut += hv
-        if gamma:
-            np.multiply(k3v, h_, out=vt)
-            vt += v
+        np.multiply(k3v, h_, out=vt)
+        vt += v
         power += accel(ut, k4v, vt)
         k4v[0] += a_ext
-        if gamma:
-            state.dash_energy += h / 6.0 * power  # dashpot energy with the method's own weights
-        # u += h/6 (k1u + 2 k2u + 2 k3u + k4u) with k1u = v, k2u = v + h/2 k1v,
-        # k3u = v + h/2 k2v, k4u = v + h k3v  =>  u += h v + h^2/6 (k1v + k2v + k3v)
+        state.dash_energy += h / 6.0 * power  # dashpot energy with the method's own weights
         np.add(k1v, k2v, out=ut)
         ut += k3v
         u += hv
         np.multiply(ut, h2_6, out=hv)
         u += hv
-        # v += h/6 (k1v + 2 k2v + 2 k3v + k4v)
         ut += k2v
         ut += k3v
         ut += k4v
@@ -312,6 +351,7 @@ class RK4Integrator(Integrator):
 
 
 _EMPTY = np.empty(0)
+_add, _multiply = np.add, np.multiply  # RK4Integrator.rk4: outputs by position, ~0.15 us a call cheaper than out=
 _ZERO = np.array(0.0)  # 0-d: a cheaper operand than the Python float (RK4Integrator.rk4)
 
 

@@ -73,6 +73,9 @@ class ContactLaw:
     #: then depends on where in a step that happens and follows no order in dt, so its error bars come
     #: from RK4 runs, which locate the kinks (granchain.errorbars.against_reference)
     slope_kinks: ClassVar[bool] = False
+    #: force_into takes any overlap and gives the force of max(alpha, 0), bit for bit (a negative one
+    #: gives +0.0): the reference solver's force evaluation then skips clipping alpha first
+    force_into_any_sign: ClassVar[bool] = False
     #: a range of valid values of each parameter (SI), from which the registry's tests draw laws
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {}
     #: the [contact] keys (besides law) of an example: brass beads of R = 4.76 mm (docs and tests)

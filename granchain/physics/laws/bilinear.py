@@ -24,6 +24,8 @@ from granchain.physics import materials as mat
 from granchain.physics import models
 from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, forbid_others
 
+_multiply, _subtract = np.multiply, np.subtract  # (a module global: one lookup, not two)
+
 
 def unloading_stiffness(k: ArrayLike, beta: ArrayLike) -> np.ndarray:
     """k_u = k / (1 - beta): slope of the unloading/reloading line (Sec. III)."""
@@ -69,6 +71,8 @@ class BilinearLaw(ContactLaw):
     history: ClassVar[bool] = True
     # F = k alpha from alpha = 0: dF/dalpha jumps 0 -> k as a contact closes, k_u -> 0 at zero force
     slope_kinks: ClassVar[bool] = True
+    # a negative overlap: alpha - beta max(alpha_max, alpha) < 0 as for alpha = 0 (alpha_max >= 0), so +0.0
+    force_into_any_sign: ClassVar[bool] = True
     scene_keys: ClassVar[tuple[str, ...]] = ("unloading_coeff", "plastic_stiffness")
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "beta": (0.0, 0.99)}
     example_contact: ClassVar[dict[str, float]] = {"unloading_coeff": 0.8, "plastic_stiffness": 2.43e7}
@@ -87,14 +91,21 @@ class BilinearLaw(ContactLaw):
     def force(self, alpha, alpha_max=None):
         return bilinear_force(alpha, 0.0 if alpha_max is None else alpha_max, self.k, self.beta)
 
+    @cached_property
+    def _operands(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """beta, k_u and 0 as arrays (0-d for scalars): numpy takes a Python or numpy float operand at
+        about half again the cost of a whole call on a short chain (force_into runs four times an RK4 step)."""
+        return np.array(self.beta, dtype=float), np.array(self.k_unloading, dtype=float), np.array(0.0)
+
     def force_into(self, alpha, alpha_max, out, tmp):
         # F = max(k_u (alpha - beta max(alpha_max, alpha)), 0); with alpha_max frozen this is the
         # loading line k alpha wherever alpha >= alpha_max
+        beta, ku, zero = self._operands
         np.maximum(alpha_max, alpha, out=tmp)
-        np.multiply(tmp, self.beta, out=tmp)
-        np.subtract(alpha, tmp, out=out)
-        np.multiply(out, self.k_unloading, out=out)
-        np.maximum(out, 0.0, out=out)
+        _multiply(tmp, beta, tmp)
+        _subtract(alpha, tmp, out)
+        _multiply(out, ku, out)
+        np.maximum(out, zero, out=out)
 
     def energy(self, alpha, alpha_max=None):
         return bilinear_energy(alpha, 0.0 if alpha_max is None else alpha_max, self.k, self.beta)
