@@ -336,8 +336,17 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
   // r = |delx| (sqrt(x * x) == |x| in IEEE arithmetic) and the force is +-F along x. Each type pair's
   // constants are one record (init_one); with one atom type, one record for the whole loop
   const double dt = update->dt;
-  auto loop = [&](auto one_type) {
+  const double gam = gamma;
+  // the loop is instantiated for (one atom type or several) x (dashpot or not) x (energy/virial tallied
+  // this step or not): none of the three is tested per pair, and a step without tallies computes no
+  // energy (the tallies come every energy sample, 1% of the steps)
+  auto loop = [&](auto one_type, auto dashpot, auto tally) {
     constexpr bool ONE = decltype(one_type)::value;
+    constexpr bool DASH = decltype(dashpot)::value;
+    constexpr bool EV = decltype(tally)::value;
+    const double(*const __restrict xq)[3] = xx;
+    double(*const __restrict fq)[3] = ff;
+    double *const __restrict fcq = fc;
     const Coef &cf1 = tab[nt + 1];    // types 1 1
     for (int ii = 0; ii < inum; ii++) {
       const int i = ilist[ii];
@@ -346,9 +355,9 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
       for (int jj = 0; jj < jnum; jj++) {
         const int j = jlist[jj] & NEIGHMASK;
         const Coef &cf = ONE ? cf1 : tab[type[i] * nt + type[j]];
-        const double delx = xx[i][0] - xx[j][0];
-        const double dely = xx[i][1] - xx[j][1];
-        const double delz = xx[i][2] - xx[j][2];
+        const double delx = xq[i][0] - xq[j][0];
+        const double dely = xq[i][1] - xq[j][1];
+        const double delz = xq[i][2] - xq[j][2];
         const double rsq = delx * delx + dely * dely + delz * delz;
         if (rsq >= cf.cutsq) continue;
         const bool collinear = dely == 0.0 && delz == 0.0;
@@ -360,51 +369,64 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
                      "each other (time step too large for this load?)", ti, tj);
         const int left = ti < tj ? i : j;
         double energy = 0.0;
+        double *const eptr = (EV && eflag) ? &energy : nullptr;
         double fmag;
         if constexpr (Law::history) {
           const double am = MAX(amax[left], alpha);
           if (left < nlocal) {
-            fmag = Law::force(alpha, am, cf.c, eflag ? &energy : nullptr, &edis[left]);
+            fmag = Law::force(alpha, am, cf.c, eptr, &edis[left]);
             amax[left] = am;
           } else {
-            fmag = Law::force(alpha, am, cf.c, eflag ? &energy : nullptr, nullptr);
+            fmag = Law::force(alpha, am, cf.c, eptr, nullptr);
           }
         } else {
-          fmag = Law::force(alpha, alpha, cf.c, eflag ? &energy : nullptr, nullptr);
+          fmag = Law::force(alpha, alpha, cf.c, EV ? eptr : nullptr, nullptr);
         }
-        if (gamma > 0.0) {
+        if constexpr (DASH) {
           // dashpot on the overlap rate: d(alpha)/dt = -dr/dt; the total force never pulls
           const double rate =
               -(delx * (vv[i][0] - vv[j][0]) + dely * (vv[i][1] - vv[j][1]) + delz * (vv[i][2] - vv[j][2])) / r;
           const double felastic = fmag;
-          fmag = MAX(felastic + gamma * rate, 0.0);
+          fmag = MAX(felastic + gam * rate, 0.0);
           if (new_sample && left < nlocal) edash[left] += (fmag - felastic) * rate * dt;
         }
-        if (left < nlocal) fc[left] = fmag;
+        if (left < nlocal) fcq[left] = fmag;
         // repulsive: pushes i away from j (newton_pair is off: init_style)
         if (collinear) {
           const double fx = delx > 0.0 ? fmag : -fmag;
-          ff[i][0] += fx;
-          if (j < nlocal) ff[j][0] -= fx;
+          fq[i][0] += fx;
+          if (j < nlocal) fq[j][0] -= fx;
         } else {
           const double fpair = fmag / r;
-          ff[i][0] += delx * fpair;
-          ff[i][1] += dely * fpair;
-          ff[i][2] += delz * fpair;
+          fq[i][0] += delx * fpair;
+          fq[i][1] += dely * fpair;
+          fq[i][2] += delz * fpair;
           if (j < nlocal) {
-            ff[j][0] -= delx * fpair;
-            ff[j][1] -= dely * fpair;
-            ff[j][2] -= delz * fpair;
+            fq[j][0] -= delx * fpair;
+            fq[j][1] -= dely * fpair;
+            fq[j][2] -= delz * fpair;
           }
         }
-        if (evflag) ev_tally(i, j, nlocal, newton_pair, energy, 0.0, fmag / r, delx, dely, delz);
+        if constexpr (EV) ev_tally(i, j, nlocal, newton_pair, energy, 0.0, fmag / r, delx, dely, delz);
       }
     }
   };
+  auto with_tally = [&](auto one_type, auto dashpot) {
+    if (evflag)
+      loop(one_type, dashpot, std::true_type{});
+    else
+      loop(one_type, dashpot, std::false_type{});
+  };
+  auto with_dashpot = [&](auto one_type) {
+    if (gam > 0.0)
+      with_tally(one_type, std::true_type{});
+    else
+      with_tally(one_type, std::false_type{});
+  };
   if (atom->ntypes == 1)
-    loop(std::true_type{});
+    with_dashpot(std::true_type{});
   else
-    loop(std::false_type{});
+    with_dashpot(std::false_type{});
 
   track_peaks(ps, fc, fprev, fprev2);
   if (vflag_fdotr) virial_fdotr_compute();
