@@ -330,7 +330,8 @@ def test_estimates_hold_on_generated_hertz_scenes(integ, sc):
 
 def test_compare_makes_each_rk4_companion_once(tmp_path, monkeypatch):
     """A bilinear scene with a fixed step: LAMMPS's RK4 companions (errors.against_rk4_because) are
-    the reference's own at 2 dt and 4 dt, so compare makes them once (shared_reference_runs)."""
+    the reference's own at 2 dt and 4 dt, so compare makes them once (shared_reference_runs); on two
+    cores a worker process makes them, with the same numbers."""
     import granchain.workflows.run as run_module
 
     sc, _ = plan_for(parse_scene(BILINEAR_CHAIN, source="b.toml"), "lammps", None, 1e-3)
@@ -344,9 +345,17 @@ def test_compare_makes_each_rk4_companion_once(tmp_path, monkeypatch):
         return real(scene, method)
 
     monkeypatch.setattr(run_module, "run_reference", counted)
+    monkeypatch.setattr(run_module, "available_cores", lambda: 1)  # no worker: every run made here
     assert main(["compare", str(p), "--out", str(tmp_path / "c"), "--quiet"]) == 0
     dt = sc.run.timestep
     assert sorted(made) == [(dt, "rk4"), (2 * dt, "rk4"), (4 * dt, "rk4")]
     errors = [json.loads((tmp_path / "c" / b / "summary.json").read_text())["errors"] for b in ("lammps", "reference")]
     assert errors[0]["companion_method"] == "rk4"
     assert errors[0]["companion_timesteps"] == errors[1]["companion_timesteps"] == [2 * dt, 4 * dt]
+
+    made.clear()
+    monkeypatch.setattr(run_module, "available_cores", lambda: 2)  # the companions made by a worker
+    assert main(["compare", str(p), "--out", str(tmp_path / "w"), "--quiet"]) == 0
+    assert made == [(dt, "rk4")]  # (the worker's runs are counted in the worker)
+    for name in ("compare.csv", "reference/peaks.csv", "lammps/peaks.csv"):
+        assert (tmp_path / "w" / name).read_bytes() == (tmp_path / "c" / name).read_bytes()

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from granchain.postprocess.compare import compare_runs, write_compare
 from granchain.results import check_output_dir, write_run_dir
+from granchain.workflows.errors import rk4_companions
 from granchain.workflows.run import check_resources, plan_for, run_scene, shared_reference_runs
 
 
@@ -41,38 +42,41 @@ def compare_scene(
     # (run_scene plans each one, and runs it again finer if its measured peaks fell far below the
     # force scale: granchain.workflows.plan.refined_plan)
     lam_scene, _ = plan_for(scene, "lammps", None, plan_rtol)
-    plan_for(reference_scene or scene, "reference", method, plan_rtol)  # a bad scene fails before any run
+    # (a bad scene fails before any run)
+    ref_scene, _ = plan_for(reference_scene or scene, "reference", method, plan_rtol)
     check_resources(lam_scene, "lammps", np_)
-    # LAMMPS's RK4 error-bar companions are the reference's own when both run the same step (a
-    # bilinear or Thornton scene with a fixed step): each made once (shared_reference_runs)
-    with shared_reference_runs():
+    # the RK4 error-bar companions at 2 dt and 4 dt: LAMMPS's are the reference's own when both run
+    # the same step (a bilinear or Thornton scene with a fixed step), each made once; and they are
+    # started at once in a worker process on a second core (shared_reference_runs), while this one
+    # runs the reference (first: it asks for them last) and LAMMPS
+    prefetch = []
+    if error_estimate:
+        for sc, m in ((ref_scene, method), (lam_scene, "verlet")):
+            prefetch += [(c, "rk4") for c in rk4_companions(sc, m)]
+    with shared_reference_runs(prefetch):
+        ref = run_scene(
+            reference_scene or scene, backend="reference", method=method, rtol=plan_rtol, error_estimate=error_estimate
+        )
         lam = run_scene(
             scene, backend="lammps", np_=np_, keep_files=True, rtol=plan_rtol, error_estimate=error_estimate
         )
-        files, work = lam.extra.pop("_files"), lam.extra.pop("_work")
-        try:
-            ref = run_scene(
-                reference_scene or scene,
-                backend="reference",
-                method=method,
-                rtol=plan_rtol,
-                error_estimate=error_estimate,
-            )
-            rows = compare_runs(lam, ref, rtol)
-            if out is not None:
-                out = Path(out)
-                tmp = out.resolve().parent / f".{out.name}.partial-{os.getpid()}"
+    files, work = lam.extra.pop("_files"), lam.extra.pop("_work")
+    try:
+        rows = compare_runs(lam, ref, rtol)
+        if out is not None:
+            out = Path(out)
+            tmp = out.resolve().parent / f".{out.name}.partial-{os.getpid()}"
+            shutil.rmtree(tmp, ignore_errors=True)
+            try:
+                tmp.mkdir(parents=True)
+                write_run_dir(lam, tmp / "lammps", extra_files=files)
+                write_run_dir(ref, tmp / "reference")
+                write_compare(rows, tmp)
+                if out.exists():
+                    shutil.rmtree(out)
+                os.replace(tmp, out)
+            finally:
                 shutil.rmtree(tmp, ignore_errors=True)
-                try:
-                    tmp.mkdir(parents=True)
-                    write_run_dir(lam, tmp / "lammps", extra_files=files)
-                    write_run_dir(ref, tmp / "reference")
-                    write_compare(rows, tmp)
-                    if out.exists():
-                        shutil.rmtree(out)
-                    os.replace(tmp, out)
-                finally:
-                    shutil.rmtree(tmp, ignore_errors=True)
-        finally:
-            shutil.rmtree(work, ignore_errors=True)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
     return rows, lam, ref

@@ -173,6 +173,20 @@ def against_rk4_because(method: str, scene) -> str | None:
     )
 
 
+def rk4_companions(scene, method: str) -> list:
+    """The RK4 companion scenes the error estimate of a run of this concrete scene with `method` will
+    ask for (the reference's own at 2 dt and 4 dt, or those a Verlet run is measured against), as far
+    as they are known before the run: compare starts them early (a run the planner refines after it
+    asks for others)."""
+    from granchain.workflows.plan import plan_scene
+
+    if withheld_because("rk4", scene) or (method != "rk4" and not against_rk4_because("verlet", scene)):
+        return []
+    stable = plan_scene(scene, method="rk4").stable_timestep
+    dt = scene.run.timestep
+    return [companion_scene(scene, f) for f in (2.0, 4.0) if f * dt <= stable]
+
+
 def estimate_errors(result, run_one, method: str, stable_timestep: float, run_rk4=None) -> ErrorReport:
     """Run a result's companions with run_one(scene) -> RunResult and estimate every error.
 

@@ -158,25 +158,72 @@ class PlanRefinedWarning(UserWarning):
     (granchain.workflows.plan.refined_plan says why)."""
 
 
-#: (scene, method) -> RunResult of the reference runs made inside shared_reference_runs(), else None
+#: (scene, method) -> RunResult (or the Future of one made in a worker process) of the reference runs
+#: made inside shared_reference_runs(), else None
 _shared_runs: dict | None = None
 
 
 @contextmanager
-def shared_reference_runs():
+def shared_reference_runs(prefetch=()):
     """Inside this block a reference run of a scene and integrator made once is not made again.
 
     granchain compare needs the same RK4 runs twice: the reference's error-bar companions at 2 dt and
     4 dt, and LAMMPS's (a bilinear or Thornton Verlet run is measured against RK4 at 2 dt and 4 dt,
     errors.against_rk4_because): the same companion scene, integrator and step, so the same numbers.
     Each caller gets its own RunResult (a shallow copy) around the shared solution.
+
+    prefetch: (scene, method) pairs that will be asked for, started at once in one worker process
+    where this process may run on two cores or more (the pure-Python solver is single-threaded:
+    the companions run while this process runs the reference's own run and LAMMPS). A prefetched run
+    that failed in the worker is made again here when asked for, so its error is raised as before.
     """
     global _shared_runs
-    outer, _shared_runs = _shared_runs, ({} if _shared_runs is None else _shared_runs)
+    outer = _shared_runs
+    _shared_runs = {} if outer is None else outer
+    pool = None
     try:
+        todo = [k for k in dict.fromkeys(prefetch) if k not in _shared_runs]
+        if todo and available_cores() >= 2:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("fork"))
+            for scene, method in todo:
+                _shared_runs[(scene, method)] = pool.submit(_prefetched_run, scene, method)
         yield
     finally:
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
         _shared_runs = outer
+
+
+def _prefetched_run(scene, method: str):
+    """A reference run in the prefetch worker: no progress lines, None if it failed (made again then)."""
+    os.environ["GRANCHAIN_QUIET"] = "1"
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return run_reference(scene, method)
+    except Exception:
+        return None
+
+
+def _shared_run(scene, method: str):
+    """The shared reference run of (scene, method): made here, or waited for if prefetched."""
+    key = (scene, method)
+    got = _shared_runs.get(key)
+    if got is not None and not isinstance(got, RunResult):  # a prefetch: running, queued or done
+        if got.cancel():  # not started yet: made here at once rather than after the worker's queue
+            got = None
+        else:
+            try:
+                got = got.result()
+            except Exception:  # the worker died: made here
+                got = None
+    if got is None:
+        got = run_reference(scene, method)
+    _shared_runs[key] = got
+    return replace(got, extra=dict(got.extra))
 
 
 def _execute(scene, backend: str, method: str, np_: int):
@@ -184,10 +231,7 @@ def _execute(scene, backend: str, method: str, np_: int):
     if backend == "reference":
         if _shared_runs is None:
             return run_reference(scene, method), None
-        key = (scene, method)
-        if key not in _shared_runs:
-            _shared_runs[key] = run_reference(scene, method)
-        return replace(_shared_runs[key], extra=dict(_shared_runs[key].extra)), None
+        return _shared_run(scene, method), None
     from granchain.lammps.runner import run_lammps
 
     with _with_fix(scene, "verlet"):
