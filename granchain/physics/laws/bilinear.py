@@ -24,7 +24,7 @@ from granchain.physics import materials as mat
 from granchain.physics import models
 from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, forbid_others
 
-_multiply, _subtract = np.multiply, np.subtract  # (a module global: one lookup, not two)
+_multiply, _subtract, _greater = np.multiply, np.subtract, np.greater  # (a module global: one lookup, not two)
 
 
 def unloading_stiffness(k: ArrayLike, beta: ArrayLike) -> np.ndarray:
@@ -125,11 +125,12 @@ class BilinearLaw(ContactLaw):
         return np.asarray(self.k_unloading)
 
     def kinks(self, alpha_max):
+        beta, _, zero = self._operands  # (0-d operands: the RK4 event location asks at every piece)
         return [
             # the force reaches zero at beta alpha_max (F' jumps from k_u to 0)
-            Kink(self.beta * alpha_max, "zero force at beta alpha_max"),
+            Kink(_multiply(beta, alpha_max), "zero force at beta alpha_max"),
             # reloading meets the loading line again at alpha_max (slope k_u -> k)
-            Kink(alpha_max, "reloading meets alpha_max", where=alpha_max > 0.0, from_below=True),
+            Kink(alpha_max, "reloading meets alpha_max", where=_greater(alpha_max, zero), from_below=True),
         ]
 
     def turn_level(self, alpha_max):
