@@ -98,17 +98,22 @@ class VerletIntegrator(Integrator):
         if consts is None:  # the plan's step and a segment's last: 0-d arrays, cheaper operands than floats
             consts = self.consts[h] = (np.array(half), np.array(h))
         half_h, h_ = consts
-        np.multiply(a_int, half_h, out=kick)
-        v += kick
-        v[0] += half * a_ext
-        np.multiply(v, h_, out=kick)
-        u += kick
-        state.dash_energy += h * state.accel(u, a_int, v)  # the dashpot sees the half-step velocity, as in LAMMPS
-        np.multiply(a_int, half_h, out=kick)
-        v += kick
-        v[0] += half * a_ext
+        add, mul = _add, _multiply  # outputs by position (RK4Integrator.rk4)
+        mul(a_int, half_h, kick)
+        add(v, kick, v)
+        if a_ext:  # (x + 0.0 is x: an unloaded segment skips it)
+            v[0] += half * a_ext
+        mul(v, h_, kick)
+        add(u, kick, u)
+        power = state.accel(u, a_int, v)  # the dashpot sees the half-step velocity, as in LAMMPS
+        if power:
+            state.dash_energy += h * power
+        mul(a_int, half_h, kick)
+        add(v, kick, v)
+        if a_ext:
+            v[0] += half * a_ext
         if self.history:
-            np.subtract(self.u_left, self.u_right, out=self.alpha)
+            _subtract(self.u_left, self.u_right, self.alpha)
             state.law.update_history(state.alpha_hist, self.alpha)
         return t0
 
@@ -351,7 +356,11 @@ class RK4Integrator(Integrator):
 
 
 _EMPTY = np.empty(0)
-_add, _multiply = np.add, np.multiply  # RK4Integrator.rk4: outputs by position, ~0.15 us a call cheaper than out=
+_add, _multiply, _subtract = (
+    np.add,
+    np.multiply,
+    np.subtract,
+)  # RK4Integrator.rk4: outputs by position, ~0.15 us a call cheaper than out=
 _ZERO = np.array(0.0)  # 0-d: a cheaper operand than the Python float (RK4Integrator.rk4)
 
 
