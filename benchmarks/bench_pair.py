@@ -314,7 +314,7 @@ def cmd_output(args) -> None:
         row = statistics.median(output_row(x) / loop_time(x) for x in logs["deck"])
         by_min = 1 - min(loops["none"]) / min(loops["deck"])
         by_pair = statistics.median(1 - b / a for a, b in zip(loops["deck"], loops["none"], strict=True))
-        steps = sum(int(k) for k in re.findall(r"^run\s+(\d+)", d.deck, re.M))
+        steps = sum(int(k) for k in re.findall(r"\brun\s+(\d+)", d.deck))
         energy = re.search(r"^fix\s+energy\s+all\s+print\s+(\d+)", d.deck, re.M)
         print(
             f"| {name} | {sc.chain.beads} | {steps} | {history_stride(sc) if sc.outputs.histories else '-'} | "
