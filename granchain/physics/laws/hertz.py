@@ -6,6 +6,7 @@ k = 4/3 E* sqrt(R*) of the pair (Johnson); a bead on the rigid flat has R* = R a
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
@@ -13,6 +14,8 @@ import numpy as np
 from granchain.physics import materials as mat
 from granchain.physics import models
 from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink
+
+_multiply = np.multiply  # (outputs by position: cheaper than out=)
 
 
 def hertz_force(alpha: ArrayLike, k: ArrayLike) -> np.ndarray:
@@ -47,10 +50,15 @@ class HertzLaw(ContactLaw):
     def force(self, alpha, alpha_max=None):
         return hertz_force(alpha, self.k)
 
+    @cached_property
+    def _k(self) -> np.ndarray:
+        """k as an array (0-d for a scalar): a cheaper operand than a float in force_into (four calls an RK4 step)."""
+        return np.array(self.k, dtype=float)
+
     def force_into(self, alpha, alpha_max, out, tmp):
         np.sqrt(alpha, out=tmp)
-        np.multiply(alpha, tmp, out=out)
-        np.multiply(out, self.k, out=out)
+        _multiply(alpha, tmp, out)
+        _multiply(out, self._k, out)
 
     def energy(self, alpha, alpha_max=None):
         return hertz_energy(alpha, self.k)
