@@ -3,6 +3,10 @@
  *   fix ID group chain/nve       the same updates as fix nve on the x components (the same expressions,
  *                                so the same numbers), none on y and z; at setup it refuses a group atom
  *                                with a y or z velocity or force (then fix nve is the one to use)
+ * Run ahead: when nothing looks at the atoms between a step's end and the next step's first half-kick
+ * (not the run's last step, no output and no end-of-step fix due, no timer timeout, no other fix that
+ * integrates), final_integrate also does the next step's half-kick and drift in the same pass and the
+ * next initial_integrate does nothing: the same expressions on the same forces, so the same doubles.
  */
 
 #ifndef GRANCHAIN_FIX_CHAIN_NVE_H
