@@ -34,13 +34,24 @@ struct LawBilinear {
     return -1;
   }
 
-  static inline double force(double alpha, double am, const double *c, double *energy, double *dissipated)
+  // the constants force() takes, derived once per type pair (init_one): beta, k_u = k / (1 - beta),
+  // k_u / 2, beta k / 2 (the same expressions as before, so the same doubles)
+  static constexpr int nconst = 4;
+  static void derive(const double *c, double *d)
   {
     const double k = c[0], b = c[1];
-    const double ku = k / (1.0 - b);
+    d[0] = b;
+    d[1] = k / (1.0 - b);
+    d[2] = 0.5 * d[1];
+    d[3] = 0.5 * b * k;
+  }
+
+  static inline double force(double alpha, double am, const double *c, double *energy, double *dissipated)
+  {
+    const double b = c[0], ku = c[1];
     const double d = alpha - b * am;
-    if (energy) *energy = d > 0.0 ? 0.5 * ku * d * d : 0.0;
-    if (dissipated) *dissipated = 0.5 * b * k * am * am;
+    if (energy) *energy = d > 0.0 ? c[2] * d * d : 0.0;
+    if (dissipated) *dissipated = c[3] * am * am;
     return d > 0.0 ? ku * d : 0.0;
   }
 };

@@ -31,12 +31,20 @@ struct LawHertz {
     return -1;
   }
 
-  // alpha >= 0 the overlap, am (unused) the largest overlap including this one
-  static inline double force(double alpha, double /*am*/, const double *c, double *energy, double *dissipated)
+  // the constants force() takes, derived once per type pair from the coefficients (init_one): k, 0.4 k
+  static constexpr int nconst = 2;
+  static void derive(const double *c, double *d)
   {
-    const double k = c[0];
+    d[0] = c[0];
+    d[1] = 0.4 * c[0];
+  }
+
+  // alpha >= 0 the overlap, am (unused) the largest overlap including this one, d from derive()
+  static inline double force(double alpha, double /*am*/, const double *d, double *energy, double *dissipated)
+  {
+    const double k = d[0];
     const double sa = sqrt(alpha);
-    if (energy) *energy = 0.4 * k * alpha * alpha * sa;
+    if (energy) *energy = d[1] * alpha * alpha * sa;    // 0.4 k alpha^2 sqrt(alpha)
     if (dissipated) *dissipated = 0.0;
     return k * alpha * sa;
   }

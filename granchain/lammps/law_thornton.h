@@ -43,23 +43,41 @@ struct LawThornton {
     return -1;
   }
 
-  static inline double force(double alpha, double am, const double *c, double *energy, double *dissipated)
+  // the constants force() takes, derived once per type pair (init_one; the same expressions as before,
+  // so the same doubles): k, d_y, 0.4 k, sqrt(d_y), Fy = k d_y sqrt(d_y), S = 1.5 k sqrt(d_y), 3 Fy, S / 2,
+  // 0.4 k d_y^2 sqrt(d_y) (the virgin curve's elastic work)
+  static constexpr int nconst = 9;
+  enum { K, DY, K04, SY, FY, SLOPE, FY3, HSLOPE, W0 };
+  static void derive(const double *c, double *d)
   {
     const double k = c[0], dy = c[1];
+    d[K] = k;
+    d[DY] = dy;
+    d[K04] = 0.4 * k;
+    d[SY] = sqrt(dy);
+    d[FY] = k * dy * d[SY];
+    d[SLOPE] = 1.5 * k * d[SY];
+    d[FY3] = 3.0 * d[FY];
+    d[HSLOPE] = 0.5 * d[SLOPE];
+    d[W0] = 0.4 * k * dy * dy * d[SY];
+  }
+
+  static inline double force(double alpha, double am, const double *c, double *energy, double *dissipated)
+  {
+    const double k = c[K], dy = c[DY];
     if (am <= dy) {
       const double sa = sqrt(alpha);
-      if (energy) *energy = 0.4 * k * alpha * alpha * sa;
+      if (energy) *energy = c[K04] * alpha * alpha * sa;
       if (dissipated) *dissipated = 0.0;
       return k * alpha * sa;
     }
-    const double sy = sqrt(dy);
-    const double fy = k * dy * sy;
-    const double slope = 1.5 * k * sy;
+    const double fy = c[FY];
+    const double slope = c[SLOPE];
     const double da = am - dy;
     const double fmax = fy + slope * da;
     // pow(x, 1.5) as x sqrt(x) and pow(y, 2/3) as cbrt(y^2): the same values to an ulp, and a chain of
     // plastic contacts 86 -> 68 ns per bead-step (Hertz: 23)
-    const double x = (2.0 * fmax + fy) / (3.0 * fy);
+    const double x = (2.0 * fmax + fy) / c[FY3];
     const double kp = k * sqrt((fy / fmax) * (x * sqrt(x)));
     const double y = fmax / kp;
     // d_p >= 0: just above d_y round-off can put am - (Fmax/kp)^(2/3) a few ulps below 0, which would
@@ -69,7 +87,7 @@ struct LawThornton {
     const double s = alpha - dp;
     const double f = s > 0.0 ? kp * s * sqrt(s) : 0.0;
     if (energy) *energy = s > 0.0 ? 0.4 * f * s : 0.0;
-    if (dissipated) *dissipated = 0.4 * k * dy * dy * sy + fy * da + 0.5 * slope * da * da - 0.4 * fmax * (am - dp);
+    if (dissipated) *dissipated = c[W0] + fy * da + c[HSLOPE] * da * da - 0.4 * fmax * (am - dp);
     return f;
   }
 };

@@ -266,7 +266,9 @@ template <class Law> double PairChain<Law>::init_one(int i, int j)
   Coef cf;
   cf.d0 = d0[i][j];
   cf.cutsq = cf.d0 * cf.d0;
-  for (int m = 0; m < Law::ncoeff; m++) cf.c[m] = coeffs[m][i][j];
+  double c[Law::ncoeff];
+  for (int m = 0; m < Law::ncoeff; m++) c[m] = coeffs[m][i][j];
+  Law::derive(c, cf.c);
   table[i * nt + j] = table[j * nt + i] = cf;
   return d0[i][j];
 }
@@ -444,10 +446,12 @@ double PairChain<Law>::single(int i, int j, int itype, int jtype, double rsq, do
   if (!(alpha > 0.0)) return 0.0;
   double c[Law::ncoeff];
   for (int m = 0; m < Law::ncoeff; m++) c[m] = coeffs[m][itype][jtype];
+  double d[Law::nconst];
+  Law::derive(c, d);
   double am = alpha;
   if constexpr (Law::history) am = MAX(custom("amax")[atom->tag[i] < atom->tag[j] ? i : j], alpha);
   double energy = 0.0;
-  const double fmag = Law::force(alpha, am, c, &energy, nullptr);
+  const double fmag = Law::force(alpha, am, d, &energy, nullptr);
   fforce = fmag / r;
   return energy;
 }

@@ -20,9 +20,11 @@
  *   ncoeff, coeff_names          its pair_coeff numbers without d0: k first, then the extras
  *   check(c, &requirement)       the index of the first coefficient out of range (requirement: what it
  *                                must be), or -1
+ *   nconst, derive(c, d)         the nconst constants force() takes, derived from the coefficients once per
+ *                                type pair (init_one)
  *   history, vectors             whether the force depends on alpha_max (then the contact keeps d_amax
  *                                and d_edis), and those per-atom vectors' names for the error messages
- *   force(alpha, am, c, energy, dissipated)   the force at overlap alpha >= 0 with am = max(alpha_max
+ *   force(alpha, am, d, energy, dissipated)   the force at overlap alpha >= 0 (d from derive) with am = max(alpha_max
  *                                before this step, alpha), the history after it; writes the stored
  *                                energy and the energy dissipated so far where the pointers are not null
  * PairChain<Law> does the rest (neighbour loop, history, dashpot, peaks, communication); the kernel is
@@ -157,7 +159,7 @@ template <class Law> class PairChain : public PairChainBase {
  protected:
   double **coeffs[Law::ncoeff];    // the law's pair_coeff numbers per type pair, k first
   struct Coef {
-    double cutsq, d0, c[Law::ncoeff];
+    double cutsq, d0, c[Law::nconst];    // c: the law's constants (Law::derive)
   };
   std::vector<Coef> table;    // per type pair (itype * (ntypes + 1) + jtype), filled by init_one
   void allocate();
