@@ -144,3 +144,28 @@ def test_plugin_build_failure_is_clear_and_leaves_nothing(tmp_path, monkeypatch)
     s.write_text(SHORT)
     assert main(["run", str(s), "--backend", "lammps", "--out", str(tmp_path / "o")]) == 2
     assert not (tmp_path / "o").exists()
+
+
+def test_compare_says_a_plugin_build_failure_before_the_reference_runs(tmp_path, monkeypatch):
+    """compare runs the reference first (its RK4 companions are shared with LAMMPS's): a broken
+    plugin build must still fail before any run, with nothing written."""
+    import granchain.workflows.run as run_mod
+    from granchain.cli import main
+
+    fake = tmp_path / "bin" / "g++"
+    fake.parent.mkdir()
+    fake.write_text("#!/bin/sh\necho 'pair_chain.cpp:1: error: simulated compiler failure' >&2\nexit 1\n")
+    fake.chmod(0o755)
+    monkeypatch.setenv("CXX", str(fake))
+    monkeypatch.setenv("GRANCHAIN_CACHE", str(tmp_path / "cache"))
+    ran = []
+    real = run_mod.run_scene
+    monkeypatch.setattr(run_mod, "run_scene", lambda *a, **k: ran.append(k.get("backend")) or real(*a, **k))
+    import granchain.workflows.compare as compare_mod
+
+    monkeypatch.setattr(compare_mod, "run_scene", run_mod.run_scene)
+    s = tmp_path / "s.toml"
+    s.write_text(SHORT)
+    assert main(["compare", str(s), "--out", str(tmp_path / "o")]) == 2
+    assert ran == [], "no backend ran before the build failure was said"
+    assert not (tmp_path / "o").exists()

@@ -45,6 +45,11 @@ def compare_scene(
     # (a bad scene fails before any run)
     ref_scene, _ = plan_for(reference_scene or scene, "reference", method, plan_rtol)
     check_resources(lam_scene, "lammps", np_)
+    # the reference runs first (below): LAMMPS's plugin is built or found now, so that a missing
+    # compiler or a failed build is said before any run, not after the reference's
+    from granchain.lammps.build import build_plugin
+
+    build_plugin()
     # the RK4 error-bar companions at 2 dt and 4 dt: LAMMPS's are the reference's own when both run
     # the same step (a bilinear or Thornton scene with a fixed step), each made once; and they are
     # started at once in a worker process on a second core (shared_reference_runs), while this one
