@@ -352,6 +352,9 @@ def test_compare_makes_each_rk4_companion_once(tmp_path, monkeypatch):
     errors = [json.loads((tmp_path / "c" / b / "summary.json").read_text())["errors"] for b in ("lammps", "reference")]
     assert errors[0]["companion_method"] == "rk4"
     assert errors[0]["companion_timesteps"] == errors[1]["companion_timesteps"] == [2 * dt, 4 * dt]
+    # the shared runs' price is shown on both: LAMMPS's companions cost what the reference's did
+    # (the same runs), though LAMMPS's report got them at once
+    assert errors[0]["companion_wall_time"] >= 0.5 * errors[1]["companion_wall_time"] > 0
 
     made.clear()
     monkeypatch.setattr(run_module, "available_cores", lambda: 2)  # the companions made by a worker
@@ -359,3 +362,5 @@ def test_compare_makes_each_rk4_companion_once(tmp_path, monkeypatch):
     assert made == [(dt, "rk4")]  # (the worker's runs are counted in the worker)
     for name in ("compare.csv", "reference/peaks.csv", "lammps/peaks.csv"):
         assert (tmp_path / "w" / name).read_bytes() == (tmp_path / "c" / name).read_bytes()
+    errors = [json.loads((tmp_path / "w" / b / "summary.json").read_text())["errors"] for b in ("lammps", "reference")]
+    assert errors[0]["companion_wall_time"] >= 0.5 * errors[1]["companion_wall_time"] > 0
