@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from granchain.campaigns import expr
+from granchain.campaigns import workspace as wsp
 from granchain.campaigns.spec import CampaignError, parse_campaign
 
 SMALL_SCENE = """
@@ -256,7 +257,7 @@ def test_reference_grid_equals_run_scene_bit_for_bit(tmp_path):
         assert (
             sp["backend"] == "reference"
             and sp["method"] == "verlet"
-            and sp["code"] == {"granchain": granchain.__version__}
+            and sp["code"] == {"granchain": granchain.__version__, "source": wsp.source_hash()}
         )
         scene = scene_from_dict(sp["scene"])
         out = tmp_path / f"direct-{job.id}"
@@ -292,6 +293,52 @@ def test_failures_are_recorded_and_the_campaign_goes_on(tmp_path):
     _, again = run_campaign(path, ws, workers=1)
     assert (again.cached, again.failed_before, again.ran) == (1, 1, 0)
     assert main(["campaign", "run", str(path), "--out", str(ws), "--retry-failed", "-q"]) == 1
+
+
+def test_the_code_of_a_point_changes_with_any_source_change_and_only_then(tmp_path):
+    """The state point's code holds the hash of granchain's sources: a copy of the package hashes as
+    the package does; an edit to a module or a deck template, or a renamed module, changes it;
+    compiled caches and bundled scenes (inputs, in the state point already) do not."""
+    import shutil
+
+    import granchain
+
+    pkg = Path(granchain.__file__).resolve().parent
+    copy = tmp_path / "granchain"
+    shutil.copytree(pkg, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    base = wsp.hash_sources(copy)
+    assert base == wsp.source_hash() == wsp.code_version("reference")["source"]
+    (copy / "__pycache__").mkdir(exist_ok=True)
+    (copy / "__pycache__" / "x.cpython-312.pyc").write_bytes(b"compiled")
+    (copy / "scenes" / "default.toml").write_text("# another default\n")
+    assert wsp.hash_sources(copy) == base
+    mod = copy / "physics" / "models.py"
+    mod.write_text(mod.read_text() + "\n# an edit\n")
+    edited = wsp.hash_sources(copy)
+    assert edited != base
+    tpl = copy / "templates" / "chain.lmp.j2"
+    tpl.write_text(tpl.read_text() + "\n")
+    assert wsp.hash_sources(copy) not in (base, edited)
+    shutil.rmtree(copy)
+    shutil.copytree(pkg, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    (copy / "physics" / "models.py").rename(copy / "physics" / "models2.py")
+    assert wsp.hash_sources(copy) != base
+
+
+def test_a_worker_on_other_source_is_refused(tmp_path):
+    """A point sent by a campaign whose granchain differs from the worker's in its source only (the
+    same version string): failed with the one message naming the fix, nothing computed."""
+    from granchain.campaigns.execute import run_point
+
+    code = dict(wsp.code_version("reference"), source="0" * 16)
+    (tmp_path / "job").mkdir()
+    out = run_point(
+        {"job_dir": str(tmp_path / "job"), "backend": "reference", "code": code, "scene": {}, "source": None}
+    )
+    assert out["status"] == "failed"
+    assert "install the same granchain on every worker" in out["message"]
+    assert f"source {wsp.source_hash()}" in out["message"] and "source 0000000000000000" in out["message"]
+    assert not (tmp_path / "job" / "run").exists()
 
 
 def test_stale_points_are_reported_and_run_again(tmp_path):
@@ -476,7 +523,7 @@ def test_lammps_grid_of_27_points_equals_granchain_run_bit_for_bit(tmp_path):
     project = signac.get_project(str(ws), search=False)
     assert len(project) == 27
     for job in project:
-        assert set(job.statepoint()["code"]) == {"granchain", "plugin"}
+        assert set(job.statepoint()["code"]) == {"granchain", "source", "plugin"}
         scene = scene_from_dict(job.statepoint()["scene"])
         out = tmp_path / f"direct-{job.id}"
         run_scene(scene, backend="lammps", out=out)

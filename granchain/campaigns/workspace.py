@@ -15,7 +15,8 @@
 
 The state point is what computes the point: the canonical scene (granchain.scene.scene_to_dict of the
 validated scene), the backend, the method, rtol, whether errors are estimated, and the code, which is
-granchain's version and, for LAMMPS, the plugin's hash (granchain.lammps.build.plugin_key). The same
+granchain's version, the hash of its sources (source_hash) and, for LAMMPS, the plugin's hash
+(granchain.lammps.build.plugin_key). The same
 scene written differently is the same job. A point computed by other code has another job id: it is
 not reused, and reported as stale.
 
@@ -25,6 +26,7 @@ signac's own tools (``signac.get_project(WS)``, ``project.find_jobs(...)``) and 
 from __future__ import annotations
 
 import functools
+import hashlib
 import json
 import os
 from pathlib import Path
@@ -41,19 +43,42 @@ RECORD_SCHEMA = 1
 
 
 def code_version(backend: str) -> dict:
-    """The code that computes a point: granchain's version, and the LAMMPS plugin's hash for LAMMPS
-    (hashed once per process: a worker checks it for every point)."""
+    """The code that computes a point: granchain's version, the hash of its Python sources and deck
+    templates (source_hash), and the LAMMPS plugin's hash for LAMMPS (hashed once per process: a
+    worker checks it for every point)."""
     return dict(_code_version(backend))
 
 
 @functools.cache
 def _code_version(backend: str) -> tuple:
-    code = {"granchain": __version__}
+    # the version string alone let two installs that differ in their source (a checkout with local
+    # changes, a later commit of the same release) share points and pass the worker's check
+    code = {"granchain": __version__, "source": source_hash()}
     if backend == "lammps":
         from granchain.lammps.build import plugin_key
 
         code["plugin"] = plugin_key()
     return tuple(code.items())
+
+
+@functools.cache
+def source_hash() -> str:
+    """sha256 (first 16 hex digits) of granchain's Python sources and LAMMPS deck templates, by path
+    relative to the package and content: any change to the code that computes a point changes it
+    (the plugin's C++ is hashed on its own, granchain.lammps.build.plugin_key). Bundled scenes are
+    inputs, already in the state point; compiled caches (__pycache__) are not sources."""
+    return hash_sources(Path(__file__).resolve().parent.parent)
+
+
+def hash_sources(pkg: Path) -> str:
+    """source_hash of the package directory pkg."""
+    h = hashlib.sha256()
+    for f in sorted(p for p in pkg.rglob("*") if p.suffix in (".py", ".j2") and "__pycache__" not in p.parts):
+        h.update(f.relative_to(pkg).as_posix().encode())
+        h.update(b"\0")
+        h.update(f.read_bytes())
+        h.update(b"\0")
+    return h.hexdigest()[:16]
 
 
 def statepoint(scene_dict: dict, backend: str, method: str, rtol: float | None, error_estimate: bool, code: dict):
