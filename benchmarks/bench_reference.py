@@ -15,7 +15,9 @@ comparison; the runs alternate between the two (old first in even repetitions, n
 ones), so that load on a shared machine hits both alike. Per case: the median ns per bead-step of
 each, the ratio of the medians new/old and the median of the ratios of the runs taken back to back
 ("paired": the steadier on a shared machine). --scene NAME adds the reference run of a scene as
-granchain compare makes it (seconds instead of ns per bead-step). --clock cpu times each run by
+granchain compare makes it (seconds instead of ns per bead-step), --companions 2,4 also its RK4
+error-bar companions at 2 dt and 4 dt (compare runs them on a second core); --methods "" --sizes ""
+times the scenes only. --clock cpu times each run by
 its process's CPU time instead of the wall clock: steadier when more processes than cores compete
 (helpers, CI), and what a single-threaded numpy solver costs when it has a core to itself.
 """
@@ -61,14 +63,18 @@ def run_case(law: str, method: str, n: int, steps: int, dt: float = 2e-8, clock:
     return seconds / (steps * n) * 1e9, s.extra_steps
 
 
-def run_scene(name: str, method: str, clock: str = "wall") -> float:
-    """Seconds (wall or cpu) of a scene's reference run, as granchain compare makes it (run_reference)."""
+def run_scene(name: str, method: str, clock: str = "wall", factor: int = 1) -> float:
+    """Seconds (wall or cpu) of a scene's reference run, as granchain compare makes it (run_reference);
+    factor 2 or 4: its RK4 error-bar companion at that multiple of the step (compare runs those too)."""
     import time
 
     from granchain.scene import load_scene
-    from granchain.workflows.run import run_reference
+    from granchain.workflows.errors import companion_scene
+    from granchain.workflows.run import plan_for, run_reference
 
     scene = load_scene(name)
+    if factor != 1:
+        scene = companion_scene(plan_for(scene, "reference", method, None)[0], float(factor))
     timer = time.perf_counter if clock == "wall" else time.process_time
     t = timer()
     run_reference(scene, method)
@@ -85,7 +91,7 @@ def worker() -> None:
         job = json.loads(line)
         clock = job.pop()
         if job[0] == "scene":
-            out: float = run_scene(job[1], job[2], clock)
+            out: float = run_scene(job[1], job[2], clock, *job[3:])
         else:
             out = run_case(*job, clock=clock)[0]
         print(json.dumps(out), flush=True)
@@ -125,6 +131,7 @@ def compare(
     new_tree: str | None = None,
     methods=("rk4", "verlet"),
     clock: str = "wall",
+    companions: tuple[int, ...] = (),
 ) -> None:
     """The old tree and the new one (default this one) side by side: alternating runs, median of reps
     each, ratios."""
@@ -139,6 +146,8 @@ def compare(
                 cases.append((f"{law} {method} N={n}", [law, method, n, STEPS[n]]))
     for name in scenes:
         cases.append((f"scene {name}", ["scene", name, "rk4"]))
+        for factor in companions:
+            cases.append((f"scene {name} at {factor} dt", ["scene", name, "rk4", factor]))
     try:
         for label, job in cases:
             times: dict[str, list[float]] = {"old": [], "new": []}
@@ -173,6 +182,11 @@ def main() -> None:
     parser.add_argument("--reps", type=int, default=5, help="runs of each tree per case (--compare)")
     parser.add_argument("--sizes", default="100,1000,10000", help="chain lengths (--compare)")
     parser.add_argument("--scene", action="append", default=[], help="also a scene's reference run (--compare)")
+    parser.add_argument(
+        "--companions",
+        default="",
+        help="also each --scene's RK4 companions at these multiples of its step, e.g. 2,4 (compare runs them)",
+    )
     parser.add_argument("--new", metavar="TREE", help="the tree to compare with --compare's (default: this one)")
     parser.add_argument("--methods", default="rk4,verlet", help="integrators (--compare)")
     parser.add_argument(
@@ -186,8 +200,10 @@ def main() -> None:
     if args.worker:
         worker()
     elif args.compare:
-        sizes = [int(s) for s in args.sizes.split(",")]
-        compare(args.compare, args.reps, sizes, args.scene, args.new, tuple(args.methods.split(",")), args.clock)
+        sizes = [int(s) for s in args.sizes.split(",") if s]
+        companions = tuple(int(f) for f in args.companions.split(",") if f)
+        methods = tuple(m for m in args.methods.split(",") if m)
+        compare(args.compare, args.reps, sizes, args.scene, args.new, methods, args.clock, companions)
     else:
         table(args.clock)
 

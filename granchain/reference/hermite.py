@@ -54,22 +54,29 @@ def _max_scalar(
     h = t1 - t0
     ps, ts = [], []
     for x0, x1, y0, y1 in zip(a0.tolist(), a1.tolist(), d0.tolist(), d1.tolist(), strict=True):
-        c = h * y0
-        b = 3.0 * (x1 - x0) - 2.0 * h * y0 - h * y1
-        a = 2.0 * (x0 - x1) + h * y0 + h * y1
-        q = b * b - 3.0 * a * c
-        disc = math.sqrt(q if not q < 0.0 else 0.0)  # np.maximum(q, 0.0): a nan stays nan
-        den = disc - b
-        if den != 0.0 or den != den:
-            s = c / den if den == den else math.nan
-        elif c != 0.0 and c == c:  # c / +-0: +-inf, by the signs of both
-            s = math.copysign(math.inf, c) * math.copysign(1.0, den)
-        else:
-            s = math.nan  # 0 / 0 or nan / 0
-        s = 1.0 if not s <= 1.0 else s if s > 0.0 else 0.0  # nan and > 1 -> 1, < 0 -> 0
-        ps.append(((a * s + b) * s + c) * s + x0)
+        p, s = max1(h, x0, x1, y0, y1)
+        ps.append(p)
         ts.append(t0 + s * h)
     return np.array(ps), np.array(ts)
+
+
+def max1(h: float, x0: float, x1: float, y0: float, y1: float) -> tuple[float, float]:
+    """hermite_max of one contact on Python floats over a step of length h: (the maximum, its
+    fraction s of the step). The same operations in the same order as the numpy path."""
+    c = h * y0
+    b = 3.0 * (x1 - x0) - 2.0 * h * y0 - h * y1
+    a = 2.0 * (x0 - x1) + h * y0 + h * y1
+    q = b * b - 3.0 * a * c
+    disc = math.sqrt(q if not q < 0.0 else 0.0)  # np.maximum(q, 0.0): a nan stays nan
+    den = disc - b
+    if den != 0.0 or den != den:
+        s = c / den if den == den else math.nan
+    elif c != 0.0 and c == c:  # c / +-0: +-inf, by the signs of both
+        s = math.copysign(math.inf, c) * math.copysign(1.0, den)
+    else:
+        s = math.nan  # 0 / 0 or nan / 0
+    s = 1.0 if not s <= 1.0 else s if s > 0.0 else 0.0  # nan and > 1 -> 1, < 0 -> 0
+    return ((a * s + b) * s + c) * s + x0, s
 
 
 def hermite_root(a0: np.ndarray, a1: np.ndarray, d0: np.ndarray, d1: np.ndarray) -> np.ndarray:

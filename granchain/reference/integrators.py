@@ -18,13 +18,14 @@ the last force evaluation, at the step's end, which is what LAMMPS dumps.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
 import numpy as np
 
 from granchain.physics.laws import ContactLaw
-from granchain.reference.hermite import hermite_max, hermite_root
+from granchain.reference.hermite import _root, hermite_max, hermite_root, max1
 from granchain.reference.state import ChainState
 
 EPS = float(np.finfo(float).eps)
@@ -356,10 +357,12 @@ class RK4Integrator(Integrator):
 
 
 _EMPTY = np.empty(0)
-_add, _multiply, _subtract = (
+_add, _multiply, _subtract, _less, _greater = (
     np.add,
     np.multiply,
     np.subtract,
+    np.less,
+    np.greater,
 )  # RK4Integrator.rk4: outputs by position, ~0.15 us a call cheaper than out=
 _ZERO = np.array(0.0)  # 0-d: a cheaper operand than the Python float (RK4Integrator.rk4)
 
@@ -425,10 +428,77 @@ def first_kink_crossing(
         The fraction s of the piece, the 0-based contact and the kink's name (the split cap's error).
     """
     kinks, turn_level = fixed if fixed is not None else (law.kinks(alpha_hist), law.turn_level(alpha_hist))
+    # the screens (a few numpy calls over the chain) leave a handful of contacts or none; those are
+    # tested on Python floats (first_crossing_scalar: numpy calls on arrays of a few elements cost
+    # more than the arithmetic), unless a screen leaves many (then all on arrays, as before)
+    a0, a1, shape = piece.a0, piece.a1, piece.a0.shape
+    screened = []
+    for kink in kinks:
+        level = _full(kink.level, shape)
+        idx = (_less(a0, level) ^ _less(a1, level)).nonzero()[0]
+        if idx.size:
+            screened.append((kink, level, idx))
+    turn = None
+    if turn_level is not None:
+        turn = (_greater(piece.d0, _ZERO) & _less(piece.d1, _ZERO)).nonzero()[0]
+    if all(idx.size <= _SCALAR_CONTACTS for _, _, idx in screened) and (turn is None or turn.size <= _SCALAR_CONTACTS):
+        return first_crossing_scalar(screened, turn, turn_level, piece, timestep)
     found = kink_roots(kinks, piece)
     if turn_level is not None:
         found += turns_above(turn_level, piece)
     return earliest(found, piece.h, timestep) if found else None
+
+
+#: first_kink_crossing tests the contacts its screens leave on Python floats up to this many per screen
+_SCALAR_CONTACTS = 16
+_TOL = KINK_ROUNDOFF * EPS  # (the same product as roundoff's and crossing's)
+_INSIDE = 1.0 - 1e-6
+
+
+def first_crossing_scalar(
+    screened: list, turn: np.ndarray | None, turn_level: np.ndarray | None, piece: Piece, timestep: float
+) -> tuple[float, int, str] | None:
+    """first_kink_crossing's tests of the screened contacts on Python floats, contact by contact:
+    the same operations in the same order as crossing, kink_roots, turns_above and earliest (so the
+    same crossing, to the bit), without the numpy calls on arrays of a few elements.
+
+    screened: (kink, its level per contact, the contacts whose ends lie on both sides of it) per
+    kink; turn: the contacts whose rate goes from > 0 to < 0 (None: the law has no turn level)."""
+    a0, d0, a1, d1, u0, u1, h = piece
+    s_min = 1e-6 * timestep
+    best_s, best_i, best_kind = math.inf, -1, ""
+    for kink, level, idx in screened:
+        where = None if kink.where is None else _full(kink.where, a0.shape)
+        for i in idx.tolist():
+            lv = level.item(i)
+            x0 = a0.item(i)
+            if kink.from_below and not x0 < lv:
+                continue
+            x1 = a1.item(i)
+            tol = _TOL * (abs(u0.item(i)) + abs(u0.item(i + 1)) + abs(u1.item(i)) + abs(u1.item(i + 1))) + _TOL * abs(
+                lv
+            )
+            lo, hi = lv - tol, lv + tol
+            if not ((x0 < lo and x1 > hi) or (x0 > hi and x1 < lo)):
+                continue
+            if where is not None and not where.item(i):
+                continue
+            s = _root(x0 - lv, x1 - lv, h * d0.item(i), h * d1.item(i))
+            if s * h >= s_min and s <= _INSIDE and s < best_s:
+                best_s, best_i, best_kind = s, i, kink.kind
+    if turn is not None and turn.size:
+        levels = _full(turn_level, a0.shape)
+        for i in turn.tolist():
+            x1 = a1.item(i)
+            if not x1 > 0.0:
+                continue
+            x0 = a0.item(i)
+            p, s = max1(1.0, x0, x1, d0.item(i) * h, d1.item(i) * h)
+            lv = levels.item(i)
+            r = _TOL * (abs(u0.item(i)) + abs(u0.item(i + 1)) + abs(u1.item(i)) + abs(u1.item(i + 1)))
+            if p > lv + r + _TOL * lv and s * h >= s_min and s <= _INSIDE and s < best_s:
+                best_s, best_i, best_kind = s, i, "turn above alpha_max"
+    return None if best_i < 0 else (best_s, best_i, best_kind)
 
 
 def crossing(piece: Piece, level: np.ndarray) -> np.ndarray:
