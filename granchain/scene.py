@@ -111,6 +111,35 @@ Effects.__module__ = __name__
 Effects.__doc__ = "Effects beyond the paper's bare chain; each is absent unless the scene declares it."
 
 
+def touching_positions(distances, start: float = 0.0) -> np.ndarray:
+    """Centres of bodies meant to touch with zero force: x_0 = start, then each x_(i+1) the smallest
+    double at or above x_i + distances[i] with fl(x_(i+1) - x_i) >= distances[i] (so also
+    fl((x_(i+1) - x_i)^2) >= fl(distances[i]^2): IEEE rounding is monotonic).
+
+    Why: LAMMPS evaluates a contact when fl(dx * dx) < fl(d0 * d0) (our pair styles: d0 from pair_coeff,
+    overlap d0 - |dx|; pair_style granular: d0 = r_i + r_j from the data file's diameters, the same
+    double for the same radii), with dx the difference of the data file's positions (printed with
+    repr: read back exactly). x_i = (i-1) D rounded, or a running sum of R_i + R_(i+1), leaves 35-44%
+    of the at-rest pairs of 1e3-1e5-bead chains overlapping by round-off (up to an ulp of x): LAMMPS
+    evaluated about 0.44 contacts per bead-step ahead of the wave front, with round-off forces and
+    velocities (2e-19 m/s) where the reference solver (on displacements: no overlap at rest) has
+    exactly zero. On these positions nothing ahead of the front moves, and the loop time of the
+    chain/hertz deck fell to 0.73-0.82x on 1e3-1e5 beads, the built-in granular style's to 0.43-0.48x
+    (benchmarks/bench_pair.py positions). Each gap left is under an ulp of x (2e-15 m at 10 m), the
+    size of the round-off before; the gaps add up (x_N about N/2 ulps above (N-1) D: 3.5e-9 m for 1e5
+    beads of 9.5 mm), so positions read back are compared with these, never with (i-1) D.
+    """
+    x = float(start)
+    out = [x]
+    for d in np.asarray(distances, dtype=float).tolist():
+        y = x + d
+        while y - x < d:
+            y = math.nextafter(y, math.inf)
+        out.append(y)
+        x = y
+    return np.array(out)
+
+
 @dataclass(frozen=True)
 class Scene:
     chain: Chain
@@ -203,9 +232,15 @@ class Scene:
 
     @property
     def bead_positions(self) -> np.ndarray:
-        """Centres of the beads in contact with zero force: x_1 = 0, x_(i+1) = x_i + R_i + R_(i+1)."""
+        """Centres of the beads at t = 0 before any precompression displacement, as LAMMPS's data file
+        has them and everything reading LAMMPS's positions back subtracts (displacements, the run
+        watch): in contact with zero force, x_1 = 0, x_(i+1) = x_i + R_i + R_(i+1), placed by
+        touching_positions so that no at-rest pair overlaps in LAMMPS's arithmetic. A precompressed
+        chain (uniform) keeps x_i = (i-1) D: its beads overlap for real, no contact is idle there."""
+        if self.effects.precompression:
+            return np.arange(self.chain.beads) * self.diameter
         r = self.bead_radii
-        return np.concatenate(([0.0], np.cumsum(r[:-1] + r[1:])))
+        return touching_positions(r[:-1] + r[1:])
 
     def bead_pair_law(self, r1: float, m1, r2: float, m2) -> ContactLaw:
         """The law of two beads (radius, material each): Hertz 4/3 E*_pair sqrt(R*_pair) (Johnson);

@@ -487,7 +487,7 @@ def energy_column_names(path: Path, scene) -> list[str]:
 def read_solution(
     scene, work: Path, total_steps: int, wall_time: float, end_time: float | None = None
 ) -> ChainSolution:
-    n, d, m = scene.chain.beads, scene.diameter, scene.mass
+    n, m = scene.chain.beads, scene.mass
     ld = scene.loading
     res = read_results(work)  # by atom ID: templates.RESULT_COLUMNS
     lay = atom_layout(scene)
@@ -500,7 +500,7 @@ def read_solution(
         flead, tlead = leading_pulse(res["flead"][o : o + n - 1], res["tlead"][o : o + n - 1], tpeak)
     else:  # a deck without the leading-pulse vectors (the built-in granular yardstick)
         flead, tlead = np.full(n - 1, np.nan), np.full(n - 1, np.nan)
-    u = res["x"][o : o + n] - (scene.bead_positions if scene.per_bead else np.arange(n) * d)
+    u = res["x"][o : o + n] - scene.bead_positions  # the data file's positions (render_data)
     v = res["vx"][o : o + n]
     amax = res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1)
 

@@ -292,17 +292,17 @@ def render_data(scene) -> str:
     u0 = np.zeros(n)
     if scene.effects.precompression:
         u0 = precompressed_displacements(scene)[0]
+    x0 = scene.bead_positions  # touching with zero force and no overlap in LAMMPS's arithmetic
     if scene.per_bead:  # one atom type per distinct (radius, material): see bead_kinds
         kinds, kind_of = bead_kinds(scene)
-        x0 = scene.bead_positions
         atoms += [(kind_of[i] + 1, 2.0 * kinds[kind_of[i]][0], kinds[kind_of[i]][1].density, x0[i]) for i in range(n)]
     else:
-        atoms += [(1, d, rho, i * d + u0[i]) for i in range(n)]
+        atoms += [(1, d, rho, x0[i] + u0[i]) for i in range(n)]
     atoms += back
     xlo = min(a[3] for a in atoms) - 2.0 * rmax
     xhi = max(a[3] for a in atoms) + 2.0 * rmax
     lines = [
-        "granchain chain: bead i at x = (i-1) D, in contact with zero force",
+        "granchain chain: bead i at x = (i-1) D, in contact with zero force (granchain.scene.touching_positions)",
         "",
         f"{len(atoms)} atoms",
         f"{max(a[0] for a in atoms)} atom types",
@@ -339,7 +339,7 @@ class Watch:
     def of(cls, scene, pairs) -> Watch:
         e0 = initial_energy(ChainProblem.from_scene(scene))
         u0 = precompressed_displacements(scene)[0] if scene.effects.precompression else np.zeros(scene.chain.beads)
-        x0 = scene.bead_positions if scene.per_bead else np.arange(scene.chain.beads) * scene.diameter
+        x0 = scene.bead_positions  # as render_data writes them
         # on each contact's virgin curve: Hertz k a^1.5, bilinear k a, ...
         a_watch = OVERLAP_WATCH * float(min(scene.bead_radii))
         problem, layout = ChainProblem.from_scene(scene), AtomLayout.of(scene)
