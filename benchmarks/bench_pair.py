@@ -17,6 +17,11 @@
         log(N) (0: flat), and the peak memory (max RSS of the LAMMPS process) of every size
     python benchmarks/bench_pair.py mpi [--reps 3] [--sizes ...]
         loop time on np = 1 against np = 2, and the crossover chain length
+    python benchmarks/bench_pair.py positions [--reps 5] [--sizes 1000,10000,100000]
+        the data file's positions (granchain.scene.touching_positions: no at-rest pair overlaps in LAMMPS's
+        arithmetic) against x = (i-1) D rounded (before: 35-44% of the at-rest pairs overlapped by
+        round-off), on the plugin deck and on the built-in granular style; the at-rest pairs LAMMPS
+        evaluates per step (overlapping in its arithmetic) and loop and Pair time, new/old paired
     python benchmarks/bench_pair.py plugins OLD_DIR NEW_DIR [--reps 5]
         two plugin builds (directories holding granchainplugin.so, e.g. a build of an older tree with
         GRANCHAIN_CACHE=/tmp/old python -c "from granchain.lammps.build import build_plugin as b; b()"
@@ -404,6 +409,61 @@ def cmd_mpi(args) -> None:
         print(f"| {n} | {steps} | {statistics.median(t1):.3f} | {statistics.median(t2):.3f} | {sp:.2f} |", flush=True)
 
 
+def rounded_positions(data: str, d: float) -> str:
+    """The data file with bead i at x = (i-1) D rounded (the positions before touching_positions); a
+    uniform chain without effects' atoms (the benchmark's)."""
+    head, rows = data.split("Atoms # sphere\n\n", 1)
+    cols = [r.split() for r in rows.split("\n") if r.strip()]
+    for i, c in enumerate(cols):
+        c[4] = repr(i * d)
+    return head + "Atoms # sphere\n\n" + "\n".join(" ".join(c) for c in cols) + "\n"
+
+
+def at_rest_overlaps(data: str, d: float) -> int:
+    """Neighbouring pairs that overlap in LAMMPS's arithmetic (fl(dx^2) < fl(d^2)) at t = 0."""
+    rows = data.split("Atoms # sphere\n\n", 1)[1]
+    x = np.array([float(r.split()[4]) for r in rows.split("\n") if r.strip()])
+    dx = np.diff(x)
+    return int(np.count_nonzero(dx * dx < d * d))
+
+
+def cmd_positions(args) -> None:
+    import os
+
+    print(f"reps {args.reps}; ns per bead-step (median); new/old: median of paired ratios")
+    head = ("N", "steps", "overlapping pairs old/new", "plugin old", "plugin new", "loop new/old", "Pair new/old")
+    head += ("granular old", "granular new", "granular new/old", "plugin/granular old", "new", "load")
+    print("| " + " | ".join(head) + " |\n|" + "---|" * len(head))
+    for n in args.sizes:
+        steps = steps_for(n)
+        p = deck_for(n, steps, options=PLUGIN_DECK_OPTIONS)
+        g = deck_for(n, steps, yardstick="builtin")
+        d = scene(n, steps).diameter
+        variants = {
+            "plugin old": (p.deck, rounded_positions(p.data, d)),
+            "plugin new": (p.deck, p.data),
+            "granular old": (g.deck, rounded_positions(g.data, d)),
+            "granular new": (g.deck, g.data),
+        }
+        load0 = os.getloadavg()[0]
+        logs = alternate(variants, args.reps)
+        ns = ns_per_bead_step(logs, n, steps)
+        pair = {k: [breakdown(x).get("Pair", 0.0) for x in v] for k, v in logs.items()}
+        med = {k: statistics.median(v) for k, v in ns.items()}
+        over = f"{at_rest_overlaps(variants['plugin old'][1], d)}/{at_rest_overlaps(p.data, d)} of {n - 1}"
+        print(
+            f"| {n} | {steps} | {over} | {med['plugin old']:.1f} | {med['plugin new']:.1f} | "
+            f"{paired(ns['plugin new'], ns['plugin old']):.2f} | "
+            f"{paired(pair['plugin new'], pair['plugin old']):.2f} | "
+            f"{med['granular old']:.1f} | {med['granular new']:.1f} | "
+            f"{paired(ns['granular new'], ns['granular old']):.2f} | "
+            f"{paired(ns['plugin old'], ns['granular old']):.2f} | "
+            f"{paired(ns['plugin new'], ns['granular new']):.2f} | "
+            f"{load0:.2f}-{os.getloadavg()[0]:.2f} |",
+            flush=True,
+        )
+
+
 def cmd_plugins(args) -> None:
     import os
     import subprocess
@@ -467,6 +527,9 @@ def main() -> None:
         "--sizes", type=lambda s: [int(x) for x in s.split(",")], default=[1000, 3000, 10000, 30000, 100000, 1000000]
     )
     m.add_argument("--bead-steps", type=float, default=4e7)
+    po = sub.add_parser("positions")
+    po.add_argument("--reps", type=int, default=5)
+    po.add_argument("--sizes", type=lambda s: [int(x) for x in s.split(",")], default=[1000, 10000, 100000])
     pl = sub.add_parser("plugins")
     pl.add_argument("old")
     pl.add_argument("new")
@@ -479,6 +542,7 @@ def main() -> None:
         "output": cmd_output,
         "mpi": cmd_mpi,
         "plugins": cmd_plugins,
+        "positions": cmd_positions,
         "scaling": cmd_scaling,
     }
     cmds[args.cmd](args)
