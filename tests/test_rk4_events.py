@@ -146,3 +146,30 @@ def test_hermite_root_is_the_same_on_python_floats_and_arrays():
     scalar = np.array([hermite._root(*x) for x in zip(a0.tolist(), a1.tolist(), d0.tolist(), d1.tolist(), strict=True)])
     assert np.array_equal(vectorised, scalar)
     assert np.all((vectorised >= 0.0) & (vectorised <= 1.0))
+
+
+def test_hermite_root_on_python_floats_keeps_the_bits_near_double_roots():
+    """_root decides a bisection step by Horner's value of the cubic where that is far from zero, by
+    the numpy path's formula near a root: on cubics with a double root next to the crossing (the
+    value stays near zero over a stretch), tiny and huge scales and slopes of zero, the same bits."""
+    from granchain.reference import hermite
+
+    rng = np.random.default_rng(5)
+    n = 3000
+    r = rng.uniform(0.0, 1.0, n)  # a double root r, a simple root q: P(s) = c (s - r)^2 (s - q)
+    q = np.where(rng.uniform(size=n) < 0.5, rng.uniform(-0.2, 1.2, n), r + rng.normal(0.0, 1e-9, n))
+    c = rng.choice([-1.0, 1.0], n) * 10.0 ** rng.uniform(-14, 2, n)
+
+    def p(s):
+        return c * (s - r) ** 2 * (s - q)
+
+    def dp(s):
+        return c * (2.0 * (s - r) * (s - q) + (s - r) ** 2)
+
+    a0, a1, d0, d1 = p(0.0), p(1.0), dp(0.0), dp(1.0)
+    a0[:50] = 0.0
+    d0[50:100] = d1[50:100] = 0.0
+    a1[100:150] = -a0[100:150] * 1e-16  # a crossing right at s = 1
+    vectorised = hermite.hermite_root(a0, a1, d0, d1)
+    scalar = np.array([hermite._root(*x) for x in zip(a0.tolist(), a1.tolist(), d0.tolist(), d1.tolist(), strict=True)])
+    assert np.array_equal(vectorised, scalar)
