@@ -209,7 +209,8 @@ class RK4Integrator(Integrator):
             np.copyto(u, self.u_save)
             np.copyto(v, self.v_save)
             state.dash_energy = e_save
-            self.rk4(state, s_ev * h_sub, a_ext)
+            # the piece starts where the rejected try did, with the same history: its first stage too
+            self.rk4(state, s_ev * h_sub, a_ext, same_start=True)
             self.extra_steps += 2  # the rejected try and the split piece
             t_split = t + s_ev * h_sub
             self.end_piece(state, t, t_split, np.subtract(u_left, u_right), np.subtract(v_left, v_right))
@@ -219,8 +220,12 @@ class RK4Integrator(Integrator):
         self.end_piece(state, t, t1, a_new, adot_new)
         return t
 
-    def rk4(self, state: ChainState, h: float, a_ext: float) -> None:
+    def rk4(self, state: ChainState, h: float, a_ext: float, same_start: bool = False) -> None:
         """Classical RK4 on (u, v) in place; the external load is constant over the step.
+
+        same_start: (u, v) and alpha_max are those of the last call's start (a step split by event
+        location), so its first stage k1v, still in its buffer, is this one's (without a dashpot,
+        whose first stage also gives a power): the same numbers without the force evaluation.
 
         Every product lands in a preallocated buffer (its out, by position) and a product two stages need is taken
         once (hv: h/2 v for stages 2 and 3, then h v for stage 4 and the update); the sums are the
@@ -241,9 +246,10 @@ class RK4Integrator(Integrator):
         if gamma:
             self.rk4_dashpot(state, h, a_ext, consts)
             return
-        accel(u, k1v, v)
-        if a_ext:  # (x + 0.0 is x: an unloaded segment skips the four)
-            k1v[0] += a_ext
+        if not same_start:
+            accel(u, k1v, v)
+            if a_ext:  # (x + 0.0 is x: an unloaded segment skips the four)
+                k1v[0] += a_ext
         mul(v, half_h, hv)
         add(hv, u, ut)
         accel(ut, k2v, None)
