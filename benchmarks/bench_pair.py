@@ -18,8 +18,8 @@
     python benchmarks/bench_pair.py mpi [--reps 3] [--sizes ...]
         loop time on np = 1 against np = 2, and the crossover chain length
     python benchmarks/bench_pair.py positions [--reps 5] [--sizes 1000,10000,100000]
-        the data file's positions (granchain.scene.touching_positions: no at-rest pair overlaps in LAMMPS's
-        arithmetic) against x = (i-1) D rounded (before: 35-44% of the at-rest pairs overlapped by
+        the data file's positions (granchain.scene.contact_quantum: every at-rest overlap exactly 0 in
+        LAMMPS's arithmetic) against x = (i-1) D rounded (before: 35-44% of the at-rest pairs overlapped by
         round-off), on the plugin deck and on the built-in granular style; the at-rest pairs LAMMPS
         evaluates per step (overlapping in its arithmetic) and loop and Pair time, new/old paired
     python benchmarks/bench_pair.py plugins OLD_DIR NEW_DIR [--reps 5]
@@ -410,13 +410,22 @@ def cmd_mpi(args) -> None:
 
 
 def rounded_positions(data: str, d: float) -> str:
-    """The data file with bead i at x = (i-1) D rounded (the positions before touching_positions); a
+    """The data file with bead i at x = (i-1) D rounded (the positions before contact_quantum); a
     uniform chain without effects' atoms (the benchmark's)."""
     head, rows = data.split("Atoms # sphere\n\n", 1)
     cols = [r.split() for r in rows.split("\n") if r.strip()]
     for i, c in enumerate(cols):
         c[4] = repr(i * d)
     return head + "Atoms # sphere\n\n" + "\n".join(" ".join(c) for c in cols) + "\n"
+
+
+def nominal_contact_distance(deck: str, d: float) -> str:
+    """The deck with pair_coeff 1 1's contact distance d0 = D (before contact_quantum: D, not the radii on
+    the grid)."""
+    out, k = re.subn(r"^(pair_coeff\s+1\s+1\s+\S+\s+)\S+", rf"\g<1>{d!r}", deck, flags=re.M)
+    if k != 1:
+        raise SystemExit("expected one 'pair_coeff 1 1' line")
+    return out
 
 
 def at_rest_overlaps(data: str, d: float) -> int:
@@ -438,9 +447,10 @@ def cmd_positions(args) -> None:
         steps = steps_for(n)
         p = deck_for(n, steps, options=PLUGIN_DECK_OPTIONS)
         g = deck_for(n, steps, yardstick="builtin")
-        d = scene(n, steps).diameter
+        sc = scene(n, steps)
+        d, d0 = sc.diameter, 2.0 * sc.contact_radius(sc.chain.radius)
         variants = {
-            "plugin old": (p.deck, rounded_positions(p.data, d)),
+            "plugin old": (nominal_contact_distance(p.deck, d), rounded_positions(p.data, d)),
             "plugin new": (p.deck, p.data),
             "granular old": (g.deck, rounded_positions(g.data, d)),
             "granular new": (g.deck, g.data),
@@ -450,7 +460,7 @@ def cmd_positions(args) -> None:
         ns = ns_per_bead_step(logs, n, steps)
         pair = {k: [breakdown(x).get("Pair", 0.0) for x in v] for k, v in logs.items()}
         med = {k: statistics.median(v) for k, v in ns.items()}
-        over = f"{at_rest_overlaps(variants['plugin old'][1], d)}/{at_rest_overlaps(p.data, d)} of {n - 1}"
+        over = f"{at_rest_overlaps(variants['plugin old'][1], d)}/{at_rest_overlaps(p.data, d0)} of {n - 1}"
         print(
             f"| {n} | {steps} | {over} | {med['plugin old']:.1f} | {med['plugin new']:.1f} | "
             f"{paired(ns['plugin new'], ns['plugin old']):.2f} | "

@@ -111,24 +111,35 @@ Effects.__module__ = __name__
 Effects.__doc__ = "Effects beyond the paper's bare chain; each is absent unless the scene declares it."
 
 
-def touching_positions(distances, start: float = 0.0) -> np.ndarray:
-    """Centres of bodies meant to touch with zero force: x_0 = start, then each x_(i+1) the smallest
-    double at or above x_i + distances[i] with fl(x_(i+1) - x_i) >= distances[i] (so also
-    fl((x_(i+1) - x_i)^2) >= fl(distances[i]^2): IEEE rounding is monotonic).
+def contact_quantum(radii) -> float:
+    """The grid of a chain's contact radii and positions (Scene.contact_radius, Scene.bead_positions): a
+    power of two Q with every position of the chain (beads, a wall) below 2^53 Q, so that sums and
+    differences of multiples of Q there are exact doubles.
 
-    Why: LAMMPS evaluates a contact when fl(dx * dx) < fl(d0 * d0) (our pair styles: d0 from pair_coeff,
-    overlap d0 - |dx|; pair_style granular: d0 = r_i + r_j from the data file's diameters, the same
-    double for the same radii), with dx the difference of the data file's positions (printed with
-    repr: read back exactly). x_i = (i-1) D rounded, or a running sum of R_i + R_(i+1), leaves 35-44%
-    of the at-rest pairs of 1e3-1e5-bead chains overlapping by round-off (up to an ulp of x): LAMMPS
-    evaluated about 0.44 contacts per bead-step ahead of the wave front, with round-off forces and
-    velocities (2e-19 m/s) where the reference solver (on displacements: no overlap at rest) has
-    exactly zero. On these positions nothing ahead of the front moves, and the loop time of the
-    chain/hertz deck fell to 0.73-0.82x on 1e3-1e5 beads, the built-in granular style's to 0.43-0.48x
-    (benchmarks/bench_pair.py positions). Each gap left is under an ulp of x (2e-15 m at 10 m), the
-    size of the round-off before; the gaps add up (x_N about N/2 ulps above (N-1) D: 3.5e-9 m for 1e5
-    beads of 9.5 mm), so positions read back are compared with these, never with (i-1) D.
+    Why: LAMMPS evaluates a contact when fl(dx * dx) < fl(d0 * d0) (our pair styles: overlap d0 - |dx|,
+    d0 from pair_coeff), dx the difference of the data file's positions (printed with repr: read back
+    exactly). On x_i = (i-1) D rounded (or a running sum of R_i + R_(i+1)) 35-44% of the at-rest pairs
+    of 1e3-1e5-bead chains overlapped by round-off (up to an ulp of x): LAMMPS evaluated about 0.44
+    contacts per bead-step ahead of the wave front, with round-off forces and velocities (2e-19 m/s)
+    where the reference solver (on displacements: no overlap at rest) has exactly zero. Radii rounded up
+    to multiples of Q give contact distances and positions that are exact, so every at-rest overlap is
+    exactly 0 (no contact evaluated, nothing ahead of the front moves) and no pair has a gap either (a
+    gap of under an ulp at every contact delays the front systematically: measurable at 1e-9 of the
+    peak forces 100 contacts on, where round-off overlaps of both signs cancelled). The loop time of the
+    chain/hertz deck fell to 0.76-0.88x on 1e3-1e5 beads (benchmarks/bench_pair.py positions). The
+    contact distance changes by under 2 Q (Q = 4.4e-16 m for a 2 m chain), the forces not at all: they
+    depend on the overlap only; masses and stiffnesses keep the scene's radii.
     """
+    r = np.asarray(radii, dtype=float)
+    extent = 2.0 * float(np.sum(r)) + 4.0 * float(np.max(r))  # beads, a wall, precompression: all below
+    return math.ldexp(1.0, math.frexp(extent)[1] - 53)
+
+
+def touching_positions(distances, start: float = 0.0) -> np.ndarray:
+    """Centres of bodies meant to touch with zero force where the contact distance cannot be put on a
+    grid (a wall's R): x_0 = start, then each x_(i+1) the smallest double at or above x_i + distances[i]
+    with fl(x_(i+1) - x_i) >= distances[i] (so fl((x_(i+1) - x_i)^2) >= fl(distances[i]^2): rounding
+    is monotonic): no overlap in LAMMPS's arithmetic, a gap under an ulp of x (see contact_quantum)."""
     x = float(start)
     out = [x]
     for d in np.asarray(distances, dtype=float).tolist():
@@ -231,16 +242,25 @@ class Scene:
         return np.array([mat.bead_mass(m, r) for m, r in zip(self.bead_materials, self.bead_radii, strict=True)])
 
     @property
+    def contact_quantum(self) -> float:
+        """The grid of contact radii and positions (contact_quantum)."""
+        return contact_quantum(self.bead_radii)
+
+    def contact_radius(self, r: float) -> float:
+        """A bead radius rounded up to the contact grid: contact distances R_i + R_j (pair_coeff d0) and
+        positions (bead_positions) are sums of these, exact doubles (contact_quantum says why)."""
+        q = self.contact_quantum
+        return math.ceil(float(r) / q) * q
+
+    @property
     def bead_positions(self) -> np.ndarray:
         """Centres of the beads at t = 0 before any precompression displacement, as LAMMPS's data file
         has them and everything reading LAMMPS's positions back subtracts (displacements, the run
-        watch): in contact with zero force, x_1 = 0, x_(i+1) = x_i + R_i + R_(i+1), placed by
-        touching_positions so that no at-rest pair overlaps in LAMMPS's arithmetic. A precompressed
-        chain (uniform) keeps x_i = (i-1) D: its beads overlap for real, no contact is idle there."""
-        if self.effects.precompression:
-            return np.arange(self.chain.beads) * self.diameter
-        r = self.bead_radii
-        return touching_positions(r[:-1] + r[1:])
+        watch): in contact with zero force, x_1 = 0, x_(i+1) = x_i + R_i + R_(i+1) with the radii on the
+        contact grid (contact_radius): exact, every at-rest overlap in LAMMPS's arithmetic exactly 0."""
+        q = self.contact_quantum
+        rc = np.ceil(self.bead_radii / q) * q
+        return np.concatenate(([0.0], np.cumsum(rc[:-1] + rc[1:])))
 
     def bead_pair_law(self, r1: float, m1, r2: float, m2) -> ContactLaw:
         """The law of two beads (radius, material each): Hertz 4/3 E*_pair sqrt(R*_pair) (Johnson);

@@ -1,6 +1,6 @@
 """The data file's positions: bodies meant to touch with zero force do not overlap in LAMMPS's arithmetic
-(granchain.scene.touching_positions), so LAMMPS leaves an at-rest chain ahead of the wave front exactly
-at rest, as the reference solver does."""
+(beads: exactly zero overlap, granchain.scene.contact_quantum; a wall: touching_positions), so LAMMPS
+leaves an at-rest chain ahead of the wave front exactly at rest, as the reference solver does."""
 
 import re
 
@@ -41,7 +41,8 @@ def overlapping_pairs(scene) -> list[tuple[int, str]]:
     """Neighbouring atoms (by ID: striker, beads, wall) that overlap at t = 0 in LAMMPS's arithmetic, in
     our pair styles' test (fl(dx^2) < fl(d0^2), d0 from pair_coeff) or pair_style granular's (radsum =
     0.5 d_i + 0.5 d_j from the data file's diameters), or by any amount d0 - |dx| > 0 (Python floats are
-    IEEE doubles: the same operations as LAMMPS's)."""
+    IEEE doubles: the same operations as LAMMPS's); and beads whose overlap d0 - |dx| is not exactly 0
+    (a gap: the reference has none)."""
     deck, lay = render_deck(scene), AtomLayout.of(scene)
     types, diam, x = data_atoms(deck.data)
     d0 = contact_distances(deck.deck)
@@ -49,23 +50,32 @@ def overlapping_pairs(scene) -> list[tuple[int, str]]:
     for k in range(len(x) - 1):
         dx = x[k + 1] - x[k]
         tests = [("pair_coeff", d0[types[k], types[k + 1]])]
-        if lay.first_id <= k + 1 < lay.last_id:  # two beads (the yardstick takes no striker or wall)
+        beads = lay.first_id <= k + 1 < lay.last_id
+        if beads:  # two beads (the yardstick takes no striker or wall)
             tests.append(("radsum", 0.5 * diam[k] + 0.5 * diam[k + 1]))
         bad += [(k + 1, name) for name, dist in tests if dx * dx < dist * dist or dist - abs(dx) > 0.0]
+        if beads and not scene.effects.precompression and d0[types[k], types[k + 1]] - abs(dx) != 0.0:
+            bad.append((k + 1, "gap"))
     return bad
 
 
 def test_touching_positions_gap_at_most_an_ulp():
     d = np.full(99999, 2 * 4.76e-3)
-    x = touching_positions(d)
+    x = touching_positions(d, start=0.5)
     dx = np.diff(x)
-    assert x[0] == 0.0 and np.all(dx >= d) and np.all(dx * dx >= d * d)
+    assert x[0] == 0.5 and np.all(dx >= d) and np.all(dx * dx >= d * d)
     # the smallest such doubles: one ulp lower would overlap
     lower = np.nextafter(x[1:], -np.inf) - x[:-1]
     assert np.all(lower < d)
+
+
+def test_a_long_chain_touches_exactly():
+    sc = make_scene(beads=100000)
+    x, d0 = sc.bead_positions, 2 * sc.contact_radius(sc.chain.radius)
+    assert np.all(np.diff(x) == d0) and 0.0 <= d0 - sc.diameter < 2 * sc.contact_quantum
     # (i-1) D, rounded, overlapped by round-off at 42% of these pairs
-    old = np.diff(np.arange(100000) * 2 * 4.76e-3)
-    assert np.mean(old * old < d * d) > 0.3
+    old = np.diff(np.arange(100000) * sc.diameter)
+    assert np.mean(old * old < sc.diameter**2) > 0.3
 
 
 @settings(max_examples=60, deadline=None)
@@ -98,10 +108,10 @@ def test_striker_touches_bead_one_without_overlap():
 def test_precompressed_chain_keeps_its_real_overlaps():
     text = make_scene_text(beads=30, end_time=1e-5, timestep=1e-8) + "\n[precompression]\nforce = 10.0\n"
     sc = parse_scene(text, source="test.toml")
-    types, _, x = data_atoms(render_deck(sc).data)
+    _, _, x = data_atoms(render_deck(sc).data)
     d = sc.diameter
-    assert np.all(np.diff(x) < d)  # every contact loaded: nothing for the nudge to do
-    assert np.array_equal(sc.bead_positions, np.arange(30) * d)
+    assert np.all(np.diff(x) < d)  # every contact loaded
+    assert overlapping_pairs(sc) == [(k, name) for k in range(1, 30) for name in ("pair_coeff", "radsum")]
 
 
 @pytest.mark.parametrize("far_end", ["free", "wall"])

@@ -292,7 +292,7 @@ def render_data(scene) -> str:
     u0 = np.zeros(n)
     if scene.effects.precompression:
         u0 = precompressed_displacements(scene)[0]
-    x0 = scene.bead_positions  # touching with zero force and no overlap in LAMMPS's arithmetic
+    x0 = scene.bead_positions  # touching with zero force, overlaps exactly 0 in LAMMPS's arithmetic
     if scene.per_bead:  # one atom type per distinct (radius, material): see bead_kinds
         kinds, kind_of = bead_kinds(scene)
         atoms += [(kind_of[i] + 1, 2.0 * kinds[kind_of[i]][0], kinds[kind_of[i]][1].density, x0[i]) for i in range(n)]
@@ -302,7 +302,7 @@ def render_data(scene) -> str:
     xlo = min(a[3] for a in atoms) - 2.0 * rmax
     xhi = max(a[3] for a in atoms) + 2.0 * rmax
     lines = [
-        "granchain chain: bead i at x = (i-1) D, in contact with zero force (granchain.scene.touching_positions)",
+        "granchain chain: bead i at x = (i-1) D, in contact with zero force (granchain.scene.contact_quantum)",
         "",
         f"{len(atoms)} atoms",
         f"{max(a[0] for a in atoms)} atom types",
@@ -376,11 +376,12 @@ def pair_coeffs(scene, layout: AtomLayout) -> list[PairCoeff]:
     """Every type pair's contact: beads (one type per bead kind of a per-bead chain), the wall's
     (distance from the bead's centre to the flat, R) and the striker's (R_s + R; striker and wall
     never meet, but their coefficients are required)."""
-    pairs = [PairCoeff(1, 1, scene.law, scene.diameter)]
+    rc = scene.contact_radius  # contact distances on the positions' grid: at-rest overlaps exactly 0
+    pairs = [PairCoeff(1, 1, scene.law, 2.0 * rc(scene.chain.radius))]
     if scene.per_bead:
         kinds, _ = bead_kinds(scene)
         pairs = [
-            PairCoeff(a + 1, b + 1, scene.bead_pair_law(*kinds[a], *kinds[b]), kinds[a][0] + kinds[b][0])
+            PairCoeff(a + 1, b + 1, scene.bead_pair_law(*kinds[a], *kinds[b]), rc(kinds[a][0]) + rc(kinds[b][0]))
             for a in range(len(kinds))
             for b in range(a, len(kinds))
         ]
