@@ -157,6 +157,9 @@ class RK4Integrator(Integrator):
         self.views = (state.u[:-1], state.u[1:], state.v[:-1], state.v[1:])  # (u and v change in place)
         self.history = state.law.history
         self.history_floor: np.ndarray | None = None
+        # equal masses (ChainState.net_force): the stages' k are net forces and 1/m is in the factors
+        self.net_force = None if state.gamma else state.net_force
+        self.inv_m = state.uniform_inv_m if self.net_force is not None else 1.0
         # a law without history has the same kinks all run (its alpha_max is never written): ask once
         law = state.law
         self.fixed_kinks = None if law.history else (law.kinks(state.alpha_hist), law.turn_level(state.alpha_hist))
@@ -235,19 +238,25 @@ class RK4Integrator(Integrator):
         The step's scalar factors are 0-d arrays, made once per step length (consts): numpy takes a
         Python float operand at about half again the cost of the whole call on a short chain.
         """
-        u, v, accel, gamma = state.u, state.v, state.accel, state.gamma
+        u, v, gamma = state.u, state.v, state.gamma
+        accel = self.net_force or state.accel
         k1v, k2v, k3v, k4v, ut, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.ut, self.hv
         consts = self.consts.get(h)
         if consts is None:
             if len(self.consts) >= 32:  # split pieces: lengths seen once
                 self.consts.clear()
-            consts = tuple(np.array(c) for c in (0.5 * h, 0.25 * h * h, h, 0.5 * h * h, h * h / 6.0, h / 6.0))
+            c = self.inv_m  # (1.0 when the k are accelerations: x * 1.0 is x)
+            consts = tuple(
+                np.array(x) for x in (0.5 * h, 0.25 * h * h * c, h, 0.5 * h * h * c, h * h / 6.0 * c, h / 6.0 * c)
+            )
             self.consts[h] = consts
         half_h, quarter_h2, h_, half_h2, h2_6, h_6 = consts
         add, mul = _add, _multiply
         if gamma:
             self.rk4_dashpot(state, h, a_ext, consts)
             return
+        if a_ext and self.net_force is not None:
+            a_ext = a_ext / self.inv_m  # the load's force (the k are forces)
         if not same_start:
             accel(u, k1v, v)
             if a_ext:  # (x + 0.0 is x: an unloaded segment skips the four)
