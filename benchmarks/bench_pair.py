@@ -18,7 +18,7 @@
     python benchmarks/bench_pair.py mpi [--reps 3] [--sizes ...]
         loop time on np = 1 against np = 2, and the crossover chain length
     python benchmarks/bench_pair.py positions [--reps 5] [--sizes 1000,10000,100000]
-        the data file's positions (granchain.scene.contact_quantum: every at-rest overlap exactly 0 in
+        the data file's positions (granchain.physics.positions.contact_quantum: every at-rest overlap exactly 0 in
         LAMMPS's arithmetic) against x = (i-1) D rounded (before: 35-44% of the at-rest pairs overlapped by
         round-off), on the plugin deck and on the built-in granular style; the at-rest pairs LAMMPS
         evaluates per step (overlapping in its arithmetic) and loop and Pair time, new/old paired

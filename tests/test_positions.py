@@ -1,5 +1,5 @@
 """The data file's positions: bodies meant to touch with zero force do not overlap in LAMMPS's arithmetic
-(beads: exactly zero overlap, granchain.scene.contact_quantum; a wall: touching_positions), so LAMMPS
+(beads: exactly zero overlap, granchain.physics.positions.contact_quantum; a wall: touching_positions), so LAMMPS
 leaves an at-rest chain ahead of the wave front exactly at rest, as the reference solver does."""
 
 import re

@@ -76,7 +76,7 @@ class WallEffect(Effect):
     def data_atoms(cls, scene, types: dict[str, int]) -> list[tuple[int, float, float, float]]:
         # the rigid flat: an atom at bead N's surface, never integrated; touching it with zero force and no
         # overlap in LAMMPS's arithmetic (touching_positions), unless precompression presses bead N into it
-        from granchain.scene import touching_positions  # granchain.scene imports the effects
+        from granchain.physics.positions import touching_positions
 
         d, r, xn = scene.diameter, scene.chain.radius, float(scene.bead_positions[-1])
         x = xn + r if scene.effects.precompression else float(touching_positions([r], start=xn)[-1])
