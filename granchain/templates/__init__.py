@@ -302,7 +302,7 @@ def render_data(scene) -> str:
     xlo = min(a[3] for a in atoms) - 2.0 * rmax
     xhi = max(a[3] for a in atoms) + 2.0 * rmax
     lines = [
-        "granchain chain: bead i at x = (i-1) D, in contact with zero force (granchain.physics.positions.contact_quantum)",
+        "granchain chain: beads in contact with zero force, on an exact grid (granchain.physics.positions)",
         "",
         f"{len(atoms)} atoms",
         f"{max(a[0] for a in atoms)} atom types",
