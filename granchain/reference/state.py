@@ -125,6 +125,8 @@ def make_accel(
     # positions: a few, all run long), made once: slicing costs as much as a small ufunc call
     views: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
+    per_mass = inv_m is not None  # else the net contact forces (a chain of equal masses)
+
     def accel(uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None) -> float:
         view = views.get(id(uu))
         if view is None or view[0] is not uu:  # (the entry holds uu: its id is not reused while cached)
@@ -136,20 +138,8 @@ def make_accel(
             maximum(alpha, zero, out=alpha)
         force_into(alpha, alpha_hist, fc, tmp)  # with alpha_max frozen within the step
         subtract(fp_left, fp_right, out)
-        multiply(out, inv_m, out)
+        if per_mass:
+            multiply(out, inv_m, out)
         return 0.0
 
-    def net_force(uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None) -> float:
-        view = views.get(id(uu))
-        if view is None or view[0] is not uu:  # (as accel)
-            view = (uu, uu[:-1], uu[1:])
-            if len(views) < 8:
-                views[id(uu)] = view
-        subtract(view[1], view[2], alpha)
-        if clip:
-            maximum(alpha, zero, out=alpha)
-        force_into(alpha, alpha_hist, fc, tmp)
-        subtract(fp_left, fp_right, out)
-        return 0.0
-
-    return accel if inv_m is not None else net_force
+    return accel
