@@ -173,3 +173,42 @@ def test_hermite_root_on_python_floats_keeps_the_bits_near_double_roots():
     vectorised = hermite.hermite_root(a0, a1, d0, d1)
     scalar = np.array([hermite._root(*x) for x in zip(a0.tolist(), a1.tolist(), d0.tolist(), d1.tolist(), strict=True)])
     assert np.array_equal(vectorised, scalar)
+
+
+@pytest.mark.parametrize("name", ["default", "plastic-short-impulse", "thornton-short-impulse"])
+def test_kink_crossing_on_python_floats_is_the_array_paths(name):
+    """first_kink_crossing tests the few contacts its screens leave on Python floats
+    (first_crossing_scalar); over many contacts it takes the array path (kink_roots, turns_above,
+    earliest). On random pieces with a handful of contacts near each kink and turning (overlaps, rates,
+    histories of both signs and scales), both give the same crossing: fraction, contact and kind."""
+    from granchain.reference import integrators as ig
+    from granchain.scene import load_scene
+
+    law = load_scene(name).law
+    rng = np.random.default_rng(25)
+    n, agree, crossed = 40, 0, 0
+    for _ in range(400):
+        hist = rng.uniform(0.0, 2e-6, n - 1) * (rng.uniform(size=n - 1) < 0.7)
+        kinks, turn_level = law.kinks(hist), law.turn_level(hist)
+        # a base overlap near some kink level for a few contacts, elsewhere far below zero
+        a0 = np.full(n - 1, -1e-3)
+        near = rng.choice(n - 1, size=rng.integers(1, 6), replace=False)
+        levels = [np.broadcast_to(k.level, hist.shape) for k in kinks]
+        lv = levels[rng.integers(len(levels))][near]
+        a0[near] = lv + rng.normal(0.0, 1e-8, near.size)
+        a1 = a0.copy()
+        a1[near] = lv + rng.normal(0.0, 1e-8, near.size)
+        d0 = rng.normal(0.0, 1e-2, n - 1)
+        d1 = rng.normal(0.0, 1e-2, n - 1)
+        u1 = np.concatenate((np.cumsum(a1[::-1])[::-1], [0.0]))
+        u0 = np.concatenate((np.cumsum(a0[::-1])[::-1], [0.0]))
+        piece = ig.Piece(a0, d0, a1, d1, u0, u1, 1e-6)
+        scalar = ig.first_kink_crossing(law, hist, piece, 1e-6)
+        found = ig.kink_roots(kinks, piece)
+        if turn_level is not None:
+            found += ig.turns_above(turn_level, piece)
+        arrays = ig.earliest(found, piece.h, 1e-6) if found else None
+        assert scalar == arrays
+        agree += 1
+        crossed += scalar is not None
+    assert agree == 400 and crossed > 20, crossed  # the pieces do cross kinks
