@@ -22,7 +22,7 @@ from granchain.physics.effects import FAR_ENDS as FAR_ENDS  # the [boundary] far
 from granchain.physics.effects import active_effects, effect_fields, refusal, sections
 from granchain.physics.laws import LAWS as LAW_REGISTRY
 from granchain.physics.laws import ContactLaw, law_class
-from granchain.physics.positions import contact_quantum, touching_positions  # noqa: F401 (re-exported)
+from granchain.physics.positions import contact_quantum
 
 LAWS = tuple(LAW_REGISTRY)  # the registered laws' names (granchain.physics.laws.LAWS)
 

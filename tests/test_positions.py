@@ -10,7 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from granchain.lammps.runner import run_lammps
-from granchain.scene import parse_scene, touching_positions
+from granchain.physics.positions import touching_positions
+from granchain.scene import parse_scene
 from granchain.templates import AtomLayout, render_deck
 from granchain.workflows.run import run_reference
 
