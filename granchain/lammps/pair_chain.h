@@ -11,6 +11,9 @@
  *                                never pulls); needs 'comm_modify vel yes' and the vector d_edash,
  *                                the dashpot energy of each contact so far
  *   pair_style chain/<law> lead floor F0   tracks the leading pulse (d_flead, d_tlead)
+ *   pair_style chain/<law> peaks all   runs every contact's peak bookkeeping every step instead of only the
+ *                                contacts written at this sample or the previous one (the same numbers,
+ *                                slower: a check of the shortcut, tests/test_peak_tracking.py)
  *   pair_coeff I J k d0 [extras] k in N/m^1.5 (hertz, thornton) or N/m (bilinear), d0 = contact distance
  *                                (R_I + R_J), then the law's extras: beta the unloading coefficient
  *                                (bilinear), d_y the yield overlap in m (thornton).
@@ -81,6 +84,7 @@ class PairChainBase : public Pair {
   const char *vectors;      // the law's per-atom vectors, for the error messages
   double gamma;    // dashpot coefficient, 0: none
   bool lead;       // track the leading pulse (d_flead, d_tlead): pair_style ... lead floor F0
+  bool peaks_all;  // 'peaks all': every contact's peak bookkeeping every step (a check of track_active)
   double lead_floor = 0.0, lead_f0 = 0.0;
   double **d0;
   double t_fc, t_fprev, t_fprev2;    // times of the current and the two previous samples
@@ -103,6 +107,14 @@ class PairChainBase : public Pair {
   };
   PeakStep peak_step(double t, bool new_sample);
   void track_peaks(const PeakStep &ps, const double *fc, const double *fprev, const double *fprev2);
+  // the owned contacts the pair loop wrote a force for at this sample (act_fc) and at the previous one
+  // (act_fprev), by local index: every other contact has fc = fprev = 0 and nothing to track
+  // (track_active). act_fprev is usable while the local indices stay those of the previous sample
+  // (no neighbour list build since): act_ready
+  std::vector<int> act_fc, act_fprev;
+  bool act_ready = false;
+  void start_active(bool new_sample);
+  void track_active(const PeakStep &ps, const double *fc, const double *fprev, const double *fprev2);
   __attribute__((always_inline)) inline void track_one(const PeakStep &ps, int i, const double *fc, const double *fprev, const double *fprev2);
 
 };
