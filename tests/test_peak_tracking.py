@@ -8,11 +8,12 @@ effect, and atoms whose local order LAMMPS changes in the middle of a run (excha
 import random
 import re
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from granchain.lammps.runner import run_deck
+from granchain.lammps.runner import read_results, run_deck
 from granchain.scene import parse_scene
 from granchain.templates import render_deck
 
@@ -96,14 +97,15 @@ def shuffled_atoms(data: str, seed: int) -> str:
 
 @pytest.mark.parametrize("law", LAW_NAMES)
 def test_atoms_exchanged_between_ranks_mid_run(tmp_path, law):
-    """Two ranks, atoms unsorted and in random local order, a free chain pushed for 2 ms: as it
-    compresses, beads cross the middle of its shrink-wrapped box from one rank's subdomain to the
-    other's, and each exchange moves other atoms' local indices while contacts carry forces. The
-    bookkeeping must follow the new indices. (What this cannot pin down: the full pass on a build
+    """Two ranks, atoms unsorted and in random local order, a free chain of 41 beads pushed for 2 ms:
+    bead 21 starts on the middle of the shrink-wrapped box, where the ranks' subdomains meet, and as the
+    chain compresses it crosses to the other rank; each exchange moves other atoms' local indices while
+    contacts carry forces. The pair loop and the bookkeeping must follow the new indices (a pair array
+    kept from the first build fails here). (What this cannot pin down: the full pass on a build
     step itself matters only for a contact whose force falls to exactly 0 on that step while an
     exchange moves it, too rare to provoke; removing that guard passes here.)"""
     text = make_scene_text(
-        beads=40,
+        beads=41,
         law=law,
         loading='kind = "step"\namplitude = 500.0\nduration = 1.0',
         end_time=2e-3,
@@ -115,6 +117,12 @@ def test_atoms_exchanged_between_ranks_mid_run(tmp_path, law):
     assert n == 1
     data = shuffled_atoms(d.data, seed=len(law))
     assert_same_bits(deck, data, tmp_path, np_=2)
+    # and the two ranks' numbers are one rank's (pair_chain.cpp's flat pair array follows the list's
+    # builds: a stale one would pair the wrong local atoms after an exchange)
+    run_deck(deck, data, work_dir=tmp_path / "one")
+    one, two = read_results(tmp_path / "one"), read_results(tmp_path / "active")
+    for key in ("x", "vx", "fpeak", "tpeak", "fmin"):
+        np.testing.assert_allclose(two[key], one[key], rtol=1e-12, atol=1e-15 * np.max(np.abs(one[key])), err_msg=key)
     # the runs did rebuild their neighbour lists (the case the test is about)
     log = (tmp_path / "active" / "log.lammps").read_text()
     builds = [int(b) for b in re.findall(r"^Neighbor list builds = (\d+)", log, re.M)]

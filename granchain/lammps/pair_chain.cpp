@@ -360,6 +360,18 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
     return;
   }
   std::vector<int> &act = act_fc;
+  // the list's pairs in its order as one flat array (the same force sums, in the same order), made
+  // again after every build of the list: the loop below reads 8 bytes a pair instead of ilist,
+  // numneigh, firstneigh and the neighbour page (a chain's half list has about one pair per bead)
+  if (neighbor->ago == 0 || neighbor->ncalls != pairs_ncalls) {
+    pairs.clear();
+    for (int ii = 0; ii < inum; ii++) {
+      const int i = ilist[ii];
+      const int *jlist = firstneigh[i];
+      for (int jj = 0; jj < numneigh[i]; jj++) pairs.push_back(IJ{i, jlist[jj] & NEIGHMASK});
+    }
+    pairs_ncalls = neighbor->ncalls;
+  }
   // x, f, v are contiguous n x 3 blocks: index them as such (no row pointer to load per access)
   const double(*const xx)[3] = (const double(*)[3]) x[0];
   double(*const ff)[3] = (double(*)[3]) f[0];
@@ -385,12 +397,11 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
     double(*const __restrict fq)[3] = ff;
     double *const __restrict fcq = fc;
     const Coef &cf1 = tab[nt + 1];    // types 1 1
-    for (int ii = 0; ii < inum; ii++) {
-      const int i = ilist[ii];
-      const int *jlist = firstneigh[i];
-      const int jnum = numneigh[i];
-      for (int jj = 0; jj < jnum; jj++) {
-        const int j = jlist[jj] & NEIGHMASK;
+    const int npairs = (int) pairs.size();
+    const IJ *const pq = pairs.data();
+    for (int p = 0; p < npairs; p++) {
+      {
+        const int i = pq[p].i, j = pq[p].j;
         const Coef &cf = ONE ? cf1 : tab[type[i] * nt + type[j]];
         const double delx = xq[i][0] - xq[j][0];
         const double dely = xq[i][1] - xq[j][1];

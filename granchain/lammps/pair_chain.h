@@ -112,6 +112,11 @@ class PairChainBase : public Pair {
   // (track_active). act_fprev is usable while the local indices stay those of the previous sample
   // (no neighbour list build since): act_ready
   std::vector<int> act_fc, act_fprev;
+  struct IJ {
+    int i, j;
+  };
+  std::vector<IJ> pairs;        // the neighbour list's pairs (i, j), in its order
+  bigint pairs_ncalls = -1;     // neighbor->ncalls when pairs was made
   bool act_ready = false;
   void start_active(bool new_sample);
   void track_active(const PeakStep &ps, const double *fc, const double *fprev, const double *fprev2);
