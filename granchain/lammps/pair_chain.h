@@ -111,7 +111,8 @@ class PairChainBase : public Pair {
   // (act_fprev), by local index: every other contact has fc = fprev = 0 and nothing to track
   // (track_active). act_fprev is usable while the local indices stay those of the previous sample
   // (no neighbour list build since): act_ready
-  std::vector<int> act_fc, act_fprev;
+  std::vector<int> act_fc, act_fprev;    // the first nact_fc, nact_fprev entries
+  int nact_fc = 0, nact_fprev = 0;
   struct IJ {
     int i, j;
   };
