@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import os
+import threading
 import warnings
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from contextlib import contextmanager
 from dataclasses import replace
 from datetime import UTC, datetime
@@ -158,9 +160,45 @@ class PlanRefinedWarning(UserWarning):
     (granchain.workflows.plan.refined_plan says why)."""
 
 
-#: (scene, method) -> RunResult (or the Future of one made in a worker process) of the reference runs
-#: made inside shared_reference_runs(), else None
-_shared_runs: dict | None = None
+class Abandoned(Exception):
+    """A run or a wait for a shared run given up: the shared_reference_runs() block is being left
+    after another run failed (granchain compare's LAMMPS run in a thread, when the reference's failed)."""
+
+
+class SharedRuns:
+    """The reference runs made inside one shared_reference_runs() block, shared by threads.
+
+    runs: (scene, method) -> the RunResult, or a Future of it: a prefetch in the worker process or a
+    run being made by another thread (waited for; made again here if it failed, as serially).
+    """
+
+    def __init__(self):
+        self.runs: dict = {}
+        self.lock = threading.Lock()
+        self._stop = Future()
+
+    def abandon(self) -> None:
+        """Give up: runs not yet started and waits for shared runs raise Abandoned from now on."""
+        if not self._stop.done():
+            self._stop.set_result(None)
+
+    @property
+    def abandoned(self) -> bool:
+        return self._stop.done()
+
+    def wait(self, future):
+        """The future's result (None if it failed with an Exception); Abandoned if given up first."""
+        done, _ = wait([future, self._stop], return_when=FIRST_COMPLETED)
+        if future not in done:
+            raise Abandoned("the shared run is no longer waited for")
+        try:
+            return future.result()
+        except Exception:  # failed in the worker, the worker died, or another thread's run failed
+            return None
+
+
+#: the SharedRuns of the shared_reference_runs() block this process is in, else None
+_shared_runs: SharedRuns | None = None
 
 
 @contextmanager
@@ -170,7 +208,9 @@ def shared_reference_runs(prefetch=()):
     granchain compare needs the same RK4 runs twice: the reference's error-bar companions at 2 dt and
     4 dt, and LAMMPS's (a bilinear or Thornton Verlet run is measured against RK4 at 2 dt and 4 dt,
     errors.against_rk4_because): the same companion scene, integrator and step, so the same numbers.
-    Each caller gets its own RunResult (a shallow copy) around the shared solution.
+    Each caller gets its own RunResult (a shallow copy) around the shared solution. Yields the
+    SharedRuns: threads may run inside the block (compare runs LAMMPS in one); a thread still running
+    must be joined before the block is left (SharedRuns.abandon() makes its waits give up).
 
     prefetch: (scene, method) pairs that will be asked for, started at once in one worker process
     where this process may run on two cores or more (the pure-Python solver is single-threaded:
@@ -179,18 +219,18 @@ def shared_reference_runs(prefetch=()):
     """
     global _shared_runs
     outer = _shared_runs
-    _shared_runs = {} if outer is None else outer
+    _shared_runs = SharedRuns() if outer is None else outer
     pool = None
     try:
-        todo = [k for k in dict.fromkeys(prefetch) if k not in _shared_runs]
+        todo = [k for k in dict.fromkeys(prefetch) if k not in _shared_runs.runs]
         if todo and available_cores() >= 2:
             import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
 
             pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("fork"))
             for scene, method in todo:
-                _shared_runs[(scene, method)] = pool.submit(_prefetched_run, scene, method)
-        yield
+                _shared_runs.runs[(scene, method)] = pool.submit(_prefetched_run, scene, method)
+        yield _shared_runs
     finally:
         if pool is not None:
             pool.shutdown(wait=False, cancel_futures=True)
@@ -209,21 +249,42 @@ def _prefetched_run(scene, method: str):
 
 
 def _shared_run(scene, method: str):
-    """The shared reference run of (scene, method): made here, or waited for if prefetched."""
-    key = (scene, method)
-    got = _shared_runs.get(key)
-    if got is not None and not isinstance(got, RunResult):  # a prefetch: running, queued or done
-        if got.cancel():  # not started yet: made here at once rather than after the worker's queue
-            got = None
-        else:
-            try:
-                got = got.result()
-            except Exception:  # the worker died: made here
-                got = None
-    if got is None:
-        got = run_reference(scene, method)
-    _shared_runs[key] = got
-    return replace(got, extra=dict(got.extra))
+    """The shared reference run of (scene, method): made here, or waited for if prefetched or being
+    made by another thread. A prefetch not started yet is made here at once rather than after the
+    worker's queue; one that failed (or whose worker died), and another thread's run that raised,
+    are made again here, so that this caller gets the run's own error as it would serially."""
+    shared, key = _shared_runs, (scene, method)
+    while True:
+        with shared.lock:
+            got = shared.runs.get(key)
+            if got is None or (isinstance(got, Future) and got.cancel()):
+                mine = Future()  # made here: another thread asking meanwhile waits for it
+                mine.set_running_or_notify_cancel()
+                shared.runs[key] = mine
+                break
+        if isinstance(got, RunResult):
+            return replace(got, extra=dict(got.extra))
+        result = shared.wait(got)
+        with shared.lock:
+            if shared.runs.get(key) is got:
+                if result is None:
+                    del shared.runs[key]
+                else:
+                    shared.runs[key] = result
+    try:
+        if shared.abandoned:
+            raise Abandoned("not started: the block is being left")
+        result = run_reference(scene, method)
+    except BaseException as e:
+        with shared.lock:
+            if shared.runs.get(key) is mine:
+                del shared.runs[key]
+        mine.set_exception(e)
+        raise
+    with shared.lock:
+        shared.runs[key] = result
+    mine.set_result(result)
+    return replace(result, extra=dict(result.extra))
 
 
 def _execute(scene, backend: str, method: str, np_: int):
@@ -232,6 +293,8 @@ def _execute(scene, backend: str, method: str, np_: int):
         if _shared_runs is None:
             return run_reference(scene, method), None
         return _shared_run(scene, method), None
+    if _shared_runs is not None and _shared_runs.abandoned:
+        raise Abandoned("not started: the block is being left")
     from granchain.lammps.runner import run_lammps
 
     with _with_fix(scene, "verlet"):
@@ -335,6 +398,53 @@ def check_timestep(scene, method: str) -> None:
         )
 
 
+def _finish(result, work, given, scene, plan, backend: str, method: str, np_: int, rtol, error_estimate, after_run):
+    """(result, work directory): run_scene's run of the planned scene made again finer if its plan is
+    refined (_refined), then after_run() (if given), then its error estimate if asked for; on any error
+    its work directory is removed (the warnings name run_scene's caller, as run_scene's own do)."""
+    try:
+        refined = _refined(given, plan, result)
+        if refined is not None:  # the measured peaks were far below the force scale: run again, finer
+            from granchain.lammps.runner import cleanup
+
+            if work is not None:
+                cleanup(work)
+            plan = refined
+            scene = refined.scene
+            warnings.warn(
+                f"{scene.source}: running again at timestep = {scene.run.timestep:.4g} s: "
+                + "refined "
+                + next(c.reason for c in plan.choices if c.name == "timestep").split("; refined ", 1)[-1],
+                PlanRefinedWarning,
+                stacklevel=3,
+            )
+            msg = output_size_warning(scene)
+            if msg:
+                warnings.warn(msg, OutputSizeWarning, stacklevel=3)
+            result, work = _execute(scene, backend, method, np_)
+        result.plan = plan
+        if after_run is not None:
+            after_run()
+        if error_estimate:
+            result.errors = _estimate_errors(result, plan, backend, method, np_)
+            worst, target = result.errors.error_estimate, (plan.rtol if plan is not None else rtol or 1e-3)
+            if worst is not None and worst > target:  # measured, not predicted: say so after the run
+                warnings.warn(
+                    f"{scene.source}: the measured error of the peak force at contact "
+                    f"{result.errors.error_estimate_contact} is {worst:.2g}, above rtol {target:g} (peaks.csv "
+                    f"peak_force_error; a smaller [run] timestep or --rtol brings it down)",
+                    AccuracyWarning,
+                    stacklevel=3,
+                )
+    except BaseException:  # an error estimate failed or was interrupted: no work directory left behind
+        if work is not None:
+            from granchain.lammps.runner import cleanup
+
+            cleanup(work)
+        raise
+    return result, work
+
+
 def run_scene(
     scene,
     backend: str = "reference",
@@ -347,6 +457,8 @@ def run_scene(
     rtol: float | None = None,
     oversubscribe: bool = False,
     error_estimate: bool = False,
+    before_run=None,
+    after_run=None,
 ) -> RunResult:
     """Run a scene on a backend; if out is given, write the run directory (checked before the run).
 
@@ -359,6 +471,10 @@ def run_scene(
     and ["_work"], for a caller that writes the run directory itself and then removes "_work".
     error_estimate: also run the scene at 2 dt and 4 dt and estimate every number's error
     (granchain.workflows.errors; result.errors, peaks.csv's *_error columns, summary.json).
+    before_run: called once after the scene's checks and warnings, before its first run; after_run:
+    called once the run is made (and made again finer if refined), before its error estimate
+    (granchain compare starts LAMMPS alongside the reference at one of them); what they raise stops
+    the run.
     """
     started = datetime.now(UTC)
     method = integrator(backend, method)
@@ -376,38 +492,11 @@ def run_scene(
     msg = output_size_warning(scene)
     if msg:
         warnings.warn(msg, OutputSizeWarning, stacklevel=2)
+    if before_run is not None:
+        before_run()
     result, work = _execute(scene, backend, method, np_)
-    refined = _refined(given, plan, result)
-    if refined is not None:  # the measured peaks were far below the force scale: run again, finer
-        from granchain.lammps.runner import cleanup
-
-        if work is not None:
-            cleanup(work)
-        plan = refined
-        scene = refined.scene
-        warnings.warn(
-            f"{scene.source}: running again at timestep = {scene.run.timestep:.4g} s: "
-            + "refined "
-            + next(c.reason for c in plan.choices if c.name == "timestep").split("; refined ", 1)[-1],
-            PlanRefinedWarning,
-            stacklevel=2,
-        )
-        msg = output_size_warning(scene)
-        if msg:
-            warnings.warn(msg, OutputSizeWarning, stacklevel=2)
-        result, work = _execute(scene, backend, method, np_)
-    result.plan, result.started_utc = plan, started
-    if error_estimate:
-        result.errors = _estimate_errors(result, plan, backend, method, np_)
-        worst, target = result.errors.error_estimate, (plan.rtol if plan is not None else rtol or 1e-3)
-        if worst is not None and worst > target:  # measured, not predicted: say so after the run
-            warnings.warn(
-                f"{scene.source}: the measured error of the peak force at contact "
-                f"{result.errors.error_estimate_contact} is {worst:.2g}, above rtol {target:g} (peaks.csv "
-                f"peak_force_error; a smaller [run] timestep or --rtol brings it down)",
-                AccuracyWarning,
-                stacklevel=2,
-            )
+    result, work = _finish(result, work, given, scene, plan, backend, method, np_, rtol, error_estimate, after_run)
+    result.started_utc = started
     if backend == "reference":
         if out is not None:
             write_run_dir(result, out, overwrite=overwrite)
