@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import os
 import shutil
+import threading
 from pathlib import Path
 
 from granchain.postprocess.compare import compare_runs, write_compare
 from granchain.results import check_output_dir, write_run_dir
+from granchain.workflows import run as run_module
 from granchain.workflows.errors import rk4_companions
-from granchain.workflows.run import check_resources, plan_for, run_scene, shared_reference_runs
+from granchain.workflows.run import Abandoned, check_resources, plan_for, run_scene, shared_reference_runs
 
 
 def compare_scene(
@@ -45,26 +47,31 @@ def compare_scene(
     # (a bad scene fails before any run)
     ref_scene, _ = plan_for(reference_scene or scene, "reference", method, plan_rtol)
     check_resources(lam_scene, "lammps", np_)
-    # the reference runs first (below): LAMMPS's plugin is built or found now, so that a missing
-    # compiler or a failed build is said before any run, not after the reference's
+    # LAMMPS's plugin is built or found now, so that a missing compiler or a failed build is said
+    # before any run (the reference's starts first, below)
     from granchain.lammps.build import build_plugin
 
     build_plugin()
     # the RK4 error-bar companions at 2 dt and 4 dt: LAMMPS's are the reference's own when both run
     # the same step (a bilinear or Thornton scene with a fixed step), each made once; and they are
     # started at once in a worker process on a second core (shared_reference_runs), while this one
-    # runs the reference (first: it asks for them last) and LAMMPS
+    # runs the reference and LAMMPS
     prefetch = []
     if error_estimate:
         for sc, m in ((ref_scene, method), (lam_scene, "verlet")):
             prefetch += [(c, "rk4") for c in rk4_companions(sc, m)]
-    with shared_reference_runs(prefetch):
-        ref = run_scene(
-            reference_scene or scene, backend="reference", method=method, rtol=plan_rtol, error_estimate=error_estimate
-        )
-        lam = run_scene(
-            scene, backend="lammps", np_=np_, keep_files=True, rtol=plan_rtol, error_estimate=error_estimate
-        )
+    ref_kw = dict(backend="reference", method=method, rtol=plan_rtol, error_estimate=error_estimate)
+    lam_kw = dict(backend="lammps", np_=np_, keep_files=True, rtol=plan_rtol, error_estimate=error_estimate)
+    with shared_reference_runs(prefetch) as shared:
+        if np_ == 1 and run_module.available_cores() >= 2:
+            # LAMMPS (a child process) runs alongside the reference, from a thread of this process,
+            # once both runs' checks and warnings are done (the reference's first): at once if the
+            # second core is free, else (a worker makes companions there) after the reference's own
+            # run, while this process waits for them (on Table I they take longer than that run)
+            ref, lam = _alongside(shared, reference_scene or scene, ref_kw, scene, lam_kw, after_ref_run=bool(prefetch))
+        else:  # one core (or LAMMPS on several ranks): one after the other, the reference first
+            ref = run_scene(reference_scene or scene, **ref_kw)
+            lam = run_scene(scene, **lam_kw)
     files, work = lam.extra.pop("_files"), lam.extra.pop("_work")
     try:
         rows = compare_runs(lam, ref, rtol)
@@ -85,3 +92,60 @@ def compare_scene(
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return rows, lam, ref
+
+
+def _alongside(shared, ref_scene, ref_kw: dict, lam_scene, lam_kw: dict, after_ref_run: bool):
+    """(reference result, LAMMPS result): LAMMPS's run_scene in a thread alongside the reference's here.
+
+    The reference's checks and warnings come first, then LAMMPS's (the thread's run_scene waits for
+    them before its run); an error in either stops both before any run. LAMMPS then starts at once
+    or, after_ref_run, once the reference's own run is made (its error estimate then waits for the
+    companions a worker process makes: this process and LAMMPS use the core it leaves idle). The
+    errors raised are those of the runs one after the other: the reference's if it failed (LAMMPS's
+    run is then given up and its work directory removed), else LAMMPS's.
+    """
+    checked, go = threading.Event(), threading.Event()
+    box: dict = {}
+
+    def lammps_checked() -> None:  # LAMMPS's run_scene, after its checks: wait for the reference's go
+        checked.set()
+        go.wait()
+        if "stop" in box:
+            raise Abandoned("the reference's run failed before LAMMPS's started")
+
+    def lammps() -> None:
+        try:
+            box["result"] = run_scene(lam_scene, before_run=lammps_checked, **lam_kw)
+        except BaseException as e:  # given to the main thread
+            box["error"] = e
+        finally:
+            checked.set()
+
+    thread = threading.Thread(target=lammps, name="granchain-compare-lammps", daemon=True)
+
+    def start_lammps() -> None:  # the reference's run_scene, after its checks
+        thread.start()
+        checked.wait()
+        if "error" in box:  # LAMMPS's checks failed: before any run
+            thread.join()
+            raise box["error"]
+        if not after_ref_run:
+            go.set()
+
+    try:
+        ref = run_scene(ref_scene, before_run=start_lammps, after_run=go.set, **ref_kw)
+    except BaseException:
+        box["stop"] = True
+        shared.abandon()  # LAMMPS's waits for shared companions give up
+        go.set()
+        if thread.ident is not None:  # started (LAMMPS finishes a run it began: a child process)
+            thread.join()
+        got = box.get("result")
+        if got is not None:
+            shutil.rmtree(got.extra["_work"], ignore_errors=True)
+        raise
+    go.set()  # (the reference's run_scene calls after_run unless it raised)
+    thread.join()
+    if "error" in box:
+        raise box["error"]
+    return ref, box["result"]
