@@ -11,7 +11,9 @@
     python benchmarks/bench_pair.py output [--reps 7] [--scenes a,b]
         every bundled scene with its default (auto) output intervals, on the deck as rendered: the share of
         the loop time spent in output, as LAMMPS's Output row and as the loop time saved by the same deck
-        without its outputs (from the fastest runs, and as the median of paired ratios)
+        without its outputs (from the fastest runs, and as the median of paired ratios). On a loaded machine
+        these scatter by 10-40 points: benchmarks/bench_output.py resolves the share (sampling, a per-event
+        cost model, and the direct difference from CPU time of interleaved copies)
     python benchmarks/bench_pair.py scaling [--reps 3] [--sizes 1000,10000,100000,1000000]
         ns per bead-step on the plugin deck from 1e3 to 1e6 beads, the fitted slope of log(cost) against
         log(N) (0: flat), and the peak memory (max RSS of the LAMMPS process) of every size
