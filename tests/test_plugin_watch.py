@@ -182,3 +182,25 @@ def test_sparse_check_needs_the_distance_check(tmp_path):
     deck = _sub(r"^neigh_modify\s+every 10 delay 0 check yes", "neigh_modify    every 10 delay 0 check no", d.deck)
     with pytest.raises(LammpsError, match="needs 'check yes'"):
         run_deck(deck, d.data, work_dir=tmp_path)
+
+
+@pytest.mark.parametrize("name", ["default", "plastic-short-impulse", "effect-precompression"])
+def test_energy_watch_reads_the_balance_of_its_own_step(tmp_path, name):
+    """The energy watch's halt reads the relative balance kept by fix ave/time (f_watch_rel: evaluated
+    once a check, not at each of the halt's four reads). At every check, across the deck's runs (load,
+    load end, free flight), the kept value must be the balance of that very step: a print after the
+    halt writes it beside v_watch_rel evaluated afresh. Fails if the two fixes' steps or order differ."""
+    d = render_deck(load_scene(name))
+    every = int(re.search(r"^fix\s+watch_energy all halt (\d+) ", d.deck, re.M).group(1))
+    line = f'fix             check_rel all print {every} "$(step) $(v_watch_rel:%.17g) $(f_watch_rel:%.17g)"'
+    line += " file rel.txt screen no"
+    deck, n = re.subn(r"^(fix\s+watch_energy all halt .*)$", lambda m: m.group(1) + "\n" + line, d.deck, flags=re.M)
+    assert n == 1
+    _, work = run_deck(deck, d.data, work_dir=tmp_path)
+    rows = np.loadtxt(work / "rel.txt", comments="#", ndmin=2)
+    runs = [int(s) for s in re.findall(r"^run\s+(\d+)", deck, re.M)]
+    assert rows.shape[0] >= sum(runs) // every - len(runs) > 10
+    assert np.count_nonzero(rows[:, 1]) > rows.shape[0] // 2  # round-off balances, not all zero
+    # (a v_ reference reaches a formula as %.15g text in LAMMPS: the halt's four reads were rounded
+    # so before; f_watch_rel keeps the double. Another step's balance differs in the leading digits)
+    np.testing.assert_allclose(rows[:, 2], rows[:, 1], rtol=1e-14, atol=0)
