@@ -81,8 +81,21 @@ def contents(d: Path) -> dict:
     return got
 
 
+#: this process's LAMMPS work directories when the current test started: pytest-xdist runs many tests in
+#: one process, and some (e.g. those that call run_lammps and drop the work directory it returns) leave
+#: theirs behind; the checks here count only the directories made during their own test
+_before: set = set()
+
+
+@pytest.fixture(autouse=True)
+def _work_dirs_before():
+    global _before
+    _before = {d for d, pid, _ in work_dirs() if pid == os.getpid()}
+    yield
+
+
 def own_work_dirs() -> list:
-    return [d for d, pid, _ in work_dirs() if pid == os.getpid()]
+    return [d for d, pid, _ in work_dirs() if pid == os.getpid() and d not in _before]
 
 
 @pytest.fixture(scope="module")
