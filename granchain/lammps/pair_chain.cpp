@@ -408,71 +408,69 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
     int *const __restrict actq = act_fc.data();
     int nact = 0;
     for (int p = 0; p < npairs; p++) {
-      {
-        const int i = pq[p].i, j = pq[p].j;
-        const Coef &cf = ONE ? cf1 : tab[type[i] * nt + type[j]];
-        const double cutsq = ONE ? cutsq1 : cf.cutsq;
-        const double delx = xq[i][0] - xq[j][0];
-        // most pairs of a chain are apart or just touching: decided on x alone, the same decision as on
-        // rsq (rsq = fl(fl(delx^2 + dely^2) + delz^2) >= fl(delx^2): rounding is monotone), with a
-        // third of the loads and arithmetic
-        if (delx * delx >= cutsq) continue;
-        const double dely = xq[i][1] - xq[j][1];
-        const double delz = xq[i][2] - xq[j][2];
-        const double rsq = delx * delx + dely * dely + delz * delz;
-        if (rsq >= cutsq) continue;
-        const bool collinear = dely == 0.0 && delz == 0.0;
-        const double r = collinear ? fabs(delx) : sqrt(rsq);
-        const double alpha = cf.d0 - r;
-        const tagint ti = tag[i], tj = tag[j];
-        if (ti - tj != 1 && tj - ti != 1)
-          error->one(FLERR, "beads {} and {} overlap but are not neighbours in the chain: beads passed through "
-                     "each other (time step too large for this load?)", ti, tj);
-        const int left = ti < tj ? i : j;
-        double energy = 0.0;
-        double *const eptr = (EV && eflag) ? &energy : nullptr;
-        double fmag;
-        if constexpr (Law::history) {
-          const double am = MAX(amax[left], alpha);
-          if (left < nlocal) {
-            fmag = Law::force(alpha, am, cf.c, eptr, &edis[left]);
-            amax[left] = am;
-          } else {
-            fmag = Law::force(alpha, am, cf.c, eptr, nullptr);
-          }
-        } else {
-          fmag = Law::force(alpha, alpha, cf.c, EV ? eptr : nullptr, nullptr);
-        }
-        if constexpr (DASH) {
-          // dashpot on the overlap rate: d(alpha)/dt = -dr/dt; the total force never pulls
-          const double rate =
-              -(delx * (vv[i][0] - vv[j][0]) + dely * (vv[i][1] - vv[j][1]) + delz * (vv[i][2] - vv[j][2])) / r;
-          const double felastic = fmag;
-          fmag = MAX(felastic + gam * rate, 0.0);
-          if (new_sample && left < nlocal) edash[left] += (fmag - felastic) * rate * dt;
-        }
+      const int i = pq[p].i, j = pq[p].j;
+      const Coef &cf = ONE ? cf1 : tab[type[i] * nt + type[j]];
+      const double cutsq = ONE ? cutsq1 : cf.cutsq;
+      const double delx = xq[i][0] - xq[j][0];
+      // most pairs of a chain are apart or just touching: decided on x alone, the same decision as on
+      // rsq (rsq = fl(fl(delx^2 + dely^2) + delz^2) >= fl(delx^2): rounding is monotone), with a
+      // third of the loads and arithmetic
+      if (delx * delx >= cutsq) continue;
+      const double dely = xq[i][1] - xq[j][1];
+      const double delz = xq[i][2] - xq[j][2];
+      const double rsq = delx * delx + dely * dely + delz * delz;
+      if (rsq >= cutsq) continue;
+      const bool collinear = dely == 0.0 && delz == 0.0;
+      const double r = collinear ? fabs(delx) : sqrt(rsq);
+      const double alpha = cf.d0 - r;
+      const tagint ti = tag[i], tj = tag[j];
+      if (ti - tj != 1 && tj - ti != 1)
+        error->one(FLERR, "beads {} and {} overlap but are not neighbours in the chain: beads passed through "
+                   "each other (time step too large for this load?)", ti, tj);
+      const int left = ti < tj ? i : j;
+      double energy = 0.0;
+      double *const eptr = (EV && eflag) ? &energy : nullptr;
+      double fmag;
+      if constexpr (Law::history) {
+        const double am = MAX(amax[left], alpha);
         if (left < nlocal) {
-          fcq[left] = fmag;
-          actq[nact++] = left;
-        }
-        // repulsive: pushes i away from j (newton_pair is off: init_style)
-        if (collinear) {
-          const double fx = delx > 0.0 ? fmag : -fmag;
-          fq[i][0] += fx;
-          if (j < nlocal) fq[j][0] -= fx;
+          fmag = Law::force(alpha, am, cf.c, eptr, &edis[left]);
+          amax[left] = am;
         } else {
-          const double fpair = fmag / r;
-          fq[i][0] += delx * fpair;
-          fq[i][1] += dely * fpair;
-          fq[i][2] += delz * fpair;
-          if (j < nlocal) {
-            fq[j][0] -= delx * fpair;
-            fq[j][1] -= dely * fpair;
-            fq[j][2] -= delz * fpair;
-          }
+          fmag = Law::force(alpha, am, cf.c, eptr, nullptr);
         }
-        if constexpr (EV) ev_tally(i, j, nlocal, newton_pair, energy, 0.0, fmag / r, delx, dely, delz);
+      } else {
+        fmag = Law::force(alpha, alpha, cf.c, EV ? eptr : nullptr, nullptr);
       }
+      if constexpr (DASH) {
+        // dashpot on the overlap rate: d(alpha)/dt = -dr/dt; the total force never pulls
+        const double rate =
+            -(delx * (vv[i][0] - vv[j][0]) + dely * (vv[i][1] - vv[j][1]) + delz * (vv[i][2] - vv[j][2])) / r;
+        const double felastic = fmag;
+        fmag = MAX(felastic + gam * rate, 0.0);
+        if (new_sample && left < nlocal) edash[left] += (fmag - felastic) * rate * dt;
+      }
+      if (left < nlocal) {
+        fcq[left] = fmag;
+        actq[nact++] = left;
+      }
+      // repulsive: pushes i away from j (newton_pair is off: init_style)
+      if (collinear) {
+        const double fx = delx > 0.0 ? fmag : -fmag;
+        fq[i][0] += fx;
+        if (j < nlocal) fq[j][0] -= fx;
+      } else {
+        const double fpair = fmag / r;
+        fq[i][0] += delx * fpair;
+        fq[i][1] += dely * fpair;
+        fq[i][2] += delz * fpair;
+        if (j < nlocal) {
+          fq[j][0] -= delx * fpair;
+          fq[j][1] -= dely * fpair;
+          fq[j][2] -= delz * fpair;
+        }
+      }
+      if constexpr (EV) ev_tally(i, j, nlocal, newton_pair, energy, 0.0, fmag / r, delx, dely, delz);
     }
     nact_fc = nact;
   };
