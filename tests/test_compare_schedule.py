@@ -22,28 +22,10 @@ from granchain.scene import parse_scene
 from granchain.workflows.plan import plan_scene
 from granchain.workflows.run import Abandoned, SharedRuns, UnstableTimestepError, plan_for, shared_reference_runs
 
-BILINEAR_CHAIN = """
-title = "invented: 25 steel beads, bilinear beta 0.6, a short pulse"
-[chain]
-beads = 25
-radius = 2.5e-3
-material = "stainless-steel-316"
-[contact]
-law = "bilinear"
-unloading_coeff = 0.6
-plastic_stiffness = 3e7
-[loading]
-kind = "impulse"
-impulse = 0.02
-duration = 2e-6
-[run]
-timestep = "auto"
-end_time = "auto"
-[outputs]
-peak_force = true
-histories = [1, 12]
-snapshots = [1e-5]
-"""
+from .test_error_estimate import BILINEAR_CHAIN as ERROR_ESTIMATE_CHAIN
+
+#: test_error_estimate's invented bilinear chain, with histories and a snapshot written
+BILINEAR_CHAIN = ERROR_ESTIMATE_CHAIN + "histories = [1, 12]\nsnapshots = [1e-5]\n"
 
 #: summary.json's keys that hold times, prices and provenance: they differ from run to run
 VARYING = {"wall_time", "extra", "price", "provenance"}
