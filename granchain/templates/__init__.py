@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import re
 from dataclasses import dataclass
 from importlib import resources
 
@@ -84,12 +85,17 @@ class DeckOptions:
     history_file: "dump", a text dump custom histories.dump (read with MDAnalysis), or "npy", fix
         chain/history buffering the history contacts' d_fc and vx and writing histories.npy at the
         end of each run (granchain.postprocess.histories reads both)
+    energy_fix: the energy samples and the run watch's energy balance by the plugin's fix chain/energy
+        (the samples' lines kept in memory and written at each run's end; the balance computed once
+        from the sample's own numbers) instead of fix print, which flushed every line, and the balance
+        as LAMMPS variables read by fix ave/time and fix halt
     """
 
     neigh_every: int = 10
     watch_computes: bool = False
     chain_nve: bool = False
     history_file: str = "dump"
+    energy_fix: bool = False
 
     def __post_init__(self):
         if self.history_file not in ("dump", "npy"):
@@ -98,10 +104,11 @@ class DeckOptions:
             raise UsageError(f"neigh_every = {self.neigh_every!r}: an integer >= 1")
 
 
-#: every piece of the plugin: the watch by its computes, fix chain/nve, histories by fix chain/history
-#: (benchmarks/bench_pair.py: 0.28-0.39x the built-in granular style's time per bead-step against
-#: 0.42-0.48 with the built-ins; histories' share of the loop 3-17% on the bundled scenes, 7-42% as text)
-PLUGIN_DECK_OPTIONS = DeckOptions(watch_computes=True, chain_nve=True, history_file="npy")
+#: every piece of the plugin: the watch by its computes, fix chain/nve, histories by fix chain/history,
+#: energy samples and balance by fix chain/energy (benchmarks/bench_pair.py: 0.28-0.39x the built-in
+#: granular style's time per bead-step against 0.42-0.48 with the built-ins; histories' share of the
+#: loop 3-17% on the bundled scenes, 7-42% as text; benchmarks/RESULTS.md, issue 18)
+PLUGIN_DECK_OPTIONS = DeckOptions(watch_computes=True, chain_nve=True, history_file="npy", energy_fix=True)
 #: the options render_deck uses unless told otherwise; DeckOptions() is the built-ins' deck
 #: (tests/test_plugin_watch.py and tests/test_history_output.py hold the two to the same doubles)
 DECK_OPTIONS = PLUGIN_DECK_OPTIONS
@@ -156,6 +163,11 @@ def law_parameters(law) -> dict:
 
 
 @functools.lru_cache(maxsize=1)
+def _is_atom_x(expr: str) -> bool:
+    """A LAMMPS expression that is an atom's x by ID, x[ID] (fix chain/energy reads those itself)."""
+    return re.fullmatch(r"x\[\d+\]", expr) is not None
+
+
 def _env() -> jinja2.Environment:
     # one environment per process: it keeps the compiled templates (a new one per deck recompiled every
     # template, 25-50 ms of a campaign point's overhead; issue 18 item 4)
@@ -171,6 +183,7 @@ def _env() -> jinja2.Environment:
     env.filters["g"] = _g
     env.filters["comment"] = comment
     env.filters["parameters"] = law_parameters
+    env.tests["atom_x"] = _is_atom_x
     env.globals.update(RESULTS_DUMP=RESULTS_DUMP, RUN_END_FILE=RUN_END_FILE)
     return env
 
