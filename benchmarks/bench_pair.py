@@ -274,11 +274,13 @@ def cmd_breakdown(args) -> None:
 def no_output(deck: str) -> str:
     """The deck without its outputs during the runs: no history or chain dump, no fix chain/history, the
     energy samples' and progress prints and thermo at an interval past the run's end (their lines stay,
-    so the deck's later 'unfix energy' still finds its fix). What is left is the integration and the run
-    watch."""
+    so the deck's later 'unfix energy' still finds its fix); fix chain/energy writing no file (FILE none:
+    its energy balance check, the run watch's, stays at its interval). What is left is the integration
+    and the run watch."""
     never = 10**9
     deck = re.sub(r"^dump\s+.*$|^dump_modify\s+.*$|^fix\s+history\s+.*$", "", deck, flags=re.M)
     deck = re.sub(r"^(fix\s+(?:energy|progress)\s+all\s+print\s+)\d+", rf"\g<1>{never}", deck, flags=re.M)
+    deck = re.sub(r"^(fix\s+energy\s+all\s+chain/energy\s+\d+\s+)energy\.txt ", r"\g<1>none ", deck, flags=re.M)
     return re.sub(r"^thermo\s+\d+$", f"thermo          {never}", deck, flags=re.M)
 
 

@@ -183,3 +183,15 @@ def test_bad_arguments_are_refused(tmp_path, line, message):
     deck = d.deck.replace("thermo_style", line + "\nthermo_style", 1)
     with pytest.raises(LammpsError, match=message):
         run_deck(deck, d.data, work_dir=tmp_path)
+
+
+def test_file_none_keeps_the_watch_without_samples(tmp_path):
+    """FILE none (the benchmarks' deck without outputs): no energy.txt, and the balance check still stops
+    a run whose energy was created, on the step the deck with samples stops."""
+    d = render_deck(load_scene("default"), options=FIX)
+    none, n = re.subn(r"^(fix\s+energy all chain/energy \d+ )energy\.txt ", r"\g<1>none ", d.deck, flags=re.M)
+    assert n == 1
+    (fix_id, step, _), _ = _halt(_kicked(d.deck, 20.0), d.data, tmp_path / "file")
+    with pytest.raises(LammpsError, match=f"chain/energy condition watch_energy met on step {step} "):
+        run_deck(_kicked(none, 20.0), d.data, work_dir=tmp_path / "none")
+    assert not (tmp_path / "none" / "energy.txt").exists()

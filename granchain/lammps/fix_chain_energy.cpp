@@ -70,7 +70,7 @@ FixChainEnergy::FixChainEnergy(LAMMPS *lmp, int narg, char **arg) :
   if (!have_title || first <= 0) error->all(FLERR, "fix chain/energy needs title and first: {}", usage);
   if (atom->map_style == Atom::MAP_NONE)
     error->all(FLERR, "fix chain/energy needs an atom map (atom_modify map array or hash)");
-  if (comm->me == 0) {
+  if (comm->me == 0 && file != "none") {    // none: the watch without the samples (benchmarks/bench_pair.py)
     fp = fopen(file.c_str(), "w");
     if (!fp) error->one(FLERR, "Cannot open fix chain/energy file {}: {}", file, utils::getsyserror());
     buffer = title + "\n";
@@ -194,7 +194,7 @@ void FixChainEnergy::sample(bool check)
   next_sample = (update->ntimestep / nevery) * nevery + nevery;
   modify->addstep_compute(next_sample);
 
-  if (comm->me == 0) {
+  if (fp) {
     char num[32];
     auto put = [&](double x, bool space) {
       snprintf(num, sizeof(num), space ? " %.17g" : "%.17g", x);

@@ -8,7 +8,8 @@
  * %.17g numbers: time ke pe [c_CID] x[ATOM] [the extra columns], the same doubles as
  *   fix ID all print N "$(time:%.17g) $(ke:%.17g) $(pe:%.17g) [$(c_CID:%.17g)] $(x[ATOM]:%.17g) ..."
  * (ke and pe as the thermo keywords compute them: the computes thermo_temp and thermo_pe). An extra
- * column is x[ID] or v_NAME (an equal-style variable). FILE is written with TITLE as its first line
+ * column is x[ID] or v_NAME (an equal-style variable). FILE "none": no samples written (the watch
+ * alone; a benchmark's deck without outputs). FILE is written with TITLE as its first line
  * when the fix is made; the lines are kept in memory and written at the end of every run, when the fix
  * is deleted (unfix, clear, an error), and before the watch stops a run: fix print flushed every line.
  *
@@ -51,7 +52,7 @@ class FixChainEnergy : public Fix {
     std::string name;    // VARIABLE
     int ivar;
   };
-  FILE *fp;                    // rank 0
+  FILE *fp;                    // rank 0 (none with FILE none)
   std::string buffer;          // rank 0: lines not yet written
   tagint first;                // bead 1's atom ID
   std::string dissipated_id;   // "" none
