@@ -105,3 +105,23 @@ def test_template_values_are_strict_single_lines():
     with pytest.raises(ValueError, match="not one line of printable text"):
         env.from_string("{{ scene.title }}").render(scene=replace(BASE, title="x\nshell touch pwned"))
     assert env.from_string("{{ scene.title | comment }}").render(scene=replace(BASE, title="x\ny")) == "x y"
+
+
+def test_decks_reuse_the_compiled_templates(monkeypatch):
+    """One jinja2 environment per process keeps the compiled templates: a second deck compiles none
+    (compiling them all again cost 40-70 ms of every campaign point, issue 18 item 4; a decorator that
+    slid onto another function once did that unnoticed)."""
+    scenes = [BASE, resolve_scene("effect-precompression")]
+    for sc in scenes:  # (first use: every template they include compiled once)
+        render_deck(sc)
+    compiled = []
+    real = jinja2.Environment.compile
+
+    def counting(self, *args, **kwargs):
+        compiled.append(args[1] if len(args) > 1 else kwargs.get("name"))
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(jinja2.Environment, "compile", counting)
+    for sc in scenes:
+        render_deck(sc)
+    assert compiled == [] and _env() is _env()

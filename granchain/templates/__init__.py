@@ -162,12 +162,12 @@ def law_parameters(law) -> dict:
     return {f.name: float(getattr(law, f.name)) for f in dataclasses.fields(law)}
 
 
-@functools.lru_cache(maxsize=1)
 def _is_atom_x(expr: str) -> bool:
     """A LAMMPS expression that is an atom's x by ID, x[ID] (fix chain/energy reads those itself)."""
     return re.fullmatch(r"x\[\d+\]", expr) is not None
 
 
+@functools.lru_cache(maxsize=1)
 def _env() -> jinja2.Environment:
     # one environment per process: it keeps the compiled templates (a new one per deck recompiled every
     # template, 25-50 ms of a campaign point's overhead; issue 18 item 4)
