@@ -34,6 +34,11 @@ EPS = float(np.finfo(float).eps)
 # displacements and carries their round-off)
 KINK_ROUNDOFF = 16.0
 
+#: RK4 with event location and no dashpot steps between two stacked (u; v) buffers instead of saving
+#: and restoring the state (RK4Integrator._lean_step); False: the plain save-and-restore step (the
+#: tests compare the two bit for bit)
+_LEAN = True
+
 #: called after every piece of an RK4 step that event location split off, but the last: (state, t0, t1)
 SplitHook = Callable[[ChainState, float, float], None]
 #: (s, contacts, kind): kink crossings found in a piece, s the fraction of the piece per contact
@@ -163,6 +168,16 @@ class RK4Integrator(Integrator):
         # a law without history has the same kinks all run (its alpha_max is never written): ask once
         law = state.law
         self.fixed_kinks = None if law.history else (law.kinks(state.alpha_hist), law.turn_level(state.alpha_hist))
+        # the lean step (lean_step): (u, v) lives in one of two pairs of buffers, the state's own and a
+        # second; a try writes the other pair, which becomes the state's when the try is accepted (a
+        # rejected try leaves the state as it was: nothing to save or restore). Not with a dashpot (its
+        # stages update u and v in place). (Stacking u and v as the rows of one (2, N) array to take
+        # overlaps and rates in one call costs more: numpy walks the strided views slower than two calls.)
+        self.lean = _LEAN and event_location and not state.gamma
+        if self.lean:
+            self.pairs = ((state.u, state.v), (np.empty(n), np.empty(n)))
+            self.pair_views = tuple((u[:-1], u[1:], v[:-1], v[1:]) for u, v in self.pairs)
+            self.current = 0
 
     def start(self, state: ChainState) -> None:
         # alpha_max follows the running maximum of the overlap since t = 0, whose start is the t = 0
@@ -177,6 +192,8 @@ class RK4Integrator(Integrator):
             self.rk4(state, h, a_ext)
             self.end_piece(state, t0, t1, state.u[:-1] - state.u[1:], state.v[:-1] - state.v[1:])
             return t0
+        if self.lean:
+            return self.lean_step(state, t0, t1, a_ext, on_split)
         return self.located_step(state, t0, t1, a_ext, on_split)
 
     def located_step(
@@ -202,14 +219,7 @@ class RK4Integrator(Integrator):
             s_ev, contact, kind = crossing
             splits += 1
             if splits > self.max_splits:
-                raise EventLocationError(
-                    f"RK4 event location split step {state.step + 1} (t = {t:.6g} s, time step "
-                    f"{self.timestep:.6g} s) {self.max_splits} times and still finds a kink: contact "
-                    f"{contact + 1} ({kind}) at s = {s_ev:.3g} of "
-                    f"the remaining {h_sub:.3g} s. This is a bug of the reference solver: please "
-                    "report it with the scene; meanwhile method 'verlet' (--method verlet) runs "
-                    "without event location"
-                )
+                raise self.too_many_splits(state, t, h_sub, crossing)
             np.copyto(u, self.u_save)
             np.copyto(v, self.v_save)
             state.dash_energy = e_save
@@ -224,12 +234,78 @@ class RK4Integrator(Integrator):
         self.end_piece(state, t, t1, a_new, adot_new)
         return t
 
-    def rk4(self, state: ChainState, h: float, a_ext: float, same_start: bool = False) -> None:
+    def too_many_splits(self, state: ChainState, t: float, h_sub: float, crossing: tuple) -> EventLocationError:
+        s_ev, contact, kind = crossing
+        return EventLocationError(
+            f"RK4 event location split step {state.step + 1} (t = {t:.6g} s, time step "
+            f"{self.timestep:.6g} s) {self.max_splits} times and still finds a kink: contact "
+            f"{contact + 1} ({kind}) at s = {s_ev:.3g} of "
+            f"the remaining {h_sub:.3g} s. This is a bug of the reference solver: please "
+            "report it with the scene; meanwhile method 'verlet' (--method verlet) runs "
+            "without event location"
+        )
+
+    def lean_step(self, state: ChainState, t0: float, t1: float, a_ext: float, on_split: Sequence[SplitHook]) -> float:
+        """located_step over the two stacked buffers (see __init__): the same pieces, the same numbers.
+
+        A try writes the pair of buffers the state is not in; accepted, the state moves there (state.u
+        and state.v are that pair), rejected, it is left behind. The contacts whose rate falls from > 0
+        to <= 0 (end_piece's turning screen, a superset of the event location's turn screen) are
+        screened once a try and handed to both."""
+        law, hist, timestep, fixed = state.law, state.alpha_hist, self.timestep, self.fixed_kinks
+        t = t0
+        splits = 0
+        cur = self.current
+        while True:
+            h_sub = t1 - t
+            nxt = 1 - cur
+            out = self.pairs[nxt]
+            # (alpha_now: the overlaps of the state's u, from the last piece's end or from t = 0)
+            self.rk4(state, h_sub, a_ext, False, out, state.alpha_now)
+            u_left, u_right, v_left, v_right = self.pair_views[nxt]
+            a_new, adot_new = _subtract(u_left, u_right), _subtract(v_left, v_right)
+            adot_old = state.adot_now
+            turning = (_greater(adot_old, _ZERO) & _less_equal(adot_new, _ZERO)).nonzero()[0]
+            piece = Piece(state.alpha_now, adot_old, a_new, adot_new, state.u, out[0], h_sub)
+            crossing = first_kink_crossing(law, hist, piece, timestep, fixed, turning)
+            if crossing is None:
+                break
+            splits += 1
+            if splits > self.max_splits:
+                raise self.too_many_splits(state, t, h_sub, crossing)
+            s_ev = crossing[0]
+            # the piece starts where the rejected try did, with the same history: its first stage too
+            self.rk4(state, s_ev * h_sub, a_ext, True, out)
+            self.extra_steps += 2  # the rejected try and the split piece
+            t_split = t + s_ev * h_sub
+            state.u, state.v = out
+            cur = self.current = nxt
+            self.end_piece(state, t, t_split, _subtract(u_left, u_right), _subtract(v_left, v_right))
+            for hook in on_split:
+                hook(state, t, t_split)
+            t = t_split
+        state.u, state.v = out
+        self.current = nxt
+        self.end_piece(state, t, t1, a_new, adot_new, turning)
+        return t
+
+    def rk4(
+        self,
+        state: ChainState,
+        h: float,
+        a_ext: float,
+        same_start: bool = False,
+        out: tuple[np.ndarray, np.ndarray] | None = None,
+        overlaps: np.ndarray | None = None,
+    ) -> None:
         """Classical RK4 on (u, v) in place; the external load is constant over the step.
 
         same_start: (u, v) and alpha_max are those of the last call's start (a step split by event
         location), so its first stage k1v, still in its buffer, is this one's (without a dashpot,
         whose first stage also gives a power): the same numbers without the force evaluation.
+        out: (u, v) of the step's end go there instead of into the state's u and v (lean_step; not
+        with a dashpot). overlaps: u[:-1] - u[1:] of the state (its alpha_now, lean_step), which the
+        first stage's force evaluation then takes instead of subtracting again (the same numbers).
 
         Every product lands in a preallocated buffer (its out, by position), and what two stages need is
         taken once: the stage 2 position P = u + h/2 v, from which stage 3's is P + h^2/4 k1v and
@@ -258,7 +334,10 @@ class RK4Integrator(Integrator):
         if a_ext and self.net_force is not None:
             a_ext = a_ext / self.inv_m  # the load's force (the k are forces)
         if not same_start:
-            accel(u, k1v, v)
+            if overlaps is None:
+                accel(u, k1v, v)
+            else:
+                accel(u, k1v, v, overlaps)
             if a_ext:  # (x + 0.0 is x: an unloaded segment skips the four)
                 k1v[0] += a_ext
         b1, b2, t = ut, self.ut2, self.tmp
@@ -285,9 +364,10 @@ class RK4Integrator(Integrator):
         add(hv, t, t)
         add(t, k4v, t)
         mul(hv, h2_6, hv)
-        add(b2, hv, u)
+        u_out, v_out = (u, v) if out is None else out
+        add(b2, hv, u_out)
         mul(t, h_6, t)
-        add(v, t, v)
+        add(v, t, v_out)
 
     def rk4_dashpot(self, state: ChainState, h: float, a_ext: float, consts: tuple[np.ndarray, ...]) -> None:
         """rk4 with a dashpot: the stage velocities too (the dashpot force), and its energy."""
@@ -332,27 +412,60 @@ class RK4Integrator(Integrator):
         np.multiply(ut, h_6, out=hv)
         v += hv
 
-    def end_piece(self, state: ChainState, t0: float, t1: float, alpha_new: np.ndarray, adot_new: np.ndarray) -> None:
+    def end_piece(
+        self,
+        state: ChainState,
+        t0: float,
+        t1: float,
+        alpha_new: np.ndarray,
+        adot_new: np.ndarray,
+        turning: np.ndarray | None = None,
+    ) -> None:
         """Accept the piece [t0, t1]: its dense output into the state (overlaps and rates at its end,
-        the contacts that turned inside it and their Hermite maxima), and the history raised to them."""
+        the contacts that turned inside it and their Hermite maxima), and the history raised to them.
+        turning: the contacts whose rate went from > 0 to <= 0, if the caller screened them already."""
         alpha_old, adot_old = state.alpha_now, state.adot_now
-        turning = (np.greater(adot_old, _ZERO) & np.less_equal(adot_new, _ZERO)).nonzero()[0]
-        if turning.size:
-            turning = turning[alpha_new[turning] > 0.0]  # (the few turning) in contact
-        if turning.size:
-            p, tp = hermite_max(t0, t1, alpha_old[turning], alpha_new[turning], adot_old[turning], adot_new[turning])
-        else:
+        if turning is None:
+            turning = (np.greater(adot_old, _ZERO) & np.less_equal(adot_new, _ZERO)).nonzero()[0]
+        peak = alpha_new
+        if not turning.size:
             p = tp = _EMPTY
+        elif turning.size <= _SCALAR_CONTACTS:
+            # a handful turn: on Python floats (numpy calls on a few elements cost more than the
+            # arithmetic), the same operations as below: hermite_max's _max_scalar, np.maximum
+            h = t1 - t0
+            kept, ps, ts = [], [], []
+            for i in turning.tolist():
+                x1 = alpha_new.item(i)
+                if x1 > 0.0:  # in contact
+                    pk, sk = max1(h, alpha_old.item(i), x1, adot_old.item(i), adot_new.item(i))
+                    kept.append(i)
+                    ps.append(pk)
+                    ts.append(t0 + sk * h)
+            turning, p, tp = np.array(kept, dtype=turning.dtype), np.array(ps), np.array(ts)
+            if kept and self.history:
+                peak = alpha_new.copy()
+                for i, pk in zip(kept, ps, strict=True):
+                    x1 = alpha_new.item(i)
+                    peak[i] = pk if (pk > x1 or pk != pk) else x1  # np.maximum(x1, pk): a nan wins
+        else:
+            turning = turning[alpha_new[turning] > 0.0]  # in contact
+            if turning.size:
+                p, tp = hermite_max(
+                    t0, t1, alpha_old[turning], alpha_new[turning], adot_old[turning], adot_new[turning]
+                )
+                if self.history:
+                    peak = alpha_new.copy()
+                    peak[turning] = np.maximum(alpha_new[turning], p)
+            else:
+                p = tp = _EMPTY
         state.alpha_now, state.adot_now = alpha_new, adot_new
         state.turning, state.turn_peak, state.turn_time = turning, p, tp
         if not self.history:
             return
         # alpha_max = max(alpha_max, the piece's largest overlap): its end, or the interpolant's
-        # maximum where the overlap turned inside it (whole-chain arrays: the law may hold per-contact ones)
-        peak = alpha_new
-        if turning.size:
-            peak = alpha_new.copy()
-            peak[turning] = np.maximum(alpha_new[turning], p)
+        # maximum where the overlap turned inside it (peak; whole-chain arrays: the law may hold
+        # per-contact ones)
         state.law.update_history(state.alpha_hist, peak)
         if self.history_floor is not None:
             state.law.update_history(state.alpha_hist, self.history_floor)
@@ -368,12 +481,13 @@ class RK4Integrator(Integrator):
 
 
 _EMPTY = np.empty(0)
-_add, _multiply, _subtract, _less, _greater = (
+_add, _multiply, _subtract, _less, _greater, _less_equal = (
     np.add,
     np.multiply,
     np.subtract,
     np.less,
     np.greater,
+    np.less_equal,
 )  # RK4Integrator.rk4: outputs by position, ~0.15 us a call cheaper than out=
 _ZERO = np.array(0.0)  # 0-d: a cheaper operand than the Python float (RK4Integrator.rk4)
 
@@ -415,6 +529,7 @@ def first_kink_crossing(
     piece: Piece,
     timestep: float,
     fixed: tuple[Sequence, np.ndarray | None] | None = None,
+    turning: np.ndarray | None = None,
 ) -> tuple[float, int, str] | None:
     """Where in the piece the first contact meets a kink of its force law, or None.
 
@@ -431,7 +546,9 @@ def first_kink_crossing(
     from either end is not split either (that contact only).
 
     fixed: (kinks, turn_level) when they do not depend on alpha_max (a law without history), else
-    None: asked of the law.
+    None: asked of the law. turning: the contacts whose rate goes from > 0 to <= 0 over the piece, if
+    the caller screened them (RK4Integrator.lean_step, for end_piece): the turn screen's contacts are
+    those of them whose rate ends below 0.
 
     Returns
     -------
@@ -444,16 +561,29 @@ def first_kink_crossing(
     # more than the arithmetic), unless a screen leaves many (then all on arrays, as before)
     a0, a1, shape = piece.a0, piece.a1, piece.a0.shape
     screened = []
+    few = True  # every screen left at most _SCALAR_CONTACTS
     for kink in kinks:
         level = _full(kink.level, shape)
         idx = (_less(a0, level) ^ _less(a1, level)).nonzero()[0]
         if idx.size:
             screened.append((kink, level, idx))
+            few = few and idx.size <= _SCALAR_CONTACTS
     turn = None
     if turn_level is not None:
-        turn = (_greater(piece.d0, _ZERO) & _less(piece.d1, _ZERO)).nonzero()[0]
-    if all(idx.size <= _SCALAR_CONTACTS for _, _, idx in screened) and (turn is None or turn.size <= _SCALAR_CONTACTS):
-        return first_crossing_scalar(screened, turn, turn_level, piece, timestep)
+        if turning is None:
+            turn = (_greater(piece.d0, _ZERO) & _less(piece.d1, _ZERO)).nonzero()[0]
+        elif not turning.size:
+            turn = turning
+        elif turning.size <= _SCALAR_CONTACTS:  # (a handful: Python floats)
+            d1 = piece.d1
+            turn = np.array([i for i in turning.tolist() if d1.item(i) < 0.0], dtype=np.intp)
+        else:
+            turn = turning[_less(piece.d1[turning], _ZERO)]
+    if turn is None or turn.size <= _SCALAR_CONTACTS:
+        if not screened and (turn is None or not turn.size):
+            return None  # (most pieces: nothing near a kink)
+        if few:
+            return first_crossing_scalar(screened, turn, turn_level, piece, timestep)
     found = kink_roots(kinks, piece)
     if turn_level is not None:
         found += turns_above(turn_level, piece)

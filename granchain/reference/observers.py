@@ -33,6 +33,8 @@ from granchain.reference.state import ChainState
 
 #: (t, kinetic, stored, dissipated, work) of one energy sample
 EnergyRow = tuple[float, float, float, float, float]
+#: up to this many contacts at a maximum, the peak tracking updates them on Python floats
+_SCALAR_CONTACTS = 16
 
 
 class Observer:
@@ -122,11 +124,19 @@ class HermitePeaks(PeakTracker):
         turning = state.turning
         if turning.size:
             p, tp = state.turn_peak, state.turn_time
-            better = p > amax[turning]
-            ix = turning[better]
-            amax[ix] = p[better]
-            tmax[ix] = tp[better]
-            amin[ix] = alpha_new[ix]  # the peak lies inside this piece: only its end comes after it
+            if turning.size <= _SCALAR_CONTACTS:  # a handful: on Python floats, the same assignments
+                for k, i in enumerate(turning.tolist()):
+                    pk = p.item(k)
+                    if pk > amax.item(i):
+                        amax[i] = pk
+                        tmax[i] = tp.item(k)
+                        amin[i] = alpha_new.item(i)
+            else:
+                better = p > amax[turning]
+                ix = turning[better]
+                amax[ix] = p[better]
+                tmax[ix] = tp[better]
+                amin[ix] = alpha_new[ix]  # the peak lies inside this piece: only its end comes after it
             for listener in self.listeners:
                 listener(state, turning)
         return False
@@ -247,7 +257,10 @@ class LeadingPulse(Observer):
 
     def at_maximum(self, state: ChainState, ix: np.ndarray) -> None:
         """Contacts ix are at a local maximum: freeze the first that rises far enough above F0."""
-        first = ~self.done[ix]
+        done = self.done
+        if ix.size <= _SCALAR_CONTACTS and all(done.item(i) for i in ix.tolist()):
+            return  # (mostly: a handful of contacts, each past its first maximum long ago)
+        first = ~done[ix]
         if not first.any():
             return
         j = ix[first]

@@ -18,8 +18,9 @@ from granchain.physics.laws import ContactLaw
 from granchain.problem import ChainProblem, initial_state, moving_mass
 
 #: accel(u, out, v) -> dashpot power: the accelerations of the state (u, v) into out; also leaves the
-#: contact forces in the state's force buffer
-Accel = Callable[[np.ndarray, np.ndarray, np.ndarray | None], float]
+#: contact forces in the state's force buffer. make_accel's own also take overlaps = u[:-1] - u[1:]
+#: where the caller has them already (RK4Integrator.lean_step: the state's alpha_now)
+Accel = Callable[..., float]
 
 
 class ChainState:
@@ -127,16 +128,25 @@ def make_accel(
 
     per_mass = inv_m is not None  # else the net contact forces (a chain of equal masses)
 
-    def accel(uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None) -> float:
-        view = views.get(id(uu))
-        if view is None or view[0] is not uu:  # (the entry holds uu: its id is not reused while cached)
-            view = (uu, uu[:-1], uu[1:])
-            if len(views) < 8:
-                views[id(uu)] = view
-        subtract(view[1], view[2], alpha)
-        if clip:
-            maximum(alpha, zero, out=alpha)
-        force_into(alpha, alpha_hist, fc, tmp)  # with alpha_max frozen within the step
+    def accel(
+        uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None, overlaps: np.ndarray | None = None
+    ) -> float:
+        if overlaps is None:
+            view = views.get(id(uu))
+            if view is None or view[0] is not uu:  # (the entry holds uu: its id is not reused while cached)
+                view = (uu, uu[:-1], uu[1:])
+                if len(views) < 8:
+                    views[id(uu)] = view
+            subtract(view[1], view[2], alpha)
+            a = alpha
+            if clip:
+                maximum(alpha, zero, out=alpha)
+        elif clip:  # overlaps: uu[:-1] - uu[1:] as the caller has them (RK4's state at a piece's start)
+            maximum(overlaps, zero, out=alpha)
+            a = alpha
+        else:
+            a = overlaps  # (force_into only reads it)
+        force_into(a, alpha_hist, fc, tmp)  # with alpha_max frozen within the step
         subtract(fp_left, fp_right, out)
         if per_mass:
             multiply(out, inv_m, out)
