@@ -98,3 +98,47 @@ def test_lean_step_is_on_where_it_applies():
     assert not integrators.RK4Integrator(state, 1e-8, False, 100).lean
     damped = load_scene("effect-dashpot")
     assert not integrators.RK4Integrator(ChainState(ChainProblem.from_scene(damped)), 1e-8, True, 100).lean
+
+
+def test_stages_by_calls_give_the_written_out_stages_bits(monkeypatch):
+    """rk4 writes the force evaluations of stages 2-4 out (make_accel's parts); a force evaluation
+    without parts takes them by calls: the same bits."""
+    scene = load_scene("plastic-short-impulse")
+    written = solve(scene, 1e-4, 1e-8)
+    init = integrators.RK4Integrator.__init__
+
+    def without_parts(self, *args, **kw):
+        init(self, *args, **kw)
+        self.parts = None
+
+    monkeypatch.setattr(integrators.RK4Integrator, "__init__", without_parts)
+    assert_same_bits(written, solve(scene, 1e-4, 1e-8))
+
+
+@pytest.mark.parametrize("law_name", ["bilinear", "thornton", "hertz"])
+def test_a_laws_kink_screens_are_the_generic_ones(law_name):
+    """A law's own kink_screens (bilinear's) give the generic screens over kinks(): the same kinks,
+    levels, where and contacts, bit for bit; on overlaps near every kink level, with zero histories."""
+    from granchain.physics.laws.base import ContactLaw
+
+    law = load_scene(
+        {"bilinear": "plastic-short-impulse", "thornton": "thornton-short-impulse"}.get(law_name, "default")
+    ).law
+    rng = np.random.default_rng(7)
+    n, straddled = 60, 0
+    for _ in range(200):
+        hist = rng.uniform(0.0, 2e-6, n - 1) * (rng.uniform(size=n - 1) < 0.7)
+        levels = [np.broadcast_to(k.level, hist.shape) for k in law.kinks(hist)]
+        a0 = levels[rng.integers(len(levels))] + rng.normal(0.0, 1e-8, n - 1)
+        a1 = levels[rng.integers(len(levels))] + rng.normal(0.0, 1e-8, n - 1)
+        own, generic = law.kink_screens(hist, a0, a1), ContactLaw.kink_screens(law, hist, a0, a1)
+        assert len(own) == len(generic)
+        for (k1, l1, i1), (k2, l2, i2) in zip(own, generic, strict=True):
+            assert (k1.kind, k1.from_below) == (k2.kind, k2.from_below)
+            assert np.asarray(k1.level).tobytes() == np.asarray(k2.level).tobytes()
+            assert l1.tobytes() == l2.tobytes() and np.array_equal(i1, i2)
+            assert (k1.where is None) == (k2.where is None)
+            if k1.where is not None:
+                assert np.array_equal(k1.where, k2.where)
+            straddled += 1
+    assert straddled > 100

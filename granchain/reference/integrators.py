@@ -157,6 +157,7 @@ class RK4Integrator(Integrator):
         # the factors of rk4 per step length: a step is t1 - t0 with event location, which takes a
         # handful of values a few ulps apart (the times are sums of steps), each thousands of times
         self.consts: dict[float, tuple[np.ndarray, ...]] = {}
+        self.scratch = tuple(np.zeros(()) for _ in range(6))
         self.vt = np.empty(n) if state.gamma else None  # stage velocities, needed only by the dashpot
         self.u_save, self.v_save = np.empty(n), np.empty(n)
         self.views = (state.u[:-1], state.u[1:], state.v[:-1], state.v[1:])  # (u and v change in place)
@@ -166,6 +167,10 @@ class RK4Integrator(Integrator):
         self.net_force = None if state.gamma else state.net_force
         self.inv_m = state.uniform_inv_m if self.net_force is not None else 1.0
         # a law without history has the same kinks all run (its alpha_max is never written): ask once
+        # stages 2-4 evaluate the forces inline (make_accel's parts) at the stage positions ut, ut2
+        accel = self.net_force or state.accel
+        self.parts = None if state.gamma else getattr(accel, "parts", None)
+        self.stage_views = ((self.ut[:-1], self.ut[1:]), (self.ut2[:-1], self.ut2[1:]))
         law = state.law
         self.fixed_kinks = None if law.history else (law.kinks(state.alpha_hist), law.turn_level(state.alpha_hist))
         # the lean step (lean_step): (u, v) lives in one of two pairs of buffers, the state's own and a
@@ -261,7 +266,7 @@ class RK4Integrator(Integrator):
             nxt = 1 - cur
             out = self.pairs[nxt]
             # (alpha_now: the overlaps of the state's u, from the last piece's end or from t = 0)
-            self.rk4(state, h_sub, a_ext, False, out, state.alpha_now)
+            self.rk4(state, h_sub, a_ext, False, out, state.alpha_now, t != t0)
             u_left, u_right, v_left, v_right = self.pair_views[nxt]
             a_new, adot_new = _subtract(u_left, u_right), _subtract(v_left, v_right)
             adot_old = state.adot_now
@@ -275,7 +280,7 @@ class RK4Integrator(Integrator):
                 raise self.too_many_splits(state, t, h_sub, crossing)
             s_ev = crossing[0]
             # the piece starts where the rejected try did, with the same history: its first stage too
-            self.rk4(state, s_ev * h_sub, a_ext, True, out)
+            self.rk4(state, s_ev * h_sub, a_ext, True, out, None, True)
             self.extra_steps += 2  # the rejected try and the split piece
             t_split = t + s_ev * h_sub
             state.u, state.v = out
@@ -297,6 +302,7 @@ class RK4Integrator(Integrator):
         same_start: bool = False,
         out: tuple[np.ndarray, np.ndarray] | None = None,
         overlaps: np.ndarray | None = None,
+        once: bool = False,
     ) -> None:
         """Classical RK4 on (u, v) in place; the external load is constant over the step.
 
@@ -306,6 +312,8 @@ class RK4Integrator(Integrator):
         out: (u, v) of the step's end go there instead of into the state's u and v (lean_step; not
         with a dashpot). overlaps: u[:-1] - u[1:] of the state (its alpha_now, lean_step), which the
         first stage's force evaluation then takes instead of subtracting again (the same numbers).
+        once: h is a length seen once (a split piece, the rest of a split step): its factors go into
+        scratch 0-d arrays instead of the cache (consts).
 
         Every product lands in a preallocated buffer (its out, by position), and what two stages need is
         taken once: the stage 2 position P = u + h/2 v, from which stage 3's is P + h^2/4 k1v and
@@ -316,16 +324,10 @@ class RK4Integrator(Integrator):
         """
         u, v, gamma = state.u, state.v, state.gamma
         accel = self.net_force or state.accel
-        k1v, k2v, k3v, k4v, ut, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.ut, self.hv
-        consts = self.consts.get(h)
+        k1v, k2v, k3v, k4v, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.hv
+        consts = None if once else self.consts.get(h)
         if consts is None:
-            if len(self.consts) >= 32:  # split pieces: lengths seen once
-                self.consts.clear()
-            c = self.inv_m  # (1.0 when the k are accelerations: x * 1.0 is x)
-            consts = tuple(
-                np.array(x) for x in (0.5 * h, 0.25 * h * h * c, h, 0.5 * h * h * c, h * h / 6.0 * c, h / 6.0 * c)
-            )
-            self.consts[h] = consts
+            consts = self.factors(h, once)
         half_h, quarter_h2, h_, half_h2, h2_6, h_6 = consts
         add, mul = _add, _multiply
         if gamma:
@@ -340,9 +342,96 @@ class RK4Integrator(Integrator):
                 accel(u, k1v, v, overlaps)
             if a_ext:  # (x + 0.0 is x: an unloaded segment skips the four)
                 k1v[0] += a_ext
-        b1, b2, t = ut, self.ut2, self.tmp
+        b2, t = self.ut2, self.tmp
+        if self.parts is None:
+            self.stages_by_calls(accel, u, v, a_ext, consts)
+        else:
+            self.stages_written_out(u, v, a_ext, consts)
+        # u += h/6 (k1u + 2 k2u + 2 k3u + k4u) with k1u = v, k2u = v + h/2 k1v, k3u = v + h/2 k2v,
+        # k4u = v + h k3v  =>  u = Q + h^2/6 S, S = k1v + k2v + k3v; v += h/6 (S + (k2v + k3v) + k4v)
+        add(k2v, k3v, t)
+        add(t, k1v, hv)  # S (hv is free)
+        add(hv, t, t)
+        add(t, k4v, t)
+        mul(hv, h2_6, hv)
+        u_out, v_out = (u, v) if out is None else out
+        add(b2, hv, u_out)
+        mul(t, h_6, t)
+        add(v, t, v_out)
+
+    def factors(self, h: float, once: bool) -> tuple[np.ndarray, ...]:
+        """rk4's scalar factors of a step of length h, as 0-d arrays: cached per length, or for a
+        length seen once (lean_step's split pieces and retries) in the scratch ones."""
+        c = self.inv_m  # (1.0 when the k are accelerations: x * 1.0 is x)
+        values = (0.5 * h, 0.25 * h * h * c, h, 0.5 * h * h * c, h * h / 6.0 * c, h / 6.0 * c)
+        if once:
+            for x, value in zip(self.scratch, values, strict=True):
+                x[()] = value
+            return self.scratch
+        if len(self.consts) >= 32:  # split pieces: lengths seen once
+            self.consts.clear()
+        consts = self.consts[h] = tuple(np.array(x) for x in values)
+        return consts
+
+    def stages_written_out(self, u: np.ndarray, v: np.ndarray, a_ext: float, consts: tuple[np.ndarray, ...]) -> None:
+        """rk4's stages 2-4 with the force evaluations written out: accel's steps (make_accel's parts),
+        the same calls on the same buffers, without a Python call and the views lookup each."""
+        alpha, ftmp, fc, fp_left, fp_right, force_into, clip, zero, inv_m, hist = self.parts
+        (b1_left, b1_right), (b2_left, b2_right) = self.stage_views
+        k1v, k2v, k3v, k4v, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.hv
+        b1, b2, t = self.ut, self.ut2, self.tmp
+        half_h, quarter_h2, _, half_h2, _, _ = consts
+        add, mul, sub = _add, _multiply, _subtract
         mul(v, half_h, hv)
         add(u, hv, b1)  # stage 2 position P = u + h/2 v
+        sub(b1_left, b1_right, alpha)
+        if clip:
+            np.maximum(alpha, zero, out=alpha)
+        force_into(alpha, hist, fc, ftmp)
+        sub(fp_left, fp_right, k2v)
+        if inv_m is not None:
+            mul(k2v, inv_m, k2v)
+        if a_ext:
+            k2v[0] += a_ext
+        mul(k1v, quarter_h2, t)
+        add(b1, t, b2)  # stage 3: u + h/2 (v + h/2 k1v) = P + h^2/4 k1v
+        sub(b2_left, b2_right, alpha)
+        if clip:
+            np.maximum(alpha, zero, out=alpha)
+        force_into(alpha, hist, fc, ftmp)
+        sub(fp_left, fp_right, k3v)
+        if inv_m is not None:
+            mul(k3v, inv_m, k3v)
+        if a_ext:
+            k3v[0] += a_ext
+        add(b1, hv, b2)  # Q = u + h v
+        mul(k2v, half_h2, t)
+        add(b2, t, b1)  # stage 4: u + h (v + h/2 k2v) = Q + h^2/2 k2v
+        sub(b1_left, b1_right, alpha)
+        if clip:
+            np.maximum(alpha, zero, out=alpha)
+        force_into(alpha, hist, fc, ftmp)
+        sub(fp_left, fp_right, k4v)
+        if inv_m is not None:
+            mul(k4v, inv_m, k4v)
+        if a_ext:
+            k4v[0] += a_ext
+
+    def stages_by_calls(
+        self,
+        accel: Callable[..., float],
+        state_u: np.ndarray,
+        v: np.ndarray,
+        a_ext: float,
+        consts: tuple[np.ndarray, ...],
+    ) -> None:
+        """rk4's stages 2-4 with a force evaluation that has no parts to write out: by calls."""
+        k1v, k2v, k3v, k4v, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.hv
+        b1, b2, t = self.ut, self.ut2, self.tmp
+        half_h, quarter_h2, _, half_h2, _, _ = consts
+        add, mul = _add, _multiply
+        mul(v, half_h, hv)
+        add(state_u, hv, b1)  # stage 2 position P = u + h/2 v
         accel(b1, k2v, None)
         if a_ext:
             k2v[0] += a_ext
@@ -357,17 +446,6 @@ class RK4Integrator(Integrator):
         accel(b1, k4v, None)
         if a_ext:
             k4v[0] += a_ext
-        # u += h/6 (k1u + 2 k2u + 2 k3u + k4u) with k1u = v, k2u = v + h/2 k1v, k3u = v + h/2 k2v,
-        # k4u = v + h k3v  =>  u = Q + h^2/6 S, S = k1v + k2v + k3v; v += h/6 (S + (k2v + k3v) + k4v)
-        add(k2v, k3v, t)
-        add(t, k1v, hv)  # S (hv is free)
-        add(hv, t, t)
-        add(t, k4v, t)
-        mul(hv, h2_6, hv)
-        u_out, v_out = (u, v) if out is None else out
-        add(b2, hv, u_out)
-        mul(t, h_6, t)
-        add(v, t, v_out)
 
     def rk4_dashpot(self, state: ChainState, h: float, a_ext: float, consts: tuple[np.ndarray, ...]) -> None:
         """rk4 with a dashpot: the stage velocities too (the dashpot force), and its energy."""
@@ -555,19 +633,24 @@ def first_kink_crossing(
     (s, contact, kind) or None
         The fraction s of the piece, the 0-based contact and the kink's name (the split cap's error).
     """
-    kinks, turn_level = fixed if fixed is not None else (law.kinks(alpha_hist), law.turn_level(alpha_hist))
     # the screens (a few numpy calls over the chain) leave a handful of contacts or none; those are
     # tested on Python floats (first_crossing_scalar: numpy calls on arrays of a few elements cost
     # more than the arithmetic), unless a screen leaves many (then all on arrays, as before)
     a0, a1, shape = piece.a0, piece.a1, piece.a0.shape
-    screened = []
+    if fixed is None:  # (law.kink_screens: the loop below over law.kinks(alpha_hist), maybe with fewer calls)
+        kinks, turn_level = None, law.turn_level(alpha_hist)
+        screened = law.kink_screens(alpha_hist, a0, a1)
+    else:
+        kinks, turn_level = fixed
+        screened = []
+        for kink in kinks:
+            level = _full(kink.level, shape)
+            idx = (_less(a0, level) ^ _less(a1, level)).nonzero()[0]
+            if idx.size:
+                screened.append((kink, level, idx))
     few = True  # every screen left at most _SCALAR_CONTACTS
-    for kink in kinks:
-        level = _full(kink.level, shape)
-        idx = (_less(a0, level) ^ _less(a1, level)).nonzero()[0]
-        if idx.size:
-            screened.append((kink, level, idx))
-            few = few and idx.size <= _SCALAR_CONTACTS
+    for _, _, idx in screened:
+        few = few and idx.size <= _SCALAR_CONTACTS
     turn = None
     if turn_level is not None:
         if turning is None:
@@ -584,7 +667,7 @@ def first_kink_crossing(
             return None  # (most pieces: nothing near a kink)
         if few:
             return first_crossing_scalar(screened, turn, turn_level, piece, timestep)
-    found = kink_roots(kinks, piece)
+    found = kink_roots(law.kinks(alpha_hist) if kinks is None else kinks, piece)
     if turn_level is not None:
         found += turns_above(turn_level, piece)
     return earliest(found, piece.h, timestep) if found else None

@@ -152,4 +152,7 @@ def make_accel(
             multiply(out, inv_m, out)
         return 0.0
 
+    # its buffers and steps, for a caller that writes the evaluation out in its own loop (RK4's stages
+    # 2-4: the same calls on the same buffers, without a Python call and the views lookup each)
+    accel.parts = (alpha, tmp, fc, fp_left, fp_right, force_into, clip, zero, inv_m if per_mass else None, alpha_hist)
     return accel

@@ -128,6 +128,21 @@ class ContactLaw:
     def turn_level(self, alpha_max: np.ndarray) -> np.ndarray | None:
         return None
 
+    def kink_screens(self, alpha_max: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> list:
+        """RK4 event location's screens of a piece whose overlaps go from a0 to a1 (one per contact):
+        (kink, its level per contact, the contacts whose ends lie strictly on both sides of it) of
+        each of kinks(alpha_max), in that order, that some contact straddles. A law may give the same
+        with fewer numpy calls (bilinear: its kinks' where only when a contact straddles it)."""
+        out = []
+        for kink in self.kinks(alpha_max):
+            level = kink.level
+            if not (isinstance(level, np.ndarray) and level.shape == a0.shape):
+                level = np.broadcast_to(level, a0.shape)
+            idx = (np.less(a0, level) ^ np.less(a1, level)).nonzero()[0]
+            if idx.size:
+                out.append((kink, level, idx))
+        return out
+
     def pair_coefficients(self) -> list[float]:
         """pair_coeff numbers after d0 in the C++ kernel's order (k first; the deck inserts d0)."""
         return [float(getattr(self, f.name)) for f in dataclasses.fields(self)]

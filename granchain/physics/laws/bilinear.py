@@ -24,7 +24,8 @@ from granchain.physics import materials as mat
 from granchain.physics import models
 from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, forbid_others
 
-_multiply, _subtract, _greater = np.multiply, np.subtract, np.greater  # (a module global: one lookup, not two)
+_multiply, _subtract, _greater, _less = np.multiply, np.subtract, np.greater, np.less  # (one lookup, not two)
+_ZERO_FORCE, _RELOADING = "zero force at beta alpha_max", "reloading meets alpha_max"  # (the kinks' kinds)
 
 
 def unloading_stiffness(k: ArrayLike, beta: ArrayLike) -> np.ndarray:
@@ -128,10 +129,25 @@ class BilinearLaw(ContactLaw):
         beta, _, zero = self._operands  # (0-d operands: the RK4 event location asks at every piece)
         return [
             # the force reaches zero at beta alpha_max (F' jumps from k_u to 0)
-            Kink(_multiply(beta, alpha_max), "zero force at beta alpha_max"),
+            Kink(_multiply(beta, alpha_max), _ZERO_FORCE),
             # reloading meets the loading line again at alpha_max (slope k_u -> k)
-            Kink(alpha_max, "reloading meets alpha_max", where=_greater(alpha_max, zero), from_below=True),
+            Kink(alpha_max, _RELOADING, where=_greater(alpha_max, zero), from_below=True),
         ]
+
+    def kink_screens(self, alpha_max, a0, a1):
+        # ContactLaw.kink_screens over kinks(alpha_max), the same arrays, with the reloading kink's
+        # where (a whole-chain comparison) and the Kinks made only for a kink some contact straddles
+        # (most pieces none: RK4 screens every piece)
+        beta, _, zero = self._operands
+        out = []
+        level = _multiply(beta, alpha_max)
+        idx = (_less(a0, level) ^ _less(a1, level)).nonzero()[0]
+        if idx.size:
+            out.append((Kink(level, _ZERO_FORCE), level, idx))
+        idx = (_less(a0, alpha_max) ^ _less(a1, alpha_max)).nonzero()[0]
+        if idx.size:
+            out.append((Kink(alpha_max, _RELOADING, where=_greater(alpha_max, zero), from_below=True), alpha_max, idx))
+        return out
 
     def turn_level(self, alpha_max):
         # a turn from loading to unloading at a new alpha_max (slope k -> k_u)
