@@ -631,6 +631,13 @@ def _read_contact(s: _Section, chain: Chain) -> Contact:
     return Contact(law=law, **law_class(law).read_contact(s, chain))
 
 
+#: the shortest loading time T: an attosecond, as the smallest impulse is 1e-18 N s. No mechanical load
+#: acts over less; and an impulse's amplitude I / T must stay within what the peak-force models hold in
+#: double precision (an impulse of 0.01 N s over 2.2e-308 s overflowed them, a crash, not a message)
+MIN_DURATION = 1e-18
+DURATION_TEXT = "loading time T in s; no mechanical load acts over less than an attosecond"
+
+
 def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
     kind = s.choice("kind", LOADING_KINDS)
     if kind == "step":
@@ -638,7 +645,7 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
         a = s.number(
             "amplitude", low=1e-9, low_open=False, high=1e12, high_open=False, what="force A in N, 1e-9 to 1e12"
         )
-        t = s.number("duration", low=0.0, what="loading time T in s")
+        t = s.number("duration", low=MIN_DURATION, low_open=False, what=DURATION_TEXT)
         s.finish(("kind", "amplitude", "duration"))
         return Loading(kind=kind, amplitude=a, duration=t)
     if kind == "impulse":
@@ -649,7 +656,7 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
         i = s.number(
             "impulse", low=1e-18, low_open=False, high=1e9, high_open=False, what="impulse I in N s, 1e-18 to 1e9"
         )
-        t = s.number("duration", low=0.0, what="loading time T in s")
+        t = s.number("duration", low=MIN_DURATION, low_open=False, what=DURATION_TEXT)
         s.finish(("kind", "impulse", "duration"))
         return Loading(kind=kind, amplitude=i / t, duration=t)
     if kind == "striker":

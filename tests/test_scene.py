@@ -5,7 +5,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from granchain.cli import bundled_scenes
@@ -39,6 +39,18 @@ def test_impulse_kind_is_a_step_with_amplitude_impulse_over_duration():
     data["loading"] = {"kind": "impulse", "impulse": 0.4, "duration": 1e-3}
     sc = scene_from_dict(data, source="x")
     assert sc.loading.amplitude == pytest.approx(0.4 / 1e-3) and sc.loading.impulse == pytest.approx(0.4)
+
+
+@pytest.mark.parametrize("kind", ["step", "impulse"])
+@pytest.mark.parametrize("duration", [0.0, 5e-19, 2.2250738585072014e-308])
+def test_a_loading_time_below_an_attosecond_is_refused(kind, duration):
+    data = tomllib.loads(ISSUE_SCENE)
+    size = {"step": ("amplitude", 10.0), "impulse": ("impulse", 0.01)}[kind]
+    data["loading"] = {"kind": kind, size[0]: size[1], "duration": duration}
+    with pytest.raises(SceneError, match=r"\[loading\] duration = .* a finite number >= 1e-18 \(loading time"):
+        scene_from_dict(data, source="x")
+    data["loading"]["duration"] = 1e-18  # the floor itself is a loading time
+    assert scene_from_dict(data, source="x").loading.duration == 1e-18
 
 
 def test_bilinear_stiffness_from_yield_strength():
@@ -324,6 +336,8 @@ def _toml_value(v):
     ),
     st.sampled_from([""] * 12 + ["[chain\n", "beads = = 3\n", "\x00", "[run]\nend_time = 1e-5\n"]),
 )
+# (an impulse over the smallest normal double's seconds overflowed the peak-force models: a crash)
+@example(mutations=[(("loading", "duration"), 2.2250738585072014e-308)], garbage="")
 def test_generated_scene_files_run_or_are_refused_clearly(tmp_path_factory, mutations, garbage):
     import contextlib
     import io
