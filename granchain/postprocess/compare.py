@@ -10,7 +10,7 @@ import numpy as np
 
 from granchain.peaks import REACHED_FRACTION
 from granchain.physics import models
-from granchain.physics.effects import active_effects
+from granchain.physics.effects import external_forces
 from granchain.physics.predictions import applicability, predict
 
 
@@ -183,7 +183,7 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
             why[q] = f"not comparable: {ended}"
         # the momentum too while it still changes: an effect's external force (a wall, precompression's
         # static forces) or a load still acting at the earlier end; a free chain's is the impulse, kept
-        pushed = [e.name for e in active_effects(scene) if not e.conserves_momentum]
+        pushed = [e.name for e in external_forces(scene)]
         if scene.loading.is_force and min(sa.end_time, sb.end_time) < scene.loading.duration:
             pushed.append("the load")
         if pushed:

@@ -29,7 +29,7 @@ from granchain._version import __version__
 from granchain.errors import UsageError
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
 from granchain.peaks import PEAK_PASSED_FRACTION, lead_floor, stop_force_floor
-from granchain.physics.effects import active_effects
+from granchain.physics.effects import active_effects, external_forces
 from granchain.physics.laws import ContactLaw
 from granchain.problem import ChainProblem, initial_energy, precompressed_displacements
 from granchain.results import scene_hash
@@ -364,7 +364,7 @@ class Watch:
             x1_0=x1_0,
             xn_0=xn_0,
             p0=scene.initial_momentum,
-            momentum=all(e.conserves_momentum for e in active_effects(scene)),
+            momentum=not external_forces(scene),
             effects_work="".join(e.watch_work(problem, x_first, x_last) for e in active_effects(scene)),
         )
 

@@ -38,6 +38,12 @@ def active_effects(scene) -> list[type[Effect]]:
     return [e for e in EFFECTS.values() if e.active(scene)]
 
 
+def external_forces(scene) -> list[type[Effect]]:
+    """The scene's effects whose forces come from outside the chain (Effect.conserves_momentum False):
+    with any of them the chain's momentum is not the initial momentum plus the impulse delivered."""
+    return [e for e in active_effects(scene) if not e.conserves_momentum]
+
+
 def effect_fields() -> dict[str, object]:
     """Every scene.Effects attribute -> its absent value (the fields of the registered effects)."""
     return {f: v for e in EFFECTS.values() for f, v in e.fields.items()}
