@@ -76,6 +76,32 @@ def law_example(law: str) -> str:
 
 #: every registered contact law (granchain.physics.laws.LAWS): tests that hold for any law run over it
 LAW_NAMES = sorted(LAWS)
+
+#: the loadings of the random-scene property tests, scaled by size (impulse, step amplitude, velocity)
+RANDOM_LOADINGS = {
+    "impulse": 'kind = "impulse"\nimpulse = {s!r}\nduration = 1e-6',
+    "step": 'kind = "step"\namplitude = {a!r}\nduration = {step!r}',
+    "velocity": 'kind = "velocity"\nvelocity = {v!r}',
+}
+
+
+def random_scene_text(
+    *, law, beads, loading, size, wall, precompression, dashpot, end_time, step_duration, outputs
+) -> str:
+    """A scene of the random-scene property tests (tests/test_peak_tracking.py, tests/test_energy_fix.py):
+    a brass chain with one of RANDOM_LOADINGS of the given size, dt = 2e-8 s, and a wall, precompression
+    and a dashpot where asked."""
+    load = RANDOM_LOADINGS[loading].format(s=0.05 * size, a=100.0 * size, v=4.0 * size, step=step_duration)
+    text = make_scene_text(beads=beads, law=law, loading=load, end_time=end_time, timestep=2e-8, outputs=outputs)
+    if wall:
+        text += '\n[boundary]\nfar_end = "wall"\n'
+    if precompression:
+        text += f"\n[precompression]\nforce = {precompression!r}\n"
+    if dashpot:
+        text += f"\n[damping]\ndashpot = {dashpot!r}\n"
+    return text
+
+
 #: the laws with history (alpha_max)
 PLASTIC_LAWS = [n for n in LAW_NAMES if LAWS[n].history]
 

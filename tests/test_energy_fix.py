@@ -17,7 +17,7 @@ from granchain.lammps.runner import HALT_MESSAGE, LammpsError, invariant_from_la
 from granchain.scene import load_scene, parse_scene
 from granchain.templates import PLUGIN_DECK_OPTIONS, render_deck
 
-from .conftest import LAW_NAMES, make_scene_text
+from .conftest import LAW_NAMES, RANDOM_LOADINGS, make_scene_text, random_scene_text
 
 FIX = PLUGIN_DECK_OPTIONS
 PRINT = dataclasses.replace(PLUGIN_DECK_OPTIONS, energy_fix=False)
@@ -71,18 +71,11 @@ def test_two_ranks_write_the_same_bytes(tmp_path):
     assert_same_bytes(parse_scene(text + "\n[precompression]\nforce = 10.0\n", source="t.toml"), tmp_path, np_=2)
 
 
-LOADINGS = {
-    "impulse": 'kind = "impulse"\nimpulse = {s!r}\nduration = 1e-6',
-    "step": 'kind = "step"\namplitude = {a!r}\nduration = 5e-5',
-    "velocity": 'kind = "velocity"\nvelocity = {v!r}',
-}
-
-
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(
     law=st.sampled_from(LAW_NAMES),
     beads=st.integers(5, 150),
-    loading=st.sampled_from(sorted(LOADINGS)),
+    loading=st.sampled_from(sorted(RANDOM_LOADINGS)),
     size=st.floats(0.2, 5.0),
     wall=st.booleans(),
     precompression=st.sampled_from([0.0, 0.0, 20.0]),
@@ -92,20 +85,18 @@ LOADINGS = {
 def test_random_scenes_write_the_same_bytes(tmp_path_factory, law, beads, loading, size, wall, precompression, dashpot):
     """Random scenes (every law, loading and effect; a step load ends mid-run, so watch_work is redefined
     between runs): the fix writes fix print's bytes, and its watch lets the same runs through."""
-    text = make_scene_text(
-        beads=beads,
+    text = random_scene_text(
         law=law,
-        loading=LOADINGS[loading].format(s=0.05 * size, a=100.0 * size, v=4.0 * size),
+        beads=beads,
+        loading=loading,
+        size=size,
+        wall=wall,
+        precompression=precompression,
+        dashpot=dashpot,
         end_time=1.5e-4,
-        timestep=2e-8,
+        step_duration=5e-5,
         outputs="peak_force = true\nhistories = [1, 3]",
     )
-    if wall:
-        text += '\n[boundary]\nfar_end = "wall"\n'
-    if precompression:
-        text += f"\n[precompression]\nforce = {precompression!r}\n"
-    if dashpot:
-        text += f"\n[damping]\ndashpot = {dashpot!r}\n"
     assert_same_bytes(parse_scene(text, source="test.toml"), tmp_path_factory.mktemp("run"))
 
 

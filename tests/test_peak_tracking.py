@@ -17,7 +17,7 @@ from granchain.lammps.runner import read_results, run_deck
 from granchain.scene import parse_scene
 from granchain.templates import render_deck
 
-from .conftest import LAW_NAMES, make_scene_text
+from .conftest import LAW_NAMES, RANDOM_LOADINGS, make_scene_text, random_scene_text
 
 #: what the deck writes from the peak bookkeeping and the dynamics (not log.lammps: it has timings)
 OUTPUTS = ("peaks.dump", "histories.npy", "energy.txt", "run_end.txt", "load_end.txt")
@@ -44,18 +44,11 @@ def assert_same_bits(deck: str, data: str, tmp_path, np_: int = 1) -> None:
         assert a[name] == b[name], name
 
 
-LOADINGS = {
-    "impulse": 'kind = "impulse"\nimpulse = {s!r}\nduration = 1e-6',
-    "step": 'kind = "step"\namplitude = {a!r}\nduration = 1e-4',
-    "velocity": 'kind = "velocity"\nvelocity = {v!r}',
-}
-
-
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(
     law=st.sampled_from(LAW_NAMES),
     beads=st.integers(8, 300),
-    loading=st.sampled_from(sorted(LOADINGS)),
+    loading=st.sampled_from(sorted(RANDOM_LOADINGS)),
     size=st.floats(0.2, 5.0),
     wall=st.booleans(),
     precompression=st.sampled_from([0.0, 0.0, 20.0]),
@@ -70,21 +63,18 @@ def test_active_contacts_give_every_contacts_bits(
 ):
     """Random scenes: the shortcut writes what tracking every contact every step writes, bit for bit.
     The runs are long enough for the wave to reach the far end and come back from a wall."""
-    load = LOADINGS[loading].format(s=0.05 * size, a=100.0 * size, v=4.0 * size)
-    text = make_scene_text(
-        beads=beads,
+    text = random_scene_text(
         law=law,
-        loading=load,
+        beads=beads,
+        loading=loading,
+        size=size,
+        wall=wall,
+        precompression=precompression,
+        dashpot=dashpot,
         end_time=2.5e-4,
-        timestep=2e-8,
+        step_duration=1e-4,
         outputs="peak_force = true\nhistories = [1, 3]",
     )
-    if wall:
-        text += '\n[boundary]\nfar_end = "wall"\n'
-    if precompression:
-        text += f"\n[precompression]\nforce = {precompression!r}\n"
-    if dashpot:
-        text += f"\n[damping]\ndashpot = {dashpot!r}\n"
     d = render_deck(parse_scene(text, source="test.toml"))
     assert_same_bits(d.deck, d.data, tmp_path_factory.mktemp("run"))
 
