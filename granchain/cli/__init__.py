@@ -378,107 +378,6 @@ def cmd_materials(args) -> int:
     return 0
 
 
-def cmd_campaign_run(args) -> int:
-    from granchain.campaigns.api import run_campaign
-    from granchain.campaigns.table import format_table
-
-    out = args.out or f"runs/{Path(args.file).stem}-campaign"
-    try:
-        tables, report = run_campaign(
-            args.file,
-            out,
-            workers=args.workers,
-            scheduler=args.scheduler,
-            rerun=args.rerun,
-            retry_failed=args.retry_failed,
-        )
-    except KeyboardInterrupt:
-        print(
-            f"granchain: interrupted; the complete points are kept in {out}: run the same command again to "
-            "complete only the missing ones",
-            file=sys.stderr,
-        )
-        return 130
-    main_table = tables.get("search", tables["table"])
-    print(format_table(main_table))
-    r = report
-    print(
-        f"campaign   {r.points} points: {r.cached} complete before, {r.done} run now, {r.failed} failed"
-        + (f", {r.failed_before} failed before" if r.failed_before else "")
-        + (f", {r.lost} lost" if r.lost else "")
-        + (f", {r.stale} stale run again" if r.stale else "")
-    )
-    print(f"workspace  {out} (table.csv, table.parquet" + (", search.csv" if "search" in tables else "") + ")")
-    unfound = []
-    if "search" in tables:
-        unfound = [
-            m for st, m in zip(tables["search"]["status"], tables["search"]["message"], strict=True) if st != "found"
-        ]
-        for message in unfound:
-            print(f"granchain: search: {message}", file=sys.stderr)
-    return 0 if not (r.failed or r.lost or r.failed_before or unfound) else 1
-
-
-def cmd_campaign_table(args) -> int:
-    from granchain.campaigns.table import format_table, write_tables
-
-    tables = write_tables(args.workspace)
-    df = tables["search"] if args.search else tables["table"]
-    if args.search and "search" not in tables:
-        raise UsageError(f"{args.workspace}: is a grid campaign; --search is for a search campaign's transitions")
-    if args.csv:
-        df.to_csv(sys.stdout, index=False)
-    else:
-        print(format_table(df))
-    return 0
-
-
-def cmd_campaign_plot(args) -> int:
-    from granchain.campaigns.plot import plot_campaign
-
-    paths = plot_campaign(
-        args.workspace,
-        x=args.x,
-        y=args.y,
-        hue=args.hue,
-        map_key=args.map,
-        out=args.out,
-        formats=tuple(f.strip() for f in args.format.split(",") if f.strip()),
-    )
-    for path in paths:
-        print(path)
-    return 0
-
-
-def add_campaign_parser(sub) -> None:
-    """granchain campaign run / table / plot (docs/campaigns.md)."""
-    cp = sub.add_parser("campaign", help="sweeps and searches over scenes, cached and resumable, on Dask")
-    csub = cp.add_subparsers(dest="campaign_command", required=True)
-    cr = csub.add_parser("run", help="run a campaign file's points into a workspace (only what is missing)")
-    cr.add_argument("file", help="campaign file (.toml; docs/campaigns.md)")
-    cr.add_argument("--out", help="workspace directory (default runs/<file>-campaign)")
-    cr.add_argument("--workers", type=int, default=None, help="local Dask worker processes (default: the cores)")
-    cr.add_argument("--scheduler", default=None, help="address of a running Dask scheduler (tcp://host:8786)")
-    cr.add_argument("--rerun", action="store_true", help="run every point again, complete or not")
-    cr.add_argument("--retry-failed", action="store_true", help="run the points that failed before again")
-    cr.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
-    cr.set_defaults(func=cmd_campaign_run)
-    ct = csub.add_parser("table", help="the table of a workspace (also written as table.csv and table.parquet)")
-    ct.add_argument("workspace", help="a campaign workspace (granchain campaign run --out)")
-    ct.add_argument("--csv", action="store_true", help="print the whole table as CSV")
-    ct.add_argument("--search", action="store_true", help="a search campaign's transitions (one row per outer point)")
-    ct.set_defaults(func=cmd_campaign_table)
-    cpl = csub.add_parser("plot", help="an observable against a key, with error bars (or a 2D map)")
-    cpl.add_argument("workspace", help="a campaign workspace")
-    cpl.add_argument("--x", required=True, help="the key on the x axis (a column of the table)")
-    cpl.add_argument("--y", required=True, help="the observable (a column: leading_peak_force, wave_speed, ...)")
-    cpl.add_argument("--hue", default=None, help="one line per value of this key (the other varied keys follow)")
-    cpl.add_argument("--map", default=None, help="a 2D map of --y over --x and this key instead of lines")
-    cpl.add_argument("--out", default=None, help="figure path without suffix (default WS/plots/<y>-vs-<x>...)")
-    cpl.add_argument("--format", default="png", help="png, pdf, svg (comma-separated; default png)")
-    cpl.set_defaults(func=cmd_campaign_plot)
-
-
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="granchain", description="Stress waves in 1D granular chains.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -607,6 +506,8 @@ def build_parser() -> argparse.ArgumentParser:
     mt = sub.add_parser("materials", help="list the built-in bead materials with their sources")
     mt.add_argument("name", nargs="?", help="show one material")
     mt.set_defaults(func=cmd_materials)
+    from granchain.cli.campaign import add_campaign_parser
+
     add_campaign_parser(sub)
     return p
 
