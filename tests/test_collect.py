@@ -13,7 +13,7 @@ import pytest
 from granchain.cli import main
 from granchain.lammps.build import plugin_env
 from granchain.lammps.runner import read_results
-from granchain.results import read_peaks, read_summary
+from granchain.rundir import read_peaks, read_summary
 from granchain.templates import RESULT_COLUMNS, RESULTS_DUMP
 from granchain.workflows.collect import CollectError, NotRefinedWarning, collect
 

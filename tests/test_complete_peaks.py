@@ -20,7 +20,7 @@ from granchain.postprocess.compare import compare_runs
 from granchain.postprocess.dumps import complete_from_samples
 from granchain.postprocess.observables import fit_wave_speed, measure_observables
 from granchain.reference.solver import ChainProblem, solve_chain
-from granchain.results import read_peaks, read_summary
+from granchain.rundir import read_peaks, read_summary
 from granchain.scene import parse_scene
 from granchain.workflows.run import run_reference, run_scene
 

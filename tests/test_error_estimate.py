@@ -8,7 +8,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 from granchain.cli import main, resolve_scene
-from granchain.results import read_peaks
+from granchain.rundir import read_peaks
 from granchain.scene import parse_scene
 from granchain.workflows.errors import companion_scene
 from granchain.workflows.run import plan_for, run_scene

@@ -5,7 +5,7 @@ import json
 import pytest
 
 from granchain.lammps.runner import log_timing
-from granchain.results import write_run_dir
+from granchain.rundir import write_run_dir
 from granchain.workflows.run import run_scene
 
 from .conftest import make_scene

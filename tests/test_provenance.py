@@ -17,7 +17,8 @@ from hypothesis import strategies as st
 
 import granchain
 from granchain.cli import main
-from granchain.results import RunResult, default_command, read_summary, scene_hash
+from granchain.results import RunResult, default_command, scene_hash
+from granchain.rundir import read_summary
 from granchain.scene import parse_scene
 
 from .conftest import make_scene, make_scene_text

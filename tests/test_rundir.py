@@ -8,9 +8,9 @@ import sys
 import numpy as np
 import pytest
 
-from granchain import results
+from granchain import rundir
 from granchain.cli import main
-from granchain.results import RunDirError, read_peaks, read_summary
+from granchain.rundir import RunDirError, read_peaks, read_summary
 from granchain.workflows.run import run_scene
 
 from .conftest import make_scene, make_scene_text
@@ -72,18 +72,18 @@ def test_interrupted_write_leaves_nothing(tmp_path, monkeypatch):
     def boom(*a, **k):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(results, "_write_csv", boom)
+    monkeypatch.setattr(rundir, "_write_csv", boom)
     with pytest.raises(KeyboardInterrupt):
-        results.write_run_dir(res, tmp_path / "r")
+        rundir.write_run_dir(res, tmp_path / "r")
     assert list(tmp_path.iterdir()) == []
 
 
 def test_overwrite_replaces_atomically(tmp_path):
     sc = make_scene(end_time=5e-5, timestep=5e-8)
     res = run_scene(sc)
-    results.write_run_dir(res, tmp_path / "r")
+    rundir.write_run_dir(res, tmp_path / "r")
     (tmp_path / "r" / "stale.txt").write_text("old")
-    results.write_run_dir(res, tmp_path / "r", overwrite=True)
+    rundir.write_run_dir(res, tmp_path / "r", overwrite=True)
     assert not (tmp_path / "r" / "stale.txt").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r"]
 
@@ -92,7 +92,7 @@ def test_unwritable_parent(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("x")
     with pytest.raises(RunDirError, match="cannot create the parent"):
-        results.check_output_dir(blocker / "sub" / "run")
+        rundir.check_output_dir(blocker / "sub" / "run")
 
 
 def test_cli_bad_scene_is_a_clear_error(tmp_path, capsys):

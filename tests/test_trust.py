@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from granchain.cli import main, resolve_scene
 from granchain.physics.estimates import expected_peak_force, highest_frequency
 from granchain.physics.laws.hertz import hertz_tangent_stiffness
-from granchain.results import read_summary
+from granchain.rundir import read_summary
 from granchain.scene import parse_scene
 from granchain.workflows import run as run_mod
 from granchain.workflows.plan import peak_ratio, plan_scene
@@ -291,7 +291,7 @@ def test_every_user_error_is_a_granchain_error(tmp_path):
     from granchain.invariants import InvariantError
     from granchain.lammps.build import PluginError
     from granchain.lammps.runner import LammpsError
-    from granchain.results import RunDirError
+    from granchain.rundir import RunDirError
     from granchain.scene import SceneError
     from granchain.workflows.run import UnstableTimestepError
 

@@ -212,7 +212,7 @@ def cmd_predict(args) -> int:
 
 
 def cmd_compare_laws(args) -> int:
-    from granchain.results import check_output_dir
+    from granchain.rundir import check_output_dir
     from granchain.workflows.laws import compare_laws, write_law_comparison
 
     scene = resolve_scene(args.scene)

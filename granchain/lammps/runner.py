@@ -38,7 +38,8 @@ from granchain.postprocess.dumps import read_dump
 from granchain.postprocess.histories import read_histories
 from granchain.problem import ChainProblem, precompressed_displacements
 from granchain.progress import Progress
-from granchain.results import ChainSolution, RunResult, distribution_version, pid_alive
+from granchain.results import ChainSolution, RunResult, distribution_version
+from granchain.rundir import pid_alive
 from granchain.schedule import scene_step_plan, step_times
 from granchain.templates import RESULT_COLUMNS, RESULTS_DUMP, RUN_END_FILE, AtomLayout, atom_layout, render_deck
 

@@ -151,13 +151,13 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
 
 
 def peaks(run: Path) -> dict[str, np.ndarray]:
-    from granchain.results import read_peaks
+    from granchain.rundir import read_peaks
 
     return read_peaks(run)
 
 
 def summary(run: Path) -> dict:
-    from granchain.results import read_summary
+    from granchain.rundir import read_summary
 
     return read_summary(run)
 

@@ -38,7 +38,8 @@ from granchain.lammps.runner import (
     lammps_result,
     output_files,
 )
-from granchain.results import RunDirError, RunResult, pid_alive, scene_hash, write_run_dir
+from granchain.results import RunResult, scene_hash
+from granchain.rundir import RunDirError, pid_alive, write_run_dir
 from granchain.scene import load_scene, parse_scene
 from granchain.templates import RESULTS_DUMP, RUN_END_FILE, render_deck
 from granchain.workflows.plan import Plan, PlanChoice, refined_plan

@@ -8,7 +8,7 @@ import threading
 from pathlib import Path
 
 from granchain.postprocess.compare import compare_runs, write_compare
-from granchain.results import check_output_dir, write_run_dir
+from granchain.rundir import check_output_dir, write_run_dir
 from granchain.workflows import run as run_module
 from granchain.workflows.errors import rk4_companions
 from granchain.workflows.run import Abandoned, check_resources, plan_for, run_scene, shared_reference_runs

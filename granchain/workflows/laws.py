@@ -28,7 +28,7 @@ import numpy as np
 from granchain.errors import UsageError
 from granchain.physics.laws import LAWS
 from granchain.postprocess.regimes import DecayFit, fit_decay
-from granchain.results import check_output_dir
+from granchain.rundir import check_output_dir
 from granchain.scene import scene_from_dict, scene_to_dict
 from granchain.workflows.run import run_scene
 

@@ -18,7 +18,8 @@ from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH, In
 from granchain.peaks import lead_floor, stop_force_floor
 from granchain.problem import ChainProblem
 from granchain.reference.solver import solve_chain
-from granchain.results import RunResult, check_output_dir, write_run_dir
+from granchain.results import RunResult
+from granchain.rundir import check_output_dir, write_run_dir
 from granchain.schedule import dump_stride, history_stride
 
 BACKENDS = ("reference", "lammps")
