@@ -507,8 +507,10 @@ def build_parser() -> argparse.ArgumentParser:
     mt.add_argument("name", nargs="?", help="show one material")
     mt.set_defaults(func=cmd_materials)
     from granchain.cli.campaign import add_campaign_parser
+    from granchain.cli.submit import add_submit_parser
 
     add_campaign_parser(sub)
+    add_submit_parser(sub)
     return p
 
 
