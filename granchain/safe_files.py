@@ -1,5 +1,367 @@
 """Reading and writing inside a directory someone else may have prepared: run directories, workspaces
 and collect directories are shared, so no symlink or name in them may make granchain read or write
-outside them."""
+outside them.
+
+The rules every reader and writer of such a directory follows:
+
+- A file is opened with ``O_NOFOLLOW``: a symbolic link planted where granchain reads or writes is
+  refused, never followed (``ln -s ~/victim RUN/peaks.png`` must not overwrite the victim).
+- Only regular files are read or copied (a FIFO would block, ``/dev/zero`` would fill the disk), and
+  a read is bounded (``limit`` bytes): a damaged or hostile file cannot exhaust memory.
+- A file is written to a hidden temporary name beside it and renamed over the old one when it is
+  complete, so a full disk or a kill leaves the old file (or none), never a truncated or 0-byte one,
+  and a hard link planted at the name is replaced, not written through.
+- A directory granchain wrote carries a marker file (:data:`MARKER`); ``--overwrite`` replaces
+  only such a directory (:func:`atomic_directory`).
+
+Every refusal is an :class:`UnsafeFileError`, an ``OSError`` whose ``str`` is one sentence naming the
+path and the fix, so code that already turns ``OSError`` into a user error (a ``GranchainError``)
+reports it the same way. (This module sits in the lowest import layer, beside ``granchain.errors``,
+so it cannot raise a ``GranchainError`` itself.)
+"""
 
 from __future__ import annotations
+
+import contextlib
+import errno
+import io
+import os
+import shutil
+import stat
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+
+#: Name of the file marking a directory granchain wrote (run, compare, accuracy, collect, laws
+#: directories, campaign workspaces): ``--overwrite`` replaces only a directory that has it.
+MARKER = ".granchain-owned"
+_MARKER_TEXT = "granchain wrote this directory; --overwrite may replace it\nkind = {kind}\n"
+_MARKER_MAGIC = "granchain wrote this directory"
+
+#: Default bound of a read (bytes): far above any summary, scene or table granchain writes.
+DEFAULT_LIMIT = 256 * 1024 * 1024
+
+_O_CLOEXEC = getattr(os, "O_CLOEXEC", 0)
+_O_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
+_O_NONBLOCK = getattr(os, "O_NONBLOCK", 0)
+
+
+class UnsafeFileError(OSError):
+    """A file granchain refuses to read or write: a symlink, not a regular file, too large,
+    unreadable text, or a directory it does not own."""
+
+    def __str__(self) -> str:
+        return self.strerror or super().__str__()
+
+
+def _refuse(path, code: int, message: str) -> UnsafeFileError:
+    return UnsafeFileError(code, f"{path}: {message}", str(path))
+
+
+def _link_message(path) -> UnsafeFileError:
+    return _refuse(
+        path,
+        errno.ELOOP,
+        "is a symbolic link; granchain does not read or write through links in a shared directory "
+        "(remove the link, or copy the file it points to in its place)",
+    )
+
+
+def is_link(path: str | Path) -> bool:
+    """Whether ``path`` itself is a symbolic link (its target is not looked at)."""
+    return os.path.islink(path)
+
+
+def check_not_link(path: str | Path) -> None:
+    """Refuse a symbolic link at ``path`` (a directory below a workspace or run directory, say)."""
+    if os.path.islink(path):
+        raise _link_message(path)
+
+
+def _open_read_fd(path: str | Path) -> tuple[int, os.stat_result]:
+    """A read descriptor on a regular file at ``path``, not following a link there."""
+    try:
+        fd = os.open(path, os.O_RDONLY | _O_NOFOLLOW | _O_CLOEXEC | _O_NONBLOCK)
+    except OSError as e:
+        if e.errno == errno.ELOOP or (e.errno in (errno.EMLINK, errno.ENOTDIR) and os.path.islink(path)):
+            raise _link_message(path) from None
+        raise
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            what = "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file"
+            raise _refuse(path, errno.EINVAL, f"is {what}; granchain reads only regular files here (remove it)")
+        if _O_NONBLOCK:
+            os.set_blocking(fd, True)
+        return fd, st
+    except BaseException:
+        os.close(fd)
+        raise
+
+
+def _too_large(path, size: int, limit: int) -> UnsafeFileError:
+    return _refuse(
+        path,
+        errno.EFBIG,
+        f"is {size} bytes, more than the {limit} granchain reads from such a file "
+        "(damaged or not granchain's; remove it or take it from a fresh run)",
+    )
+
+
+@contextlib.contextmanager
+def open_for_read(path: str | Path, mode: str = "r", *, encoding: str = "utf-8") -> Iterator[io.IOBase]:
+    """Open a regular file for reading without following a link there (streaming: no size limit;
+    the caller bounds what it reads). ``mode`` is "r" (text) or "rb"."""
+    if mode not in ("r", "rb"):
+        raise ValueError(f"open_for_read: mode {mode!r}; use 'r' or 'rb'")
+    fd, _ = _open_read_fd(path)
+    fh = os.fdopen(fd, mode, encoding=None if mode == "rb" else encoding, newline=None if mode == "rb" else "")
+    with fh:
+        yield fh
+
+
+def file_size(path: str | Path) -> int:
+    """The size of a regular file at ``path`` (refused if a link or not a regular file)."""
+    fd, st = _open_read_fd(path)
+    os.close(fd)
+    return st.st_size
+
+
+def read_bytes(path: str | Path, limit: int = DEFAULT_LIMIT) -> bytes:
+    """The content of a regular file, refused if a link, not a regular file, or over ``limit`` bytes."""
+    fd, st = _open_read_fd(path)
+    with os.fdopen(fd, "rb") as fh:
+        if st.st_size > limit:
+            raise _too_large(path, st.st_size, limit)
+        data = fh.read(limit + 1)
+    if len(data) > limit:  # grew while read
+        raise _too_large(path, len(data), limit)
+    return data
+
+
+def read_text(path: str | Path, limit: int = DEFAULT_LIMIT, encoding: str = "utf-8") -> str:
+    """:func:`read_bytes` decoded; text that does not decode is refused with the path."""
+    data = read_bytes(path, limit)
+    try:
+        return data.decode(encoding)
+    except UnicodeDecodeError as e:
+        raise _refuse(
+            path, errno.EILSEQ, f"is not {encoding} text (byte {e.start}); damaged or not granchain's"
+        ) from None
+
+
+def read_head(path: str | Path, size: int) -> bytes:
+    """The first ``size`` bytes of a regular file (its whole content if shorter)."""
+    fd, _ = _open_read_fd(path)
+    with os.fdopen(fd, "rb") as fh:
+        return fh.read(size)
+
+
+def read_tail(path: str | Path, size: int) -> bytes:
+    """The last ``size`` bytes of a regular file (its whole content if shorter)."""
+    fd, st = _open_read_fd(path)
+    with os.fdopen(fd, "rb") as fh:
+        if st.st_size > size:
+            fh.seek(st.st_size - size)
+        return fh.read(size)
+
+
+def _tmp_name(path: Path) -> Path:
+    return path.with_name(f".{path.name}.tmp-{os.getpid()}-{os.urandom(3).hex()}")
+
+
+@contextlib.contextmanager
+def open_for_write(path: str | Path, mode: str = "w", *, encoding: str = "utf-8") -> Iterator[io.IOBase]:
+    """Write a file atomically without following a link: yields a file object on a hidden temporary
+    file beside ``path``, renamed over ``path`` when the block ends without an error (removed
+    otherwise: a full disk leaves no 0-byte or partial file). A symbolic link at ``path`` is refused.
+
+    ``mode`` is "w" (text, universal newlines off) or "wb". Usable as a matplotlib target::
+
+        with open_for_write(out / "peaks.png", "wb") as fh:
+            fig.savefig(fh, format="png")
+    """
+    if mode not in ("w", "wb"):
+        raise ValueError(f"open_for_write: mode {mode!r}; use 'w' or 'wb'")
+    path = Path(path)
+    check_not_link(path)
+    if path.is_dir():
+        raise _refuse(path, errno.EISDIR, "is a directory; remove it or choose another output")
+    tmp = _tmp_name(path)
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _O_NOFOLLOW | _O_CLOEXEC, 0o666)
+    try:
+        text = mode == "w"
+        with os.fdopen(fd, mode, encoding=encoding if text else None, newline="" if text else None) as fh:
+            yield fh
+            fh.flush()
+        check_not_link(path)  # planted while we wrote: os.replace would not follow it, but say so
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def write_bytes(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically, refusing a symbolic link there (:func:`open_for_write`)."""
+    with open_for_write(path, "wb") as fh:
+        fh.write(data)
+
+
+def write_text(path: str | Path, text: str, encoding: str = "utf-8") -> None:
+    """Write ``text`` to ``path`` atomically, refusing a symbolic link there (:func:`open_for_write`)."""
+    with open_for_write(path, "w", encoding=encoding) as fh:
+        fh.write(text)
+
+
+def save_figure(fig, path: str | Path, **kwargs) -> None:
+    """``fig.savefig`` into ``path`` through :func:`open_for_write` (format from the suffix unless given)."""
+    path = Path(path)
+    kwargs.setdefault("format", path.suffix.lstrip(".").lower() or "png")
+    with open_for_write(path, "wb") as fh:
+        fig.savefig(fh, **kwargs)
+
+
+def copy_file(src: str | Path, dst: str | Path, limit: int = DEFAULT_LIMIT) -> None:
+    """Copy a regular file (never a link's target, a device or a FIFO; at most ``limit`` bytes)
+    to ``dst``, written as :func:`open_for_write` does."""
+    fd, st = _open_read_fd(src)
+    with os.fdopen(fd, "rb") as fin:
+        if st.st_size > limit:
+            raise _too_large(src, st.st_size, limit)
+        with open_for_write(dst, "wb") as fout:
+            copied = 0
+            while chunk := fin.read(1 << 20):
+                copied += len(chunk)
+                if copied > limit:
+                    raise _too_large(src, copied, limit)
+                fout.write(chunk)
+
+
+def regular_files(directory: str | Path) -> list[str]:
+    """Names of the regular files directly in ``directory`` (links, subdirectories and special
+    files left out), sorted."""
+    out = []
+    with os.scandir(directory) as it:
+        for entry in it:
+            if entry.is_file(follow_symlinks=False):
+                out.append(entry.name)
+    return sorted(out)
+
+
+# ---------------------------------------------------------------------------------------------------
+# directories granchain owns
+
+
+def mark_owned(directory: str | Path, kind: str) -> None:
+    """Write the marker saying granchain wrote ``directory`` (``kind``: run, compare, accuracy, ...)."""
+    write_text(Path(directory) / MARKER, _MARKER_TEXT.format(kind=kind))
+
+
+def is_owned(directory: str | Path, legacy: Iterable[str] = ()) -> bool:
+    """Whether granchain wrote ``directory``: it is a real directory (not a link) holding the marker
+    as a regular file. ``legacy``: names of a directory written before the marker existed (a run
+    directory: ``summary.json``, ``peaks.csv``, ...); such a directory counts as owned when it holds
+    the first of them and nothing but regular files named in it."""
+    d = Path(directory)
+    if os.path.islink(d) or not d.is_dir():
+        return False
+    try:
+        text = read_bytes(d / MARKER, limit=4096).decode("utf-8", "replace")
+    except OSError:
+        text = ""
+    if text.startswith(_MARKER_MAGIC):
+        return True
+    legacy = list(legacy)
+    if not legacy:
+        return False
+    try:
+        with os.scandir(d) as it:
+            entries = list(it)
+    except OSError:
+        return False
+    names = {e.name for e in entries}
+    if legacy[0] not in names:
+        return False
+    allowed = set(legacy)
+    return all(e.name in allowed and e.is_file(follow_symlinks=False) for e in entries)
+
+
+def not_owned_message(directory: str | Path, option: str = "--out") -> str:
+    """The refusal of ``--overwrite`` on a directory granchain did not write (one sentence, the fix)."""
+    return (
+        f"{directory}: exists and was not written by granchain (no {MARKER} marker), so --overwrite "
+        f"will not replace it; choose another {option}, or move or remove that directory yourself"
+    )
+
+
+def pid_alive(pid: int) -> bool:
+    """Whether a process exists (stale partial directories name their writer's pid)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    except OverflowError:
+        return False
+    return True
+
+
+def check_replaceable(out: str | Path, overwrite: bool, legacy: Iterable[str] = (), option: str = "--out") -> None:
+    """Refuse an existing ``out`` unless ``overwrite`` and granchain owns it (:func:`is_owned`).
+
+    Raises :class:`UnsafeFileError` (EEXIST) with the message the command line prints.
+    """
+    out = Path(out)
+    if os.path.islink(out):
+        raise _refuse(
+            out,
+            errno.ELOOP,
+            f"is a symbolic link; granchain writes a directory only at a real path (choose another {option})",
+        )
+    if not out.exists():
+        return
+    if not out.is_dir():
+        raise _refuse(out, errno.EEXIST, f"exists and is not a directory; choose another {option}")
+    if not overwrite:
+        raise _refuse(out, errno.EEXIST, f"already exists; choose another {option} or pass --overwrite to replace it")
+    if not is_owned(out, legacy):
+        raise UnsafeFileError(errno.EEXIST, not_owned_message(out, option), str(out))
+
+
+@contextlib.contextmanager
+def atomic_directory(
+    out: str | Path, kind: str, overwrite: bool = False, legacy: Iterable[str] = (), option: str = "--out"
+) -> Iterator[Path]:
+    """Build a directory under a hidden temporary name beside ``out`` and rename it into place.
+
+    Yields the temporary directory; when the block ends without an error the marker
+    (:data:`MARKER`, ``kind``) is written and the directory renamed to ``out``. An existing ``out``
+    is replaced only with ``overwrite`` and only if granchain owns it (:func:`check_replaceable`);
+    on any error the temporary directory is removed and ``out`` is left as it was. Stale temporary
+    directories of a killed writer (their pid gone) are removed first.
+    """
+    out = Path(out)
+    check_replaceable(out, overwrite, legacy, option)
+    parent = out.absolute().parent
+    parent.mkdir(parents=True, exist_ok=True)
+    tmp = parent / f".{out.name}.partial-{os.getpid()}"
+    for stale in parent.glob(f".{out.name}.partial-*"):  # left by a killed writer (or this pid's past)
+        pid = stale.name.rsplit("-", 1)[-1]
+        if not os.path.islink(stale) and (stale == tmp or (pid.isdigit() and not pid_alive(int(pid)))):
+            shutil.rmtree(stale, ignore_errors=True)
+    tmp.mkdir()
+    try:
+        yield tmp
+        mark_owned(tmp, kind)
+        if out.exists() or os.path.islink(out):
+            check_replaceable(out, overwrite, legacy, option)  # again: it may have appeared meanwhile
+            old = parent / f".{out.name}.old-{os.getpid()}"
+            os.replace(out, old)
+            os.replace(tmp, out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
