@@ -8,36 +8,98 @@
     energy.csv      time, kinetic, potential, dissipated, work
 
 The directory is written under a hidden temporary name and renamed into place at the end, so an
-interrupted run never leaves a directory that looks complete.
+interrupted run never leaves a directory that looks complete. It carries granchain's marker
+(granchain.safe_files.MARKER): ``--overwrite`` replaces only a directory granchain wrote, never one
+that holds anything else. Reads and writes never follow a symbolic link planted in it.
 """
 
 from __future__ import annotations
 
 import csv
+import fnmatch
+import io
 import json
 import math
 import os
-import shutil
 from pathlib import Path
 
 import numpy as np
 
+from granchain import safe_files
 from granchain.errors import GranchainError
 from granchain.results import RunResult
+from granchain.safe_files import pid_alive  # noqa: F401 - where callers have imported it from
+
+#: what a run directory written before the marker existed may hold: granchain run's, compare's,
+#: compare-laws', accuracy's and plot's files (lammps/ and reference/ of a compare directory are such
+#: directories themselves); :func:`owned_by_granchain` accepts an unmarked directory of only these
+_LEGACY_FILES = (
+    "scene.toml",
+    "summary.json",
+    "peaks.csv",
+    "histories.csv",
+    "snapshots.csv",
+    "energy.csv",
+    "deck.lmp",
+    "chain.data",
+    "log.lammps",
+    "*.dump",
+    "histories.npy",
+    "energy.txt",
+    "compare.csv",
+    "compare.md",
+    "laws.csv",
+    "laws.json",
+    "accuracy.csv",
+    "accuracy.md",
+    "*.png",
+    "*.pdf",
+    "*.svg",
+)
+_LEGACY_SIGNS = ("summary.json", "compare.csv", "laws.json", "accuracy.csv")
+_LEGACY_SUBDIRS = ("lammps", "reference")
 
 
 class RunDirError(GranchainError, RuntimeError):
-    """The run directory cannot be written (exists, not writable, disk full, ...)."""
+    """The run directory cannot be written (exists, not writable, disk full, ...) or read (missing,
+    damaged, a symbolic link)."""
+
+
+def owned_by_granchain(d: str | Path) -> bool:
+    """Whether granchain wrote the directory d: it carries the marker (safe_files.MARKER), or it was
+    written before the marker existed and holds only granchain's files (a summary.json, compare.csv,
+    laws.json or accuracy.csv among them) and no link."""
+    d = Path(d)
+    if safe_files.is_owned(d):
+        return True
+    if os.path.islink(d) or not d.is_dir():
+        return False
+    try:
+        with os.scandir(d) as it:
+            entries = list(it)
+    except OSError:
+        return False
+    if not any(e.name in _LEGACY_SIGNS for e in entries):
+        return False
+    for e in entries:
+        if e.is_dir(follow_symlinks=False):
+            if e.name not in _LEGACY_SUBDIRS or not owned_by_granchain(e.path):
+                return False
+        elif not e.is_file(follow_symlinks=False) or not any(fnmatch.fnmatch(e.name, g) for g in _LEGACY_FILES):
+            return False
+    return True
 
 
 def check_output_dir(out: str | Path, overwrite: bool = False) -> Path:
-    """Fail early (before a run starts) if the run directory cannot be created."""
+    """Fail early (before a run starts) if the run directory cannot be created: it exists (without
+    overwrite), it is not a directory granchain wrote (with overwrite: owned_by_granchain), it is a
+    symbolic link, or its parent cannot be made or written."""
     out = Path(out)
-    if out.exists() and not overwrite:
-        raise RunDirError(f"{out}: already exists; choose another --out or pass --overwrite to replace it")
-    if out.exists() and not out.is_dir():
-        raise RunDirError(f"{out}: exists and is not a directory; choose another --out")
-    parent = out.resolve().parent
+    try:
+        safe_files.check_replaceable(out, overwrite, owned=owned_by_granchain)
+    except OSError as e:
+        raise RunDirError(str(e)) from None
+    parent = out.absolute().parent
     try:
         parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -50,7 +112,7 @@ def check_output_dir(out: str | Path, overwrite: bool = False) -> Path:
 
 
 def _write_csv(path: Path, header: list[str], rows) -> None:
-    with open(path, "w", newline="") as fh:
+    with safe_files.create_new(path) as fh:
         w = csv.writer(fh)
         w.writerow(header)
         for row in rows:
@@ -69,48 +131,22 @@ def _fmt(x) -> str:
 def write_run_dir(result: RunResult, out: str | Path, overwrite: bool = False, extra_files: dict | None = None) -> Path:
     """Write the run directory atomically; returns its path.
 
-    extra_files: name -> text or source Path, copied in as well (e.g. a LAMMPS deck and log).
+    extra_files: name -> text or source Path, copied in as well (e.g. a LAMMPS deck and log; only a
+    regular file is copied, never a symbolic link's target). overwrite replaces only a directory
+    granchain wrote (check_output_dir).
     """
     out = check_output_dir(out, overwrite)
-    parent = out.resolve().parent
-    tmp = parent / f".{out.name}.partial-{os.getpid()}"
-    for stale in parent.glob(f".{out.name}.partial-*"):  # left by a killed writer (or this pid's past)
-        pid = stale.name.rsplit("-", 1)[-1]
-        if stale == tmp or (pid.isdigit() and not pid_alive(int(pid))):
-            shutil.rmtree(stale, ignore_errors=True)
     try:
-        tmp.mkdir()
-        _write_contents(result, tmp, extra_files or {})
-        if out.exists():
-            old = parent / f".{out.name}.old-{os.getpid()}"
-            os.replace(out, old)
-            os.replace(tmp, out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(tmp, out)
+        with safe_files.atomic_directory(out, "run", overwrite=overwrite, owned=owned_by_granchain) as tmp:
+            _write_contents(result, tmp, extra_files or {})
     except OSError as e:
-        shutil.rmtree(tmp, ignore_errors=True)
         raise RunDirError(f"{out}: could not write the run directory ({e}); nothing was left behind") from None
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return out
-
-
-def pid_alive(pid: int) -> bool:
-    """Whether a process exists (stale partial run and LAMMPS work directories name their writer)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 def _write_contents(result: RunResult, d: Path, extra_files: dict) -> None:
     sc, s = result.scene, result.solution
-    (d / "scene.toml").write_text(sc.source_text if sc.source_text else sc.to_toml())
+    _write_new(d / "scene.toml", sc.source_text if sc.source_text else sc.to_toml())
     contacts = np.asarray(sc.peak_contacts, dtype=int)
     idx = contacts - 1
     header = [
@@ -164,12 +200,19 @@ def _write_contents(result: RunResult, d: Path, extra_files: dict) -> None:
         zip(s.energy_time, s.kinetic, s.potential, s.dissipated, s.work, strict=True),
     )
     for name, content in extra_files.items():
+        if Path(name).name != name or name.startswith("."):
+            raise ValueError(f"extra file name {name!r}: a plain file name")  # a bug, not the user's
         if isinstance(content, Path):
-            shutil.copyfile(content, d / name)
+            safe_files.copy_file(content, d / name, limit=None)
         else:
-            (d / name).write_text(content)
+            _write_new(d / name, content)
     # summary last: its presence marks a complete directory even before the rename
-    (d / "summary.json").write_text(json.dumps(result.summary(), indent=2, default=_json_default) + "\n")
+    _write_new(d / "summary.json", json.dumps(result.summary(), indent=2, default=_json_default) + "\n")
+
+
+def _write_new(path: Path, text: str) -> None:
+    with safe_files.create_new(path) as fh:
+        fh.write(text)
 
 
 def _json_default(o):
@@ -180,14 +223,48 @@ def _json_default(o):
     raise TypeError(repr(o))
 
 
+#: the most a reader takes from a run directory's peaks.csv or summary.json (bytes)
+READ_LIMIT = 256 * 1024 * 1024
+
+
+def _read_text(path: Path) -> str:
+    try:
+        return safe_files.read_text(path, limit=READ_LIMIT)
+    except FileNotFoundError:
+        raise RunDirError(f"{path}: missing; give a run directory granchain wrote (granchain run --out)") from None
+    except OSError as e:
+        raise RunDirError(f"{path}: cannot be read ({e})") from None
+
+
 def read_peaks(run_dir: str | Path) -> dict[str, np.ndarray]:
-    """peaks.csv of a run directory as arrays (contact is 1-based; complete, where present, is bool)."""
-    data = np.genfromtxt(Path(run_dir) / "peaks.csv", delimiter=",", names=True, ndmin=1, dtype=None, encoding="utf-8")
-    out = {name: np.asarray(data[name]) for name in data.dtype.names}
+    """peaks.csv of a run directory as arrays (contact is 1-based; complete, where present, is bool).
+
+    A missing, damaged or linked file is a RunDirError naming it."""
+    path = Path(run_dir) / "peaks.csv"
+    text = _read_text(path)
+    try:
+        data = np.genfromtxt(io.StringIO(text), delimiter=",", names=True, ndmin=1, dtype=None, encoding="utf-8")
+        names = data.dtype.names
+        if not names or "contact" not in names:
+            raise ValueError("no 'contact' column")
+        out = {name: np.asarray(data[name]) for name in names}
+        if out["contact"].dtype.kind not in "iu":
+            raise ValueError("the contact column is not whole numbers")
+    except (ValueError, TypeError, IndexError) as e:
+        raise RunDirError(f"{path}: is not the peak table granchain writes ({e}); run the scene again") from None
     if "complete" in out:
         out["complete"] = out["complete"] == 1
     return out
 
 
 def read_summary(run_dir: str | Path) -> dict:
-    return json.loads((Path(run_dir) / "summary.json").read_text())
+    """summary.json of a run directory (a RunDirError naming it when missing, damaged or linked)."""
+    path = Path(run_dir) / "summary.json"
+    text = _read_text(path)
+    try:
+        data = json.loads(text)
+    except (ValueError, RecursionError) as e:
+        raise RunDirError(f"{path}: is not JSON ({str(e)[:200]}); damaged: run the scene again") from None
+    if not isinstance(data, dict):
+        raise RunDirError(f"{path}: is not the summary granchain writes (not a JSON object); run the scene again")
+    return data

@@ -201,6 +201,22 @@ def open_for_write(path: str | Path, mode: str = "w", *, encoding: str = "utf-8"
         raise
 
 
+def create_new(path: str | Path, mode: str = "w", *, encoding: str = "utf-8") -> io.IOBase:
+    """Open a new file for writing in a directory granchain has just made (its own temporary
+    directory): refused if anything, a link included, is already at ``path`` (O_EXCL, O_NOFOLLOW).
+    ``mode`` is "w" (text, no newline translation) or "wb"; the caller closes it."""
+    if mode not in ("w", "wb"):
+        raise ValueError(f"create_new: mode {mode!r}; use 'w' or 'wb'")
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _O_NOFOLLOW | _O_CLOEXEC, 0o666)
+    except FileExistsError:
+        if os.path.islink(path):
+            raise _link_message(path) from None
+        raise
+    text = mode == "w"
+    return os.fdopen(fd, mode, encoding=encoding if text else None, newline="" if text else None)
+
+
 def write_bytes(path: str | Path, data: bytes) -> None:
     """Write ``data`` to ``path`` atomically, refusing a symbolic link there (:func:`open_for_write`)."""
     with open_for_write(path, "wb") as fh:
@@ -221,10 +237,11 @@ def save_figure(fig, path: str | Path, **kwargs) -> None:
         fig.savefig(fh, **kwargs)
 
 
-def copy_file(src: str | Path, dst: str | Path, limit: int = DEFAULT_LIMIT) -> None:
-    """Copy a regular file (never a link's target, a device or a FIFO; at most ``limit`` bytes)
-    to ``dst``, written as :func:`open_for_write` does."""
+def copy_file(src: str | Path, dst: str | Path, limit: int | None = DEFAULT_LIMIT) -> None:
+    """Copy a regular file (never a link's target, a device or a FIFO; at most ``limit`` bytes,
+    None: no limit) to ``dst``, written as :func:`open_for_write` does."""
     fd, st = _open_read_fd(src)
+    limit = float("inf") if limit is None else limit
     with os.fdopen(fd, "rb") as fin:
         if st.st_size > limit:
             raise _too_large(src, st.st_size, limit)
@@ -307,8 +324,11 @@ def pid_alive(pid: int) -> bool:
     return True
 
 
-def check_replaceable(out: str | Path, overwrite: bool, legacy: Iterable[str] = (), option: str = "--out") -> None:
-    """Refuse an existing ``out`` unless ``overwrite`` and granchain owns it (:func:`is_owned`).
+def check_replaceable(
+    out: str | Path, overwrite: bool, legacy: Iterable[str] = (), option: str = "--out", owned=None
+) -> None:
+    """Refuse an existing ``out`` unless ``overwrite`` and granchain owns it (:func:`is_owned`, or the
+    predicate ``owned(path) -> bool`` when given).
 
     Raises :class:`UnsafeFileError` (EEXIST) with the message the command line prints.
     """
@@ -325,13 +345,18 @@ def check_replaceable(out: str | Path, overwrite: bool, legacy: Iterable[str] = 
         raise _refuse(out, errno.EEXIST, f"exists and is not a directory; choose another {option}")
     if not overwrite:
         raise _refuse(out, errno.EEXIST, f"already exists; choose another {option} or pass --overwrite to replace it")
-    if not is_owned(out, legacy):
+    if not (owned(out) if owned is not None else is_owned(out, legacy)):
         raise UnsafeFileError(errno.EEXIST, not_owned_message(out, option), str(out))
 
 
 @contextlib.contextmanager
 def atomic_directory(
-    out: str | Path, kind: str, overwrite: bool = False, legacy: Iterable[str] = (), option: str = "--out"
+    out: str | Path,
+    kind: str,
+    overwrite: bool = False,
+    legacy: Iterable[str] = (),
+    option: str = "--out",
+    owned=None,
 ) -> Iterator[Path]:
     """Build a directory under a hidden temporary name beside ``out`` and rename it into place.
 
@@ -339,10 +364,11 @@ def atomic_directory(
     (:data:`MARKER`, ``kind``) is written and the directory renamed to ``out``. An existing ``out``
     is replaced only with ``overwrite`` and only if granchain owns it (:func:`check_replaceable`);
     on any error the temporary directory is removed and ``out`` is left as it was. Stale temporary
-    directories of a killed writer (their pid gone) are removed first.
+    directories of a killed writer (their pid gone) are removed first. ``owned``: as in
+    :func:`check_replaceable`.
     """
     out = Path(out)
-    check_replaceable(out, overwrite, legacy, option)
+    check_replaceable(out, overwrite, legacy, option, owned)
     parent = out.absolute().parent
     parent.mkdir(parents=True, exist_ok=True)
     tmp = parent / f".{out.name}.partial-{os.getpid()}"
@@ -355,7 +381,7 @@ def atomic_directory(
         yield tmp
         mark_owned(tmp, kind)
         if out.exists() or os.path.islink(out):
-            check_replaceable(out, overwrite, legacy, option)  # again: it may have appeared meanwhile
+            check_replaceable(out, overwrite, legacy, option, owned)  # again: it may have appeared meanwhile
             old = parent / f".{out.name}.old-{os.getpid()}"
             os.replace(out, old)
             os.replace(tmp, out)

@@ -11,6 +11,7 @@ import pytest
 from granchain import rundir
 from granchain.cli import main
 from granchain.rundir import RunDirError, read_peaks, read_summary
+from granchain.safe_files import MARKER
 from granchain.workflows.run import run_scene
 
 from .conftest import make_scene, make_scene_text
@@ -23,7 +24,7 @@ def test_run_writes_documented_files(tmp_path):
     out = tmp_path / "run"
     res = run_scene(sc, out=out)
     names = {p.name for p in out.iterdir()}
-    assert names == {"scene.toml", "summary.json", "peaks.csv", "histories.csv", "snapshots.csv", "energy.csv"}
+    assert names == {"scene.toml", "summary.json", "peaks.csv", "histories.csv", "snapshots.csv", "energy.csv", MARKER}
     s = read_summary(out)
     for key in ("backend", "timestep", "steps", "wall_time", "observables"):
         assert key in s
