@@ -5,11 +5,18 @@ The public API is small::
     import granchain
 
     scene = granchain.load_scene("default")            # a bundled name or a .toml path
+    scene = granchain.parse_scene(toml_text)           # or a scene written inline
     plan = granchain.plan(scene, rtol=1e-3, method="verlet")
     result = granchain.run(scene, backend="lammps")    # plans "auto" values for Verlet itself
-    result.peak_table["peak_force"], result.summary()["observables"]
+    result.peaks                                       # pandas DataFrame by contact (units in .attrs)
+    result.histories, result.snapshots                 # xarray Datasets (units in .attrs), or None
+    result.summary["observables"]                      # summary.json as a dict
+    fig = result.plot("peaks")                         # a matplotlib Figure; nothing saved or shown
+    same = granchain.load_run("runs/default-lammps")   # a run directory back as the same result
+    cmp = granchain.compare(scene)                     # LAMMPS vs reference: cmp.table, cmp.ok
 
-Every error a user can cause is a :class:`GranchainError`.
+Every error a user can cause is a :class:`GranchainError`. Importing granchain (or drawing through
+it) never changes matplotlib's backend: figures are made without pyplot.
 
 This package root is the public API's facade: it sits above every layer (it imports the workflows,
 lazily) and no module of granchain imports it (pyproject.toml, [tool.importlinter]).
@@ -20,7 +27,36 @@ from __future__ import annotations
 from granchain._version import __version__
 from granchain.errors import GranchainError
 
-__all__ = ["GranchainError", "__version__", "campaign", "load_campaign", "load_scene", "plan", "run"]
+__all__ = [
+    "GranchainError",
+    "__version__",
+    "campaign",
+    "compare",
+    "figure",
+    "load_campaign",
+    "load_run",
+    "load_scene",
+    "parse_scene",
+    "plan",
+    "provenance_packages",
+    "run",
+]
+
+
+def _plot_result(result, kind: str = "peaks", **kw):
+    """RunResult.plot's figure function: granchain.workflows.plots, imported when first drawn."""
+    from granchain.workflows.plots import plot_result
+
+    return plot_result(result, kind, **kw)
+
+
+def _with_figures(result):
+    """result, with RunResult.plot able to draw (the figure functions are loaded on first use)."""
+    from granchain import results
+
+    if results._PLOTTER is None:
+        results.register_plotter(_plot_result)
+    return result
 
 
 def load_scene(path_or_name):
@@ -44,6 +80,30 @@ def load_scene(path_or_name):
     from granchain.scene import load_scene as _load
 
     return _load(path_or_name)
+
+
+def parse_scene(text: str, source: str = "<notebook>"):
+    """A scene from TOML text (a scene written inline, e.g. in a notebook), validated.
+
+    Parameters
+    ----------
+    text : str
+        The scene file's text (``granchain scenes NAME`` prints one to start from).
+    source : str
+        A name for the scene in messages and provenance.
+
+    Returns
+    -------
+    granchain.scene.Scene
+
+    Raises
+    ------
+    GranchainError
+        (``SceneError``) an invalid entry; the message names the key and the fix.
+    """
+    from granchain.scene import parse_scene as _parse
+
+    return _parse(text, source=source)
 
 
 def plan(scene, rtol: float | None = None, method: str = "rk4"):
@@ -107,13 +167,126 @@ def run(
     Returns
     -------
     granchain.results.RunResult
-        ``result.peak_table``: numpy structured array (contact, peak_force, time_of_peak, complete);
-        ``result.summary()``: the summary written to ``summary.json``; ``result.scene``: the scene
-        as run; ``result.plan``: the plan (or None).
+        ``result.peaks``: pandas DataFrame by contact (peak_force N, time_of_peak s, complete,
+        errors; units in ``.attrs["units"]``); ``result.histories`` / ``result.snapshots``: xarray
+        Datasets (None when not asked for); ``result.energy``: DataFrame by time;
+        ``result.summary``: the summary written to ``summary.json`` (a dict; calling it works too);
+        ``result.plot(kind)``: a matplotlib Figure; ``result.scene``: the scene as run;
+        ``result.plan``: the plan (or None); ``result.path``: the run directory when ``out`` was given.
     """
+    from pathlib import Path
+
     from granchain.workflows.run import run_scene
 
-    return run_scene(scene, backend=backend, method=method, rtol=rtol, out=out, error_estimate=error_estimate, **kw)
+    result = run_scene(scene, backend=backend, method=method, rtol=rtol, out=out, error_estimate=error_estimate, **kw)
+    if out is not None:
+        result.path = Path(out)
+    return _with_figures(result)
+
+
+def load_run(path):
+    """A run directory read back as the result that wrote it.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A directory of ``granchain run`` (either backend), of ``granchain collect``, or a campaign
+        point's job directory.
+
+    Returns
+    -------
+    granchain.results.RunResult
+        The type :func:`run` returns (a LAMMPS run's LammpsRunResult, a collected run's
+        CollectedRunResult), equal to the in-memory result for everything the directory keeps:
+        ``peaks``, ``histories``, ``snapshots``, ``energy``, ``summary`` (as written), ``scene``,
+        ``plan``; ``result.path`` is the directory. Not kept, so empty: the final state and the
+        companion runs' ErrorReport (their numbers are in ``summary["errors"]`` and ``peaks``).
+
+    Raises
+    ------
+    GranchainError
+        (``LoadRunError``) not a complete run directory, or a file in it is a symbolic link or damaged.
+    """
+    from granchain.workflows.load import load_run as _load
+
+    return _with_figures(_load(path))
+
+
+def figure(run, kind: str = "peaks", **kw):
+    """One figure of a run as a matplotlib Figure, made without pyplot (not saved, not shown).
+
+    Parameters
+    ----------
+    run : RunResult or str or pathlib.Path
+        A result of :func:`run` or :func:`load_run`, or a run directory.
+    kind : {"peaks", "histories", "snapshots", "heatmap"}
+        peak force along the chain with the models that apply; force and velocity histories;
+        profiles at the snapshot times; the x-t diagram of contact force.
+    **kw
+        ``log=False``: linear axes for "peaks".
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``fig.savefig("peaks.png")`` writes it; a notebook shows it as a cell's value.
+    """
+    from granchain.workflows.plots import figure as _figure
+
+    return _figure(run, kind, **kw)
+
+
+def compare(
+    scene,
+    rtol: float = 1e-3,
+    method: str = "rk4",
+    out=None,
+    error_estimate: bool = False,
+    overwrite: bool = False,
+    np_: int = 1,
+):
+    """Run a scene on LAMMPS and on the reference solver and compare them (``granchain compare``).
+
+    Parameters
+    ----------
+    scene : granchain.scene.Scene
+        "auto" values are planned for each backend's integrator, the time step for rtol / 2 each.
+    rtol : float
+        Tolerance between the two runs (a difference fails beyond rtol plus both measured errors).
+    method : {"rk4", "verlet"}
+        The reference's integrator.
+    out : str or pathlib.Path, optional
+        Write the compare directory (lammps/, reference/, compare.csv, compare.md).
+    error_estimate : bool
+        Give both runs measured error bars (companion runs at 2 dt and 4 dt).
+
+    Returns
+    -------
+    granchain.workflows.api.Comparison
+        ``.table`` (pandas DataFrame by quantity, units in ``.attrs``), ``.ok``, ``.lammps`` and
+        ``.reference`` (RunResults).
+    """
+    from pathlib import Path
+
+    from granchain.workflows.api import Comparison
+    from granchain.workflows.compare import compare_scene
+
+    rows, lam, ref = compare_scene(
+        scene, rtol=rtol, out=out, overwrite=overwrite, method=method, np_=np_, error_estimate=error_estimate
+    )
+    if out is not None:
+        lam.path, ref.path = Path(out) / "lammps", Path(out) / "reference"
+    _with_figures(lam)
+    return Comparison(rows=rows, lammps=lam, reference=ref, rtol=rtol, path=None if out is None else Path(out))
+
+
+def provenance_packages(campaign: bool = False) -> dict:
+    """The installed versions of the libraries a run goes through (summary.json's
+    provenance.packages: numpy, scipy, lammps, MDAnalysis, matplotlib, jinja2, pandas, xarray), and
+    with ``campaign=True`` those a campaign runs on too (dask, distributed, signac); None where one
+    is not installed."""
+    from granchain.results import CAMPAIGN_PACKAGES, RUN_PACKAGES, package_versions
+
+    return package_versions(RUN_PACKAGES + (CAMPAIGN_PACKAGES if campaign else ()))
 
 
 def campaign(

