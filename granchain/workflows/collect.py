@@ -14,13 +14,18 @@ log.lammps; summary.json's provenance says the run was collected and what was no
 
 collect refuses, with a CollectError saying what to do: a directory without deck.lmp, chain.data or
 scene.toml; a scene.toml whose content hash is not the one render wrote into the deck; a run that
-has not finished (no results dump: the log's last lines are in the message). Nothing is written
-then; the files it adds are written aside and renamed into place, summary.json last.
+has not finished (no results dump: the log's last lines are in the message); a file it reads or
+copies that is a symbolic link, not a regular file, larger than it reads, or damaged (it names the
+file). Nothing is written then; the files it adds are written aside and renamed into place,
+summary.json last. The directory may come from someone else: nothing in it makes collect read or
+write outside it, or outside --out.
 """
 
 from __future__ import annotations
 
+import fnmatch
 import json
+import math
 import os
 import re
 import shutil
@@ -29,8 +34,12 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
+import numpy as np
+
+from granchain import safe_files
 from granchain.errors import GranchainError
 from granchain.lammps.runner import (
+    OUTPUT_GLOBS,
     LammpsError,
     LammpsRunResult,
     ResultsError,
@@ -39,7 +48,8 @@ from granchain.lammps.runner import (
     output_files,
 )
 from granchain.results import RunResult, scene_hash
-from granchain.rundir import RunDirError, pid_alive, write_run_dir
+from granchain.rundir import RunDirError, write_run_dir
+from granchain.safe_files import pid_alive
 from granchain.scene import load_scene, parse_scene
 from granchain.templates import RESULTS_DUMP, RUN_END_FILE, render_deck
 from granchain.workflows.plan import Plan, PlanChoice, refined_plan
@@ -53,6 +63,15 @@ LOG_FILE = "log.lammps"
 _HASH_LINE = re.compile(r"^# Scene sha256: ([0-9a-f]{64})\b", re.M)
 _RENDERED_BY = re.compile(r"^# Rendered by granchain (\S+) from ", re.M)
 _MONTHS = {m: i + 1 for i, m in enumerate("Jan Feb Mar Apr May Jun Jul Aug Sep Oct Nov Dec".split())}
+
+#: the most collect reads from a text file it takes whole (scene, deck, plan, log, run end), bytes
+TEXT_LIMIT = 256 * 1024 * 1024
+#: the most it reads into memory from one of LAMMPS's result files (dumps, energy samples, histories)
+DATA_LIMIT = 2 * 1024**3
+#: the files collect reads or copies (beside OUTPUT_GLOBS): each must be a regular file, not a link
+_READ_NAMES = ("scene.toml", PLAN_FILE, LOG_FILE, RUN_END_FILE, RESULTS_DUMP, "load_end.txt", "energy.txt")
+#: what collect catches from reading LAMMPS's result files: a damaged file (its parser's errors)
+_DAMAGED = (ValueError, KeyError, IndexError, TypeError, OverflowError, EOFError, UnicodeError)
 
 
 class CollectError(GranchainError, RuntimeError):
@@ -150,7 +169,12 @@ class LammpsLog:
 
 
 def read_log(path: Path) -> LammpsLog:
-    text = path.read_text(errors="replace")
+    """What a LAMMPS log says about its run (a CollectError if it is not LAMMPS's, or larger than
+    TEXT_LIMIT)."""
+    try:
+        text = safe_files.read_bytes(path, TEXT_LIMIT).decode("utf-8", "replace")
+    except OSError as e:
+        raise CollectError(f"{path}: cannot be read ({e})") from None
     m = re.search(r"^LAMMPS \((\d{1,2}) (\w{3}) (\d{4})([^)]*)\)", text, re.M)
     version_text = version = None
     if m:
@@ -158,7 +182,17 @@ def read_log(path: Path) -> LammpsLog:
         if m.group(2) in _MONTHS:
             version = int(m.group(3)) * 10000 + _MONTHS[m.group(2)] * 100 + int(m.group(1))
     loops = re.findall(r"^Loop time of (\S+) on (\d+) procs", text, re.M)
-    threads = re.search(r"using (\d+) OpenMP thread", text)
+    for t, n in loops:
+        try:
+            ok = math.isfinite(float(t)) and float(t) >= 0 and 0 < int(n) < 10**9
+        except ValueError:
+            ok = False
+        if not ok:
+            raise CollectError(
+                f"{path}: 'Loop time of {t[:40]} on {n[:20]} procs' is not LAMMPS's (a time and a number of ranks): "
+                "the log is damaged; run 'lmp -in deck.lmp' in this directory again"
+            )
+    threads = re.search(r"using (\d{1,9}) OpenMP thread", text)
     wall = re.search(r"^Total wall time: (\S+)", text, re.M)
     return LammpsLog(
         version_text=version_text,
@@ -188,11 +222,62 @@ def _check_is_render_dir(d: Path) -> None:
         raise CollectError(
             f"{d}: no such directory; give a directory written by 'granchain render SCENE --out DIR' and run by LAMMPS"
         )
+    _check_files(d)
     missing = [f for f in RENDER_FILES if not (d / f).is_file()]
     if missing:
         raise CollectError(
             f"{d}: has no {', '.join(missing)}: not a directory of 'granchain render SCENE --out DIR' "
             "(collect needs the deck, its data file and the scene it was rendered from)"
+        )
+
+
+def _collected_name(name: str) -> bool:
+    return name in RENDER_FILES or name in _READ_NAMES or any(fnmatch.fnmatch(name, g) for g in OUTPUT_GLOBS)
+
+
+def _check_files(d: Path) -> None:
+    """Every file of d collect reads or copies is a regular file (not a symbolic link, a FIFO or a
+    device), no larger than it reads; else a CollectError naming it."""
+    try:
+        with os.scandir(d) as it:
+            entries = sorted(it, key=lambda e: e.name)
+    except OSError as e:
+        raise CollectError(f"{d}: cannot be listed ({e.strerror})") from None
+    for e in entries:
+        if not _collected_name(e.name):
+            continue
+        path = d / e.name
+        if e.is_symlink():
+            raise CollectError(
+                f"{path}: is a symbolic link; collect reads and copies only the files LAMMPS wrote in this "
+                "directory, never a link's target: remove the link (or copy the file it points to in its place)"
+            )
+        if not e.is_file(follow_symlinks=False):
+            raise CollectError(f"{path}: is not a regular file; collect reads only regular files here: remove it")
+        limit = TEXT_LIMIT if e.name in RENDER_FILES or e.name in _READ_NAMES[:4] else DATA_LIMIT
+        if e.name in RENDER_FILES or e.name in _READ_NAMES or e.name.startswith(("snapshot_", "histories.")):
+            size = e.stat(follow_symlinks=False).st_size
+            if size > limit:
+                raise CollectError(
+                    f"{path}: is {size} bytes, more than the {limit} collect reads from it (damaged, or not what the "
+                    "deck writes): run 'lmp -in deck.lmp' in this directory again"
+                )
+
+
+def _check_disk(d: Path, files: dict, out: Path) -> None:
+    """Refuse collect --out when the files it copies need more disk than is free there."""
+    need = sum(p.stat(follow_symlinks=False).st_size for p in files.values())
+    parent = out.absolute().parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    try:
+        free = shutil.disk_usage(parent).free
+    except OSError:
+        return
+    if need > free:
+        raise CollectError(
+            f"{d}: its LAMMPS files take {need / 1e9:.3g} GB, {free / 1e9:.3g} GB is free where --out {out} goes: "
+            "free some space or choose another --out (or collect in place, without --out)"
         )
 
 
@@ -253,7 +338,10 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
     d = Path(run_dir)
     _check_is_render_dir(d)
     scene = load_scene(d / "scene.toml")
-    deck = (d / "deck.lmp").read_text(errors="replace")
+    try:
+        deck = safe_files.read_bytes(d / "deck.lmp", TEXT_LIMIT).decode("utf-8", "replace")
+    except OSError as e:
+        raise CollectError(f"{d / 'deck.lmp'}: cannot be read ({e})") from None
     _check_scene_matches_deck(d, scene, deck)
     log = read_log(d / LOG_FILE) if (d / LOG_FILE).is_file() else None
     _check_finished(d, scene, log)
@@ -265,9 +353,11 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
     plan = plan_record = None
     if (d / PLAN_FILE).is_file():
         try:
-            plan_record = json.loads((d / PLAN_FILE).read_text())
+            plan_record = json.loads(safe_files.read_text(d / PLAN_FILE, TEXT_LIMIT))
+            if plan_record is not None and not isinstance(plan_record, dict):
+                raise TypeError("not a JSON object")
             plan = plan_from_dict(plan_record, scene)
-        except (ValueError, KeyError, TypeError) as e:
+        except (ValueError, KeyError, TypeError, RecursionError, OSError) as e:
             raise CollectError(f"{d / PLAN_FILE}: is not the plan 'granchain render --out' wrote ({e})") from None
     extra = {
         "lammps_version": log.version,
@@ -277,11 +367,19 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
         "plugin_build_time": None,
     }
     try:
-        base = lammps_result(scene, d, log.loop_time, extra)
+        with warnings.catch_warnings():  # an empty file is refused below: no warning before the message
+            warnings.filterwarnings("ignore", message="loadtxt: input contained no data")
+            base = lammps_result(scene, d, log.loop_time, extra)
     except ResultsError as e:
         raise CollectError(
             f"{d}: the LAMMPS run's results cannot be read: {e}. Last lines of {LOG_FILE}:\n{log.tail()}"
         ) from None
+    except FileNotFoundError as e:
+        raise CollectError(
+            f"{e.filename or d}: missing; the deck writes it during the run: run 'lmp -in deck.lmp' in {d} again"
+        ) from None
+    except _DAMAGED as e:  # a result file that is not what the deck writes (damaged, edited, another deck's)
+        raise CollectError(_damaged_message(d, scene, e)) from None
     rendered = _RENDERED_BY.search(deck)
     refinement = _refinement(d, plan_record, plan, base)
     result = CollectedRunResult(
@@ -309,17 +407,62 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
         },
     )
     if out is not None:
-        write_run_dir(result, out, overwrite=overwrite, extra_files=output_files(d))
+        files = output_files(d)
+        _check_disk(d, files, Path(out))
+        write_run_dir(result, out, overwrite=overwrite, extra_files=files)
     else:
         _write_in_place(result, d)
     return result
+
+
+def _damaged_message(d: Path, scene, err: Exception) -> str:
+    """The message of a result file its reader could not take: each file read alone, the first that
+    fails named (only on this error path: a good directory is read once)."""
+    from granchain.lammps.runner import read_results
+    from granchain.postprocess.dumps import read_dump
+    from granchain.postprocess.histories import HISTORY_NPY, read_history_table
+
+    def energy(p):
+        e = np.loadtxt(p, comments="#", ndmin=2)
+        if e.shape[0] < 1 or e.shape[1] < 4:
+            raise ValueError(f"{e.shape[0]} rows of {e.shape[1]} columns")
+
+    def load_end(p):
+        if np.loadtxt(p, ndmin=1).size < 2:
+            raise ValueError("not 'step x1'")
+
+    probes = [
+        (RESULTS_DUMP, lambda p: read_results(d)),
+        ("energy.txt", energy),
+        ("load_end.txt", load_end),
+        (HISTORY_NPY, read_history_table),
+        *((f"snapshot_{k}.dump", read_dump) for k in range(len(scene.outputs.snapshots))),
+    ]
+    for name, probe in probes:
+        if not (d / name).exists():
+            continue
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                probe(d / name)
+        except Exception as e:  # noqa: BLE001 - a probe of a file already known to be damaged somewhere
+            why = " ".join(str(e).split())[:240]
+            return (
+                f"{d / name}: is not what the deck writes ({type(e).__name__}: {why}); it is damaged or another "
+                "run's: run 'lmp -in deck.lmp' in this directory again"
+            )
+    why = " ".join(str(err).split())[:240]
+    return (
+        f"{d}: LAMMPS's result files here cannot be read ({type(err).__name__}: {why}); they are damaged or not "
+        "this deck's: run 'lmp -in deck.lmp' in this directory again"
+    )
 
 
 def _refinement(d: Path, record: dict | None, plan, result) -> dict | None:
     """Whether granchain run would have run this planned scene again at a finer step (its measured
     peaks fell far below the force scale: workflows.plan.refined_plan); then a NotRefinedWarning and
     {"timestep", "reason"} for the provenance. A plain-LAMMPS run is run once."""
-    if plan is None or not record or not record.get("scene_as_given"):
+    if plan is None or not record or not isinstance(record.get("scene_as_given"), str):
         return None
     given = parse_scene(record["scene_as_given"], source=f"{d / PLAN_FILE} (scene as given)")
     refined = refined_plan(given, plan, result.solution)
