@@ -25,13 +25,12 @@ from __future__ import annotations
 
 import io
 import json
-import os
-import stat
 from datetime import datetime
 from pathlib import Path
 
 import numpy as np
 
+from granchain import safe_files
 from granchain.errors import GranchainError
 from granchain.results import ChainSolution, RunResult, StoredRun
 
@@ -59,30 +58,26 @@ def run_dir_of(path: str | Path) -> Path:
 
 
 def read_text(d: Path, name: str) -> str:
-    """The text of file name in directory d, never through a symbolic link (refused with the fix)."""
+    """The text of file name in directory d: a regular file, never read through a symbolic link, of
+    bounded size (granchain.safe_files); anything else is a LoadRunError naming the file and the fix."""
     path = d / name
     try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
+        return safe_files.read_text(path)
     except FileNotFoundError:
         raise LoadRunError(f"{path}: missing; the run directory is incomplete") from None
+    except safe_files.UnsafeFileError as e:
+        raise LoadRunError(str(e)) from None
     except OSError as e:
-        if path.is_symlink():
-            raise LoadRunError(
-                f"{path}: is a symbolic link; a run directory's files are read only as themselves "
-                "(replace the link by the file)"
-            ) from None
         raise LoadRunError(f"{path}: cannot be read ({e.strerror})") from None
-    with os.fdopen(fd, "rb") as fh:
-        if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
-            raise LoadRunError(f"{path}: not a regular file; a run directory's {name} is one")
-        return fh.read().decode("utf-8")
 
 
 def _csv(d: Path, name: str, **kw):
     import pandas as pd
 
+    # numbers exactly as written (repr): pandas 3 parses them so by default, pandas 2 with round_trip
+    exact = {} if int(pd.__version__.split(".")[0]) >= 3 else {"float_precision": "round_trip"}
     try:
-        return pd.read_csv(io.StringIO(read_text(d, name)), float_precision="round_trip", **kw)
+        return pd.read_csv(io.StringIO(read_text(d, name)), **exact, **kw)
     except (ValueError, pd.errors.ParserError) as e:
         raise LoadRunError(f"{d / name}: not a granchain CSV table ({e})") from None
 
