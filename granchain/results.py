@@ -595,12 +595,13 @@ def _num(v) -> str:
     return str(v)
 
 
-def printable(text: str, limit: int | None = None) -> str:
+def printable(text: str, limit: int | None = None, keep: str = "") -> str:
     """text with its control characters escaped (ESC as \\x1b, a newline as \\n ...): scene text
-    shown on a terminal can neither move the cursor nor retitle the window. Cut to limit characters."""
+    shown on a terminal can neither move the cursor nor retitle the window. Cut to limit characters;
+    the characters in keep (e.g. "\\n" for a message of several lines) stay as they are."""
     out = "".join(
         ch
-        if ch.isprintable()
+        if ch.isprintable() or ch in keep
         else (ch.encode("unicode_escape").decode("ascii") if ord(ch) < 0x10000 else repr(ch)[1:-1])
         for ch in str(text)
     )

@@ -10,10 +10,43 @@ import sys
 import warnings
 from pathlib import Path
 
+from granchain._version import __version__
 from granchain.errors import GranchainError, UsageError
+from granchain.results import OBSERVABLE_UNITS, printable
 from granchain.scene import Scene, SceneError, bundled_scenes, load_scene, parse_scene
 
 DEFAULT_SCENE = "default"
+
+
+def shown(text) -> str:
+    """Text from a scene, a file or a path as printed on a terminal: control characters escaped
+    (a title's ESC sequences cannot retitle the window or clear the screen); newlines and tabs kept."""
+    return printable(str(text), keep="\n\t")
+
+
+def _scene_name(scene: Scene) -> str:
+    return printable(scene.title or scene.source or "")
+
+
+def json_safe(o):
+    """o with every non-finite float as None (null) and numpy numbers as Python's: strict JSON for
+    scripts (json.dumps refuses NaN with allow_nan=False)."""
+    if isinstance(o, dict):
+        return {str(k): json_safe(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [json_safe(v) for v in o]
+    if hasattr(o, "tolist") and not isinstance(o, (str, bytes)):  # numpy scalars and arrays
+        return json_safe(o.tolist())
+    if isinstance(o, float) and not math.isfinite(o):
+        return None
+    if isinstance(o, Path):
+        return str(o)
+    return o
+
+
+def print_json(data) -> None:
+    """data as strict JSON on stdout (one document; NaN and infinities as null)."""
+    print(json.dumps(json_safe(data), indent=2, allow_nan=False))
 
 
 def resolve_scene(arg: str | None) -> Scene:
@@ -37,7 +70,9 @@ def planned(scene: Scene, rtol: float | None, backend: str, method: str | None):
     scene, plan = plan_for(scene, backend, method, rtol)
     if plan is not None:
         for c in plan.choices:
-            print(f"plan ({integrator(backend, method)}): {c.name} = {c.value:.6g}  ({c.reason})", file=sys.stderr)
+            print(
+                f"plan ({integrator(backend, method)}): {c.name} = {c.value:.6g}  ({shown(c.reason)})", file=sys.stderr
+            )
     return scene, plan
 
 
@@ -77,18 +112,39 @@ def cmd_plan(args) -> int:
     scene = resolve_scene(args.scene)
     plan = plan_scene(scene, rtol=args.rtol, method=args.method)
     s = plan.scene
-    print(f"scene       {scene.title or scene.source}")
+    steps = math.ceil(s.run.end_time / s.run.timestep)
+    if args.json:
+        chosen = {c.name for c in plan.choices}
+        kept = [("beads", s.chain.beads), ("end_time", s.run.end_time), ("timestep", s.run.timestep)]
+        print_json(
+            {
+                "scene": {"title": scene.title, "source": scene.source},
+                "method": plan.method,
+                "rtol": plan.rtol,
+                "stable_timestep": plan.stable_timestep,
+                "omega_max": plan.omega_max,
+                "choices": [{"name": c.name, "value": c.value, "reason": c.reason} for c in plan.choices],
+                "given": [{"name": n, "value": v} for n, v in kept if n not in chosen],
+                "beads": s.chain.beads,
+                "end_time": s.run.end_time,
+                "timestep": s.run.timestep,
+                "steps": steps,
+                "bead_steps": steps * s.chain.beads,
+                "units": {"end_time": "s", "timestep": "s", "stable_timestep": "s", "omega_max": "rad/s"},
+            }
+        )
+        return 0
+    print(f"scene       {_scene_name(scene)}")
     print(
         f"method      {plan.method}, rtol {plan.rtol:g}; stability limit {plan.stable_timestep:.4g} s "
         f"(omega_max = {plan.omega_max:.4g} rad/s)"
     )
     for c in plan.choices:
-        print(f"{c.name:11s} {c.value:.6g}  because {c.reason}")
+        print(f"{c.name:11s} {c.value:.6g}  because {shown(c.reason)}")
     kept = [("beads", s.chain.beads), ("end_time", s.run.end_time), ("timestep", s.run.timestep)]
     for name, v in kept:
         if name not in {c.name for c in plan.choices}:
             print(f"{name:11s} {v:.6g}  as given in the scene")
-    steps = math.ceil(s.run.end_time / s.run.timestep)
     print(f"cost        about {steps} steps x {s.chain.beads} beads = {steps * s.chain.beads:.3g} bead-steps")
     return 0
 
@@ -121,6 +177,9 @@ def cmd_run(args) -> int:
         rtol=args.rtol,
         error_estimate=args.error_estimate == "on",
     )
+    if args.json:
+        print_json({"run_dir": str(out), **result.summary})
+        return 0
     print_result(result, out)
     return 0
 
@@ -129,7 +188,7 @@ def print_result(result, out) -> None:
     """What `granchain run` (and `granchain collect`) prints about a finished run."""
     scene = result.scene
     s = result.summary()
-    print(f"scene      {scene.title or scene.source}")
+    print(f"scene      {_scene_name(scene)}")
     print(
         f"backend    {s['backend']} ({s['method']}), dt = {s['timestep']:g} s, {s['steps']} steps, "
         f"{s['wall_time']:.3g} s wall"
@@ -138,7 +197,7 @@ def print_result(result, out) -> None:
     errors = (s.get("errors") or {}).get("observables", {})
     for k, v in s["observables"].items():
         label = f"{k} ({OBSERVABLE_UNITS.get(k, '?')})"
-        why = f"   not measured: {missing[k]}" if v is None and k in missing else ""
+        why = f"   not measured: {shown(missing[k])}" if v is None and k in missing else ""
         bar = ""
         if v is not None and k in errors:  # the measured error bar, or why there is none
             e = errors[k]
@@ -161,7 +220,7 @@ def print_result(result, out) -> None:
     e = s.get("errors")
     if e is not None:
         if e["why_none"]:
-            print(f"  {'error estimate':38s} none: {e['why_none']}")
+            print(f"  {'error estimate':38s} none: {shown(e['why_none'])}")
         else:
             worst = e["error_estimate"]
             where = f" at contact {e['error_estimate_contact']}" if worst is not None else ""
@@ -175,21 +234,7 @@ def print_result(result, out) -> None:
             )
             if n_bad:
                 print(f"  {'peaks without an estimate':38s} {n_bad}   (peaks.csv error_status says why)")
-    print(f"run directory: {out}")
-
-
-#: units of the observables `granchain run` prints ("1": dimensionless)
-OBSERVABLE_UNITS = {
-    "window": "contacts",
-    "leading_peak_contact": "contact",
-    "leading_peak_force": "N",
-    "leading_peak_force_nondim": "1",  # F / (E* R*^2), Eq. 5
-    "wave_speed": "m/s",
-    "wave_speed_stderr": "m/s",
-    "wave_speed_contacts": "contacts fitted",
-    "max_peak_force": "N",
-    "max_peak_contact": "contact",
-}
+    print(f"run directory: {shown(out)}")
 
 
 def cmd_predict(args) -> int:
@@ -198,7 +243,7 @@ def cmd_predict(args) -> int:
     scene = resolve_scene(args.scene)
     preds = predict(scene)
     if args.json:
-        print(json.dumps([p.as_dict() for p in preds], indent=2))
+        print_json([p.as_dict() for p in preds])
         return 0
     print(f"{'quantity':34s} {'value':>12s} {'unit':8s} {'nondim':>10s}  {'applies':7s}  source; valid when; why")
     for p in preds:
@@ -206,7 +251,7 @@ def cmd_predict(args) -> int:
         applies = "yes" if p.applies else "no"
         print(
             f"{p.name:34s} {p.value:12.5g} {p.unit:8s} {nd:>10s}  {applies:7s}  "
-            f"{p.equation}; {p.valid}; {p.applies_reason}"
+            + shown(f"{p.equation}; {p.valid}; {p.applies_reason}")
         )
     return 0
 
@@ -222,19 +267,19 @@ def cmd_compare_laws(args) -> int:
     laws = tuple(x.strip() for x in args.laws.split(",") if x.strip())
     cmp = compare_laws(scene, laws, backend=args.backend, rtol=args.rtol, error_estimate=args.error_estimate == "on")
     write_law_comparison(cmp, out, overwrite=args.overwrite)
-    print(f"scene      {scene.title or scene.source}")
+    print(f"scene      {_scene_name(scene)}")
     print(f"{'law':10} {'contact':44} {'F_1 (N)':>10} {'F_last (N)':>10} {'trans.':>6} {'lambda':>8} {'p':>6}")
     for row in cmp.table():
         contact = ", ".join(f"{k}={v:.4g}" for k, v in row["contact"].items() if k != "law")
         fit = (
             f"{row['transition_contact']:>6} {row['decay_per_contact']:>8.3g} {row['inverse_power']:>6.3g}"
             if row["transition_contact"]
-            else f"  no fit: {row['why_no_fit']}"
+            else f"  no fit: {shown(row['why_no_fit'])}"
         )
         first = row["first_peak_force"] or float("nan")
         last = row["last_peak_force"] or float("nan")
         print(f"{row['law']:10} {contact:44} {first:>10.4g} {last:>10.4g} {fit}")
-    print(f"laws directory: {out}")
+    print(f"laws directory: {shown(out)}")
     return 0
 
 
@@ -260,16 +305,37 @@ def cmd_compare(args) -> int:
         np_=np_,
         error_estimate=args.error_estimate == "on",
     )
-    print(f"scene      {scene.title or scene.source}")
+    bad = [r.quantity for r in rows if not r.ok]
+    if args.json:
+        from granchain.workflows.api import compare_frame
+
+        table = compare_frame(rows).reset_index()
+        print_json(
+            {
+                "scene": {"title": scene.title, "source": scene.source},
+                "rtol": args.rtol,
+                "ok": not bad,
+                "differ": bad,
+                "lammps": {"method": "verlet", "timestep": lam.solution.timestep, "wall_time": lam.solution.wall_time},
+                "reference": {
+                    "method": args.method,
+                    "timestep": ref.solution.timestep,
+                    "wall_time": ref.solution.wall_time,
+                },
+                "rows": table.to_dict(orient="records"),
+                "compare_dir": str(out),
+            }
+        )
+        return 1 if bad else 0
+    print(f"scene      {_scene_name(scene)}")
     print(f"lammps     verlet, dt = {lam.solution.timestep:g} s, {lam.solution.wall_time:.3g} s wall")
     print(f"reference  {args.method}, dt = {ref.solution.timestep:g} s, {ref.solution.wall_time:.3g} s wall")
     print(f"rtol       {args.rtol:g}")
-    print(format_table(rows))
+    print(shown(format_table(rows)))
     unmeasured = [r.quantity for r in rows if not r.measured]
     if unmeasured:
         print(f"granchain: not measured (the table says why): {', '.join(unmeasured)}", file=sys.stderr)
-    bad = [r.quantity for r in rows if not r.ok]
-    print(f"compare directory: {out}")
+    print(f"compare directory: {shown(out)}")
     if bad:
         print(
             f"granchain: {len(bad)} quantities differ by more than rtol = {args.rtol:g}: {', '.join(bad)}",
@@ -283,18 +349,14 @@ def cmd_plot(args) -> int:
     from granchain.workflows.plots import is_compare_dir, plot_compare, plot_run
 
     skipped: dict[str, str] = {}
-    try:
-        if is_compare_dir(args.run_dir):  # lammps/ and reference/, each with summary.json
-            made = plot_compare(args.run_dir, formats=args.format, skipped=skipped)
-        else:
-            made = plot_run(args.run_dir, log=not args.linear, formats=args.format, skipped=skipped)
-    except FileNotFoundError as e:
-        print(f"granchain: error: {e}", file=sys.stderr)
-        return 2
+    if is_compare_dir(args.run_dir):  # lammps/ and reference/, each with summary.json
+        made = plot_compare(args.run_dir, formats=args.format, skipped=skipped)
+    else:
+        made = plot_run(args.run_dir, log=not args.linear, formats=args.format, skipped=skipped)
     for p in made:
-        print(p)
+        print(shown(p))
     for figure, why in skipped.items():
-        print(f"granchain: {figure} not drawn: {why}", file=sys.stderr)
+        print(f"granchain: {figure} not drawn: {shown(why)}", file=sys.stderr)
     return 0
 
 
@@ -358,7 +420,7 @@ def cmd_scenes(args) -> int:
         return 0
     for name, text in scenes.items():
         title = parse_scene(text, source=name).title
-        print(f"{name:28s} {title}")
+        print(f"{name:28s} {printable(title)}")
     return 0
 
 
@@ -380,6 +442,7 @@ def cmd_materials(args) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="granchain", description="Stress waves in 1D granular chains.")
+    p.add_argument("--version", action="version", version=f"granchain {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
     r = sub.add_parser("run", help="run a scene and write a run directory")
@@ -413,17 +476,19 @@ def build_parser() -> argparse.ArgumentParser:
         choices=["on", "off"],
         help="also run at 2 dt and 4 dt and give every number a measured error (default on; about 0.75x a run more)",
     )
+    r.add_argument("--json", action="store_true", help="print the summary (summary.json and run_dir) as JSON on stdout")
     r.set_defaults(func=cmd_run)
 
     q = sub.add_parser("predict", help="print the paper's analytic predictions for a scene")
     q.add_argument("scene", nargs="?", help="scene file or bundled scene name")
-    q.add_argument("--json", action="store_true", help="JSON output")
+    q.add_argument("--json", action="store_true", help="JSON output (NaN as null)")
     q.set_defaults(func=cmd_predict)
 
     pp = sub.add_parser("plan", help="print the planner's choices (time step, beads, end time) with reasons")
     pp.add_argument("scene", nargs="?", help="scene file or bundled scene name")
     pp.add_argument("--rtol", type=float, default=None, help="relative tolerance (default 1e-3; sets the time step)")
     pp.add_argument("--method", default="rk4", choices=["rk4", "verlet"], help="integrator the plan is for")
+    pp.add_argument("--json", action="store_true", help="the plan as JSON on stdout")
     pp.set_defaults(func=cmd_plan)
 
     c = sub.add_parser("compare", help="run LAMMPS and the reference on a scene and compare them")
@@ -439,6 +504,9 @@ def build_parser() -> argparse.ArgumentParser:
         choices=["on", "off"],
         help="give both runs measured error bars (companions at 2 dt and 4 dt); a difference fails only "
         "beyond rtol plus both errors (default on)",
+    )
+    c.add_argument(
+        "--json", action="store_true", help="the table as JSON on stdout (exit 1 still means a disagreement)"
     )
     c.set_defaults(func=cmd_compare)
 
@@ -525,7 +593,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
 
     def one_line(message, category, filename, lineno, file=None, line=None):
-        print(f"granchain: warning: {message}", file=sys.stderr)
+        print(f"granchain: warning: {shown(message)}", file=sys.stderr)
 
     try:
         with warnings.catch_warnings(), progress.quiet(getattr(args, "quiet", False)):
@@ -533,7 +601,7 @@ def main(argv: list[str] | None = None) -> int:
             warnings.simplefilter("always", UserWarning)
             return args.func(args)
     except GranchainError as e:  # a user's error: one line; anything else is a bug and keeps its traceback
-        print(f"granchain: error: {e}", file=sys.stderr)
+        print(f"granchain: error: {shown(e)}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # `granchain predict | head`: the reader has what it wanted
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - no flush error at exit
