@@ -12,6 +12,11 @@ MDAnalysis's LAMMPSDUMP reader has quirks; how each is handled here:
   end, snapshot), so time is not step x dt. We pass dt = 1 and map ``ts.data['step']`` to time with
   the run's step plan (``granchain.schedule.step_times``).
 - Masses default to 1.0: never used (masses come from the scene).
+- The whole-chain dump (chain.dump) also carries ``type radius`` after ``id`` and ``v_radius`` at the
+  end, for other tools: MDAnalysis takes the atom types from ``type`` (and reads the radius with
+  ``additional_columns=["radius"]``), OVITO maps ``radius`` to its particle radius, ASE's reader
+  needs ``type`` and keeps only prefixed columns, hence ``v_radius``. read_dump reads columns by
+  name, so the extra ones change nothing here (tests/test_dump_readers.py).
 - ``dump_modify format float %.17g`` makes the text exact; ``sort id`` orders atoms by ID.
 - MDAnalysis cannot parse the optional ``ITEM: TIME`` header, so decks do not write it.
 """
