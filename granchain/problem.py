@@ -29,6 +29,7 @@ class ChainProblem:
     dashpot: float = 0.0  # gamma, N s/m, while beads overlap; the total force never pulls
     precompression: float = 0.0  # F0, N: every contact starts in equilibrium at F0 (bead 1 pushed
     # by F0; the far end held by the wall, or pulled by F0 on bead N when free)
+    front: int = 0  # beads in front of bead 1 (with_ends: a striker), whose contacts start unloaded
 
     @property
     def beads(self) -> int:
@@ -64,6 +65,7 @@ class ChainProblem:
             initial_velocity=self.initial_velocity,
             dashpot=self.dashpot,
             precompression=self.precompression,
+            front=sum(e.beads_in_front for e in EFFECTS.values() if e.in_problem(self)),
         )
 
 
@@ -90,19 +92,23 @@ def precompressed_displacements(scene) -> tuple[np.ndarray, np.ndarray]:
 
 
 def initial_state(problem: ChainProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(u, v, alpha_max) at t = 0 of a chain without wall or striker beads (ChainProblem.with_ends):
-    at rest but for bead 1's initial velocity; with precompression every contact in static
-    equilibrium at F0 (a law with history was loaded to it: alpha_max is the static overlap)."""
-    n = problem.beads
+    """(u, v, alpha_max) at t = 0 of a chain (also with its extra beads, ChainProblem.with_ends):
+    at rest but for the first bead's initial velocity (bead 1's, or a striker's); with precompression
+    every contact from bead 1 on (the wall's included) in static equilibrium at F0 (a law with history
+    was loaded to it: alpha_max is the static overlap), and the beads in front of bead 1 (a striker)
+    touching it unloaded (docs/effects.md, the conventions)."""
+    n, s0 = problem.beads, problem.front
     u = np.zeros(n)
     v = np.zeros(n)
     v[0] = problem.initial_velocity
     alpha_hist = np.zeros(n - 1)  # the history alpha_max (laws with history)
     f0 = float(problem.precompression)
     if f0:
-        u[:], alpha0 = static_state(problem.law, f0, n)
+        law = problem.law.contacts(n - 1, s0) if s0 else problem.law
+        u[s0:], alpha0 = static_state(law, f0, n - s0)
+        u[:s0] = u[s0]  # the striker touches bead 1 with no overlap
         if problem.law.history:
-            alpha_hist[:] = alpha0  # the precompression loaded every contact to it
+            alpha_hist[s0:] = alpha0  # the precompression loaded every contact to it
     return u, v, alpha_hist
 
 

@@ -167,14 +167,15 @@ class Scene:
     def impulse_scale(self) -> float:
         return mat.impulse_scale(self.chain.material, self.chain.radius)
 
-    def pair_law(self, e_star: float, r_star: float) -> ContactLaw:
-        """The contact law of two bodies of effective modulus E* and radius R* (the law's for_pair)."""
-        return self.contact.law_class.for_pair(self.contact, e_star, r_star, self.r_star)
+    def pair_law(self, e_star: float, r_star: float, materials: tuple = ()) -> ContactLaw:
+        """The contact law of two bodies of effective modulus E* and radius R* and their materials (a
+        flat has none): the law's for_pair, its mixing rules included."""
+        return self.contact.law_class.for_pair(self.contact, e_star, r_star, self.r_star, materials)
 
     @property
     def law(self) -> ContactLaw:
         """The nominal bead-bead contact's law (bead 1's material and radius)."""
-        return self.pair_law(self.e_star, self.r_star)
+        return self.pair_law(self.e_star, self.r_star, (self.chain.material, self.chain.material))
 
     @property
     def stiffness(self) -> float:
@@ -225,8 +226,23 @@ class Scene:
 
     def bead_pair_law(self, r1: float, m1, r2: float, m2) -> ContactLaw:
         """The law of two beads (radius, material each): Hertz 4/3 E*_pair sqrt(R*_pair) (Johnson);
-        bilinear: the plastic k scaled by R*_pair / R* of the nominal beads (k = 18.5 sigma_y R*)."""
-        return self.pair_law(mat.pair_effective_modulus(m1, m2), mat.pair_effective_radius(r1, r2))
+        the plastic laws' mixing rules for two materials are the law's (ContactLaw.for_pair)."""
+        return self.pair_law(mat.pair_effective_modulus(m1, m2), mat.pair_effective_radius(r1, r2), (m1, m2))
+
+    @property
+    def bead_kinds(self) -> tuple[list[tuple[float, object]], list[int]]:
+        """Distinct (radius, material) kinds of the chain's beads, in order of first appearance, and
+        each bead's kind (one kind for a uniform chain)."""
+        kinds: list[tuple[float, object]] = []
+        index: dict = {}
+        kind_of = []
+        for r, m in zip(self.bead_radii.tolist(), self.bead_materials, strict=True):
+            key = (float(r), m)
+            if key not in index:
+                index[key] = len(kinds)
+                kinds.append(key)
+            kind_of.append(index[key])
+        return kinds, kind_of
 
     def pair_stiffness(self, r1: float, m1, r2: float, m2) -> float:
         """k of two beads (bead_pair_law)."""
@@ -267,19 +283,23 @@ class Scene:
 
     @property
     def striker_law(self) -> ContactLaw:
-        """Striker on bead 1: the law of the striker and a bead (see bead_pair_law)."""
-        ld, c = self.loading, self.chain
-        return self.bead_pair_law(ld.striker_radius, ld.striker_material, c.radius, c.material)
+        """Striker on bead 1: the law of the striker and bead 1 (see bead_pair_law)."""
+        ld = self.loading
+        return self.bead_pair_law(ld.striker_radius, ld.striker_material, self.chain.radius, self.chain.material)
 
     @property
     def striker_stiffness(self) -> float:
         return float(self.striker_law.k)
 
+    def flat_law(self, r: float, m) -> ContactLaw:
+        """A bead (radius, material) on a rigid flat: R* = R and E* = E/(1-nu^2) (Hertz, Thornton);
+        bilinear, k = 18.5 sigma_y R* with R* = R, i.e. twice the bead-bead k."""
+        return self.pair_law(mat.flat_effective_modulus(m), float(r), (m,))
+
     @property
     def wall_law(self) -> ContactLaw:
-        """Bead N on the rigid flat: R* = R and E* = E/(1-nu^2) (Hertz, Thornton); bilinear, k = 18.5
-        sigma_y R* with R* = R, i.e. twice the bead-bead k."""
-        return self.pair_law(mat.flat_effective_modulus(self.chain.material), self.chain.radius)
+        """Bead N on the rigid flat (flat_law of bead N's radius and material)."""
+        return self.flat_law(float(self.bead_radii[-1]), self.bead_materials[-1])
 
     @property
     def wall_stiffness(self) -> float:

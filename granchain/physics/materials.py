@@ -106,6 +106,28 @@ def flat_effective_modulus(m: Material) -> float:
     return m.youngs_modulus / (1.0 - m.poisson_ratio**2)
 
 
+#: Thornton's limiting contact pressure from the yield strength, p_y = 1.61 sigma_y: the Hertz peak
+#: pressure at which a contact first yields (von Mises, nu = 0.3; Johnson, Contact Mechanics, 1985,
+#: Sec. 6.2). Used where a scene gives no yield_pressure: the softer body of each contact sets it.
+YIELD_PRESSURE_FACTOR = 1.61
+
+
+def lacking_yield_strength(chain) -> str:
+    """ "" when every bead material of the chain has a yield_strength, else what to add, naming the
+    materials without one (the plastic laws' mixing rules read it)."""
+    names = chain.materials if chain.materials is not None else (chain.material_name,)
+    if chain.materials is None:
+        missing = [] if chain.material.yield_strength is not None else [chain.material_name or "[chain.material]"]
+    else:
+        missing = sorted({n for n in names if MATERIALS[n].yield_strength is None})
+    if not missing:
+        return ""
+    return (
+        f"a yield_strength (Pa) for {', '.join(repr(n) for n in missing)}: add yield_strength to a "
+        "[chain.material] table, or choose materials that have one (granchain materials)"
+    )
+
+
 def plastic_stiffness_from_yield(yield_strength: float, radius: float) -> float:
     """Bilinear plastic loading stiffness k = 18.5 sigma_y R* (Sec. III)."""
     return PLASTIC_STIFFNESS_FACTOR * yield_strength * effective_radius(radius)

@@ -84,6 +84,7 @@ class VerletIntegrator(Integrator):
 
     def __init__(self, state: ChainState) -> None:
         self.history = state.law.history
+        self.load_bead = state.load_bead  # where the external load acts (a_ext): bead 1
         self.kick = np.empty(state.n)  # h/2 a and h v, into a preallocated buffer
         self.alpha = np.empty(state.n - 1)  # the overlaps at the step's end (the history)
         self.u_left, self.u_right = state.u[:-1], state.u[1:]
@@ -108,7 +109,7 @@ class VerletIntegrator(Integrator):
         mul(a_int, half_h, kick)
         add(v, kick, v)
         if a_ext:  # (x + 0.0 is x: an unloaded segment skips it)
-            v[0] += half * a_ext
+            v[self.load_bead] += half * a_ext
         mul(v, h_, kick)
         add(u, kick, u)
         power = state.accel(u, a_int, v)  # the dashpot sees the half-step velocity, as in LAMMPS
@@ -117,7 +118,7 @@ class VerletIntegrator(Integrator):
         mul(a_int, half_h, kick)
         add(v, kick, v)
         if a_ext:
-            v[0] += half * a_ext
+            v[self.load_bead] += half * a_ext
         if self.history:
             _subtract(self.u_left, self.u_right, self.alpha)
             state.law.update_history(state.alpha_hist, self.alpha)
@@ -146,6 +147,7 @@ class RK4Integrator(Integrator):
 
     def __init__(self, state: ChainState, timestep: float, event_location: bool, max_splits: int) -> None:
         n = state.n
+        self.load_bead = state.load_bead  # where the external load acts (a_ext): bead 1
         self.timestep = timestep
         self.event_location = event_location
         self.max_splits = max_splits
@@ -341,7 +343,7 @@ class RK4Integrator(Integrator):
             else:
                 accel(u, k1v, v, overlaps)
             if a_ext:  # (x + 0.0 is x: an unloaded segment skips the four)
-                k1v[0] += a_ext
+                k1v[self.load_bead] += a_ext
         b2, t = self.ut2, self.tmp
         if self.parts is None:
             self.stages_by_calls(accel, u, v, a_ext, consts)
@@ -392,7 +394,7 @@ class RK4Integrator(Integrator):
         if inv_m is not None:
             mul(k2v, inv_m, k2v)
         if a_ext:
-            k2v[0] += a_ext
+            k2v[self.load_bead] += a_ext
         mul(k1v, quarter_h2, t)
         add(b1, t, b2)  # stage 3: u + h/2 (v + h/2 k1v) = P + h^2/4 k1v
         sub(b2_left, b2_right, alpha)
@@ -403,7 +405,7 @@ class RK4Integrator(Integrator):
         if inv_m is not None:
             mul(k3v, inv_m, k3v)
         if a_ext:
-            k3v[0] += a_ext
+            k3v[self.load_bead] += a_ext
         add(b1, hv, b2)  # Q = u + h v
         mul(k2v, half_h2, t)
         add(b2, t, b1)  # stage 4: u + h (v + h/2 k2v) = Q + h^2/2 k2v
@@ -415,7 +417,7 @@ class RK4Integrator(Integrator):
         if inv_m is not None:
             mul(k4v, inv_m, k4v)
         if a_ext:
-            k4v[0] += a_ext
+            k4v[self.load_bead] += a_ext
 
     def stages_by_calls(
         self,
@@ -434,18 +436,18 @@ class RK4Integrator(Integrator):
         add(state_u, hv, b1)  # stage 2 position P = u + h/2 v
         accel(b1, k2v, None)
         if a_ext:
-            k2v[0] += a_ext
+            k2v[self.load_bead] += a_ext
         mul(k1v, quarter_h2, t)
         add(b1, t, b2)  # stage 3: u + h/2 (v + h/2 k1v) = P + h^2/4 k1v
         accel(b2, k3v, None)
         if a_ext:
-            k3v[0] += a_ext
+            k3v[self.load_bead] += a_ext
         add(b1, hv, b2)  # Q = u + h v
         mul(k2v, half_h2, t)
         add(b2, t, b1)  # stage 4: u + h (v + h/2 k2v) = Q + h^2/2 k2v
         accel(b1, k4v, None)
         if a_ext:
-            k4v[0] += a_ext
+            k4v[self.load_bead] += a_ext
 
     def rk4_dashpot(self, state: ChainState, h: float, a_ext: float, consts: tuple[np.ndarray, ...]) -> None:
         """rk4 with a dashpot: the stage velocities too (the dashpot force), and its energy."""
@@ -454,13 +456,13 @@ class RK4Integrator(Integrator):
         half_h, quarter_h2, h_, half_h2, h2_6, h_6 = consts
         power = 0.0
         power += accel(u, k1v, v)
-        k1v[0] += a_ext
+        k1v[self.load_bead] += a_ext
         np.multiply(v, half_h, out=hv)
         np.add(hv, u, out=ut)
         np.multiply(k1v, half_h, out=vt)
         vt += v
         power += 2.0 * accel(ut, k2v, vt)
-        k2v[0] += a_ext
+        k2v[self.load_bead] += a_ext
         # stage 3 position: u + h/2 (v + h/2 k1v)
         np.multiply(k1v, quarter_h2, out=ut)
         ut += u
@@ -468,7 +470,7 @@ class RK4Integrator(Integrator):
         np.multiply(k2v, half_h, out=vt)
         vt += v
         power += 2.0 * accel(ut, k3v, vt)
-        k3v[0] += a_ext
+        k3v[self.load_bead] += a_ext
         # stage 4 position: u + h (v + h/2 k2v)
         np.multiply(v, h_, out=hv)
         np.multiply(k2v, half_h2, out=ut)
@@ -477,7 +479,7 @@ class RK4Integrator(Integrator):
         np.multiply(k3v, h_, out=vt)
         vt += v
         power += accel(ut, k4v, vt)
-        k4v[0] += a_ext
+        k4v[self.load_bead] += a_ext
         state.dash_energy += h / 6.0 * power  # dashpot energy with the method's own weights
         np.add(k1v, k2v, out=ut)
         ut += k3v

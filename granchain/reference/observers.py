@@ -366,13 +366,13 @@ class EnergyLedger(Observer):
 
     def work(self, state: ChainState) -> float:
         """Energy put in: the initial energy, the work of f(t) and of the static forces."""
-        p, u = self.problem, state.u
+        p, u, s0 = self.problem, state.u, self.problem.front  # bead 1: behind the beads in front
         w = self.e_initial
         if p.amplitude:
-            u0 = u[0] if self.u0_at_load_end is None else self.u0_at_load_end
-            w += p.amplitude * (u0 - self.u_init[0])
+            u0 = u[s0] if self.u0_at_load_end is None else self.u0_at_load_end
+            w += p.amplitude * (u0 - self.u_init[s0])
         for effect in EFFECTS.values():  # the effects' external forces (precompression's static ones)
-            w += effect.work(p, u[0] - self.u_init[0], u[-1] - self.u_init[-1])
+            w += effect.work(p, u[s0] - self.u_init[s0], u[-1] - self.u_init[-1])
         return w
 
     def row(self, state: ChainState, t: float) -> None:
@@ -396,7 +396,7 @@ class EnergyLedger(Observer):
     def at_breakpoint(self, state: ChainState, stopped: bool) -> None:
         p = self.problem
         if not stopped and p.amplitude and state.t == p.duration:
-            self.u0_at_load_end = float(state.u[0])
+            self.u0_at_load_end = float(state.u[p.front])
         self.row(state, state.t)
 
     def finish(self, state: ChainState) -> dict[str, Any]:

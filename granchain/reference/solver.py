@@ -238,14 +238,15 @@ def _drive(
     calls = [(ob.every, ob.after_step) for ob in observers if ob.every > 0]
     on_split = [ob.after_split for ob in observers if type(ob).after_split is not Observer.after_split]
     progress_at = -1 if progress is None else progress.start(sum(g.steps for g in plan))  # one int comparison per step
-    inv_m0 = float(state.inv_m[0])
+    inv_m1 = float(state.inv_m[state.load_bead])  # the load (and a striker's F0 push) act on bead 1
+    push = state.static_push
     amplitude = state.problem.amplitude
     integrator.start(state)
     for observer in observers:
         observer.start(state)
     step, t = 0, 0.0
     for g in plan:
-        a_ext = (amplitude if g.loaded else 0.0) * inv_m0
+        a_ext = ((amplitude if g.loaded else 0.0) + push) * inv_m1
         integrator.start_segment(state, g.start)
         state.seg_end = g.end
         stopped = False

@@ -68,8 +68,13 @@ class ChainState:
         self.dash_energy = 0.0
         self.fp = np.zeros(n + 1)
         self.fc = self.fp[1:n]
-        for effect in EFFECTS.values():  # the static push on bead 1 and pull on a free bead N (precompression)
-            effect.static_forces(problem, self.fp)
+        # the static push on bead 1 and pull on a free bead N (precompression): the push is fp[0] when
+        # bead 1 is the first bead; behind a striker it joins the load on bead 1 (a_ext, load_bead)
+        self.load_bead = problem.front
+        push = sum(effect.static_forces(problem, self.fp) for effect in EFFECTS.values())
+        self.static_push = push if self.load_bead else 0.0
+        if not self.load_bead:
+            self.fp[0] = push
         self.accel = make_accel(problem, self.law, self.inv_m, self.fp, self.alpha_hist)
         # a chain of equal masses: RK4 takes the net forces and folds 1/m into its step's factors
         # (one numpy call fewer per force evaluation); None with unequal masses (a striker, a wall,

@@ -202,6 +202,8 @@ class AtomLayout:
     offset: int  # atoms in front of bead 1 (Effect.beads_in_front)
     skin: float  # neighbor skin: 0.2 x the smallest bead diameter
     rmax: float  # the largest bead radius
+    bead_types: int = 1  # bead kinds (Scene.bead_kinds): types 1..bead_types
+    last_bead_type: int = 1  # bead N's type
 
     @classmethod
     def of(cls, scene) -> AtomLayout:
@@ -209,7 +211,9 @@ class AtomLayout:
         rmax = float(max(scene.bead_radii)) if scene.per_bead else float(scene.chain.radius)
         active = active_effects(scene)
         extra = tuple(e.atom_type for e in active if e.atom_type)
-        return cls(scene.chain.beads, extra, sum(e.beads_in_front for e in active), skin, rmax)
+        kinds, kind_of = bead_kinds(scene) if scene.per_bead else ([None], [0])
+        front = sum(e.beads_in_front for e in active)
+        return cls(scene.chain.beads, extra, front, skin, rmax, len(kinds), kind_of[-1] + 1)
 
     @property
     def binsize(self) -> float:
@@ -229,7 +233,10 @@ class AtomLayout:
 
     @property
     def types(self) -> dict[str, int]:
-        return {"bead": 1, **{name: i + 2 for i, name in enumerate(self.extra_types)}}
+        """Atom types: the bead kinds first (1..bead_types; "bead" names the first), then each
+        effect's atom, in registry order."""
+        first = self.bead_types + 1
+        return {"bead": 1, **{name: first + i for i, name in enumerate(self.extra_types)}}
 
     @property
     def natoms(self) -> int:
@@ -261,28 +268,26 @@ def atom_layout(scene) -> dict:
 
 
 def precompression_overlaps(scene) -> dict:
-    """Static overlaps for the deck: bead-bead contacts, and the wall's (0 without precompression)."""
+    """Static overlaps for the deck: bead-bead contacts ("beads": one value on a chain of one bead
+    kind; "per_contact": (atom, overlap) of each bead-bead contact on a per-bead chain, on its left
+    bead's atom), and the wall's (0 without precompression). A striker's contact starts unloaded."""
     if not scene.effects.precompression:
-        return {"beads": 0.0, "wall": 0.0}
+        return {"beads": 0.0, "wall": 0.0, "per_contact": []}
     alpha0 = precompressed_displacements(scene)[1]
     wall = scene.effects.far_end == "wall"
-    return {"beads": float(alpha0[0]), "wall": float(alpha0[-1]) if wall else 0.0}
+    layout = AtomLayout.of(scene)
+    per_contact = []
+    if scene.per_bead:
+        per_contact = [(layout.first_id + i, float(alpha0[i])) for i in range(scene.n_contacts)]
+    return {"beads": float(alpha0[0]), "wall": float(alpha0[-1]) if wall else 0.0, "per_contact": per_contact}
 
 
 MAX_BEAD_KINDS = 200  # pair_coeff lines grow as kinds^2 / 2
 
 
 def bead_kinds(scene) -> tuple[list[tuple[float, object]], list[int]]:
-    """Distinct (radius, material) kinds of a per-bead chain and each bead's kind; atom type = kind + 1."""
-    kinds: list[tuple[float, object]] = []
-    index: dict = {}
-    kind_of = []
-    for r, m in zip(scene.bead_radii, scene.bead_materials, strict=True):
-        key = (float(r), m)
-        if key not in index:
-            index[key] = len(kinds)
-            kinds.append(key)
-        kind_of.append(index[key])
+    """Scene.bead_kinds, at most MAX_BEAD_KINDS of them (one atom type each); atom type = kind + 1."""
+    kinds, kind_of = scene.bead_kinds
     if len(kinds) > MAX_BEAD_KINDS:
         raise SceneError(
             f"{scene.source}: the chain has {len(kinds)} distinct bead kinds (radius, material); the LAMMPS "
@@ -297,20 +302,21 @@ def render_data(scene) -> str:
     rmax = float(max(scene.bead_radii)) if scene.per_bead else scene.chain.radius
     w = 4.0 * rmax  # periodic y/z sides wider than cutoff + skin, so no bead sees its own image
     rho = scene.chain.material.density
-    front: list[tuple[int, float, float, float]] = []  # the effects' atoms (Effect.data_atoms)
-    back: list[tuple[int, float, float, float]] = []
-    for effect in active_effects(scene):
-        (front if effect.beads_in_front else back).extend(effect.data_atoms(scene, lay["types"]))
-    atoms = list(front)
     u0 = np.zeros(n)
     if scene.effects.precompression:
         u0 = precompressed_displacements(scene)[0]
-    x0 = scene.bead_positions  # touching with zero force, overlaps exactly 0 in LAMMPS's arithmetic
+    # touching with zero force, overlaps exactly 0 in LAMMPS's arithmetic; displaced by a precompression
+    x = scene.bead_positions + u0
+    front: list[tuple[int, float, float, float]] = []  # the effects' atoms (Effect.data_atoms)
+    back: list[tuple[int, float, float, float]] = []
+    for effect in active_effects(scene):
+        (front if effect.beads_in_front else back).extend(effect.data_atoms(scene, lay["types"], x))
+    atoms = list(front)
     if scene.per_bead:  # one atom type per distinct (radius, material): see bead_kinds
         kinds, kind_of = bead_kinds(scene)
-        atoms += [(kind_of[i] + 1, 2.0 * kinds[kind_of[i]][0], kinds[kind_of[i]][1].density, x0[i]) for i in range(n)]
+        atoms += [(kind_of[i] + 1, 2.0 * kinds[kind_of[i]][0], kinds[kind_of[i]][1].density, x[i]) for i in range(n)]
     else:
-        atoms += [(1, d, rho, x0[i] + u0[i]) for i in range(n)]
+        atoms += [(1, d, rho, x[i]) for i in range(n)]
     atoms += back
     xlo = min(a[3] for a in atoms) - 2.0 * rmax
     xhi = max(a[3] for a in atoms) + 2.0 * rmax

@@ -27,6 +27,7 @@ import numpy as np
 
 from granchain.errors import UsageError
 from granchain.physics.laws import LAWS
+from granchain.physics.materials import YIELD_PRESSURE_FACTOR
 from granchain.postprocess.regimes import DecayFit, fit_decay
 from granchain.rundir import check_output_dir
 from granchain.scene import scene_from_dict, scene_to_dict
@@ -47,14 +48,24 @@ def equivalent_contact(scene, law: str, given: dict | None = None) -> dict:
         return LAWS[law].contact_to_dict(c)
     r_star = scene.r_star
     if law == "thornton" and c.law == "bilinear":
-        return {"law": law, "yield_pressure": float(c.plastic_stiffness) / (math.pi * r_star)}
+        return {"law": law, "yield_pressure": float(scene.law.k) / (math.pi * r_star)}
     if law == "bilinear" and c.law == "thornton":
         return {
             "law": law,
             "unloading_coeff": DEFAULT_BETA,
-            "plastic_stiffness": math.pi * float(c.yield_pressure) * r_star,
+            "plastic_stiffness": math.pi * p_y(scene) * r_star,
         }
     return {"law": law, **LAWS[law].example_contact}
+
+
+def p_y(scene) -> float:
+    """Thornton's limiting pressure of the nominal contact (given, or from bead 1's yield strength)."""
+    c = scene.contact
+    return (
+        float(c.yield_pressure)
+        if c.yield_pressure is not None
+        else YIELD_PRESSURE_FACTOR * float(scene.chain.material.yield_strength)
+    )
 
 
 def scene_with_law(scene, contact: dict):

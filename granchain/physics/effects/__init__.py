@@ -70,13 +70,12 @@ def work(problem, dx_first, dx_last):
 
 
 def refusal(active: list[type[Effect]]) -> str | None:
-    """Why these effects cannot go together yet (the first effect that words a refusal), or None."""
+    """Why these effects cannot be simulated together (the physical reason, as the first effect that
+    words a refusal gives it), or None. Every pair of the registered effects goes together today."""
     names = {e.name for e in active}
     for e in active:
         partners = [o for o in active if o.name in names and e.incompatible.get(o.name) is not None]
         if partners:
             fix = e.incompatible[partners[0].name]
-            return f"{e.label} with {', '.join(o.label for o in partners)} is not available yet" + (
-                f"; {fix}" if fix else ""
-            )
+            return f"{e.label} with {', '.join(o.label for o in partners)} cannot be simulated: {fix}"
     return None

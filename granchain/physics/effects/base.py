@@ -22,14 +22,16 @@ Rules for writing a new effect (tests/test_effects.py checks them for every regi
    number/choice/finish raise a SceneError naming the file, the key, the value and what is
    allowed); returns its ``fields``. ``to_dict(effects)``: its section for a scene file (None when
    absent); read back by ``read`` to equal fields. ``active(scene)``: the scene declares it.
-3. Compatibility: ``incompatible`` maps every effect it cannot go with yet to the fix this effect's
-   refusal suggests ("" none), or None where the other effect words the refusal. Both sides list
+3. Compatibility: every effect goes with every other (tests simulate every subset of the registry).
+   Where a combination truly cannot be simulated, ``incompatible`` maps the other effect to the
+   physical reason this effect's refusal gives, or None where the other effect words it. Both sides list
    the pair (the relation is symmetric) and exactly one side words it.
 4. The problem (granchain.problem.ChainProblem): ``problem_fields(scene, fields)`` updates the fields
    the chain is built from (mass, law, wall_law, dashpot, ...); ``ends(problem, parts, mass)`` adds
    the extra beads a solver integrates (a striker in front, an immovable wall at the end; those in
    front counted by ``beads_in_front``), and ``end_fields`` what the results report of them;
-   ``static_forces(problem, fp)`` the constant external forces on the end beads (precompression);
+   ``static_forces(problem, fp)`` the constant external forces on the end beads (precompression:
+   the push on bead 1 returned, the pull on bead N in fp[-1]);
    ``reference_accel(...)`` the reference's force evaluation when it changes the contact force law
    (the dashpot: a closure over preallocated buffers, as fast as the plain one).
 5. The planner's and the stability check's bounds (granchain.physics.estimates.highest_frequency):
@@ -145,9 +147,10 @@ class Effect:
         return {}
 
     @classmethod
-    def static_forces(cls, problem, fp: np.ndarray) -> None:
-        """External forces constant over the run into the reference's padded force buffer: fp[0] on
-        bead 1 (pushing), fp[-1] on bead N (pulling when positive)."""
+    def static_forces(cls, problem, fp: np.ndarray) -> float:
+        """External forces constant over the run: returns the push on bead 1 (N), and writes a pull on
+        bead N into the reference's padded force buffer, fp[-1] (pulling when positive)."""
+        return 0.0
 
     @classmethod
     def reference_accel(cls, problem, law, inv_m: np.ndarray, fp: np.ndarray, alpha_hist: np.ndarray):
@@ -197,14 +200,18 @@ class Effect:
         return ""
 
     @classmethod
-    def data_atoms(cls, scene, types: dict[str, int]) -> list[tuple[int, float, float, float]]:
+    def data_atoms(cls, scene, types: dict[str, int], x: np.ndarray) -> list[tuple[int, float, float, float]]:
         """Its atoms in the deck's data file: (type, diameter, density, x); in front of bead 1 when it
-        has beads_in_front, after bead N otherwise."""
+        has beads_in_front, after bead N otherwise. types: the layout's atom types (bead kind k is
+        type k + 1, Scene.bead_kinds; an effect's by its atom_type); x: the beads' positions in the
+        data file (displaced by any precompression)."""
         return []
 
     @classmethod
     def pair_coeffs(cls, scene, types: dict[str, int]) -> list[tuple[int, int, Any, float]]:
-        """(I, J, law, contact distance) of the pair_coeff lines of its atom types."""
+        """(I, J, law, contact distance) of the pair_coeff lines of its atom types: with every bead
+        kind (types 1..K, Scene.bead_kinds; LAMMPS needs a line for every pair of types, also those
+        that never meet) and with the other effects' types."""
         return []
 
 

@@ -16,7 +16,6 @@ class PerBeadEffect(Effect):
     name = "per_bead"
     label = "per-bead radius or material"
     declaration = {"chain": {"taper": 0.97}}
-    incompatible = {"wall": "", "precompression": "", "striker": ""}
 
     @classmethod
     def active(cls, scene) -> bool:

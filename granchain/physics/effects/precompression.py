@@ -24,7 +24,6 @@ class PrecompressionEffect(Effect):
     fields = {"precompression": 0.0}
     example = {"force": 50.0}
     invalid = {"force": (0.0, -5.0, "50 N", float("nan"))}
-    incompatible = {"striker": "use a force or velocity load, or remove [precompression]", "per_bead": None}
     conserves_momentum = False
     deck_blocks = {"forces": "precompression.lmp.j2"}
 
@@ -66,12 +65,11 @@ class PrecompressionEffect(Effect):
         return problem.wall_law is None and bool(np.isfinite(problem.mass[-1]))
 
     @classmethod
-    def static_forces(cls, problem, fp: np.ndarray) -> None:
+    def static_forces(cls, problem, fp: np.ndarray) -> float:
         f0 = float(problem.precompression)
-        if f0:
-            fp[0] = f0  # the static push on bead 1
-            if cls._free_end(problem):
-                fp[-1] = f0  # ... held by an equal pull on bead N when there is no wall
+        if f0 and cls._free_end(problem):
+            fp[-1] = f0  # bead N held by an equal pull when there is no wall
+        return f0  # the static push on bead 1 (the loading device)
 
     @classmethod
     def work(cls, problem, dx_first, dx_last):

@@ -19,7 +19,6 @@ class StrikerEffect(Effect):
     name = "striker"
     label = "a striker"
     declaration = {"loading": {"kind": "striker", "velocity": 2.0}}
-    incompatible = {"precompression": None, "per_bead": None}
     deck_blocks = {}  # its load is the loading_striker block (scene.loading.kind)
     beads_in_front = 1
     atom_type = "striker"
@@ -61,18 +60,26 @@ class StrikerEffect(Effect):
         b.extra["striker_damp"] = gamma / ms + gamma / math.sqrt(ms * m0)
 
     @classmethod
-    def data_atoms(cls, scene, types: dict[str, int]) -> list[tuple[int, float, float, float]]:
-        # touching bead 1 from the left, of the requested mass exactly
+    def data_atoms(cls, scene, types: dict[str, int], x: np.ndarray) -> list[tuple[int, float, float, float]]:
+        # touching bead 1 from the left with no overlap in LAMMPS's arithmetic (bead 1 where the data file
+        # puts it: displaced under precompression), of the requested mass exactly
         rs = scene.loading.striker_radius
         ds = 2.0 * rs
         rho_s = scene.striker_mass / (math.pi * ds**3 / 6.0)
-        return [(types["striker"], ds, rho_s, -(rs + scene.chain.radius))]
+        x1, d = float(x[0]), rs + scene.chain.radius
+        x = x1 - d
+        while x1 - x < d:
+            x = math.nextafter(x, -math.inf)
+        return [(types["striker"], ds, rho_s, x)]
 
     @classmethod
     def pair_coeffs(cls, scene, types: dict[str, int]) -> list[tuple[int, int, Any, float]]:
-        ts, rs, r = types["striker"], scene.loading.striker_radius, scene.chain.radius
-        law = scene.striker_law
-        pairs = [(1, ts, law, rs + r), (ts, ts, law, 2 * rs)]
+        # only bead 1's kind meets the striker; LAMMPS needs every other kind's coefficients too
+        ld, ts = scene.loading, types["striker"]
+        rs, ms = ld.striker_radius, ld.striker_material
+        kinds, kind_of = scene.bead_kinds
+        pairs = [(k + 1, ts, scene.bead_pair_law(rs, ms, r, m), rs + r) for k, (r, m) in enumerate(kinds)]
+        pairs.append((ts, ts, scene.striker_law, 2 * rs))
         if "wall" in types:  # striker and wall never meet, but their coefficients are required
-            pairs.append((types["wall"], ts, law, rs))
+            pairs.append((types["wall"], ts, scene.striker_law, rs))
         return pairs

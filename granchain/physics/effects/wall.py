@@ -25,7 +25,6 @@ class WallEffect(Effect):
     fields = {"far_end": "free"}
     example = {"far_end": "wall"}
     invalid = {"far_end": ("rigid", 1, True)}
-    incompatible = {"per_bead": None}
     conserves_momentum = False
     deck_blocks = {"ends": "wall.lmp.j2"}
     yardstick = "a wall (the yardstick would see a sphere)"
@@ -73,16 +72,22 @@ class WallEffect(Effect):
         b.extra["wall"] = kw
 
     @classmethod
-    def data_atoms(cls, scene, types: dict[str, int]) -> list[tuple[int, float, float, float]]:
+    def data_atoms(cls, scene, types: dict[str, int], x: np.ndarray) -> list[tuple[int, float, float, float]]:
         # the rigid flat: an atom at bead N's surface, never integrated; touching it with zero force and no
         # overlap in LAMMPS's arithmetic (touching_positions), unless precompression presses bead N into it
         from granchain.physics.positions import touching_positions
 
-        d, r, xn = scene.diameter, scene.chain.radius, float(scene.bead_positions[-1])
+        r = float(scene.bead_radii[-1])
+        xn = float(scene.bead_positions[-1])
         x = xn + r if scene.effects.precompression else float(touching_positions([r], start=xn)[-1])
-        return [(types["wall"], d, scene.chain.material.density, x)]
+        return [(types["wall"], 2.0 * r, scene.bead_materials[-1].density, x)]
 
     @classmethod
     def pair_coeffs(cls, scene, types: dict[str, int]) -> list[tuple[int, int, Any, float]]:
-        tw, r = types["wall"], scene.chain.radius  # contact distance: bead centre to the flat
-        return [(1, tw, scene.wall_law, r), (tw, tw, scene.wall_law, r)]
+        # contact distance: bead centre to the flat, R. Only bead N's kind meets the wall; LAMMPS needs
+        # every other kind's coefficients too (each kind's own law on the flat)
+        tw = types["wall"]
+        kinds, _ = scene.bead_kinds
+        pairs = [(k + 1, tw, scene.flat_law(r, m), r) for k, (r, m) in enumerate(kinds)]
+        rn = float(scene.bead_radii[-1])
+        return pairs + [(tw, tw, scene.wall_law, rn)]

@@ -172,6 +172,11 @@ class ContactLaw:
         """The same law with every parameter as an array of n contacts."""
         return type(self).join([(self, n)])
 
+    def contacts(self, n: int, start: int, stop: int | None = None) -> ContactLaw:
+        """The law of contacts start..stop-1 of this law over n contacts."""
+        whole = self.per_contact(n)
+        return type(self)(**{f.name: getattr(whole, f.name)[start:stop] for f in dataclasses.fields(self)})
+
     @classmethod
     def read_contact(cls, section, chain) -> dict:
         """Read and validate this law's [contact] keys; the Contact fields (besides law)."""
@@ -185,13 +190,18 @@ class ContactLaw:
         return None
 
     @classmethod
-    def for_pair(cls, contact, e_star: float, r_star: float, nominal_r_star: float) -> ContactLaw:
+    def for_pair(cls, contact, e_star: float, r_star: float, nominal_r_star: float, materials=()) -> ContactLaw:
+        """The law of one contact: two bodies of effective modulus E* and radius R* (a bead on a flat:
+        the flat's E* and R* = R), the scene's [contact] values, the nominal pair's R* (bead 1 on bead
+        2) and the materials of the bodies that touch (the flat has none), for laws whose mixing rule
+        reads them (the softer material's yield: docs/effects.md)."""
         raise NotImplementedError
 
     @classmethod
     def contact_to_dict(cls, contact) -> dict:
         """The [contact] table of a scene file for this law (scene_to_dict)."""
-        return {"law": cls.name, **{k: getattr(contact, k) for k in cls.scene_keys}}
+        # (None: a value the scene left to the materials, e.g. a yield_pressure from the yield strength)
+        return {"law": cls.name, **{k: getattr(contact, k) for k in cls.scene_keys if getattr(contact, k) is not None}}
 
 
 #: the registered laws, name -> class (granchain.physics.laws.LAWS fills it: the only list of laws)

@@ -165,6 +165,17 @@ class BilinearLaw(ContactLaw):
         )
         k = s.number("plastic_stiffness", required=False, low=0.0, what="plastic loading stiffness k in N/m")
         ys = chain.material.yield_strength
+        if chain.materials is not None:  # each contact's k from the softer of its two materials
+            if k is not None:
+                raise s.error(
+                    f"[contact] plastic_stiffness = {k!r} sets one k, but [chain] material is a list: each "
+                    "contact's k = 18.5 sigma_y R* comes from the softer bead's yield_strength; remove it"
+                )
+            lacking = mat.lacking_yield_strength(chain)
+            if lacking:
+                raise s.error(f"[contact] law = 'bilinear' on a chain of several materials needs {lacking}")
+            s.finish(("law", *cls.scene_keys))
+            return {"unloading_coeff": beta, "plastic_stiffness": None}
         if k is None and ys is None:
             raise s.error(
                 "[contact] law = 'bilinear' needs a stiffness: give plastic_stiffness (N/m) or "
@@ -181,19 +192,12 @@ class BilinearLaw(ContactLaw):
         return {"unloading_coeff": beta, "plastic_stiffness": k}
 
     @classmethod
-    def for_pair(cls, contact, e_star, r_star, nominal_r_star):
+    def for_pair(cls, contact, e_star, r_star, nominal_r_star, materials=()):
+        if contact.plastic_stiffness is None:  # several materials: 18.5 sigma_y R* of the pair, the softer's sigma_y
+            k = mat.PLASTIC_STIFFNESS_FACTOR * min(m.yield_strength for m in materials) * r_star
+            return cls(k=k, beta=contact.unloading_coeff)
         k = float(contact.plastic_stiffness)
         return cls(k=k if r_star == nominal_r_star else k * (r_star / nominal_r_star), beta=contact.unloading_coeff)
-
-    @classmethod
-    def unsupported(cls, chain) -> str | None:
-        """Why a chain cannot have this law (None: it can)."""
-        if chain.materials is not None:
-            return (
-                "[chain] material as a list with the bilinear law is not available yet "
-                "(the plastic stiffness is scaled by radius only); use one material"
-            )
-        return None
 
     # ---- the planner's estimates
     @classmethod

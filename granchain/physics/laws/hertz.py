@@ -77,7 +77,7 @@ class HertzLaw(ContactLaw):
         return [Kink(np.zeros(np.shape(alpha_max)), "zero overlap")]
 
     @classmethod
-    def for_pair(cls, contact, e_star, r_star, nominal_r_star):
+    def for_pair(cls, contact, e_star, r_star, nominal_r_star, materials=()):
         return cls(k=mat.hertz_contact_stiffness(e_star, r_star))
 
     # ---- the planner's estimates (granchain.physics.estimates dispatches here)

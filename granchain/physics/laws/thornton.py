@@ -230,11 +230,17 @@ class ThorntonLaw(ContactLaw):
     def read_contact(cls, s, chain) -> dict:
         forbid_others(s, cls)
         if not s.has("yield_pressure"):
-            raise s.error(
-                "[contact] law = 'thornton' needs yield_pressure: Thornton's limiting contact pressure p_y "
-                "in Pa, the largest pressure plastic flow lets the contact hold. It is not the tensile yield "
-                "strength sigma_y: a Hertz contact starts to yield at a peak pressure of about 1.6 sigma_y"
-            )
+            lacking = mat.lacking_yield_strength(chain)
+            if lacking:
+                raise s.error(
+                    "[contact] law = 'thornton' needs yield_pressure: Thornton's limiting contact pressure p_y "
+                    "in Pa, the largest pressure plastic flow lets the contact hold (without it, p_y = "
+                    f"{mat.YIELD_PRESSURE_FACTOR} sigma_y of the softer bead of each contact, and {lacking}). "
+                    "It is not the tensile yield strength sigma_y: a Hertz contact starts to yield at a peak "
+                    f"pressure of about {mat.YIELD_PRESSURE_FACTOR} sigma_y"
+                )
+            s.finish(("law", *cls.scene_keys))
+            return {"yield_pressure": None}
         p_y = s.number(
             "yield_pressure", low=0.0, what="Thornton's limiting contact pressure p_y in Pa (not the yield strength)"
         )
@@ -242,11 +248,12 @@ class ThorntonLaw(ContactLaw):
         return {"yield_pressure": p_y}
 
     @classmethod
-    def for_pair(cls, contact, e_star, r_star, nominal_r_star):
-        return cls(
-            k=mat.hertz_contact_stiffness(e_star, r_star),
-            yield_overlap=yield_overlap(contact.yield_pressure, e_star, r_star),
-        )
+    def for_pair(cls, contact, e_star, r_star, nominal_r_star, materials=()):
+        # without a given p_y: the softer body's yield sets it (docs/effects.md, mixing rules)
+        p_y = contact.yield_pressure
+        if p_y is None:
+            p_y = mat.YIELD_PRESSURE_FACTOR * min(m.yield_strength for m in materials)
+        return cls(k=mat.hertz_contact_stiffness(e_star, r_star), yield_overlap=yield_overlap(p_y, e_star, r_star))
 
     @classmethod
     def unsupported(cls, chain) -> str | None:
