@@ -390,3 +390,126 @@ def test_error_bars_only_where_larger_than_the_marker():
     ax.set_ylim(1.0, 1e3)
     assert _error_bars(ax, x, y, np.full(5, 1e-2), "k") == 0  # 0.01% of the value: inside the marker
     plt.close(fig)
+
+
+# ---- figures as objects: returned, not saved, matplotlib's state untouched
+
+#: a fresh interpreter: imports granchain, draws every figure of a run directory through the API, and
+#: reports matplotlib's backend setting before and after (rcParams._get: reading it resolves nothing)
+BACKEND_PROBE = r"""
+import json, sys
+import matplotlib
+{use}
+before = str(matplotlib.rcParams._get("backend"))
+import granchain
+import granchain.workflows.plots
+after_import = str(matplotlib.rcParams._get("backend"))
+r = granchain.load_run(sys.argv[1])
+figs = [r.plot(k) for k in ("peaks", "histories", "snapshots", "heatmap")] + [granchain.figure(sys.argv[1])]
+print(json.dumps({{
+    "before": before,
+    "after_import": after_import,
+    "after_plot": str(matplotlib.rcParams._get("backend")),
+    "pyplot": "matplotlib.pyplot" in sys.modules,
+    "types": sorted({{type(f).__module__ + "." + type(f).__name__ for f in figs}}),
+}}))
+"""
+
+
+@pytest.mark.parametrize("use", ["", 'matplotlib.use("svg")', 'matplotlib.use("pdf")'])
+def test_importing_and_plotting_never_change_the_backend(snaps_run, use):
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
+    out = subprocess.run(
+        [sys.executable, "-c", BACKEND_PROBE.format(use=use), str(snaps_run)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+        check=True,
+    )
+    got = json.loads(out.stdout)
+    assert got["before"] == got["after_import"] == got["after_plot"]
+    assert not got["pyplot"]  # figures are made without pyplot: no backend is even chosen
+    assert got["types"] == ["matplotlib.figure.Figure"]
+
+
+def test_figures_are_returned_and_nothing_is_written(snaps_run, tmp_path):
+    from matplotlib.figure import Figure
+
+    import granchain
+
+    r = copy(snaps_run, tmp_path)
+    before = sorted(p.name for p in r.iterdir())
+    figs_before = plt.get_fignums()
+    result = granchain.load_run(r)
+    for kind in ("peaks", "histories", "snapshots", "heatmap"):
+        fig = result.plot(kind)
+        assert isinstance(fig, Figure) and fig.axes
+    assert isinstance(plots.figure(r, "peaks", log=False), Figure)
+    assert sorted(p.name for p in r.iterdir()) == before  # save only when asked
+    assert plt.get_fignums() == figs_before  # pyplot's figure list untouched
+    fig = result.plot("peaks")
+    fig.savefig(tmp_path / "asked.png")
+    assert_valid(tmp_path / "asked.png", "png")
+    with pytest.raises(GranchainError, match="unknown figure 'nope'"):
+        result.plot("nope")
+
+
+def test_an_in_memory_result_plots_the_same_data_as_its_directory(tmp_path):
+    import granchain
+
+    sc = scene("histories = [1, 5, 10]\nsnapshots = [6e-5]")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        mem = granchain.run(sc, out=tmp_path / "r")
+    loaded = granchain.load_run(tmp_path / "r")
+    for kind in ("peaks", "histories", "snapshots"):
+        a, b = mem.plot(kind), loaded.plot(kind)
+        for ax_a, ax_b in zip(a.axes, b.axes, strict=True):
+            for la, lb in zip(ax_a.lines, ax_b.lines, strict=True):
+                np.testing.assert_array_equal(la.get_xydata(), lb.get_xydata())
+
+
+@pytest.mark.parametrize("name", ["peaks.png", "peaks_plot.csv", "heatmap.png"])
+def test_plot_never_writes_through_a_link_planted_in_the_run_directory(snaps_run, tmp_path, capsys, name):
+    from granchain.cli import main
+
+    r = copy(snaps_run, tmp_path)
+    victim = tmp_path / "victim"
+    victim.write_text("precious\n")
+    (r / name).unlink(missing_ok=True)
+    (r / name).symlink_to(victim)
+    assert main(["plot", str(r)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("granchain: error: ") and name in err and "symbolic link" in err
+    assert victim.read_text() == "precious\n"
+    assert (r / name).is_symlink()
+
+
+def test_a_linked_run_inside_a_compare_directory_is_refused(compare_dir, tmp_path):
+    d = tmp_path / "cmp"
+    shutil.copytree(compare_dir, d)
+    shutil.move(d / "lammps", tmp_path / "elsewhere")
+    (d / "lammps").symlink_to(tmp_path / "elsewhere")
+    with pytest.raises(GranchainError, match="symbolic link"):
+        plot_compare(d)
+
+
+def test_control_characters_of_a_title_are_escaped_in_figures(compare_dir, tmp_path):
+    import granchain
+
+    r = copy(compare_dir / "reference", tmp_path)
+    toml = (
+        (r / "scene.toml").read_text().split("\n", 1)[1]
+        if (r / "scene.toml").read_text().startswith("title")
+        else (r / "scene.toml").read_text()
+    )
+    (r / "scene.toml").write_text('title = "bell \\u0007 esc \\u001b[2J"\n' + toml)
+    fig = granchain.load_run(r).plot("peaks")
+    title = fig.axes[0].get_title()
+    assert "\x07" not in title and "\x1b" not in title and "\\x1b[2J" in title
