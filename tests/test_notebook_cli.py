@@ -1,0 +1,106 @@
+"""The command line for scripts and shared scenes: ``python -m granchain``, ``--version``, strict JSON
+from run, plan, compare and predict (``--json``), and scene text printed with its control characters
+escaped (a shared scene's title cannot retitle the terminal or clear it)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+import granchain
+from granchain.cli import main
+
+#: a title with an OSC (window title), a bell and a clear-screen sequence, as TOML escapes
+EVIL_TITLE = r"evil \u001b]0;owned\u0007\u001b[2J end"
+
+SCENE = f'''title = "{EVIL_TITLE}"
+[chain]
+beads = 16
+radius = 4.76e-3
+material = "brass"
+[contact]
+law = "hertz"
+[loading]
+kind = "impulse"
+impulse = 0.05
+duration = 1e-6
+[run]
+end_time = 6e-5
+timestep = "auto"
+[outputs]
+histories = [1, 8]
+'''
+
+
+@pytest.fixture
+def scene_file(tmp_path):
+    p = tmp_path / "evil.toml"
+    p.write_text(SCENE)
+    return p
+
+
+def no_control(text: str) -> None:
+    bad = sorted({hex(ord(c)) for c in text if not c.isprintable() and c not in "\n\t"})
+    assert not bad, f"control characters printed: {bad}"
+
+
+@pytest.mark.parametrize("how", [[sys.executable, "-m", "granchain"], [sys.executable, "-m", "granchain.cli"]])
+def test_python_m_granchain_and_version(how):
+    out = subprocess.run([*how, "--version"], capture_output=True, text=True, timeout=120, check=True)
+    assert out.stdout.strip() == f"granchain {granchain.__version__}"
+    out = subprocess.run([*how, "materials", "brass"], capture_output=True, text=True, timeout=120, check=True)
+    assert "brass" in out.stdout
+
+
+@pytest.mark.parametrize("command", ["run", "plan", "compare", "predict"])
+def test_scene_text_is_printed_escaped(command, scene_file, tmp_path, capfd):
+    args = [command, str(scene_file)]
+    if command in ("run", "compare"):
+        args += ["--out", str(tmp_path / "out"), "--error-estimate", "off", "-q"]
+    assert main(args) == 0
+    out, err = capfd.readouterr()
+    no_control(out)
+    no_control(err)
+    if command != "predict":  # predict prints the models, not the scene's text
+        assert r"evil \x1b]0;owned\x07\x1b[2J end" in out
+
+
+@pytest.mark.parametrize("command", ["run", "plan", "compare", "predict"])
+def test_json_for_scripts(command, scene_file, tmp_path, capfd):
+    args = [command, str(scene_file), "--json"]
+    if command in ("run", "compare"):
+        args += ["--out", str(tmp_path / "out"), "-q"]
+    assert main(args) == 0
+    out, err = capfd.readouterr()
+    data = json.loads(out, parse_constant=lambda c: pytest.fail(f"not strict JSON: {c}"))
+    no_control(out)  # JSON escapes the title's control characters itself
+    if command == "run":
+        assert data["run_dir"] == str(tmp_path / "out") and data["backend"] == "reference"
+        assert data["title"] == "evil \x1b]0;owned\x07\x1b[2J end"
+        assert data["observables"]["wave_speed"] > 0 and "provenance" in data
+        data.pop("run_dir")
+        kept = json.loads(json.dumps(granchain.load_run(tmp_path / "out").summary), parse_constant=lambda c: None)
+        assert data == kept  # summary.json, NaN as null
+    elif command == "plan":
+        assert data["method"] == "rk4" and data["timestep"] > 0 and data["steps"] * 16 == data["bead_steps"]
+        assert "timestep" in {c["name"] for c in data["choices"]} and data["units"]["timestep"] == "s"
+    elif command == "compare":
+        assert data["ok"] is True and data["differ"] == []
+        rows = {r["quantity"]: r for r in data["rows"]}
+        assert rows and all({"unit", "lammps", "reference", "ok"} <= set(r) for r in rows.values())
+        assert data["compare_dir"] == str(tmp_path / "out")
+    else:
+        assert isinstance(data, list) and {"name", "value", "unit"} <= set(data[0])
+
+
+def test_errors_and_warnings_are_printed_escaped(tmp_path, capfd):
+    bad = tmp_path / "bad\x1b[2J.toml"
+    bad.write_text("[chain]\nbeads = -1\n")
+    assert main(["run", str(bad)]) == 2
+    _, err = capfd.readouterr()
+    assert err.startswith("granchain: error: ")
+    no_control(err)
+    assert r"bad\x1b[2J.toml" in err
