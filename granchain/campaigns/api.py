@@ -3,15 +3,28 @@
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 from pathlib import Path
 
 from granchain.campaigns import workspace as wsp
+from granchain.campaigns.cluster import ClusterError, ClusterSettings, describe, merge
+from granchain.campaigns.cluster import check as check_cluster
 from granchain.campaigns.execute import Executor, Runner, preflight, run_grid
 from granchain.campaigns.search import run_search
-from granchain.campaigns.spec import Campaign, CampaignError, campaign_from_dict, load_campaign_file, params_text
+from granchain.campaigns.spec import (
+    Campaign,
+    CampaignError,
+    campaign_from_dict,
+    check_ranks,
+    load_campaign_file,
+    params_text,
+)
 from granchain.campaigns.table import build_search_table, build_table, write_tables
+
+#: a workspace's folder for the batch jobs' output (stdout and stderr of each worker job)
+JOB_LOGS = "jobs"
 
 
 def as_campaign(spec) -> Campaign:
@@ -77,6 +90,26 @@ def write_record(ws: Path, campaign: Campaign, runner: Runner, entries: list[dic
     wsp.write_json(ws / wsp.RECORD, record)
 
 
+def cluster_settings(campaign: Campaign, cluster=None, ranks: int = 1) -> ClusterSettings | None:
+    """The campaign file's [cluster] table with `cluster` over it: a kind ("slurm"), a dict of
+    settings (granchain.campaigns.cluster.ClusterSettings' fields; None values are not given), or a
+    ClusterSettings (used as it is). None: no batch cluster (local workers or --scheduler)."""
+    if isinstance(cluster, ClusterSettings):
+        settings = cluster
+    else:
+        flags = {"kind": cluster} if isinstance(cluster, str) else dict(cluster or {})
+        try:
+            settings = merge(campaign.cluster, flags)
+        except ClusterError as e:
+            raise CampaignError(str(e)) from None
+    if settings is None:
+        return None
+    try:
+        return check_cluster(settings, ranks=ranks)
+    except ClusterError as e:
+        raise CampaignError(str(e)) from None
+
+
 def run_campaign(
     spec,
     out,
@@ -85,19 +118,37 @@ def run_campaign(
     rerun: bool = False,
     retry_failed: bool = False,
     stream=None,
+    cluster=None,
+    ranks: int | str | None = None,
 ):
     """Run a campaign into the workspace `out`; returns (its table as a DataFrame, the RunReport).
 
     Nothing runs unless every point is valid. Points complete in the workspace are not run again
-    (``rerun`` forces them; ``retry_failed`` runs the failed ones again). Ctrl-C stops the workers,
-    writes the table of what is complete, and re-raises KeyboardInterrupt.
+    (``rerun`` forces them; ``retry_failed`` runs the failed ones again). Ctrl-C stops the workers
+    (on a batch cluster: cancels the jobs this run submitted, only those), writes the table of what
+    is complete, and re-raises KeyboardInterrupt.
+
+    cluster: worker jobs on a batch queue: "slurm" or "pbs", or a dict of settings ({"kind": "slurm",
+    "queue": ..., "jobs": 4, ...}; granchain.campaigns.cluster.ClusterSettings), over the file's
+    [cluster] table. ranks: MPI ranks per point (or "auto"), over [campaign] ranks.
     """
     campaign = as_campaign(spec)
+    if ranks is not None:
+        campaign = dataclasses.replace(campaign, ranks=check_ranks(ranks, campaign.backend, "--ranks"))
     stream = sys.stderr if stream is None else stream
+    settings = cluster_settings(campaign, cluster, ranks=1 if campaign.ranks == "auto" else campaign.ranks)
     points = validate(campaign)
     ws = Path(out)
-    ex = Executor(workers=workers, scheduler=scheduler)
+    ex = Executor(
+        workers=workers,
+        scheduler=scheduler,
+        cluster=settings,
+        ranks=_job_ranks(campaign, settings, points),
+        log_directory=ws / JOB_LOGS,
+    )
     runner = Runner(campaign, ws, ex, rerun=rerun, retry_failed=retry_failed, stream=stream)
+    if settings is not None and settings.batch:
+        runner.say(f"campaign: worker jobs: {describe(settings, ex.ranks)}")
     if campaign.text:
         (ws / "campaign.toml").write_text(campaign.text)
     from granchain.scene import scene_from_dict
@@ -130,6 +181,11 @@ def run_campaign(
             evaluated, search_rows = run_search(campaign, runner, on_progress=save)
             entries = search_entries(evaluated)
             write_record(ws, campaign, runner, entries, search_rows)
+        ex.check_failure()  # every batch job ended, none may be replaced: the points not run are missing
+    except CampaignError:
+        ex.close()
+        write_tables(ws)
+        raise
     except KeyboardInterrupt:
         interrupted = time.time()
         ex.close()
@@ -150,6 +206,26 @@ def run_campaign(
     if len(r.messages) > 20:
         runner.say(f"campaign: ... {len(r.messages) - 20} more failures (table.csv, column message)")
     return tables, r
+
+
+def _job_ranks(campaign: Campaign, settings: ClusterSettings | None, points: list) -> int:
+    """The cores a worker is given for its points: [campaign] ranks, or for "auto" the batch job's
+    cores per job (one worker per job), or locally the most ranks the --np auto rule gives any point
+    on this machine's cores (a search's points are not known before: 1)."""
+    if campaign.ranks != "auto":
+        return campaign.ranks
+    if settings is not None and settings.batch:
+        if settings.cores_per_job is None:
+            raise CampaignError(
+                'ranks = "auto" on a batch cluster needs the cores a point may use: give --cores-per-job '
+                "(or [cluster] cores_per_job); each point then runs on as many of them as pay for its chain"
+            )
+        return settings.cores_per_job
+    from granchain.campaigns.execute import planned_beads
+    from granchain.schedule import auto_ranks
+    from granchain.workflows.run import available_cores
+
+    return max((auto_ranks(planned_beads(campaign, p.scene), available_cores()) for p in points), default=1)
 
 
 def load_campaign(ws, table: str | None = None):

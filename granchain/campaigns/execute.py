@@ -27,6 +27,7 @@ import logging
 import os
 import socket
 import sys
+import threading
 import time
 import traceback
 import uuid
@@ -39,6 +40,7 @@ from tqdm import tqdm
 
 from granchain import progress
 from granchain.campaigns import workspace as wsp
+from granchain.campaigns.cluster import ClusterSettings, JobCluster, NoWorkerJobs
 from granchain.campaigns.spec import Campaign, CampaignError, Point, params_text
 from granchain.errors import GranchainError
 
@@ -54,6 +56,9 @@ def run_point(payload: dict) -> dict:
     """
     t0 = time.perf_counter()
     job = Path(payload["job_dir"])
+    before = finished_before(job, payload)
+    if before is not None:
+        return before
     caught: list[str] = []
     status, message, detail, run_time = "done", None, None, None
     try:
@@ -78,6 +83,7 @@ def run_point(payload: dict) -> dict:
                 error_estimate=payload["error_estimate"],
                 out=job / wsp.RUN_DIR,
                 overwrite=True,
+                np_=payload.get("ranks", 1),
             )
         run_time = time.perf_counter() - t_run
         caught = [str(x.message).splitlines()[0] for x in w]
@@ -100,12 +106,44 @@ def run_point(payload: dict) -> dict:
         "warnings": caught,
         "host": socket.gethostname(),
         "pid": os.getpid(),
+        "ranks": payload.get("ranks", 1),
+        "token": payload.get("token"),
     }
     try:
         wsp.write_json(job / wsp.TASK, record)
     except OSError:  # the record is a courtesy; the run directory is what counts
         pass
     return record
+
+
+def finished_before(job: Path, payload: dict) -> dict | None:
+    """The status of a point that is complete already, without running it again; None: run it.
+
+    A task Dask runs a second time (its worker, or the worker's batch job, ended before the scheduler
+    heard the result) finds its own run directory complete, with its own token in task.json: that
+    run stands. A point another campaign completed meanwhile stands too, unless this run reruns
+    everything (``rerun``)."""
+    if wsp.job_state(job) != "done":
+        return None
+    rec = wsp.read_json(job / wsp.TASK)
+    token = payload.get("token")
+    mine = isinstance(rec, dict) and token is not None and rec.get("token") == token
+    if not mine and payload.get("rerun"):
+        return None
+    out = {
+        "job": job.name,
+        "status": "done",
+        "message": None,
+        "wall_time": 0.0,
+        "run_time": None,
+        "warnings": [],
+        "host": socket.gethostname(),
+        "pid": os.getpid(),
+        "repeated": True,
+    }
+    if mine:
+        out.update({k: rec[k] for k in ("wall_time", "run_time", "warnings") if k in rec})
+    return out
 
 
 def one_line(e: BaseException) -> str:
@@ -129,6 +167,8 @@ class CampaignProgress:
         self.desc = f"granchain: {desc}"
         self.t0 = time.perf_counter()
         self._next_line = self.t0 + progress.DELAY
+        #: a callable giving the batch jobs' line ("jobs 1 pending, 2 running"), or None
+        self.jobs = None
         self._bar = None
         if self.tty:
             self._bar = tqdm(total=total, desc=self.desc, unit="pt", file=self.stream, dynamic_ncols=True, leave=True)
@@ -138,7 +178,9 @@ class CampaignProgress:
         return min(self.pending, self.workers)
 
     def _postfix(self) -> str:
-        return f"done {self.done}, running {self.running}, failed {self.failed}"
+        text = f"done {self.done}, running {self.running}, failed {self.failed}"
+        jobs = self.jobs() if self.jobs is not None else None
+        return f"{text}; {jobs}" if jobs else text
 
     def update(self, done: int = 0, failed: int = 0, pending: int | None = None, total: int | None = None) -> None:
         self.done += done
@@ -223,21 +265,44 @@ class PersistentLammps(WorkerPlugin):
 
 
 class Executor:
-    """A Dask client made on first use: a LocalCluster of `workers` processes (one thread each) or
-    the scheduler at `scheduler`."""
+    """A Dask client made on first use: a LocalCluster of `workers` processes (one thread each), the
+    scheduler at `scheduler`, or worker jobs on a batch queue (`cluster`, granchain.campaigns.cluster).
+
+    ranks: MPI ranks per point (a local worker or a job's worker gets that many cores).
+    log_directory: where batch jobs write their output.
+    """
 
     #: workers keep a LAMMPS child for their next points (PersistentLammps); False: a fresh process
     #: per LAMMPS point, as before (benchmarks/bench_campaigns.py compares the two)
     reuse_lammps = True
 
-    def __init__(self, workers: int | None = None, scheduler: str | None = None):
+    def __init__(
+        self,
+        workers: int | None = None,
+        scheduler: str | None = None,
+        cluster: ClusterSettings | None = None,
+        ranks: int = 1,
+        log_directory=None,
+    ):
         if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
             raise CampaignError(f"--workers = {workers!r}: give a whole number of worker processes >= 1")
         if workers is not None and scheduler is not None:
             raise CampaignError("--workers and --scheduler: the scheduler's cluster has its own workers; give one")
+        if cluster is not None and cluster.batch and (workers is not None or scheduler is not None):
+            raise CampaignError(
+                f"--cluster {cluster.kind} with --workers or --scheduler: the jobs are the workers (--jobs, "
+                "--cores-per-job); give one"
+            )
         self.workers, self.scheduler = workers, scheduler
+        self.batch = cluster if cluster is not None and cluster.batch else None
+        self.ranks = ranks
+        self.log_directory = log_directory
         self.client = None
         self.cluster = None
+        self.jobs: JobCluster | None = None
+        self.failure: BaseException | None = None  # what ended the batch jobs' upkeep (NoWorkerJobs)
+        self._upkeep = None
+        self._stop = threading.Event()
 
     @property
     def nworkers(self) -> int:
@@ -246,13 +311,32 @@ class Executor:
                 return max(1, sum(self.client.nthreads().values()))
             except Exception:  # noqa: BLE001 - only for the progress display
                 return 1
-        return self.workers or _cores()
+        if self.batch is not None:
+            return self.batch.jobs * self.batch.workers_per_job(self.ranks)
+        return self.workers or max(1, _cores() // self.ranks)
+
+    def slot_cores(self) -> int:
+        """The cores one worker may give its point (for ranks = "auto")."""
+        if self.batch is not None:
+            return self.batch.cores(self.ranks) // self.batch.workers_per_job(self.ranks)
+        return max(1, _cores() // (self.workers or max(1, _cores() // self.ranks)))
+
+    def jobs_text(self) -> str | None:
+        return None if self.jobs is None else self.jobs.counts.text()
 
     def start(self):
         if self.client is not None:
             return self.client
         from distributed import Client, LocalCluster
 
+        if self.batch is not None:
+            self.jobs = JobCluster(self.batch, self.ranks, self.log_directory)
+            self.client = self.jobs.start()
+            if self.reuse_lammps and self.ranks == 1:
+                self.client.register_plugin(PersistentLammps())
+            self._upkeep = threading.Thread(target=self._keep_jobs, name="granchain-jobs", daemon=True)
+            self._upkeep.start()
+            return self.client
         if self.scheduler is not None:
             try:
                 self.client = Client(self.scheduler, timeout="20s")
@@ -274,7 +358,7 @@ class Executor:
                     ) from None
             return self.client
         self.cluster = LocalCluster(
-            n_workers=self.workers or _cores(),
+            n_workers=self.workers or max(1, _cores() // self.ranks),
             threads_per_worker=1,
             processes=True,
             dashboard_address=None,
@@ -288,19 +372,47 @@ class Executor:
             self.client.register_plugin(PersistentLammps())
         return self.client
 
+    def _keep_jobs(self) -> None:
+        """The batch jobs' upkeep, in a thread: poll the queue, replace ended jobs; when none is left
+        (NoWorkerJobs), cancel what is queued so that the driver's wait ends, and keep the reason."""
+        while not self._stop.wait(JobCluster.POLL):
+            try:
+                self.jobs.poll(force=True)
+            except NoWorkerJobs as e:
+                self.failure = e
+                try:
+                    self.client.cancel(list(self.client.futures), force=True)
+                except Exception:  # noqa: BLE001 - the client may be closing
+                    pass
+                return
+            except Exception:  # noqa: BLE001 - a queue command failing once is retried at the next poll
+                continue
+
     def submit(self, payload: dict):
         client = self.start()
         key = f"granchain-point-{Path(payload['job_dir']).name[:12]}-{uuid.uuid4().hex[:8]}"
         return client.submit(run_point, payload, key=key, pure=False)
 
+    def check_failure(self) -> None:
+        """Raise what stopped the batch jobs (NoWorkerJobs), if anything did."""
+        if self.failure is not None:
+            raise CampaignError(f"campaign stopped: {self.failure}")
+
     def close(self) -> None:
-        for thing in (self.client, self.cluster):
+        self._stop.set()
+        if self._upkeep is not None and self._upkeep is not threading.current_thread():
+            self._upkeep.join(timeout=10)
+        self._upkeep = None
+        things = (self.client, self.cluster)
+        self.client = self.cluster = None
+        for thing in things:
             if thing is not None:
                 try:
                     thing.close()
                 except Exception:  # noqa: BLE001 - closing after Ctrl-C may find it half gone
                     pass
-        self.client = self.cluster = None
+        if self.jobs is not None:
+            self.jobs.close()  # cancels every job this run submitted, and only those
 
 
 def _cores() -> int:
@@ -342,6 +454,7 @@ class Runner:
         self._stale = wsp.stale_versions(self.project, self.code)
         self.report = RunReport()
         self.in_flight: dict = {}  # future key -> job directory
+        self.token = uuid.uuid4().hex  # this campaign run's: a task Dask runs twice finds its own result
 
     def submit(self, job, point: Point):
         """Submit one point's run (the job directory counts as in flight until collected)."""
@@ -386,8 +499,16 @@ class Runner:
                 self.report.stale_codes.append(other)
         return True
 
+    def ranks(self, point: Point) -> int:
+        """MPI ranks for this point: [campaign] ranks, or for "auto" the plan's --np auto rule
+        (granchain.schedule.auto_ranks) over the cores one worker may use."""
+        return point_ranks(self.c, point.scene, self.ex.slot_cores())
+
     def payload(self, job, point: Point) -> dict:
         return {
+            "ranks": self.ranks(point),
+            "token": self.token,
+            "rerun": self.rerun,
             "job_dir": str(Path(job.path).resolve()),
             "scene": point.scene_dict,
             "source": f"campaign point ({params_text(point.params)})",
@@ -443,6 +564,25 @@ class Runner:
             )
 
 
+def point_ranks(campaign: Campaign, scene, slot_cores: int) -> int:
+    """A point's MPI ranks: [campaign] ranks as given, or for "auto" one rank per
+    MPI_CROSSOVER_BEADS / 2 beads, at most `slot_cores` (granchain.schedule.auto_ranks)."""
+    if campaign.ranks != "auto":
+        return campaign.ranks
+    from granchain.schedule import auto_ranks
+
+    return auto_ranks(planned_beads(campaign, scene), max(1, slot_cores))
+
+
+def planned_beads(campaign: Campaign, scene) -> int:
+    """The point's chain length as it will run (chain.beads = "auto" planned)."""
+    if isinstance(scene.chain.beads, int):
+        return scene.chain.beads
+    from granchain.workflows.run import plan_for
+
+    return plan_for(scene, campaign.backend, campaign.method, campaign.rtol)[0].chain.beads
+
+
 def _method(c: Campaign) -> str:
     from granchain.workflows.run import integrator
 
@@ -452,13 +592,15 @@ def _method(c: Campaign) -> str:
 def preflight(campaign: Campaign, points: list[Point]) -> None:
     """Plan every point and check its time step against the stability limit before anything runs:
     one bad point is reported with its parameters and nothing starts."""
-    from granchain.workflows.run import check_timestep, integrator, plan_for
+    from granchain.workflows.run import check_resources, check_timestep, integrator, plan_for
 
     method = integrator(campaign.backend, campaign.method)
     for p in points:
         try:
             scene, _ = plan_for(p.scene, campaign.backend, method, campaign.rtol)
             check_timestep(scene, method)
+            if isinstance(campaign.ranks, int) and campaign.ranks > 1:  # the cores are the job's, not ours
+                check_resources(scene, campaign.backend, campaign.ranks, oversubscribe=True)
         except GranchainError as e:
             raise CampaignError(
                 f"{campaign.source}: point {p.index + 1} ({params_text(p.params)}) cannot run: {e}"
@@ -467,7 +609,7 @@ def preflight(campaign: Campaign, points: list[Point]) -> None:
 
 def run_grid(campaign: Campaign, runner: Runner, points: list[Point]) -> RunReport:
     """Run every point of a grid that is not complete yet."""
-    from distributed import as_completed
+    from distributed import wait
 
     r = runner.report
     r.points = len(points)
@@ -481,18 +623,23 @@ def run_grid(campaign: Campaign, runner: Runner, points: list[Point]) -> RunRepo
         return r
     runner.prepare()
     prog = CampaignProgress(len(todo), "campaign", runner.stream, workers=runner.ex.nworkers)
+    prog.jobs = runner.ex.jobs_text
     futures = {}
     try:
         for p, job in todo:
             futures[runner.submit(job, p)] = p
         r.ran = len(futures)
-        prog.workers = runner.ex.nworkers
         prog.update(pending=len(futures))
-        pending = len(futures)
-        for fut in as_completed(list(futures)):
-            pending -= 1
-            prog.pending = pending
-            runner.collect(fut, futures[fut].params, prog)
+        waiting = set(futures)
+        while waiting:  # as_completed, with a look at the workers (and the batch jobs) every second
+            try:
+                done, waiting = wait(waiting, timeout=1.0, return_when="FIRST_COMPLETED")
+            except TimeoutError:
+                done = set()
+            prog.workers = runner.ex.nworkers
+            for fut in done:
+                runner.collect(fut, futures[fut].params, prog)
+            prog.update(pending=len(waiting))
     finally:
         prog.close()
     return r

@@ -61,8 +61,8 @@ from granchain.scene import SECTIONS, Scene, SceneError, load_scene, scene_from_
 
 KINDS = ("grid", "search")
 BACKENDS = ("reference", "lammps")
-CAMPAIGN_KEYS = ("base", "backend", "method", "rtol", "error_estimate", "regime_contact", "title", "kind")
-TABLES = ("campaign", "scene", "vary", "zip", "derive", "search")
+CAMPAIGN_KEYS = ("base", "backend", "method", "rtol", "error_estimate", "regime_contact", "title", "kind", "ranks")
+TABLES = ("campaign", "scene", "vary", "zip", "derive", "search", "cluster")
 SEARCH_KEYS = ("key", "range", "scale", "tolerance", "predicate")
 PREDICATE_KEYS = ("quantity", "contact", "op", "value")
 #: the observables of summary.json a predicate may test (granchain.postprocess.observables)
@@ -77,8 +77,14 @@ OBSERVABLES = (
     "max_peak_contact",
 )
 OPS = (">", ">=", "<", "<=", "==", "!=")
-#: the most points a campaign may have (a typo in num can ask for millions)
+#: the most points a campaign may have (a typo in num can ask for millions); counted from the lists'
+#: lengths and num before any value is made
 MAX_POINTS = 100_000
+#: the most beads a campaign point's chain may have when [vary] or [zip] sets chain.beads (one chain
+#: longer than this is one run: granchain run, or granchain submit on a cluster)
+MAX_POINT_BEADS = 10_000_000
+#: the most MPI ranks a point may ask for
+MAX_RANKS = 4096
 
 
 class CampaignError(GranchainError, ValueError):
@@ -189,6 +195,8 @@ class Campaign:
     search: Search | None = None
     regime_contact: int | None = None
     title: str = ""
+    ranks: int | str = 1  # MPI ranks per point, or "auto" (granchain.campaigns.execute.point_ranks)
+    cluster: dict | None = None  # the [cluster] table's values (granchain.campaigns.cluster)
 
     @property
     def varied_keys(self) -> tuple[str, ...]:
@@ -335,8 +343,17 @@ def campaign_from_dict(
                 f"{source}: [campaign] has unknown key {key!r}; {_did_you_mean(key, CAMPAIGN_KEYS)}"
                 f"allowed keys: {', '.join(CAMPAIGN_KEYS)}"
             )
-    base, base_source = _read_base(c, data.get("scene"), source, base_dir)
     settings = _read_settings(c, source)
+    cluster = None
+    if "cluster" in data:
+        from granchain.campaigns.cluster import ClusterError, from_table
+
+        try:
+            cluster = from_table(data["cluster"], source)
+        except ClusterError as e:
+            raise CampaignError(str(e)) from None
+    axes = _read_axes(data, source)
+    base, base_source = _read_base(c, data.get("scene"), source, base_dir)
     kind = c.get("kind", "search" if "search" in data else "grid")
     if kind not in KINDS:
         raise CampaignError(f"{source}: [campaign] kind = {kind!r} is invalid: 'grid' or 'search'")
@@ -344,15 +361,11 @@ def campaign_from_dict(
         raise CampaignError(f"{source}: [campaign] kind = 'search' needs a [search] table (key, range, predicate)")
     if kind == "grid" and "search" in data:
         raise CampaignError(f"{source}: a [search] table with kind = 'grid': drop kind (or set kind = 'search')")
-    axes = _read_axes(data, source)
     search = _read_search(data["search"], source) if kind == "search" else None
     if kind == "grid" and not axes:
         raise CampaignError(
             f'{source}: nothing varies: the grid is empty; add a [vary] table, e.g. "loading.amplitude" = [10.0, 100.0]'
         )
-    count = math.prod(len(a.values) for a in axes)
-    if count > MAX_POINTS:
-        raise CampaignError(f"{source}: the grid has {count} points, more than {MAX_POINTS}; reduce num or the lists")
     grid_keys = [k for a in axes for k in a.keys]
     if search is not None and search.key in grid_keys:
         raise CampaignError(f"{source}: [search] key {search.key!r} is also varied in [vary]/[zip]; drop it there")
@@ -366,6 +379,7 @@ def campaign_from_dict(
         axes=tuple(axes),
         derive=tuple(derive),
         search=search,
+        cluster=cluster,
         **settings,
     )
 
@@ -395,7 +409,9 @@ def _read_settings(c: dict, source: str) -> dict:
     title = c.get("title", "")
     if not isinstance(title, str):
         raise CampaignError(f"{source}: [campaign] title = {title!r} is invalid: a string")
+    ranks = check_ranks(c.get("ranks", 1), backend, f"{source}: [campaign] ranks")
     return {
+        "ranks": ranks,
         "backend": backend,
         "method": method,
         "rtol": None if rtol is None else float(rtol),
@@ -405,12 +421,29 @@ def _read_settings(c: dict, source: str) -> dict:
     }
 
 
+def check_ranks(ranks, backend: str, where: str) -> int | str:
+    """MPI ranks per point: a whole number from 1 to MAX_RANKS or "auto", for the LAMMPS backend only.
+    where: what the message names ("FILE: [campaign] ranks", "--ranks")."""
+    if ranks != "auto" and (isinstance(ranks, bool) or not isinstance(ranks, int) or not 1 <= ranks <= MAX_RANKS):
+        raise CampaignError(
+            f"{where} = {ranks!r} is invalid: MPI ranks per point, a whole number from 1 to {MAX_RANKS}, or "
+            "\"auto\" (the plan's --np auto rule for each point's chain)"
+        )
+    if backend != "lammps" and ranks != 1:
+        raise CampaignError(
+            f"{where} = {ranks!r}: the {backend} backend runs a point in one process; MPI ranks are for "
+            'backend = "lammps" (drop ranks)'
+        )
+    return ranks
+
+
 def _read_axes(data: dict, source: str) -> list[Axis]:
     """The grid's axes: one per [vary] key, and one for the [zip] keys together."""
     axes = []
     for name in ("vary", "zip"):
         if name in data and not data[name]:
             raise CampaignError(f"{source}: [{name}] is empty: the grid has no points; give each key a list of values")
+    _check_size(data, source)
     for key, spec in data.get("vary", {}).items():
         _check_key(key, "vary", source)
         values = _values_of(spec, f"{source}: [vary] {key!r}")
@@ -430,6 +463,59 @@ def _read_axes(data: dict, source: str) -> list[Axis]:
             )
         axes.append(Axis(tuple(cols), tuple(zip(*cols.values(), strict=True))))
     return axes
+
+
+def _length(spec: Any) -> int | None:
+    """How many values a [vary] / [zip] entry makes, read before any is made (None: not a valid entry;
+    _values_of says why)."""
+    if isinstance(spec, list):
+        return len(spec)
+    if isinstance(spec, dict):
+        num = spec.get("num")
+        if isinstance(num, int) and not isinstance(num, bool):
+            return num
+        if isinstance(num, float) and math.isfinite(num) and num >= 1:
+            return math.floor(num)
+    return None
+
+
+def _check_size(data: dict, source: str) -> None:
+    """The grid's point count from the lists' lengths and num, before any value is made: a num of
+    1e12 is refused here, naming the key and the limit (not after building a trillion values); so is
+    a varied chain.beads above MAX_POINT_BEADS (its planning alone would not end)."""
+    count = 1
+    for name in ("vary", "zip"):
+        table = data.get(name, {})
+        lengths = []
+        for key, spec in table.items():
+            n = _length(spec)
+            if n is None:
+                continue
+            if n > MAX_POINTS:
+                raise CampaignError(
+                    f"{source}: [{name}] {key!r} makes {n:g} values; a campaign has at most {MAX_POINTS} points "
+                    "(granchain.campaigns.spec.MAX_POINTS): reduce num or the list"
+                )
+            if key == "chain.beads" and isinstance(spec, list):
+                big = [v for v in spec if isinstance(v, int) and not isinstance(v, bool) and v > MAX_POINT_BEADS]
+                if big:
+                    raise CampaignError(
+                        f"{source}: [{name}] 'chain.beads' = {big[0]}: a campaign point has at most "
+                        f"{MAX_POINT_BEADS} beads (granchain.campaigns.spec.MAX_POINT_BEADS); one chain this long "
+                        "is one run: granchain run, or granchain submit on a cluster"
+                    )
+            lengths.append(n)
+        if not lengths:
+            continue
+        count *= max(lengths) if name == "zip" else math.prod(lengths)
+        if count > MAX_POINTS:
+            keys = ", ".join(repr(k) for k in data.get("vary", {})) + (
+                ", [zip] " + ", ".join(repr(k) for k in data.get("zip", {})) if "zip" in data else ""
+            )
+            raise CampaignError(
+                f"{source}: the grid of {keys} has {count:g} points or more; a campaign has at most {MAX_POINTS} "
+                "(granchain.campaigns.spec.MAX_POINTS): reduce num or the lists"
+            )
 
 
 def _did_you_mean(key: str, known) -> str:

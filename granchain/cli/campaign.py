@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -13,6 +14,18 @@ def cmd_campaign_run(args) -> int:
     from granchain.campaigns.table import format_table
 
     out = args.out or f"runs/{Path(args.file).stem}-campaign"
+    cluster = {
+        "kind": args.cluster,
+        "queue": args.queue,
+        "account": args.account,
+        "walltime": args.walltime,
+        "jobs": args.jobs,
+        "cores_per_job": args.cores_per_job,
+        "memory": args.memory,
+        "interface": args.interface,
+        "replacements": args.replacements,
+        "prologue": args.prologue,
+    }
     try:
         tables, report = run_campaign(
             args.file,
@@ -21,6 +34,8 @@ def cmd_campaign_run(args) -> int:
             scheduler=args.scheduler,
             rerun=args.rerun,
             retry_failed=args.retry_failed,
+            cluster=cluster,
+            ranks=args.ranks,
         )
     except KeyboardInterrupt:
         print(
@@ -80,6 +95,16 @@ def cmd_campaign_plot(args) -> int:
     return 0
 
 
+def ranks_arg(text: str) -> int | str:
+    """--ranks: a whole number of MPI ranks per point, or "auto"."""
+    if text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of MPI ranks or 'auto', got {text!r}") from None
+
+
 def add_campaign_parser(sub) -> None:
     """granchain campaign run / table / plot (docs/campaigns.md)."""
     cp = sub.add_parser("campaign", help="sweeps and searches over scenes, cached and resumable, on Dask")
@@ -89,6 +114,25 @@ def add_campaign_parser(sub) -> None:
     cr.add_argument("--out", help="workspace directory (default runs/<file>-campaign)")
     cr.add_argument("--workers", type=int, default=None, help="local Dask worker processes (default: the cores)")
     cr.add_argument("--scheduler", default=None, help="address of a running Dask scheduler (tcp://host:8786)")
+    cr.add_argument(
+        "--ranks", type=ranks_arg, default=None, help="MPI ranks per LAMMPS point, or auto (default: [campaign] ranks)"
+    )
+    cl = cr.add_argument_group("worker jobs on a batch queue (docs/clusters.md; flags win over the file's [cluster])")
+    cl.add_argument("--cluster", choices=["local", "slurm", "pbs"], default=None, help="where the workers run")
+    cl.add_argument("--queue", default=None, help="partition / queue of the worker jobs (#SBATCH -p)")
+    cl.add_argument("--account", default=None, help="account charged for the jobs (#SBATCH -A)")
+    cl.add_argument("--walltime", default=None, help="each worker job's time limit, HH:MM:SS (default 01:00:00)")
+    cl.add_argument("--jobs", type=int, default=None, help="worker jobs kept in the queue (default 1)")
+    cl.add_argument("--cores-per-job", type=int, default=None, help="cores per job (default: the ranks of a point)")
+    cl.add_argument("--memory", default=None, help="memory per job, e.g. 4GB (default 2GB per core)")
+    cl.add_argument("--interface", default=None, help="network interface of the scheduler and workers (ib0, lo)")
+    cl.add_argument("--replacements", type=int, default=None, help="ended jobs replaced (default 2 per job)")
+    cl.add_argument(
+        "--prologue",
+        action="append",
+        default=None,
+        help="a shell line each job runs before its worker (repeatable), e.g. 'source /shared/venv/bin/activate'",
+    )
     cr.add_argument("--rerun", action="store_true", help="run every point again, complete or not")
     cr.add_argument("--retry-failed", action="store_true", help="run the points that failed before again")
     cr.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")

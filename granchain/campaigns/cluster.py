@@ -1,0 +1,548 @@
+"""Campaign workers as batch jobs: SLURM (or PBS) through dask-jobqueue, the jobs watched and replaced.
+
+``granchain campaign run FILE --cluster slurm`` (or a ``[cluster]`` table in the campaign file; a flag
+wins) starts a Dask scheduler in the driver and asks the queue for ``jobs`` worker jobs of
+``cores_per_job`` cores each; a job runs ``cores_per_job // ranks`` Dask worker processes of one
+thread, each running one point at a time on ``ranks`` MPI ranks (:class:`ClusterSettings`). The
+driver (:class:`JobCluster`):
+
+* keeps the ids of every job it submitted, and cancels those (and only those) when it ends, on
+  Ctrl-C too;
+* polls the queue (``squeue`` for SLURM; for PBS the Dask workers that connected) to show jobs
+  pending / running in the progress line;
+* replaces a job that ended before the campaign did (cancelled, timed out, a node failure) with a
+  new one, up to ``replacements`` times; then, with no job left, it stops with a message naming the
+  jobs and their states (:class:`NoWorkerJobs`): the next ``campaign run`` runs only what is missing.
+
+Everything in a ``[cluster]`` table is a name or a number checked against a strict pattern: a
+campaign file is shared, and nothing in it reaches the job script but these values. What a job must
+run before its worker starts (``source venv/bin/activate``, ``module load``) is a command-line or API
+setting of the user who runs the campaign (``--prologue``), never a file's.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from granchain.errors import GranchainError
+
+KINDS = ("local", "slurm", "pbs")
+#: the keys a [cluster] table may hold (flags: --cluster, --queue, ...; the same names with dashes)
+KEYS = ("kind", "queue", "account", "walltime", "jobs", "cores_per_job", "memory", "interface", "replacements")
+#: the jobs' submit command per kind (its absence on PATH is refused before anything starts)
+SUBMIT = {"slurm": "sbatch", "pbs": "qsub"}
+
+_NAME = re.compile(r"^[A-Za-z0-9_.,:@+-]{1,64}$")
+_WALLTIME = re.compile(r"^(?:(\d+)-)?(\d{1,4}):([0-5]\d):([0-5]\d)$")
+_MEMORY = re.compile(r"^(\d+(?:\.\d+)?)\s*(B|kB|KB|MB|GB|TB|KiB|MiB|GiB|TiB)$")
+_INTERFACE = re.compile(r"^[A-Za-z0-9_.:-]{1,32}$")
+
+#: job states that SLURM reports for a job that holds no running worker any more
+ENDED = {
+    "BOOT_FAIL",
+    "CANCELLED",
+    "COMPLETED",
+    "DEADLINE",
+    "FAILED",
+    "NODE_FAIL",
+    "OUT_OF_MEMORY",
+    "PREEMPTED",
+    "REVOKED",
+    "SPECIAL_EXIT",
+    "TIMEOUT",
+}
+
+
+class ClusterError(GranchainError, ValueError):
+    """A cluster setting is invalid, or the queue refused the jobs; the message says which and what to do."""
+
+
+class NoWorkerJobs(GranchainError, RuntimeError):
+    """Every worker job ended and the replacement limit is reached: the campaign cannot go on."""
+
+
+@dataclass(frozen=True)
+class ClusterSettings:
+    """Where a campaign's workers run.
+
+    Parameters
+    ----------
+    kind : str
+        "local" (a LocalCluster on this machine), "slurm" or "pbs" (worker jobs through dask-jobqueue).
+    queue, account : str or None
+        The partition / queue (``#SBATCH -p``) and the account (``-A``); None: the site's default.
+    walltime : str
+        Each worker job's time limit, ``[D-]HH:MM:SS``. The workers leave a few minutes before it
+        (``--lifetime``): a point in flight goes back to the queue, a replacement job takes over.
+    jobs : int
+        Worker jobs kept in the queue.
+    cores_per_job : int or None
+        Cores each job asks for (None: ``ranks``, one worker per job); a job runs
+        ``cores_per_job // ranks`` worker processes.
+    memory : str or None
+        Memory per job (``"4GB"``); None: 2 GB per core.
+    interface : str or None
+        The network interface the scheduler and the workers bind to (``ib0``, ``eth0``; ``lo`` when the
+        driver and every job share one machine, as in tests); None: Dask's choice.
+    replacements : int or None
+        How many ended jobs are replaced by new ones (None: 2 per job, at least 3).
+    prologue : tuple of str
+        Shell lines a job runs before its worker starts (``source /shared/venv/bin/activate``); the
+        caller's own, never a campaign file's.
+    log_directory : str or None
+        Where the jobs' stdout and stderr go (the workspace's ``jobs/`` by default).
+    """
+
+    kind: str = "local"
+    queue: str | None = None
+    account: str | None = None
+    walltime: str = "01:00:00"
+    jobs: int = 1
+    cores_per_job: int | None = None
+    memory: str | None = None
+    interface: str | None = None
+    replacements: int | None = None
+    prologue: tuple[str, ...] = ()
+    log_directory: str | None = None
+
+    @property
+    def batch(self) -> bool:
+        return self.kind in SUBMIT
+
+    def cores(self, ranks: int) -> int:
+        """Cores per job for points of `ranks` MPI ranks."""
+        return self.cores_per_job if self.cores_per_job is not None else ranks
+
+    def workers_per_job(self, ranks: int) -> int:
+        return max(1, self.cores(ranks) // ranks)
+
+    def memory_text(self, ranks: int) -> str:
+        return self.memory if self.memory is not None else f"{2 * self.cores(ranks)}GB"
+
+    def replacement_limit(self) -> int:
+        return self.replacements if self.replacements is not None else max(3, 2 * self.jobs)
+
+    def walltime_seconds(self) -> int:
+        m = _WALLTIME.match(self.walltime)
+        assert m is not None  # checked by check()
+        d, h, mi, s = (int(x) if x else 0 for x in m.groups())
+        return ((d * 24 + h) * 60 + mi) * 60 + s
+
+    def lifetime_seconds(self) -> int:
+        """A worker's --lifetime: the walltime less a margin (a tenth of it, at most 5 min, at least 20 s)."""
+        w = self.walltime_seconds()
+        return max(10, w - min(300, max(20, w // 10)))
+
+
+def _where(source: str | None, key: str) -> str:
+    flag = "--" + key.replace("_", "-")
+    return f"{source}: [cluster] {key}" if source else flag
+
+
+def check(settings: ClusterSettings, source: str | None = None, ranks: int = 1) -> ClusterSettings:
+    """Every setting checked (a CampaignError-like ClusterError naming the key or flag and the fix).
+
+    source: the campaign file the values came from (messages name its [cluster] key), or None (flags).
+    """
+    s = settings
+    if s.kind not in KINDS:
+        raise ClusterError(f"{_where(source, 'kind')} = {s.kind!r} is invalid: one of {', '.join(KINDS)}")
+    for key in ("queue", "account"):
+        v = getattr(s, key)
+        if v is not None and (not isinstance(v, str) or not _NAME.match(v)):
+            raise ClusterError(
+                f"{_where(source, key)} = {v!r} is invalid: a {key} name (letters, digits and _ . , : @ + -)"
+            )
+    if not isinstance(s.walltime, str) or not _WALLTIME.match(s.walltime):
+        raise ClusterError(
+            f"{_where(source, 'walltime')} = {s.walltime!r} is invalid: HH:MM:SS or D-HH:MM:SS, e.g. '02:00:00'"
+        )
+    if s.walltime_seconds() < 60:
+        raise ClusterError(f"{_where(source, 'walltime')} = {s.walltime!r}: at least a minute (00:01:00)")
+    for key, low in (("jobs", 1), ("cores_per_job", 1), ("replacements", 0)):
+        v = getattr(s, key)
+        if v is None and key != "jobs":
+            continue
+        if isinstance(v, bool) or not isinstance(v, int) or v < low or v > 100_000:
+            raise ClusterError(f"{_where(source, key)} = {v!r} is invalid: a whole number from {low} to 100000")
+    if s.cores_per_job is not None and s.cores_per_job < ranks:
+        raise ClusterError(
+            f"{_where(source, 'cores_per_job')} = {s.cores_per_job}: a point runs on {ranks} MPI ranks, so a job "
+            f"needs at least {ranks} cores (give cores_per_job >= ranks, a multiple of it)"
+        )
+    if s.memory is not None and (not isinstance(s.memory, str) or not _MEMORY.match(s.memory.strip())):
+        raise ClusterError(f"{_where(source, 'memory')} = {s.memory!r} is invalid: an amount such as '4GB' or '500MB'")
+    _check_interface(s, source)
+    for line in s.prologue:
+        if not isinstance(line, str) or "\n" in line or "\r" in line:
+            raise ClusterError(f"--prologue {line!r} is invalid: one shell line per --prologue")
+    return s
+
+
+def _check_interface(s: ClusterSettings, source: str | None) -> None:
+    if s.interface is not None:
+        if not isinstance(s.interface, str) or not _INTERFACE.match(s.interface):
+            raise ClusterError(f"{_where(source, 'interface')} = {s.interface!r} is invalid: a network interface name")
+        import psutil
+
+        have = sorted(psutil.net_if_addrs())
+        if s.interface not in have:
+            raise ClusterError(
+                f"{_where(source, 'interface')} = {s.interface!r}: this machine has no such network interface; "
+                f"it has {', '.join(have)}"
+            )
+
+
+def from_table(table, source: str) -> dict:
+    """The settings a campaign file's [cluster] table gives (validated by :func:`check` once merged)."""
+    if not isinstance(table, dict):
+        raise ClusterError(f"{source}: cluster = {table!r} must be a table: write it as a [cluster] section")
+    import difflib
+
+    out = {}
+    for key, value in table.items():
+        if key not in KEYS:
+            close = difflib.get_close_matches(str(key), KEYS, n=1, cutoff=0.6)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            extra = (
+                "; what a job runs before its worker (source, module load) is the --prologue flag of whoever "
+                "runs the campaign, not a campaign file's"
+                if key in ("prologue", "job_script_prologue", "python", "directives")
+                else ""
+            )
+            raise ClusterError(
+                f"{source}: [cluster] has unknown key {key!r}; {hint}allowed keys: {', '.join(KEYS)}{extra}"
+            )
+        out[key] = value
+    check(ClusterSettings(**{k: v for k, v in out.items()}), source)
+    return out
+
+
+def merge(file_values: dict | None, flags: dict, source: str | None = None) -> ClusterSettings | None:
+    """The campaign file's [cluster] values with the flags given (not None) over them; None: no cluster
+    asked for anywhere (the local cluster, or --workers / --scheduler)."""
+    values = dict(file_values or {})
+    values.update({k: v for k, v in flags.items() if v is not None and k != "prologue"})
+    if not values and not flags.get("prologue"):
+        return None
+    prologue = tuple(flags.get("prologue") or ())
+    try:
+        return ClusterSettings(**values, prologue=prologue)
+    except TypeError as e:  # an unknown key: from_table has refused it already; a caller's typo here
+        raise ClusterError(f"cluster settings: {e}") from None
+
+
+# ------------------------------------------------------------------------------- the job cluster
+
+
+@dataclass
+class JobState:
+    """One submitted job as the driver last saw it."""
+
+    job_id: str
+    name: str
+    state: str = "PENDING"
+    seen_running: bool = False
+    ended_at: float | None = None
+
+
+@dataclass
+class JobCounts:
+    pending: int = 0
+    running: int = 0
+    ended: int = 0
+    replaced: int = 0
+
+    def text(self) -> str:
+        t = f"jobs {self.pending} pending, {self.running} running"
+        return t + (f", {self.ended} ended ({self.replaced} replaced)" if self.ended else "")
+
+
+def _queue_states(kind: str, ids: list[str]) -> dict[str, str] | None:
+    """{job id: state} for these ids as the queue reports them (an id it no longer knows is absent);
+    None when the queue cannot be asked (then the Dask workers' connections are all there is)."""
+    if kind != "slurm" or not ids or shutil.which("squeue") is None:
+        return None
+    try:
+        r = subprocess.run(
+            ["squeue", "-h", "-t", "all", "-o", "%i %T", "-j", ",".join(ids)],
+            capture_output=True,
+            text=True,
+            timeout=30,
+        )
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    if r.returncode != 0 and "Invalid job id" not in r.stderr:
+        return None
+    out = {}
+    for line in r.stdout.splitlines():
+        parts = line.split()
+        if len(parts) == 2:
+            out[parts[0]] = parts[1].rstrip("+")
+    return out
+
+
+class JobCluster:
+    """A dask-jobqueue cluster of worker jobs for one campaign run (see the module docstring).
+
+    Parameters
+    ----------
+    settings : ClusterSettings
+        Checked settings (kind "slurm" or "pbs").
+    ranks : int
+        MPI ranks per point (each worker process gets this many cores of its job).
+    log_directory : path
+        Where the jobs' output goes (created).
+    """
+
+    #: seconds between two looks at the queue
+    POLL = 2.0
+
+    def __init__(self, settings: ClusterSettings, ranks: int = 1, log_directory=None):
+        self.s, self.ranks = settings, ranks
+        self.log_directory = Path(log_directory) if log_directory else None
+        self.cluster = None
+        self.jobs: dict[str, JobState] = {}  # job id -> state: every job this run submitted
+        self.counts = JobCounts()
+        self._last_poll = 0.0
+        self._closed = False
+
+    # ---------------------------------------------------------------------------- start and close
+    def start(self):
+        """Start the scheduler and submit the jobs; returns a distributed Client."""
+        import dask
+        from distributed import Client
+
+        s = self.s
+        cmd = SUBMIT[s.kind]
+        if shutil.which(cmd) is None:
+            raise ClusterError(
+                f"--cluster {s.kind}: {cmd} is not on PATH; run the campaign where jobs can be submitted "
+                f"(a login node of the {s.kind.upper()} cluster)"
+            )
+        if self.log_directory is not None:
+            self.log_directory.mkdir(parents=True, exist_ok=True)
+        # a job that ended is noticed by the driver's own poll (replace_ended); Dask's own timeout before
+        # it closes a lost worker's job object stays, but the driver does not wait for it
+        dask.config.set({"distributed.scheduler.allowed-failures": 3})
+        cls = self._cluster_class()
+        cores = s.cores(self.ranks)
+        processes = s.workers_per_job(self.ranks)
+        prologue = [
+            *s.prologue,
+            "export GRANCHAIN_QUIET=1",
+            # a point's mpirun starts its ranks inside this job, on this node (not through srun / pbsdsh)
+            "export HYDRA_BOOTSTRAP=fork",
+        ]
+        lifetime = s.lifetime_seconds()
+        kwargs = dict(
+            cores=processes,  # Dask threads: one per worker process; the job's cores are job_cpu below
+            processes=processes,
+            memory=s.memory_text(self.ranks),
+            walltime=s.walltime,
+            queue=s.queue,
+            account=s.account,
+            job_name="granchain-worker",
+            interface=s.interface,
+            job_script_prologue=prologue,
+            worker_extra_args=["--lifetime", f"{lifetime}s", "--lifetime-stagger", f"{min(120, lifetime // 10)}s"],
+            log_directory=str(self.log_directory) if self.log_directory else None,
+            scheduler_options={"dashboard_address": None},
+            death_timeout=60,
+        )
+        if s.kind == "slurm":
+            kwargs["job_cpu"] = cores
+        else:
+            mem = s.memory_text(self.ranks).replace(" ", "")
+            kwargs["resource_spec"] = f"select=1:ncpus={cores}:mem={mem}"
+        try:
+            self.cluster = cls(**kwargs)
+        except (ValueError, OSError) as e:
+            raise ClusterError(f"--cluster {s.kind}: cannot start the scheduler ({e})") from None
+        self._submit(s.jobs)
+        return Client(self.cluster)
+
+    def _cluster_class(self):
+        if self.s.kind == "slurm":
+            from dask_jobqueue import SLURMCluster
+
+            return SLURMCluster
+        from dask_jobqueue import PBSCluster
+
+        return PBSCluster
+
+    def job_script(self) -> str:
+        """The script each worker job runs (dask-jobqueue's, with these settings)."""
+        return self.cluster.job_script()
+
+    def _submit(self, jobs: int) -> None:
+        """Scale to `jobs` jobs now (the submissions done before returning: sbatch's refusal is a
+        ClusterError here, not a log line later)."""
+        self.cluster.scale(jobs=jobs)
+        try:
+            self.cluster.sync(self.cluster._correct_state)
+        except Exception as e:  # noqa: BLE001 - dask-jobqueue raises RuntimeError with the command's stderr
+            text = " ".join(str(e).split())
+            self.close()
+            raise ClusterError(
+                f"--cluster {self.s.kind}: the queue refused the worker job ({text[-800:]}); check --queue, "
+                "--account, --walltime, --memory and --cores-per-job against the site's limits"
+            ) from None
+        self._record()
+
+    def _record(self) -> None:
+        for name, job in list(self.cluster.workers.items()):
+            jid = getattr(job, "job_id", None)
+            if jid and jid not in self.jobs:
+                self.jobs[jid] = JobState(jid, str(name))
+
+    def close(self) -> None:
+        """Close the cluster (dask-jobqueue cancels its jobs), then cancel every job this run submitted
+        that the queue still holds: these ids only, never another job of the user's."""
+        if self._closed:
+            return
+        self._closed = True
+        if self.cluster is not None:
+            try:
+                self._record()
+            except Exception:  # noqa: BLE001 - closing after Ctrl-C may find it half gone
+                pass
+            try:
+                self.cluster.close(timeout=30)
+            except Exception:  # noqa: BLE001
+                pass
+        self.cancel_all()
+
+    def cancel_all(self) -> list[str]:
+        """Cancel the jobs this run submitted that are still queued or running; returns their ids."""
+        ids = list(self.jobs)
+        if not ids:
+            return []
+        states = _queue_states(self.s.kind, ids)
+        live = [j for j in ids if states is None or (j in states and states[j] not in ENDED)]
+        if live:
+            cancel = "scancel" if self.s.kind == "slurm" else "qdel"
+            try:
+                subprocess.run([cancel, *live], capture_output=True, timeout=60)
+            except (OSError, subprocess.TimeoutExpired):
+                pass
+        return live
+
+    # -------------------------------------------------------------------------------- the upkeep
+    def poll(self, force: bool = False) -> JobCounts:
+        """Look at the queue (at most every POLL seconds): the counts of pending and running jobs, and
+        ended jobs replaced (up to the limit). Raises NoWorkerJobs when every job has ended and none
+        may be replaced."""
+        now = time.monotonic()
+        if not force and now - self._last_poll < self.POLL:
+            return self.counts
+        self._last_poll = now
+        self._record()
+        live = self._live_names()
+        states = _queue_states(self.s.kind, [j for j, st in self.jobs.items() if st.ended_at is None])
+        for jid, st in self.jobs.items():
+            if st.ended_at is not None:
+                continue
+            if states is not None:
+                st.state = states.get(jid, "ENDED")
+            elif st.name in live:
+                st.state = "RUNNING"
+            if st.state == "RUNNING" or st.name in live:
+                st.seen_running = True
+            gone = st.state in ENDED or st.state == "ENDED"
+            if states is None and st.seen_running and st.name not in live:
+                gone = True  # no queue to ask: its workers left
+            if gone:
+                st.ended_at = now
+        self._replace_ended()
+        c = self.counts
+        c.pending = sum(1 for st in self.jobs.values() if st.ended_at is None and st.state != "RUNNING")
+        c.running = sum(1 for st in self.jobs.values() if st.ended_at is None and st.state == "RUNNING")
+        c.ended = sum(1 for st in self.jobs.values() if st.ended_at is not None)
+        if c.pending + c.running == 0:
+            ended = ", ".join(f"{j} {st.state}" for j, st in self.jobs.items())
+            raise NoWorkerJobs(
+                f"every worker job ended ({ended}) and {c.replaced} were replaced, the limit (--replacements "
+                f"{self.s.replacement_limit()}); the complete points are kept: run the same command again to run "
+                "only the missing ones"
+                + (f" (the jobs' output is in {self.log_directory})" if self.log_directory else "")
+            )
+        return c
+
+    def _live_names(self) -> set[str]:
+        """Job names with a Dask worker connected now (a job's workers are named <job name>-<i>)."""
+        try:
+            info = self.cluster.scheduler_info["workers"].values()
+        except Exception:  # noqa: BLE001
+            return set()
+        names = set()
+        for w in info:
+            n = str(w.get("name", ""))
+            names.add(n)
+            names.add(n.rsplit("-", 1)[0])
+        return names
+
+    def _replace_ended(self) -> None:
+        """Drop the ended jobs from the cluster and submit new ones in their place, within the limit."""
+        ended = [st for st in self.jobs.values() if st.ended_at is not None and st.name in self.cluster.workers]
+        if not ended:
+            return
+        names = [st.name for st in ended]
+
+        async def drop():
+            for n in names:
+                job = self.cluster.workers.pop(n, None)
+                self.cluster.worker_spec.pop(n, None)
+                if job is not None:
+                    try:
+                        await job.close()  # cancelling an ended job of ours: harmless
+                    except Exception:  # noqa: BLE001
+                        pass
+
+        self.cluster.sync(drop)
+        room = self.s.replacement_limit() - self.counts.replaced
+        want = min(len(names), max(0, room))
+        if want:
+            self.counts.replaced += want
+            alive = sum(1 for st in self.jobs.values() if st.ended_at is None)
+            self.cluster.scale(jobs=min(self.s.jobs, alive + want))
+            try:
+                self.cluster.sync(self.cluster._correct_state)
+            except Exception:  # noqa: BLE001 - a refused replacement: the jobs still alive go on
+                pass
+            self._record()
+
+
+def describe(settings: ClusterSettings, ranks: int) -> str:
+    """'2 SLURM jobs of 2 cores (1 worker of 2 ranks each), queue debug, walltime 01:00:00'."""
+    s = settings
+    w = s.workers_per_job(ranks)
+    parts = [
+        f"{s.jobs} {s.kind.upper()} job{'s' if s.jobs != 1 else ''} of {s.cores(ranks)} "
+        f"core{'s' if s.cores(ranks) != 1 else ''} ({w} worker{'s' if w != 1 else ''}"
+        + (f" of {ranks} ranks" if ranks > 1 else "")
+        + " each)"
+    ]
+    if s.queue:
+        parts.append(f"queue {s.queue}")
+    if s.account:
+        parts.append(f"account {s.account}")
+    parts.append(f"walltime {s.walltime}")
+    return ", ".join(parts)
+
+
+__all__ = [
+    "ClusterError",
+    "ClusterSettings",
+    "JobCluster",
+    "NoWorkerJobs",
+    "check",
+    "describe",
+    "from_table",
+    "merge",
+]
