@@ -562,6 +562,11 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
     why = contact.law_class.unsupported(chain) if scene.per_bead else None
     if why:
         raise SceneError(f"{source}: {why}")
+    if chain.beads == 1 and loading.kind != "striker" and effects.far_end != "wall":
+        raise SceneError(
+            f"{source}: [chain] beads = 1 has no contact to load: a single bead needs a striker "
+            '([loading] kind = "striker") or a wall ([boundary] far_end = "wall") to touch'
+        )
     return scene
 
 
@@ -602,7 +607,7 @@ def _read_chain(s: _Section, source: str) -> Chain:
         s.raw("beads")  # mark the key as read
         beads = None  # "auto": the planner chooses (granchain plan)
     else:
-        beads = s.integer("beads", low=2, what='number of beads; bead 1 is the loaded end, or "auto"')
+        beads = s.integer("beads", low=1, what='number of beads; bead 1 is the loaded end, or "auto"')
     radii = materials = None
     if isinstance(s.table.get("radius"), list):
         v = s.raw("radius")

@@ -100,3 +100,23 @@ def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
     elif "wall" in extra and i == n - 1:
         where += " (on the wall)"
     return omega, where
+
+
+def one_bead_impacts(scene) -> list[tuple[str, dict[str, float]]]:
+    """A one-bead scene's contacts as two-body impacts (models.two_body_impact), in the order they
+    happen: the striker on the bead (reduced mass, the striker's speed), then the bead on the wall (the
+    bead's mass, at the speed it was given or the striker's). Empty for longer chains."""
+    if scene.chain.beads != 1:
+        return []
+    m1, ld = float(scene.bead_masses[0]), scene.loading
+    v = 0.0 if ld.is_force else ld.velocity
+    out = []
+    if ld.kind == "striker":
+        ms = scene.striker_mass
+        out.append(("striker", models.two_body_impact(scene.striker_law, ms * m1 / (ms + m1), ld.velocity)))
+        v = ld.velocity * 2.0 * ms / (ms + m1)  # the bead's speed after an elastic impact, at most
+    elif ld.is_force:
+        v = ld.impulse / m1  # the load's momentum, all in the bead
+    if scene.effects.far_end == "wall" and v > 0.0:
+        out.append(("wall", models.two_body_impact(scene.wall_law, m1, v)))
+    return out

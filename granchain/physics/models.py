@@ -153,6 +153,61 @@ def inverse_decay_exponent(beta: float) -> float:
     return (1.0 + beta) / 2.0
 
 
+#: Hertz impact: the contact lasts HERTZ_IMPACT_DURATION delta_max / v (Johnson, Contact Mechanics,
+#: 1985, Sec. 11.1: t = 2.94 delta_max / v, the integral 2 int_0^1 dx / sqrt(1 - x^(5/2)))
+HERTZ_IMPACT_DURATION = 2.9432
+
+
+def hertz_impact(k: float, reduced_mass: float, velocity: float) -> dict[str, float]:
+    """Two elastic bodies meeting at relative velocity v (a striker on bead 1, a bead on a wall): F =
+    k delta^(3/2), m* the reduced mass (a wall: the bead's mass). The largest overlap delta_max =
+    (5 m* v^2 / (4 k))^(2/5), peak force F = k delta_max^(3/2) = k^(2/5) (5/4 m* v^2)^(3/5) and
+    contact duration 2.943 delta_max / v (Johnson 1985, Sec. 11.1)."""
+    delta = (5.0 * reduced_mass * velocity**2 / (4.0 * k)) ** 0.4
+    return {"peak_force": k * delta**1.5, "duration": HERTZ_IMPACT_DURATION * delta / velocity, "max_overlap": delta}
+
+
+def two_body_impact(law, reduced_mass: float, velocity: float) -> dict[str, float]:
+    """The same impact under any contact law (its loading, plastic and unloading branches), integrated:
+    velocity Verlet on m* delta'' = -F(delta, delta_max) from delta = 0 at v until the bodies part, at
+    about 2000 steps per contact. Returns peak_force, duration, max_overlap and the rebound velocity."""
+    k = float(np.max(np.asarray(law.k, dtype=float)))
+    guess = max(k**0.4 * (1.25 * reduced_mass * velocity**2) ** 0.6, velocity * math.sqrt(k * reduced_mass))
+    stiff = float(np.max(np.asarray(law.max_stiffness(2.0 * guess), dtype=float)))
+    dt = 2e-3 * math.sqrt(reduced_mass / stiff)
+    x, v, xmax, t, fpeak = 0.0, velocity, 0.0, 0.0, 0.0
+    f = 0.0
+    for _ in range(2_000_000):
+        v -= 0.5 * dt * f / reduced_mass
+        x += dt * v
+        t += dt
+        if x <= 0.0 and v < 0.0:
+            break
+        xmax = max(xmax, x)
+        f = float(law.force(np.array([x]), np.array([xmax]))[0])
+        fpeak = max(fpeak, f)
+        v -= 0.5 * dt * f / reduced_mass
+    return {"peak_force": fpeak, "duration": t, "max_overlap": xmax, "rebound_velocity": -v}
+
+
+def precompressed_sound_speed(k: float, static_force: float, mass: float, spacing: float) -> float:
+    """c0 = a sqrt(k_lin / m), k_lin = 3/2 k^(2/3) F0^(1/3): the long-wave sound speed of a Hertz chain
+    linearised about the static force F0, a the distance between neighbouring centres (Nesterenko,
+    Dynamics of Heterogeneous Materials, 2001, Sec. 1.1; Daraio et al., PRE 72, 016603, 2005, Eq. 1)."""
+    k_lin = 1.5 * k ** (2.0 / 3.0) * static_force ** (1.0 / 3.0)
+    return spacing * math.sqrt(k_lin / mass)
+
+
+def precompressed_solitary_wave_speed(c0: float, force_ratio: float) -> float:
+    """V_s = c0 / (f_r^(2/3) - 1) sqrt(4/15 (3 + 2 f_r^(5/3) - 5 f_r^(2/3))): the solitary wave of a
+    precompressed Hertz chain, f_r = F_m / F0 the ratio of its largest contact force (static force
+    included) to F0; c0 as f_r -> 1 (Nesterenko 2001, Sec. 1.3; Daraio et al., PRE 72, 016603, Eq. 2)."""
+    fr23 = force_ratio ** (2.0 / 3.0)
+    if force_ratio <= 1.0 + 1e-9:
+        return c0
+    return c0 / (fr23 - 1.0) * math.sqrt(4.0 / 15.0 * (3.0 + 2.0 * force_ratio ** (5.0 / 3.0) - 5.0 * fr23))
+
+
 def linear_sound_speed(k: float, mass: float, diameter: float) -> float:
     """c = D sqrt(k/m) (Sec. III B): the plastic loading front's speed, and the largest group
     velocity of a linear chain of stiffness k (nothing enters an undisturbed chain faster)."""

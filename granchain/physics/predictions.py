@@ -73,6 +73,12 @@ MODEL_DOMAINS: dict[str, tuple[str, str]] = {
     **{n: ("hertz", "any") for n in _HERTZ_ANY},
     **{n: ("bilinear", "short") for n in _BILINEAR_SHORT},
     **{n: ("bilinear", "long") for n in _BILINEAR_LONG},
+    # the effects' own regimes: a precompressed chain, two-body impacts of a striker or on the wall
+    "precompressed_sound_speed": ("hertz", "precompressed"),
+    "striker_impact_peak_force": ("hertz", "striker_impact"),
+    "striker_impact_duration": ("hertz", "striker_impact"),
+    "wall_impact_peak_force": ("hertz", "wall_impact"),
+    "wall_impact_duration": ("hertz", "wall_impact"),
     # a law's own models (granchain.physics.laws: ContactLaw.model_domains)
     **{n: (name, needs) for name, cls in LAWS.items() for n, needs in cls.model_domains.items()},
 }
@@ -111,6 +117,8 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
     if name not in MODEL_DOMAINS:
         raise ValueError(f"{name!r}: no such model; known: {', '.join([*SCENE_QUANTITIES, *MODEL_DOMAINS])}")
     law, needs = MODEL_DOMAINS[name]
+    if needs in EFFECT_DOMAINS:
+        return _effect_model_applies(law, needs, scene)
     why_not: list[str] = []
     if scene.contact.law != law:
         why_not.append(f"a {law} model; this chain's contact law is {scene.contact.law}")
@@ -141,10 +149,56 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
     return Applicability(True, f"{regime.text}; {chain}{wall}")
 
 
+#: the domains of the effects' models: what the scene must be, in words
+EFFECT_DOMAINS = {
+    "precompressed": "a uniform Hertz chain under static precompression, no dashpot",
+    "striker_impact": "a striker on one free bead, Hertz contact, no dashpot or precompression (two bodies)",
+    "wall_impact": "one bead given a velocity against the wall, Hertz contact, no dashpot or precompression",
+}
+
+
+def _effect_model_applies(law: str, needs: str, scene) -> Applicability:
+    """Applicability of the effects' models (EFFECT_DOMAINS), which hold where the paper's do not."""
+    why_not = []
+    if scene.contact.law != law:
+        why_not.append(f"a {law} model; this chain's contact law is {scene.contact.law}")
+    if scene.effects.dashpot:
+        why_not.append(f"viscous dashpot (gamma = {scene.effects.dashpot:g} N s/m)")
+    if needs == "precompressed":
+        if not scene.effects.precompression:
+            why_not.append("no static precompression")
+        if scene.per_bead:
+            why_not.append("the beads differ: c0 is for a uniform chain")
+    else:
+        if scene.effects.precompression:
+            why_not.append(f"static precompression F0 = {scene.effects.precompression:g} N")
+        if scene.chain.beads != 1:
+            why_not.append(f"{scene.chain.beads} beads: a two-body impact needs one bead (its neighbours push back)")
+        ld, wall = scene.loading, scene.effects.far_end == "wall"
+        if needs == "striker_impact" and (ld.kind != "striker" or wall):
+            why_not.append(f"a {ld.kind} load, far end {scene.effects.far_end}: needs a striker and a free bead")
+        if needs == "wall_impact" and (ld.kind != "velocity" or not wall):
+            why_not.append(f"a {ld.kind} load, far end {scene.effects.far_end}: needs a velocity load and the wall")
+    if why_not:
+        return Applicability(False, "; ".join(why_not))
+    return Applicability(True, "the scene is inside the model's domain")
+
+
+#: The paper's models are for a long chain: the solitary wave forms over the first few beads and is
+#: measured over the middle half of the chain; below this many beads they do not apply (a two-bead
+#: chain is a two-body impact: Eq. 8 gives 159.6 N where the exact impact gives 187.8 N)
+MIN_CHAIN_BEADS = 10
+
+
 def _outside_the_papers_chain(scene) -> list[str]:
     """Why the scene is not the paper's chain (uniform beads, no dashpot or precompression, the
     paper's loading), one reason each; empty when it is."""
     why_not: list[str] = []
+    if scene.chain.beads is not None and scene.chain.beads < MIN_CHAIN_BEADS:
+        why_not.append(
+            f"a chain of {scene.chain.beads} bead{'s' if scene.chain.beads > 1 else ''}: the paper's models are "
+            f"for a long chain, where the wave forms over the first beads (at least {MIN_CHAIN_BEADS})"
+        )
     if scene.per_bead:
         r = scene.chain.radii or (scene.chain.radius,)
         differ = [f"radii {min(r) * 1e3:.3g} to {max(r) * 1e3:.3g} mm: tapered or decorated"] if len(set(r)) > 1 else []
@@ -197,6 +251,7 @@ def _predict(scene) -> list[Prediction]:
         out.append(Prediction("loading_time_over_tau", ld.duration / scene.tau, "-", "T / tau (Eq. 7)", "always"))
         out.append(Prediction("amplitude", ld.amplitude, "N", "Eq. 4", "always", nondim=ld.amplitude / fs))
 
+    out += _effect_predictions(scene)
     if scene.contact.law == "hertz":
         fp = models.short_load_peak_force(impulse, m, scene.e_star, scene.r_star)
         out.append(
@@ -366,3 +421,53 @@ def transition_contact(
         if fs > lead[i]:
             return i + 1
     return None
+
+
+def _effect_predictions(scene) -> list[Prediction]:
+    """The effects' models (EFFECT_DOMAINS): the precompressed chain's sound speed, two-body impacts."""
+    if scene.contact.law != "hertz":
+        return []
+    out = []
+    f0 = scene.effects.precompression
+    if f0:
+        k, m = float(scene.law.k), scene.mass
+        spacing = scene.diameter - float(scene.law.static_overlap(f0))
+        out.append(
+            Prediction(
+                "precompressed_sound_speed",
+                models.precompressed_sound_speed(k, f0, m, spacing),
+                "m/s",
+                "c0 = a sqrt(k_lin/m), k_lin = 3/2 K^(2/3) F0^(1/3) (Nesterenko 2001, Sec. 1.1)",
+                EFFECT_DOMAINS["precompressed"] + "; the speed of a small perturbation's front",
+            )
+        )
+    if scene.chain.beads == 1:
+        ld, m1 = scene.loading, float(scene.bead_masses[0])
+        if ld.kind == "striker":
+            ms = scene.striker_mass
+            hit = models.hertz_impact(float(scene.striker_law.k), ms * m1 / (ms + m1), ld.velocity)
+            name, law_text = "striker_impact", "striker on bead 1, m* = M m / (M + m)"
+        elif ld.kind == "velocity" and scene.effects.far_end == "wall":
+            hit = models.hertz_impact(float(scene.wall_law.k), m1, ld.velocity)
+            name, law_text = "wall_impact", "bead on the flat, E* = E/(1-nu^2), R* = R, m* = m"
+        else:
+            return out
+        nd = EFFECT_DOMAINS[name]
+        out += [
+            Prediction(
+                f"{name}_peak_force",
+                hit["peak_force"],
+                "N",
+                f"Hertz impact: K^(2/5) (5/4 m* v^2)^(3/5), {law_text} (Johnson 1985, Sec. 11.1)",
+                nd,
+                nondim=hit["peak_force"] / scene.force_scale,
+            ),
+            Prediction(
+                f"{name}_duration",
+                hit["duration"],
+                "s",
+                "Hertz impact: 2.943 delta_max / v (Johnson 1985, Sec. 11.1)",
+                nd,
+            ),
+        ]
+    return out

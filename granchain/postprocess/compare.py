@@ -77,6 +77,8 @@ ROW_MODELS: dict[tuple[str, str], tuple[tuple[str, str], ...]] = {
     ("hertz", "wave_speed"): (("nesterenko_wave_speed", "Nesterenko at the reference's leading peak"),),
     ("bilinear", "peak_force_contact_1"): (("first_contact_peak_force", "Eq. A2 (short loading)"),),
     ("bilinear", "wave_speed"): (("long_load_c", "c = D sqrt(k/m) (Sec. III B, long loading)"),),
+    ("hertz", "striker_peak_force"): (("striker_impact_peak_force", "Hertz impact (two bodies)"),),
+    ("hertz", "wall_peak_force"): (("wall_impact_peak_force", "Hertz impact (bead on the flat)"),),
 }
 
 
@@ -110,6 +112,9 @@ def _model_rows(scene, ref_obs: dict) -> dict[str, tuple[float | None, str, bool
 
 def _not_measured(sol, obs: dict) -> dict[str, str]:
     """Why a quantity can be missing from both runs (keyed like the rows)."""
+    if not obs["window"]:  # one bead: no bead-bead contact (the observables say why)
+        ended = f"before the run ended at t = {sol.end_time:g} s"
+        return {"striker_peak_force": f"the striker did not touch bead 1 {ended}"}
     w0, w1 = obs["window"]
     ended = f"before the run ended at t = {sol.end_time:g} s"
     out = {
@@ -135,7 +140,7 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
     oa, ob = a.observables(), b.observables()
     modl = _model_rows(scene, ob)
     sa, sb = a.solution, b.solution
-    w0, w1 = ob["window"]
+    w0, w1 = ob["window"] or (0, 0)  # (one bead: no bead-bead contact, no contact rows)
 
     def complete(sol, contact: int) -> bool:  # only a complete peak is a number to compare
         return bool(np.isfinite(sol.time_of_peak[contact - 1]) and sol.complete[contact - 1])
@@ -143,20 +148,26 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
     def peak(sol, contact: int) -> float | None:
         return float(sol.peak_force[contact - 1]) if complete(sol, contact) else None
 
-    rows: list[tuple[str, str, float | None, float | None]] = [
-        ("leading_peak_force", "N", oa["leading_peak_force"], ob["leading_peak_force"]),
-        ("leading_peak_force_nondim", "-", oa["leading_peak_force_nondim"], ob["leading_peak_force_nondim"]),
-        ("wave_speed", "m/s", oa["wave_speed"], ob["wave_speed"]),
-        ("max_peak_force", "N", oa["max_peak_force"], ob["max_peak_force"]),
-        ("peak_force_contact_1", "N", peak(sa, 1), peak(sb, 1)),
-        (f"peak_force_contact_{w0}", "N", peak(sa, w0), peak(sb, w0)),
-        # the front's arrival: the leading pulse's time (peaks.leading_pulse), not the largest peak's
-        (
-            f"arrival_time_contact_{w1}",
-            "s",
-            _finite(sa.leading_pulse_time[w1 - 1]),
-            _finite(sb.leading_pulse_time[w1 - 1]),
-        ),
+    rows: list[tuple[str, str, float | None, float | None]] = []
+    if scene.n_contacts:
+        rows += [
+            ("leading_peak_force", "N", oa["leading_peak_force"], ob["leading_peak_force"]),
+            ("leading_peak_force_nondim", "-", oa["leading_peak_force_nondim"], ob["leading_peak_force_nondim"]),
+            ("wave_speed", "m/s", oa["wave_speed"], ob["wave_speed"]),
+            ("max_peak_force", "N", oa["max_peak_force"], ob["max_peak_force"]),
+            ("peak_force_contact_1", "N", peak(sa, 1), peak(sb, 1)),
+            (f"peak_force_contact_{w0}", "N", peak(sa, w0), peak(sb, w0)),
+            # the front's arrival: the leading pulse's time (peaks.leading_pulse), not the largest peak's
+            (
+                f"arrival_time_contact_{w1}",
+                "s",
+                _finite(sa.leading_pulse_time[w1 - 1]),
+                _finite(sb.leading_pulse_time[w1 - 1]),
+            ),
+        ]
+    if scene.loading.kind == "striker":
+        rows.append(("striker_peak_force", "N", sa.striker_peak_force, sb.striker_peak_force))
+    rows += [
         ("final_kinetic_energy", "J", float(sa.kinetic[-1]), float(sb.kinetic[-1])),
         ("momentum", "N s", sa.momentum, sb.momentum),
     ]
@@ -192,7 +203,11 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
         rows = [(q, u, None, None) if q in apart else (q, u, va, vb) for q, u, va, vb in rows]
     ea, eb = _errors(a, w0, w1), _errors(b, w0, w1)
     out = []
+    seen: set[str] = set()
     for q, unit, va, vb in rows:
+        if q in seen:  # each quantity once (on two beads the window's first contact is contact 1)
+            continue
+        seen.add(q)
         mv, msrc, applies = modl.get(q, (None, "", None))
         out.append(CompareRow(q, unit, va, vb, mv, msrc, rtol, applies, why.get(q), ea.get(q), eb.get(q)))
     return out
@@ -204,6 +219,9 @@ def _errors(result, w0: int, w1: int) -> dict[str, float]:
     if e is None or e.peak_force is None:
         return {}
     out = {name: v["error"] for name, v in e.observables.items() if v["error"] is not None}
+    out.update({name: v["error"] for name, v in getattr(e, "end_peaks", {}).items() if v["error"] is not None})
+    if not w0:  # one bead: no bead-bead contact
+        return out
     for c in (1, w0):
         if np.isfinite(e.peak_force.error[c - 1]):
             out[f"peak_force_contact_{c}"] = float(e.peak_force.error[c - 1])

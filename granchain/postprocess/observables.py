@@ -72,6 +72,15 @@ def _why_no_leading_pulse(solution, contact: int) -> str:
 def measure_observables(scene, solution, missing: dict | None = None) -> dict:
     """The observables of a run (complete peaks only); `missing`, if given, gets name -> reason for each None."""
     why: dict[str, str] = {}
+    if scene.n_contacts == 0:  # one bead: its contacts are the striker's and the wall's (end_fields)
+        names = ("leading_peak_force", "leading_peak_force_nondim", "wave_speed", "wave_speed_stderr")
+        out = dict.fromkeys((*names, "max_peak_force", "max_peak_contact"))
+        out.update(window=[], leading_peak_contact=None, wave_speed_contacts=0)
+        for name in (*names, "max_peak_force", "max_peak_contact"):
+            why[name] = "one bead has no bead-bead contact: its contact's peak is the striker's or the wall's"
+        if missing is not None:
+            missing.update(why)
+        return out
     complete = np.asarray(solution.complete, dtype=bool)
     a, b = scene.window
     contacts = np.arange(a, b + 1)

@@ -50,6 +50,8 @@ class ErrorReport:
     why_none_4dt: str | None = None  # why the order was not checked (the 4 dt run failed)
     unreliable_contacts: list[int] = field(default_factory=list)  # measured contacts without an estimate
     against: str | None = None  # "rk4": measured against RK4 runs at 2 dt and 4 dt (or dt, 2 dt), not by Richardson
+    #: the effects' own contacts (a striker's, a wall's): name -> value, error, status
+    end_peaks: dict[str, dict] = field(default_factory=dict)
 
     def summary(self, main_wall_time: float) -> dict:
         """The summary.json entry."""
@@ -73,6 +75,7 @@ class ErrorReport:
             "unreliable_contacts": self.unreliable_contacts,
             "peak_status_counts": counts,
             "observables": self.observables,
+            "end_peaks": self.end_peaks,
             "why_none": self.why_none,
             "why_no_order_check": self.why_none_4dt,
         }
@@ -249,13 +252,19 @@ def estimate_errors(result, run_one, method: str, stable_timestep: float, run_rk
 
     _largest(report, scene, sol)
 
+    def bars_of(values, times):
+        v = [float(x) for x in values] + ([None] if coarser is None else [])
+        t = None if times is None else tuple([float(x)] for x in times) + ((None,) if coarser is None else ())
+        return richardson([v[0]], [v[1]], None if v[2] is None else [v[2]], p, times=t, jump_time=jump, orders=orders)
+
+    report.end_peaks = _end_peaks((sol, *runs), bars_of)
     obs = [measure_observables(scene, s) for s in (sol, coarse) + ((coarser,) if coarser is not None else ())]
-    b = scene.window[1] - 1
+    b = max(scene.window[1] - 1, 0)
     for name in ESTIMATED_OBSERVABLES:
         vals = [o.get(name) for o in obs]
         v = [np.nan if x is None else float(x) for x in vals] + ([None] if coarser is None else [])
         times = None
-        if name.startswith("leading_peak_force"):
+        if name.startswith("leading_peak_force") and scene.n_contacts:
             times = tuple(None if s is None else float(s.leading_pulse_time[b]) for s in (sol, coarse, coarser))
         # max_peak_force: the largest over contacts is continuous in the runs even where its contact
         # changes (a steady wave peaks alike everywhere), so no pulse check; wave_speed: a fit
@@ -313,13 +322,20 @@ def _against_rk4(result, run_rk4) -> ErrorReport:
     report.leading_pulse_force = against_reference(*lf, times=(lt[0], lt[1]), jump_time=jump)
     report.arrival_time = against_reference(*lt, times=(lt[0], lt[1]), jump_time=jump)
     _largest(report, scene, sol)
+
+    def bars_of(values, times):
+        v = [float(x) for x in values]
+        t = None if times is None else ([float(times[0])], [float(times[1])])
+        return against_reference([v[0]], [v[1]], [v[2]], times=t, jump_time=jump)
+
+    report.end_peaks = _end_peaks((sol, *runs), bars_of)
     obs = [measure_observables(scene, s) for s in (sol, *runs)]
-    b = scene.window[1] - 1
+    b = max(scene.window[1] - 1, 0)
     for name in ESTIMATED_OBSERVABLES:
         vals = [o.get(name) for o in obs]
         v = [np.nan if x is None else float(x) for x in vals]
         times = None
-        if name.startswith("leading_peak_force"):
+        if name.startswith("leading_peak_force") and scene.n_contacts:
             times = tuple([float(s.leading_pulse_time[b])] for s in (sol, runs[0]))
         bars = against_reference([v[0]], [v[1]], [v[2]], times=times, jump_time=jump)
         report.observables[name] = {
@@ -328,6 +344,30 @@ def _against_rk4(result, run_rk4) -> ErrorReport:
             "status": str(bars.status[0]),
         }
     return report
+
+
+#: the effects' own contacts that get error bars: peak force -> its time (ChainSolution fields)
+END_PEAKS = {"striker_peak_force": "striker_time_of_peak", "wall_peak_force": "wall_time_of_peak"}
+
+
+def _end_peaks(solutions, bars_of) -> dict[str, dict]:
+    """Error bars of the striker's and the wall's peak forces and times from the run and its
+    companions (bars_of(values, times) -> ErrorBars of one number, the estimator of the report)."""
+    out: dict[str, dict] = {}
+    for force, when in END_PEAKS.items():
+        vals = [getattr(s, force) for s in solutions]
+        if vals[0] is None or any(v is None for v in vals):
+            continue
+        times = [getattr(s, when) for s in solutions]
+        for name, values, at in ((force, vals, times), (when, times, None)):
+            bars = bars_of(values, at)
+            err = float(bars.error[0])
+            out[name] = {
+                "value": float(values[0]),
+                "error": err if np.isfinite(err) else None,
+                "status": str(bars.status[0]),
+            }
+    return out
 
 
 def _largest(report: ErrorReport, scene, sol) -> None:

@@ -36,6 +36,7 @@ from granchain.physics.estimates import (
     expected_peak_force,
     highest_frequency,
     max_stiffness,
+    one_bead_impacts,
     step_equivalent,
 )
 from granchain.scene import AUTO, Scene, SceneError, scene_from_dict, scene_to_dict
@@ -210,7 +211,7 @@ def last_measured_contact(scene) -> int | None:
         cands.append(max(o.peak_force))
     if o.window is not None:
         cands.append(o.window[1])
-    elif o.peak_force is True and scene.chain.beads is not None:
+    elif o.peak_force is True and scene.chain.beads is not None and scene.n_contacts:
         cands.append(scene.window[1])
     return max(cands) if cands else None
 
@@ -262,6 +263,19 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     last = last_measured_contact(scene)
     slow, fast = wave_speeds(scene)
     end = scene.run.end_time
+    impacts = one_bead_impacts(scene)
+    if end is None and impacts:
+        load = scene.loading.duration if scene.loading.is_force else 0.0
+        end = load + 1.5 * sum(i["duration"] for _, i in impacts)
+        choices.append(
+            PlanChoice(
+                "end_time",
+                end,
+                "one bead: 1.5 x the contact time of "
+                + " then ".join(f"the {name}'s impact ({i['duration']:.3g} s)" for name, i in impacts)
+                + (f", after a load of {load:.3g} s" if load else ""),
+            )
+        )
     if end is None:
         if last is None:
             raise SceneError(
