@@ -94,9 +94,19 @@ def check_formats(formats: str | Iterable[str]) -> tuple[str, ...]:
     return tuple(dict.fromkeys(fmts))
 
 
+class ChainFigure(Figure):
+    """A matplotlib Figure made outside pyplot that a notebook shows by itself (``_repr_png_``), even
+    before pyplot has chosen a backend; otherwise a plain Figure (``savefig``, ``axes``, ...)."""
+
+    def _repr_png_(self) -> bytes:
+        buf = io.BytesIO()
+        self.savefig(buf, format="png", bbox_inches="tight")
+        return buf.getvalue()
+
+
 def _new_figure(**kw) -> Figure:
     """A Figure outside pyplot: no backend is chosen or changed, no global figure list grows."""
-    return Figure(**kw)
+    return ChainFigure(**kw)
 
 
 def _unsafe(e: OSError) -> PlotError:
