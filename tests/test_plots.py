@@ -513,3 +513,21 @@ def test_control_characters_of_a_title_are_escaped_in_figures(compare_dir, tmp_p
     fig = granchain.load_run(r).plot("peaks")
     title = fig.axes[0].get_title()
     assert "\x07" not in title and "\x1b" not in title and "\\x1b[2J" in title
+
+
+@pytest.mark.parametrize("kind", ["peaks", "histories", "snapshots", "heatmap"])
+def test_plot_functions_return_figures_and_save_only_when_asked(snaps_run, tmp_path, kind):
+    from matplotlib.figure import Figure
+
+    r = copy(snaps_run, tmp_path)
+    before = sorted(p.name for p in r.iterdir())
+    plot = getattr(plots, f"plot_{kind}")
+    assert isinstance(plot(r), Figure)
+    assert sorted(p.name for p in r.iterdir()) == before
+    elsewhere = tmp_path / "figures"
+    elsewhere.mkdir()
+    assert isinstance(plot(r, save=elsewhere, formats="png,svg"), Figure)
+    assert sorted(p.name for p in elsewhere.iterdir()) == sorted([f"{kind}.png", f"{kind}.svg", f"{kind}_plot.csv"])
+    assert_valid(elsewhere / f"{kind}.png", "png")
+    plot(r, save=True)
+    assert (r / f"{kind}.png").exists() and (r / f"{kind}_plot.csv").exists()

@@ -5,6 +5,8 @@ The figure functions (figure_peaks, figure_histories, figure_snapshots, figure_h
 kind); RunResult.plot) take a RunResult or a run directory and return a matplotlib Figure: not saved,
 not shown, and made without pyplot, so importing or calling them never changes matplotlib's backend
 or pyplot's figures (a notebook shows a returned Figure as the cell's value; ``fig.savefig`` writes it).
+plot_peaks, plot_histories, plot_snapshots and plot_heatmap return the same Figure and save it only
+when asked (``save=`` a directory, or True for the run's own, with the plotted data as CSV).
 
 plot_run and plot_compare write each figure in every requested format (``formats``: any of png,
 pdf, svg), with the CSV of its plotted data beside it (``<figure>_plot.csv``), atomically and never
@@ -329,8 +331,8 @@ def figure_histories(run) -> Figure:
     return drawn[0]
 
 
-def plot_histories(run, formats=("png",)) -> list[Path]:
-    """histories.<format> and histories_plot.csv in a run directory; [] when it has no histories."""
+def write_histories(run, formats=("png",)) -> list[Path]:
+    """(plot_run) histories.<format> and histories_plot.csv in a run directory; [] when it has no histories."""
     r = as_result(run)
     drawn = _draw_histories(r)
     if drawn is None:
@@ -477,8 +479,8 @@ def figure_peaks(run, log: bool = True) -> Figure:
     return _draw_peaks(as_result(run), log)[0]
 
 
-def plot_peaks(run, log: bool = True, formats=("png",)) -> list[Path]:
-    """peaks.<format> and peaks_plot.csv in a run directory."""
+def write_peaks(run, log: bool = True, formats=("png",)) -> list[Path]:
+    """(plot_run) peaks.<format> and peaks_plot.csv in a run directory."""
     r = as_result(run)
     fig, header, cols = _draw_peaks(r, log)
     made = _save(fig, r.path / "peaks", formats)
@@ -533,8 +535,8 @@ def figure_snapshots(run) -> Figure:
     return drawn[0]
 
 
-def plot_snapshots(run, formats=("png",)) -> list[Path]:
-    """snapshots.<format> and snapshots_plot.csv in a run directory; [] when it has no snapshots."""
+def write_snapshots(run, formats=("png",)) -> list[Path]:
+    """(plot_run) snapshots.<format> and snapshots_plot.csv in a run directory; [] when it has no snapshots."""
     r = as_result(run)
     drawn = _draw_snapshots(r)
     if drawn is None:
@@ -699,8 +701,8 @@ def figure_heatmap(run) -> Figure:
     return _draw_heatmap(r, st)[0]
 
 
-def plot_heatmap(run_dir, formats=("png",), skipped: dict[str, str] | None = None) -> list[Path]:
-    """The x-t diagram of contact force (heatmap.<format>); [] and the reason in skipped["heatmap"] (and
+def write_heatmap(run_dir, formats=("png",), skipped: dict[str, str] | None = None) -> list[Path]:
+    """(plot_run) The x-t diagram of contact force (heatmap.<format>); [] and the reason in skipped["heatmap"] (and
     the log) when the run directory has no whole-chain time data."""
     formats = check_formats(formats)
     r = as_result(run_dir)
@@ -714,6 +716,54 @@ def plot_heatmap(run_dir, formats=("png",), skipped: dict[str, str] | None = Non
     made = _save(fig, r.path / "heatmap", formats)
     _write_csv(r.path / "heatmap_plot.csv", header, cols)
     return made
+
+
+def _saved(fig: Figure, r: RunResult, name: str, header, cols, save, formats) -> Figure:
+    """fig, and, when save is a directory (True: the run's own), name.<format> and name_plot.csv in it."""
+    if save is None or save is False:
+        return fig
+    d = r.path if save is True else Path(save)
+    if d is None:
+        raise PlotError("save=True writes into the run's directory, and this result has none: give save=DIRECTORY")
+    _save(fig, Path(d) / name, formats)
+    _write_csv(Path(d) / f"{name}_plot.csv", header, cols)
+    return fig
+
+
+def plot_peaks(run, log: bool = True, save=None, formats=("png",)) -> Figure:
+    """figure_peaks, written too when asked: save a directory (True: the run directory) gets
+    peaks.<format> for each format and peaks_plot.csv (the plotted data). Returns the Figure."""
+    r = as_result(run)
+    fig, header, cols = _draw_peaks(r, log)
+    return _saved(fig, r, "peaks", header, cols, save, formats)
+
+
+def plot_histories(run, save=None, formats=("png",)) -> Figure:
+    """figure_histories, written too when asked (save: as plot_peaks)."""
+    r = as_result(run)
+    drawn = _draw_histories(r)
+    if drawn is None:
+        figure_histories(r)  # raises, with the fix
+    return _saved(drawn[0], r, "histories", drawn[1], drawn[2], save, formats)
+
+
+def plot_snapshots(run, save=None, formats=("png",)) -> Figure:
+    """figure_snapshots, written too when asked (save: as plot_peaks)."""
+    r = as_result(run)
+    drawn = _draw_snapshots(r)
+    if drawn is None:
+        figure_snapshots(r)  # raises, with the fix
+    return _saved(drawn[0], r, "snapshots", drawn[1], drawn[2], save, formats)
+
+
+def plot_heatmap(run, save=None, formats=("png",)) -> Figure:
+    """figure_heatmap, written too when asked (save: as plot_peaks)."""
+    r = as_result(run)
+    st, why = spacetime_force(r)
+    if st is None:
+        raise PlotError(why)
+    fig, header, cols = _draw_heatmap(r, st)
+    return _saved(fig, r, "heatmap", header, cols, save, formats)
 
 
 #: the figures of a run: figure(result, kind) and RunResult.plot(kind)
@@ -772,10 +822,10 @@ def plot_run(run_dir, log: bool = True, formats=("png",), skipped: dict[str, str
     if r.path is None:
         raise PlotError("plot_run writes into a run directory: give its path (or figure(result, kind) for a Figure)")
     return [
-        *plot_peaks(r, log, formats),
-        *plot_histories(r, formats),
-        *plot_snapshots(r, formats),
-        *plot_heatmap(r, formats, skipped),
+        *write_peaks(r, log, formats),
+        *write_histories(r, formats),
+        *write_snapshots(r, formats),
+        *write_heatmap(r, formats, skipped),
     ]
 
 
