@@ -16,6 +16,10 @@ Grammar (``**`` binds tighter than a unary sign and groups to the right, as in P
 A NAME is letters, digits, ``_`` and dots (``loading.amplitude``). :func:`parse` turns the text into
 a small tree (checked once, before any point is made); :func:`evaluate` computes it for one point's
 values. Every problem is an :class:`ExpressionError` naming the expression and the place.
+
+An expression is at most MAX_LENGTH characters and its tree at most MAX_DEPTH operations deep
+(parentheses, signs and chained operators all count): the parser and the evaluator recurse, and a
+file someone else wrote must not reach Python's recursion limit (a RecursionError, not a message).
 """
 
 from __future__ import annotations
@@ -29,6 +33,12 @@ from granchain.errors import GranchainError
 
 class ExpressionError(GranchainError, ValueError):
     """An expression that cannot be read or computed; the message names it and the fix."""
+
+
+#: the longest expression read (characters)
+MAX_LENGTH = 10_000
+#: the deepest expression tree read: nested parentheses or signs, or operators chained (a + b + ...)
+MAX_DEPTH = 100
 
 
 _TOKEN = re.compile(
@@ -81,6 +91,15 @@ class _Parser:
         self.text = text
         self.toks = _tokens(text)
         self.i = 0
+        self.depth = 0  # parentheses and signs open now
+
+    def nest(self, at: int) -> None:
+        self.depth += 1
+        if self.depth > MAX_DEPTH:
+            raise ExpressionError(
+                f"expression {_short(self.text)}: nested more than {MAX_DEPTH} deep (parentheses, signs or powers) at "
+                f"position {at + 1}; split it into several [derive] keys"
+            )
 
     def peek(self) -> tuple[str, str, int] | None:
         return self.toks[self.i] if self.i < len(self.toks) else None
@@ -112,15 +131,20 @@ class _Parser:
 
     def unary(self):
         if self.is_op("+", "-"):
-            op = self.take()[1]
-            return Unary(op, self.unary())
+            _, op, at = self.take()
+            self.nest(at)
+            node = Unary(op, self.unary())
+            self.depth -= 1
+            return node
         return self.power()
 
     def power(self):
         node = self.atom()
         if self.is_op("**"):
-            self.take()
+            at = self.take()[2]
+            self.nest(at)
             node = Binary("**", node, self.unary())
+            self.depth -= 1
         return node
 
     def atom(self):
@@ -135,7 +159,9 @@ class _Parser:
                 )
             return Name(value)
         if value == "(":
+            self.nest(at)
             node = self.expr()
+            self.depth -= 1
             if not self.is_op(")"):
                 raise ExpressionError(f"expression {self.text!r}: '(' at position {at + 1} is never closed")
             self.take()
@@ -148,13 +174,42 @@ class _Parser:
 def parse(text: str):
     """The expression's tree; raises ExpressionError for anything but the grammar above."""
     if not isinstance(text, str) or not text.strip():
-        raise ExpressionError(f'expression {text!r}: give a non-empty string such as "impulse / amplitude"')
+        raise ExpressionError(f'expression {_short(text)}: give a non-empty string such as "impulse / amplitude"')
+    if len(text) > MAX_LENGTH:
+        raise ExpressionError(
+            f"expression {_short(text)}: {len(text)} characters, more than {MAX_LENGTH}; split it into several "
+            "[derive] keys"
+        )
     p = _Parser(text)
     node = p.expr()
     if p.peek() is not None:
         kind, value, at = p.peek()
         raise ExpressionError(f"expression {text!r}: unexpected {value!r} at position {at + 1}")
+    depth = _depth(node)
+    if depth > MAX_DEPTH:
+        raise ExpressionError(
+            f"expression {_short(text)}: {depth} operations deep (a chain such as a + b + c + ... counts one "
+            f"each), more than {MAX_DEPTH}; split it into several [derive] keys"
+        )
     return node
+
+
+def _short(text) -> str:
+    r = repr(text)
+    return r if len(r) <= 80 else r[:60] + "..." + r[-15:]
+
+
+def _depth(node) -> int:
+    """The depth of an expression tree, without recursion (it is checked before anything recurses)."""
+    deepest, stack = 0, [(node, 1)]
+    while stack:
+        n, d = stack.pop()
+        deepest = max(deepest, d)
+        if isinstance(n, Unary):
+            stack.append((n.operand, d + 1))
+        elif isinstance(n, Binary):
+            stack += [(n.left, d + 1), (n.right, d + 1)]
+    return deepest
 
 
 def names(node) -> set[str]:
