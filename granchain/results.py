@@ -1,7 +1,10 @@
 """The one result format every backend produces, and the run directory it is written to.
 
-A backend (reference solver or LAMMPS) fills a :class:`ChainSolution`; :func:`write_run_dir`
-turns it into a run directory:
+A backend (reference solver or LAMMPS) fills a :class:`ChainSolution`, wrapped in a
+:class:`RunResult`: the tables researchers use (``peaks`` and ``energy`` as pandas DataFrames,
+``histories`` and ``snapshots`` as xarray Datasets, units in their attrs), ``summary`` (a dict), a
+short display (``repr``, ``_repr_html_``) and ``plot``. granchain.rundir.write_run_dir turns it into
+a run directory; granchain.workflows.load.load_run reads one back into the same RunResult:
 
     scene.toml      the scene as given
     summary.json    backend, method, timestep, steps, wall_time, price (RunResult.price: start-up,
