@@ -51,6 +51,11 @@ def run_dir_of(path: str | Path) -> Path:
         return p
     if (p / CAMPAIGN_RUN_DIR / "summary.json").exists():
         return p / CAMPAIGN_RUN_DIR
+    if (p / "lammps" / "summary.json").exists() and (p / "reference" / "summary.json").exists():
+        raise LoadRunError(
+            f"{p}: a compare directory (granchain compare): load each run, load_run('{p / 'lammps'}') and "
+            f"load_run('{p / 'reference'}')"
+        )
     raise LoadRunError(
         f"{p}: not a complete run directory (no summary.json; an interrupted run or a directory of "
         "'granchain render' not yet collected: run 'granchain collect' on it)"
