@@ -10,6 +10,8 @@ import math
 import subprocess
 import sys
 import tomllib
+import uuid
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +20,8 @@ import pandas.testing as pdt
 import pytest
 import xarray as xr
 import xarray.testing as xrt
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import granchain
 from granchain.cli import main
@@ -25,6 +29,8 @@ from granchain.lammps.build import plugin_env
 from granchain.lammps.runner import LammpsRunResult
 from granchain.results import PEAK_UNITS, RunResult
 from granchain.workflows.collect import CollectedRunResult
+
+from .scenegen import scenes
 
 BIN = Path(sys.executable).parent
 
@@ -225,3 +231,17 @@ def test_nan_survives_the_round_trip(scene, tmp_path):
     assert unreached.any()  # the wave has not reached the far contacts: nan in the table
     assert np.isnan(loaded.peaks["time_of_peak"].to_numpy()[unreached]).all()
     assert math.isnan(float(loaded.peaks["arrival_time"].iloc[-1]))
+
+
+@pytest.mark.slow
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(sc=scenes(max_beads=24), method=st.sampled_from(["rk4", "verlet"]))
+def test_every_valid_scene_round_trips(sc, method, tmp_path):
+    """Whatever the law, load, effects and per-bead chain: the directory reads back to the result."""
+    out = tmp_path / f"r-{uuid.uuid4().hex}"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # accuracy and output-size notes: not the point here
+        mem = granchain.run(sc, method=method, out=out)
+    loaded = granchain.load_run(out)
+    assert_same_result(mem, loaded)
+    assert len(repr(loaded)) < 2000 and len(repr(mem)) < 2000

@@ -9,6 +9,8 @@ import subprocess
 import sys
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 import granchain
 from granchain.cli import main
@@ -104,3 +106,18 @@ def test_errors_and_warnings_are_printed_escaped(tmp_path, capfd):
     assert err.startswith("granchain: error: ")
     no_control(err)
     assert r"bad\x1b[2J.toml" in err
+
+
+@given(text=st.text(), limit=st.one_of(st.none(), st.integers(3, 200)))
+def test_printable_text_has_no_control_characters(text, limit):
+    """Whatever a scene's text holds, what granchain prints of it moves no cursor and rings no bell,
+    and keeps every printable character as it is."""
+    from granchain.results import printable
+
+    out = printable(text, limit)
+    no_control(out.replace("\n", "").replace("\t", ""))
+    assert "\n" not in out and "\t" not in out and "\x1b" not in out
+    if limit is not None:
+        assert len(out) <= limit
+    if text.isprintable() and (limit is None or len(text) <= limit):
+        assert out == text
