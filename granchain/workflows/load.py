@@ -50,6 +50,10 @@ def run_dir_of(path: str | Path) -> Path:
     if (p / "summary.json").exists() or (p / "summary.json").is_symlink():
         return p
     if (p / CAMPAIGN_RUN_DIR / "summary.json").exists():
+        if (p / CAMPAIGN_RUN_DIR).is_symlink():  # a job directory's run/ is read only as itself
+            raise LoadRunError(
+                f"{p / CAMPAIGN_RUN_DIR}: is a symbolic link; a campaign point's run/ is read only as itself"
+            )
         return p / CAMPAIGN_RUN_DIR
     if (p / "lammps" / "summary.json").exists() and (p / "reference" / "summary.json").exists():
         raise LoadRunError(
