@@ -388,6 +388,10 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
   // constants are one record (init_one); with one atom type, one record for the whole loop
   const double dt = update->dt;
   const double gam = gamma;
+  // the dashpot's energy of a step: its power at the step's end (half-step velocities) times dt, as
+  // the reference books it; the evaluation at t = 0 ends no step (a precompressed contact closing
+  // at t = 0 has power there, which belongs to no step)
+  const bool dash_tally = new_sample && t > 0.0;
   // the loop is instantiated for (one atom type or several) x (dashpot or not) x (energy/virial tallied
   // this step or not): none of the three is tested per pair, and a step without tallies computes no
   // energy (the tallies come every energy sample, 1% of the steps)
@@ -448,7 +452,7 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
             -(delx * (vv[i][0] - vv[j][0]) + dely * (vv[i][1] - vv[j][1]) + delz * (vv[i][2] - vv[j][2])) / r;
         const double felastic = fmag;
         fmag = MAX(felastic + gam * rate, 0.0);
-        if (new_sample && left < nlocal) edash[left] += (fmag - felastic) * rate * dt;
+        if (dash_tally && left < nlocal) edash[left] += (fmag - felastic) * rate * dt;
       }
       if (left < nlocal) {
         fcq[left] = fmag;

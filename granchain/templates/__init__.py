@@ -279,7 +279,8 @@ def precompression_overlaps(scene) -> dict:
     per_contact = []
     if scene.per_bead:
         per_contact = [(layout.first_id + i, float(alpha0[i])) for i in range(scene.n_contacts)]
-    return {"beads": float(alpha0[0]), "wall": float(alpha0[-1]) if wall else 0.0, "per_contact": per_contact}
+    beads = float(alpha0[0]) if scene.n_contacts else 0.0  # (one bead: only the wall's contact)
+    return {"beads": beads, "wall": float(alpha0[-1]) if wall else 0.0, "per_contact": per_contact}
 
 
 MAX_BEAD_KINDS = 200  # pair_coeff lines grow as kinds^2 / 2
