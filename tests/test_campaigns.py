@@ -796,3 +796,29 @@ def test_the_bundled_fig1_campaign_reads():
     c = load_campaign_file(resources.files("granchain.campaigns") / "fig1-transition.toml")
     assert c.kind == "search" and c.outer_keys == ("loading.amplitude",)
     validate(c)
+
+
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        (
+            '[vary]\n"loading.amplitude" = { log = [1.0, 10.0], num = 1000000000000 }\n',
+            r"\[vary\] 'loading.amplitude' makes 1e\+12 values; a campaign has at most 100000 points",
+        ),
+        (
+            '[vary]\n"loading.amplitude" = { linear = [1.0, 10.0], num = 1000 }\n'
+            '"loading.duration" = { linear = [1e-6, 1e-5], num = 1000 }\n',
+            r"has 1e\+06 points or more; a campaign has at most 100000",
+        ),
+        (
+            '[zip]\n"loading.amplitude" = { linear = [1.0, 10.0], num = 200000 }\n',
+            r"\[zip\] 'loading.amplitude' makes 200000 values; a campaign has at most 100000 points",
+        ),
+        ('[vary]\n"chain.beads" = [20, 1000000000]\n', r"'chain.beads' = 1000000000: a campaign point has at most"),
+    ],
+)
+def test_a_grid_too_big_is_refused_from_its_lengths_before_any_value_is_made(body, message):
+    """num = 1e12 is refused from the count (not after making a trillion values: a MemoryError after
+    41 s before); a varied chain.beads of 1e9 before its point is planned (which did not end)."""
+    with pytest.raises(CampaignError, match=message):
+        parse_campaign(campaign_text(body))

@@ -192,6 +192,8 @@ def run_campaign(
         runner.forget_interrupted(interrupted)
         if campaign.kind == "grid":
             write_tables(ws)
+        if ex.jobs is not None and ex.jobs.jobs:
+            runner.say(f"campaign interrupted: cancelled its worker jobs {', '.join(ex.jobs.jobs)} (only those)")
         runner.say(
             "campaign interrupted: the points in flight are lost, the complete ones are kept; run the "
             "same command again to complete only what is missing"

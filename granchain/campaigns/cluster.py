@@ -368,13 +368,19 @@ class JobCluster:
         return Client(self.cluster)
 
     def _cluster_class(self):
-        if self.s.kind == "slurm":
-            from dask_jobqueue import SLURMCluster
+        import signal
+        import threading
 
-            return SLURMCluster
-        from dask_jobqueue import PBSCluster
-
-        return PBSCluster
+        # importing dask_jobqueue sets SIGINT to sys.exit() (its runner module, at import): Ctrl-C would
+        # end the driver with status 0 and no word; the handler it replaced is put back
+        main = threading.current_thread() is threading.main_thread()
+        before = signal.getsignal(signal.SIGINT) if main else None
+        try:
+            import dask_jobqueue
+        finally:
+            if main and before is not None:
+                signal.signal(signal.SIGINT, before)
+        return dask_jobqueue.SLURMCluster if self.s.kind == "slurm" else dask_jobqueue.PBSCluster
 
     def job_script(self) -> str:
         """The script each worker job runs (dask-jobqueue's, with these settings)."""

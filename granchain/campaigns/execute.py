@@ -32,6 +32,7 @@ import time
 import traceback
 import uuid
 import warnings
+import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -303,6 +304,7 @@ class Executor:
         self.failure: BaseException | None = None  # what ended the batch jobs' upkeep (NoWorkerJobs)
         self._upkeep = None
         self._stop = threading.Event()
+        self.futures: weakref.WeakSet = weakref.WeakSet()
 
     @property
     def nworkers(self) -> int:
@@ -381,7 +383,7 @@ class Executor:
             except NoWorkerJobs as e:
                 self.failure = e
                 try:
-                    self.client.cancel(list(self.client.futures), force=True)
+                    self.client.cancel([f for f in self.futures if not f.done()], force=True)
                 except Exception:  # noqa: BLE001 - the client may be closing
                     pass
                 return
@@ -391,7 +393,9 @@ class Executor:
     def submit(self, payload: dict):
         client = self.start()
         key = f"granchain-point-{Path(payload['job_dir']).name[:12]}-{uuid.uuid4().hex[:8]}"
-        return client.submit(run_point, payload, key=key, pure=False)
+        fut = client.submit(run_point, payload, key=key, pure=False)
+        self.futures.add(fut)  # cancelled together when no batch job is left (_keep_jobs)
+        return fut
 
     def check_failure(self) -> None:
         """Raise what stopped the batch jobs (NoWorkerJobs), if anything did."""
@@ -610,6 +614,7 @@ def preflight(campaign: Campaign, points: list[Point]) -> None:
 def run_grid(campaign: Campaign, runner: Runner, points: list[Point]) -> RunReport:
     """Run every point of a grid that is not complete yet."""
     from distributed import wait
+    from distributed.client import FuturesCancelledError
 
     r = runner.report
     r.points = len(points)
@@ -636,6 +641,9 @@ def run_grid(campaign: Campaign, runner: Runner, points: list[Point]) -> RunRepo
                 done, waiting = wait(waiting, timeout=1.0, return_when="FIRST_COMPLETED")
             except TimeoutError:
                 done = set()
+            except FuturesCancelledError:  # no batch job left (Executor._keep_jobs): each one collected as lost
+                done = {f for f in waiting if f.done()}
+                waiting = waiting - done
             prog.workers = runner.ex.nworkers
             for fut in done:
                 runner.collect(fut, futures[fut].params, prog)
