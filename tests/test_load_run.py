@@ -20,7 +20,7 @@ import pandas.testing as pdt
 import pytest
 import xarray as xr
 import xarray.testing as xrt
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import granchain
@@ -28,9 +28,10 @@ from granchain.cli import main
 from granchain.lammps.build import plugin_env
 from granchain.lammps.runner import LammpsRunResult
 from granchain.results import PEAK_UNITS, RunResult
+from granchain.scene import SceneError, parse_scene
 from granchain.workflows.collect import CollectedRunResult
 
-from .scenegen import scenes
+from .scenegen import overlap_fraction, scene_texts
 
 BIN = Path(sys.executable).parent
 
@@ -234,10 +235,17 @@ def test_nan_survives_the_round_trip(scene, tmp_path):
 
 
 @pytest.mark.slow
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(sc=scenes(max_beads=24), method=st.sampled_from(["rk4", "verlet"]))
-def test_every_valid_scene_round_trips(sc, method, tmp_path):
-    """Whatever the law, load, effects and per-bead chain: the directory reads back to the result."""
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(text=scene_texts(max_beads=24), method=st.sampled_from(["rk4", "verlet"]))
+def test_every_valid_scene_round_trips(text, method, tmp_path):
+    """Whatever the law, load, effects and per-bead chain: the directory reads back to the result.
+    (A drawn scene the scene reader refuses is the generator's failure, caught by test_trust's use of
+    scenes(); here it is left out, this test being about run directories.)"""
+    try:
+        sc = parse_scene(text, source="generated.toml")
+    except SceneError:
+        assume(False)
+    assume(overlap_fraction(sc) < 0.05)  # a load the contact laws describe (as scenegen.scenes)
     out = tmp_path / f"r-{uuid.uuid4().hex}"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # accuracy and output-size notes: not the point here
