@@ -3,6 +3,10 @@ keys (with error bars from ``<observable>_error``), or a 2D map over two keys.
 
 Axes are logarithmic when the values are positive and span at least a factor LOG_SPAN. The plotted
 numbers are written beside each figure (``<figure>.csv``).
+
+Every text drawn (title, axis labels, legend) is the campaign file's own text, not matplotlib
+mathtext (a title ``$\\frac{1}{$`` is drawn as it is written) and with control characters escaped.
+Files are written aside and renamed, never through a symbolic link (granchain.safe_files).
 """
 
 from __future__ import annotations
@@ -10,8 +14,10 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from granchain import safe_files
+from granchain.campaigns import workspace as wsp
 from granchain.campaigns.spec import CampaignError
-from granchain.campaigns.table import build_search_table, build_table, read_record
+from granchain.campaigns.table import build_search_table, build_table, printable, read_record
 
 FORMATS = ("png", "pdf", "svg")
 #: values spanning this factor (all > 0) get a log axis
@@ -24,7 +30,30 @@ def _log_axis(values) -> bool:
 
 
 def _label(key: str, value) -> str:
-    return f"{key} = {value:.4g}" if isinstance(value, float) else f"{key} = {value}"
+    return printable(f"{key} = {value:.4g}" if isinstance(value, float) else f"{key} = {value}")
+
+
+def _write_failed(path, e: OSError) -> CampaignError:
+    return wsp.WorkspaceWriteError(
+        e.errno,
+        f"{path}: cannot be written ({e.strerror or e}); make the workspace writable, free some space, or give "
+        "--out a path elsewhere",
+    )
+
+
+def _make_dir(d: Path) -> None:
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise _write_failed(d, e) from None
+
+
+def _write_csv(df, path: Path) -> None:
+    try:
+        with safe_files.open_for_write(path) as fh:
+            df.to_csv(fh, index=False)
+    except OSError as e:
+        raise _write_failed(path, e) from None
 
 
 def _check_columns(df, ws, **cols) -> None:
@@ -61,17 +90,17 @@ def plot_campaign(ws, x: str, y: str, hue: str | None = None, map_key: str | Non
     err = f"{y}_error" if f"{y}_error" in df.columns else None
     stem = f"{y}-vs-{x}" + (f"-map-{map_key}" if map_key else f"-by-{hue}" if hue else "")
     base = str(out) if out is not None else str(ws / "plots" / stem)  # keys have dots: no with_suffix
-    Path(base).parent.mkdir(parents=True, exist_ok=True)
+    _make_dir(Path(base).parent)
     fig, ax = plt.subplots(figsize=(6.4, 4.6), layout="constrained")
     if map_key is not None:
         grid = done.pivot_table(index=map_key, columns=x, values=y, aggfunc="mean")
         xs, ys = grid.columns.to_numpy(dtype=float), grid.index.to_numpy(dtype=float)
         mesh = ax.pcolormesh(xs, ys, grid.to_numpy(dtype=float), shading="nearest")
-        fig.colorbar(mesh, ax=ax, label=y)
-        ax.set_ylabel(map_key)
+        fig.colorbar(mesh, ax=ax).set_label(printable(y), parse_math=False)
+        ax.set_ylabel(printable(map_key), parse_math=False)
         if _log_axis(ys):
             ax.set_yscale("log")
-        done[[x, map_key, y] + ([err] if err else [])].to_csv(Path(base + ".csv"), index=False)
+        _write_csv(done[[x, map_key, y] + ([err] if err else [])], Path(base + ".csv"))
     else:
         groups = [k for k in ([hue] if hue else []) + [k for k in varied if k not in (x, hue)]]
         groups = [k for k in groups if done[k].nunique() > 1]
@@ -85,22 +114,32 @@ def plot_campaign(ws, x: str, y: str, hue: str | None = None, map_key: str | Non
             label = ", ".join(_label(k, v) for k, v in zip(groups, key, strict=True)) or None
             ax.errorbar(part[x], part[y], yerr=yerr, marker="o", ms=4, capsize=3, label=label)
         if groups:
-            ax.legend(fontsize="small")
-        ax.set_ylabel(y)
+            for text in ax.legend(fontsize="small").get_texts():
+                text.set_parse_math(False)
+        ax.set_ylabel(printable(y), parse_math=False)
         if _log_axis(done[y]):
             ax.set_yscale("log")
         cols = [x, *groups, y] + ([err] if err else [])
-        done[cols].to_csv(Path(base + ".csv"), index=False)
-    ax.set_xlabel(x)
+        _write_csv(done[cols], Path(base + ".csv"))
+    ax.set_xlabel(printable(x), parse_math=False)
     if _log_axis(done[x]):
         ax.set_xscale("log")
     title = record.get("title")
     if title:
-        ax.set_title(title, fontsize="medium")
+        ax.set_title(printable(str(title)), fontsize="medium", parse_math=False)
+    try:
+        return _save(fig, base, formats)
+    finally:
+        plt.close(fig)
+
+
+def _save(fig, base: str, formats) -> list[Path]:
     paths = []
     for f in formats:
         p = Path(f"{base}.{f}")
-        fig.savefig(p, dpi=150)
+        try:
+            safe_files.save_figure(fig, p, format=f, dpi=150)
+        except OSError as e:
+            raise _write_failed(p, e) from None
         paths.append(p)
-    plt.close(fig)
     return paths

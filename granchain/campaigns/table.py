@@ -16,19 +16,31 @@ Columns, in order:
   (the signac job id: the directory WS/workspace/<job>).
 
 Written as table.csv (floats round-trip) and table.parquet; a search adds search.csv / search.parquet.
+The terminal view (format_table) prints control characters of any value escaped (``\\x1b``): a
+string parameter of a campaign file someone else wrote cannot move the cursor or retitle the terminal.
+A workspace's record (campaign.json) is checked before it is used: a job id that is not signac's
+(32 hex digits) never becomes a path.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import re
+import unicodedata
 from pathlib import Path
 
+from granchain import safe_files
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.search import read_history
 from granchain.campaigns.spec import OBSERVABLES, CampaignError
 
 TIMING_COLUMNS = ("wall_time",)  # differ between two runs of the same point; everything else is reproducible
+
+
+def _number(v):
+    """A number of summary.json as it is; anything else (a damaged file's) as blank."""
+    return v if isinstance(v, (int, float)) and not isinstance(v, bool) else None
 
 
 def _scalar(v):
@@ -45,49 +57,80 @@ def regime_contact(record: dict, sp_scene: dict) -> int | None:
     return int(hist[-1]) if hist else None
 
 
+#: the most read from a run directory's histories.csv for the regime columns (bytes)
+HISTORY_LIMIT = 512 * 1024 * 1024
+
+
+def _history(run: Path, contact: int):
+    """The regime contact's force history, or None when histories.csv is absent, a link, too large or
+    damaged (the row then has no pulses or regime)."""
+    path = run / "histories.csv"
+    try:
+        if safe_files.file_size(path) > HISTORY_LIMIT:
+            return None
+        force = read_history(run, contact)
+    except (OSError, ValueError, IndexError, TypeError):
+        return None
+    if force is None or getattr(force, "ndim", 0) != 1 or not len(force):
+        return None
+    return force
+
+
 def point_row(ws: Path, record: dict, entry: dict, stale: dict) -> dict:
     """One table row for one point of the record."""
     from granchain.postprocess.regimes import classify_wave, count_pulses
 
     row = {k: _scalar(v) for k, v in entry["params"].items()}
     job_dir = ws / "workspace" / entry["job"]
-    state = wsp.job_state(job_dir)
-    sp = wsp.read_json(job_dir / "signac_statepoint.json") or {}
+    sp = wsp.read_json(job_dir / wsp.STATEPOINT)
+    sp = sp if isinstance(sp, dict) else {}
+    state = wsp.job_state(job_dir, sp or None)
     key = entry.get("key") or (wsp.point_key(sp) if sp else None)
     if state == "missing" and key in stale:
         state = "stale"
     row["status"] = state
     summary = wsp.read_json(job_dir / wsp.RUN_DIR / "summary.json") if state == "done" else None
-    contact = regime_contact(record, sp.get("scene", {}))  # the scene's histories, when the job is there
+    try:  # the scene's histories, when the job is there
+        contact = regime_contact(record, sp.get("scene") if isinstance(sp.get("scene"), dict) else {})
+    except (TypeError, ValueError, IndexError):
+        contact = None
     row["pulses"], row["regime"] = None, None
-    if summary is not None and contact is not None:
-        force = read_history(job_dir / wsp.RUN_DIR, contact)
+    if summary is not None and isinstance(contact, int) and not isinstance(contact, bool):
+        force = _history(job_dir / wsp.RUN_DIR, contact)
         if force is not None:
             row["pulses"], row["regime"] = count_pulses(force), classify_wave(force)
-    obs = (summary or {}).get("observables", {})
-    errs = ((summary or {}).get("errors") or {}).get("observables", {})
+    summary = _dict(summary)
+    obs = _dict(summary.get("observables"))
+    errs = _dict(_dict(summary.get("errors")).get("observables"))
     for name in OBSERVABLES:
-        row[name] = obs.get(name)
+        row[name] = _number(obs.get(name))
         if name in ("leading_peak_force", "leading_peak_force_nondim", "wave_speed", "max_peak_force"):
-            row[f"{name}_error"] = (errs.get(name) or {}).get("error")
-    row["error_estimate"] = (summary or {}).get("error_estimate")
-    price = (summary or {}).get("price") or {}
-    row["beads"] = (summary or {}).get("beads")
-    row["timestep"] = (summary or {}).get("timestep")
-    row["steps"] = (summary or {}).get("steps")
-    row["bead_steps"] = price.get("bead_steps")
-    wall = price.get("wall_time")
-    row["wall_time"] = None if wall is None else wall + (price.get("error_estimate") or 0.0)
-    task = wsp.read_json(job_dir / wsp.TASK) or {}
-    row["warnings"] = (" | ".join(task.get("warnings") or []) or None) if state == "done" else None
+            row[f"{name}_error"] = _number(_dict(errs.get(name)).get("error"))
+    row["error_estimate"] = _number(summary.get("error_estimate"))
+    price = _dict(summary.get("price"))
+    row["beads"] = _number(summary.get("beads"))
+    row["timestep"] = _number(summary.get("timestep"))
+    row["steps"] = _number(summary.get("steps"))
+    row["bead_steps"] = _number(price.get("bead_steps"))
+    wall = _number(price.get("wall_time"))
+    row["wall_time"] = None if wall is None else wall + (_number(price.get("error_estimate")) or 0.0)
+    task = _dict(wsp.read_json(job_dir / wsp.TASK))
+    warned = task.get("warnings") or []
+    warned = [str(w) for w in warned] if isinstance(warned, list) else [str(warned)]
+    row["warnings"] = (" | ".join(warned) or None) if state == "done" else None
     message = None
     if state == "failed":
-        message = (wsp.read_json(job_dir / wsp.FAILURE) or {}).get("message")
+        message = _dict(wsp.read_json(job_dir / wsp.FAILURE)).get("message")
+        message = None if message is None else str(message)
     elif state == "stale":
         message = "computed by other code: " + wsp.code_text(stale[key])
     row["message"] = message
     row["job"] = entry["job"]
     return row
+
+
+def _dict(x) -> dict:
+    return x if isinstance(x, dict) else {}
 
 
 def build_table(ws: str | Path):
@@ -120,13 +163,42 @@ def build_search_table(ws: str | Path):
     return df
 
 
+_JOB_ID = re.compile(r"[0-9a-f]{32}")
+
+
 def read_record(ws: Path) -> dict:
-    rec = wsp.read_json(Path(ws) / wsp.RECORD)
+    """The workspace's campaign.json, checked: its points each a job id of signac's (32 hex digits)
+    and a table of parameters; a CampaignError naming what is wrong otherwise."""
+    wsp.check_links(ws)
+    path = Path(ws) / wsp.RECORD
+    rec = wsp.read_json(path)
     if rec is None:
         raise CampaignError(
             f"{ws}: is not a campaign workspace (no readable {wsp.RECORD}); give the --out directory of "
             "'granchain campaign run'"
         )
+    damaged = f"{path}: is damaged ({{}}); run 'granchain campaign run FILE --out {ws}' again to write it"
+    if not isinstance(rec, dict):
+        raise CampaignError(damaged.format("not a JSON object"))
+    points = rec.get("points")
+    if not isinstance(points, list):
+        raise CampaignError(damaged.format("no list of points"))
+    for k, e in enumerate(points):
+        if not isinstance(e, dict) or not isinstance(e.get("params"), dict):
+            raise CampaignError(damaged.format(f"point {k + 1} is not a job and its parameters"))
+        if not isinstance(e.get("job"), str) or not _JOB_ID.fullmatch(e["job"]):
+            raise CampaignError(
+                damaged.format(f"point {k + 1}'s job {str(e.get('job'))[:40]!r} is not a signac job id")
+            )
+        if e.get("key") is not None and not isinstance(e["key"], str):
+            raise CampaignError(damaged.format(f"point {k + 1}'s key is not a string"))
+    if not isinstance(rec.get("code"), dict):
+        raise CampaignError(damaged.format("no code record"))
+    for key in ("varied", "search_results"):
+        if rec.get(key) is not None and not isinstance(rec[key], list):
+            raise CampaignError(damaged.format(f"{key} is not a list"))
+    if rec.get("title") is not None and not isinstance(rec["title"], str):
+        raise CampaignError(damaged.format("its title is not a string"))
     return rec
 
 
@@ -143,14 +215,34 @@ def write_tables(ws: str | Path) -> dict:
 
 
 def _write_atomic(df, path: Path, fmt: str) -> None:
-    import os
+    """Write aside and rename, refusing a link at path; a failure (read-only, disk full) leaves no
+    temporary file and is a WorkspaceWriteError naming the file."""
+    try:
+        with safe_files.open_for_write(path, "w" if fmt == "csv" else "wb") as fh:
+            if fmt == "csv":
+                df.to_csv(fh, index=False)
+            else:
+                df.to_parquet(fh, index=False)
+    except OSError as e:
+        raise wsp.WorkspaceWriteError(
+            e.errno,
+            f"{path}: cannot be written ({e.strerror or e}); make the workspace writable, or free some space "
+            "('granchain campaign table WS --csv' prints the table without writing it)",
+        ) from None
 
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    if fmt == "csv":
-        df.to_csv(tmp, index=False)
-    else:
-        df.to_parquet(tmp, index=False)
-    os.replace(tmp, path)
+
+def printable(text: str) -> str:
+    """text with control and format characters escaped (ESC as \\x1b, a newline as \\n, U+202E as
+    \\u202e): safe to print on a terminal, one line."""
+    out = []
+    for ch in text:
+        if ch == "\\":
+            out.append(ch)
+        elif unicodedata.category(ch) in ("Cc", "Cf", "Zl", "Zp"):
+            out.append(ch.encode("unicode_escape").decode("ascii"))
+        else:
+            out.append(ch)
+    return "".join(out)
 
 
 def format_table(df, columns: list[str] | None = None, max_rows: int = 60) -> str:
@@ -166,9 +258,9 @@ def format_table(df, columns: list[str] | None = None, max_rows: int = 60) -> st
             return "-"
         if isinstance(v, float):
             return f"{v:.6g}"
-        return str(v)
+        return printable(str(v))
 
-    cells = [[str(c) for c in columns]] + [[fmt(v) for v in row] for row in view.itertuples(index=False)]
+    cells = [[printable(str(c)) for c in columns]] + [[fmt(v) for v in row] for row in view.itertuples(index=False)]
     widths = [max(len(r[i]) for r in cells) for i in range(len(columns))]
     lines = ["  ".join(x.rjust(w) for x, w in zip(r, widths, strict=True)) for r in cells]
     if len(df) > max_rows:

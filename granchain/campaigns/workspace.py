@@ -21,6 +21,14 @@ scene written differently is the same job. A point computed by other code has an
 not reused, and reported as stale.
 
 signac's own tools (``signac.get_project(WS)``, ``project.find_jobs(...)``) and row read the workspace.
+
+A workspace may be shared or copied from someone else, so nothing in it is trusted: a symbolic link
+where granchain reads or writes (campaign.toml, base.toml, campaign.json, the tables, plots/,
+workspace/, a job directory or a file in one) is refused or left out, every file is read bounded
+(granchain.safe_files), and a point counts as complete only if its run directory's summary.json and
+scene.toml parse and match its state point (job_state). A job directory whose state point is
+damaged (signac_statepoint.json that does not parse or is not its directory's hash) or that is a link
+is moved aside, to WS/damaged/, by ``campaign run``: its point runs again.
 """
 
 from __future__ import annotations
@@ -29,8 +37,10 @@ import functools
 import hashlib
 import json
 import os
+import warnings
 from pathlib import Path
 
+from granchain import safe_files
 from granchain._version import __version__
 from granchain.campaigns.spec import CampaignError
 
@@ -38,6 +48,25 @@ RUN_DIR = "run"
 FAILURE = "failure.json"
 TASK = "task.json"
 RECORD = "campaign.json"
+STATEPOINT = "signac_statepoint.json"
+#: where campaign run moves a damaged job directory (its state point unreadable, or a link)
+DAMAGED = "damaged"
+#: the names granchain reads or writes at the top of a workspace: none may be a symbolic link
+WORKSPACE_NAMES = (
+    "campaign.toml",
+    "base.toml",
+    RECORD,
+    "table.csv",
+    "table.parquet",
+    "search.csv",
+    "search.parquet",
+    "plots",
+    "workspace",
+    ".signac",
+    DAMAGED,
+)
+#: the most read from one JSON file of a workspace (bytes)
+JSON_LIMIT = 64 * 1024 * 1024
 #: version of campaign.json's layout
 RECORD_SCHEMA = 1
 
@@ -110,11 +139,88 @@ def _plain(o):
     raise TypeError(repr(o))
 
 
+class WorkspaceWriteError(CampaignError, OSError):
+    """A workspace file that cannot be written (full disk, read-only, a link at its name): a user's
+    error (one line) that code catching OSError still catches."""
+
+    def __init__(self, code: int | None, message: str):
+        super().__init__(message)
+        self.errno, self.strerror = code, message
+
+    def __str__(self) -> str:
+        return self.strerror
+
+
+def check_links(ws: str | Path) -> None:
+    """Refuse a workspace with a symbolic link where granchain reads or writes (WORKSPACE_NAMES)."""
+    ws = Path(ws)
+    for name in WORKSPACE_NAMES:
+        if os.path.islink(ws / name):
+            raise CampaignError(
+                f"{ws / name}: is a symbolic link; granchain reads and writes a workspace only inside it: remove "
+                "the link (or copy what it points to in its place)"
+            )
+
+
+def job_dirs(ws: str | Path) -> dict[str, dict | None]:
+    """Job id -> state point of every job directory of the workspace; None for one that is damaged:
+    a link, not a directory, or a signac_statepoint.json that does not parse or does not hash to the
+    directory's name. Read without signac (which stops at the first damaged one)."""
+    from signac.job import calc_id
+
+    out: dict[str, dict | None] = {}
+    root = Path(ws) / "workspace"
+    if os.path.islink(root) or not root.is_dir():
+        return out
+    with os.scandir(root) as it:
+        for e in it:
+            sp = None
+            if e.is_dir(follow_symlinks=False):
+                sp = read_json(Path(e.path) / STATEPOINT)
+                try:
+                    if not isinstance(sp, dict) or calc_id(sp) != e.name:
+                        sp = None
+                except (TypeError, ValueError, RecursionError):
+                    sp = None
+            out[e.name] = sp
+    return out
+
+
+def set_aside_damaged(ws: str | Path) -> list[str]:
+    """Move damaged job directories (job_dirs: None) to WS/damaged/, with a warning naming them; their
+    points run again. Returns the job ids moved."""
+    ws = Path(ws)
+    moved = []
+    for job, sp in sorted(job_dirs(ws).items()):
+        if sp is not None:
+            continue
+        dest_dir = ws / DAMAGED
+        dest_dir.mkdir(exist_ok=True)
+        dest = dest_dir / job
+        k = 1
+        while os.path.lexists(dest):
+            dest, k = dest_dir / f"{job}.{k}", k + 1
+        os.replace(ws / "workspace" / job, dest)  # a link is moved as a link, never followed
+        moved.append(job)
+    if moved:
+        warnings.warn(
+            f"{ws}: {len(moved)} job director{'y' if len(moved) == 1 else 'ies'} with a damaged state point "
+            f"({STATEPOINT} unreadable or not the directory's hash, or a symbolic link) moved to {ws / DAMAGED}: "
+            f"{', '.join(moved[:5])}{' ...' if len(moved) > 5 else ''}; their points run again",
+            stacklevel=2,
+        )
+    return moved
+
+
 def create_workspace(ws: str | Path):
-    """Open the workspace, making it if needed; refuse a directory that is something else."""
+    """Open the workspace, making it if needed; refuse a directory that is something else, or one
+    with a symbolic link where granchain writes; set damaged job directories aside."""
     import signac
 
     ws = Path(ws)
+    if os.path.islink(ws):
+        raise CampaignError(f"{ws}: is a symbolic link; give the workspace's own path as --out")
+    check_links(ws)
     if ws.exists() and not ws.is_dir():
         raise CampaignError(f"{ws}: exists and is not a directory; choose another --out")
     if ws.is_dir() and any(ws.iterdir()) and not (ws / ".signac").is_dir():
@@ -123,9 +229,15 @@ def create_workspace(ws: str | Path):
         )
     try:
         ws.mkdir(parents=True, exist_ok=True)
-        return signac.init_project(str(ws))
+        if not os.access(ws, os.W_OK):
+            raise PermissionError(13, "not writable")
+        project = _signac(signac.init_project, ws)
+        set_aside_damaged(ws)
+        return project
     except OSError as e:
-        raise CampaignError(f"{ws}: cannot create the workspace ({e.strerror}); choose another --out") from None
+        raise CampaignError(
+            f"{ws}: cannot create or write the workspace ({e.strerror}); make it writable or choose another --out"
+        ) from None
 
 
 def open_workspace(ws: str | Path):
@@ -133,47 +245,119 @@ def open_workspace(ws: str | Path):
     import signac
 
     ws = Path(ws)
+    check_links(ws)
     if not (ws / ".signac").is_dir() or not (ws / RECORD).is_file():
         raise CampaignError(
             f"{ws}: is not a campaign workspace (no .signac or {RECORD}); give the --out directory of "
             "'granchain campaign run'"
         )
-    return signac.get_project(str(ws), search=False)
+    return _signac(signac.get_project, ws, search=False)
 
 
-def job_state(job_dir: str | Path) -> str:
-    """'done' (its run directory is complete), 'failed' (failure.json) or 'missing'."""
+def _signac(open_project, ws: Path, **kw):
+    """signac's project of ws; its configuration error (a damaged .signac/config) as a CampaignError."""
+    from signac.errors import ConfigError
+
+    try:
+        return open_project(str(ws), **kw)
+    except ConfigError as e:
+        why = " ".join(str(e).split())[:200]
+        raise CampaignError(
+            f"{ws / '.signac' / 'config'}: signac cannot read it ({why}); the workspace is damaged: run the "
+            "campaign into a new --out"
+        ) from None
+
+
+def job_state(job_dir: str | Path, sp: dict | None = None) -> str:
+    """'done' (its run directory is complete and is this point's: run_is_complete), 'failed'
+    (failure.json) or 'missing'. sp: the job's state point, read from the job directory if not given."""
     d = Path(job_dir)
-    if (d / RUN_DIR / "summary.json").is_file():
+    if os.path.islink(d) or not d.is_dir():
+        return "missing"
+    if sp is None:
+        sp = read_json(d / STATEPOINT)
+    if isinstance(sp, dict) and run_is_complete(d / RUN_DIR, sp):
         return "done"
-    if (d / FAILURE).is_file():
+    if isinstance(read_json(d / FAILURE), dict):
         return "failed"
     return "missing"
 
 
-def read_json(path: Path) -> dict | None:
+def run_is_complete(run: Path, sp: dict) -> bool:
+    """Whether run is a complete run directory of the state point sp: not a link; its summary.json a
+    JSON object of sp's backend and method whose scene hash is its scene.toml's; that scene.toml a
+    valid scene with every value sp's scene gives (the "auto" ones, the time step, end time and
+    sampling intervals are the planner's)."""
+    from granchain.scene import parse_scene, scene_to_dict
+
+    if os.path.islink(run) or not run.is_dir():
+        return False
+    summary = read_json(run / "summary.json")
+    if not isinstance(summary, dict):
+        return False
+    if summary.get("backend") != sp.get("backend") or summary.get("method") != sp.get("method"):
+        return False
     try:
-        return json.loads(Path(path).read_text())
-    except (OSError, ValueError):
+        text = safe_files.read_bytes(run / "scene.toml", JSON_LIMIT)
+        recorded = summary["provenance"]["scene"]["sha256"]
+    except (OSError, KeyError, TypeError):
+        return False
+    if hashlib.sha256(text).hexdigest() != recorded:
+        return False
+    try:
+        scene = scene_to_dict(parse_scene(text.decode("utf-8"), source=str(run / "scene.toml")))
+    except Exception:  # noqa: BLE001 - any scene that does not load is not this point's
+        return False
+    return _agrees(sp.get("scene"), json.loads(json.dumps(scene)))
+
+
+#: scene keys the run may have set otherwise than the state point gives them (the planner's step,
+#: end time and sampling intervals, with an rtol): not compared
+_PLANNED = ("timestep", "end_time", "history_interval", "dump_interval")
+
+
+def _agrees(given, ran) -> bool:
+    """Every value of the state point's scene (given) is the run's (ran), "auto" and planned ones aside."""
+    if given == "auto":
+        return True
+    if isinstance(given, dict):
+        return isinstance(ran, dict) and all(k in _PLANNED or _agrees(v, ran.get(k)) for k, v in given.items())
+    return given == ran
+
+
+def read_json(path: Path):
+    """A workspace JSON file's content, or None when it is missing, a link, not a regular file,
+    larger than JSON_LIMIT, or not JSON."""
+    try:
+        return json.loads(safe_files.read_text(path, JSON_LIMIT))
+    except (OSError, ValueError, RecursionError):
         return None
 
 
 def write_json(path: Path, data) -> None:
-    """Write aside and rename: a reader never sees half a file."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(data, indent=1, default=_plain) + "\n")
-    os.replace(tmp, path)
+    """Write aside and rename (a reader never sees half a file, a full disk leaves no temporary
+    file); a link at path is refused (a WorkspaceWriteError, as is a file that cannot be written)."""
+    text = json.dumps(data, indent=1, default=_plain) + "\n"
+    try:
+        safe_files.write_text(path, text)
+    except OSError as e:
+        raise WorkspaceWriteError(
+            e.errno, f"{path}: cannot be written ({e.strerror or e}); free some space or fix the workspace"
+        ) from None
 
 
 def stale_versions(project, code: dict) -> dict[str, dict]:
     """point key -> code of a complete job of the same point computed by other code."""
     out: dict[str, dict] = {}
-    for job in project:
-        sp = job.cached_statepoint
-        other = dict(sp.get("code", {}))
-        if other != code and job_state(job.path) == "done":
-            out[point_key(sp)] = other
+    root = Path(project.path)
+    for job, sp in job_dirs(root).items():
+        if sp is None:  # damaged: not a result of any code
+            continue
+        other = sp.get("code", {})
+        if not isinstance(other, dict):
+            continue
+        if other != code and job_state(root / "workspace" / job, sp) == "done":
+            out[point_key(sp)] = dict(other)
     return out
 
 
