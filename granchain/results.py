@@ -27,6 +27,7 @@ interrupted run never leaves a directory that looks complete.
 
 from __future__ import annotations
 
+import copy
 import functools
 import hashlib
 import importlib.metadata
@@ -144,6 +145,9 @@ class RunResult:
         cls.__repr__ = RunResult.__repr__
 
     def observables(self) -> dict:
+        """The observables (leading peak, wave speed, ...; docs/observables.md); a loaded run's as written."""
+        if self.stored is not None:
+            return copy.deepcopy(self.stored.summary.get("observables") or {})
         return measure_observables(self.scene, self.solution)
 
     @property
@@ -163,6 +167,8 @@ class RunResult:
 
     def observables_missing(self) -> dict[str, str]:
         """Why each observable that is None could not be measured (name -> reason)."""
+        if self.stored is not None:
+            return dict(self.stored.summary.get("observables_missing") or {})
         missing: dict[str, str] = {}
         measure_observables(self.scene, self.solution, missing)
         return missing
@@ -170,6 +176,8 @@ class RunResult:
     def peak_status(self) -> dict:
         """How many of the measured contacts (those of peaks.csv) have a complete peak, one that is not
         complete yet (the wave is still there at the end of the run) and one never reached."""
+        if self.stored is not None and "peaks" in self.stored.summary:
+            return dict(self.stored.summary["peaks"])
         idx = np.asarray(self.scene.peak_contacts, dtype=int) - 1
         reached = np.isfinite(self.solution.time_of_peak[idx])
         complete = self.solution.complete[idx]
@@ -471,8 +479,11 @@ class RunResult:
         output        LAMMPS: dumps and thermo during the runs plus reading the results back
         error_estimate  the companion runs at 2 dt and 4 dt (granchain.workflows.errors), when made
         steps, bead_steps (steps x moving beads, striker included), ns_per_bead_step (integration)
-        A part the backend does not time is None, with the reason in "not_timed".
+        A part the backend does not time is None, with the reason in "not_timed". A loaded run's is
+        its summary's.
         """
+        if self.stored is not None and "price" in self.stored.summary:
+            return copy.deepcopy(self.stored.summary["price"])
         s, sc, ex = self.solution, self.scene, self.extra
         steps = int(s.steps) + int(s.extra_steps or 0)
         beads = int(sc.chain.beads) + (1 if sc.loading.kind == "striker" else 0)
@@ -511,7 +522,10 @@ class RunResult:
         }
 
     def provenance(self) -> dict:
-        """Where the run came from: the summary's "provenance" (see :func:`provenance`)."""
+        """Where the run came from: the summary's "provenance" (see :func:`provenance`); a loaded run's
+        as written."""
+        if self.stored is not None and "provenance" in self.stored.summary:
+            return copy.deepcopy(self.stored.summary["provenance"])
         return provenance(self)
 
     def lammps_provenance(self) -> dict | None:

@@ -253,3 +253,14 @@ def test_every_valid_scene_round_trips(text, method, tmp_path):
     loaded = granchain.load_run(out)
     assert_same_result(mem, loaded)
     assert len(repr(loaded)) < 2000 and len(repr(mem)) < 2000
+
+
+def test_a_loaded_run_answers_from_what_its_directory_keeps(scene, tmp_path):
+    mem = granchain.run(scene, out=tmp_path / "r", error_estimate=True)
+    loaded = granchain.load_run(tmp_path / "r")
+    plain = _plain(mem.summary)
+    assert loaded.observables() == plain["observables"]
+    assert loaded.observables_missing() == plain["observables_missing"]
+    assert loaded.peak_status() == mem.peak_status()
+    assert loaded.price() == plain["price"]
+    assert loaded.provenance() == plain["provenance"]
