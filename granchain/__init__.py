@@ -43,6 +43,15 @@ __all__ = [
 ]
 
 
+def _scene(scene):
+    """A Scene as it is; a bundled scene's name or a .toml path loaded (load_scene)."""
+    from pathlib import Path
+
+    if isinstance(scene, (str, Path)):
+        return load_scene(scene)
+    return scene
+
+
 def _plot_result(result, kind: str = "peaks", **kw):
     """RunResult.plot's figure function: granchain.workflows.plots, imported when first drawn."""
     from granchain.workflows.plots import plot_result
@@ -111,8 +120,8 @@ def plan(scene, rtol: float | None = None, method: str = "rk4"):
 
     Parameters
     ----------
-    scene : granchain.scene.Scene
-        From :func:`load_scene`.
+    scene : granchain.scene.Scene or str or pathlib.Path
+        From :func:`load_scene` or :func:`parse_scene`, or a bundled scene's name or a .toml path.
     rtol : float, optional
         Relative tolerance of the peak forces; sets the time step (default: only "auto" values are
         chosen, the time step for 1e-3).
@@ -129,7 +138,7 @@ def plan(scene, rtol: float | None = None, method: str = "rk4"):
     from granchain.workflows.plan import plan_scene
     from granchain.workflows.run import integrator
 
-    return plan_scene(scene, rtol=rtol, method=integrator("reference", method))
+    return plan_scene(_scene(scene), rtol=rtol, method=integrator("reference", method))
 
 
 def run(
@@ -145,8 +154,9 @@ def run(
 
     Parameters
     ----------
-    scene : granchain.scene.Scene
-        From :func:`load_scene`; "auto" values are planned for the integrator this backend runs.
+    scene : granchain.scene.Scene or str or pathlib.Path
+        From :func:`load_scene` or :func:`parse_scene` (or a bundled scene's name or a .toml path);
+        "auto" values are planned for the integrator this backend runs.
     backend : {"reference", "lammps"}
         The pure-Python reference solver, or LAMMPS with granchain's pair styles.
     method : {None, "rk4", "verlet"}
@@ -178,7 +188,9 @@ def run(
 
     from granchain.workflows.run import run_scene
 
-    result = run_scene(scene, backend=backend, method=method, rtol=rtol, out=out, error_estimate=error_estimate, **kw)
+    result = run_scene(
+        _scene(scene), backend=backend, method=method, rtol=rtol, out=out, error_estimate=error_estimate, **kw
+    )
     if out is not None:
         result.path = Path(out)
     return _with_figures(result)
@@ -248,8 +260,9 @@ def compare(
 
     Parameters
     ----------
-    scene : granchain.scene.Scene
-        "auto" values are planned for each backend's integrator, the time step for rtol / 2 each.
+    scene : granchain.scene.Scene or str or pathlib.Path
+        A scene (or a bundled scene's name or a .toml path); "auto" values are planned for each
+        backend's integrator, the time step for rtol / 2 each.
     rtol : float
         Tolerance between the two runs (a difference fails beyond rtol plus both measured errors).
     method : {"rk4", "verlet"}
@@ -271,7 +284,7 @@ def compare(
     from granchain.workflows.compare import compare_scene
 
     rows, lam, ref = compare_scene(
-        scene, rtol=rtol, out=out, overwrite=overwrite, method=method, np_=np_, error_estimate=error_estimate
+        _scene(scene), rtol=rtol, out=out, overwrite=overwrite, method=method, np_=np_, error_estimate=error_estimate
     )
     if out is not None:
         lam.path, ref.path = Path(out) / "lammps", Path(out) / "reference"

@@ -121,3 +121,13 @@ def test_printable_text_has_no_control_characters(text, limit):
         assert len(out) <= limit
     if text.isprintable() and (limit is None or len(text) <= limit):
         assert out == text
+
+
+def test_the_api_takes_a_scene_name_or_path_where_it_takes_a_scene(tmp_path):
+    p = tmp_path / "s.toml"
+    p.write_text(SCENE)
+    by_path, by_scene = granchain.run(p), granchain.run(granchain.load_scene(p))
+    assert by_path.peaks.equals(by_scene.peaks)
+    assert granchain.plan("default").scene.chain.beads == granchain.load_scene("default").chain.beads
+    with pytest.raises(granchain.GranchainError, match="neither a scene file nor a bundled scene"):
+        granchain.run(tmp_path / "missing.toml")
