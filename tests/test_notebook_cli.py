@@ -129,5 +129,5 @@ def test_the_api_takes_a_scene_name_or_path_where_it_takes_a_scene(tmp_path):
     by_path, by_scene = granchain.run(p), granchain.run(granchain.load_scene(p))
     assert by_path.peaks.equals(by_scene.peaks)
     assert granchain.plan("default").scene.chain.beads == granchain.load_scene("default").chain.beads
-    with pytest.raises(granchain.GranchainError, match="neither a scene file nor a bundled scene"):
+    with pytest.raises(granchain.GranchainError, match="no such scene file"):
         granchain.run(tmp_path / "missing.toml")
