@@ -264,3 +264,25 @@ def test_a_loaded_run_answers_from_what_its_directory_keeps(scene, tmp_path):
     assert loaded.peak_status() == mem.peak_status()
     assert loaded.price() == plain["price"]
     assert loaded.provenance() == plain["provenance"]
+
+
+@pytest.mark.parametrize(
+    "damage",
+    [
+        ("summary.json", lambda t: t.replace('"steps"', '"stepz"')),
+        ("summary.json", lambda t: t.replace('"method": "rk4"', '"method": null').replace('"timestep":', '"x":', 1)),
+        ("summary.json", lambda t: t[: len(t) // 2]),
+        ("peaks.csv", lambda t: t.replace("contact,", "kontakt,", 1)),
+        ("peaks.csv", lambda t: t.replace("\n1,", "\nseven,", 1)),
+        ("snapshots.csv", lambda t: "\n".join(t.splitlines()[:-3])),
+        ("histories.csv", lambda t: t.replace("time,", "time,extra,", 1)),
+        ("scene.toml", lambda t: t + "\n[chain]\n"),
+    ],
+)
+def test_a_damaged_run_directory_is_one_clear_error(scene, tmp_path, damage):
+    name, change = damage
+    granchain.run(scene, out=tmp_path / "r")
+    path = tmp_path / "r" / name
+    path.write_text(change(path.read_text()))
+    with pytest.raises(granchain.GranchainError):
+        granchain.load_run(tmp_path / "r")

@@ -145,10 +145,16 @@ def _solution(d: Path, scene, summary: dict, peaks: dict) -> ChainSolution:
     if (d / "histories.csv").exists() or (d / "histories.csv").is_symlink():
         h = _csv(d, "histories.csv")
         fcols = [x for x in h.columns if x.startswith("force_")]
+        vcols = [f"velocity_{x.split('_', 1)[1]}" for x in fcols]
+        if list(h.columns) != ["time", *fcols, *vcols]:
+            raise LoadRunError(
+                f"{d / 'histories.csv'}: columns {', '.join(map(str, h.columns))}; granchain writes time, "
+                "force_<i>... then velocity_<i>... (damaged: run the scene again)"
+            )
         kw["history_contacts"] = tuple(int(x.split("_", 1)[1]) - 1 for x in fcols)
         kw["history_time"] = h["time"].to_numpy(np.float64)
         kw["history_force"] = h[fcols].to_numpy(np.float64)
-        kw["history_velocity"] = h[[f"velocity_{x.split('_', 1)[1]}" for x in fcols]].to_numpy(np.float64)
+        kw["history_velocity"] = h[vcols].to_numpy(np.float64)
     if (d / "snapshots.csv").exists() or (d / "snapshots.csv").is_symlink():
         s = _csv(d, "snapshots.csv")
         t = s["time"].to_numpy(np.float64)
@@ -211,7 +217,17 @@ def load_run(path: str | Path) -> RunResult:
         raise LoadRunError(f"{d / 'summary.json'}: not a granchain run summary (no backend or steps)")
     scene = _scene(d, summary)
     peaks = _read_peaks(d)
-    solution = _solution(d, scene, summary, peaks)
+    if "contact" not in peaks or "peak_force" not in peaks:
+        raise LoadRunError(
+            f"{d / 'peaks.csv'}: has no contact or peak_force column; not the peak table granchain writes"
+        )
+    try:
+        solution = _solution(d, scene, summary, peaks)
+    except (KeyError, TypeError, ValueError, IndexError) as e:
+        raise LoadRunError(
+            f"{d}: its summary.json or tables do not fit together ({type(e).__name__}: {e}); the run directory "
+            "is damaged: run the scene again"
+        ) from None
     prov = summary.get("provenance") or {}
     from granchain.workflows.collect import plan_from_dict
 
