@@ -18,6 +18,12 @@ when the run directory's worker.json is written and every file the deck wrote is
 keeps them). What LAMMPS or a crash writes to stdout or stderr during a deck goes to RUN_DIR/worker.err.
 After a LAMMPS error it answers and exits (an instance that raised is not trusted with the next deck);
 it exits at the end of stdin, and when its parent process dies (even mid-run). Ctrl-C stops it at once.
+
+A worker for one deck dies with the granchain process that started it, too (kill -9 of `granchain
+run --backend lammps` must not leave LAMMPS running to the end, writing into a work directory nobody
+reads): on Linux the kernel sends it SIGKILL when its parent dies (prctl PR_SET_PDEATHSIG), and a
+thread watches the granchain process above it (above mpirun and its proxies, when several ranks run)
+and exits when that is gone.
 """
 
 from __future__ import annotations
@@ -89,7 +95,87 @@ def _success(lmp, wall: float, startup: float, ranks: int) -> dict:
     }
 
 
+#: process names between a worker and the granchain process that started it (MPI launchers)
+LAUNCHERS = ("mpirun", "mpiexec", "mpiexec.hydra", "hydra_pmi_proxy", "orterun", "orted", "prterun", "prted")
+
+
+def _proc_stat(pid: int) -> tuple[str, int, int] | None:
+    """(name, parent pid, start time in clock ticks) of a process, from /proc; None if gone, a zombie
+    (or no /proc)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            data = f.read().decode("utf-8", "replace")
+    except OSError:
+        return None
+    name = data[data.index("(") + 1 : data.rindex(")")]
+    fields = data[data.rindex(")") + 2 :].split()
+    if fields[0] in ("Z", "X"):  # dead, not yet reaped
+        return None
+    return name, int(fields[1]), int(fields[19])
+
+
+def _starter() -> tuple[int, int | None]:
+    """(pid, start time) of the granchain process that started this worker: the parent, or the first
+    process above it that is not an MPI launcher (LAUNCHERS)."""
+    pid = os.getppid()
+    for _ in range(8):
+        st = _proc_stat(pid)
+        if st is None:
+            return pid, None
+        name, ppid, _start = st
+        if name not in LAUNCHERS or ppid <= 1:
+            return pid, _start
+        pid = ppid
+    st = _proc_stat(pid)
+    return pid, (st[2] if st else None)
+
+
+def _die_with_parent() -> None:
+    """Exit when the process that started this worker dies (see the module's docstring)."""
+    import signal
+    import threading
+
+    parent = os.getppid()
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        PR_SET_PDEATHSIG = 1
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):  # no prctl: the watch below still ends it
+            pass
+        if os.getppid() != parent:  # the parent died before prctl took effect
+            os._exit(70)
+    starter, started = _starter()
+
+    def gone() -> bool:
+        st = _proc_stat(starter)
+        if st is not None:
+            return started is not None and st[2] != started  # the pid reused by another process
+        if os.path.isdir("/proc"):
+            return True
+        try:
+            os.kill(starter, 0)
+        except ProcessLookupError:
+            return True
+        except PermissionError:
+            return False
+        return False
+
+    def watch() -> None:
+        while True:
+            time.sleep(0.25)
+            if gone():
+                os._exit(70)
+
+    if gone():
+        os._exit(70)
+    threading.Thread(target=watch, name="granchain-starter-watch", daemon=True).start()
+
+
 def main(run_dir: str) -> int:
+    _die_with_parent()
     t0 = time.perf_counter()
     d = Path(run_dir)
     lmp = _open_lammps(["-log", str(d / LOG)])
