@@ -11,17 +11,20 @@ reported apart). Also the error of dump-derived peaks against the dump interval.
 from __future__ import annotations
 
 import csv
+import os
 import statistics
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
+from granchain import safe_files
 from granchain.errors import UsageError
 from granchain.postprocess.observables import fit_wave_speed
 from granchain.problem import ChainProblem
 from granchain.reference.scipy_solver import solve_chain_dop853
 from granchain.reference.solver import solve_chain
+from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain
 from granchain.workflows.plan import plan_scene
 
 TARGETS = (1e-2, 1e-3, 1e-4)
@@ -174,15 +177,48 @@ def _dump_interval_errors(scene, dt: float) -> list[tuple[int, float, float]]:
     return out
 
 
-def write_study(study: AccuracyStudy, out: str | Path) -> list[Path]:
+def check_study_dir(out: str | Path, overwrite: bool = False) -> Path:
+    """Fail early (before the study runs) if out cannot take the study: it exists and is not empty
+    (without overwrite), it is not a directory granchain wrote (with overwrite), it is a link, or its
+    parent is not writable (a RunDirError naming it and the fix). An empty directory is taken."""
+    out = Path(out)
+    if _empty_dir(out):
+        return out
+    return check_output_dir(out, overwrite)
+
+
+def _empty_dir(d: Path) -> bool:
+    if os.path.islink(d) or not d.is_dir():
+        return False
+    try:
+        with os.scandir(d) as it:
+            return next(it, None) is None
+    except OSError:
+        return False
+
+
+def write_study(study: AccuracyStudy, out: str | Path, overwrite: bool = False) -> list[Path]:
+    """accuracy.csv, accuracy.png and accuracy.md in the directory out, written aside and renamed into
+    place (granchain's marker in it): out must be new or empty, or, with overwrite, a directory
+    granchain wrote (check_study_dir). Returns the three paths."""
+    out = check_study_dir(out, overwrite)
+    if _empty_dir(out):
+        os.rmdir(out)  # taken as new: the directory is renamed into its place
+    try:
+        with safe_files.atomic_directory(out, "accuracy", overwrite=overwrite, owned=owned_by_granchain) as tmp:
+            _write_study_files(study, tmp)
+    except OSError as e:
+        raise RunDirError(f"{out}: could not write the study ({e}); nothing was left behind") from None
+    return [out / "accuracy.csv", out / "accuracy.png", out / "accuracy.md"]
+
+
+def _write_study_files(study: AccuracyStudy, out: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "accuracy.csv", "w", newline="") as fh:
+    with safe_files.create_new(out / "accuracy.csv") as fh:
         w = csv.writer(fh)
         w.writerow(["method", "setting", "steps", "wall_time", "error_peak_force", "error_wave_speed"])
         for p in [*study.points, *study.plan_points]:
@@ -222,14 +258,17 @@ def write_study(study: AccuracyStudy, out: str | Path) -> list[Path]:
     ax.set_ylabel("max relative error of peak forces")
     import textwrap
 
-    ax.set_title("\n".join(textwrap.wrap(f"Work-precision: {study.scene.title or study.scene.source}", 80)), fontsize=9)
+    title = "\n".join(textwrap.wrap(f"Work-precision: {study.scene.title or study.scene.source}", 80))
+    ax.set_title(title, fontsize=9, parse_math=False)  # the scene's own text, not mathtext
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out / "accuracy.png", dpi=120)
-    plt.close(fig)
-    (out / "accuracy.md").write_text(summary_text(study))
-    return [out / "accuracy.csv", out / "accuracy.png", out / "accuracy.md"]
+    try:
+        safe_files.save_figure(fig, out / "accuracy.png", dpi=120)
+    finally:
+        plt.close(fig)
+    with safe_files.create_new(out / "accuracy.md") as fh:
+        fh.write(summary_text(study))
 
 
 def summary_text(study: AccuracyStudy) -> str:
@@ -283,4 +322,4 @@ def summary_text(study: AccuracyStudy) -> str:
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["accuracy_study", "write_study", "summary_text", "AccuracyStudy", "Point"]
+__all__ = ["accuracy_study", "check_study_dir", "write_study", "summary_text", "AccuracyStudy", "Point"]
