@@ -21,6 +21,7 @@ import io
 import json
 import math
 import os
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -243,14 +244,18 @@ def read_peaks(run_dir: str | Path) -> dict[str, np.ndarray]:
     path = Path(run_dir) / "peaks.csv"
     text = _read_text(path)
     try:
-        data = np.genfromtxt(io.StringIO(text), delimiter=",", names=True, ndmin=1, dtype=None, encoding="utf-8")
+        if not text.strip():
+            raise ValueError("empty")
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # a damaged table's warnings (lines of other widths): refused
+            data = np.genfromtxt(io.StringIO(text), delimiter=",", names=True, ndmin=1, dtype=None, encoding="utf-8")
         names = data.dtype.names
         if not names or "contact" not in names:
             raise ValueError("no 'contact' column")
         out = {name: np.asarray(data[name]) for name in names}
         if out["contact"].dtype.kind not in "iu":
             raise ValueError("the contact column is not whole numbers")
-    except (ValueError, TypeError, IndexError) as e:
+    except (ValueError, TypeError, IndexError, UserWarning) as e:
         raise RunDirError(f"{path}: is not the peak table granchain writes ({e}); run the scene again") from None
     if "complete" in out:
         out["complete"] = out["complete"] == 1

@@ -258,7 +258,8 @@ def _write_study_files(study: AccuracyStudy, out: Path) -> None:
     ax.set_ylabel("max relative error of peak forces")
     import textwrap
 
-    title = "\n".join(textwrap.wrap(f"Work-precision: {study.scene.title or study.scene.source}", 80))
+    text = "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in str(study.scene.title or ""))
+    title = "\n".join(textwrap.wrap(f"Work-precision: {text or study.scene.source}", 80))
     ax.set_title(title, fontsize=9, parse_math=False)  # the scene's own text, not mathtext
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
