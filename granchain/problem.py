@@ -132,3 +132,18 @@ def initial_energy(problem: ChainProblem) -> float:
     p = problem.with_ends()
     u, v, alpha_hist = initial_state(p)
     return state_energy(p.law, moving_mass(p.mass), u, v, alpha_hist)
+
+
+def contact_positions(scene) -> np.ndarray:
+    """Where each bead-bead contact sits at t = 0 (m, along the chain; contact i between beads i and
+    i+1): bead i's centre plus its radius, less half the static overlap under precompression. The
+    distances a front travels between contacts (a taper's or a dimer's differ from bead 1's diameter)."""
+    r = np.asarray(scene.bead_radii, dtype=float)
+    x = np.asarray(scene.bead_positions, dtype=float)
+    if scene.n_contacts == 0:
+        return np.zeros(0)
+    at = x[:-1] + r[:-1]
+    if scene.effects.precompression:
+        u0, alpha0 = precompressed_displacements(scene)
+        at = at + u0[:-1] - 0.5 * alpha0[: scene.n_contacts]
+    return at

@@ -25,22 +25,31 @@ from __future__ import annotations
 import numpy as np
 
 from granchain.peaks import LEAD_FRACTION, PEAK_PASSED_FRACTION
+from granchain.problem import contact_positions
 
 
-def fit_wave_speed(contacts: np.ndarray, times: np.ndarray, diameter: float) -> tuple[float, float] | None:
-    """Least-squares speed (m/s) and its standard error from times of peak at 1-based contacts."""
+def fit_wave_speed(
+    contacts: np.ndarray, times: np.ndarray, diameter: float, positions: np.ndarray | None = None
+) -> tuple[float, float] | None:
+    """Least-squares speed (m/s) and the fit's standard error from times at 1-based contacts.
+
+    positions: where each contact sits (m; problem.contact_positions, indexed by contact - 1): the
+    distances the front travels. Without it the contacts are one diameter apart (a uniform chain).
+    """
     ok = np.isfinite(times)
-    x, t = np.asarray(contacts, dtype=float)[ok], np.asarray(times)[ok]
+    c = np.asarray(contacts)[ok]
+    t = np.asarray(times)[ok]
+    x = c.astype(float) * diameter if positions is None else np.asarray(positions, dtype=float)[c - 1]
     if x.size < 3:
         return None
     xm, tm = x.mean(), t.mean()
     sxx = np.sum((x - xm) ** 2)
-    slope = np.sum((x - xm) * (t - tm)) / sxx  # s per contact
+    slope = np.sum((x - xm) * (t - tm)) / sxx  # s per m
     if slope <= 0:
         return None
     resid = t - (tm + slope * (x - xm))
     stderr_slope = np.sqrt(np.sum(resid**2) / (x.size - 2) / sxx)
-    speed = diameter / slope
+    speed = 1.0 / slope
     return float(speed), float(speed * stderr_slope / slope)
 
 
@@ -96,7 +105,7 @@ def measure_observables(scene, solution, missing: dict | None = None) -> dict:
         out["leading_peak_force"] = out["leading_peak_force_nondim"] = None
         why["leading_peak_force"] = why["leading_peak_force_nondim"] = _why_no_leading_pulse(solution, b)
     ok = np.isfinite(lead_t[contacts - 1])
-    fit = fit_wave_speed(contacts[ok], lead_t[contacts - 1][ok], scene.diameter)
+    fit = fit_wave_speed(contacts[ok], lead_t[contacts - 1][ok], scene.diameter, contact_positions(scene))
     out["wave_speed"] = fit[0] if fit else None
     out["wave_speed_stderr"] = fit[1] if fit else None
     out["wave_speed_contacts"] = int(np.sum(ok))

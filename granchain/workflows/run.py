@@ -86,9 +86,12 @@ class AccuracyWarning(UserWarning):
 
 #: fewer beads per MPI rank than this and the ranks spend the step exchanging ghosts: a 1D chain
 #: has two neighbours per bead, so each rank's work is its beads and its talk is two ghost beads
-#: per step whatever the length; refused before the run (a provisional bound: the performance issue
-#: measures the crossover)
+#: per step whatever the length; warned about before the run
 MIN_BEADS_PER_RANK = 1000
+
+
+class SmallChainRanksWarning(UserWarning):
+    """More MPI ranks than a chain this short can use: the run is slower, its results the same."""
 
 
 def integrator(backend: str, method: str | None) -> str:
@@ -113,8 +116,9 @@ def available_cores() -> int:
 
 
 def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False) -> None:
-    """Refuse an MPI request that cannot pay before anything runs: ranks on the reference backend,
-    more ranks than cores (unless oversubscribe), fewer than MIN_BEADS_PER_RANK beads per rank."""
+    """Refuse an MPI request that cannot run as asked before anything runs: ranks on the reference
+    backend, more ranks than cores (unless oversubscribe); warn below MIN_BEADS_PER_RANK beads per
+    rank (slow, not wrong: a user testing MPI on a short chain may mean it)."""
     if not isinstance(np_, int) or np_ < 1:
         raise UsageError(f"--np = {np_!r}: the number of MPI ranks must be a whole number >= 1")
     if np_ == 1:
@@ -132,10 +136,12 @@ def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False) 
     beads = scene.chain.beads
     if beads is not None and beads < MIN_BEADS_PER_RANK * np_:
         best = max(1, beads // MIN_BEADS_PER_RANK)
-        raise UsageError(
+        warnings.warn(
             f"--np = {np_}: {beads} beads over {np_} ranks is {beads // np_} beads per rank; below "
-            f"{MIN_BEADS_PER_RANK} per rank the ranks spend their time exchanging ghosts, not computing "
-            f"(use --np {best})"
+            f"{MIN_BEADS_PER_RANK} per rank the ranks spend their time exchanging ghosts, not computing, and "
+            f"this run will be slower than --np {best} (the results are the same)",
+            SmallChainRanksWarning,
+            stacklevel=2,
         )
 
 
