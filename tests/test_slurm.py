@@ -149,9 +149,11 @@ def test_ranks_are_checked_before_anything_runs(tmp_path):
         parse_campaign(campaign_text('[vary]\n"loading.amplitude" = [1.0]\n', campaign="ranks = 2"))
     with pytest.raises(CampaignError, match=r"ranks = 0 is invalid"):
         parse_campaign(campaign_text('[vary]\n"loading.amplitude" = [1.0]\n', campaign='backend = "lammps"\nranks = 0'))
-    # 20 beads on 2 ranks: refused by the beads-per-rank rule of granchain run --np, before the workspace
-    c = parse_campaign(campaign_text('[vary]\n"loading.amplitude" = [1.0]\n', campaign='backend = "lammps"\nranks = 2'))
-    with pytest.raises(CampaignError, match=r"point 1 .* cannot run: --np = 2: 20 beads over 2 ranks"):
+    # a point that cannot run: refused before the workspace is made, with its parameters
+    c = parse_campaign(
+        campaign_text('[vary]\n"run.timestep" = [5e-8, 5e-5]\n', campaign='backend = "lammps"\nranks = 2')
+    )
+    with pytest.raises(CampaignError, match=r"point 2 \(run.timestep = 5e-05\) cannot run"):
         run_campaign(c, tmp_path / "ws")
     assert not (tmp_path / "ws").exists()
 
@@ -161,28 +163,46 @@ def test_a_cluster_without_its_submit_command_is_refused_clearly(tmp_path, monke
 
     monkeypatch.setenv("PATH", str(tmp_path))  # no sbatch, no qsub
     c = parse_campaign(campaign_text('[vary]\n"loading.amplitude" = [1.0]\n'))
-    with pytest.raises(Exception, match=r"--cluster pbs: qsub is not on PATH"):
+    with pytest.raises(CampaignError, match=r"--cluster pbs: qsub is not on PATH"):
         run_campaign(c, tmp_path / "ws", cluster="pbs")
+    assert not (tmp_path / "ws").exists()
 
 
-def test_submit_settings_are_refused_before_anything_is_written(tmp_path):
-    from granchain.cli import main
+def test_ranks_auto_follows_the_np_auto_rule_within_a_workers_cores():
+    from granchain.campaigns.execute import point_ranks
+    from granchain.schedule import auto_ranks
 
-    for args, message in [
-        (["--walltime", "90"], "--walltime = '90' is invalid"),
-        (["--queue", "a b"], "--queue = 'a b' is invalid"),
-        (["--ranks", "0"], "--ranks = 0 is invalid"),
-    ]:
-        out = tmp_path / "job"
-        proc = subprocess.run(
-            [sys.executable, "-m", "granchain", "submit", "default", "--out", str(out), *args],
-            capture_output=True,
-            text=True,
-            timeout=120,
-        )
-        assert proc.returncode == 2 and message in proc.stderr, proc.stderr
-        assert not out.exists()
-    assert main is not None
+    c = parse_campaign(
+        campaign_text('[vary]\n"chain.beads" = [2000, 12000, 40000]\n', campaign='backend = "lammps"\nranks = "auto"')
+    )
+    for p in c.points():
+        for cores in (1, 2, 4, 16):
+            n = point_ranks(c, p.scene, cores)
+            assert n == auto_ranks(p.scene.chain.beads, cores) and 1 <= n <= cores
+    assert [point_ranks(c, p.scene, 16) for p in c.points()] == [1, 2, 8]
+
+
+def test_a_task_run_again_finds_its_own_finished_point_and_does_not_run_it(tmp_path):
+    """A point whose worker (or worker job) ended after the run directory was complete but before the
+    scheduler heard of it is submitted again by Dask: the task finds its own token in task.json and
+    returns done without running (the scene here would fail if it ran)."""
+    from granchain.campaigns import workspace as wsp
+    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.execute import run_point
+
+    c = parse_campaign(campaign_text('[vary]\n"loading.amplitude" = [1.0]\n'))
+    tables, _ = run_campaign(c, tmp_path / "ws", workers=1)
+    job = tmp_path / "ws" / "workspace" / tables["table"]["job"][0]
+    task = json.loads((job / "task.json").read_text())
+    summary = (job / "run" / "summary.json").stat().st_mtime_ns
+    payload = {"job_dir": str(job), "token": task["token"], "rerun": True, "scene": {}, "backend": "reference"}
+    r = run_point(payload)
+    assert r["status"] == "done" and r["repeated"] and r["wall_time"] == task["wall_time"]
+    assert (job / "run" / "summary.json").stat().st_mtime_ns == summary  # not run again
+    # another campaign run's token with rerun: it runs (and this payload's empty scene fails, recorded)
+    other = {"token": "other", "source": "x", "method": None, "rtol": None, "error_estimate": False}
+    r2 = run_point({**payload, **other, "code": wsp.code_version("reference")})
+    assert r2["status"] == "failed" and (job / "failure.json").is_file()
 
 
 # -------------------------------------------------------------------------- on a real SLURM

@@ -4,12 +4,13 @@
 from __future__ import annotations
 
 import dataclasses
+import shutil
 import sys
 import time
 from pathlib import Path
 
 from granchain.campaigns import workspace as wsp
-from granchain.campaigns.cluster import ClusterError, ClusterSettings, describe, merge
+from granchain.campaigns.cluster import SUBMIT, ClusterError, ClusterSettings, describe, merge
 from granchain.campaigns.cluster import check as check_cluster
 from granchain.campaigns.execute import Executor, Runner, preflight, run_grid
 from granchain.campaigns.search import run_search
@@ -105,9 +106,15 @@ def cluster_settings(campaign: Campaign, cluster=None, ranks: int = 1) -> Cluste
     if settings is None:
         return None
     try:
-        return check_cluster(settings, ranks=ranks)
+        settings = check_cluster(settings, ranks=ranks)
     except ClusterError as e:
         raise CampaignError(str(e)) from None
+    if settings.batch and shutil.which(SUBMIT[settings.kind]) is None:  # before the workspace is made
+        raise CampaignError(
+            f"--cluster {settings.kind}: {SUBMIT[settings.kind]} is not on PATH; run the campaign where jobs can be "
+            f"submitted (a login node of the {settings.kind.upper()} cluster)"
+        )
+    return settings
 
 
 def run_campaign(

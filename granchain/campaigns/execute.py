@@ -599,16 +599,23 @@ def preflight(campaign: Campaign, points: list[Point]) -> None:
     from granchain.workflows.run import check_resources, check_timestep, integrator, plan_for
 
     method = integrator(campaign.backend, campaign.method)
+    said: list[str] = []  # what the ranks rule says of the points, once for the campaign
     for p in points:
         try:
             scene, _ = plan_for(p.scene, campaign.backend, method, campaign.rtol)
             check_timestep(scene, method)
             if isinstance(campaign.ranks, int) and campaign.ranks > 1:  # the cores are the job's, not ours
-                check_resources(scene, campaign.backend, campaign.ranks, oversubscribe=True)
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always")
+                    check_resources(scene, campaign.backend, campaign.ranks, oversubscribe=True)
+                said += [f"point {p.index + 1}: {w.message}" for w in caught]
         except GranchainError as e:
             raise CampaignError(
                 f"{campaign.source}: point {p.index + 1} ({params_text(p.params)}) cannot run: {e}"
             ) from None
+    if said:
+        more = f" (and {len(said) - 1} more points)" if len(said) > 1 else ""
+        warnings.warn(f"{campaign.source}: ranks = {campaign.ranks}: {said[0]}{more}", UserWarning, stacklevel=2)
 
 
 def run_grid(campaign: Campaign, runner: Runner, points: list[Point]) -> RunReport:
