@@ -168,6 +168,35 @@ def test_a_cluster_without_its_submit_command_is_refused_clearly(tmp_path, monke
     assert not (tmp_path / "ws").exists()
 
 
+@pytest.mark.parametrize("kind", ["slurm", "pbs"])
+def test_the_worker_job_script_asks_for_ranks_times_workers_cores(kind):
+    """cores_per_job = 4 with ranks = 2: two Dask workers of one thread in a 4-core job; the points'
+    mpirun starts its ranks inside the job; the walltime, queue and account as given."""
+    from unittest import mock
+
+    from granchain.campaigns import cluster as cl
+
+    s = cl.check(
+        cl.ClusterSettings(kind=kind, queue="workq", account="proj", cores_per_job=4, memory="8GB", interface="lo"),
+        ranks=2,
+    )
+    jc = cl.JobCluster(s, 2, None)
+    with (
+        mock.patch.object(cl.shutil, "which", return_value="/usr/bin/true"),
+        mock.patch.object(cl.JobCluster, "_submit", lambda self, n: None),  # the script only: nothing submitted
+    ):
+        client = jc.start()
+    try:
+        script = jc.job_script()
+    finally:
+        client.close()
+        jc.cluster.close()
+    cores = "#SBATCH --cpus-per-task=4" if kind == "slurm" else "#PBS -l select=1:ncpus=4:mem=8GB"
+    for line in (cores, "--nworkers 2", "--nthreads 1", "export HYDRA_BOOTSTRAP=fork", "--interface lo", "workq"):
+        assert line in script, (line, script)
+    assert "--lifetime 3300s" in script  # an hour's walltime less 5 min
+
+
 def test_ranks_auto_follows_the_np_auto_rule_within_a_workers_cores():
     from granchain.campaigns.execute import point_ranks
     from granchain.schedule import auto_ranks
