@@ -255,16 +255,17 @@ def open_workspace(ws: str | Path):
 
 
 def _signac(open_project, ws: Path, **kw):
-    """signac's project of ws; its configuration error (a damaged .signac/config) as a CampaignError."""
-    from signac.errors import ConfigError
+    """signac's project of ws; its errors opening it (a damaged .signac/config, another schema) as a
+    CampaignError."""
+    from signac.errors import Error
 
     try:
         return open_project(str(ws), **kw)
-    except ConfigError as e:
+    except (Error, ValueError, OSError) as e:  # (a config that is not UTF-8 is signac's UnicodeDecodeError)
         why = " ".join(str(e).split())[:200]
         raise CampaignError(
-            f"{ws / '.signac' / 'config'}: signac cannot read it ({why}); the workspace is damaged: run the "
-            "campaign into a new --out"
+            f"{ws / '.signac' / 'config'}: signac cannot open the workspace ({why}); it is damaged or another "
+            "signac's: run the campaign into a new --out"
         ) from None
 
 
