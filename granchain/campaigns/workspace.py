@@ -335,16 +335,21 @@ def read_json(path: Path):
         return None
 
 
-def write_json(path: Path, data) -> None:
-    """Write aside and rename (a reader never sees half a file, a full disk leaves no temporary
-    file); a link at path is refused (a WorkspaceWriteError, as is a file that cannot be written)."""
-    text = json.dumps(data, indent=1, default=_plain) + "\n"
+def write_text(path: Path, text: str) -> None:
+    """Write a workspace's text file (campaign.toml, base.toml) aside and rename it into place,
+    refusing a link at path; a failure (a full disk, read-only) is a WorkspaceWriteError naming it."""
     try:
         safe_files.write_text(path, text)
     except OSError as e:
         raise WorkspaceWriteError(
             e.errno, f"{path}: cannot be written ({e.strerror or e}); free some space or fix the workspace"
         ) from None
+
+
+def write_json(path: Path, data) -> None:
+    """Write aside and rename (a reader never sees half a file, a full disk leaves no temporary
+    file); a link at path is refused (a WorkspaceWriteError, as is a file that cannot be written)."""
+    write_text(path, json.dumps(data, indent=1, default=_plain) + "\n")
 
 
 def stale_versions(project, code: dict) -> dict[str, dict]:
