@@ -111,7 +111,7 @@ def job_script(
         f"#SBATCH -J {job_name}",
         f"#SBATCH -n {ranks}",
         f"#SBATCH -t {walltime}",
-        f"#SBATCH -o {d / 'slurm-%j.out'}",
+        "#SBATCH -o slurm-%j.out",  # in the job's working directory: sbatch --chdir DIR
     ]
     if queue:
         lines.append(f"#SBATCH -p {queue}")
@@ -184,7 +184,12 @@ def submit(
     script = out / JOB_SCRIPT
     script.write_text(script_text)
     try:
-        r = subprocess.run(["sbatch", "--parsable", str(script.resolve())], capture_output=True, text=True, timeout=120)
+        r = subprocess.run(
+            ["sbatch", "--parsable", "--chdir", str(out.resolve()), str(script.resolve())],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
     except (OSError, subprocess.TimeoutExpired) as e:
         raise SubmitError(f"sbatch failed to run ({e}); the deck and job script are in {out}") from None
     if r.returncode != 0:
