@@ -79,7 +79,11 @@ def _why_no_leading_pulse(solution, contact: int) -> str:
 
 
 def measure_observables(scene, solution, missing: dict | None = None) -> dict:
-    """The observables of a run (complete peaks only); `missing`, if given, gets name -> reason for each None."""
+    """The observables of a run (complete peaks only); `missing`, if given, gets name -> reason for each None.
+
+    Forces are dynamic on a precompressed chain: the rise above the static force F0 (static_force),
+    which every contact carries at rest; the leading pulse and its arrival are measured on it too.
+    """
     why: dict[str, str] = {}
     if scene.n_contacts == 0:  # one bead: its contacts are the striker's and the wall's (end_fields)
         names = ("leading_peak_force", "leading_peak_force_nondim", "wave_speed", "wave_speed_stderr")
@@ -96,7 +100,12 @@ def measure_observables(scene, solution, missing: dict | None = None) -> dict:
     out: dict = {"window": [int(a), int(b)]}
     last = b - 1
     out["leading_peak_contact"] = int(b)
-    lead_f = np.asarray(solution.leading_pulse_force, dtype=float)
+    # under precompression every contact carries F0 at rest: the wave is the dynamic force F - F0,
+    # which the peak forces below measure (the total is F0 more: peaks.csv keeps it)
+    f0 = float(scene.effects.precompression)
+    if f0:
+        out["static_force"] = f0
+    lead_f = np.asarray(solution.leading_pulse_force, dtype=float) - f0
     lead_t = np.asarray(solution.leading_pulse_time, dtype=float)
     if np.isfinite(lead_f[last]):
         out["leading_peak_force"] = float(lead_f[last])
@@ -118,7 +127,7 @@ def measure_observables(scene, solution, missing: dict | None = None) -> dict:
         )
     if complete.any():
         i = int(np.argmax(np.where(complete, solution.peak_force, -np.inf)))
-        out["max_peak_force"] = float(solution.peak_force[i])
+        out["max_peak_force"] = float(solution.peak_force[i]) - f0
         out["max_peak_contact"] = i + 1
     else:
         out["max_peak_force"] = out["max_peak_contact"] = None

@@ -412,8 +412,10 @@ def _largest(report: ErrorReport, scene, sol) -> None:
     n = len(sol.peak_force)
     measured = measured_contacts(scene, sol)
     rel = np.full(n, np.nan)
-    ok = report.peak_force.reliable & (np.abs(sol.peak_force) > 0)
-    rel[ok] = report.peak_force.error[ok] / np.abs(sol.peak_force[ok])
+    # relative to the wave's force: above the static force F0 a precompressed contact carries at rest
+    dynamic = np.abs(np.asarray(sol.peak_force, dtype=float) - float(scene.effects.precompression))
+    ok = report.peak_force.reliable & (dynamic > 0)
+    rel[ok] = report.peak_force.error[ok] / dynamic[ok]
     m = measured[np.isfinite(rel[measured])]
     if m.size:
         i = int(m[np.argmax(rel[m])])
