@@ -75,6 +75,8 @@ MODEL_DOMAINS: dict[str, tuple[str, str]] = {
     **{n: ("bilinear", "long") for n in _BILINEAR_LONG},
     # the effects' own regimes: a precompressed chain, two-body impacts of a striker or on the wall
     "precompressed_sound_speed": ("hertz", "precompressed"),
+    # Nesterenko's V_s(f_r) at a measured leading peak (compare, like nesterenko_wave_speed)
+    "precompressed_solitary_wave_speed": ("hertz", "precompressed"),
     "striker_impact_peak_force": ("hertz", "striker_impact"),
     "striker_impact_duration": ("hertz", "striker_impact"),
     "wall_impact_peak_force": ("hertz", "wall_impact"),

@@ -74,7 +74,10 @@ ROW_MODELS: dict[tuple[str, str], tuple[tuple[str, str], ...]] = {
         ("short_load_peak_force", "Eq. 8"),
         ("long_load_peak_force_upper", "Eq. 15 + Nesterenko (upper bound)"),
     ),
-    ("hertz", "wave_speed"): (("nesterenko_wave_speed", "Nesterenko at the reference's leading peak"),),
+    ("hertz", "wave_speed"): (
+        ("nesterenko_wave_speed", "Nesterenko at the reference's leading peak"),
+        ("precompressed_solitary_wave_speed", "Nesterenko's V_s(f_r) at the reference's leading peak over F0"),
+    ),
     ("bilinear", "peak_force_contact_1"): (("first_contact_peak_force", "Eq. A2 (short loading)"),),
     ("bilinear", "wave_speed"): (("long_load_c", "c = D sqrt(k/m) (Sec. III B, long loading)"),),
     ("hertz", "striker_peak_force"): (("striker_impact_peak_force", "Hertz impact (two bodies)"),),
@@ -90,6 +93,11 @@ def _model_rows(scene, ref_obs: dict) -> dict[str, tuple[float | None, str, bool
         values["nesterenko_wave_speed"] = models.solitary_wave_speed(
             ref_obs["leading_peak_force"], scene.stiffness, scene.mass, scene.diameter
         )
+        f0 = scene.effects.precompression
+        if f0 and "precompressed_sound_speed" in values:  # f_r: the largest contact force over F0
+            ratio = (f0 + ref_obs["leading_peak_force"]) / f0
+            c0 = values["precompressed_sound_speed"]
+            values["precompressed_solitary_wave_speed"] = models.precompressed_solitary_wave_speed(c0, ratio)
     out: dict[str, tuple[float | None, str, bool]] = {}
     for (law, quantity), candidates in ROW_MODELS.items():
         if law != scene.contact.law:
