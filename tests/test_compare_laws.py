@@ -71,3 +71,25 @@ def test_compare_laws_quiet_prints_no_progress(tmp_path, capsys, monkeypatch, qu
     assert main(args + (["--quiet"] if quiet else [])) == 0
     err = capsys.readouterr().err
     assert ("%" in err) is not quiet  # the progress line shows a percentage
+
+
+@pytest.mark.parametrize(
+    "decay,power,transition,noise", [(0.3, 1.5, 15, 0.02), (0.15, 0.9, 25, 0.01), (0.5, 2.0, 10, 0.05)]
+)
+def test_decay_fit_uncertainties_cover_the_truth(decay, power, transition, noise):
+    """On peak-force curves exponential then inverse with log-normal scatter (200 fixed draws), the
+    fitted decay rate and exponent lie within 2 standard errors of the truth about 95% of the time
+    (at least 85%: a standard error 2x too small would cover 68%), and the transition range holds
+    the true transition at least 80% of the time."""
+    from granchain.postprocess.regimes import fit_decay
+
+    n = 60
+    i = np.arange(1, n + 1, dtype=float)
+    at = 1000.0 * math.exp(-decay * (transition - 1))  # continuous at the transition
+    clean = np.where(i < transition, 1000.0 * np.exp(-decay * (i - 1)), at * (i / transition) ** -power)
+    rng = np.random.default_rng(20261125)
+    fits = [fit_decay(clean * np.exp(noise * rng.standard_normal(n))) for _ in range(200)]
+    assert np.mean([abs(f.decay_per_contact - decay) <= 2 * f.decay_per_contact_stderr for f in fits]) >= 0.85
+    assert np.mean([abs(f.power - power) <= 2 * f.power_stderr for f in fits]) >= 0.85
+    assert np.mean([f.transition_range[0] <= transition <= f.transition_range[1] for f in fits]) >= 0.8
+    assert all(f.transition_range[0] <= f.transition_contact <= f.transition_range[1] for f in fits)

@@ -45,20 +45,37 @@ def classify_wave(force: np.ndarray, fraction: float = PULSE_FRACTION) -> str:
     return "no wave" if n == 0 else "single solitary wave" if n == 1 else "wave train"
 
 
+#: the transition range: splits whose summed squared residuals exceed the least by at most this many
+#: residual variances (the F test at 95% for one parameter, F(1, n - 4) ~ 4 for the chains' n)
+TRANSITION_F = 4.0
+
+
 @dataclass(frozen=True)
 class DecayFit:
     """Peak force vs contact index i (1-based): F = F_1 exp(-lambda (i-1)) for i < transition,
-    F = a i^(-p) from the transition on."""
+    F = a i^(-p) from the transition on; each with its uncertainty from the fit: the slopes' standard
+    errors, and the range of transition contacts the data cannot tell from the best (their summed
+    squared residuals within TRANSITION_F residual variances of the least)."""
 
     transition_contact: int
     decay_per_contact: float  # lambda, exponential regime
     power: float  # p, inverse regime
     rms_log_residual: float
+    decay_per_contact_stderr: float = float("nan")
+    power_stderr: float = float("nan")
+    transition_range: tuple[int, int] = (0, 0)
 
 
 def _line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
     slope, icpt = np.polyfit(x, y, 1)
     return float(slope), float(icpt), float(np.sum((y - (icpt + slope * x)) ** 2))
+
+
+def _slope_stderr(x: np.ndarray, rss: float) -> float:
+    """The least-squares slope's standard error (nan with fewer than 3 points)."""
+    if x.size < 3:
+        return float("nan")
+    return float(np.sqrt(rss / (x.size - 2) / np.sum((x - x.mean()) ** 2)))
 
 
 def fit_decay(peak_force: np.ndarray, last_contact: int | None = None, min_points: int = 3) -> DecayFit:
@@ -71,17 +88,24 @@ def fit_decay(peak_force: np.ndarray, last_contact: int | None = None, min_point
     n = len(f) if last_contact is None else last_contact
     i = np.arange(1, n + 1, dtype=float)
     y = np.log(f[:n])
-    best = None
+    fits = []
     for c in range(min_points + 1, n - min_points + 2):
         s1, _, r1 = _line(i[: c - 1], y[: c - 1])
         s2, _, r2 = _line(np.log(i[c - 1 :]), y[c - 1 :])
-        if best is None or r1 + r2 < best[0]:
-            best = (r1 + r2, c, -s1, -s2)
-    if best is None:
+        fits.append((r1 + r2, c, -s1, -s2, r1, r2))
+    if not fits:
         raise ValueError(f"need at least {2 * min_points} contacts to fit two decay regimes, got {n}")
+    best = min(fits)
+    rss, c = best[0], best[1]
+    variance = rss / max(n - 4, 1)  # four fitted numbers
+    # splits no worse than the best by the F test's 95% level for one parameter (F(1, n-4) ~ 4)
+    near = [x[1] for x in fits if x[0] <= rss + TRANSITION_F * variance]
     return DecayFit(
-        transition_contact=best[1],
+        transition_contact=c,
         decay_per_contact=best[2],
         power=best[3],
-        rms_log_residual=float(np.sqrt(best[0] / n)),
+        rms_log_residual=float(np.sqrt(rss / n)),
+        decay_per_contact_stderr=_slope_stderr(i[: c - 1], best[4]),
+        power_stderr=_slope_stderr(np.log(i[c - 1 :]), best[5]),
+        transition_range=(min(near), max(near)),
     )
