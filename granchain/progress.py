@@ -1,4 +1,4 @@
-"""Progress of long runs on stderr (issue 12): a tqdm bar on a terminal, plain lines elsewhere.
+"""Progress of long runs on stderr: a tqdm bar on a terminal, plain lines elsewhere.
 
     with Progress(total_steps, "reference rk4") as p:
         next_check = p.start()

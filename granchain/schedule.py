@@ -100,10 +100,10 @@ def _stride(scene, interval) -> int:
 #: Chain length (beads) at which two MPI ranks first beat one in LAMMPS's loop time on two otherwise
 #: idle cores: below it the ranks' synchronisation every step (ghost positions, the neighbour check's
 #: reduction) costs more than halving the chain saves. Measured by `python benchmarks/bench_pair.py mpi`
-#: on the 2-core development machine at load average 0.1-0.8 (benchmarks/RESULTS.md, issue 18, stop
-#: 24): np 1 / np 2 loop time 1.12-1.24x at 1e3-3e3 beads (within the noise of 1), 1.67x at 1e4,
+#: on a 2-core machine with both cores idle (benchmarks/RESULTS.md): np 1 / np 2 loop
+#: time 1.12-1.24x at 1e3-3e3 beads (within the noise of 1), 1.67x at 1e4,
 #: 1.86-2.12x at 3e4-3e5, 1.51x at 1e6. On cores that are busy with other work the ranks wait for each
-#: other every step and the crossover moves far out (0.85x at 1e5, 1.12x at 3e5 at load 4-7), which
+#: other every step and the crossover moves far out (0.85x at 1e5, 1.12x at 3e5 with both cores busy), which
 #: is why auto_ranks counts only idle cores.
 MPI_CROSSOVER_BEADS = 10_000
 

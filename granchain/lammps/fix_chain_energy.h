@@ -1,5 +1,5 @@
 /* granchain: fix chain/energy, the deck's energy samples written through a buffer, and the run watch's
- * energy balance on the same numbers (LAMMPS plugin; issue 18, item 2).
+ * energy balance on the same numbers (LAMMPS plugin).
  *
  *   fix ID group chain/energy N FILE title TITLE first ATOM [dissipated CID] [extra COL ...]
  *   fix_modify ID watch BOUND WORK FMAX

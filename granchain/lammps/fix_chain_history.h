@@ -1,5 +1,5 @@
 /* granchain: fix chain/history, the history contacts' force and velocity in memory, one binary file per
- * run's end (LAMMPS plugin; issue 18).
+ * run's end (LAMMPS plugin).
  *
  *   fix ID group chain/history N file.npy
  *       every N steps (on the steps a 'dump ID group custom N ...' writes: multiples of N, each step

@@ -1,4 +1,4 @@
-/* granchain: fix chain/nve, velocity Verlet along x only, for a chain along x (LAMMPS plugin; issue 18).
+/* granchain: fix chain/nve, velocity Verlet along x only, for a chain along x (LAMMPS plugin).
  *
  *   fix ID group chain/nve       the same updates as fix nve on the x components (the same expressions,
  *                                so the same numbers), none on y and z; at setup it refuses a group atom

@@ -381,8 +381,8 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
   const Coef *const tab = table.data();
   const int nt = atom->ntypes + 1;
 
-  // the pair loop as before issue 18 (a branch skips pairs out of contact: measured faster than a
-  // branch-free loop, 1.2-1.3x in Pair time, benchmarks/RESULTS.md), less a square root and a
+  // the pair loop (a branch skips pairs out of contact: measured faster than a branch-free loop,
+  // 1.2-1.3x in Pair time, benchmarks/RESULTS.md), less a square root and a
   // division for a chain along x: y and z never change there (every force is along x), so
   // r = |delx| (sqrt(x * x) == |x| in IEEE arithmetic) and the force is +-F along x. Each type pair's
   // constants are one record (init_one); with one atom type, one record for the whole loop

@@ -1,6 +1,6 @@
 """The paper's claim (Sec. III, Fig. 4; Conclusions) that the bilinear law "captures the key phenomena
 associated with a more complex nonlinear model", tested with Thornton's (1997) elastic-perfectly-
-plastic law (issue 14, docs/laws.md): the Fig. 5 load (I = 0.1 N s over 1 us, 60 brass beads) on the
+plastic law (docs/laws.md): the Fig. 5 load (I = 0.1 N s over 1 us, 60 brass beads) on the
 bundled thornton-short-impulse scene and on its bilinear equivalent (equal plastic slopes,
 pi p_y R* = k, beta = 0.8: granchain.workflows.laws.equivalent_contact), each a campaign point (LAMMPS,
 planned for rtol 1e-3, error bars), each peak-force curve fitted exponential-then-inverse

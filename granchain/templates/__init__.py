@@ -72,8 +72,8 @@ def result_columns(declared) -> list[str]:
 
 @dataclass(frozen=True)
 class DeckOptions:
-    """How a deck computes what it computes, none of which changes its numbers (issue 18;
-    tests/test_plugin_watch.py and tests/test_history_output.py hold each choice against the other).
+    """How a deck computes what it computes, none of which changes its numbers
+    (tests/test_plugin_watch.py and tests/test_history_output.py hold each choice against the other).
 
     neigh_every: steps between two checks of the neighbour list (neigh_modify every N delay 0 check yes);
         our pair styles fail a run with a dangerous build at its end, so a too sparse check cannot pass
@@ -107,7 +107,7 @@ class DeckOptions:
 #: every piece of the plugin: the watch by its computes, fix chain/nve, histories by fix chain/history,
 #: energy samples and balance by fix chain/energy (benchmarks/bench_pair.py: 0.28-0.39x the built-in
 #: granular style's time per bead-step against 0.42-0.48 with the built-ins; histories' share of the
-#: loop 3-17% on the bundled scenes, 7-42% as text; benchmarks/RESULTS.md, issue 18)
+#: loop 3-17% on the bundled scenes, 7-42% as text; benchmarks/RESULTS.md)
 PLUGIN_DECK_OPTIONS = DeckOptions(watch_computes=True, chain_nve=True, history_file="npy", energy_fix=True)
 #: the options render_deck uses unless told otherwise; DeckOptions() is the built-ins' deck
 #: (tests/test_plugin_watch.py and tests/test_history_output.py hold the two to the same doubles)
@@ -170,7 +170,7 @@ def _is_atom_x(expr: str) -> bool:
 @functools.lru_cache(maxsize=1)
 def _env() -> jinja2.Environment:
     # one environment per process: it keeps the compiled templates (a new one per deck recompiled every
-    # template, 25-50 ms of a campaign point's overhead; issue 18 item 4)
+    # template, 25-50 ms of a campaign point's overhead)
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(resources.files("granchain") / "templates")),
         undefined=jinja2.StrictUndefined,

@@ -87,7 +87,7 @@ def predicted_error(method: str, omega_max: float, rate: float, dt: float) -> fl
 #: the scale: the error model bounds a peak's error by C (omega_max dt)^p times the forces it was
 #: calibrated on (the largest of the run), not times the peak itself. Measured (LAMMPS at the
 #: step planned for rtol 1e-3 against a quarter of it; complete peaks of the window's contacts):
-#: the 500-bead steel bilinear chain of issue 11, whose front decays from 2.3 kN to 49 N (scale over
+#: a 500-bead steel bilinear chain whose front decays from 2.3 kN to 49 N (scale over
 #: smallest peak 123), missed by 36 x rtol; the bundled Table I chain (ratio 3) was 0.07 x rtol and a
 #: plastic short impulse (ratio 42) 0.7 x rtol. A planned run whose measured peaks fall below its
 #: force scale is therefore run again at the step planned for rtol / ratio (refined_plan); the ratio
