@@ -432,3 +432,31 @@ def test_ctrl_c_cancels_the_campaigns_jobs_and_only_those(tmp_path, no_job_left)
         assert any(line.split()[0] == foreign for line in our_jobs()), "the foreign job was cancelled"
     finally:
         subprocess.run(["scancel", foreign], timeout=30)
+
+
+#: 64 LAMMPS points of about a second each: longer on one core than a 1-minute job's workers live
+LONGER = """
+[vary]
+"loading.amplitude" = { log = [1.0, 100.0], num = 8 }
+"loading.duration" = { linear = [1e-6, 5e-6], num = 8 }
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.slurm
+def test_a_worker_job_at_its_walltime_is_replaced_and_the_campaign_finishes(tmp_path, no_job_left):
+    """One worker job of 1 minute: its worker leaves before the limit (--lifetime 40 s), the job ends,
+    a replacement (with a name of its own: distributed cancels the job under a lost worker's name) takes
+    over, and every point completes once."""
+    scene = BIG.replace("beads = 2000", "beads = 300").replace("end_time = 1e-4", "end_time = 8e-4")
+    scene = scene.replace("timestep = 1e-8", "timestep = 2e-8").replace("window = [20, 80]", "window = [20, 80]")
+    path = write(tmp_path, "c.toml", campaign_text(LONGER, scene=scene, campaign='backend = "lammps"'))
+    ws = tmp_path / "ws"
+    cmd = [sys.executable, "-m", "granchain", "campaign", "run", str(path), "--out", str(ws), "--jobs", "1"]
+    cmd += ["--cluster", "slurm", "--interface", "lo", "--walltime", "00:01:00", "-q"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert "64 points: 0 complete before, 64 run now, 0 failed" in p.stdout
+    assert len(complete_jobs(ws)) == 64
+    jobs = {f.stem for f in (ws / "jobs").glob("*.err")}
+    assert len(jobs) >= 2, f"no job was replaced: {jobs}"

@@ -514,6 +514,12 @@ class JobCluster:
         room = self.s.replacement_limit() - self.counts.replaced
         want = min(len(names), max(0, room))
         if want:
+            # a new job gets a name no job of this run had: distributed closes (cancels) the job under
+            # a lost worker's name some seconds after the loss (lost-worker-timeout), and SpecCluster
+            # would give the freed name to the replacement
+            used = {st.name for st in self.jobs.values()}
+            while self.cluster._new_worker_name(self.cluster._i) in used:
+                self.cluster._i += 1
             self.counts.replaced += want
             alive = sum(1 for st in self.jobs.values() if st.ended_at is None)
             self.cluster.scale(jobs=min(self.s.jobs, alive + want))
