@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import subprocess
 import tempfile
@@ -36,7 +37,6 @@ from granchain.campaigns.spec import parse_campaign
 def job_start(n: int) -> list[float]:
     out = []
     for _ in range(n):
-        t0 = time.perf_counter()
         jid = subprocess.run(
             ["sbatch", "--parsable", "-J", "granchain-bench", "-o", "/dev/null", "--wrap", "true"],
             capture_output=True,
@@ -50,7 +50,6 @@ def job_start(n: int) -> list[float]:
                 break
             time.sleep(0.02)
         out.append(time.perf_counter() - t_sub)
-        _ = t0
     return out
 
 
@@ -98,16 +97,17 @@ def main() -> None:
     ap.add_argument("--points", default="10,60")
     ap.add_argument("--reps", type=int, default=2)
     a = ap.parse_args()
-    import os
-
     os.environ["GRANCHAIN_QUIET"] = "1"
     lat = job_start(a.starts)
     print("| what | median (s) | min | max |\n|---|---|---|---|")
-    print(f"| sbatch to RUNNING (trivial job, {a.starts}x) | {statistics.median(lat):.2f} | {min(lat):.2f} | {max(lat):.2f} |")
+    med = statistics.median(lat)
+    print(f"| sbatch to RUNNING (trivial job, {a.starts}x) | {med:.2f} | {min(lat):.2f} | {max(lat):.2f} |")
     for jobs in (1, 2):
         ups = [workers_up(jobs) for _ in range(a.reps)]
-        print(f"| scheduler + {jobs} job(s) to connected workers ({a.reps}x) | {statistics.median(ups):.2f} | "
-              f"{min(ups):.2f} | {max(ups):.2f} |")
+        print(
+            f"| scheduler + {jobs} job(s) to connected workers ({a.reps}x) | {statistics.median(ups):.2f} | "
+            f"{min(ups):.2f} | {max(ups):.2f} |"
+        )
     lo, hi = (int(x) for x in a.points.split(","))
     print("\n| where | points | wall (s) | runs (s) |\n|---|---|---|---|")
     slope = {}
