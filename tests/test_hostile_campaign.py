@@ -237,24 +237,21 @@ _WS_FILES = ["campaign.json", "run/summary.json", "run/scene.toml", "run/histori
              wsp.STATEPOINT, "failure.json", ".signac/config"]  # fmt: skip
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(
-    damages=st.lists(
-        st.tuples(
-            st.sampled_from(_WS_FILES),
-            st.integers(0, 3),
-            st.one_of(
-                st.binary(max_size=64),
-                st.sampled_from(['{"observables": 5}', "null", "[]", '{"warnings": 3}', '{"message": [1]}']),
-            ),
+_DAMAGES = st.lists(
+    st.tuples(
+        st.sampled_from(_WS_FILES),
+        st.integers(0, 3),
+        st.one_of(
+            st.binary(max_size=64),
+            st.sampled_from(['{"observables": 5}', "null", "[]", '{"warnings": 3}', '{"message": [1]}']),
         ),
-        min_size=1,
-        max_size=3,
-    )
+    ),
+    min_size=1,
+    max_size=3,
 )
-def test_campaign_table_of_any_damaged_workspace_is_a_table_or_one_error_line(made, tmp_path_factory, damages):
-    """Whatever is cut, replaced or appended in its files: campaign table prints a table (the damaged
-    points incomplete) or one error line; a bug's exception propagates out of main and fails this."""
+
+
+def _damaged_copy(made, tmp_path_factory, damages) -> Path:
     w = tmp_path_factory.mktemp("h") / "ws"
     shutil.copytree(made[1], w)
     for name, how, junk in damages:
@@ -263,6 +260,23 @@ def test_campaign_table_of_any_damaged_workspace_is_a_table_or_one_error_line(ma
         junk = junk if isinstance(junk, bytes) else junk.encode()
         p.parent.mkdir(parents=True, exist_ok=True)
         p.write_bytes([data[: len(data) // 2], junk, data + junk, b""][how])
+    return w
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(damages=_DAMAGES)
+def test_campaign_plot_of_any_damaged_workspace_is_a_figure_or_one_error_line(made, tmp_path_factory, damages):
+    w = _damaged_copy(made, tmp_path_factory, damages)
+    assert main(["campaign", "plot", str(w), *PLOT, "--out", str(w.parent / "fig")]) in (0, 2)
+    shutil.rmtree(w.parent)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(damages=_DAMAGES)
+def test_campaign_table_of_any_damaged_workspace_is_a_table_or_one_error_line(made, tmp_path_factory, damages):
+    """Whatever is cut, replaced or appended in its files: campaign table prints a table (the damaged
+    points incomplete) or one error line; a bug's exception propagates out of main and fails this."""
+    w = _damaged_copy(made, tmp_path_factory, damages)
     assert main(["campaign", "table", str(w), "--csv"]) in (0, 2)
     shutil.rmtree(w.parent)
 
