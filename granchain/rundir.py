@@ -56,6 +56,7 @@ _LEGACY_FILES = (
     "*.png",
     "*.pdf",
     "*.svg",
+    "*_plot.csv",  # granchain plot: each figure's plotted data beside it
 )
 _LEGACY_SIGNS = ("summary.json", "compare.csv", "laws.json", "accuracy.csv")
 _LEGACY_SUBDIRS = ("lammps", "reference")
