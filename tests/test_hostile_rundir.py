@@ -236,3 +236,24 @@ def test_write_helpers_leave_nothing_on_a_full_disk(tmp_path, monkeypatch):
         fh.write("partial")
         raise Full
     assert json.loads(p.read_text()) == {"old": 1} and sorted(x.name for x in tmp_path.iterdir()) == ["f.json"]
+
+
+def test_directories_written_before_the_marker_count_as_granchains_only_with_granchains_files(tmp_path):
+    d = tmp_path / "compare"
+    for sub in ("lammps", "reference"):
+        (d / sub).mkdir(parents=True)
+        for name in ("summary.json", "peaks.csv", "scene.toml", "peaks.png", "peaks_plot.csv"):
+            (d / sub / name).write_text("x")
+    for name in ("compare.csv", "compare.md", "compare_peaks.png", "compare_peaks_plot.csv"):
+        (d / name).write_text("x")
+    assert rundir.owned_by_granchain(d)
+    (d / "lammps" / "notes.txt").write_text("mine")
+    assert not rundir.owned_by_granchain(d)
+    (d / "lammps" / "notes.txt").unlink()
+    os.symlink(tmp_path, d / "reference" / "chain.dump")
+    assert not rundir.owned_by_granchain(d)
+    (d / "reference" / "chain.dump").unlink()
+    (d / "other").mkdir()
+    assert not rundir.owned_by_granchain(d)
+    (d / "other").rmdir()
+    assert rundir.owned_by_granchain(d) and not rundir.owned_by_granchain(tmp_path / "nothing")
