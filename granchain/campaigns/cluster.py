@@ -326,6 +326,9 @@ class JobCluster:
                 f"(a login node of the {s.kind.upper()} cluster)"
             )
         if self.log_directory is not None:
+            from granchain.safe_files import check_not_link
+
+            check_not_link(self.log_directory)  # the jobs' output is written there: not through a planted link
             self.log_directory.mkdir(parents=True, exist_ok=True)
         # a job that ended is noticed by the driver's own poll (replace_ended); Dask's own timeout before
         # it closes a lost worker's job object stays, but the driver does not wait for it
