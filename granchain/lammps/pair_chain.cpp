@@ -2,9 +2,7 @@
 
 #include "pair_chain.h"
 
-#include "law_bilinear.h"
-#include "law_hertz.h"
-#include "law_thornton.h"
+#include "chain_laws.h"  // generated from the law registry: GRANCHAIN_LAWS(X), every law's header
 
 #include "atom.h"
 #include "comm.h"
@@ -535,7 +533,7 @@ template <class Law> void *PairChain<Law>::extract(const char *str, int &dim)
 }
 
 namespace LAMMPS_NS {
-template class PairChain<LawHertz>;
-template class PairChain<LawBilinear>;
-template class PairChain<LawThornton>;
+#define GRANCHAIN_INSTANTIATE(Law) template class PairChain<Law>;
+GRANCHAIN_LAWS(GRANCHAIN_INSTANTIATE)
+#undef GRANCHAIN_INSTANTIATE
 }    // namespace LAMMPS_NS

@@ -11,9 +11,7 @@
 #include "lammps.h"
 #include "pair_chain.h"
 
-#include "law_bilinear.h"
-#include "law_hertz.h"
-#include "law_thornton.h"
+#include "chain_laws.h"  // generated from the law registry: GRANCHAIN_LAWS(X), every law's header
 
 using namespace LAMMPS_NS;
 
@@ -41,9 +39,9 @@ void lammpsplugin_init(void *, void *, void *);
 #endif
 
 // PairChain<Law> is instantiated for every law in pair_chain.cpp
-extern template class LAMMPS_NS::PairChain<LawHertz>;
-extern template class LAMMPS_NS::PairChain<LawBilinear>;
-extern template class LAMMPS_NS::PairChain<LawThornton>;
+#define GRANCHAIN_EXTERN_PAIR(Law) extern template class LAMMPS_NS::PairChain<Law>;
+GRANCHAIN_LAWS(GRANCHAIN_EXTERN_PAIR)
+#undef GRANCHAIN_EXTERN_PAIR
 
 template <class Law> static Pair *creator(LAMMPS *lmp) { return new PairChain<Law>(lmp); }
 
@@ -73,9 +71,9 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   plugin.style = "pair";
   plugin.author = "granchain";
   plugin.handle = handle;
-  register_law<LawHertz>(plugin, reg, lmp);
-  register_law<LawBilinear>(plugin, reg, lmp);
-  register_law<LawThornton>(plugin, reg, lmp);
+#define GRANCHAIN_REGISTER(Law) register_law<Law>(plugin, reg, lmp);
+  GRANCHAIN_LAWS(GRANCHAIN_REGISTER)
+#undef GRANCHAIN_REGISTER
   plugin.style = "compute";
   plugin.name = "chain/fmax";
   plugin.info = "granchain: largest contact force d_fc and its atom ID (the run watch)";
