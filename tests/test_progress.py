@@ -227,3 +227,13 @@ def test_stale_work_directories_are_named_when_they_cannot_be_removed(own_tmp, m
     assert not stale.exists() and live.exists()
     text = runner.work_dirs_report()
     assert "left by killed runs" not in text and "in use" in text
+
+
+def test_a_labelled_run_says_what_it_is_for():
+    from granchain.progress import Progress, labelled
+
+    with labelled("error-bar companion at 2 dt"):
+        inner = Progress(10, "reference rk4", stream=None)
+    after = Progress(10, "reference rk4", stream=None)
+    assert inner.desc == "granchain: error-bar companion at 2 dt: reference rk4"
+    assert after.desc == "granchain: reference rk4"  # the label ends with its block

@@ -26,6 +26,7 @@ import numpy as np
 from granchain.errorbars import ORDER, ErrorBars, against_reference, richardson
 from granchain.errors import GranchainError
 from granchain.postprocess.observables import measure_observables
+from granchain.progress import labelled
 
 #: scalar observables that get an error estimate, and the time each is measured at (for the check
 #: that a companion measured the same pulse)
@@ -244,7 +245,8 @@ def estimate_errors(result, run_one, method: str, stable_timestep: float, run_rk
             break
         t0 = time.perf_counter()
         try:
-            runs.append(run_one(companion_scene(scene, factor)).solution)
+            with labelled(f"error-bar companion at {factor:g} dt"):
+                runs.append(run_one(companion_scene(scene, factor)).solution)
             # (a run shared or made ahead by granchain compare returns at once: its own wall time)
             t0 = min(t0, time.perf_counter() - runs[-1].wall_time)
         except GranchainError as e:  # a coarser run broke an invariant: the run itself stands
@@ -325,7 +327,8 @@ def _against_rk4(result, run_rk4) -> ErrorReport:
     for factor in against_rk4_factors(scene):
         t0 = time.perf_counter()
         try:
-            companion = run_rk4(companion_scene(scene, factor))
+            with labelled(f"error-bar companion (RK4) at {factor:.3g} dt"):
+                companion = run_rk4(companion_scene(scene, factor))
         except GranchainError as e:
             first_line = str(e).splitlines()[0] if str(e) else type(e).__name__
             report.why_none = f"the RK4 companion run at {factor:g} dt failed ({first_line}): no estimate"
