@@ -33,6 +33,32 @@ class SceneError(GranchainError, ValueError):
     """A scene file is invalid. The message names the file, the key, the value and the fix."""
 
 
+#: the most beads a chain may have: the planner and the solvers hold a few numbers per bead and the
+#: leading wave needs steps in proportion to the chain's length, so a longer chain cannot finish (the
+#: planner alone needs about a second and 130 MB per million beads)
+MAX_BEADS = 10**6
+#: the most beads a chain whose beads differ (a taper, per-bead lists) may have: every contact gets its
+#: own law, and the planner spends about 80 us per contact on them (8 s for the largest)
+MAX_VARIED_BEADS = 10**5
+#: the longest time a scene may give (end_time, a load's duration, snapshots, intervals): about 3 hours,
+#: far beyond any stress wave in a chain of spheres; more is a typo for a shorter time
+MAX_TIME = 1e4
+
+
+def _shown(value: Any) -> str:
+    """A value as a message shows it: its repr, shortened (a long string, a big list, deep nesting
+    would make a message of megabytes, or recurse without end)."""
+    import reprlib
+
+    r = reprlib.Repr()
+    r.maxstring, r.maxother, r.maxlong, r.maxlevel = 80, 80, 60, 3
+    r.maxlist = r.maxtuple = r.maxdict = r.maxset = 12
+    try:
+        return r.repr(value)
+    except RecursionError:  # pragma: no cover - reprlib bounds the depth
+        return "<nested too deeply to show>"
+
+
 AUTO = "auto"  # a value the planner chooses (granchain.workflows.plan)
 
 
@@ -350,7 +376,7 @@ class _Section:
     def __init__(self, file: str, name: str, table: Any):
         self.file, self.name = file, name
         if not isinstance(table, dict):
-            raise SceneError(f"{file}: [{name}] must be a table, got {table!r}; write it as a [{name}] section")
+            raise SceneError(f"{file}: [{name}] must be a table, got {_shown(table)}; write it as a [{name}] section")
         self.table = dict(table)
         self.used: set[str] = set()
 
@@ -359,7 +385,7 @@ class _Section:
         return SceneError(f"{self.file}: {message}")
 
     def fail(self, key: str, value: Any, allowed: str) -> SceneError:
-        return SceneError(f"{self.file}: [{self.name}] {key} = {value!r} is invalid: {allowed}")
+        return SceneError(f"{self.file}: [{self.name}] {key} = {_shown(value)} is invalid: {allowed}")
 
     def has(self, key: str) -> bool:
         return key in self.table
@@ -371,7 +397,7 @@ class _Section:
     def missing(self, key: str, allowed: str) -> SceneError:
         """A required key is absent: name it, and the present key that looks like a typo of it."""
         typo = [k for k in self.table if k not in self.used and _did_you_mean(k, (key,))]
-        hint = f" ({typo[0]!r} looks like a typo of {key!r})" if typo else ""
+        hint = f" ({_shown(typo[0])} looks like a typo of {key!r})" if typo else ""
         return SceneError(f"{self.file}: [{self.name}] is missing {key!r}{hint}: {allowed}")
 
     def required(self, key: str, allowed: str) -> Any:
@@ -406,10 +432,12 @@ class _Section:
             raise self.fail(key, v, allowed)
         return v
 
-    def integer(self, key: str, *, low: int, what: str = "") -> int:
-        allowed = f"an integer >= {low}" + (f" ({what})" if what else "")
+    def integer(self, key: str, *, low: int, high: int | None = None, what: str = "") -> int:
+        allowed = (
+            f"an integer >= {low}" + (f" and <= {high:,}" if high is not None else "") + (f" ({what})" if what else "")
+        )
         v = self.required(key, allowed)
-        if isinstance(v, bool) or not isinstance(v, int) or v < low:
+        if isinstance(v, bool) or not isinstance(v, int) or v < low or (high is not None and v > high):
             raise self.fail(key, v, allowed)
         return v
 
@@ -424,14 +452,14 @@ class _Section:
         for key in keys:
             if key in self.table:
                 raise SceneError(
-                    f"{self.file}: [{self.name}] {key} = {self.table[key]!r} is not allowed here: {reason}"
+                    f"{self.file}: [{self.name}] {key} = {_shown(self.table[key])} is not allowed here: {reason}"
                 )
 
     def finish(self, known: tuple[str, ...]) -> None:
         for key in self.table:
             if key not in self.used:
                 raise SceneError(
-                    f"{self.file}: [{self.name}] has unknown key {key!r} = {self.table[key]!r}; "
+                    f"{self.file}: [{self.name}] has unknown key {_shown(key)} = {_shown(self.table[key])}; "
                     f"{_did_you_mean(key, known)}allowed keys: {', '.join(known)}"
                 )
 
@@ -511,6 +539,11 @@ def parse_scene(text: str, source: str = "<scene>") -> Scene:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise SceneError(f"{source}: is not valid TOML: {e}") from None
+    except RecursionError:  # the TOML reader recurses once per level of nested arrays or tables
+        raise SceneError(
+            f"{source}: nests arrays or tables too deeply for a scene file (hundreds of levels); "
+            "no scene key takes more than a list of numbers"
+        ) from None
     scene = scene_from_dict(data, source=source)
     return _with_source(scene, source, text)
 
@@ -528,7 +561,7 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
     for key in data:
         if key not in SECTIONS:
             raise SceneError(
-                f"{source}: unknown section or key {key!r}; {_did_you_mean(key, SECTIONS)}"
+                f"{source}: unknown section or key {_shown(key)}; {_did_you_mean(key, SECTIONS)}"
                 f"allowed: {', '.join(SECTIONS)}"
             )
     for sec in ("chain", "contact", "loading", "run"):
@@ -538,7 +571,7 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
             )
     title = data.get("title", "")
     if not isinstance(title, str):
-        raise SceneError(f"{source}: title = {title!r} is invalid: a string")
+        raise SceneError(f"{source}: title = {_shown(title)} is invalid: a string")
 
     chain = _read_chain(_Section(source, "chain", data["chain"]), source)
     contact = _read_contact(_Section(source, "contact", data["contact"]), chain)
@@ -556,6 +589,7 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
         title=title,
         source=source,
     )
+    _check_scales(scene, source)
     why = refusal(active_effects(scene))
     if why:
         raise SceneError(f"{source}: {why}")
@@ -568,6 +602,73 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
             '([loading] kind = "striker") or a wall ([boundary] far_end = "wall") to touch'
         )
     return scene
+
+
+#: the shortest contact time scale tau a chain may have: 1 fs (beads of a micrometre of the stiffest
+#: material have 0.2 ps); a shorter one comes only from values at the edge of their ranges together
+MIN_TAU = 1e-15
+#: the largest static force on a contact (as a load's amplitude)
+MAX_FORCE = 1e12
+
+
+def _material_keys(chain: Chain) -> str:
+    return "[chain] material" if chain.material_name or chain.materials else "[chain.material] values"
+
+
+def _check_scales(scene: Scene, source: str) -> None:
+    """Refuse a scene whose values, each within its own range, together give a chain outside double
+    precision or outside any mechanics: a contact time scale below MIN_TAU, a law's constants that
+    over- or underflow, a dashpot that damps faster than an attosecond, a precompression beyond
+    MAX_FORCE. Each message names the keys the scene set that make it so, and the fix."""
+    chain = scene.chain
+    radii = (min(chain.radii), max(chain.radii)) if chain.radii else (chain.radius,)
+    names = sorted(set(chain.materials)) if chain.materials else [None]
+    materials = [mat.MATERIALS[n] for n in names] if chain.materials else [chain.material]
+    keys = f"[chain] radius and {_material_keys(chain)}"
+    for r in radii:
+        for m in materials:
+            tau = mat.time_scale(m, r)
+            if not (math.isfinite(tau) and tau >= MIN_TAU):
+                raise SceneError(
+                    f"{source}: {keys} give beads of radius {r:g} m a contact time scale tau = {tau:.3g} s, "
+                    f"below {MIN_TAU:g} s: no chain of real spheres is this fast; check the radius, density, "
+                    "youngs_modulus and poisson_ratio (a Poisson ratio near -1 makes E* unbounded)"
+                )
+    laws = {"the beads' contact": (scene.law, keys + " and [contact]")}
+    if scene.loading.kind == "striker":
+        laws["the striker's contact"] = (scene.striker_law, "[loading] radius, material and [contact]")
+    if scene.effects.far_end == "wall":
+        laws["the wall's contact"] = (scene.wall_law, keys + " and [contact]")
+    for what, (law, keys_of) in laws.items():
+        values = {
+            "k": law.k,
+            **{k: getattr(law, k) for k in ("yield_overlap", "yield_force", "k_unloading") if hasattr(law, k)},
+        }
+        for name, v in values.items():
+            v = float(v)
+            if not (math.isfinite(v) and v > 0.0):
+                raise SceneError(
+                    f"{source}: {keys_of} give {what} a law with {name} = {v:g}, outside double precision: "
+                    f"bring the {' and '.join(law.scene_keys) or 'material values'} closer to those of real beads "
+                    f"(e.g. {law.example_contact or 'brass: E = 115e9 Pa'})"
+                )
+    gamma = float(scene.effects.dashpot)
+    if gamma:
+        m_min = float(min(mat.bead_mass(m, radii[0]) for m in materials))
+        if scene.loading.kind == "striker":
+            m_min = min(m_min, float(scene.striker_mass))
+        if m_min / gamma < MIN_DURATION:
+            raise SceneError(
+                f"{source}: [damping] dashpot = {gamma:g} N s/m is invalid: it damps the lightest body "
+                f"({m_min:.3g} kg) in m/gamma = {m_min / gamma:.3g} s, under an attosecond; a dashpot of at most "
+                f"{m_min / MIN_DURATION:.3g} N s/m (a viscous contact is damped over microseconds: gamma of "
+                "about 1 to 100 N s/m for millimetre beads)"
+            )
+    f0 = float(scene.effects.precompression)
+    if f0 > MAX_FORCE:
+        raise SceneError(
+            f"{source}: [precompression] force = {f0:g} N is invalid: a static force F0 in N of at most {MAX_FORCE:g}"
+        )
 
 
 def _read_effects(source: str, data: dict) -> Effects:
@@ -591,11 +692,23 @@ def _read_material(s: _Section, source: str, required: bool = True) -> tuple[mat
         return mat.MATERIALS[m], m
     if isinstance(m, dict):
         ms = _Section(source, f"{s.name}.material", m)
+        # the ranges hold every solid from aerogel and soft gels to beyond diamond; outside them the
+        # derived scales (tau, E* R*^2, the contact stiffness) leave double precision
         material = mat.Material(
-            density=ms.number("density", low=0.0, high=1e5, high_open=False, what="kg/m^3, at most 1e5"),
-            youngs_modulus=ms.number("youngs_modulus", low=0.0, high=1e13, high_open=False, what="Pa, at most 1e13"),
+            density=ms.number("density", low=1.0, low_open=False, high=1e5, high_open=False, what="kg/m^3, 1 to 1e5"),
+            youngs_modulus=ms.number(
+                "youngs_modulus", low=1e3, low_open=False, high=1e13, high_open=False, what="Pa, 1e3 to 1e13"
+            ),
             poisson_ratio=ms.number("poisson_ratio", low=-1.0, high=0.5, what="-1 < nu < 0.5"),
-            yield_strength=ms.number("yield_strength", required=False, low=0.0, what="Pa"),
+            yield_strength=ms.number(
+                "yield_strength",
+                required=False,
+                low=1.0,
+                low_open=False,
+                high=1e13,
+                high_open=False,
+                what="Pa, 1 to 1e13",
+            ),
         )
         ms.finish(("density", "youngs_modulus", "poisson_ratio", "yield_strength"))
         return material, None
@@ -607,7 +720,7 @@ def _read_chain(s: _Section, source: str) -> Chain:
         s.raw("beads")  # mark the key as read
         beads = None  # "auto": the planner chooses (granchain plan)
     else:
-        beads = s.integer("beads", low=1, what='number of beads; bead 1 is the loaded end, or "auto"')
+        beads = s.integer("beads", low=1, high=MAX_BEADS, what='number of beads; bead 1 is the loaded end, or "auto"')
     radii = materials = None
     if isinstance(s.table.get("radius"), list):
         v = s.raw("radius")
@@ -635,6 +748,25 @@ def _read_chain(s: _Section, source: str) -> Chain:
     if taper is not None:
         if radii is not None or beads is None:
             raise s.fail("taper", taper, "a rule for a single nominal radius and a given number of beads")
+        # the last bead's radius, in logarithms (taper^(beads-1) over- or underflows long before)
+        last = math.log10(radius) + (beads - 1) * math.log10(taper)
+        if not math.log10(1e-6) <= last <= 0.0:
+            raise s.fail(
+                "taper",
+                taper,
+                f"a ratio that keeps every radius from 1e-6 to 1 m: bead {beads} would have radius "
+                f"10^{last:.4g} m = {radius:g} x taper^{beads - 1}; choose taper between "
+                f"{(1e-6 / radius) ** (1 / max(beads - 1, 1)):.6g} and {(1 / radius) ** (1 / max(beads - 1, 1)):.6g}",
+            )
+    varied = taper is not None or radii is not None or isinstance(s.table.get("material"), list)
+    if varied and beads is not None and beads > MAX_VARIED_BEADS:
+        raise s.fail(
+            "beads",
+            beads,
+            f"at most {MAX_VARIED_BEADS:,} beads for a chain whose beads differ (a taper or per-bead lists): each "
+            f"contact gets its own law; a uniform chain takes up to {MAX_BEADS:,}",
+        )
+    if taper is not None:
         radii = tuple(radius * taper**i for i in range(beads))
     if isinstance(s.table.get("material"), list):
         v = s.raw("material")
@@ -661,6 +793,7 @@ def _read_contact(s: _Section, chain: Chain) -> Contact:
 #: double precision (an impulse of 0.01 N s over 2.2e-308 s overflowed them, a crash, not a message)
 MIN_DURATION = 1e-18
 DURATION_TEXT = "loading time T in s; no mechanical load acts over less than an attosecond"
+TIME_TEXT = f"at most {MAX_TIME:g} s: about 3 hours, far beyond any stress wave in a chain"
 
 
 def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
@@ -670,7 +803,7 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
         a = s.number(
             "amplitude", low=1e-9, low_open=False, high=1e12, high_open=False, what="force A in N, 1e-9 to 1e12"
         )
-        t = s.number("duration", low=MIN_DURATION, low_open=False, what=DURATION_TEXT)
+        t = s.number("duration", low=MIN_DURATION, low_open=False, high=MAX_TIME, high_open=False, what=DURATION_TEXT)
         s.finish(("kind", "amplitude", "duration"))
         return Loading(kind=kind, amplitude=a, duration=t)
     if kind == "impulse":
@@ -681,7 +814,7 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
         i = s.number(
             "impulse", low=1e-18, low_open=False, high=1e9, high_open=False, what="impulse I in N s, 1e-18 to 1e9"
         )
-        t = s.number("duration", low=MIN_DURATION, low_open=False, what=DURATION_TEXT)
+        t = s.number("duration", low=MIN_DURATION, low_open=False, high=MAX_TIME, high_open=False, what=DURATION_TEXT)
         s.finish(("kind", "impulse", "duration"))
         return Loading(kind=kind, amplitude=i / t, duration=t)
     if kind == "striker":
@@ -698,13 +831,26 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
             what="the striker's speed in m/s at bead 1, 1e-15 to 1e5",
         )
         r = s.number(
-            "radius", required=False, default=chain.radius, low=0.0, high=1.0, what="the striker's radius in m, <= 1"
+            "radius",
+            required=False,
+            default=chain.radius,
+            low=1e-6,
+            low_open=False,
+            high=1.0,
+            high_open=False,
+            what="the striker's radius in m, 1e-6 to 1 (as a bead's)",
         )
         material, name = _read_material(s, source, required=False)
         if material is None:
             material, name = chain.material, chain.material_name
         m = s.number(
-            "mass", required=False, low=0.0, what="the striker's mass in kg (default: from radius and density)"
+            "mass",
+            required=False,
+            low=1e-18,
+            low_open=False,
+            high=1e6,
+            high_open=False,
+            what="the striker's mass in kg, 1e-18 to 1e6 (default: from radius and density)",
         )
         s.finish(("kind", "velocity", "radius", "material", "mass"))
         return Loading(
@@ -736,7 +882,18 @@ def _read_run(s: _Section, loading: Loading) -> Run:
         if s.table.get(key) == AUTO:
             s.raw(key)
             return None
-        return s.number(key, low=0.0, what='s, or "auto" for the planner to choose')
+        if key == "timestep":
+            return s.number(
+                key,
+                low=MIN_DURATION,
+                low_open=False,
+                high=MAX_TIME,
+                high_open=False,
+                what='s, at least an attosecond, or "auto" for the planner to choose',
+            )
+        return s.number(
+            key, low=0.0, high=MAX_TIME, high_open=False, what=f's, {TIME_TEXT}, or "auto" for the planner to choose'
+        )
 
     end = num_or_auto("end_time")
     dt = num_or_auto("timestep")
@@ -779,7 +936,7 @@ def _read_snapshots(s: _Section, run: Run) -> tuple[float, ...]:
     if not s.has("snapshots"):
         return ()
     v = s.raw("snapshots")
-    end = run.end_time if run.end_time is not None else math.inf
+    end = run.end_time if run.end_time is not None else MAX_TIME
     allowed = f"a list of times in s with 0 < t <= end_time = {end:g}"
     if not isinstance(v, list) or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v):
         raise s.fail("snapshots", v, allowed)
@@ -823,7 +980,14 @@ def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
         if s.table.get(key) == AUTO:
             s.raw(key)
             return AUTO
-        v = s.number(key, required=False, low=0.0, what=what + ', or "auto" for the planner to choose')
+        v = s.number(
+            key,
+            required=False,
+            low=0.0,
+            high=MAX_TIME,
+            high_open=False,
+            what=what + ', or "auto" for the planner to choose',
+        )
         if v is not None and run.timestep is not None and v < run.timestep:
             raise s.fail(key, v, f"at least the time step {run.timestep:g} s")
         if v is not None and run.end_time is not None and v > run.end_time:

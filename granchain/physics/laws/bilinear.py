@@ -163,7 +163,15 @@ class BilinearLaw(ContactLaw):
             high=1.0,
             what="beta, the residual-to-maximum overlap ratio: 0 <= beta < 1",
         )
-        k = s.number("plastic_stiffness", required=False, low=0.0, what="plastic loading stiffness k in N/m")
+        k = s.number(
+            "plastic_stiffness",
+            required=False,
+            low=1.0,
+            low_open=False,
+            high=1e16,
+            high_open=False,
+            what="plastic loading stiffness k in N/m, 1 to 1e16",
+        )
         ys = chain.material.yield_strength
         if chain.materials is not None:  # each contact's k from the softer of its two materials
             if k is not None:
