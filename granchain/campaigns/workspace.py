@@ -37,6 +37,7 @@ import functools
 import hashlib
 import json
 import os
+import time
 import warnings
 from pathlib import Path
 
@@ -186,14 +187,30 @@ def job_dirs(ws: str | Path) -> dict[str, dict | None]:
     return out
 
 
+#: a job directory without a state point made within this many seconds is not set aside (another
+#: driver's signac may be between making it and writing its state point)
+SETTLE = 30.0
+
+
+def _mtime(d: Path) -> float:
+    try:
+        return os.lstat(d).st_mtime
+    except OSError:
+        return 0.0
+
+
 def set_aside_damaged(ws: str | Path) -> list[str]:
     """Move damaged job directories (job_dirs: None) to WS/damaged/, with a warning naming them; their
     points run again. Returns the job ids moved."""
     ws = Path(ws)
     moved = []
+    now = time.time()
     for job, sp in sorted(job_dirs(ws).items()):
         if sp is not None:
             continue
+        d = ws / "workspace" / job
+        if not os.path.islink(d) and not os.path.lexists(d / STATEPOINT) and _mtime(d) > now - SETTLE:
+            continue  # being made right now (signac makes the directory, then writes its state point)
         dest_dir = ws / DAMAGED
         dest_dir.mkdir(exist_ok=True)
         dest = dest_dir / job
