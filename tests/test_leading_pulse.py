@@ -43,7 +43,7 @@ def test_a_plastic_front_leads_with_its_first_pulse_not_its_largest():
     """Behind a bilinear chain's front under a long step the force oscillates, and at some contacts a
     later oscillation is larger than the front's pulse: the leading pulse is the first, earlier than
     the largest, and it converges with the time step (LAMMPS, planned at rtol 1e-3, against dt / 4)."""
-    from tests.test_trust import STEEL
+    from tests.test_plan_and_user_errors import STEEL
 
     sc, _ = plan_for(parse_scene(STEEL.format(beads=120), source="steel.toml"), "lammps", None, 1e-3)
     sol = run_scene(sc, backend="lammps").solution
@@ -111,7 +111,7 @@ def test_a_plateau_front_leads_with_its_first_overshoot():
     the force fell to half: 21% higher at contact 186 of a 250-bead chain). The leading pulse is the
     first maximum of the history."""
     from granchain.peaks import lead_floor
-    from tests.test_trust import STEEL
+    from tests.test_plan_and_user_errors import STEEL
 
     sc, _ = plan_for(parse_scene(STEEL.format(beads=150), source="steel.toml"), "lammps", None, 1e-3)
     sc = replace(sc, outputs=replace(sc.outputs, histories=(60, 100), history_interval=None))

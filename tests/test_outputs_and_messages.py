@@ -1,4 +1,4 @@
-"""Issue 12: output sizes, words a user reads, refusals before the run."""
+"""Output sizes, the words a user reads, refusals before the run."""
 
 import warnings
 from dataclasses import replace

@@ -1,4 +1,4 @@
-"""Issue 11: the planner per integrator and per effect, end_time covering every requested output,
+"""The planner per integrator and per effect, end_time covering every requested output,
 accuracy warnings for fixed steps, resource checks, and a rendered deck that stands alone."""
 
 import subprocess
