@@ -135,3 +135,14 @@ def measure_observables(scene, solution, missing: dict | None = None) -> dict:
     if missing is not None:
         missing.update(why)
     return out
+
+
+def unmeasured_outputs(scene, solution) -> list[str]:
+    """What the scene asked for that the run ended before measuring: its window's leading peak and
+    wave speed (a peak-force table), each with the reason; [] when everything asked for is there.
+    A run that ends too soon says so (the command line exits 1), not only in summary.json."""
+    if not scene.outputs.peak_force or scene.n_contacts == 0:
+        return []
+    missing: dict[str, str] = {}
+    out = measure_observables(scene, solution, missing)
+    return [f"{name}: {missing[name]}" for name in ("leading_peak_force", "wave_speed") if out.get(name) is None]
