@@ -195,6 +195,27 @@ def test_the_worker_job_script_asks_for_ranks_times_workers_cores(kind):
     for line in (cores, "--nworkers 2", "--nthreads 1", "export HYDRA_BOOTSTRAP=fork", "--interface lo", "workq"):
         assert line in script, (line, script)
     assert "--lifetime 3300s" in script  # an hour's walltime less 5 min
+    if kind == "slurm":
+        assert "#SBATCH --mem=8G" in script
+
+
+def test_without_memory_the_job_asks_for_none_and_takes_the_queues_default():
+    from unittest import mock
+
+    from granchain.campaigns import cluster as cl
+
+    jc = cl.JobCluster(cl.check(cl.ClusterSettings(kind="slurm", interface="lo")), 1, None)
+    with (
+        mock.patch.object(cl.shutil, "which", return_value="/usr/bin/true"),
+        mock.patch.object(cl.JobCluster, "_submit", lambda self, n: None),
+    ):
+        client = jc.start()
+    try:
+        script = jc.job_script()
+    finally:
+        client.close()
+        jc.cluster.close()
+    assert "#SBATCH --mem" not in script and "--memory-limit" in script
 
 
 def test_ranks_auto_follows_the_np_auto_rule_within_a_workers_cores():

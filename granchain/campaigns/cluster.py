@@ -85,7 +85,8 @@ class ClusterSettings:
         Cores each job asks for (None: ``ranks``, one worker per job); a job runs
         ``cores_per_job // ranks`` worker processes.
     memory : str or None
-        Memory per job (``"4GB"``); None: 2 GB per core.
+        Memory per job (``"4GB"``, ``#SBATCH --mem``); None: the queue's default (the Dask workers'
+        memory limit is then 2 GB per core).
     interface : str or None
         The network interface the scheduler and the workers bind to (``ib0``, ``eth0``; ``lo`` when the
         driver and every job share one machine, as in tests); None: Dask's choice.
@@ -358,6 +359,11 @@ class JobCluster:
             scheduler_options={"dashboard_address": None},
             death_timeout=60,
         )
+        if s.memory is None and s.kind == "slurm":
+            # no --mem unless asked for: the partition's default applies (a node declared without
+            # RealMemory has 1 MB to give, and a --mem of any size would keep the job pending forever);
+            # the Dask worker's memory limit is still memory_text's
+            kwargs["job_directives_skip"] = ["--mem"]
         if s.kind == "slurm":
             kwargs["job_cpu"] = cores
         else:

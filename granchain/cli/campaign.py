@@ -124,7 +124,7 @@ def add_campaign_parser(sub) -> None:
     cl.add_argument("--walltime", default=None, help="each worker job's time limit, HH:MM:SS (default 01:00:00)")
     cl.add_argument("--jobs", type=int, default=None, help="worker jobs kept in the queue (default 1)")
     cl.add_argument("--cores-per-job", type=int, default=None, help="cores per job (default: the ranks of a point)")
-    cl.add_argument("--memory", default=None, help="memory per job, e.g. 4GB (default 2GB per core)")
+    cl.add_argument("--memory", default=None, help="memory per job, e.g. 4GB (default: the queue's)")
     cl.add_argument("--interface", default=None, help="network interface of the scheduler and workers (ib0, lo)")
     cl.add_argument("--replacements", type=int, default=None, help="ended jobs replaced (default 2 per job)")
     cl.add_argument(
