@@ -259,8 +259,11 @@ class JobCounts:
     ended: int = 0
     replaced: int = 0
 
+    why: str = ""  # why the pending jobs wait, as the queue says (Resources, Priority, ...)
+
     def text(self) -> str:
-        t = f"jobs {self.pending} pending, {self.running} running"
+        t = f"jobs {self.pending} pending" + (f" ({self.why})" if self.pending and self.why else "")
+        t += f", {self.running} running"
         return t + (f", {self.ended} ended ({self.replaced} replaced)" if self.ended else "")
 
 
@@ -271,7 +274,7 @@ def _queue_states(kind: str, ids: list[str]) -> dict[str, str] | None:
         return None
     try:
         r = subprocess.run(
-            ["squeue", "-h", "-t", "all", "-o", "%i %T", "-j", ",".join(ids)],
+            ["squeue", "-h", "-t", "all", "-o", "%i %T %r", "-j", ",".join(ids)],
             capture_output=True,
             text=True,
             timeout=30,
@@ -283,9 +286,27 @@ def _queue_states(kind: str, ids: list[str]) -> dict[str, str] | None:
     out = {}
     for line in r.stdout.splitlines():
         parts = line.split()
-        if len(parts) == 2:
+        if len(parts) >= 2:
             out[parts[0]] = parts[1].rstrip("+")
+            if len(parts) > 2 and parts[2] != "None":
+                _REASONS[parts[0]] = parts[2]
     return out
+
+
+#: the queue's reason a job waits, by job id (squeue %r), as last seen
+_REASONS: dict[str, str] = {}
+#: reasons a pending job never starts for: the campaign stops with the reason instead of waiting
+HOPELESS = {
+    "BadConstraints",
+    "InvalidAccount",
+    "InvalidQOS",
+    "PartitionConfig",
+    "PartitionNodeLimit",
+    "PartitionTimeLimit",
+    "QOSMaxWallDurationPerJobLimit",
+    "QOSMaxCpuPerJobLimit",
+    "QOSMaxMemoryPerJob",
+}
 
 
 class JobCluster:
@@ -476,6 +497,17 @@ class JobCluster:
                 st.ended_at = now
         self._replace_ended()
         c = self.counts
+        waiting = [j for j, st in self.jobs.items() if st.ended_at is None and st.state == "PENDING"]
+        reasons = sorted({_REASONS[j] for j in waiting if j in _REASONS})
+        c.why = ", ".join(reasons)
+        hopeless = [r for r in reasons if r in HOPELESS]
+        if hopeless and not any(st.state == "RUNNING" for st in self.jobs.values() if st.ended_at is None):
+            self.cancel_all()
+            raise NoWorkerJobs(
+                f"the worker jobs {', '.join(waiting)} wait for a reason they never start for ({', '.join(hopeless)}: "
+                "see the site's limits with 'scontrol show partition'); fix --queue, --walltime, --cores-per-job, "
+                "--memory or --account and run the same command again"
+            )
         c.pending = sum(1 for st in self.jobs.values() if st.ended_at is None and st.state != "RUNNING")
         c.running = sum(1 for st in self.jobs.values() if st.ended_at is None and st.state == "RUNNING")
         c.ended = sum(1 for st in self.jobs.values() if st.ended_at is not None)
