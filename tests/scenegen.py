@@ -1,8 +1,9 @@
-"""A hypothesis strategy for valid scenes of every law, loading kind and effect the scene accepts.
+"""A hypothesis strategy for valid scenes of every law, loading kind and combination of effects.
 
-Combinations the scene refuses today (per-bead chains with a wall, precompression or a striker;
-precompression with a striker; per-bead materials with the bilinear law) are not drawn: a drawn
-scene that is refused anyway is a failure of the generator, not skipped.
+Every combination is drawn (per-bead chains with a wall, precompression or a striker, precompression
+with a striker); a chain of several materials under a plastic law draws metals with a yield strength
+and leaves the law's k to them (docs/effects.md, mixing rules). A drawn scene that is refused is a
+failure of the generator (or of the scene reader), not skipped.
 """
 
 from __future__ import annotations
@@ -18,34 +19,30 @@ from granchain.scene import parse_scene
 def scene_texts(
     draw, *, max_beads: int = 60, auto: bool = True, law: str | None = None, precompressed: bool = False
 ) -> str:
-    """law: a registered law's name (default: drawn); precompressed: always a precompression (then
-    neither a striker nor a per-bead chain, which the scene refuses with it)."""
+    """law: a registered law's name (default: drawn); precompressed: always a precompression."""
     law = law or draw(st.sampled_from(sorted(LAWS)))
     radius = draw(st.floats(2e-3, 1e-2))
     beads = draw(st.integers(12, max_beads))
-    kind = draw(st.sampled_from(["step", "impulse", "velocity"] + ([] if precompressed else ["striker"])))
-    if precompressed:
-        per_bead = None
-    else:
-        per_bead = draw(st.sampled_from([None, "taper", "materials"])) if kind != "striker" else None
-    if per_bead == "materials" and LAWS[law].unsupported(_materials_chain()):
-        per_bead = "taper"
-    wall = pre = False
-    if per_bead is None:
-        wall = draw(st.booleans())
-        pre = precompressed or (kind != "striker" and draw(st.booleans()))
+    kind = draw(st.sampled_from(["step", "impulse", "velocity", "striker"]))
+    per_bead = draw(st.sampled_from([None, "taper", "materials"]))
+    wall = draw(st.booleans())
+    pre = precompressed or draw(st.booleans())
     dashpot = draw(st.one_of(st.just(0.0), st.floats(0.1, 20.0)))
 
     chain = f"beads = {beads}\nradius = {radius!r}\n"
-    names = sorted(MATERIALS)
+    plastic = LAWS[law].history
+    # several materials under a plastic law: metals whose yield strength sets each contact's k
+    names = sorted(n for n, m in MATERIALS.items() if m.yield_strength is not None or not plastic)
     if per_bead == "materials":
         chain += "material = [" + ", ".join(f'"{draw(st.sampled_from(names))}"' for _ in range(beads)) + "]\n"
     else:
-        chain += f'material = "{draw(st.sampled_from(names))}"\n'
+        chain += f'material = "{draw(st.sampled_from(sorted(MATERIALS)))}"\n'
     if per_bead == "taper":
         chain += f"taper = {draw(st.floats(0.95, 0.995))!r}\n"
     contact = f'law = "{law}"\n'
     for key, (lo, hi) in LAWS[law].scene_key_ranges.items():
+        if per_bead == "materials" and key == "plastic_stiffness":
+            continue  # each contact's k from its softer material's yield strength
         contact += f"{key} = {draw(st.floats(lo, hi))!r}\n"
     if kind == "step":
         loading = f"amplitude = {draw(st.floats(1.0, 1e4))!r}\nduration = {draw(st.floats(1e-6, 2e-4))!r}\n"
@@ -71,13 +68,6 @@ def scene_texts(
     if pre:
         text += f"[precompression]\nforce = {draw(st.floats(0.1, 50.0))!r}\n"
     return text
-
-
-def _materials_chain():
-    """A chain with per-bead materials (whether a law takes one: its unsupported())."""
-    from types import SimpleNamespace
-
-    return SimpleNamespace(materials=("brass", "steel"), radii=None)
 
 
 def overlap_fraction(scene) -> float:
