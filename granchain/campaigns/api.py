@@ -9,7 +9,6 @@ import sys
 import time
 from pathlib import Path
 
-from granchain import safe_files
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.cluster import SUBMIT, ClusterError, ClusterSettings, describe, merge
 from granchain.campaigns.cluster import check as check_cluster
@@ -158,10 +157,10 @@ def run_campaign(
     if settings is not None and settings.batch:
         runner.say(f"campaign: worker jobs: {describe(settings, ex.ranks)}")
     if campaign.text:
-        safe_files.write_text(ws / "campaign.toml", campaign.text)  # never through a link planted there
+        wsp.write_text(ws / "campaign.toml", campaign.text)  # never through a link planted there
     from granchain.scene import scene_from_dict
 
-    safe_files.write_text(ws / "base.toml", scene_from_dict(campaign.base, source=campaign.base_source).to_toml())
+    wsp.write_text(ws / "base.toml", scene_from_dict(campaign.base, source=campaign.base_source).to_toml())
     entries: list[dict] = []
     search_rows = None
     try:
