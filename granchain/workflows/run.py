@@ -20,7 +20,10 @@ from granchain.problem import ChainProblem
 from granchain.reference.solver import solve_chain
 from granchain.results import RunResult
 from granchain.rundir import check_output_dir, write_run_dir
-from granchain.schedule import dump_stride, history_stride
+from granchain.schedule import history_stride
+from granchain.workflows.guards import DUMP_FRAME_HEADER_BYTES as DUMP_FRAME_HEADER_BYTES
+from granchain.workflows.guards import DUMP_LINE_BYTES as DUMP_LINE_BYTES
+from granchain.workflows.guards import check_run, output_sizes
 
 BACKENDS = ("reference", "lammps")
 
@@ -115,12 +118,19 @@ def available_cores() -> int:
         return os.cpu_count() or 1
 
 
-def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False) -> None:
-    """Refuse an MPI request that cannot run as asked before anything runs: ranks on the reference
-    backend, more ranks than cores (unless oversubscribe); warn below MIN_BEADS_PER_RANK beads per
-    rank (slow, not wrong: a user testing MPI on a short chain may mean it)."""
+def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False, out=None) -> None:
+    """Refuse a run that cannot run as asked before anything runs: more steps than the step limit,
+    more memory than this machine has available or more disk than is free at `out` (and LAMMPS's work
+    directory), with the estimate and the fix (granchain.workflows.guards.check_run, for a planned
+    scene; oversubscribe: the run's cores are not this machine's -- a cluster job, a campaign's
+    workers -- so neither are its memory and disk, and only the steps are checked); an MPI request
+    with ranks on the reference backend or more ranks than cores (unless oversubscribe). Warns below
+    MIN_BEADS_PER_RANK beads per rank (slow, not wrong: a user testing MPI on a short chain may mean
+    it) and about a long run."""
     if not isinstance(np_, int) or np_ < 1:
         raise UsageError(f"--np = {np_!r}: the number of MPI ranks must be a whole number >= 1")
+    if not scene.needs_plan:
+        check_run(scene, backend, out=out, machine=not oversubscribe, stacklevel=3)
     if np_ == 1:
         return
     if backend != "lammps":
@@ -343,26 +353,6 @@ class OutputSizeWarning(UserWarning):
 
 #: a dump or history file larger than this is announced before the run (with the interval that fits)
 OUTPUT_WARN_BYTES = 1e9
-#: bytes of one atom line of a granchain dump: 10 columns at %.17g (granchain/templates/*dump*.j2)
-DUMP_LINE_BYTES = 230
-DUMP_FRAME_HEADER_BYTES = 200
-
-
-def output_sizes(scene) -> dict[str, float]:
-    """Estimated bytes of each file a planned scene's run writes in proportion to its length:
-    the LAMMPS history and whole-chain dumps and histories.csv (the peak table, energy and
-    snapshots are small)."""
-    steps = scene.run.end_time / scene.run.timestep
-    sizes = {}
-    if scene.outputs.histories:
-        frames = steps / history_stride(scene) + 1
-        n = len(scene.outputs.histories)
-        sizes["histories.npy"] = 8 * (1 + frames) * (1 + 2 * n)  # LAMMPS: float64 time, forces, velocities
-        sizes["histories.csv"] = frames * (1 + 2 * n) * 24
-    if dump_stride(scene):
-        frames = steps / dump_stride(scene) + 1
-        sizes["chain.dump"] = frames * (DUMP_FRAME_HEADER_BYTES + scene.chain.beads * DUMP_LINE_BYTES)
-    return sizes
 
 
 def output_size_warning(scene) -> str | None:
@@ -428,6 +418,7 @@ def _finish(result, work, given, scene, plan, backend: str, method: str, np_: in
             msg = output_size_warning(scene)
             if msg:
                 warnings.warn(msg, OutputSizeWarning, stacklevel=3)
+            check_run(scene, backend, stacklevel=4)  # finer: more steps, larger files
             result, work = _execute(scene, backend, method, np_)
         result.plan = plan
         if after_run is not None:
@@ -487,7 +478,7 @@ def run_scene(
     method = integrator(backend, method)
     given = scene
     scene, plan = plan_for(scene, backend, method, rtol)
-    check_resources(scene, backend, np_, oversubscribe)
+    check_resources(scene, backend, np_, oversubscribe, out=out)
     if out is not None:
         check_output_dir(out, overwrite)
     if not force:
