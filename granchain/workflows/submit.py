@@ -129,6 +129,8 @@ def job_script(
         f"cd {shlex.quote(str(d))}",
         f"export LAMMPS_PLUGIN_PATH={shlex.quote(str(plugin_dir))}",
         "export OMP_NUM_THREADS=1",
+        "# ranks on one node: mpirun starts them itself (srun's MPI plugin, which a site may lack, stays out)",
+        'if [ "${SLURM_JOB_NUM_NODES:-1}" = 1 ]; then export HYDRA_BOOTSTRAP=fork; fi',
         " ".join(shlex.quote(a) for a in run),
     ]
     return "\n".join(lines) + "\n"
