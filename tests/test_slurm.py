@@ -63,14 +63,15 @@ def _slurm_down_reason() -> str | None:
     for cmd in ("sbatch", "squeue", "scontrol", "scancel", "sinfo"):
         if shutil.which(cmd) is None:
             return f"{cmd} is not on PATH (install slurm-client, start SLURM with .ci/slurm-up)"
+    conf = os.environ.get("SLURM_CONF", "/etc/slurm/slurm.conf")
+    start = "start it with .ci/slurm-up and export the SLURM_CONF it prints"
     try:
         r = subprocess.run(["sinfo", "-h", "-N", "-o", "%T"], capture_output=True, text=True, timeout=20)
     except subprocess.TimeoutExpired:
-        return "sinfo did not answer in 20 s"
+        return f"sinfo did not answer in 20 s (SLURM_CONF = {conf}); {start}"
     states = r.stdout.split()
     if r.returncode != 0:
-        conf = os.environ.get("SLURM_CONF", "/etc/slurm/slurm.conf")
-        return f"sinfo failed ({' '.join(r.stderr.split())[:300]}); SLURM_CONF = {conf}; start it with .ci/slurm-up"
+        return f"sinfo failed ({' '.join(r.stderr.split())[:300]}); SLURM_CONF = {conf}; {start}"
     if not any(s.rstrip("*~#") in ("idle", "mixed", "allocated", "completing") for s in states):
         return f"no node is up (sinfo: {' '.join(states) or 'no nodes'})"
     return None
