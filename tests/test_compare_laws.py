@@ -8,6 +8,7 @@ import pytest
 
 from granchain.cli import main, resolve_scene
 from granchain.errors import UsageError
+from granchain.safe_files import MARKER
 from granchain.physics.laws import LAWS
 from granchain.workflows.laws import compare_laws, equivalent_contact, scene_with_law, write_law_comparison
 
@@ -39,7 +40,7 @@ def test_compare_laws_on_the_reference_writes_one_table_and_one_figure(tmp_path)
         # the decay curve: no holes, from contact 1
         assert list(r.contacts) == list(range(1, r.contacts.size + 1))
     out = write_law_comparison(cmp, tmp_path / "laws")
-    assert {p.name for p in out.iterdir()} == {"laws.csv", "laws.json", "laws.png"}
+    assert {p.name for p in out.iterdir()} == {"laws.csv", "laws.json", "laws.png", MARKER}  # granchain's own
     table = json.loads((out / "laws.json").read_text())["laws"]
     assert [t["law"] for t in table] == ["thornton", "bilinear"]
     header = (out / "laws.csv").read_text().splitlines()[0].split(",")

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import os
 import shutil
 import threading
 from pathlib import Path
 
 from granchain.postprocess.compare import compare_runs, write_compare
-from granchain.rundir import check_output_dir, write_run_dir
+from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain, write_run_dir
+from granchain.safe_files import UnsafeFileError, atomic_directory
 from granchain.workflows import run as run_module
 from granchain.workflows.errors import rk4_companions
 from granchain.workflows.run import Abandoned, check_resources, plan_for, run_scene, shared_reference_runs
@@ -76,19 +76,15 @@ def compare_scene(
     try:
         rows = compare_runs(lam, ref, rtol)
         if out is not None:
-            out = Path(out)
-            tmp = out.resolve().parent / f".{out.name}.partial-{os.getpid()}"
-            shutil.rmtree(tmp, ignore_errors=True)
+            # written aside and renamed into place with granchain's marker; an existing directory is
+            # replaced only when granchain wrote it (safe_files.atomic_directory)
             try:
-                tmp.mkdir(parents=True)
-                write_run_dir(lam, tmp / "lammps", extra_files=files)
-                write_run_dir(ref, tmp / "reference")
-                write_compare(rows, tmp)
-                if out.exists():
-                    shutil.rmtree(out)
-                os.replace(tmp, out)
-            finally:
-                shutil.rmtree(tmp, ignore_errors=True)
+                with atomic_directory(out, "compare", overwrite=overwrite, owned=owned_by_granchain) as tmp:
+                    write_run_dir(lam, tmp / "lammps", extra_files=files)
+                    write_run_dir(ref, tmp / "reference")
+                    write_compare(rows, tmp)
+            except UnsafeFileError as e:
+                raise RunDirError(str(e)) from None
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return rows, lam, ref

@@ -197,12 +197,16 @@ def rk4_companions(scene, method: str) -> list:
 #: predicted error (the planner's error model): small beside the distance they measure
 #: (errorbars.REFERENCE_SHARE checks it run by run), at the largest step that reaches it
 RK4_COMPANION_SHARE = 0.02
+#: below this many dt the RK4 companions stay at 2 dt and 4 dt: the reference's own companions there
+#: (granchain compare makes each run once for both backends) cost less than slightly coarser new ones
+SHARED_BELOW = 3.0
 
 
 def against_rk4_factors(scene) -> tuple[float, float]:
     """The steps (as multiples of the run's dt) of the RK4 runs a Verlet run is measured against: RK4's
     planned step for RK4_COMPANION_SHARE of the Verlet run's predicted error, and twice it (its own
-    error), within RK4's stability; at least 2 dt and 4 dt, or dt and 2 dt where 4 dt is unstable."""
+    error), within RK4's stability, where that is at least SHARED_BELOW dt; else 2 dt and 4 dt, or dt
+    and 2 dt where 4 dt is unstable."""
     from granchain.workflows.plan import STABILITY, accurate_timestep, highest_frequency, predicted_error
 
     omega = highest_frequency(scene)[0]
@@ -210,7 +214,7 @@ def against_rk4_factors(scene) -> tuple[float, float]:
     stable = STABILITY["rk4"] / omega
     h = accurate_timestep("rk4", omega, 0.0, RK4_COMPANION_SHARE * predicted_error("verlet", omega, 0.0, dt))
     h = min(h, 0.5 * stable)
-    if h > 2.0 * dt:
+    if h >= SHARED_BELOW * dt:
         return (h / dt, 2.0 * h / dt)
     return (2.0, 4.0) if 4 * dt <= stable else (1.0, 2.0)
 

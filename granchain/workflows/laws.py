@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import shutil
 import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +27,8 @@ from granchain.errors import UsageError
 from granchain.physics.laws import LAWS
 from granchain.physics.materials import YIELD_PRESSURE_FACTOR
 from granchain.postprocess.regimes import DecayFit, fit_decay
-from granchain.rundir import check_output_dir
+from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain
+from granchain.safe_files import UnsafeFileError, atomic_directory
 from granchain.scene import scene_from_dict, scene_to_dict
 from granchain.workflows.run import run_scene
 
@@ -173,60 +172,58 @@ def fit_curves(run: LawRun) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def write_law_comparison(cmp: LawComparison, out: str | Path, overwrite: bool = False, formats=("png",)) -> Path:
     """laws.csv (contact, then peak force and error per law), laws.json (fits, contacts, costs), and
     the figure laws.png; written to a temporary directory and moved into place."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     check_output_dir(out, overwrite)
     out = Path(out)
-    tmp = out.resolve().parent / f".{out.name}.partial-{os.getpid()}"
-    shutil.rmtree(tmp, ignore_errors=True)
     try:
-        tmp.mkdir(parents=True)
-        n = max((r.contacts.size for r in cmp.runs), default=0)
-        header = ["contact"]
-        cols = [np.arange(1, n + 1, dtype=float)]
-        for r in cmp.runs:
-            f = np.full(n, np.nan)
-            e = np.full(n, np.nan)
-            f[: r.contacts.size], e[: r.contacts.size] = r.peak_force, r.peak_force_error
-            header += [f"peak_force_{r.law}", f"peak_force_error_{r.law}"]
-            cols += [f, e]
-        with open(tmp / "laws.csv", "w") as fh:
-            fh.write(",".join(header) + "\n")
-            for row in zip(*cols, strict=True):
-                fh.write(",".join("" if not np.isfinite(x) else repr(float(x)) for x in row) + "\n")
-        (tmp / "laws.json").write_text(
-            json.dumps({"scene": cmp.scene.title or cmp.scene.source, "laws": cmp.table()}, indent=2)
-        )
-        fig, ax = plt.subplots(figsize=(6.4, 4.4))
-        for r, color in zip(cmp.runs, ("C0", "C3", "C2", "C4"), strict=False):
-            err = np.where(np.isfinite(r.peak_force_error), r.peak_force_error, 0.0)
-            ax.errorbar(r.contacts, r.peak_force, yerr=err, fmt="o", ms=3, color=color, label=f"{r.law} peak force")
-            if r.fit is not None:
-                i, expo, inv = fit_curves(r)
-                ax.plot(i, expo, "-", color=color, lw=1, label=f"{r.law}: exp(-{r.fit.decay_per_contact:.3g} i)")
-                ax.plot(
-                    i,
-                    inv,
-                    "--",
-                    color=color,
-                    lw=1,
-                    label=f"{r.law}: i^-{r.fit.power:.3g} from {r.fit.transition_contact}",
-                )
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("contact i")
-        ax.set_ylabel("peak force (N)")
-        ax.set_title("\n".join(textwrap.wrap(cmp.scene.title or "", 80)), fontsize=8)
-        ax.legend(fontsize=7)
-        for fmt in formats:
-            fig.savefig(tmp / f"laws.{fmt}", dpi=120)
-        plt.close(fig)
-        if out.exists():
-            shutil.rmtree(out)
-        os.replace(tmp, out)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+        with atomic_directory(out, "laws", overwrite=overwrite, owned=owned_by_granchain) as tmp:
+            _write_laws(cmp, tmp, formats)
+    except UnsafeFileError as e:
+        raise RunDirError(str(e)) from None
     return out
+
+
+def _write_laws(cmp, tmp: Path, formats) -> None:
+    """laws.csv, laws.json and the figure into the directory being written (a Figure of its own: no
+    pyplot, no change of the caller's matplotlib backend)."""
+    from matplotlib.figure import Figure
+
+    n = max((r.contacts.size for r in cmp.runs), default=0)
+    header = ["contact"]
+    cols = [np.arange(1, n + 1, dtype=float)]
+    for r in cmp.runs:
+        f = np.full(n, np.nan)
+        e = np.full(n, np.nan)
+        f[: r.contacts.size], e[: r.contacts.size] = r.peak_force, r.peak_force_error
+        header += [f"peak_force_{r.law}", f"peak_force_error_{r.law}"]
+        cols += [f, e]
+    with open(tmp / "laws.csv", "w") as fh:
+        fh.write(",".join(header) + "\n")
+        for row in zip(*cols, strict=True):
+            fh.write(",".join("" if not np.isfinite(x) else repr(float(x)) for x in row) + "\n")
+    (tmp / "laws.json").write_text(
+        json.dumps({"scene": cmp.scene.title or cmp.scene.source, "laws": cmp.table()}, indent=2)
+    )
+    fig = Figure(figsize=(6.4, 4.4))
+    ax = fig.subplots()
+    for r, color in zip(cmp.runs, ("C0", "C3", "C2", "C4"), strict=False):
+        err = np.where(np.isfinite(r.peak_force_error), r.peak_force_error, 0.0)
+        ax.errorbar(r.contacts, r.peak_force, yerr=err, fmt="o", ms=3, color=color, label=f"{r.law} peak force")
+        if r.fit is not None:
+            i, expo, inv = fit_curves(r)
+            ax.plot(i, expo, "-", color=color, lw=1, label=f"{r.law}: exp(-{r.fit.decay_per_contact:.3g} i)")
+            ax.plot(
+                i,
+                inv,
+                "--",
+                color=color,
+                lw=1,
+                label=f"{r.law}: i^-{r.fit.power:.3g} from {r.fit.transition_contact}",
+            )
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("contact i")
+    ax.set_ylabel("peak force (N)")
+    ax.set_title("\n".join(textwrap.wrap(cmp.scene.title or "", 80)), fontsize=8, parse_math=False)
+    ax.legend(fontsize=7)
+    for fmt in formats:
+        fig.savefig(tmp / f"laws.{fmt}", dpi=120)
