@@ -1,4 +1,4 @@
-"""granchain compare-laws (issue 14): one scene under two contact laws, side by side."""
+"""granchain compare-laws: one scene under two contact laws, side by side."""
 
 import json
 import math
@@ -8,8 +8,8 @@ import pytest
 
 from granchain.cli import main, resolve_scene
 from granchain.errors import UsageError
-from granchain.safe_files import MARKER
 from granchain.physics.laws import LAWS
+from granchain.safe_files import MARKER
 from granchain.workflows.laws import compare_laws, equivalent_contact, scene_with_law, write_law_comparison
 
 from .conftest import make_scene
