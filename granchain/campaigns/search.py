@@ -12,12 +12,14 @@ workspace like a grid's: cached, resumable, in the table.
 
 from __future__ import annotations
 
+import io
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from granchain import safe_files
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.spec import Campaign, CampaignError, Predicate, Search, params_text
 
@@ -49,17 +51,26 @@ def predicate_quantity(job_dir: str | Path, predicate: Predicate) -> tuple[float
     return float(value), None
 
 
+#: the largest histories.csv a search reads (a point's history of one chain: far below)
+HISTORY_LIMIT = 1 << 30
+
+
 def read_history(run_dir: Path, contact: int) -> np.ndarray | None:
-    """Contact `contact`'s force history from a run directory's histories.csv (None if absent)."""
+    """Contact `contact`'s force history from a run directory's histories.csv (None if absent or
+    unreadable: a link, a damaged or oversized file; read without following links)."""
     path = Path(run_dir) / "histories.csv"
-    if not path.is_file():
+    try:
+        text = safe_files.read_text(path, HISTORY_LIMIT)
+    except (OSError, UnicodeDecodeError):
         return None
-    with open(path) as fh:
-        header = fh.readline().strip().split(",")
+    header = text.split("\n", 1)[0].strip().split(",")
     col = f"force_{contact}"
     if col not in header:
         return None
-    data = np.loadtxt(path, delimiter=",", skiprows=1, usecols=[header.index(col)], ndmin=1)
+    try:
+        data = np.loadtxt(io.StringIO(text), delimiter=",", skiprows=1, usecols=[header.index(col)], ndmin=1)
+    except ValueError:
+        return None
     return np.asarray(data, dtype=float)
 
 
