@@ -93,10 +93,13 @@ def run_point(payload: dict) -> dict:
         status, message = "failed", one_line(e)
         if not isinstance(e, GranchainError):  # a bug: keep where it happened
             detail = traceback.format_exc()
-        wsp.write_json(
-            job / wsp.FAILURE,
-            {"message": message, "type": type(e).__name__, "traceback": detail, "host": socket.gethostname()},
-        )
+        try:
+            wsp.write_json(
+                job / wsp.FAILURE,
+                {"message": message, "type": type(e).__name__, "traceback": detail, "host": socket.gethostname()},
+            )
+        except OSError:  # a full or read-only disk: the point stays failed, its record below says why
+            pass
     wall = time.perf_counter() - t0
     record = {
         "job": job.name,

@@ -72,6 +72,10 @@ def cmd_campaign_table(args) -> int:
     if args.search and "search" not in tables:
         raise UsageError(f"{args.workspace}: is a grid campaign; --search is for a search campaign's transitions")
     if args.csv:
+        if sys.stdout.isatty():  # on a terminal a parameter's text cannot retitle or clear it
+            from granchain.campaigns.table import printable
+
+            df = df.map(lambda v: printable(v) if isinstance(v, str) else v)
         df.to_csv(sys.stdout, index=False)
     else:
         print(format_table(df))
