@@ -13,6 +13,7 @@ time, energy.txt, load_end.txt and the history and snapshot dumps.
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import re
@@ -27,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from granchain import safe_files
 from granchain.errors import GranchainError
 from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution
 from granchain.lammps import server, worker
@@ -372,10 +374,15 @@ def lammps_result(scene, work: Path, wall_time: float, extra: dict | None = None
     check_solution(scene, sol)
     extra = dict(extra or {})
     log = Path(work) / "log.lammps"
-    if log.exists():
-        extra.update(log_timing(log.read_text(errors="replace")))
+    if log.exists():  # its timing lines are at the end: the tail is enough, however long the log
+        extra.update(log_timing(safe_files.read_tail(log, LOG_TAIL).decode("utf-8", errors="replace")))
     extra["read_time"] = time.perf_counter() - t0
     return LammpsRunResult(scene=scene, backend="lammps", solution=sol, extra=extra)
+
+
+#: the most of a results file read (a 10^7-bead chain's peaks.dump is about 2.5 GB) and of a log's end
+RESULTS_LIMIT = 8 * 1024**3
+LOG_TAIL = 1 << 20
 
 
 class ResultsError(GranchainError, RuntimeError):
@@ -386,7 +393,7 @@ def read_run_end(work: Path) -> tuple[int, float]:
     """The run's last step and time, as the deck printed them (templates.RUN_END_FILE)."""
     p = Path(work) / RUN_END_FILE
     try:
-        step, t = p.read_text().split()
+        step, t = safe_files.read_text(p, 4096).split()
         return int(step), float(t)
     except FileNotFoundError:
         raise ResultsError(f"{p}: missing; the deck writes it when the run has finished") from None
@@ -403,11 +410,13 @@ def read_results(work: Path) -> dict[str, np.ndarray]:
     """
     p = Path(work) / RESULTS_DUMP
     try:
-        with open(p) as fh:
-            header = [fh.readline() for _ in range(9)]
-            body = fh.read()
+        lines = safe_files.read_text(p, RESULTS_LIMIT).split("\n", 9)
     except FileNotFoundError:
         raise ResultsError(f"{p}: missing; the deck writes it as its last file when the run has finished") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise ResultsError(f"{p}: cannot be read as the deck's results ({e})") from None
+    header = [x + "\n" for x in lines[:9]] + [""] * (9 - min(len(lines), 9))
+    body = lines[9] if len(lines) > 9 else ""
     if not header[0].startswith("ITEM: TIMESTEP") or not header[8].startswith("ITEM: ATOMS"):
         raise ResultsError(f"{p}: not a LAMMPS dump custom file (its header is incomplete)")
     try:
@@ -509,7 +518,7 @@ def read_solution(
     v = res["vx"][o : o + n]
     amax = res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1)
 
-    e = np.loadtxt(work / "energy.txt", comments="#", ndmin=2)
+    e = np.loadtxt(io.StringIO(safe_files.read_text(work / "energy.txt", RESULTS_LIMIT)), comments="#", ndmin=2)
     # the deck appends the end of the run (energy.lmp.j2); where the last periodic sample is that, keep one
     keep = np.append(e[1:, 0] != e[:-1, 0], True)
     e = e[keep]
@@ -527,7 +536,7 @@ def read_solution(
     if ld.is_force:
         dx = x1 - x1_0
         if (work / "load_end.txt").exists():
-            x1_end = float(np.loadtxt(work / "load_end.txt", ndmin=1)[1])
+            x1_end = float(np.loadtxt(io.StringIO(safe_files.read_text(work / "load_end.txt", 4096)), ndmin=1)[1])
             dx = np.where(et > ld.duration, x1_end - x1_0, dx)
         work_done = work_done + ld.amplitude * dx
     # the work of the effects' external forces (Effect.work: precompression's static ones)
