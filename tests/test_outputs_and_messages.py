@@ -101,3 +101,21 @@ def test_materials_command_lists_every_built_in_material(capsys):
     assert all(name in out for name in MATERIALS)
     assert main(["materials", "unobtainium"]) == 2
     assert "no built-in material of that name" in capsys.readouterr().err
+
+
+def test_a_run_that_ends_before_measuring_says_so_and_exits_1(tmp_path, capsys):
+    text = resolve_scene("default").source_text.replace("end_time = 7e-4", "end_time = 1e-4")
+    text = "\n".join(x for x in text.splitlines() if not x.startswith("snapshots"))  # (beyond the end)
+    p = tmp_path / "short.toml"
+    p.write_text(text)
+    assert main(["run", str(p), "--out", str(tmp_path / "r"), "-q", "--error-estimate", "off"]) == 1
+    err = capsys.readouterr().err
+    assert "granchain: not measured: leading_peak_force:" in err and "wave_speed" in err
+
+
+def test_quiet_silences_the_plan_and_the_striker_peak_is_printed_with_its_error(tmp_path, capsys):
+    assert main(["run", "classic-two-spheres", "--out", str(tmp_path / "r"), "--quiet"]) == 0
+    out, err = capsys.readouterr()
+    assert "plan (" not in err
+    line = next(x for x in out.splitlines() if x.strip().startswith("striker_peak_force"))
+    assert " +- " in line

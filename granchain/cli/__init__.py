@@ -65,10 +65,11 @@ def _fmt(v) -> str:
 def planned(scene: Scene, rtol: float | None, backend: str, method: str | None):
     """The scene with its "auto" values (and, given rtol, its time step) chosen by the planner for
     the integrator this backend runs; the plan's notes go to stderr (stdout may be a deck)."""
+    from granchain.progress import is_quiet
     from granchain.workflows.run import integrator, plan_for
 
     scene, plan = plan_for(scene, backend, method, rtol)
-    if plan is not None:
+    if plan is not None and not is_quiet():  # (--quiet: no plan lines either)
         for c in plan.choices:
             print(
                 f"plan ({integrator(backend, method)}): {c.name} = {c.value:.6g}  ({shown(c.reason)})", file=sys.stderr
@@ -179,9 +180,20 @@ def cmd_run(args) -> int:
     )
     if args.json:
         print_json({"run_dir": str(out), **result.summary})
-        return 0
+        return _ended_too_soon(result)
     print_result(result, out)
-    return 0
+    return _ended_too_soon(result)
+
+
+def _ended_too_soon(result) -> int:
+    """1, with what and why on stderr, when the run ended before measuring what the scene asked for
+    (a wave that had not passed the window's end: run longer, or end_time = "auto"); else 0."""
+    from granchain.postprocess.observables import unmeasured_outputs
+
+    unmeasured = unmeasured_outputs(result.scene, result.solution)
+    for line in unmeasured:
+        print(f"granchain: not measured: {shown(line)}", file=sys.stderr)
+    return 1 if unmeasured else 0
 
 
 def print_result(result, out) -> None:
@@ -203,6 +215,18 @@ def print_result(result, out) -> None:
             e = errors[k]
             bar = f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})"
         print(f"  {label:38s} {_fmt(v)}{bar}{why}")
+    end_errors = (s.get("errors") or {}).get("end_peaks", {})
+    for name, label in (("striker_peak_force", "striker's contact"), ("wall_peak_force", "wall's contact")):
+        value = s.get(name)
+        if value is None:
+            continue
+        e = end_errors.get(name)
+        bar = (
+            ""
+            if e is None
+            else (f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})")
+        )
+        print(f"  {name + ' (N)':38s} {_fmt(value)}{bar}   (the {label} peak)")
     c = s["conservation"]
     ld = scene.loading
     if ld.is_force:
@@ -268,14 +292,20 @@ def cmd_compare_laws(args) -> int:
     cmp = compare_laws(scene, laws, backend=args.backend, rtol=args.rtol, error_estimate=args.error_estimate == "on")
     write_law_comparison(cmp, out, overwrite=args.overwrite)
     print(f"scene      {_scene_name(scene)}")
-    print(f"{'law':10} {'contact':44} {'F_1 (N)':>10} {'F_last (N)':>10} {'trans.':>6} {'lambda':>8} {'p':>6}")
+    print(
+        f"{'law':10} {'contact':44} {'F_1 (N)':>10} {'F_last (N)':>10} {'transition':>10} "
+        f"{'lambda (1/contact)':>18} {'p':>14}"
+    )
     for row in cmp.table():
         contact = ", ".join(f"{k}={v:.4g}" for k, v in row["contact"].items() if k != "law")
-        fit = (
-            f"{row['transition_contact']:>6} {row['decay_per_contact']:>8.3g} {row['inverse_power']:>6.3g}"
-            if row["transition_contact"]
-            else f"  no fit: {shown(row['why_no_fit'])}"
-        )
+        if row["transition_contact"]:
+            lo, hi = row["transition_contact_range"]
+            trans = f"{row['transition_contact']} ({lo}-{hi})"
+            lam = f"{row['decay_per_contact']:.3g} +- {row['decay_per_contact_stderr']:.2g}"
+            pw = f"{row['inverse_power']:.3g} +- {row['inverse_power_stderr']:.2g}"
+            fit = f"{trans:>10} {lam:>18} {pw:>14}"
+        else:
+            fit = f"  no fit: {shown(row['why_no_fit'])}"
         first = row["first_peak_force"] or float("nan")
         last = row["last_peak_force"] or float("nan")
         print(f"{row['law']:10} {contact:44} {first:>10.4g} {last:>10.4g} {fit}")
@@ -361,13 +391,14 @@ def cmd_plot(args) -> int:
 
 
 def cmd_accuracy(args) -> int:
-    from granchain.workflows.accuracy import accuracy_study, summary_text, write_study
+    from granchain.workflows.accuracy import accuracy_study, check_study_dir, summary_text, write_study
 
     scene, _ = planned(resolve_scene(args.scene), None, "reference", "rk4")
     name = Path(args.scene).stem if args.scene else DEFAULT_SCENE
     out = args.out or f"runs/{name}-accuracy"
+    check_study_dir(out, args.overwrite)  # before the study runs
     study = accuracy_study(scene, methods=tuple(args.methods.split(",")), levels=args.levels, repeats=args.repeats)
-    for p in write_study(study, out):
+    for p in write_study(study, out, overwrite=args.overwrite):
         print(p)
     print(summary_text(study))
     return 0
@@ -534,6 +565,7 @@ def build_parser() -> argparse.ArgumentParser:
     acc.add_argument("--levels", type=int, default=7, help="time steps (tolerances) per method")
     acc.add_argument("--repeats", type=int, default=3, help="repeats per run (median wall time)")
     acc.add_argument("--out", help="output directory (default runs/<scene>-accuracy)")
+    acc.add_argument("--overwrite", action="store_true", help="replace --out if granchain wrote it")
     acc.set_defaults(func=cmd_accuracy)
 
     d = sub.add_parser("render", help="print the LAMMPS deck of a scene, or write a directory plain LAMMPS runs")
