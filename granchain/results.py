@@ -571,6 +571,8 @@ PEAK_UNITS = {
     "complete": "bool",
     "leading_pulse_force": "N",
     "arrival_time": "s",
+    "dynamic_peak_force": "N",  # precompressed chains: peak_force - F0
+    "dynamic_leading_pulse_force": "N",
     "peak_force_error": "N",
     "time_of_peak_error": "s",
     "error_status": "text",
@@ -587,6 +589,7 @@ OBSERVABLE_UNITS = {
     "wave_speed_contacts": "contacts fitted",
     "max_peak_force": "N",
     "max_peak_contact": "contact",
+    "static_force": "N",  # a precompression's F0: the forces above are dynamic, F - F0
 }
 
 #: the observables a result's short display shows
@@ -642,6 +645,10 @@ def peak_columns(result: RunResult) -> dict[str, np.ndarray]:
         "leading_pulse_force": s.leading_pulse_force[idx],
         "arrival_time": s.leading_pulse_time[idx],
     }
+    f0 = float(sc.effects.precompression)
+    if f0:  # a precompressed contact carries F0 at rest: the wave is the dynamic force F - F0
+        cols["dynamic_peak_force"] = s.peak_force[idx] - f0
+        cols["dynamic_leading_pulse_force"] = s.leading_pulse_force[idx] - f0
     e = result.errors
     if e is not None and e.peak_force is not None:
         cols["peak_force_error"] = e.peak_force.error[idx]

@@ -28,7 +28,7 @@ import numpy as np
 
 from granchain import safe_files
 from granchain.errors import GranchainError
-from granchain.results import RunResult
+from granchain.results import RunResult, peak_columns
 from granchain.safe_files import pid_alive  # noqa: F401 - where callers have imported it from
 
 #: what a run directory written before the marker existed may hold: granchain run's, compare's,
@@ -149,32 +149,9 @@ def write_run_dir(result: RunResult, out: str | Path, overwrite: bool = False, e
 def _write_contents(result: RunResult, d: Path, extra_files: dict) -> None:
     sc, s = result.scene, result.solution
     _write_new(d / "scene.toml", sc.source_text if sc.source_text else sc.to_toml())
-    contacts = np.asarray(sc.peak_contacts, dtype=int)
-    idx = contacts - 1
-    header = [
-        "contact",
-        "peak_force",
-        "time_of_peak",
-        "peak_force_nondim",
-        "complete",
-        "leading_pulse_force",
-        "arrival_time",
-    ]
-    columns = [
-        contacts,
-        s.peak_force[idx],
-        s.time_of_peak[idx],
-        s.peak_force[idx] / sc.force_scale,
-        s.complete[idx].astype(int),
-        s.leading_pulse_force[idx],
-        s.leading_pulse_time[idx],
-    ]
-    e = result.errors
-    if e is not None and e.peak_force is not None:
-        # nan where there is no estimate; error_status says why (granchain.errorbars)
-        header += ["peak_force_error", "time_of_peak_error", "error_status"]
-        status = [str(x).replace(",", ";") for x in e.peak_force.status[idx]]  # one CSV cell each
-        columns += [e.peak_force.error[idx], e.time_of_peak.error[idx], status]
+    cols = peak_columns(result)  # the one source of peaks.csv and RunResult.peaks
+    cols["complete"] = cols["complete"].astype(int)
+    header, columns = list(cols), list(cols.values())
     _write_csv(d / "peaks.csv", header, zip(*columns, strict=True))
     if s.history_contacts:
         cols = [f"force_{i + 1}" for i in s.history_contacts] + [f"velocity_{i + 1}" for i in s.history_contacts]

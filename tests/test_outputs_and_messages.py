@@ -103,14 +103,28 @@ def test_materials_command_lists_every_built_in_material(capsys):
     assert "no built-in material of that name" in capsys.readouterr().err
 
 
-def test_a_run_that_ends_before_measuring_says_so_and_exits_1(tmp_path, capsys):
+def test_a_run_that_ends_before_measuring_says_so(tmp_path, capsys):
+    """A fixed end time too short for the window: told what was missed (exit 0: the user chose it)."""
     text = resolve_scene("default").source_text.replace("end_time = 7e-4", "end_time = 1e-4")
     text = "\n".join(x for x in text.splitlines() if not x.startswith("snapshots"))  # (beyond the end)
     p = tmp_path / "short.toml"
     p.write_text(text)
-    assert main(["run", str(p), "--out", str(tmp_path / "r"), "-q", "--error-estimate", "off"]) == 1
+    assert main(["run", str(p), "--out", str(tmp_path / "r"), "-q", "--error-estimate", "off"]) == 0
     err = capsys.readouterr().err
     assert "granchain: not measured: leading_peak_force:" in err and "wave_speed" in err
+
+
+def test_an_auto_end_time_that_misses_the_window_exits_1(tmp_path, capsys, monkeypatch):
+    """end_time = "auto" promises the window: a plan that falls short (here forced so) exits 1."""
+    from granchain.workflows import plan as plan_mod
+
+    monkeypatch.setattr(plan_mod, "front_travel_time", lambda scene, last, slow: 1e-5)  # a plan too short
+    text = resolve_scene("default").source_text.replace("end_time = 7e-4", 'end_time = "auto"')
+    text = "\n".join(x for x in text.splitlines() if not x.startswith("snapshots"))
+    p = tmp_path / "auto.toml"
+    p.write_text(text)
+    assert main(["run", str(p), "--out", str(tmp_path / "r"), "-q", "--error-estimate", "off"]) == 1
+    assert "granchain: not measured: leading_peak_force:" in capsys.readouterr().err
 
 
 def test_quiet_silences_the_plan_and_the_striker_peak_is_printed_with_its_error(tmp_path, capsys):
