@@ -309,6 +309,8 @@ def campaign(
     scheduler: str | None = None,
     rerun: bool = False,
     retry_failed: bool = False,
+    cluster=None,
+    ranks: int | str | None = None,
 ):
     """Run a campaign (a sweep or a search over scenes) into a workspace and return its table.
 
@@ -326,6 +328,10 @@ def campaign(
         Address of a running Dask scheduler (e.g. one started by dask-jobqueue) instead of a local cluster.
     rerun : bool
         Run every point again. ``retry_failed``: run the points that failed before again.
+    cluster : str or dict, optional
+        ``"slurm"``, ``"pbs"`` or a dict of settings (docs/clusters.md), over the file's ``[cluster]``.
+    ranks : int or "auto", optional
+        MPI ranks per LAMMPS point (``"auto"``: the --np auto rule).
 
     Returns
     -------
@@ -337,7 +343,16 @@ def campaign(
     """
     from granchain.campaigns.api import run_campaign
 
-    tables, _ = run_campaign(spec, out, workers=workers, scheduler=scheduler, rerun=rerun, retry_failed=retry_failed)
+    tables, _ = run_campaign(
+        spec,
+        out,
+        workers=workers,
+        scheduler=scheduler,
+        rerun=rerun,
+        retry_failed=retry_failed,
+        cluster=cluster,
+        ranks=ranks,
+    )
     return tables.get("search", tables["table"])
 
 

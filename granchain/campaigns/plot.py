@@ -66,11 +66,8 @@ def _check_columns(df, ws, **cols) -> None:
 def plot_campaign(ws, x: str, y: str, hue: str | None = None, map_key: str | None = None, out=None, formats=("png",)):
     """Draw y against x (lines, one per value of the other varied keys; hue first) or, with map_key,
     a 2D map of y over (x, map_key); returns the paths written."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import numpy as np
+    from matplotlib.figure import Figure  # a figure of its own: the caller's matplotlib backend untouched
 
     ws = Path(ws)
     for f in formats:
@@ -91,7 +88,8 @@ def plot_campaign(ws, x: str, y: str, hue: str | None = None, map_key: str | Non
     stem = f"{y}-vs-{x}" + (f"-map-{map_key}" if map_key else f"-by-{hue}" if hue else "")
     base = str(out) if out is not None else str(ws / "plots" / stem)  # keys have dots: no with_suffix
     _make_dir(Path(base).parent)
-    fig, ax = plt.subplots(figsize=(6.4, 4.6), layout="constrained")
+    fig = Figure(figsize=(6.4, 4.6), layout="constrained")
+    ax = fig.subplots()
     if map_key is not None:
         grid = done.pivot_table(index=map_key, columns=x, values=y, aggfunc="mean")
         xs, ys = grid.columns.to_numpy(dtype=float), grid.index.to_numpy(dtype=float)
@@ -127,10 +125,7 @@ def plot_campaign(ws, x: str, y: str, hue: str | None = None, map_key: str | Non
     title = record.get("title")
     if title:
         ax.set_title(printable(str(title)), fontsize="medium", parse_math=False)
-    try:
-        return _save(fig, base, formats)
-    finally:
-        plt.close(fig)
+    return _save(fig, base, formats)
 
 
 def _save(fig, base: str, formats) -> list[Path]:
