@@ -375,7 +375,10 @@ def lammps_result(scene, work: Path, wall_time: float, extra: dict | None = None
     extra = dict(extra or {})
     log = Path(work) / "log.lammps"
     if log.exists():  # its timing lines are at the end: the tail is enough, however long the log
-        extra.update(log_timing(safe_files.read_tail(log, LOG_TAIL).decode("utf-8", errors="replace")))
+        try:
+            extra.update(log_timing(safe_files.read_tail(log, LOG_TAIL).decode("utf-8", errors="replace")))
+        except OSError:  # a link or not a file: no timing (the run's results stand without it)
+            pass
     extra["read_time"] = time.perf_counter() - t0
     return LammpsRunResult(scene=scene, backend="lammps", solution=sol, extra=extra)
 
@@ -387,6 +390,17 @@ LOG_TAIL = 1 << 20
 
 class ResultsError(GranchainError, RuntimeError):
     """A deck's results (templates.RESULTS_DUMP, RUN_END_FILE) are missing or incomplete."""
+
+
+def _result_text(path: Path, limit: int) -> str:
+    """A results file's text, read without following links and bounded; a ResultsError naming it
+    when it is missing, a link, too large or not text."""
+    try:
+        return safe_files.read_text(path, limit)
+    except FileNotFoundError:
+        raise ResultsError(f"{path}: missing; the deck writes it during the run") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise ResultsError(f"{path}: cannot be read as the deck's output ({e})") from None
 
 
 def read_run_end(work: Path) -> tuple[int, float]:
@@ -518,7 +532,7 @@ def read_solution(
     v = res["vx"][o : o + n]
     amax = res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1)
 
-    e = np.loadtxt(io.StringIO(safe_files.read_text(work / "energy.txt", RESULTS_LIMIT)), comments="#", ndmin=2)
+    e = np.loadtxt(io.StringIO(_result_text(work / "energy.txt", RESULTS_LIMIT)), comments="#", ndmin=2)
     # the deck appends the end of the run (energy.lmp.j2); where the last periodic sample is that, keep one
     keep = np.append(e[1:, 0] != e[:-1, 0], True)
     e = e[keep]
@@ -536,7 +550,7 @@ def read_solution(
     if ld.is_force:
         dx = x1 - x1_0
         if (work / "load_end.txt").exists():
-            x1_end = float(np.loadtxt(io.StringIO(safe_files.read_text(work / "load_end.txt", 4096)), ndmin=1)[1])
+            x1_end = float(np.loadtxt(io.StringIO(_result_text(work / "load_end.txt", 4096)), ndmin=1)[1])
             dx = np.where(et > ld.duration, x1_end - x1_0, dx)
         work_done = work_done + ld.amplitude * dx
     # the work of the effects' external forces (Effect.work: precompression's static ones)
