@@ -2,8 +2,8 @@
 
     python benchmarks/bench_error_estimate.py [--reps 3]
 
-For each case the scene runs as `granchain run` runs it (planned for rtol 1e-3, then the companions
-at 2 dt and 4 dt); the table gives the run's wall time, the companions' and their ratio (best of
+For each law on each backend the scene runs as `granchain run` runs it (planned for rtol 1e-3, then
+the companions: at 2 dt and 4 dt, or RK4 runs for a Verlet run on a kinked law); the table gives the run's wall time, the companions' and their ratio (best of
 the repetitions for each). Expected from the step counts alone: 1/2 + 1/4 = 0.75; LAMMPS pays its
 start-up (process, plugin load) once more per companion, which dominates small runs.
 """
@@ -20,10 +20,19 @@ os.environ.setdefault("GRANCHAIN_QUIET", "1")
 from granchain.cli import resolve_scene  # noqa: E402
 from granchain.workflows.run import run_scene  # noqa: E402
 
+#: every law on every backend (the short impulse of each law's bundled scene), and the long loads
 CASES = [
     ("default", "reference", "rk4"),
     ("default", "reference", "verlet"),
     ("default", "lammps", None),
+    ("plastic-short-impulse", "reference", "rk4"),
+    ("plastic-short-impulse", "reference", "verlet"),
+    ("plastic-short-impulse", "lammps", None),
+    ("thornton-short-impulse", "reference", "rk4"),
+    ("thornton-short-impulse", "reference", "verlet"),
+    ("thornton-short-impulse", "lammps", None),
+    ("classic-two-spheres", "reference", "rk4"),
+    ("classic-two-spheres", "lammps", None),
     ("elastic-step-40N", "lammps", None),
     ("plastic-long-load-table1", "lammps", None),
 ]
