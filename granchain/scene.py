@@ -653,15 +653,15 @@ def _check_scales(scene: Scene, source: str) -> None:
                     f"(e.g. {law.example_contact or 'brass: E = 115e9 Pa'})"
                 )
     gamma = float(scene.effects.dashpot)
-    if gamma:
+    if gamma > 0.0:
         m_min = float(min(mat.bead_mass(m, radii[0]) for m in materials))
         if scene.loading.kind == "striker":
             m_min = min(m_min, float(scene.striker_mass))
-        if m_min / gamma < MIN_DURATION:
+        if m_min / gamma < MIN_TAU:
             raise SceneError(
                 f"{source}: [damping] dashpot = {gamma:g} N s/m is invalid: it damps the lightest body "
-                f"({m_min:.3g} kg) in m/gamma = {m_min / gamma:.3g} s, under an attosecond; a dashpot of at most "
-                f"{m_min / MIN_DURATION:.3g} N s/m (a viscous contact is damped over microseconds: gamma of "
+                f"({m_min:.3g} kg) in m/gamma = {m_min / gamma:.3g} s, under {MIN_TAU:g} s; a dashpot of at most "
+                f"{m_min / MIN_TAU:.3g} N s/m (a viscous contact is damped over microseconds: gamma of "
                 "about 1 to 100 N s/m for millimetre beads)"
             )
     f0 = float(scene.effects.precompression)
@@ -793,6 +793,10 @@ def _read_contact(s: _Section, chain: Chain) -> Contact:
 #: double precision (an impulse of 0.01 N s over 2.2e-308 s overflowed them, a crash, not a message)
 MIN_DURATION = 1e-18
 DURATION_TEXT = "loading time T in s; no mechanical load acts over less than an attosecond"
+#: the shortest time step a scene may give: a million times below the shortest a chain needs (a contact
+#: time scale of MIN_TAU = 1 fs, a step of a thousandth of it at the finest tolerance); a shorter one
+#: makes step counts that overflow LAMMPS's and granchain's integers (5e-324 s crashed the planner)
+MIN_TIMESTEP = 1e-24
 TIME_TEXT = f"at most {MAX_TIME:g} s: about 3 hours, far beyond any stress wave in a chain"
 
 
@@ -885,11 +889,11 @@ def _read_run(s: _Section, loading: Loading) -> Run:
         if key == "timestep":
             return s.number(
                 key,
-                low=MIN_DURATION,
+                low=MIN_TIMESTEP,
                 low_open=False,
                 high=MAX_TIME,
                 high_open=False,
-                what='s, at least an attosecond, or "auto" for the planner to choose',
+                what='s, at least 1e-24 s (a step count must stay a number), or "auto" for the planner to choose',
             )
         return s.number(
             key, low=0.0, high=MAX_TIME, high_open=False, what=f's, {TIME_TEXT}, or "auto" for the planner to choose'

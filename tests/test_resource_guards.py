@@ -143,3 +143,10 @@ def test_bundled_scenes_pass_the_guards_without_a_warning(name):
         warnings.simplefilter("error", LongRunWarning)
         est = check_run(sc)
     assert est.steps <= guards.MAX_STEPS
+
+
+def test_a_dashpot_that_forces_a_tiny_planned_step_is_refused_naming_the_planner_not_timestep(tmp_path):
+    text = scene_text(end_time=2e-4, timestep="auto") + "[damping]\ndashpot = 1e12\n"
+    rc, err, _ = cli(tmp_path, text.replace("timestep = 'auto'", 'timestep = "auto"'))
+    refused(rc, err, tmp_path, "steps", "planner's step", "dashpot")
+    assert "[run] timestep =" not in err

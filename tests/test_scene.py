@@ -112,7 +112,7 @@ RULES = [
     ("unknown law", ("contact", "law"), "hooke", "law", "'hertz', 'bilinear'"),
     ("hertz with beta", ("contact", "unloading_coeff"), 0.5, "unloading_coeff", "only the bilinear"),
     ("negative time", ("run", "end_time"), -1.0, "end_time", "> 0"),
-    ("zero timestep", ("run", "timestep"), 0.0, "timestep", ">= 1e-18"),
+    ("zero timestep", ("run", "timestep"), 0.0, "timestep", ">= 1e-24"),
     ("timestep over end", ("run", "timestep"), 1.0, "timestep", "no longer than end_time"),
     ("nan amplitude", ("loading", "amplitude"), float("nan"), "amplitude", "finite"),
     ("loading key of other kind", ("loading", "velocity"), 3.0, "velocity", "amplitude (N) and duration"),

@@ -162,7 +162,9 @@ def _duration(seconds: float) -> str:
     return f"{seconds:.3g} s"
 
 
-def check_run(scene, backend: str = "reference", out=None, machine: bool = True, stacklevel: int = 2) -> Estimate:
+def check_run(
+    scene, backend: str = "reference", out=None, machine: bool = True, stacklevel: int = 2, planned_step: bool = False
+) -> Estimate:
     """Refuse a planned scene's run that cannot finish here, before anything runs; warn about a long one.
 
     Refused (ResourceError, with the estimate and the fix): more steps than max_steps(); more memory
@@ -182,6 +184,8 @@ def check_run(scene, backend: str = "reference", out=None, machine: bool = True,
         The run is made on this machine: check its memory and disk (not for a cluster job).
     stacklevel : int
         The warnings' stacklevel (the caller of the run).
+    planned_step : bool
+        The time step is the planner's, not the scene's: the fix is not a larger [run] timestep.
 
     Returns
     -------
@@ -198,7 +202,13 @@ def check_run(scene, backend: str = "reference", out=None, machine: bool = True,
             f"time step {run.timestep:.3g} s), "
             f"more than the limit of {limit:.3g} (about {_duration(est.seconds)} of the reference solver on "
             f"{est.beads} beads): shorten [run] end_time (or stop after a contact: [run] stop_after_contact), "
-            'set [run] timestep = "auto" or a larger one, or raise the limit with GRANCHAIN_MAX_STEPS if you mean it'
+            + (
+                "soften what makes the planner's step this short (`granchain plan` names it: the stiffest contact "
+                "or the dashpot's rate), "
+                if planned_step
+                else 'set [run] timestep = "auto" or a larger one, '
+            )
+            + "or raise the limit with GRANCHAIN_MAX_STEPS if you mean it"
         )
     memory = available_memory() if machine else None
     if memory is not None and est.memory > memory:

@@ -118,7 +118,7 @@ def available_cores() -> int:
         return os.cpu_count() or 1
 
 
-def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False, out=None) -> None:
+def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False, out=None, given=None) -> None:
     """Refuse a run that cannot run as asked before anything runs: more steps than the step limit,
     more memory than this machine has available or more disk than is free at `out` (and LAMMPS's work
     directory), with the estimate and the fix (granchain.workflows.guards.check_run, for a planned
@@ -126,11 +126,12 @@ def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False, 
     workers -- so neither are its memory and disk, and only the steps are checked); an MPI request
     with ranks on the reference backend or more ranks than cores (unless oversubscribe). Warns below
     MIN_BEADS_PER_RANK beads per rank (slow, not wrong: a user testing MPI on a short chain may mean
-    it) and about a long run."""
+    it) and about a long run. given: the scene before planning, if planned (whose step is the planner's)."""
     if not isinstance(np_, int) or np_ < 1:
         raise UsageError(f"--np = {np_!r}: the number of MPI ranks must be a whole number >= 1")
     if not scene.needs_plan:
-        check_run(scene, backend, out=out, machine=not oversubscribe, stacklevel=3)
+        planned_step = given is not None and given.run.timestep is None
+        check_run(scene, backend, out=out, machine=not oversubscribe, stacklevel=3, planned_step=planned_step)
     if np_ == 1:
         return
     if backend != "lammps":
@@ -418,7 +419,7 @@ def _finish(result, work, given, scene, plan, backend: str, method: str, np_: in
             msg = output_size_warning(scene)
             if msg:
                 warnings.warn(msg, OutputSizeWarning, stacklevel=3)
-            check_run(scene, backend, stacklevel=4)  # finer: more steps, larger files
+            check_run(scene, backend, stacklevel=4, planned_step=True)  # finer: more steps, larger files
             result, work = _execute(scene, backend, method, np_)
         result.plan = plan
         if after_run is not None:
@@ -478,7 +479,7 @@ def run_scene(
     method = integrator(backend, method)
     given = scene
     scene, plan = plan_for(scene, backend, method, rtol)
-    check_resources(scene, backend, np_, oversubscribe, out=out)
+    check_resources(scene, backend, np_, oversubscribe, out=out, given=given)
     if out is not None:
         check_output_dir(out, overwrite)
     if not force:
