@@ -47,7 +47,9 @@ def test_a_loading_time_below_an_attosecond_is_refused(kind, duration):
     data = tomllib.loads(ISSUE_SCENE)
     size = {"step": ("amplitude", 10.0), "impulse": ("impulse", 0.01)}[kind]
     data["loading"] = {"kind": kind, size[0]: size[1], "duration": duration}
-    with pytest.raises(SceneError, match=r"\[loading\] duration = .* a finite number >= 1e-18 and <= 10000 \(loading time"):
+    with pytest.raises(
+        SceneError, match=r"\[loading\] duration = .* a finite number >= 1e-18 and <= 10000 \(loading time"
+    ):
         scene_from_dict(data, source="x")
     data["loading"]["duration"] = 1e-18  # the floor itself is a loading time
     assert scene_from_dict(data, source="x").loading.duration == 1e-18
