@@ -111,3 +111,24 @@ BILINEAR = law_example("bilinear")
 @pytest.fixture
 def issue_scene_text():
     return ISSUE_SCENE
+
+
+#: the small scene of the campaign tests (a 20-bead brass chain under a short step)
+CAMPAIGN_SCENE = """
+[chain]
+beads = 20
+radius = 4.76e-3
+material = "brass"
+[contact]
+law = "hertz"
+[loading]
+kind = "step"
+amplitude = 10.0
+duration = 1e-6
+[run]
+end_time = 1e-4
+timestep = 5e-8
+[outputs]
+peak_force = true
+histories = [5]
+"""

@@ -13,24 +13,9 @@ from granchain.campaigns import expr
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.spec import CampaignError, parse_campaign
 
-SMALL_SCENE = """
-[chain]
-beads = 20
-radius = 4.76e-3
-material = "brass"
-[contact]
-law = "hertz"
-[loading]
-kind = "step"
-amplitude = 10.0
-duration = 1e-6
-[run]
-end_time = 1e-4
-timestep = 5e-8
-[outputs]
-peak_force = true
-histories = [5]
-"""
+from .conftest import CAMPAIGN_SCENE
+
+SMALL_SCENE = CAMPAIGN_SCENE
 
 
 def campaign_text(

@@ -17,24 +17,9 @@ from granchain.campaigns import workspace as wsp
 from granchain.campaigns.spec import CampaignError, parse_campaign
 from granchain.cli import main
 
-SCENE = """
-[chain]
-beads = 20
-radius = 4.76e-3
-material = "brass"
-[contact]
-law = "hertz"
-[loading]
-kind = "step"
-amplitude = 10.0
-duration = 1e-6
-[run]
-end_time = 1e-4
-timestep = 5e-8
-[outputs]
-peak_force = true
-histories = [5]
-"""
+from .conftest import CAMPAIGN_SCENE
+
+SCENE = CAMPAIGN_SCENE
 ESCAPES = "a\x1b]0;pwned\x07\x1b[2J"
 
 
