@@ -9,6 +9,7 @@ and output tables.
 from __future__ import annotations
 
 import math
+import os
 import tomllib
 from dataclasses import dataclass, field, make_dataclass
 from pathlib import Path
@@ -40,6 +41,9 @@ MAX_BEADS = 10**6
 #: the most beads a chain whose beads differ (a taper, per-bead lists) may have: every contact gets its
 #: own law, and the planner spends about 80 us per contact on them (8 s for the largest)
 MAX_VARIED_BEADS = 10**5
+#: the largest scene file read: the TOML reader holds it several times over and takes about a second
+#: per few MB
+MAX_SCENE_BYTES = 16 * 1024**2
 #: the longest time a scene may give (end_time, a load's duration, snapshots, intervals): about 3 hours,
 #: far beyond any stress wave in a chain of spheres; more is a typo for a shorter time
 MAX_TIME = 1e4
@@ -527,7 +531,17 @@ def load_scene(path_or_name: str | Path) -> Scene:
     if not p.is_file():
         raise SceneError(f"{p}: is not a file; give the path of a .toml scene (see 'granchain scenes')")
     try:
-        text = p.read_text(encoding="utf-8")
+        with open(p, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            if size > MAX_SCENE_BYTES:
+                raise SceneError(
+                    f"{p}: is {size:,} bytes; a scene file is text of at most {MAX_SCENE_BYTES:,} bytes "
+                    "(a per-bead list of the longest varied chain takes about 3 MB)"
+                )
+            data = fh.read(min(size, MAX_SCENE_BYTES) + 1)  # a file that grows while read stops here
+        if len(data) > MAX_SCENE_BYTES:
+            raise SceneError(f"{p}: is over {MAX_SCENE_BYTES:,} bytes; a scene file is text of at most that")
+        text = data.decode("utf-8")
     except (OSError, UnicodeDecodeError) as e:
         raise SceneError(f"{p}: cannot be read as UTF-8 text ({e})") from None
     return parse_scene(text, source=str(p))

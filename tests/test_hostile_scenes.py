@@ -389,3 +389,16 @@ def test_hostile_scene_files_run_briefly_or_are_refused(tmp_path_factory, drawn)
     check_outcome(rc, err, max(seconds - 40.0, 0.0), "", argv)  # a run of 20000 steps may take a while
     _event("run: " + ("ran" if rc == 0 else "steps over the limit" if "GRANCHAIN_MAX_STEPS" in err else "refused"))
     assert rc == 2 or (tmp_path / "out" / "summary.json").exists()
+
+
+def test_a_huge_or_sparse_scene_file_is_refused_before_it_is_read(tmp_path):
+    sparse = tmp_path / "sparse.toml"
+    with open(sparse, "wb") as f:
+        f.truncate(6 * 1024**3)  # 6 GB of holes: read whole, it took the memory first
+    rc, err, seconds = run_cli(["plan", str(sparse)])
+    check_outcome(rc, err, seconds, "", ["plan"])
+    assert rc == 2 and "at most 16,777,216 bytes" in err and seconds < 5
+    long = tmp_path / "long.toml"
+    long.write_text(scene_text(_data({("", "title"): "x" * 17_000_000})))
+    rc, err, _ = run_cli(["render", str(long)])
+    assert rc == 2 and "long.toml: is 17,0" in err
