@@ -21,7 +21,7 @@ import numpy as np
 from granchain import safe_files
 from granchain.errors import UsageError
 from granchain.postprocess.observables import fit_wave_speed
-from granchain.problem import ChainProblem
+from granchain.problem import ChainProblem, contact_positions
 from granchain.reference.scipy_solver import solve_chain_dop853
 from granchain.reference.solver import solve_chain
 from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain
@@ -69,8 +69,9 @@ class AccuracyStudy:
 def _errors(scene, sol, ref, idx) -> tuple[float, float | None]:
     e = float(np.max(np.abs(sol.peak_force[idx] - ref.peak_force[idx]) / ref.peak_force[idx]))
     cs = idx + 1
-    a = fit_wave_speed(cs, sol.time_of_peak[idx], scene.diameter)
-    b = fit_wave_speed(cs, ref.time_of_peak[idx], scene.diameter)
+    at = contact_positions(scene)  # the contacts' real positions (a taper's are not a diameter apart)
+    a = fit_wave_speed(cs, sol.time_of_peak[idx], scene.diameter, at)
+    b = fit_wave_speed(cs, ref.time_of_peak[idx], scene.diameter, at)
     es = abs(a[0] - b[0]) / b[0] if a and b else None
     return e, es
 
