@@ -254,9 +254,10 @@ def run_cli(argv: list[str]) -> tuple[int, str, float]:
 def check_outcome(rc: int, err: str, seconds: float, text: str, argv: list[str]) -> None:
     assert "Traceback" not in err, err
     assert seconds < SECONDS, f"{argv[0]} took {seconds:.1f} s"
-    assert rc in (0, 2), (rc, err)
+    # run exits 1 when it ended before measuring what the scene asked for (it says what, on stderr)
+    assert rc in (0, 2) or (rc == 1 and argv[0] == "run" and "not measured" in err), (rc, err)
     errors = [line for line in err.splitlines() if line.startswith("granchain: error:")]
-    if rc == 0:
+    if rc in (0, 1):
         assert not errors, err
         return
     assert len(errors) == 1, err
@@ -380,13 +381,21 @@ def test_hostile_scene_files_run_briefly_or_are_refused(tmp_path_factory, drawn)
     if _commands(data, tmp_path, ("plan",)) != [0]:
         return
     _commands(data, tmp_path, ("predict", "render"))
+    from granchain.scene import load_scene
+    from granchain.workflows.guards import estimate
+    from granchain.workflows.run import plan_for
+
+    est = estimate(plan_for(load_scene(tmp_path / "hostile.toml"))[0])
+    if est.steps * est.beads > 2e6:  # valid, and long: the step limit's own tests are test_resource_guards'
+        _event("run: skipped (over 2e6 bead-steps)")
+        return
     os.environ["GRANCHAIN_MAX_STEPS"] = "20000"
     try:
         argv = ["run", str(tmp_path / "hostile.toml"), "--out", str(tmp_path / "out"), "--quiet"]
         rc, err, seconds = run_cli(argv)
     finally:
         del os.environ["GRANCHAIN_MAX_STEPS"]
-    check_outcome(rc, err, max(seconds - 40.0, 0.0), "", argv)  # a run of 20000 steps may take a while
+    check_outcome(rc, err, max(seconds - 60.0, 0.0), "", argv)  # a run and its error estimate may take a while
     _event("run: " + ("ran" if rc == 0 else "steps over the limit" if "GRANCHAIN_MAX_STEPS" in err else "refused"))
     assert rc == 2 or (tmp_path / "out" / "summary.json").exists()
 
