@@ -132,7 +132,7 @@ def read_bytes(path: str | Path, limit: int = DEFAULT_LIMIT) -> bytes:
     with os.fdopen(fd, "rb") as fh:
         if st.st_size > limit:
             raise _too_large(path, st.st_size, limit)
-        data = fh.read(limit + 1)
+        data = fh.read(min(st.st_size, limit) + 1)  # (CPython sets the whole request aside first)
     if len(data) > limit:  # grew while read
         raise _too_large(path, len(data), limit)
     return data

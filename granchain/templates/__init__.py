@@ -188,6 +188,15 @@ def _env() -> jinja2.Environment:
     return env
 
 
+def largest_radius(scene) -> float:
+    """The largest radius of the deck's moving bodies: the beads' and a striker's (a striker larger than
+    the beads must not see its own periodic image across y and z, and its cutoff sets the bins)."""
+    r = float(max(scene.bead_radii)) if scene.per_bead else float(scene.chain.radius)
+    if scene.loading.kind == "striker":
+        r = max(r, float(scene.loading.striker_radius))
+    return r
+
+
 @dataclass(frozen=True)
 class AtomLayout:
     """Atom IDs and types: the atoms of effects with beads in front (a striker, ID 1), the beads, the
@@ -201,14 +210,14 @@ class AtomLayout:
     extra_types: tuple[str, ...]  # the effects' atom types, in registry order
     offset: int  # atoms in front of bead 1 (Effect.beads_in_front)
     skin: float  # neighbor skin: 0.2 x the smallest bead diameter
-    rmax: float  # the largest bead radius
+    rmax: float  # the largest radius of a body that moves (beads, a striker)
     bead_types: int = 1  # bead kinds (Scene.bead_kinds): types 1..bead_types
     last_bead_type: int = 1  # bead N's type
 
     @classmethod
     def of(cls, scene) -> AtomLayout:
         skin = 0.2 * 2.0 * float(min(scene.bead_radii)) if scene.per_bead else 0.2 * scene.diameter
-        rmax = float(max(scene.bead_radii)) if scene.per_bead else float(scene.chain.radius)
+        rmax = largest_radius(scene)
         active = active_effects(scene)
         extra = tuple(e.atom_type for e in active if e.atom_type)
         kinds, kind_of = bead_kinds(scene) if scene.per_bead else ([None], [0])
@@ -300,8 +309,8 @@ def bead_kinds(scene) -> tuple[list[tuple[float, object]], list[int]]:
 def render_data(scene) -> str:
     n, d = scene.chain.beads, scene.diameter
     lay = atom_layout(scene)
-    rmax = float(max(scene.bead_radii)) if scene.per_bead else scene.chain.radius
-    w = 4.0 * rmax  # periodic y/z sides wider than cutoff + skin, so no bead sees its own image
+    rmax = largest_radius(scene)
+    w = 4.0 * rmax  # periodic y/z sides wider than cutoff + skin, so no body sees its own image
     rho = scene.chain.material.density
     u0 = np.zeros(n)
     if scene.effects.precompression:

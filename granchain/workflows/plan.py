@@ -201,6 +201,11 @@ def wave_speeds(scene) -> tuple[float, float]:
     return scene.contact.law_class.wave_speeds(scene, expected_peak_force(scene), step_equivalent(scene))
 
 
+#: the smallest --rtol: below it round-off, not the time step, limits every number (and the planned
+#: step would fall below any a scene accepts)
+MIN_RTOL = 1e-12
+
+
 #: under precompression a front moves at least at the linearised chain's sound speed c0; its first
 #: maximum lags the sonic front by dispersion (1.6% over 300 beads at a perturbation of 1e-3 F0):
 #: plan with this fraction of c0
@@ -284,8 +289,10 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     peak_ratio: the run's force scale over its smallest measured peak, when a first run measured it
     (refined_plan); the time step and the output intervals are planned for rtol / peak_ratio.
     """
-    if rtol is not None and not (0 < rtol < 1):
-        raise UsageError(f"--rtol = {rtol!r}: a relative tolerance must be between 0 and 1")
+    if rtol is not None and not (MIN_RTOL <= rtol < 1):
+        raise UsageError(
+            f"--rtol = {rtol!r}: a relative tolerance must be at least {MIN_RTOL:g} (round-off) and below 1"
+        )
     rtol_eff = 1e-3 if rtol is None else rtol
     rtol_plan = rtol_eff / peak_ratio  # what the step must meet at the run's force scale
     choices: list[PlanChoice] = []
@@ -359,7 +366,10 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
         beads = n
     d = scene_to_dict(scene)
     d["chain"]["beads"] = beads
-    d["run"] = {"end_time": end, "timestep": min(dt, end)}
+    # a finer step is always allowed: the step also fits inside the end time and any explicit output
+    # interval (a 1e-18 s load with history_interval = 1e-7 s: the interval stands, the step is the load's)
+    given = [v for v in (scene.outputs.history_interval, scene.outputs.dump_interval) if isinstance(v, float)]
+    d["run"] = {"end_time": end, "timestep": min([dt, end, *given])}
     stop = scene.run.stop_after_contact
     if scene.run.end_time is None and stop is None and last is not None and not scene.outputs.snapshots:
         stop = last
@@ -381,7 +391,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     for key in ("history_interval", "dump_interval"):
         if getattr(o, key) == AUTO:
             step = d["run"]["timestep"]
-            stride = output_stride(omega, step, rtol_plan)
+            stride = min(output_stride(omega, step, rtol_plan), max(1, int(end // step)))  # within the run
             d["outputs"][key] = stride * step
             choices.append(
                 PlanChoice(
