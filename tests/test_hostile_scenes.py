@@ -368,7 +368,7 @@ def test_hostile_scene_files_are_planned_predicted_rendered_or_refused(tmp_path,
 
 @pytest.mark.slow
 @settings(
-    max_examples=300,
+    max_examples=100,
     deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.data_too_large],
 )

@@ -13,7 +13,7 @@ from granchain.workflows.run import run_reference
 
 from .conftest import make_scene_text
 
-SETTINGS = settings(max_examples=8, deadline=None, suppress_health_check=list(HealthCheck))
+SETTINGS = settings(max_examples=5, deadline=None, suppress_health_check=list(HealthCheck))
 HERTZ_MATERIALS = sorted(mat.MATERIALS)
 
 
