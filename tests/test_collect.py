@@ -16,6 +16,7 @@ from granchain.lammps.runner import read_results
 from granchain.rundir import read_peaks, read_summary
 from granchain.templates import RESULT_COLUMNS, RESULTS_DUMP
 from granchain.workflows.collect import CollectError, NotRefinedWarning, collect
+from tests.test_plan_and_user_errors import STEEL
 
 from .conftest import BILINEAR, make_scene_text
 
@@ -39,29 +40,8 @@ STRIKER_WALL = (
 STOPPED = make_scene_text(beads=60, end_time=4e-4, timestep=2e-8).replace("[run]\n", "[run]\nstop_after_contact = 20\n")
 
 
-#: a bilinear steel chain whose front decays far below the force scale (as tests/test_trust.py's STEEL)
-STEEL_DECAYING = """
-[chain]
-beads = 60
-radius = 4.76e-3
-[chain.material]
-density = 7850
-youngs_modulus = 200e9
-poisson_ratio = 0.3
-yield_strength = 1e9
-[contact]
-law = "bilinear"
-unloading_coeff = 0.6
-[loading]
-kind = "step"
-amplitude = 2000.0
-duration = 5e-5
-[run]
-timestep = "auto"
-end_time = "auto"
-[outputs]
-histories = [1, 10, 30]
-"""
+#: a bilinear steel chain whose front decays far below the force scale (test_plan_and_user_errors's STEEL)
+STEEL_DECAYING = STEEL.format(beads=60)
 
 
 def scene_arg(tmp_path: Path, scene: str) -> str:
