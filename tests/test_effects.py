@@ -205,7 +205,7 @@ def test_per_bead_material_list_and_uniform_lists():
     assert "taper" not in deck.deck and "1 atom types" in deck.data
 
 
-# ---- the effect registry (granchain.physics.effects, issue 13 item 2): properties every registered
+# ---- the effect registry (granchain.physics.effects): properties every registered
 # effect has, drawn over the registry (a new effect is tested by registering it)
 
 

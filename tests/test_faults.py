@@ -1,4 +1,4 @@
-"""Faults (issue 6): Ctrl-C or a killed process in the middle of a run, a full disk, a plugin that
+"""Faults: Ctrl-C or a killed process in the middle of a run, a full disk, a plugin that
 fails to build. Each gives a clear message, leaves no run directory that looks complete, and a
 rerun starts cleanly. These run the real `granchain` command in its own process."""
 

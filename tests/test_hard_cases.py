@@ -1,4 +1,4 @@
-"""Hard cases stay numerically stable (issue 6; the table is docs/hard-cases.md).
+"""Hard cases stay numerically stable (the table is docs/hard-cases.md).
 
 Each case runs the reference RK4, the reference velocity Verlet and LAMMPS (where it applies) and
 checks the invariants with bounds stated per integrator (derived, not fitted; omega = the planner's
@@ -180,7 +180,7 @@ def transitions(force_history):
         ("hertz", "", 'kind = "velocity"\nvelocity = 1.0', '[boundary]\nfar_end = "wall"\n'),
         # plastic free flight (Sec. III A): beads separate behind the wave and recollide
         ("bilinear", "unloading_coeff = 0.8\nplastic_stiffness = 2.43e7", None, ""),
-        # the same with Thornton's law (issue 14): yield, Hertzian unloading with the enlarged radius
+        # the same with Thornton's law: yield, Hertzian unloading with the enlarged radius
         ("thornton", "yield_pressure = 3.25e9", None, ""),
     ],
     ids=["hertz-rebound", "plastic-free-flight", "thornton-free-flight"],

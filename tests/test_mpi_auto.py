@@ -1,4 +1,4 @@
-"""--np auto (issue 18): MPI ranks only where they pay, by the measured crossover chain length."""
+"""--np auto: MPI ranks only where they pay, by the measured crossover chain length."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The deck's plugin pieces (issue 18) against the LAMMPS built-ins they replace and against the reference
+"""The deck's plugin pieces against the LAMMPS built-ins they replace and against the reference
 solver: the run watch's computes chain/fmax and chain/momentum, fix chain/nve, and the neighbour list
 checked every 10 steps with the pair style's stop at a dangerous build.
 

@@ -1,4 +1,4 @@
-"""Progress of long runs (issue 12): a tqdm bar on a terminal, plain lines otherwise, nothing when quiet;
+"""Progress of long runs: a tqdm bar on a terminal, plain lines otherwise, nothing when quiet;
 LAMMPS's progress is LAMMPS's own step count. A failed LAMMPS run leaves no work directory."""
 
 import io

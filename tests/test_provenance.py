@@ -1,4 +1,4 @@
-"""Provenance (issue 12, item 3): summary.json says which code, LAMMPS, Python, host, command, scene and
+"""Provenance: summary.json says which code, LAMMPS, Python, host, command, scene and
 plan made a run, and when; runs of one scene with different methods get different default names."""
 
 import hashlib

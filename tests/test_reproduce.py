@@ -1,4 +1,4 @@
-"""granchain reproduce (issue 17): the report's rows against docs/paper-discrepancies.md (its tables
+"""granchain reproduce: the report's rows against docs/paper-discrepancies.md (its tables
 parsed, not copied here), every figure present and not blank, a second call runs nothing, and the
 pieces (verdicts, report, command line, campaigns) checked cheaply without running anything."""
 
