@@ -142,9 +142,14 @@ def test_a_run_that_raises_closes_its_bar(monkeypatch):
     monkeypatch.setattr(gp, "DELAY", 0.0)
     monkeypatch.delenv("GRANCHAIN_QUIET", raising=False)
     term = Terminal()
-    with pytest.raises(KeyboardInterrupt), gp.Progress(1000, "demo", stream=term) as p:
-        p.update(300)
-        raise KeyboardInterrupt
+
+    def interrupted():
+        with gp.Progress(1000, "demo", stream=term) as p:
+            p.update(300)
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        interrupted()
     assert term.getvalue().endswith("\n") and "300/1000" in term.getvalue()  # a message after it starts a line
 
 

@@ -136,11 +136,14 @@ def write(tmp_path: Path, name: str, text: str) -> Path:
 def test_bad_cluster_tables_get_one_clear_message(table, message):
     campaign = 'backend = "lammps"\nranks = 2' if "cores_per_job" in table else 'backend = "reference"'
     text = campaign_text('[vary]\n"loading.amplitude" = [1.0]\n', campaign=campaign) + f"\n[cluster]\n{table}\n"
-    with pytest.raises(CampaignError, match=message):
-        c = parse_campaign(text)
-        from granchain.campaigns.api import cluster_settings
+    from granchain.campaigns.api import cluster_settings
 
-        cluster_settings(c, None, ranks=c.ranks)
+    def settings():
+        c = parse_campaign(text)
+        return cluster_settings(c, None, ranks=c.ranks)
+
+    with pytest.raises(CampaignError, match=message):
+        settings()
 
 
 def test_ranks_are_checked_before_anything_runs(tmp_path):
@@ -184,7 +187,7 @@ def test_the_worker_job_script_asks_for_ranks_times_workers_cores(kind):
     jc = cl.JobCluster(s, 2, None)
     with (
         mock.patch.object(cl.shutil, "which", return_value="/usr/bin/true"),
-        mock.patch.object(cl.JobCluster, "_submit", lambda self, n: None),  # the script only: nothing submitted
+        mock.patch.object(cl.JobCluster, "_submit", return_value=None),  # the script only: nothing submitted
     ):
         client = jc.start()
     try:
@@ -208,7 +211,7 @@ def test_without_memory_the_job_asks_for_none_and_takes_the_queues_default():
     jc = cl.JobCluster(cl.check(cl.ClusterSettings(kind="slurm", interface="lo")), 1, None)
     with (
         mock.patch.object(cl.shutil, "which", return_value="/usr/bin/true"),
-        mock.patch.object(cl.JobCluster, "_submit", lambda self, n: None),
+        mock.patch.object(cl.JobCluster, "_submit", return_value=None),
     ):
         client = jc.start()
     try:
