@@ -1,0 +1,73 @@
+"""Error bars on precompressed chains: the dynamic peaks (F - F0) of generated precompressed chains,
+with force ratios (dynamic force over F0) from 1e-3 to 1e3, get measured error bars on every backend,
+and each number is within [1/3, 3] of its true error (a run at a sixteenth of the step)."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from granchain.physics import materials as mat
+from granchain.scene import parse_scene
+from granchain.workflows.run import plan_for, run_scene
+
+from .conftest import make_scene_text
+
+HERTZ_MATERIALS = sorted(mat.MATERIALS)
+
+
+@st.composite
+def precompressed_chains(draw):
+    """A precompressed Hertz chain, uniform, tapered or a dimer, bead 1 kicked so that the dynamic
+    force is about `ratio` x F0 (linear estimate: v sqrt(k_lin m), k_lin = 3/2 K^(2/3) F0^(1/3))."""
+    n = draw(st.integers(15, 30), label="beads")
+    material = draw(st.sampled_from(HERTZ_MATERIALS), label="material")
+    shape = draw(st.sampled_from(["uniform", "taper", "dimer"]), label="shape")
+    f0 = 10 ** draw(st.floats(-1.0, 2.0), label="log10 F0")
+    ratio = 10 ** draw(st.floats(-3.0, 3.0), label="log10 force ratio")
+
+    def text(velocity):
+        t = make_scene_text(
+            beads=n, loading=f'kind = "velocity"\nvelocity = {velocity!r}', outputs="peak_force = true"
+        ).replace("end_time = 0.0002\ntimestep = 1e-08", 'end_time = "auto"\ntimestep = "auto"')
+        return t.replace('material = "brass"', f'material = "{material}"')
+
+    uniform = parse_scene(text(1.0) + f"[precompression]\nforce = {f0!r}\n")
+    k_lin = 1.5 * uniform.stiffness ** (2.0 / 3.0) * f0 ** (1.0 / 3.0)
+    chain = text(float(ratio * f0 / np.sqrt(k_lin * uniform.mass)))
+    if shape == "taper":
+        chain = chain.replace("radius = 4.76e-3", f"radius = 4.76e-3\ntaper = {draw(st.floats(0.9, 0.99))!r}")
+    elif shape == "dimer":
+        small = 4.76e-3 / draw(st.floats(1.1, 2.5), label="radius ratio")
+        chain = chain.replace("radius = 4.76e-3", f"radius = {[4.76e-3 if i % 2 == 0 else small for i in range(n)]!r}")
+    return parse_scene(chain + f"[precompression]\nforce = {f0!r}\n", source="precompressed.toml")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("integ", ["rk4", "verlet", "lammps"])
+@settings(max_examples=4, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
+@given(sc=precompressed_chains())
+def test_dynamic_peaks_get_truthful_error_bars(integ, sc):
+    """Every complete dynamic peak has an error bar or a status that says why not ("not measured"
+    is not a reason on a complete peak), at least one per chain has a number, and every number is
+    within [1/3, 3] of the distance to a run at a sixteenth of the step."""
+    backend, method = ("lammps", None) if integ == "lammps" else ("reference", integ)
+    sc, _ = plan_for(sc, backend, method, 1e-3)
+    sc = replace(sc, outputs=replace(sc.outputs, histories=(), snapshots=(), history_interval=None, dump_interval=None))
+    got = run_scene(sc, backend=backend, method=method, error_estimate=True)
+    fine = run_scene(replace(sc, run=replace(sc.run, timestep=sc.run.timestep / 16)), backend=backend, method=method)
+    a, b = got.solution, fine.solution
+    est = got.errors.peak_force
+    assert est is not None, got.errors.why_none
+    complete = a.complete & b.complete
+    assert complete.any(), "no complete peak: the chain is too short for the check"
+    statuses = [str(s) for s in est.status[complete]]
+    assert not any(s.startswith("not measured") for s in statuses), statuses
+    assert est.reliable[complete].any(), f"no error bar on {int(complete.sum())} complete dynamic peaks: {statuses}"
+    true = np.abs(a.peak_force - b.peak_force)
+    above = complete & (true > 1e3 * np.spacing(np.abs(a.peak_force)))
+    ok = above & est.reliable
+    ratio = est.error[ok] / true[ok]
+    assert np.all((ratio >= 1 / 3) & (ratio <= 3)), f"effectivity {np.sort(ratio)[[0, -1]]} on {int(ok.sum())} peaks"
