@@ -170,7 +170,8 @@ class Effect:
     # ---- energy
     @classmethod
     def in_problem(cls, problem) -> bool:
-        """The problem (a ChainProblem, also after with_ends) carries this effect."""
+        """The problem (a ChainProblem) carries this effect. An effect with external forces must
+        answer so after with_ends too: the reference's run watches ask the problem it integrates."""
         return False
 
     @classmethod

@@ -12,11 +12,26 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from typing_extensions import override
 
 from granchain.physics.effects.base import Bounds, Effect
 
 
 class DashpotEffect(Effect):
+    """A viscous dashpot between overlapping beads: dissipation proportional to the relative velocity.
+
+    While two beads overlap, their contact force is max(F(alpha) + gamma d(alpha)/dt, 0): the law's
+    force plus a dashpot of coefficient gamma, never pulling. The paper's chains lose energy only
+    by plasticity; its introduction cites dissipation tied to the beads' relative motion (its
+    Refs. 15 and 16), of which this is the linear form.
+
+    Scene keys: ``[damping] dashpot`` = gamma in N s/m (positive and finite). Deck block:
+    ``damping.lmp.j2`` in the "interactions" slot (ghost beads' velocities, which the pair style
+    needs), with ``dashpot gamma`` on the pair_style line; the energy it dissipates is the pair
+    style's per-atom ``d_edash``. LAMMPS's built-in granular pair style has no such damping, so a
+    dashpot scene has no yardstick.
+    """
+
     name = "dashpot"
     label = "[damping] dashpot"
     declaration = {"damping": {"dashpot": 3.0}}
@@ -30,14 +45,17 @@ class DashpotEffect(Effect):
     yardstick = "a dashpot (the yardstick has no damping)"
 
     @classmethod
+    @override
     def active(cls, scene) -> bool:
         return bool(scene.effects.dashpot)
 
     @classmethod
+    @override
     def in_problem(cls, problem) -> bool:
         return bool(problem.dashpot)
 
     @classmethod
+    @override
     def read(cls, section) -> dict[str, Any]:
         gamma = section.number(
             "dashpot", low=0.0, what="gamma in N s/m: force gamma x relative velocity while beads overlap"
@@ -46,23 +64,28 @@ class DashpotEffect(Effect):
         return {"dashpot": gamma}
 
     @classmethod
+    @override
     def to_dict(cls, effects) -> dict[str, Any] | None:
         return {"dashpot": effects.dashpot} if effects.dashpot else None
 
     @classmethod
+    @override
     def problem_fields(cls, scene, fields: dict[str, Any]) -> None:
         fields["dashpot"] = scene.effects.dashpot
 
     @classmethod
+    @override
     def chain_bounds(cls, scene, b: Bounds) -> None:
         b.gamma = float(scene.effects.dashpot)
 
     @classmethod
+    @override
     def reference_accel(cls, problem, law, inv_m: np.ndarray, fp: np.ndarray, alpha_hist: np.ndarray):
         gamma = float(problem.dashpot)
         return dashpot_accel(law, inv_m, gamma, fp, alpha_hist) if gamma else None
 
     @classmethod
+    @override
     def pair_style_args(cls, scene) -> str:
         return f" dashpot {float(scene.effects.dashpot)!r}"
 

@@ -11,11 +11,27 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from typing_extensions import override
 
 from granchain.physics.effects.base import Bounds, Effect
 
 
 class PrecompressionEffect(Effect):
+    """A static precompression F0: every contact starts loaded, and the wave travels on top of F0.
+
+    Bead 1 is pushed by F0 for the whole run, and the far end is held by the wall or, on a free
+    chain, by an equal pull on bead N; every contact starts in static equilibrium at F0 on its law's
+    virgin curve (``granchain.problem.initial_state``). The paper's chains are uncompressed; a
+    precompressed chain is linear about F0, and its observables are measured on the dynamic force
+    (a contact's force less F0). The static forces are external: they do work and the chain's
+    momentum is not conserved.
+
+    Scene keys: ``[precompression] force`` = F0 in N (positive and finite). Deck block:
+    ``precompression.lmp.j2`` in the "forces" slot (the push on bead 1, the pull on bead N when
+    there is no wall, and a law with history's alpha_max set to the static overlaps); the beads'
+    positions in the data file are the static equilibrium.
+    """
+
     name = "precompression"
     label = "[precompression]"
     declaration = {"precompression": {"force": 50.0}}
@@ -28,14 +44,17 @@ class PrecompressionEffect(Effect):
     deck_blocks = {"forces": "precompression.lmp.j2"}
 
     @classmethod
+    @override
     def active(cls, scene) -> bool:
         return bool(scene.effects.precompression)
 
     @classmethod
+    @override
     def in_problem(cls, problem) -> bool:
         return bool(problem.precompression)
 
     @classmethod
+    @override
     def read(cls, section) -> dict[str, Any]:
         f0 = section.number(
             "force",
@@ -47,14 +66,17 @@ class PrecompressionEffect(Effect):
         return {"precompression": f0}
 
     @classmethod
+    @override
     def to_dict(cls, effects) -> dict[str, Any] | None:
         return {"force": effects.precompression} if effects.precompression else None
 
     @classmethod
+    @override
     def problem_fields(cls, scene, fields: dict[str, Any]) -> None:
         fields["precompression"] = scene.effects.precompression
 
     @classmethod
+    @override
     def chain_bounds(cls, scene, b: Bounds) -> None:
         b.static_force = float(scene.effects.precompression)
         b.force = b.static_force + b.force  # every contact carries F0 on top of the wave
@@ -65,6 +87,7 @@ class PrecompressionEffect(Effect):
         return problem.wall_law is None and bool(np.isfinite(problem.mass[-1]))
 
     @classmethod
+    @override
     def static_forces(cls, problem, fp: np.ndarray) -> float:
         f0 = float(problem.precompression)
         if f0 and cls._free_end(problem):
@@ -72,6 +95,7 @@ class PrecompressionEffect(Effect):
         return f0  # the static push on bead 1 (the loading device)
 
     @classmethod
+    @override
     def work(cls, problem, dx_first, dx_last):
         f0 = problem.precompression
         if not f0:
@@ -79,6 +103,7 @@ class PrecompressionEffect(Effect):
         return f0 * dx_first - (f0 * dx_last if cls._free_end(problem) else 0.0)
 
     @classmethod
+    @override
     def watch_work(cls, problem, x_first: str, x_last: str) -> str:
         f0 = problem.precompression
         if not f0:
@@ -89,5 +114,6 @@ class PrecompressionEffect(Effect):
         return text
 
     @classmethod
+    @override
     def energy_columns(cls, layout) -> dict[str, tuple[str, str]]:
         return {"xN": (f"x[{layout.last_id}]", "x of bead N")}

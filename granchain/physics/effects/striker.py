@@ -11,11 +11,28 @@ import math
 from typing import Any
 
 import numpy as np
+from typing_extensions import override
 
 from granchain.physics.effects.base import Bounds, Effect
 
 
 class StrikerEffect(Effect):
+    """A striker: a sphere of its own radius, material and mass that hits bead 1 at a velocity.
+
+    The solvers integrate it as an extra bead in front of bead 1, moving at the load's velocity,
+    whose contact with bead 1 has the law of that pair (``scene.striker_law``). The paper loads its
+    chains with a force f(t) (Eq. 4); a striker is the experiments' load (the paper's Sec. II B
+    recalls that a heavier striker makes a longer load and a wave train). The results report its
+    contact's peak force and time and its final velocity (``striker_peak_force``,
+    ``striker_time_of_peak``, ``striker_velocity``).
+
+    Scene keys: none of its own; ``[loading] kind = "striker"`` declares it, with the striker's
+    ``velocity`` and optional ``radius``, ``material`` and ``mass`` (default: a bead's radius and
+    material, the mass from them); the [loading] reader validates them (``section`` is None).
+    Deck block: none of its own; its load is the ``loading_striker.lmp.j2`` block, chosen by
+    ``scene.loading.kind``; its atom is the ``striker`` atom type in front of bead 1.
+    """
+
     name = "striker"
     label = "a striker"
     declaration = {"loading": {"kind": "striker", "velocity": 2.0}}
@@ -24,18 +41,25 @@ class StrikerEffect(Effect):
     atom_type = "striker"
 
     @classmethod
+    @override
     def active(cls, scene) -> bool:
         return scene.loading.kind == "striker"
 
     @classmethod
+    @override
     def in_problem(cls, problem) -> bool:
+        # the problem as built from the scene: with_ends drops striker_mass (the striker is then the
+        # chain's first bead), so this is False after it; the striker's forces are internal
+        # (conserves_momentum), so no run watch needs it there
         return problem.striker_mass is not None
 
     @classmethod
+    @override
     def problem_fields(cls, scene, fields: dict[str, Any]) -> None:
         fields.update(striker_mass=scene.striker_mass, striker_law=scene.striker_law)
 
     @classmethod
+    @override
     def ends(cls, problem, parts: list, mass: np.ndarray) -> np.ndarray:
         if problem.striker_mass is None:
             return mass
@@ -43,6 +67,7 @@ class StrikerEffect(Effect):
         return np.concatenate(([problem.striker_mass], mass))
 
     @classmethod
+    @override
     def end_fields(cls, force: np.ndarray, time: np.ndarray, velocity: np.ndarray, last: int) -> dict[str, float]:
         return {
             "striker_peak_force": float(force[0]),
@@ -51,6 +76,7 @@ class StrikerEffect(Effect):
         }
 
     @classmethod
+    @override
     def end_bounds(cls, scene, b: Bounds) -> None:
         ms = scene.striker_mass
         ks = float(np.asarray(scene.striker_law.tangent_stiffness(b.force), dtype=float))
@@ -60,6 +86,7 @@ class StrikerEffect(Effect):
         b.extra["striker_damp"] = gamma / ms + gamma / math.sqrt(ms * m0)
 
     @classmethod
+    @override
     def data_atoms(cls, scene, types: dict[str, int], x: np.ndarray) -> list[tuple[int, float, float, float]]:
         # touching bead 1 from the left with no overlap in LAMMPS's arithmetic (bead 1 where the data file
         # puts it: displaced under precompression), of the requested mass exactly
@@ -73,6 +100,7 @@ class StrikerEffect(Effect):
         return [(types["striker"], ds, rho_s, x)]
 
     @classmethod
+    @override
     def pair_coeffs(cls, scene, types: dict[str, int]) -> list[tuple[int, int, Any, float]]:
         # only bead 1's kind meets the striker; LAMMPS needs every other kind's coefficients too
         ld, ts = scene.loading, types["striker"]

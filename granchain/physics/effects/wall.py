@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from typing_extensions import override
 
 from granchain.physics.effects.base import Bounds, Effect
 
@@ -17,6 +18,21 @@ FAR_ENDS = ("free", "wall")
 
 
 class WallEffect(Effect):
+    """A rigid wall at the far end: a flat touching bead N at t = 0, on which the wave reflects.
+
+    The paper's chain is semi-infinite (its far end free and never reached); with a wall, bead N
+    presses on an immovable flat with the wall's law (``scene.wall_law``: the chain's law for a bead
+    on a flat, R* = R and E* = E/(1-nu^2); for the bilinear law, twice the bead-bead k). The
+    solvers integrate it as an extra bead of zero inverse mass after bead N; the results report its
+    contact's peak force and time (``wall_peak_force``, ``wall_time_of_peak``). The wall takes
+    momentum: a walled chain does not conserve it.
+
+    Scene keys: ``[boundary] far_end`` = "free" (the default: no wall) or "wall". Deck block:
+    ``wall.lmp.j2`` in the "ends" slot (the wall's group, held at rest); its atom is the ``wall``
+    atom type after bead N. LAMMPS's built-in granular pair style would see it as a sphere, so a
+    walled scene has no yardstick.
+    """
+
     name = "wall"
     label = '[boundary] far_end = "wall"'
     declaration = {"boundary": {"far_end": "wall"}}
@@ -31,28 +47,34 @@ class WallEffect(Effect):
     atom_type = "wall"
 
     @classmethod
+    @override
     def active(cls, scene) -> bool:
         return scene.effects.far_end == "wall"
 
     @classmethod
+    @override
     def in_problem(cls, problem) -> bool:
         return problem.wall_law is not None or not bool(np.isfinite(problem.mass[-1]))
 
     @classmethod
+    @override
     def read(cls, section) -> dict[str, Any]:
         far_end = section.choice("far_end", FAR_ENDS)
         section.finish(cls.scene_keys)
         return {"far_end": far_end}
 
     @classmethod
+    @override
     def to_dict(cls, effects) -> dict[str, Any] | None:
         return {"far_end": effects.far_end} if effects.far_end != "free" else None
 
     @classmethod
+    @override
     def problem_fields(cls, scene, fields: dict[str, Any]) -> None:
         fields["wall_law"] = scene.wall_law
 
     @classmethod
+    @override
     def ends(cls, problem, parts: list, mass: np.ndarray) -> np.ndarray:
         if problem.wall_law is None:
             return mass
@@ -60,10 +82,12 @@ class WallEffect(Effect):
         return np.append(mass, np.inf)
 
     @classmethod
+    @override
     def end_fields(cls, force: np.ndarray, time: np.ndarray, velocity: np.ndarray, last: int) -> dict[str, float]:
         return {"wall_peak_force": float(force[last]), "wall_time_of_peak": float(time[last])}
 
     @classmethod
+    @override
     def end_bounds(cls, scene, b: Bounds) -> None:
         # a neighbour of infinite mass: only the diagonal term; its contact sees the reflected wave,
         # up to twice the force
@@ -72,6 +96,7 @@ class WallEffect(Effect):
         b.extra["wall"] = kw
 
     @classmethod
+    @override
     def data_atoms(cls, scene, types: dict[str, int], x: np.ndarray) -> list[tuple[int, float, float, float]]:
         # the rigid flat: an atom at bead N's surface, never integrated; touching it with zero force and no
         # overlap in LAMMPS's arithmetic (touching_positions), unless precompression presses bead N into it
@@ -83,6 +108,7 @@ class WallEffect(Effect):
         return [(types["wall"], 2.0 * r, scene.bead_materials[-1].density, x)]
 
     @classmethod
+    @override
     def pair_coeffs(cls, scene, types: dict[str, int]) -> list[tuple[int, int, Any, float]]:
         # contact distance: bead centre to the flat, R. Only bead N's kind meets the wall; LAMMPS needs
         # every other kind's coefficients too (each kind's own law on the flat)
