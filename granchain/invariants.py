@@ -53,6 +53,23 @@ def energy_violation(balance_error: float, scale: float, bound: float = ENERGY_W
 
 
 def momentum_violation(momentum: float, expected: float, bound: float = MOMENTUM_WATCH) -> str | None:
+    """The detail text if the total momentum misses the expected one by more than bound x the larger.
+
+    Parameters
+    ----------
+    momentum : float
+        The chain's total momentum (kg m/s).
+    expected : float
+        The initial momentum plus the impulse the load delivered so far (kg m/s): what a chain
+        whose forces are all between its beads keeps, to round-off.
+    bound : float
+        Relative bound, MOMENTUM_WATCH by default.
+
+    Returns
+    -------
+    str or None
+        What broke, with both numbers and the bound; None when the momentum is kept.
+    """
     scale = max(abs(momentum), abs(expected))
     if scale > 0.0 and not abs(momentum - expected) <= bound * scale:
         return (

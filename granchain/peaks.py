@@ -14,8 +14,8 @@ import numpy as np
 from granchain.physics.estimates import expected_peak_force
 
 #: A contact counts as reached by the wave when its peak force exceeds this fraction of the largest
-#: peak in the chain. Below it a "peak" is round-off: LAMMPS places bead i at x = (i-1) D, and the
-#: difference of two such positions misses D by an ulp, a spurious overlap of ~1e-18 m.
+#: peak in the chain. Below it a "peak" is round-off: an ulp of a bead's position is an overlap of
+#: ~1e-18 m (granchain.physics.positions places LAMMPS's beads so that at-rest contacts have none).
 REACHED_FRACTION = 1e-9
 
 
@@ -96,7 +96,7 @@ def complete_peaks(
 def stop_force_floor(scene) -> float:
     """The smallest peak that counts as the leading wave for [run] stop_after_contact (both backends):
     the static force plus REACHED_FRACTION of the largest expected force. Round-off forces ahead of
-    the wave (LAMMPS's positions miss D by an ulp: ~1e-11 N on a linear contact) stay far below.
+    the wave (an ulp of overlap: ~1e-11 N on a linear contact) stay far below.
     Under precompression the chain is linear about F0 and carries precursors ahead of the front (the
     integrator's dispersion too: a 300-bead brass chain at F0 = 100 N, a 0.1 N step, stopped at 2 dt
     on one a millisecond before the front): there the leading pulse's floor (lead_floor)."""

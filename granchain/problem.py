@@ -23,7 +23,7 @@ class ChainProblem:
     amplitude: float = 0.0  # A, N
     duration: float = 0.0  # T, s
     initial_velocity: float = 0.0  # m/s of bead 1 at t = 0
-    wall_law: ContactLaw | None = None  # far end: None free, else bead N on a rigid flat (same law)
+    wall_law: ContactLaw | None = None  # far end: None free, else bead N on a rigid flat (scene.wall_law)
     striker_mass: float | None = None  # a striker before bead 1 (moving at initial_velocity), or None
     striker_law: ContactLaw | None = None  # its contact with bead 1
     dashpot: float = 0.0  # gamma, N s/m, while beads overlap; the total force never pulls
@@ -33,6 +33,7 @@ class ChainProblem:
 
     @property
     def beads(self) -> int:
+        """Number of beads the problem integrates (with_ends: the effects' extra beads included)."""
         return int(self.mass.shape[0])
 
     @classmethod

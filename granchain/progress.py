@@ -137,9 +137,11 @@ class Progress:
             self._bar = None
 
     def __enter__(self) -> Progress:
+        """The progress itself: ``with Progress(...) as p``."""
         return self
 
     def __exit__(self, *exc) -> None:
+        """Close the display, whether the run ended or raised (the exception propagates)."""
         self.close()
 
     # ---- display

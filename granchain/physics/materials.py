@@ -87,17 +87,18 @@ def effective_radius(radius: float) -> float:
 
 
 def bead_mass(m: Material, radius: float) -> float:
-    """m = rho 4/3 pi R^3."""
+    """Mass of a bead of material m and radius R: rho 4/3 pi R^3."""
     return m.density * 4.0 / 3.0 * math.pi * radius**3
 
 
 def hertz_contact_stiffness(e_star: float, r_star: float) -> float:
-    """k = 4 E* sqrt(R*) / 3, so that F = k alpha^(3/2) (text after Eq. 14; Johnson for any pair)."""
+    """Hertz constant k = 4 E* sqrt(R*) / 3, so that F = k alpha^(3/2) (Eq. 16; defined after Eq. 14;
+    Johnson for any pair)."""
     return 4.0 * e_star * math.sqrt(r_star) / 3.0
 
 
 def hertz_stiffness(m: Material, radius: float) -> float:
-    """k of two identical beads (the paper's chain)."""
+    """Hertz constant k of two identical beads (the paper's chain, Eq. 16)."""
     return hertz_contact_stiffness(effective_modulus(m), effective_radius(radius))
 
 
@@ -113,8 +114,9 @@ YIELD_PRESSURE_FACTOR = 1.61
 
 
 def lacking_yield_strength(chain) -> str:
-    """ "" when every bead material of the chain has a yield_strength, else what to add, naming the
-    materials without one (the plastic laws' mixing rules read it)."""
+    """What the chain's materials lack for a plastic law: "" when every bead material has a
+    yield_strength, else what to add, naming the materials without one (the plastic laws' mixing
+    rules read it)."""
     names = chain.materials if chain.materials is not None else (chain.material_name,)
     if chain.materials is None:
         missing = [] if chain.material.yield_strength is not None else [chain.material_name or "[chain.material]"]
@@ -134,18 +136,18 @@ def plastic_stiffness_from_yield(yield_strength: float, radius: float) -> float:
 
 
 def time_scale(m: Material, radius: float) -> float:
-    """tau = sqrt(pi rho R*^2 / (4 E*)), the chain's intrinsic time scale (Eq. 7)."""
+    """The chain's intrinsic time scale tau = sqrt(pi rho R*^2 / (4 E*)) (Eq. 7)."""
     rs = effective_radius(radius)
     return math.sqrt(math.pi * m.density * rs**2 / (4.0 * effective_modulus(m)))
 
 
 def force_scale(m: Material, radius: float) -> float:
-    """E* R*^2: F~ = F / (E* R*^2) (Eq. 5)."""
+    """The force scale E* R*^2 of the nondimensional force F~ = F / (E* R*^2) (Eq. 5)."""
     return effective_modulus(m) * effective_radius(radius) ** 2
 
 
 def impulse_scale(m: Material, radius: float) -> float:
-    """E* R*^2 tau: I~ = I / (E* R*^2 tau) (Eq. 6)."""
+    """The impulse scale E* R*^2 tau of the nondimensional impulse I~ = I / (E* R*^2 tau) (Eq. 6)."""
     return force_scale(m, radius) * time_scale(m, radius)
 
 

@@ -33,6 +33,8 @@ class Comparison:
 
     @property
     def ok(self) -> bool:
+        """Every quantity agrees within rtol plus both runs' measured errors (CompareRow.ok: one that
+        only one run measured fails, one that neither measured does not)."""
         return all(r.ok for r in self.rows)
 
     def disagreements(self) -> list[str]:
@@ -40,6 +42,7 @@ class Comparison:
         return [r.quantity for r in self.rows if not r.ok]
 
     def __repr__(self) -> str:
+        """A few lines: the scene, both runs' methods and steps, rtol and the verdict (which differ)."""
         title = printable(self.lammps.scene.title or self.lammps.scene.source or "untitled scene", 120)
         bad = self.disagreements()
         verdict = "all agree" if not bad else f"{len(bad)} differ: {', '.join(bad)}"
