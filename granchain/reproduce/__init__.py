@@ -47,6 +47,8 @@ def campaign_specs(quick: bool) -> dict[str, dict]:
 
 
 def run_section(ctx: Context, name: str, title: str) -> SectionResult:
+    """One section of the report: its module's ``run(ctx)``. A section whose module is missing or
+    raises is reported as not reproduced (with the traceback in its notes), and the others still run."""
     try:
         mod = importlib.import_module(f"granchain.reproduce.{name}")
     except ModuleNotFoundError as exc:
@@ -120,6 +122,8 @@ def reproduce(
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``granchain reproduce`` command line: the mode (--quick, the default, or --full), --out,
+    where campaign points run (--workers or --scheduler), --section and --quiet."""
     p = argparse.ArgumentParser(
         prog="granchain reproduce",
         description="Regenerate the paper's figures and printed numbers, with verdicts (docs/reproduce.md).",

@@ -40,6 +40,12 @@ class Row:
     verdict: str = ""
 
     def judge(self) -> Row:
+        """Give the row its verdict, unless it has one already; returns the row.
+
+        "not yet reproduced" without a finite value of ours, "no comparison" without a printed
+        value, else "agrees" when |ours - paper| <= tol |paper| + our error bar (tol: the row's, or
+        half a unit of the printed number's last digit), and "disagrees" otherwise.
+        """
         if self.verdict:
             return self
         if self.ours is None or not math.isfinite(self.ours):
@@ -62,12 +68,18 @@ def printed_precision(text: str, value: float) -> float:
 
 @dataclass
 class Figure:
+    """A figure of a section: the file OUT/figures/<name>.png and its caption in the report."""
+
     name: str  # file stem under OUT/figures
     caption: str  # what it shows, and how it differs from the paper's
 
 
 @dataclass
 class SectionResult:
+    """One section of the report: the printed numbers it checks (rows), its figures and notes,
+    whether it reproduced its part of the paper, and the campaigns it ran with their cost beside
+    the paper's."""
+
     key: str
     title: str
     rows: list[Row] = field(default_factory=list)
@@ -82,6 +94,7 @@ class SectionResult:
 
 
 def not_yet(key: str, title: str, why: str) -> SectionResult:
+    """A section that is not reproduced, with why in its notes."""
     return SectionResult(key, title, notes=[f"Not yet reproduced: {why}"], reproduced=False)
 
 
@@ -97,10 +110,13 @@ class Context:
 
     @property
     def mode(self) -> str:
+        """The mode, "quick" or "full": the prefix of every campaign's workspace name."""
         return "quick" if self.quick else "full"
 
     def campaign(self, name: str, spec: dict):
-        """Run (or find complete) one campaign in OUT/ws/<mode>-<name>; its points table."""
+        """Run (or find complete) one campaign in OUT/ws/<mode>-<name>; returns that workspace
+        directory (``points`` reads its table) and keeps the campaign's report (points run, cached,
+        failed) for the report's metadata."""
         from granchain.campaigns.api import run_campaign
 
         ws = self.out / "ws" / f"{self.mode}-{name}"
@@ -110,6 +126,7 @@ class Context:
         return ws
 
     def figure(self, fig, name: str) -> Path:
+        """Save a matplotlib figure as OUT/figures/<name>.png and close it; returns the path."""
         path = self.fig_dir / f"{name}.png"
         fig.savefig(path, dpi=110)
         import matplotlib.pyplot as plt
@@ -131,11 +148,13 @@ def points(ws: Path):
 
 
 def failed(df) -> list[str]:
+    """What went wrong at the points of a campaign table that are not done: "status: message" each."""
     bad = df[df["status"] != "done"]
     return [f"{r.get('status')}: {r.get('message')}" for _, r in bad.iterrows()]
 
 
 def cost_of(*tables) -> dict:
+    """What the done points of campaign tables cost together: runs, wall_time (s) and bead_steps."""
     runs, wall, bs = 0, 0.0, 0.0
     for df in tables:
         done = df[df["status"] == "done"]
@@ -146,23 +165,27 @@ def cost_of(*tables) -> dict:
 
 
 def read_csv(path: Path) -> dict[str, np.ndarray]:
+    """A CSV file with a header row, as one array per column name."""
     data = np.genfromtxt(path, delimiter=",", names=True, ndmin=1, dtype=None, encoding="utf-8")
     return {n: np.asarray(data[n]) for n in data.dtype.names}
 
 
 def peaks(run: Path) -> dict[str, np.ndarray]:
+    """A run directory's peaks.csv, one array per column (granchain.rundir.read_peaks)."""
     from granchain.rundir import read_peaks
 
     return read_peaks(run)
 
 
 def summary(run: Path) -> dict:
+    """A run directory's summary.json (granchain.rundir.read_summary)."""
     from granchain.rundir import read_summary
 
     return read_summary(run)
 
 
 def histories(run: Path) -> dict[str, np.ndarray]:
+    """A run directory's histories.csv, one array per column (time, force_<i>, velocity_<i>)."""
     return read_csv(Path(run) / "histories.csv")
 
 
@@ -185,6 +208,7 @@ def observable(run: Path, name: str) -> tuple[float | None, float | None]:
 
 
 def scene_of(run: Path):
+    """The scene a run directory was run from (its scene.toml: the scene as given)."""
     from granchain.scene import load_scene
 
     return load_scene(Path(run) / "scene.toml")

@@ -36,6 +36,8 @@ WHY_SPEEDS = (
 
 
 def campaign(quick: bool) -> dict:
+    """The bundled elastic-step-40N scene (A = 40 N, T = 10 ms) on LAMMPS with error bars: quick
+    150 beads to 2.5 ms, full 5000 beads to 100 ms as the paper's Fig. 2."""
     size = (
         {"chain.beads": [150], "run.end_time": [2.5e-3], "outputs.snapshots": [[1e-3, 2.5e-3]],
          "outputs.window": [[30, 100]], "outputs.histories": [[1, 2, 3, 50]]}
@@ -157,6 +159,8 @@ def _figure(ctx: Context, run, sc, fp) -> Figure:
 
 
 def run(ctx: Context) -> SectionResult:
+    """The section: the bounds c^l and c^u (Eqs. 19 and 15) and their forces, the measured front
+    speed and leading peak force, T/tau of Sec. II B, each against its printed value; and Fig. 2."""
     res, df = campaign_section(ctx, KEY, TITLE, "elastic", campaign(ctx.quick), __doc__)
     res.paper_cost = "RK4 at 5e-9 s to t = 100 ms: about 5000 beads (the front at 473 m/s), 2e7 steps"
     res.paper_bead_steps = 5000 * 0.1 / 5e-9
@@ -175,10 +179,12 @@ def run(ctx: Context) -> SectionResult:
 
 
 def scene_of_base():
+    """The bundled elastic-step-40N scene: the section's rows from the models when its run failed."""
     from granchain.scene import load_scene
 
     return load_scene("elastic-step-40N")
 
 
 def campaign_specs(quick: bool) -> dict[str, dict]:
+    """The section's campaigns by workspace name (without the mode prefix)."""
     return {"elastic": campaign(quick)}

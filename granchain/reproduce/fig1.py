@@ -25,6 +25,9 @@ MAIN_CONTACT = 20
 
 
 def campaign(quick: bool, contact: int) -> dict:
+    """The shipped fig1-transition search for one definition of the transition: pulses counted at
+    `contact` on a chain of 2 `contact` beads, amplitudes 1 N to 1 kN (quick, 3) or 1 N to 10 kN
+    (full, 9), bisection in log T to 2% (quick) or 0.2% (full)."""
     spec = tomllib.loads(resources.files("granchain.campaigns").joinpath("fig1-transition.toml").read_text())
     spec["vary"] = {
         "loading.amplitude": [1.0, 31.6227766017, 1000.0] if quick else {"log": [1.0, 1e4], "num": 9},
@@ -37,7 +40,22 @@ def campaign(quick: bool, contact: int) -> dict:
 
 
 def fit(amplitude: np.ndarray, t: np.ndarray, rel_err: np.ndarray) -> dict:
-    """log T = log P + s log A by least squares; s's error: the fit's standard error or the brackets'."""
+    """Fit the power law T = P A^s, as log T = log P + s log A by least squares.
+
+    Parameters
+    ----------
+    amplitude, t : numpy.ndarray
+        The load amplitudes (N) and the transition loading times found at them (s).
+    rel_err : numpy.ndarray
+        Each transition time's relative error: half its final bisection bracket over T.
+
+    Returns
+    -------
+    dict
+        ``exponent`` s, ``prefactor`` P (s N^-s), ``stderr`` the fit's standard error of s (nan
+        below three points), and ``error`` the larger of that and the error the brackets alone
+        leave in s.
+    """
     x, y = np.log(amplitude), np.log(t)
     a = np.vstack([np.ones_like(x), x]).T
     (b, s), res, *_ = np.linalg.lstsq(a, y, rcond=None)
@@ -84,6 +102,8 @@ def _figure(ctx: Context, fits: dict, data: dict) -> Figure:
 
 
 def run(ctx: Context) -> SectionResult:
+    """The section: the transition's exponent against the paper's -1/6, the prefactor of each
+    definition (not printed), and Fig. 1."""
     res = SectionResult(KEY, TITLE)
     fits, data, tables = {}, {}, []
     for n in contacts(ctx.quick):
@@ -136,8 +156,10 @@ def run(ctx: Context) -> SectionResult:
 
 
 def contacts(quick: bool) -> list[int]:
+    """The contacts whose pulses define the transition: 20 (the main definition), 10, and 30 in full."""
     return [MAIN_CONTACT, 10] if quick else [MAIN_CONTACT, 10, 30]
 
 
 def campaign_specs(quick: bool) -> dict[str, dict]:
+    """The section's campaigns by workspace name (without the mode prefix)."""
     return {f"fig1-contact{n}": campaign(quick, n) for n in contacts(quick)}

@@ -38,11 +38,15 @@ def _brass():
 
 
 def f8(impulse: float) -> float:
+    """F_8(I): Eq. 8's peak force of a single solitary wave for the impulse I on the paper's brass
+    chain, the force the normalisation divides by."""
     sc = _brass()
     return models.short_load_peak_force(impulse, sc.mass, sc.e_star, sc.r_star)
 
 
 def grid(quick: bool) -> tuple[list[float], list[float], list[float]]:
+    """The campaign's points as (impulses, amplitudes, durations), zipped: at each impulse, the
+    amplitudes A = x F_8(I) for x from 0.01 to 100 (5 quick, 13 full, evenly in log), T = I/A."""
     impulses = [0.01, 0.1] if quick else [0.005, 0.02, 0.1, 0.4]
     xs = np.geomspace(0.01, 100.0, 5 if quick else 13)
     amp = [float(f"{x * f8(i):.6g}") for i in impulses for x in xs]
@@ -52,6 +56,9 @@ def grid(quick: bool) -> tuple[list[float], list[float], list[float]]:
 
 
 def campaign(quick: bool) -> dict:
+    """A brass Hertz chain under step loads of the grid's impulses and amplitudes, on LAMMPS planned
+    for rtol 1e-3 (beads, end time and step "auto"), with error bars; the leading peak over the
+    window of contacts 20-40 (quick) or 50-150 (full)."""
     imp, amp, dur = grid(quick)
     window = [20, 40] if quick else [50, 150]
     return {
@@ -106,6 +113,8 @@ def _figure(ctx: Context, df, scale: float) -> Figure:
 
 
 def run(ctx: Context) -> SectionResult:
+    """The section: Fig. 3 (a) and (b), the short-load limit F_p/F_8 against Eq. 8's 1, and how well
+    the points collapse onto one curve (neither is printed in the paper)."""
     res, df = campaign_section(ctx, KEY, TITLE, "fig3", campaign(ctx.quick), __doc__)
     res.paper_cost = "RK4 at 5e-9 s; impulses, amplitudes and chain lengths not given"
     done = df[df["status"] == "done"].copy()
@@ -135,4 +144,5 @@ def run(ctx: Context) -> SectionResult:
 
 
 def campaign_specs(quick: bool) -> dict[str, dict]:
+    """The section's campaigns by workspace name (without the mode prefix)."""
     return {"fig3": campaign(quick)}

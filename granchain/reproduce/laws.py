@@ -20,6 +20,9 @@ LAWS = ("thornton", "bilinear")
 
 
 def campaigns() -> dict[str, dict]:
+    """One campaign per law, by law name: the bundled thornton-short-impulse scene under Thornton's
+    law and under its bilinear equivalent (granchain.workflows.laws.equivalent_contact), each on
+    LAMMPS planned for rtol 1e-3, with error bars. The same in both modes."""
     from granchain.scene import load_scene, scene_to_dict
     from granchain.workflows.laws import equivalent_contact, scene_with_law
 
@@ -46,6 +49,9 @@ def _curve(run) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def run(ctx: Context) -> SectionResult:
+    """The section: each law's peak force along the chain fitted exponential-then-inverse, the fits
+    side by side (no printed numbers: the paper's nonlinear law is not printed), a verdict in the
+    notes, and the figure."""
     res = SectionResult(KEY, TITLE)
     curves, fits, tables = {}, {}, []
     for law, spec in campaigns().items():
@@ -121,4 +127,5 @@ def _figure(ctx: Context, curves, fits) -> Figure:
 
 
 def campaign_specs(quick: bool) -> dict[str, dict]:
+    """The section's campaigns by workspace name (without the mode prefix); `quick` changes nothing."""
     return {f"laws-{law}": spec for law, spec in campaigns().items()}

@@ -13,6 +13,7 @@ ROW_HEADER = ["key", "quantity", "unit", "paper", "ours", "+-", "model", "verdic
 
 
 def fmt(x, digits: int = 4) -> str:
+    """A table cell: a number to `digits` significant digits, "" for None and non-finite, else str."""
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return ""
     if isinstance(x, (int, float)):
@@ -21,6 +22,7 @@ def fmt(x, digits: int = 4) -> str:
 
 
 def row_cells(r) -> list[str]:
+    """A Row's cells, in ROW_HEADER's order."""
     if r.paper is None:
         tol = ""
     else:
@@ -30,6 +32,8 @@ def row_cells(r) -> list[str]:
 
 
 def cost_cells(s: SectionResult) -> list[str]:
+    """A section's line of the cost table, in COST_HEADER's order: our runs, wall time and
+    bead-steps beside the paper's setup and the bead-steps it implies."""
     c = s.cost or {}
     return [
         s.title,
@@ -50,6 +54,7 @@ COST_HEADER = ["section", "our runs", "our wall time (s)", "our bead-steps", "th
 
 
 def cost_rows(sections: list[SectionResult]) -> list[list[str]]:
+    """The cost table: a line per section with a cost (ours or the paper's), and the total."""
     rows = [cost_cells(s) for s in sections if s.cost or s.paper_cost]
     total = {k: sum((s.cost or {}).get(k, 0) for s in sections) for k in ("runs", "wall_time", "bead_steps")}
     paper = sum(s.paper_bead_steps or 0 for s in sections)
@@ -64,6 +69,8 @@ def _md_table(header, rows) -> list[str]:
 
 
 def write_markdown(out: Path, sections: list[SectionResult], meta: dict) -> Path:
+    """Write OUT/report.md: every printed number in one table, then each section (notes, rows,
+    figures) and the cost table; returns its path."""
     lines = [
         "# Reproducing Pal & Geubelle, *Wave propagation in elastic and elastoplastic granular chains*",
         "",
@@ -109,6 +116,8 @@ def _cls(c) -> str:
 
 
 def write_html(out: Path, sections: list[SectionResult], meta: dict) -> Path:
+    """Write OUT/report.html, the same report in one self-contained page (figures embedded as base64
+    PNG, verdicts coloured); returns its path."""
     parts = [
         "<!doctype html><html><head><meta charset='utf-8'><title>granchain reproduce</title><style>",
         "body{font-family:sans-serif;max-width:1200px;margin:auto}table{border-collapse:collapse;font-size:12px}"

@@ -47,10 +47,12 @@ TABLE1_SOURCE = "Table I's largest numerical-vs-predicted gap, which the paper c
 
 
 def timestep(quick: bool) -> float:
+    """The LAMMPS run's time step: 2e-7 s quick, the scene's 5e-8 s full."""
     return 2e-7 if quick else 5e-8
 
 
 def campaign(quick: bool) -> dict:
+    """The bundled plastic-long-load-table1 scene on LAMMPS at the mode's time step."""
     # no Richardson companions: the error bars come from the RK4 campaign (error_bars)
     return {
         "campaign": {
@@ -152,6 +154,8 @@ def _figure(ctx: Context, run, sc, got: dict, model: dict) -> Figure:
 
 
 def run(ctx: Context) -> SectionResult:
+    """The section: Table I's v_1, v_t, v_2, F_2 and x_t measured with error bars, against the
+    paper's numerical column, beside Eqs. 35-38 as derived; F_1 (not printed); and Fig. 9."""
     res, df = campaign_section(ctx, KEY, TITLE, "table1", campaign(ctx.quick), __doc__)
     res.paper_cost = "RK4 at 5e-9 s to 5.2 ms on a chain the fronts do not leave: about 500 beads, 1.04e6 steps"
     res.paper_bead_steps = 500 * 5.2e-3 / 5e-9
@@ -205,4 +209,5 @@ def run(ctx: Context) -> SectionResult:
 
 
 def campaign_specs(quick: bool) -> dict[str, dict]:
+    """The section's campaigns by workspace name (without the mode prefix)."""
     return {"table1": campaign(quick), "table1-rk4": rk4_campaign(quick)}
