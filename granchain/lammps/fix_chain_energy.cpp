@@ -224,8 +224,7 @@ void FixChainEnergy::sample(bool check)
   const double a = std::fabs(rel);
   const double value = (rel / (a + 1e-300)) * (fmax->vector[1] + 0.5 * (a + 0.999 - std::fabs(a - 0.999)));
   flush();
-  error->all(FLERR, "Fix chain/energy condition watch_energy met on step {} with value {}", update->ntimestep,
-             value);
+  error->all(FLERR, "Fix chain/energy condition watch_energy met on step {} with value {}", update->ntimestep, value);
 }
 
 void FixChainEnergy::flush()

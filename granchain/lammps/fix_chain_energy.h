@@ -52,10 +52,10 @@ class FixChainEnergy : public Fix {
     std::string name;    // VARIABLE
     int ivar;
   };
-  FILE *fp;                    // rank 0 (none with FILE none)
-  std::string buffer;          // rank 0: lines not yet written
-  tagint first;                // bead 1's atom ID
-  std::string dissipated_id;   // "" none
+  FILE *fp;                     // rank 0 (none with FILE none)
+  std::string buffer;           // rank 0: lines not yet written
+  tagint first;                 // bead 1's atom ID
+  std::string dissipated_id;    // "" none
   std::vector<Extra> extras;
   bool watch;
   double bound;
