@@ -161,6 +161,86 @@ def test_join_keeps_each_group(name):
     assert np.allclose(f[:2], a.force(alpha[:2], 0.0)) and np.allclose(f[2:], b.force(alpha[2:], 0.0))
 
 
+# ---- the law's models (rule 8): declared in model_domains, and every model it gives or draws is declared
+
+#: a scene of every kind a law's models are for: the paper's chain under a short and a long load, a
+#: two-body impact, one bead struck or on the wall, a precompressed chain ([section] lines besides
+#: [contact]; the law's example contact is added)
+MODEL_SCENES = {
+    "short impulse": (30, 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6', ""),
+    "long step": (200, 'kind = "step"\namplitude = 40.0\nduration = 1e-2', ""),
+    "two-bead impact": (2, 'kind = "velocity"\nvelocity = 1.0', ""),
+    "struck bead": (1, 'kind = "striker"\nvelocity = 1.0', ""),
+    "bead on the wall": (1, 'kind = "velocity"\nvelocity = 1.0', '[boundary]\nfar_end = "wall"\n'),
+    "precompressed chain": (30, 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6', "[precompression]\nforce = 10.0\n"),
+}
+
+
+def model_scenes(name):
+    """The scenes of MODEL_SCENES the law accepts."""
+    from granchain.scene import SceneError, parse_scene
+
+    from .conftest import make_scene_text
+
+    out = {}
+    for kind, (beads, loading, extra) in MODEL_SCENES.items():
+        try:
+            out[kind] = parse_scene(
+                make_scene_text(beads=beads, law=name, loading=loading) + extra, source=f"{kind}.toml"
+            )
+        except SceneError:
+            continue
+    return out
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+def test_model_tables_name_declared_models(name):
+    from granchain.physics.laws.base import MODEL_NEEDS
+
+    cls = LAWS[name]
+    assert set(cls.model_domains.values()) <= set(MODEL_NEEDS), cls.model_domains
+    for quantity, candidates in cls.compare_models.items():
+        assert candidates, quantity
+        for model, label in candidates:
+            assert model in cls.model_domains and label, (quantity, model)
+    # a model name is one law's: the predictions' table of domains (name -> law) keeps one owner
+    for other, c in LAWS.items():
+        if other != name:
+            assert not set(cls.model_domains) & set(c.model_domains), (name, other)
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+def test_every_model_a_law_gives_or_draws_is_declared(name):
+    from granchain.physics.predictions import applicability
+
+    cls = LAWS[name]
+    scenes = model_scenes(name)
+    assert {"short impulse", "long step", "two-bead impact"} <= set(scenes)
+    given: set[str] = set()
+    for kind, sc in scenes.items():
+        fields = cls.predictions(sc)
+        names = [f["name"] for f in fields]
+        assert len(names) == len(set(names)) and set(names) <= set(cls.model_domains), (kind, names)
+        values = {f["name"]: f["value"] for f in fields}
+        for obs in ({}, {"leading_peak_force": 100.0}):
+            measured = cls.measured_models(sc, values, obs)
+            assert set(measured) <= set(cls.model_domains) - set(names), (kind, measured)
+            given |= set(measured)
+        given |= set(names)
+        asked = []
+
+        def applies(model, label, sc=sc, asked=asked):
+            asked.append(model)
+            return applicability(model, sc).applies
+
+        contacts = np.arange(1.0, max(sc.chain.beads, 2))
+        curves = cls.model_curves(sc, contacts, applies)
+        assert set(asked) <= set(cls.model_domains), (kind, asked)
+        assert len(curves) <= len(asked) and all(np.shape(y) == contacts.shape for y in curves.values())
+    # every declared model is given on some scene it is for
+    assert given == set(cls.model_domains), sorted(set(cls.model_domains) - given)
+
+
 # ---- Thornton (1997): the law as written in issue 14
 
 

@@ -153,6 +153,23 @@ def inverse_decay_exponent(beta: float) -> float:
     return (1.0 + beta) / 2.0
 
 
+def leading_peaks_exponential(first_peak: float, decay: float, n: int):
+    """Leading peak force at contacts 1..n in the exponential regime (Eq. 27)."""
+    return [first_peak * math.exp(-decay * i) for i in range(n)]
+
+
+def transition_contact(
+    first_peak: float, decay: float, k_u: float, mass: float, omega: float, n_contacts: int
+) -> int | None:
+    """First contact (1-based) where Eq. 30's secondary peak exceeds Eq. 27's leading peak."""
+    lead = leading_peaks_exponential(first_peak, decay, n_contacts)
+    for i in range(1, n_contacts):
+        fs = secondary_wave_peak_force(lead[0] - lead[i], k_u, mass, omega)
+        if fs > lead[i]:
+            return i + 1
+    return None
+
+
 #: Hertz impact: the contact lasts HERTZ_IMPACT_DURATION delta_max / v (Johnson, Contact Mechanics,
 #: 1985, Sec. 11.1: t = 2.94 delta_max / v, the integral 2 int_0^1 dx / sqrt(1 - x^(5/2)))
 HERTZ_IMPACT_DURATION = 2.9432

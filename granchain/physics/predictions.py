@@ -4,13 +4,25 @@ scene is inside it (:func:`applicability`, the one place that rule lives: `granc
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass, replace
 from typing import NamedTuple
 
-from granchain.physics import models
 from granchain.physics.laws import LAWS
+from granchain.physics.laws.base import EFFECT_DOMAINS
+from granchain.physics.models import leading_peaks_exponential, transition_contact
 from granchain.physics.regimes import loading_regime
+
+__all__ = [
+    "EFFECT_DOMAINS",
+    "MODEL_DOMAINS",
+    "SCENE_QUANTITIES",
+    "Applicability",
+    "Prediction",
+    "applicability",
+    "leading_peaks_exponential",
+    "predict",
+    "transition_contact",
+]
 
 
 @dataclass(frozen=True)
@@ -39,50 +51,9 @@ class Applicability(NamedTuple):
 #: Quantities of the scene itself (not models): they always apply.
 SCENE_QUANTITIES = frozenset({"tau", "impulse", "loading_time_over_tau", "amplitude"})
 
-_HERTZ_SHORT = ("short_load_peak_force", "short_load_wave_speed")
-_HERTZ_LONG = (
-    "front_speed_lower",
-    "front_speed_upper",
-    "long_load_peak_force_lower",
-    "long_load_peak_force_upper",
-    "bead_velocity_at_lower_speed",
-    "bead_velocity_at_upper_speed",
-)
-#: peak_force_envelope: min(Eq. 8, Eq. 15 bound), an upper estimate for any loading time;
-#: nesterenko_wave_speed: a solitary wave's speed from its peak force (ref. 9), used by `compare`.
-_HERTZ_ANY = ("peak_force_envelope", "nesterenko_wave_speed")
-_BILINEAR_SHORT = (
-    "first_contact_peak_force",
-    "first_beads_velocity_at_peak",
-    "second_contact_force_at_peak",
-    "trailing_velocity",
-    "dissipation_first_contact",
-    "gamma",
-    "eta",
-    "omega",
-    "exponential_decay_per_contact",
-    "transition_contact",
-    "inverse_decay_exponent",
-)
-_BILINEAR_LONG = tuple(f"long_load_{k}" for k in ("c", "c_u", "F_1", "v_1", "v_t", "x_t", "T_t", "F_2", "v_2"))
-
-#: Every model: (contact law, loading regime it needs: "short", "long" or "any").
+#: Every model: (contact law, what it needs: ContactLaw.model_domains, from the law registry).
 MODEL_DOMAINS: dict[str, tuple[str, str]] = {
-    **{n: ("hertz", "short") for n in _HERTZ_SHORT},
-    **{n: ("hertz", "long") for n in _HERTZ_LONG},
-    **{n: ("hertz", "any") for n in _HERTZ_ANY},
-    **{n: ("bilinear", "short") for n in _BILINEAR_SHORT},
-    **{n: ("bilinear", "long") for n in _BILINEAR_LONG},
-    # the effects' own regimes: a precompressed chain, two-body impacts of a striker or on the wall
-    "precompressed_sound_speed": ("hertz", "precompressed"),
-    # Nesterenko's V_s(f_r) at a measured leading peak (compare, like nesterenko_wave_speed)
-    "precompressed_solitary_wave_speed": ("hertz", "precompressed"),
-    "striker_impact_peak_force": ("hertz", "striker_impact"),
-    "striker_impact_duration": ("hertz", "striker_impact"),
-    "wall_impact_peak_force": ("hertz", "wall_impact"),
-    "wall_impact_duration": ("hertz", "wall_impact"),
-    # a law's own models (granchain.physics.laws: ContactLaw.model_domains)
-    **{n: (name, needs) for name, cls in LAWS.items() for n, needs in cls.model_domains.items()},
+    n: (name, needs) for name, cls in LAWS.items() for n, needs in cls.model_domains.items()
 }
 
 #: (model, measured quantity) pairs where the run measures something other than what the model
@@ -145,18 +116,10 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
         return Applicability(False, "; ".join(why_not))
     if quantity is not None and (name, quantity) in MEASURES_OTHER:
         return Applicability(False, MEASURES_OTHER[(name, quantity)])
-    chain = f"uniform {'Hertz' if law == 'hertz' else law} chain, no dashpot, no precompression"
+    chain = f"uniform {LAWS[law].label or law} chain, no dashpot, no precompression"
     if needs == "any":
         return Applicability(True, f"{chain}, any loading time{wall}")
     return Applicability(True, f"{regime.text}; {chain}{wall}")
-
-
-#: the domains of the effects' models: what the scene must be, in words
-EFFECT_DOMAINS = {
-    "precompressed": "a uniform Hertz chain under static precompression, no dashpot",
-    "striker_impact": "a striker on one free bead, Hertz contact, no dashpot or precompression (two bodies)",
-    "wall_impact": "one bead given a velocity against the wall, Hertz contact, no dashpot or precompression",
-}
 
 
 def _effect_model_applies(law: str, needs: str, scene) -> Applicability:
@@ -219,11 +182,13 @@ def _outside_the_papers_chain(scene) -> list[str]:
     ld = scene.loading
     if ld.kind == "striker":
         ratio = scene.striker_mass / scene.mass
-        if scene.contact.law != "hertz" or abs(ratio - 1.0) > EQUAL_STRIKER_MASS:
+        # equal masses exchange velocities only in an elastic impact: a law with history dissipates
+        dissipates = scene.contact.law_class.history
+        if dissipates or abs(ratio - 1.0) > EQUAL_STRIKER_MASS:
             why_not.append(
                 f"a striker (M = {ratio:.3g} m at {ld.velocity:g} m/s) is not the paper's loading (a force "
                 "f(t), Eq. 4, or bead 1's velocity): a lighter one rebounds, a heavier one pushes on"
-                + ("" if scene.contact.law == "hertz" else f", and its {scene.contact.law} contact dissipates")
+                + (f", and its {scene.contact.law} contact dissipates" if dissipates else "")
             )
     return why_not
 
@@ -239,237 +204,23 @@ def predict(scene) -> list[Prediction]:
 
 
 def _predict(scene) -> list[Prediction]:
-    m, d, k = scene.mass, scene.diameter, scene.stiffness
-    fs, isc = scene.force_scale, scene.impulse_scale
+    """The scene's own quantities (Eqs. 4, 7), then the models of its contact law (ContactLaw.predictions)."""
     ld = scene.loading
     impulse = scene.input_impulse
     out: list[Prediction] = [
         Prediction("tau", scene.tau, "s", "Eq. 7", "intrinsic time scale of the bead pair"),
         Prediction(
-            "impulse", impulse, "N s", "Eq. 4 (I = A T; velocity load: I = m v0)", "always", nondim=impulse / isc
+            "impulse",
+            impulse,
+            "N s",
+            "Eq. 4 (I = A T; velocity load: I = m v0)",
+            "always",
+            nondim=impulse / scene.impulse_scale,
         ),
     ]
     if ld.is_force:
         out.append(Prediction("loading_time_over_tau", ld.duration / scene.tau, "-", "T / tau (Eq. 7)", "always"))
-        out.append(Prediction("amplitude", ld.amplitude, "N", "Eq. 4", "always", nondim=ld.amplitude / fs))
-
-    out += _effect_predictions(scene)
-    if scene.contact.law == "hertz":
-        fp = models.short_load_peak_force(impulse, m, scene.e_star, scene.r_star)
         out.append(
-            Prediction(
-                "short_load_peak_force",
-                fp,
-                "N",
-                "Eq. 8 (constant 0.719 fitted by the authors)",
-                "single-solitary-wave regime: load shorter than the wave's own contact time "
-                "(Fig. 1; T/tau ~ 1 at I = 0.4 N s); measured far enough down the chain for the wave to form",
-                nondim=fp / fs,
-            )
+            Prediction("amplitude", ld.amplitude, "N", "Eq. 4", "always", nondim=ld.amplitude / scene.force_scale)
         )
-        out.append(
-            Prediction(
-                "short_load_wave_speed",
-                models.solitary_wave_speed(fp, k, m, d),
-                "m/s",
-                "Nesterenko long-wave relation V = (2/sqrt5) D k^(1/3) F^(1/6) / sqrt(m) (ref. 9) at Eq. 8's force",
-                "as Eq. 8; the long-wave relation is approximate for a discrete chain",
-            )
-        )
-        if ld.is_force:
-            a = ld.amplitude
-            cl = models.front_speed_lower(a, k, m, d)
-            cu = models.front_speed_upper(a, k, m, d)
-            fl = models.solitary_wave_peak_force(cl, k, m, d)
-            fu = models.solitary_wave_peak_force(cu, k, m, d)
-            long_valid = "wave-train regime: load much longer than the solitary wave's contact time (e.g. T/tau ~ 100)"
-            out += [
-                Prediction("front_speed_lower", cl, "m/s", "Eq. 19", long_valid),
-                Prediction("front_speed_upper", cu, "m/s", "Eq. 15", long_valid),
-                Prediction(
-                    "long_load_peak_force_lower", fl, "N", "Eq. 19 + Nesterenko (ref. 9)", long_valid, nondim=fl / fs
-                ),
-                Prediction(
-                    "long_load_peak_force_upper", fu, "N", "Eq. 15 + Nesterenko (ref. 9)", long_valid, nondim=fu / fs
-                ),
-                Prediction(
-                    "bead_velocity_at_lower_speed",
-                    models.constant_regime_bead_velocity(a, cl, m, d),
-                    "m/s",
-                    "Eq. 12 with c = c^l",
-                    long_valid + "; beads behind the front",
-                ),
-                Prediction(
-                    "bead_velocity_at_upper_speed",
-                    models.constant_regime_bead_velocity(a, cu, m, d),
-                    "m/s",
-                    "Eq. 12 with c = c^u",
-                    long_valid + "; beads behind the front",
-                ),
-                Prediction(
-                    "peak_force_envelope",
-                    min(fp, fu),
-                    "N",
-                    "min(Eq. 8, upper long-load bound): the two regimes of Fig. 3",
-                    "upper estimate of the leading peak for any loading time",
-                    nondim=min(fp, fu) / fs,
-                ),
-            ]
-        return out
-
-    # ---- the law's own models (granchain.physics.laws)
-    out += [Prediction(**d) for d in scene.contact.law_class.predictions(scene)]
-    if scene.contact.law != "bilinear":
-        return out
-
-    # ---- bilinear (Sec. III)
-    beta = scene.contact.unloading_coeff
-    ku = scene.unloading_stiffness
-    lin = models.linear_chain_impulse_response(impulse, k, m, beta)
-    short_valid = "short loading (T much shorter than the contact time pi sqrt(m/2k)); first contacts"
-    out += [
-        Prediction("first_contact_peak_force", lin["F_p"], "N", "Eq. A2", short_valid, nondim=lin["F_p"] / fs),
-        Prediction("first_beads_velocity_at_peak", lin["v_m"], "m/s", "Eq. A1", short_valid),
-        Prediction("second_contact_force_at_peak", lin["F_2"], "N", "Eq. A3", short_valid, nondim=lin["F_2"] / fs),
-        Prediction("trailing_velocity", lin["v_t"], "m/s", "Eq. A4", short_valid),
-        Prediction(
-            "dissipation_first_contact",
-            float(models.dissipation_per_cycle(lin["F_p"], k, beta)),
-            "J",
-            "Eq. 20",
-            "energy dissipated at a contact loaded to the first contact's peak force",
-        ),
-    ]
-    coeffs = models.leading_wave_coefficients(k, m, beta)
-    lam = models.exponential_decay_rate(k, m, beta)
-    out += [
-        Prediction("gamma", coeffs.gamma, "m/(s N)", "Eq. 22 via A1, A2", short_valid),
-        Prediction("eta", coeffs.eta, "-", "Eq. 22 via A2, A3", short_valid),
-        Prediction("omega", coeffs.omega, "m/(s N)", "Eq. 22 via A1, A2, A4", short_valid),
-        Prediction(
-            "exponential_decay_per_contact",
-            lam,
-            "-",
-            "Eqs. 26-27 (F_{i+1} = F_i exp(-lambda); Eq. 27 as derived from Eq. 26)",
-            "exponential regime: contacts before the transition",
-        ),
-    ]
-    tc = transition_contact(lin["F_p"], lam, ku, m, coeffs.omega, scene.n_contacts)
-    if tc is not None:
-        out.append(
-            Prediction(
-                "transition_contact",
-                float(tc),
-                "-",
-                "Eq. 27 meets Eq. 30",
-                "first contact where the secondary-wave peak exceeds the leading peak",
-            )
-        )
-    out.append(
-        Prediction(
-            "inverse_decay_exponent",
-            models.inverse_decay_exponent(beta),
-            "-",
-            "Eq. 34",
-            "inverse regime, beyond the transition contact",
-        )
-    )
-    if ld.is_force:
-        try:
-            r = models.long_load_bilinear(ld.amplitude, ld.duration, k, beta, m, d)
-        except ZeroDivisionError:  # beta ~ 0: c_u = c, the fronts never merge (Eq. 36's x_t is infinite)
-            r = {}
-        long_valid = "long loading (steady fronts, Sec. III B); until the first collision of the fronts"
-        units = {
-            "c": "m/s",
-            "c_u": "m/s",
-            "F_1": "N",
-            "v_1": "m/s",
-            "v_t": "m/s",
-            "x_t": "m",
-            "T_t": "s",
-            "F_2": "N",
-            "v_2": "m/s",
-        }
-        eqs = {
-            "c": "c = D sqrt(k/m) (Sec. III B)",
-            "c_u": "c_u = D sqrt(k_u/m) (Sec. III B)",
-            "F_1": "F_1 = A",
-            "v_1": "Eq. 35",
-            "v_t": "v_t = v_1 - 2 F_1 R/(m c_u) (Sec. III B)",
-            "x_t": "Eq. 36",
-            "T_t": "Eq. 36",
-            "F_2": "Eq. 38",
-            "v_2": "Eq. 38",
-        }
-        for key, val in r.items():
-            nd = val / fs if units[key] == "N" else None
-            out.append(Prediction(f"long_load_{key}", val, units[key], eqs[key], long_valid, nondim=nd))
-    return out
-
-
-def leading_peaks_exponential(first_peak: float, decay: float, n: int):
-    """Leading peak force at contacts 1..n in the exponential regime (Eq. 27)."""
-    return [first_peak * math.exp(-decay * i) for i in range(n)]
-
-
-def transition_contact(
-    first_peak: float, decay: float, k_u: float, mass: float, omega: float, n_contacts: int
-) -> int | None:
-    """First contact (1-based) where Eq. 30's secondary peak exceeds Eq. 27's leading peak."""
-    lead = leading_peaks_exponential(first_peak, decay, n_contacts)
-    for i in range(1, n_contacts):
-        fs = models.secondary_wave_peak_force(lead[0] - lead[i], k_u, mass, omega)
-        if fs > lead[i]:
-            return i + 1
-    return None
-
-
-def _effect_predictions(scene) -> list[Prediction]:
-    """The effects' models (EFFECT_DOMAINS): the precompressed chain's sound speed, two-body impacts."""
-    if scene.contact.law != "hertz":
-        return []
-    out = []
-    f0 = scene.effects.precompression
-    if f0:
-        k, m = float(scene.law.k), scene.mass
-        spacing = scene.diameter - float(scene.law.static_overlap(f0))
-        out.append(
-            Prediction(
-                "precompressed_sound_speed",
-                models.precompressed_sound_speed(k, f0, m, spacing),
-                "m/s",
-                "c0 = a sqrt(k_lin/m), k_lin = 3/2 K^(2/3) F0^(1/3) (Nesterenko 2001, Sec. 1.1)",
-                EFFECT_DOMAINS["precompressed"] + "; the speed of a small perturbation's front",
-            )
-        )
-    if scene.chain.beads == 1:
-        ld, m1 = scene.loading, float(scene.bead_masses[0])
-        if ld.kind == "striker":
-            ms = scene.striker_mass
-            hit = models.hertz_impact(float(scene.striker_law.k), ms * m1 / (ms + m1), ld.velocity)
-            name, law_text = "striker_impact", "striker on bead 1, m* = M m / (M + m)"
-        elif ld.kind == "velocity" and scene.effects.far_end == "wall":
-            hit = models.hertz_impact(float(scene.wall_law.k), m1, ld.velocity)
-            name, law_text = "wall_impact", "bead on the flat, E* = E/(1-nu^2), R* = R, m* = m"
-        else:
-            return out
-        nd = EFFECT_DOMAINS[name]
-        out += [
-            Prediction(
-                f"{name}_peak_force",
-                hit["peak_force"],
-                "N",
-                f"Hertz impact: K^(2/5) (5/4 m* v^2)^(3/5), {law_text} (Johnson 1985, Sec. 11.1)",
-                nd,
-                nondim=hit["peak_force"] / scene.force_scale,
-            ),
-            Prediction(
-                f"{name}_duration",
-                hit["duration"],
-                "s",
-                "Hertz impact: 2.943 delta_max / v (Johnson 1985, Sec. 11.1)",
-                nd,
-            ),
-        ]
-    return out
+    return out + [Prediction(**fields) for fields in scene.contact.law_class.predictions(scene)]

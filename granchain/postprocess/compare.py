@@ -9,7 +9,6 @@ from pathlib import Path
 import numpy as np
 
 from granchain.peaks import REACHED_FRACTION
-from granchain.physics import models
 from granchain.physics.effects import external_forces
 from granchain.physics.predictions import applicability, predict
 
@@ -67,41 +66,18 @@ class CompareRow:
         return "yes" if self.ok else "FAIL"
 
 
-#: The model each compared quantity is checked against, per contact law, in order of preference:
-#: (prediction name, label); the first that applies to the scene is used (predictions.applicability).
-ROW_MODELS: dict[tuple[str, str], tuple[tuple[str, str], ...]] = {
-    ("hertz", "leading_peak_force"): (
-        ("short_load_peak_force", "Eq. 8"),
-        ("long_load_peak_force_upper", "Eq. 15 + Nesterenko (upper bound)"),
-    ),
-    ("hertz", "wave_speed"): (
-        ("nesterenko_wave_speed", "Nesterenko at the reference's leading peak"),
-        ("precompressed_solitary_wave_speed", "Nesterenko's V_s(f_r) at the reference's leading peak over F0"),
-    ),
-    ("bilinear", "peak_force_contact_1"): (("first_contact_peak_force", "Eq. A2 (short loading)"),),
-    ("bilinear", "wave_speed"): (("long_load_c", "c = D sqrt(k/m) (Sec. III B, long loading)"),),
-    ("hertz", "striker_peak_force"): (("striker_impact_peak_force", "Hertz impact (two bodies)"),),
-    ("hertz", "wall_peak_force"): (("wall_impact_peak_force", "Hertz impact (bead on the flat)"),),
-}
-
-
 def _model_rows(scene, ref_obs: dict) -> dict[str, tuple[float | None, str, bool]]:
     """(value, source, applies) of the model for each compared quantity that has one; where none of
-    its models applies to the scene: (None, "n/a: <model>: <reason>", False)."""
+    its models applies to the scene: (None, "n/a: <model>: <reason>", False).
+
+    The models and the quantities they check are the scene's contact law's (ContactLaw.compare_models,
+    in order of preference: the first that applies is used); those that need a measured value are
+    evaluated at the reference run's observables (ContactLaw.measured_models)."""
+    law = scene.contact.law_class
     values = {p.name: p.value for p in predict(scene)}
-    if ref_obs.get("leading_peak_force"):
-        values["nesterenko_wave_speed"] = models.solitary_wave_speed(
-            ref_obs["leading_peak_force"], scene.stiffness, scene.mass, scene.diameter
-        )
-        f0 = scene.effects.precompression
-        if f0 and "precompressed_sound_speed" in values:  # f_r: the largest contact force over F0
-            ratio = (f0 + ref_obs["leading_peak_force"]) / f0
-            c0 = values["precompressed_sound_speed"]
-            values["precompressed_solitary_wave_speed"] = models.precompressed_solitary_wave_speed(c0, ratio)
+    values.update(law.measured_models(scene, values, ref_obs))
     out: dict[str, tuple[float | None, str, bool]] = {}
-    for (law, quantity), candidates in ROW_MODELS.items():
-        if law != scene.contact.law:
-            continue
+    for quantity, candidates in law.compare_models.items():
         first_no = None
         for name, label in candidates:
             verdict = applicability(name, scene, quantity=quantity)

@@ -49,8 +49,7 @@ from matplotlib.ticker import FuncFormatter, MaxNLocator
 
 from granchain import safe_files
 from granchain.errors import GranchainError, UsageError
-from granchain.physics import models
-from granchain.physics.predictions import applicability, transition_contact
+from granchain.physics.predictions import applicability
 from granchain.results import RunResult, printable, register_plotter
 from granchain.workflows.load import LoadRunError, load_run
 
@@ -346,12 +345,9 @@ def write_histories(run, formats=("png",)) -> list[Path]:
 def model_curves(scene, contacts: np.ndarray, skipped: dict[str, str] | None = None) -> dict[str, np.ndarray]:
     """Model peak force vs contact, for the models that apply to the scene (predictions.applicability).
 
-    skipped: if given, filled with label -> reason for each model left out because it does not apply.
+    The curves are the scene's contact law's (ContactLaw.model_curves). skipped: if given, filled with
+    label -> reason for each model left out because it does not apply.
     """
-    m, d, k = scene.mass, scene.diameter, scene.stiffness
-    ld = scene.loading
-    impulse = scene.input_impulse
-    curves: dict[str, np.ndarray] = {}
 
     def applies(name: str, label: str) -> bool:
         verdict = applicability(name, scene)
@@ -359,38 +355,7 @@ def model_curves(scene, contacts: np.ndarray, skipped: dict[str, str] | None = N
             skipped[label] = verdict.reason
         return verdict.applies
 
-    if scene.contact.law == "hertz":
-        label = "Eq. 8 (short load)"
-        if applies("short_load_peak_force", label):
-            curves[label] = np.full(
-                contacts.shape, models.short_load_peak_force(impulse, m, scene.e_star, scene.r_star)
-            )
-        for name, eq, fn in (
-            ("long_load_peak_force_lower", "Eq. 19", models.front_speed_lower),
-            ("long_load_peak_force_upper", "Eq. 15", models.front_speed_upper),
-        ):
-            label = f"{eq} + Nesterenko (long load)"
-            if applies(name, label) and ld.is_force:
-                curves[label] = np.full(
-                    contacts.shape, models.solitary_wave_peak_force(fn(ld.amplitude, k, m, d), k, m, d)
-                )
-    elif scene.contact.law == "bilinear":
-        beta = scene.contact.unloading_coeff
-        f1 = models.linear_chain_impulse_response(impulse, k, m, beta)["F_p"]
-        lam = models.exponential_decay_rate(k, m, beta)
-        coeffs = models.leading_wave_coefficients(k, m, beta)
-        tc = transition_contact(f1, lam, scene.unloading_stiffness, m, coeffs.omega, int(contacts.max()))
-        label = "Eq. 27 (exponential regime)"
-        if applies("exponential_decay_per_contact", label):
-            # Eq. 27 holds before the transition; drawn a little past it to show where the two meet
-            last = 2 * tc if tc is not None else contacts.max()
-            curves[label] = np.where(contacts <= last, f1 * np.exp(-lam * (contacts - 1)), np.nan)
-        label = "Eq. 34 slope (1+beta)/2" + (f" from contact {tc}" if tc is not None else "")
-        if applies("inverse_decay_exponent", label) and tc is not None:
-            p = models.inverse_decay_exponent(beta)
-            anchor = f1 * np.exp(-lam * (tc - 1))
-            curves[label] = np.where(contacts >= tc, anchor * (contacts / tc) ** (-p), np.nan)
-    return curves
+    return scene.contact.law_class.model_curves(scene, contacts, applies)
 
 
 def _peak_markers(

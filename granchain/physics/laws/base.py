@@ -38,6 +38,15 @@ on them; tests/test_laws.py and tests/test_kernels.py check them for every regis
 7. Register the class in granchain/physics/laws/__init__.py (LAWS, the only list of laws) and the C++
    kernel in granchain/lammps/plugin.cpp; the planner's estimates (expected_peak_force, wave speeds)
    are class methods over a scene.
+8. The law's analytic models (optional: a law without any has empty tables), which `granchain
+   predict`, `compare` and the peak plot take from the law and nowhere else:
+   ``model_domains`` names every model the law predicts and what it needs (a loading regime, "any",
+   "collision" or an effect's regime: MODEL_NEEDS); ``predictions(scene)`` gives the values of those
+   that follow from the scene; ``measured_models(scene, values, observables)`` those that need a
+   run's measured observables (a wave speed at the measured peak); ``compare_models`` the models
+   each compared quantity is checked against; ``model_curves(scene, contacts, applies)`` the peak
+   force along the chain of the models that apply. Whether a model applies to a scene is decided in
+   one place, granchain.physics.predictions.applicability, from ``model_domains``.
 """
 
 from __future__ import annotations
@@ -147,14 +156,74 @@ class ContactLaw:
         """pair_coeff numbers after d0 in the C++ kernel's order (k first; the deck inserts d0)."""
         return [float(getattr(self, f.name)) for f in dataclasses.fields(self)]
 
-    # ---- analytic predictions of the law itself (granchain.physics.predictions adds them): model name
-    # -> what it needs ("any": every chain of this law; "collision": two beads, bead 1 given a velocity)
+    # ---- the law's analytic models (rule 8; granchain.physics.predictions, postprocess.compare and the
+    # peak plot ask every law for its own)
+    #: the law's name in running text ("a uniform Hertz chain"); empty: its name
+    label: ClassVar[str] = ""
+    #: model name -> what it needs besides this law: one of MODEL_NEEDS
     model_domains: ClassVar[dict[str, str]] = {}
+    #: a quantity `granchain compare` measures -> the models it is checked against, in order of
+    #: preference: (model name, label); the first that applies to the scene is used
+    compare_models: ClassVar[dict[str, tuple[tuple[str, str], ...]]] = {}
 
     @classmethod
     def predictions(cls, scene) -> list[dict]:
-        """Prediction fields (name, value, unit, equation, valid[, nondim]) for this law's own models."""
+        """The law's models that follow from the scene alone.
+
+        Parameters
+        ----------
+        scene : granchain.scene.Scene
+            A scene whose contact law is this one.
+
+        Returns
+        -------
+        list of dict
+            Prediction fields (name, value, unit, equation, valid[, nondim]), each name a key of
+            ``model_domains``; a model the scene gives no value for (a long-load model under a
+            velocity load) is left out.
+        """
         return []
+
+    @classmethod
+    def measured_models(cls, scene, values: dict[str, float], observables: dict) -> dict[str, float]:
+        """The law's models evaluated at what a run measured.
+
+        Parameters
+        ----------
+        scene : granchain.scene.Scene
+            A scene whose contact law is this one.
+        values : dict
+            The scene's predictions, name -> value (``predictions`` and the scene's own quantities).
+        observables : dict
+            The run's observables (granchain.postprocess.observables).
+
+        Returns
+        -------
+        dict
+            Model name (a key of ``model_domains``) -> value, for those the observables allow.
+        """
+        return {}
+
+    @classmethod
+    def model_curves(cls, scene, contacts: np.ndarray, applies) -> dict[str, np.ndarray]:
+        """The peak force along the chain of the law's models that apply to the scene.
+
+        Parameters
+        ----------
+        scene : granchain.scene.Scene
+            A scene whose contact law is this one.
+        contacts : numpy.ndarray
+            Contact numbers (1-based, float) to evaluate the curves at.
+        applies : callable
+            ``applies(model name, label) -> bool``: whether the model applies to the scene (it records
+            why not); asked once for every curve the law can draw, before its value is computed.
+
+        Returns
+        -------
+        dict
+            Legend label -> peak force (N) at `contacts` (NaN where the model does not hold).
+        """
+        return {}
 
     # ---- building laws
     @classmethod
@@ -203,6 +272,21 @@ class ContactLaw:
         # (None: a value the scene left to the materials, e.g. a yield_pressure from the yield strength)
         return {"law": cls.name, **{k: getattr(contact, k) for k in cls.scene_keys if getattr(contact, k) is not None}}
 
+
+#: what a model may need besides its law (ContactLaw.model_domains): the paper's chain in a loading
+#: regime (granchain.physics.regimes: "short", "long"), at "any" loading time, or a two-body impact
+#: ("collision": two beads, bead 1 given a velocity, a free far end)
+CHAIN_NEEDS = ("short", "long", "any", "collision")
+
+#: ... or an effect's regime, where the paper's models do not hold: what the scene must be, in words
+EFFECT_DOMAINS = {
+    "precompressed": "a uniform Hertz chain under static precompression, no dashpot",
+    "striker_impact": "a striker on one free bead, Hertz contact, no dashpot or precompression (two bodies)",
+    "wall_impact": "one bead given a velocity against the wall, Hertz contact, no dashpot or precompression",
+}
+
+#: every value a law's model_domains may hold
+MODEL_NEEDS = (*CHAIN_NEEDS, *EFFECT_DOMAINS)
 
 #: the registered laws, name -> class (granchain.physics.laws.LAWS fills it: the only list of laws)
 REGISTRY: dict[str, type[ContactLaw]] = {}

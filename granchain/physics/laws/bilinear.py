@@ -10,6 +10,9 @@ overlap so far:
 
 k = 18.5 sigma_y R* (Sec. III) for the nominal pair, scaled by R*_pair / R* for other pairs (a bead on
 the rigid flat, R* = R, has twice the bead-bead k).
+The law's models: the paper's Sec. III (the linear chain's first contacts, Eqs. A1-A4; the leading
+wave's exponential decay, Eqs. 22-27, the transition, Eq. 30, and the inverse decay, Eq. 34; the
+steady fronts of a long load, Eqs. 35-38).
 """
 
 from __future__ import annotations
@@ -26,6 +29,19 @@ from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, forbid_othe
 
 _multiply, _subtract, _greater, _less = np.multiply, np.subtract, np.greater, np.less  # (one lookup, not two)
 _ZERO_FORCE, _RELOADING = "zero force at beta alpha_max", "reloading meets alpha_max"  # (the kinks' kinds)
+
+#: the long-load models (Sec. III B; models.long_load_bilinear's keys): unit and equation
+_LONG_LOAD = {
+    "c": ("m/s", "c = D sqrt(k/m) (Sec. III B)"),
+    "c_u": ("m/s", "c_u = D sqrt(k_u/m) (Sec. III B)"),
+    "F_1": ("N", "F_1 = A"),
+    "v_1": ("m/s", "Eq. 35"),
+    "v_t": ("m/s", "v_t = v_1 - 2 F_1 R/(m c_u) (Sec. III B)"),
+    "x_t": ("m", "Eq. 36"),
+    "T_t": ("s", "Eq. 36"),
+    "F_2": ("N", "Eq. 38"),
+    "v_2": ("m/s", "Eq. 38"),
+}
 
 
 def unloading_stiffness(k: ArrayLike, beta: ArrayLike) -> np.ndarray:
@@ -80,6 +96,29 @@ class BilinearLaw(ContactLaw):
     scene_key_ranges: ClassVar[dict[str, tuple[float, float]]] = {
         "unloading_coeff": (0.0, 0.9),
         "plastic_stiffness": (1e6, 1e8),
+    }
+    model_domains: ClassVar[dict[str, str]] = {
+        **dict.fromkeys(
+            (
+                "first_contact_peak_force",
+                "first_beads_velocity_at_peak",
+                "second_contact_force_at_peak",
+                "trailing_velocity",
+                "dissipation_first_contact",
+                "gamma",
+                "eta",
+                "omega",
+                "exponential_decay_per_contact",
+                "transition_contact",
+                "inverse_decay_exponent",
+            ),
+            "short",
+        ),
+        **dict.fromkeys((f"long_load_{key}" for key in _LONG_LOAD), "long"),
+    }
+    compare_models: ClassVar[dict[str, tuple[tuple[str, str], ...]]] = {
+        "peak_force_contact_1": (("first_contact_peak_force", "Eq. A2 (short loading)"),),
+        "wave_speed": (("long_load_c", "c = D sqrt(k/m) (Sec. III B, long loading)"),),
     }
 
     beta: ArrayLike
@@ -236,3 +275,117 @@ class BilinearLaw(ContactLaw):
         """The loading line's sound speed D sqrt(k/m), the largest group velocity of a linear chain
         (the faster unloading speed only exists behind the front)."""
         return models.linear_sound_speed(scene.stiffness, scene.mass, scene.diameter)
+
+    # ---- the law's models (ContactLaw rule 8)
+    @classmethod
+    def predictions(cls, scene) -> list[dict]:
+        """The paper's bilinear-chain models (Sec. III): short loading's first contacts and decay
+        regimes (Eqs. A1-A4, 20-34), and under a force load the steady fronts (Eqs. 35-38)."""
+        out = _short_load_predictions(scene)
+        ld = scene.loading
+        if ld.is_force:
+            out += _long_load_predictions(scene, ld.amplitude, ld.duration)
+        return out
+
+    @classmethod
+    def model_curves(cls, scene, contacts, applies):
+        """Eq. 27's exponential decay from Eq. A2's first peak, drawn a little past the transition
+        (Eq. 30) to show where the two meet, and Eq. 34's inverse decay from the transition on."""
+        m, k = scene.mass, scene.stiffness
+        beta = scene.contact.unloading_coeff
+        curves: dict[str, np.ndarray] = {}
+        f1 = models.linear_chain_impulse_response(scene.input_impulse, k, m, beta)["F_p"]
+        lam = models.exponential_decay_rate(k, m, beta)
+        coeffs = models.leading_wave_coefficients(k, m, beta)
+        tc = models.transition_contact(f1, lam, scene.unloading_stiffness, m, coeffs.omega, int(contacts.max()))
+        label = "Eq. 27 (exponential regime)"
+        if applies("exponential_decay_per_contact", label):
+            # Eq. 27 holds before the transition; drawn to twice it to show where the two meet
+            last = 2 * tc if tc is not None else contacts.max()
+            curves[label] = np.where(contacts <= last, f1 * np.exp(-lam * (contacts - 1)), np.nan)
+        label = "Eq. 34 slope (1+beta)/2" + (f" from contact {tc}" if tc is not None else "")
+        if applies("inverse_decay_exponent", label) and tc is not None:
+            p = models.inverse_decay_exponent(beta)
+            anchor = f1 * np.exp(-lam * (tc - 1))
+            curves[label] = np.where(contacts >= tc, anchor * (contacts / tc) ** (-p), np.nan)
+        return curves
+
+
+def _short_load_predictions(scene) -> list[dict]:
+    """Short loading (Sec. III A): Eqs. A1-A4 of the first contacts, Eq. 20's dissipation, the leading
+    wave's coefficients (Eq. 22) and exponential decay (Eqs. 26-27), the transition contact (Eq. 30)
+    and the inverse decay's exponent (Eq. 34)."""
+    m, k = scene.mass, scene.stiffness
+    fs = scene.force_scale
+    beta = scene.contact.unloading_coeff
+    lin = models.linear_chain_impulse_response(scene.input_impulse, k, m, beta)
+    short_valid = "short loading (T much shorter than the contact time pi sqrt(m/2k)); first contacts"
+
+    def short(name, value, unit, equation, nondim=None):
+        return dict(name=name, value=value, unit=unit, equation=equation, valid=short_valid, nondim=nondim)
+
+    out = [
+        short("first_contact_peak_force", lin["F_p"], "N", "Eq. A2", nondim=lin["F_p"] / fs),
+        short("first_beads_velocity_at_peak", lin["v_m"], "m/s", "Eq. A1"),
+        short("second_contact_force_at_peak", lin["F_2"], "N", "Eq. A3", nondim=lin["F_2"] / fs),
+        short("trailing_velocity", lin["v_t"], "m/s", "Eq. A4"),
+        dict(
+            name="dissipation_first_contact",
+            value=float(models.dissipation_per_cycle(lin["F_p"], k, beta)),
+            unit="J",
+            equation="Eq. 20",
+            valid="energy dissipated at a contact loaded to the first contact's peak force",
+        ),
+    ]
+    coeffs = models.leading_wave_coefficients(k, m, beta)
+    lam = models.exponential_decay_rate(k, m, beta)
+    out += [
+        short("gamma", coeffs.gamma, "m/(s N)", "Eq. 22 via A1, A2"),
+        short("eta", coeffs.eta, "-", "Eq. 22 via A2, A3"),
+        short("omega", coeffs.omega, "m/(s N)", "Eq. 22 via A1, A2, A4"),
+        dict(
+            name="exponential_decay_per_contact",
+            value=lam,
+            unit="-",
+            equation="Eqs. 26-27 (F_{i+1} = F_i exp(-lambda); Eq. 27 as derived from Eq. 26)",
+            valid="exponential regime: contacts before the transition",
+        ),
+    ]
+    tc = models.transition_contact(lin["F_p"], lam, scene.unloading_stiffness, m, coeffs.omega, scene.n_contacts)
+    if tc is not None:
+        out.append(
+            dict(
+                name="transition_contact",
+                value=float(tc),
+                unit="-",
+                equation="Eq. 27 meets Eq. 30",
+                valid="first contact where the secondary-wave peak exceeds the leading peak",
+            )
+        )
+    out.append(
+        dict(
+            name="inverse_decay_exponent",
+            value=models.inverse_decay_exponent(beta),
+            unit="-",
+            equation="Eq. 34",
+            valid="inverse regime, beyond the transition contact",
+        )
+    )
+    return out
+
+
+def _long_load_predictions(scene, amplitude: float, duration: float) -> list[dict]:
+    """Long loading (Sec. III B): the steady fronts until they first collide (Eqs. 35-38)."""
+    try:
+        r = models.long_load_bilinear(
+            amplitude, duration, scene.stiffness, scene.contact.unloading_coeff, scene.mass, scene.diameter
+        )
+    except ZeroDivisionError:  # beta ~ 0: c_u = c, the fronts never merge (Eq. 36's x_t is infinite)
+        r = {}
+    long_valid = "long loading (steady fronts, Sec. III B); until the first collision of the fronts"
+    out = []
+    for key, val in r.items():
+        unit, equation = _LONG_LOAD[key]
+        nd = val / scene.force_scale if unit == "N" else None
+        out.append(dict(name=f"long_load_{key}", value=val, unit=unit, equation=equation, valid=long_valid, nondim=nd))
+    return out

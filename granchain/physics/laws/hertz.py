@@ -1,6 +1,9 @@
 """Hertz contacts (Sec. II A): F = k alpha^(3/2), stored energy 2/5 k alpha^(5/2), no history.
 
 k = 4/3 E* sqrt(R*) of the pair (Johnson); a bead on the rigid flat has R* = R and E* = E/(1-nu^2).
+The law's models: the paper's Sec. II (Eq. 8 for short loads, Eqs. 12-19 with Nesterenko's solitary
+wave for long ones) and the effects' Hertz models (a precompressed chain's sound speed, two-body
+impacts of a striker or on the wall).
 """
 
 from __future__ import annotations
@@ -13,7 +16,7 @@ import numpy as np
 
 from granchain.physics import materials as mat
 from granchain.physics import models
-from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink
+from granchain.physics.laws.base import EFFECT_DOMAINS, ArrayLike, ContactLaw, Kink
 
 _multiply = np.multiply  # (outputs by position: cheaper than out=)
 
@@ -46,6 +49,41 @@ class HertzLaw(ContactLaw):
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12)}
     example_contact: ClassVar[dict[str, float]] = {}
     scene_key_ranges: ClassVar[dict[str, tuple[float, float]]] = {}
+    label: ClassVar[str] = "Hertz"
+    model_domains: ClassVar[dict[str, str]] = {
+        **dict.fromkeys(("short_load_peak_force", "short_load_wave_speed"), "short"),
+        **dict.fromkeys(
+            (
+                "front_speed_lower",
+                "front_speed_upper",
+                "long_load_peak_force_lower",
+                "long_load_peak_force_upper",
+                "bead_velocity_at_lower_speed",
+                "bead_velocity_at_upper_speed",
+            ),
+            "long",
+        ),
+        # peak_force_envelope: min(Eq. 8, Eq. 15 bound), an upper estimate for any loading time;
+        # nesterenko_wave_speed: a solitary wave's speed from its measured peak force (ref. 9)
+        **dict.fromkeys(("peak_force_envelope", "nesterenko_wave_speed"), "any"),
+        # the effects' own regimes: a precompressed chain (Nesterenko's V_s(f_r) at a measured leading
+        # peak too), two-body impacts of a striker or on the wall
+        **dict.fromkeys(("precompressed_sound_speed", "precompressed_solitary_wave_speed"), "precompressed"),
+        **dict.fromkeys(("striker_impact_peak_force", "striker_impact_duration"), "striker_impact"),
+        **dict.fromkeys(("wall_impact_peak_force", "wall_impact_duration"), "wall_impact"),
+    }
+    compare_models: ClassVar[dict[str, tuple[tuple[str, str], ...]]] = {
+        "leading_peak_force": (
+            ("short_load_peak_force", "Eq. 8"),
+            ("long_load_peak_force_upper", "Eq. 15 + Nesterenko (upper bound)"),
+        ),
+        "wave_speed": (
+            ("nesterenko_wave_speed", "Nesterenko at the reference's leading peak"),
+            ("precompressed_solitary_wave_speed", "Nesterenko's V_s(f_r) at the reference's leading peak over F0"),
+        ),
+        "striker_peak_force": (("striker_impact_peak_force", "Hertz impact (two bodies)"),),
+        "wall_peak_force": (("wall_impact_peak_force", "Hertz impact (bead on the flat)"),),
+    }
 
     def force(self, alpha, alpha_max=None):
         return hertz_force(alpha, self.k)
@@ -114,3 +152,174 @@ class HertzLaw(ContactLaw):
     def leading_edge_speed(cls, scene, expected_force: float, step) -> float:
         """The fastest a disturbance can enter the undisturbed chain: the fastest solitary wave."""
         return cls.wave_speeds(scene, expected_force, step)[1]
+
+    # ---- the law's models (ContactLaw rule 8)
+    @classmethod
+    def predictions(cls, scene) -> list[dict]:
+        """The effects' Hertz models, then the paper's (Sec. II): Eq. 8 and Nesterenko's speed at its
+        force for short loads, the long-load fronts (Eqs. 12, 15, 19) under a force load."""
+        return _effect_predictions(scene) + _chain_predictions(scene)
+
+    @classmethod
+    def measured_models(cls, scene, values, observables):
+        """Nesterenko's solitary-wave speed at the run's leading peak (ref. 9) and, on a precompressed
+        chain, his V_s(f_r) with f_r the largest contact force over F0 (Nesterenko 2001)."""
+        f = observables.get("leading_peak_force")
+        if not f:
+            return {}
+        out = {"nesterenko_wave_speed": models.solitary_wave_speed(f, scene.stiffness, scene.mass, scene.diameter)}
+        f0 = scene.effects.precompression
+        if f0 and "precompressed_sound_speed" in values:
+            ratio = (f0 + f) / f0
+            c0 = values["precompressed_sound_speed"]
+            out["precompressed_solitary_wave_speed"] = models.precompressed_solitary_wave_speed(c0, ratio)
+        return out
+
+    @classmethod
+    def model_curves(cls, scene, contacts, applies):
+        """Eq. 8's peak (short load) and the long-load bounds, Eqs. 15 and 19 with Nesterenko's peak of
+        a solitary wave at the front speed (Fig. 3): constant along the chain."""
+        m, d, k = scene.mass, scene.diameter, scene.stiffness
+        ld = scene.loading
+        curves: dict[str, np.ndarray] = {}
+        label = "Eq. 8 (short load)"
+        if applies("short_load_peak_force", label):
+            curves[label] = np.full(
+                contacts.shape, models.short_load_peak_force(scene.input_impulse, m, scene.e_star, scene.r_star)
+            )
+        for name, eq, fn in (
+            ("long_load_peak_force_lower", "Eq. 19", models.front_speed_lower),
+            ("long_load_peak_force_upper", "Eq. 15", models.front_speed_upper),
+        ):
+            label = f"{eq} + Nesterenko (long load)"
+            if applies(name, label) and ld.is_force:
+                curves[label] = np.full(
+                    contacts.shape, models.solitary_wave_peak_force(fn(ld.amplitude, k, m, d), k, m, d)
+                )
+        return curves
+
+
+def _chain_predictions(scene) -> list[dict]:
+    """The paper's Hertz-chain models (Sec. II): Eq. 8, and under a force load Eqs. 12-19."""
+    m, d, k = scene.mass, scene.diameter, scene.stiffness
+    fs = scene.force_scale
+    ld = scene.loading
+    fp = models.short_load_peak_force(scene.input_impulse, m, scene.e_star, scene.r_star)
+    out = [
+        dict(
+            name="short_load_peak_force",
+            value=fp,
+            unit="N",
+            equation="Eq. 8 (constant 0.719 fitted by the authors)",
+            valid="single-solitary-wave regime: load shorter than the wave's own contact time "
+            "(Fig. 1; T/tau ~ 1 at I = 0.4 N s); measured far enough down the chain for the wave to form",
+            nondim=fp / fs,
+        ),
+        dict(
+            name="short_load_wave_speed",
+            value=models.solitary_wave_speed(fp, k, m, d),
+            unit="m/s",
+            equation="Nesterenko long-wave relation V = (2/sqrt5) D k^(1/3) F^(1/6) / sqrt(m) (ref. 9) "
+            "at Eq. 8's force",
+            valid="as Eq. 8; the long-wave relation is approximate for a discrete chain",
+        ),
+    ]
+    if not ld.is_force:
+        return out
+    a = ld.amplitude
+    cl = models.front_speed_lower(a, k, m, d)
+    cu = models.front_speed_upper(a, k, m, d)
+    fl = models.solitary_wave_peak_force(cl, k, m, d)
+    fu = models.solitary_wave_peak_force(cu, k, m, d)
+    long_valid = "wave-train regime: load much longer than the solitary wave's contact time (e.g. T/tau ~ 100)"
+    behind = long_valid + "; beads behind the front"
+    return out + [
+        dict(name="front_speed_lower", value=cl, unit="m/s", equation="Eq. 19", valid=long_valid),
+        dict(name="front_speed_upper", value=cu, unit="m/s", equation="Eq. 15", valid=long_valid),
+        dict(
+            name="long_load_peak_force_lower",
+            value=fl,
+            unit="N",
+            equation="Eq. 19 + Nesterenko (ref. 9)",
+            valid=long_valid,
+            nondim=fl / fs,
+        ),
+        dict(
+            name="long_load_peak_force_upper",
+            value=fu,
+            unit="N",
+            equation="Eq. 15 + Nesterenko (ref. 9)",
+            valid=long_valid,
+            nondim=fu / fs,
+        ),
+        dict(
+            name="bead_velocity_at_lower_speed",
+            value=models.constant_regime_bead_velocity(a, cl, m, d),
+            unit="m/s",
+            equation="Eq. 12 with c = c^l",
+            valid=behind,
+        ),
+        dict(
+            name="bead_velocity_at_upper_speed",
+            value=models.constant_regime_bead_velocity(a, cu, m, d),
+            unit="m/s",
+            equation="Eq. 12 with c = c^u",
+            valid=behind,
+        ),
+        dict(
+            name="peak_force_envelope",
+            value=min(fp, fu),
+            unit="N",
+            equation="min(Eq. 8, upper long-load bound): the two regimes of Fig. 3",
+            valid="upper estimate of the leading peak for any loading time",
+            nondim=min(fp, fu) / fs,
+        ),
+    ]
+
+
+def _effect_predictions(scene) -> list[dict]:
+    """The effects' Hertz models (EFFECT_DOMAINS): a precompressed chain's sound speed, and the peak
+    force and duration of a two-body impact (a striker on one bead, one bead on the wall)."""
+    out = []
+    f0 = scene.effects.precompression
+    if f0:
+        k, m = float(scene.law.k), scene.mass
+        spacing = scene.diameter - float(scene.law.static_overlap(f0))
+        out.append(
+            dict(
+                name="precompressed_sound_speed",
+                value=models.precompressed_sound_speed(k, f0, m, spacing),
+                unit="m/s",
+                equation="c0 = a sqrt(k_lin/m), k_lin = 3/2 K^(2/3) F0^(1/3) (Nesterenko 2001, Sec. 1.1)",
+                valid=EFFECT_DOMAINS["precompressed"] + "; the speed of a small perturbation's front",
+            )
+        )
+    if scene.chain.beads != 1:
+        return out
+    ld, m1 = scene.loading, float(scene.bead_masses[0])
+    if ld.kind == "striker":
+        ms = scene.striker_mass
+        hit = models.hertz_impact(float(scene.striker_law.k), ms * m1 / (ms + m1), ld.velocity)
+        name, law_text = "striker_impact", "striker on bead 1, m* = M m / (M + m)"
+    elif ld.kind == "velocity" and scene.effects.far_end == "wall":
+        hit = models.hertz_impact(float(scene.wall_law.k), m1, ld.velocity)
+        name, law_text = "wall_impact", "bead on the flat, E* = E/(1-nu^2), R* = R, m* = m"
+    else:
+        return out
+    return out + [
+        dict(
+            name=f"{name}_peak_force",
+            value=hit["peak_force"],
+            unit="N",
+            equation=f"Hertz impact: K^(2/5) (5/4 m* v^2)^(3/5), {law_text} (Johnson 1985, Sec. 11.1)",
+            valid=EFFECT_DOMAINS[name],
+            nondim=hit["peak_force"] / scene.force_scale,
+        ),
+        dict(
+            name=f"{name}_duration",
+            value=hit["duration"],
+            unit="s",
+            equation="Hertz impact: 2.943 delta_max / v (Johnson 1985, Sec. 11.1)",
+            valid=EFFECT_DOMAINS[name],
+        ),
+    ]
