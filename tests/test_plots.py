@@ -22,6 +22,7 @@ from granchain.workflows.plots import (
     FORMATS,
     HEATMAP_MAX_CELLS,
     SpaceTime,
+    canvas,
     check_formats,
     compare_histories,
     compare_peaks,
@@ -336,7 +337,7 @@ def test_incomplete_peaks_get_open_markers(compare_dir, tmp_path):
     pk = load_peaks(r)
     assert pk.has_complete and (pk.reached & ~pk.complete).any()
     fig, ax = plt.subplots()
-    plots._peak_markers(ax, pk.contact, pk.peak_force, pk.reached, pk.complete, pk.has_complete, "run")
+    canvas._peak_markers(ax, pk.contact, pk.peak_force, pk.reached, pk.complete, pk.has_complete, "run")
     filled, hollow = ax.lines
     assert np.array_equal(filled.get_xdata(), pk.contact[pk.reached & pk.complete])
     assert np.array_equal(hollow.get_xdata(), pk.contact[pk.reached & ~pk.complete])
@@ -375,7 +376,7 @@ def test_error_bars_only_where_larger_than_the_marker():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from granchain.workflows.plots import _error_bars
+    from granchain.workflows.plots.canvas import _error_bars
 
     fig, ax = plt.subplots(figsize=(6, 4), dpi=100)
     x = np.arange(1.0, 6.0)

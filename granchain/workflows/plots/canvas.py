@@ -1,0 +1,181 @@
+"""What every figure of granchain shares: figures made outside pyplot, the formats and files they are
+written to (atomically, never through a symbolic link: granchain.safe_files), the plotted data as CSV,
+the text on them (user text shown as is, time units), and the peak-force markers and error bars."""
+
+from __future__ import annotations
+
+import csv
+import io
+from collections.abc import Iterable
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter
+
+from granchain import safe_files
+from granchain.errors import GranchainError, UsageError
+from granchain.results import printable
+
+
+class PlotError(GranchainError, ValueError):
+    """A directory that cannot be plotted (not a run or compare directory, or missing data)."""
+
+
+#: figure formats plot_run and plot_compare write (matplotlib's savefig, by file suffix)
+FORMATS = ("png", "pdf", "svg")
+
+
+DPI = 120
+
+
+def check_formats(formats: str | Iterable[str]) -> tuple[str, ...]:
+    """The figure formats asked for, checked: a comma-separated string or an iterable of names."""
+    if isinstance(formats, str):
+        formats = formats.split(",")
+    fmts = [str(f).strip().lower().lstrip(".") for f in formats]
+    fmts = [f for f in fmts if f]
+    if not fmts:
+        raise UsageError(f"no figure format given: choose one or more of {', '.join(FORMATS)} (e.g. png,pdf)")
+    bad = [f for f in fmts if f not in FORMATS]
+    if bad:
+        raise UsageError(
+            f"unknown figure format {bad[0]!r}: choose one or more of {', '.join(FORMATS)} (e.g. --format png,pdf)"
+        )
+    return tuple(dict.fromkeys(fmts))
+
+
+class ChainFigure(Figure):
+    """A matplotlib Figure made outside pyplot that a notebook shows by itself (``_repr_png_``), even
+    before pyplot has chosen a backend; otherwise a plain Figure (``savefig``, ``axes``, ...)."""
+
+    def _repr_png_(self) -> bytes:
+        buf = io.BytesIO()
+        self.savefig(buf, format="png", bbox_inches="tight")
+        return buf.getvalue()
+
+
+def _new_figure(**kw) -> Figure:
+    """A Figure outside pyplot: no backend is chosen or changed, no global figure list grows."""
+    return ChainFigure(**kw)
+
+
+def _unsafe(e: OSError) -> PlotError:
+    return PlotError(f"{e}; nothing was written there")
+
+
+def save_figure(fig: Figure, base: Path, formats=("png",)) -> list[Path]:
+    """fig as base.<format> for each format, written atomically and never through a symbolic link
+    (granchain.safe_files: a link planted at the name is refused, its target untouched)."""
+    out = []
+    for fmt in check_formats(formats):
+        p = base.with_name(f"{base.name}.{fmt}")
+        try:
+            safe_files.save_figure(fig, p, format=fmt, dpi=DPI, metadata={"Date": None} if fmt == "svg" else None)
+        except safe_files.UnsafeFileError as e:
+            raise _unsafe(e) from None
+        out.append(p)
+    return out
+
+
+_save = save_figure
+
+
+def _write_csv(path: Path, header: list[str], columns: list[np.ndarray]) -> None:
+    text = io.StringIO()
+    w = csv.writer(text)
+    w.writerow(header)
+    for row in zip(*columns, strict=True):
+        w.writerow([repr(float(x)) for x in row])
+    try:
+        safe_files.write_text(path, text.getvalue())
+    except safe_files.UnsafeFileError as e:
+        raise _unsafe(e) from None
+
+
+def _cmap(name: str):
+    return matplotlib.colormaps[name]
+
+
+def _plain(text: str) -> str:
+    """User text (a scene title) shown as is: a $ would start mathtext; control characters escaped."""
+    return printable(str(text)).replace("$", r"\$")
+
+
+def _method_label(summary: dict) -> str:
+    return _plain(f"({summary['method']}, ") + rf"$\Delta t$ = {summary['timestep']:g} s)"
+
+
+def _label(summary: dict) -> str:
+    return _plain(summary["backend"]) + " " + _method_label(summary)
+
+
+def _time_unit(t_max: float) -> tuple[float, str]:
+    """Factor and mathtext unit for a time axis running to t_max seconds."""
+    for factor, unit in ((1.0, "s"), (1e3, "ms"), (1e6, r"$\mu$s")):
+        if t_max * factor >= 1.0:
+            return factor, unit
+    return 1e9, "ns"
+
+
+#: marker size (points) of the peak-force markers; an error bar is drawn where it reaches beyond one
+MARKER_SIZE = 3.0
+
+
+def _error_bars(ax, x: np.ndarray, y: np.ndarray, err: np.ndarray | None, color, label: str = "") -> int:
+    """Error bars of the measured peak-force errors (granchain.workflows.errors) where they reach beyond
+    the marker, decided in display space once the axes' limits are final; returns how many were drawn."""
+    if err is None:
+        return 0
+    ok = np.isfinite(err) & np.isfinite(y) & (err > 0)
+    if not ok.any():
+        return 0
+    fig = ax.figure
+    radius = 0.5 * MARKER_SIZE * fig.dpi / 72.0  # pixels
+    lo = np.where(ok, np.maximum(y - np.where(ok, err, 0.0), np.finfo(float).tiny), y)
+    pts = lambda v: ax.transData.transform(np.column_stack([x, v]))[:, 1]  # noqa: E731
+    centre, top, bottom = pts(y), pts(np.where(ok, y + np.where(ok, err, 0.0), y)), pts(lo)
+    big = ok & ((top - centre > radius) | (centre - bottom > radius))
+    if big.any():
+        ax.errorbar(x[big], y[big], yerr=err[big], fmt="none", ecolor=color, elinewidth=0.8, capsize=2, label=label)
+    return int(big.sum())
+
+
+def _plain_log_ticks(*axes) -> None:
+    """Plain numbers on log y axes spanning less than a decade (not 4.2 x 10^4 on every minor tick)."""
+    lo, hi = axes[0].get_ylim()
+    if lo > 0 and hi / lo < 10.0:
+        for ax in axes:
+            for set_fmt in (ax.yaxis.set_major_formatter, ax.yaxis.set_minor_formatter):
+                set_fmt(FuncFormatter(lambda v, _: f"{v:.6g}"))
+
+
+def _legend_label(model_label: str) -> str:
+    """A model_curves label for a legend: its formulas in mathtext."""
+    return model_label.replace("(1+beta)/2", r"$(1+\beta)/2$")
+
+
+#: more lines than this (snapshot times, history contacts) and they are coloured by a colour bar, not
+#: named in a legend
+LEGEND_MAX = 8
+
+
+def _peak_markers(
+    ax, contacts, peak, reached, complete, has_complete: bool, label: str, color=None, open_note: str = ""
+) -> None:
+    """Peak forces of the reached contacts as markers: filled where the peak is complete, open where it
+    is not (when known)."""
+    full = reached & complete
+    (line,) = ax.plot(contacts[full], peak[full], "o", ms=MARKER_SIZE, color=color, label=label)
+    part = reached & ~complete
+    if has_complete and part.any():
+        ax.plot(
+            contacts[part],
+            peak[part],
+            "o",
+            ms=4,
+            mfc="none",
+            color=line.get_color(),
+            label=f"peak not complete at the end of the run (open marker{open_note})",
+        )

@@ -1,0 +1,364 @@
+"""The figures of a run (a RunResult or a run directory): histories, peaks with the models that apply,
+snapshots, the heat map; returned as Figures, saved when asked, or all written into the run directory
+(plot_run)."""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+import numpy as np
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
+
+from granchain.physics.predictions import applicability
+from granchain.results import RunResult
+from granchain.workflows.plots.canvas import (
+    LEGEND_MAX,
+    PlotError,
+    _cmap,
+    _error_bars,
+    _label,
+    _legend_label,
+    _new_figure,
+    _peak_markers,
+    _plain,
+    _plain_log_ticks,
+    _save,
+    _time_unit,
+    _write_csv,
+    check_formats,
+)
+from granchain.workflows.plots.spacetime import (
+    _draw_heatmap,
+    figure_heatmap,
+    spacetime_force,
+    write_heatmap,
+)
+from granchain.workflows.plots.tables import (
+    _histories_table,
+    _snapshots_table,
+    as_result,
+    load_peaks,
+)
+
+
+def _draw_histories(r: RunResult):
+    """(Figure, CSV header, CSV columns) of the histories, or None without any."""
+    if not r.solution.history_contacts:
+        return None
+    summary = r.summary
+    header, data = _histories_table(r)
+    factor, unit = _time_unit(float(np.max(data[:, 0])) if data.size else 0.0)
+    t = data[:, 0] * factor
+    fcols = [i for i, h in enumerate(header) if h.startswith("force_")]
+    vcols = [i for i, h in enumerate(header) if h.startswith("velocity_")]
+    contacts = [int(header[i].split("_")[1]) for i in fcols]
+    many = len(fcols) > LEGEND_MAX
+    cmap = _cmap("viridis")
+    norm = Normalize(min(contacts), max(contacts)) if many else None
+    fig = _new_figure(figsize=(8, 7), layout="constrained" if many else None)
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    for i in fcols:
+        c = int(header[i].split("_")[1])
+        kw = {"color": cmap(norm(c))} if many else {"label": rf"$F_{{{c},{c + 1}}}$"}
+        ax1.plot(t, data[:, i], lw=1, **kw)
+    for i in vcols:
+        c = int(header[i].split("_")[1])
+        kw = {"color": cmap(norm(c))} if many else {"label": rf"$v_{{{c}}}$"}
+        ax2.plot(t, data[:, i], lw=1, **kw)
+    ax1.set_ylabel(r"contact force $F_{i,i+1}$ (N)")
+    ax2.set_ylabel(r"bead velocity $v_i$ (m/s)")
+    ax2.set_xlabel(rf"time $t$ ({unit})")
+    ax1.set_title(f"Contact force and bead velocity histories — {_label(summary)}", fontsize=10)
+    for ax in (ax1, ax2):
+        ax.grid(alpha=0.3)
+    if many:
+        cb = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=r"contact / bead $i$")
+        cb.ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    else:
+        ax1.legend(fontsize=8)
+        ax2.legend(fontsize=8)
+        fig.tight_layout()
+    return fig, [header[0], *[header[i] for i in fcols + vcols]], [data[:, 0], *[data[:, i] for i in fcols + vcols]]
+
+
+def figure_histories(run) -> Figure:
+    """Contact force and bead velocity histories at the recorded contacts (Fig. 5a, 5b) of a RunResult
+    or run directory, as a Figure (not saved). PlotError when the run recorded none."""
+    drawn = _draw_histories(as_result(run))
+    if drawn is None:
+        raise PlotError("this run recorded no histories: set [outputs] histories = [contacts] in the scene")
+    return drawn[0]
+
+
+def write_histories(run, formats=("png",)) -> list[Path]:
+    """(plot_run) histories.<format> and histories_plot.csv in a run directory; [] when it has no histories."""
+    r = as_result(run)
+    drawn = _draw_histories(r)
+    if drawn is None:
+        return []
+    fig, header, cols = drawn
+    made = _save(fig, r.path / "histories", formats)
+    _write_csv(r.path / "histories_plot.csv", header, cols)
+    return made
+
+
+def model_curves(scene, contacts: np.ndarray, skipped: dict[str, str] | None = None) -> dict[str, np.ndarray]:
+    """Model peak force vs contact, for the models that apply to the scene (predictions.applicability).
+
+    The curves are the scene's contact law's (ContactLaw.model_curves). skipped: if given, filled with
+    label -> reason for each model left out because it does not apply.
+    """
+
+    def applies(name: str, label: str) -> bool:
+        verdict = applicability(name, scene)
+        if not verdict.applies and skipped is not None:
+            skipped[label] = verdict.reason
+        return verdict.applies
+
+    return scene.contact.law_class.model_curves(scene, contacts, applies)
+
+
+def _draw_peaks(r: RunResult, log: bool = True):
+    summary = r.summary
+    scene = r.scene
+    pk = load_peaks(r)
+    contacts, peak = pk.contact, pk.peak_force
+    skipped: dict[str, str] = {}
+    curves = model_curves(scene, contacts, skipped)
+    fig = _new_figure(figsize=(8, 5))
+    ax = fig.subplots()
+    # on log axes, the tiny peaks of contacts the front is still reaching at the end of the run (not
+    # complete) would squash the profile into a line: the axis is set by the complete peaks, the rest
+    # are counted in the legend (and kept in peaks_plot.csv)
+    done = pk.reached & pk.complete
+    floor, note = None, ""
+    if log and pk.has_complete and done.any():
+        floor = float(peak[done].min()) / 1.5
+        below = int(np.sum(pk.reached & ~pk.complete & (peak < floor)))
+        if below:
+            note = f"; {below} below the axis"
+        else:
+            floor = None
+    label = f"peak force — {_label(summary)}"
+    _peak_markers(ax, contacts, peak, pk.reached, pk.complete, pk.has_complete, label, open_note=note)
+    for name, y in curves.items():
+        ax.plot(contacts, y, "-", lw=1.2, label=_legend_label(name))
+    if log:
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+    if floor is not None:
+        tops = [float(peak[pk.reached].max()), *(float(np.nanmax(y)) for y in curves.values() if np.isfinite(y).any())]
+        ax.set_ylim(floor, 1.3 * max(tops))
+    ax.set_xlabel(r"contact $i$ (between bead $i$ and $i+1$)")
+    ax.set_ylabel(r"peak contact force $F_p$ (N)")
+    sec = ax.secondary_yaxis("right", functions=(lambda f: f / scene.force_scale, lambda g: g * scene.force_scale))
+    sec.set_ylabel(r"$F_p \,/\, (E^* R^{*2})$")
+    if log:
+        _plain_log_ticks(ax, sec)
+    ax.set_title(_plain(scene.title or "peak force along the chain"), fontsize=9)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    if skipped:  # say which models are left out, and why
+        note = "\n".join(
+            _plain(textwrap.shorten(f"not drawn, {label}: {reason}", width=160, placeholder=" ..."))
+            for label, reason in skipped.items()
+        )
+        fig.text(0.01, 0.01, note, fontsize=6, va="bottom", ha="left", color="0.3")
+        fig.tight_layout(rect=(0, 0.025 * (len(skipped) + 1), 1, 1))
+    else:
+        fig.tight_layout()
+    err = None if pk.error is None else np.where(pk.reached, pk.error, np.nan)
+    if _error_bars(ax, contacts, peak, err, "0.25", "measured error (dt, 2 dt, 4 dt), where beyond the marker"):
+        ax.legend(fontsize=8)
+    header, cols = ["contact", "peak_force"], [contacts, peak]
+    if pk.error is not None:
+        header, cols = [*header, "peak_force_error"], [*cols, pk.error]
+    if pk.has_complete:
+        header, cols = [*header, "complete"], [*cols, pk.complete.astype(float)]
+    return fig, [*header, *curves], [*cols, *curves.values()]
+
+
+def figure_peaks(run, log: bool = True) -> Figure:
+    """Peak force vs contact (log axes unless log=False) with the models that apply (Figs. 6, 7), of a
+    RunResult or run directory, as a Figure (not saved); open markers: peaks not complete."""
+    return _draw_peaks(as_result(run), log)[0]
+
+
+def write_peaks(run, log: bool = True, formats=("png",)) -> list[Path]:
+    """(plot_run) peaks.<format> and peaks_plot.csv in a run directory."""
+    r = as_result(run)
+    fig, header, cols = _draw_peaks(r, log)
+    made = _save(fig, r.path / "peaks", formats)
+    _write_csv(r.path / "peaks_plot.csv", header, cols)
+    return made
+
+
+def _draw_snapshots(r: RunResult):
+    if not np.size(r.solution.snapshot_time):
+        return None
+    summary = r.summary
+    data = _snapshots_table(r)
+    pk = load_peaks(r)
+    times = np.unique(data[:, 0])
+    factor, unit = _time_unit(float(times.max()))
+    many = times.size > LEGEND_MAX
+    cmap = _cmap("viridis")
+    norm = Normalize(times.min() * factor, times.max() * factor) if many else None
+    fig = _new_figure(figsize=(9, 7), layout="constrained" if many else None)
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    cols = {"time": [], "bead": [], "velocity": [], "contact_force": []}
+    for t in times:
+        rows = data[data[:, 0] == t]
+        kw = {"color": cmap(norm(t * factor))} if many else {"label": rf"$t$ = {t * factor:g} {unit}"}
+        ax1.plot(rows[:-1, 1], rows[:-1, 4], lw=1, **kw)
+        ax2.plot(rows[:, 1], rows[:, 3], lw=1, **kw)
+        for k, c in zip(cols, (rows[:, 0], rows[:, 1], rows[:, 3], rows[:, 4]), strict=True):
+            cols[k].append(c)
+    ax1.plot(pk.contact, pk.peak_force, "k--", lw=1, label="peak-force envelope (whole run)")
+    ax1.set_ylabel(r"contact force $F_{i,i+1}$ (N)")
+    ax2.set_ylabel(r"bead velocity $v_i$ (m/s)")
+    ax2.set_xlabel(r"bead / contact index $i$")
+    ax1.set_title(f"Force and velocity along the chain — {_label(summary)}", fontsize=10)
+    for ax in (ax1, ax2):
+        ax.grid(alpha=0.3)
+    ax1.legend(fontsize=8)
+    if not many:
+        ax2.legend(fontsize=8)
+    if many:
+        fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=rf"snapshot time $t$ ({unit})")
+    else:
+        fig.tight_layout()
+    return fig, list(cols), [np.concatenate(v) for v in cols.values()]
+
+
+def figure_snapshots(run) -> Figure:
+    """Force and velocity along the chain at the snapshot times with the running peak-force envelope
+    (Figs. 2, 8, 9), of a RunResult or run directory, as a Figure (not saved). PlotError without any."""
+    drawn = _draw_snapshots(as_result(run))
+    if drawn is None:
+        raise PlotError("this run took no snapshots: set [outputs] snapshots = [times] in the scene")
+    return drawn[0]
+
+
+def write_snapshots(run, formats=("png",)) -> list[Path]:
+    """(plot_run) snapshots.<format> and snapshots_plot.csv in a run directory; [] when it has no snapshots."""
+    r = as_result(run)
+    drawn = _draw_snapshots(r)
+    if drawn is None:
+        return []
+    fig, header, cols = drawn
+    made = _save(fig, r.path / "snapshots", formats)
+    _write_csv(r.path / "snapshots_plot.csv", header, cols)
+    return made
+
+
+def _saved(fig: Figure, r: RunResult, name: str, header, cols, save, formats) -> Figure:
+    """fig, and, when save is a directory (True: the run's own), name.<format> and name_plot.csv in it."""
+    if save is None or save is False:
+        return fig
+    d = r.path if save is True else Path(save)
+    if d is None:
+        raise PlotError("save=True writes into the run's directory, and this result has none: give save=DIRECTORY")
+    _save(fig, Path(d) / name, formats)
+    _write_csv(Path(d) / f"{name}_plot.csv", header, cols)
+    return fig
+
+
+def plot_peaks(run, log: bool = True, save=None, formats=("png",)) -> Figure:
+    """figure_peaks, written too when asked: save a directory (True: the run directory) gets
+    peaks.<format> for each format and peaks_plot.csv (the plotted data). Returns the Figure."""
+    r = as_result(run)
+    fig, header, cols = _draw_peaks(r, log)
+    return _saved(fig, r, "peaks", header, cols, save, formats)
+
+
+def plot_histories(run, save=None, formats=("png",)) -> Figure:
+    """figure_histories, written too when asked (save: as plot_peaks)."""
+    r = as_result(run)
+    drawn = _draw_histories(r)
+    if drawn is None:
+        figure_histories(r)  # raises, with the fix
+    return _saved(drawn[0], r, "histories", drawn[1], drawn[2], save, formats)
+
+
+def plot_snapshots(run, save=None, formats=("png",)) -> Figure:
+    """figure_snapshots, written too when asked (save: as plot_peaks)."""
+    r = as_result(run)
+    drawn = _draw_snapshots(r)
+    if drawn is None:
+        figure_snapshots(r)  # raises, with the fix
+    return _saved(drawn[0], r, "snapshots", drawn[1], drawn[2], save, formats)
+
+
+def plot_heatmap(run, save=None, formats=("png",)) -> Figure:
+    """figure_heatmap, written too when asked (save: as plot_peaks)."""
+    r = as_result(run)
+    st, why = spacetime_force(r)
+    if st is None:
+        raise PlotError(why)
+    fig, header, cols = _draw_heatmap(r, st)
+    return _saved(fig, r, "heatmap", header, cols, save, formats)
+
+
+#: the figures of a run: figure(result, kind) and RunResult.plot(kind)
+FIGURES = {
+    "peaks": figure_peaks,
+    "histories": figure_histories,
+    "snapshots": figure_snapshots,
+    "heatmap": figure_heatmap,
+}
+
+
+def figure(run, kind: str = "peaks", **kw) -> Figure:
+    """One figure of a RunResult or run directory, as a matplotlib Figure (not saved, not shown).
+
+    Parameters
+    ----------
+    run : granchain.results.RunResult or str or pathlib.Path
+        A result (granchain.run, granchain.load_run) or a run directory.
+    kind : {"peaks", "histories", "snapshots", "heatmap"}
+        Which figure (FIGURES).
+    **kw
+        For "peaks": ``log`` (default True: log axes).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Made without pyplot: ``fig.savefig(path)`` writes it; a notebook shows it as a cell's value.
+
+    Raises
+    ------
+    PlotError
+        kind is unknown, or the run has no data for it (the message says what to set in the scene).
+    """
+    if kind not in FIGURES:
+        raise PlotError(f"unknown figure {kind!r}: choose one of {', '.join(FIGURES)}")
+    return FIGURES[kind](run, **kw)
+
+
+def plot_result(result: RunResult, kind: str = "peaks", **kw) -> Figure:
+    """RunResult.plot: figure(result, kind, **kw)."""
+    return figure(result, kind, **kw)
+
+
+def plot_run(run_dir, log: bool = True, formats=("png",), skipped: dict[str, str] | None = None) -> list[Path]:
+    """Every figure of a run directory, in each format, with its plotted data (<figure>_plot.csv), written
+    in it without following symbolic links; returns the figure files.
+
+    skipped: if given, filled with figure -> reason for each figure that could not be drawn (the heat map
+    of a run without whole-chain time data); the reason is also logged.
+    """
+    formats = check_formats(formats)
+    r = as_result(run_dir)
+    if r.path is None:
+        raise PlotError("plot_run writes into a run directory: give its path (or figure(result, kind) for a Figure)")
+    return [
+        *write_peaks(r, log, formats),
+        *write_histories(r, formats),
+        *write_snapshots(r, formats),
+        *write_heatmap(r, formats, skipped),
+    ]

@@ -1,0 +1,82 @@
+"""A run's data as the figures read it: the peak table, the histories and snapshots as their CSV files
+have them, and a RunResult from a result or a run directory."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from granchain.results import RunResult
+from granchain.workflows.load import LoadRunError, load_run
+from granchain.workflows.plots.canvas import (
+    PlotError,
+)
+
+
+@dataclass
+class Peaks:
+    """peaks.csv of a run directory, with or without its complete column."""
+
+    contact: np.ndarray  # 1-based
+    peak_force: np.ndarray  # N
+    time_of_peak: np.ndarray  # s; nan where the wave never reached the contact
+    complete: np.ndarray  # bool; all True when the file has no complete column
+    has_complete: bool  # whether the file has a complete column
+    error: np.ndarray | None = None  # peak_force_error (N; nan where not estimated), None without the column
+
+    @property
+    def reached(self) -> np.ndarray:
+        """Contacts with a peak: reached by the wave (a time of peak) and a positive force."""
+        return np.isfinite(self.time_of_peak) & (self.peak_force > 0)
+
+
+def load_peaks(run) -> Peaks:
+    """The peak table of a run (a RunResult or a run directory; the complete column is optional)."""
+    df = as_result(run).peaks
+    has = "complete" in df.columns
+    contact = df.index.to_numpy().astype(float)
+    complete = df["complete"].to_numpy(bool) if has else np.ones(contact.shape, bool)
+    error = df["peak_force_error"].to_numpy(float) if "peak_force_error" in df.columns else None
+    return Peaks(contact, df["peak_force"].to_numpy(float), df["time_of_peak"].to_numpy(float), complete, has, error)
+
+
+def as_result(run) -> RunResult:
+    """A RunResult as it is, or a run directory read back (granchain.load_run); a directory that is not
+    one is a PlotError."""
+    if isinstance(run, RunResult):
+        return run
+    run = Path(run)
+    try:
+        return load_run(run)
+    except LoadRunError as e:
+        raise PlotError(str(e)) from None
+
+
+def _histories_table(r: RunResult) -> tuple[list[str], np.ndarray]:
+    """The histories as histories.csv has them: header and (samples, 1 + 2 contacts) data."""
+    s = r.solution
+    c = [i + 1 for i in s.history_contacts]
+    header = ["time", *[f"force_{i}" for i in c], *[f"velocity_{i}" for i in c]]
+    t = np.asarray(s.history_time, float)
+    f = np.asarray(s.history_force, float).reshape(t.size, len(c))
+    v = np.asarray(s.history_velocity, float).reshape(t.size, len(c))
+    return header, np.column_stack([t, f, v])
+
+
+def _snapshots_table(r: RunResult) -> np.ndarray:
+    """The snapshots as snapshots.csv has them: rows (time, bead, displacement, velocity, contact_force)."""
+    s, n = r.solution, int(r.scene.chain.beads)
+    t = np.asarray(s.snapshot_time, float)
+    k = t.size
+    force = np.column_stack([np.asarray(s.snapshot_force, float).reshape(k, n - 1), np.zeros(k)])
+    return np.column_stack(
+        [
+            np.repeat(t, n),
+            np.tile(np.arange(1, n + 1, dtype=float), k),
+            np.asarray(s.snapshot_displacement, float).reshape(k * n),
+            np.asarray(s.snapshot_velocity, float).reshape(k * n),
+            force.reshape(k * n),
+        ]
+    )
