@@ -135,10 +135,11 @@ def plan(scene, rtol: float | None = None, method: str = "rk4"):
         ``plan.scene`` is concrete (no "auto" left); ``plan.choices`` holds each choice and its reason;
         ``plan.omega_max`` and ``plan.stable_timestep`` the frequency bound and stability limit.
     """
+    from granchain.backends import REFERENCE
     from granchain.workflows.plan import plan_scene
     from granchain.workflows.run import integrator
 
-    return plan_scene(_scene(scene), rtol=rtol, method=integrator("reference", method))
+    return plan_scene(_scene(scene), rtol=rtol, method=integrator(REFERENCE, method))
 
 
 def run(
@@ -157,8 +158,9 @@ def run(
     scene : granchain.scene.Scene or str or pathlib.Path
         From :func:`load_scene` or :func:`parse_scene` (or a bundled scene's name or a .toml path);
         "auto" values are planned for the integrator this backend runs.
-    backend : {"reference", "lammps"}
-        The pure-Python reference solver, or LAMMPS with granchain's pair styles.
+    backend : str or granchain.backends.Backend
+        A key of ``granchain.backends.BACKENDS``: "reference" (the pure-Python reference solver) or
+        "lammps" (LAMMPS with granchain's pair styles).
     method : {None, "rk4", "verlet"}
         Reference integrator (default RK4); LAMMPS runs velocity Verlet only.
     rtol : float, optional
@@ -280,6 +282,7 @@ def compare(
     """
     from pathlib import Path
 
+    from granchain.backends import LAMMPS, REFERENCE
     from granchain.workflows.api import Comparison
     from granchain.workflows.compare import compare_scene
 
@@ -287,7 +290,7 @@ def compare(
         _scene(scene), rtol=rtol, out=out, overwrite=overwrite, method=method, np_=np_, error_estimate=error_estimate
     )
     if out is not None:
-        lam.path, ref.path = Path(out) / "lammps", Path(out) / "reference"
+        lam.path, ref.path = Path(out) / LAMMPS.name, Path(out) / REFERENCE.name
     _with_figures(lam)
     return Comparison(rows=rows, lammps=lam, reference=ref, rtol=rtol, path=None if out is None else Path(out))
 

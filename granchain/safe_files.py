@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import glob
 import io
 import os
 import shutil
@@ -349,10 +350,21 @@ def check_replaceable(
         raise UnsafeFileError(errno.EEXIST, not_owned_message(out, option), str(out))
 
 
+def _fresh_temp(parent: Path, prefix: str) -> Path:
+    """``parent/<prefix><pid>``, not yet made: stale ones of a killed writer (their pid gone, or this
+    pid's past) are removed first."""
+    tmp = parent / f"{prefix}{os.getpid()}"
+    for stale in parent.glob(f"{glob.escape(prefix)}*"):
+        pid = stale.name.rsplit("-", 1)[-1]
+        if not os.path.islink(stale) and (stale == tmp or (pid.isdigit() and not pid_alive(int(pid)))):
+            shutil.rmtree(stale, ignore_errors=True)
+    return tmp
+
+
 @contextlib.contextmanager
 def atomic_directory(
     out: str | Path,
-    kind: str,
+    kind: str | None,
     overwrite: bool = False,
     legacy: Iterable[str] = (),
     option: str = "--out",
@@ -361,25 +373,22 @@ def atomic_directory(
     """Build a directory under a hidden temporary name beside ``out`` and rename it into place.
 
     Yields the temporary directory; when the block ends without an error the marker
-    (:data:`MARKER`, ``kind``) is written and the directory renamed to ``out``. An existing ``out``
-    is replaced only with ``overwrite`` and only if granchain owns it (:func:`check_replaceable`);
-    on any error the temporary directory is removed and ``out`` is left as it was. Stale temporary
-    directories of a killed writer (their pid gone) are removed first. ``owned``: as in
-    :func:`check_replaceable`.
+    (:data:`MARKER`, ``kind``; none for ``kind`` None) is written and the directory renamed to
+    ``out``. An existing ``out`` is replaced only with ``overwrite`` and only if granchain owns it
+    (:func:`check_replaceable`); on any error the temporary directory is removed and ``out`` is left
+    as it was: nothing half-written appears. Stale temporary directories of a killed writer (their
+    pid gone) are removed first. ``owned``: as in :func:`check_replaceable`.
     """
     out = Path(out)
     check_replaceable(out, overwrite, legacy, option, owned)
     parent = out.absolute().parent
     parent.mkdir(parents=True, exist_ok=True)
-    tmp = parent / f".{out.name}.partial-{os.getpid()}"
-    for stale in parent.glob(f".{out.name}.partial-*"):  # left by a killed writer (or this pid's past)
-        pid = stale.name.rsplit("-", 1)[-1]
-        if not os.path.islink(stale) and (stale == tmp or (pid.isdigit() and not pid_alive(int(pid)))):
-            shutil.rmtree(stale, ignore_errors=True)
+    tmp = _fresh_temp(parent, f".{out.name}.partial-")
     tmp.mkdir()
     try:
         yield tmp
-        mark_owned(tmp, kind)
+        if kind is not None:
+            mark_owned(tmp, kind)
         if out.exists() or os.path.islink(out):
             check_replaceable(out, overwrite, legacy, option, owned)  # again: it may have appeared meanwhile
             old = parent / f".{out.name}.old-{os.getpid()}"
@@ -391,3 +400,29 @@ def atomic_directory(
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+
+
+@contextlib.contextmanager
+def atomic_files(
+    directory: str | Path, last: str, keep: Iterable[str] = (), prefix: str = ".partial-"
+) -> Iterator[Path]:
+    """Add files to an existing directory, each complete or not at all, ``last`` last.
+
+    Yields a path inside ``directory`` (``<prefix><pid>``, not yet made) for the block to write a
+    directory at. When the block ends without an error, ``directory``'s own ``last`` is removed, the
+    written files are renamed into ``directory`` one by one (those named in ``keep`` stay as they
+    were) and ``last`` after them, so that its presence marks a complete set. On any error nothing is
+    renamed. The temporary directory is removed in any case; stale ones of a killed writer first.
+    """
+    d = Path(directory)
+    tmp = _fresh_temp(d, prefix)
+    try:
+        yield tmp
+        keep = {*keep, last}
+        made = sorted(p.name for p in tmp.iterdir() if p.name not in keep)
+        (d / last).unlink(missing_ok=True)
+        for name in made:
+            os.replace(tmp / name, d / name)
+        os.replace(tmp / last, d / last)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)

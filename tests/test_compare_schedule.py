@@ -16,11 +16,13 @@ import pytest
 import granchain.lammps.runner as runner
 import granchain.workflows.compare as compare_mod
 import granchain.workflows.run as run_mod
+from granchain.backends import REFERENCE, backend_named
 from granchain.cli import main
 from granchain.lammps.runner import LammpsError, work_dirs
 from granchain.scene import parse_scene
 from granchain.workflows.plan import plan_scene
-from granchain.workflows.run import Abandoned, SharedRuns, UnstableTimestepError, plan_for, shared_reference_runs
+from granchain.workflows.run import UnstableTimestepError, plan_for, shared_reference_runs
+from granchain.workflows.shared_runs import Abandoned, SharedRuns
 
 from .test_error_estimate import BILINEAR_CHAIN as ERROR_ESTIMATE_CHAIN
 
@@ -101,7 +103,8 @@ def test_two_cores_write_what_one_core_writes(serial, tmp_path, monkeypatch, est
     p, dt, serial = serial
     events, threads = [], []
     lammps_started = threading.Event()
-    real_lammps, real_reference, real_run = runner.run_lammps, run_mod.run_reference, compare_mod.run_scene
+    real_lammps, real_reference = runner.run_lammps, run_mod.run_reference
+    real_run, real_calculate = compare_mod.run_scene, compare_mod.calculate_scene
 
     def lammps(scene, *a, **k):
         events.append("lammps")
@@ -118,12 +121,17 @@ def test_two_cores_write_what_one_core_writes(serial, tmp_path, monkeypatch, est
         return got
 
     def run_scene(scene, **kw):
-        threads.append((kw["backend"], threading.current_thread() is threading.main_thread()))
+        threads.append((backend_named(kw["backend"]).name, threading.current_thread() is threading.main_thread()))
         return real_run(scene, **kw)
+
+    def calculate_scene(scene, **kw):
+        threads.append((backend_named(kw["backend"]).name, threading.current_thread() is threading.main_thread()))
+        return real_calculate(scene, **kw)
 
     monkeypatch.setattr(runner, "run_lammps", lammps)
     monkeypatch.setattr(run_mod, "run_reference", reference)
     monkeypatch.setattr(compare_mod, "run_scene", run_scene)
+    monkeypatch.setattr(compare_mod, "calculate_scene", calculate_scene)
     monkeypatch.setattr(run_mod, "available_cores", lambda: 2)
     assert compare(p, tmp_path / "c", estimate) == 0
     assert sorted(threads) == [("lammps", False), ("reference", True)]
@@ -141,13 +149,18 @@ def test_two_cores_write_what_one_core_writes(serial, tmp_path, monkeypatch, est
 def test_one_core_runs_one_after_the_other(tmp_path, monkeypatch):
     p, _ = scene_file(tmp_path)
     threads = []
-    real_run = compare_mod.run_scene
+    real_run, real_calculate = compare_mod.run_scene, compare_mod.calculate_scene
 
     def run_scene(scene, **kw):
-        threads.append((kw["backend"], threading.current_thread() is threading.main_thread()))
+        threads.append((backend_named(kw["backend"]).name, threading.current_thread() is threading.main_thread()))
         return real_run(scene, **kw)
 
+    def calculate_scene(scene, **kw):
+        threads.append((backend_named(kw["backend"]).name, threading.current_thread() is threading.main_thread()))
+        return real_calculate(scene, **kw)
+
     monkeypatch.setattr(compare_mod, "run_scene", run_scene)
+    monkeypatch.setattr(compare_mod, "calculate_scene", calculate_scene)
     monkeypatch.setattr(run_mod, "available_cores", lambda: 1)
     assert compare(p, tmp_path / "c", "off") == 0
     assert threads == [("reference", True), ("lammps", True)]
@@ -293,7 +306,7 @@ def test_shared_runs_are_made_once_across_threads_and_waits_give_up_when_abandon
     got = {}
 
     def ask(name):
-        got[name] = run_mod._execute(sc, "reference", "rk4", 1)[0]
+        got[name] = run_mod._execute(sc, REFERENCE, "rk4", 1).result
 
     with shared_reference_runs() as shared:
         a = threading.Thread(target=ask, args=("a",), name="a")

@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from granchain import safe_files
+from granchain.backends import LAMMPS
 from granchain.errors import GranchainError
 from granchain.lammps.runner import (
     OUTPUT_GLOBS,
@@ -44,14 +45,12 @@ from granchain.lammps.runner import (
     LammpsRunResult,
     ResultsError,
     invariant_from_lammps,
-    lammps_result,
     output_files,
 )
 from granchain.results import RunResult, scene_hash
 from granchain.rundir import RunDirError, write_run_dir
-from granchain.safe_files import pid_alive
 from granchain.scene import load_scene, parse_scene
-from granchain.templates import RESULTS_DUMP, RUN_END_FILE, render_deck
+from granchain.templates import RESULTS_DUMP, RUN_END_FILE
 from granchain.workflows.plan import Plan, PlanChoice, refined_plan
 
 #: what granchain render --out writes (plan.json only when something was planned)
@@ -124,31 +123,24 @@ def render_dir(scene, out: str | Path, plan=None, given=None) -> Path:
     out = Path(out)
     if out.exists() or out.is_symlink():
         raise RunDirError(f"{out}: already exists; granchain render --out writes a new directory: choose another")
-    deck = render_deck(scene)
+    files = LAMMPS.input_files(scene)
+    files["scene.toml"] = scene_file_text(scene)
+    if plan is not None:
+        record = plan_to_dict(plan)
+        if given is not None:
+            record["scene_as_given"] = scene_file_text(given)
+        files[PLAN_FILE] = json.dumps(record, indent=2) + "\n"
     parent = out.resolve().parent
     try:
         parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise RunDirError(f"{parent}: cannot create the directory ({e.strerror}); choose another --out") from None
-    tmp = parent / f".{out.name}.partial-{os.getpid()}"
-    shutil.rmtree(tmp, ignore_errors=True)
     try:
-        tmp.mkdir()
-        (tmp / "deck.lmp").write_text(deck.deck)
-        (tmp / "chain.data").write_text(deck.data)
-        (tmp / "scene.toml").write_text(scene_file_text(scene))
-        if plan is not None:
-            record = plan_to_dict(plan)
-            if given is not None:
-                record["scene_as_given"] = scene_file_text(given)
-            (tmp / PLAN_FILE).write_text(json.dumps(record, indent=2) + "\n")
-        os.replace(tmp, out)
+        with safe_files.atomic_directory(out, None) as tmp:
+            for name, text in files.items():
+                (tmp / name).write_text(text)
     except OSError as e:
-        shutil.rmtree(tmp, ignore_errors=True)
         raise RunDirError(f"{out}: could not write the deck directory ({e}); nothing was left behind") from None
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return out
 
 
@@ -350,15 +342,7 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
             f"{d}: the run finished but left no {LOG_FILE}; collect reads LAMMPS's version, ranks and wall "
             "time from it: run the deck with LAMMPS's default log ('lmp -in deck.lmp'), or copy log.lammps back"
         )
-    plan = plan_record = None
-    if (d / PLAN_FILE).is_file():
-        try:
-            plan_record = json.loads(safe_files.read_text(d / PLAN_FILE, TEXT_LIMIT))
-            if plan_record is not None and not isinstance(plan_record, dict):
-                raise TypeError("not a JSON object")
-            plan = plan_from_dict(plan_record, scene)
-        except (ValueError, KeyError, TypeError, RecursionError, OSError) as e:
-            raise CollectError(f"{d / PLAN_FILE}: is not the plan 'granchain render --out' wrote ({e})") from None
+    plan, plan_record = _read_plan(d, scene)
     extra = {
         "lammps_version": log.version,
         "ranks": log.ranks,
@@ -369,7 +353,7 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
     try:
         with warnings.catch_warnings():  # an empty file is refused below: no warning before the message
             warnings.filterwarnings("ignore", message="loadtxt: input contained no data")
-            base = lammps_result(scene, d, log.loop_time, extra)
+            base = LAMMPS.read_results(scene, d, log.loop_time, extra)
     except ResultsError as e:
         raise CollectError(
             f"{d}: the LAMMPS run's results cannot be read: {e}. Last lines of {LOG_FILE}:\n{log.tail()}"
@@ -413,6 +397,19 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
     else:
         _write_in_place(result, d)
     return result
+
+
+def _read_plan(d: Path, scene):
+    """(Plan, plan.json's record) of a rendered directory; (None, None) when nothing was planned."""
+    if not (d / PLAN_FILE).is_file():
+        return None, None
+    try:
+        record = json.loads(safe_files.read_text(d / PLAN_FILE, TEXT_LIMIT))
+        if record is not None and not isinstance(record, dict):
+            raise TypeError("not a JSON object")
+        return plan_from_dict(record, scene), record
+    except (ValueError, KeyError, TypeError, RecursionError, OSError) as e:
+        raise CollectError(f"{d / PLAN_FILE}: is not the plan 'granchain render --out' wrote ({e})") from None
 
 
 def _damaged_message(d: Path, scene, err: Exception) -> str:
@@ -485,25 +482,13 @@ def _write_in_place(result: RunResult, d: Path) -> None:
     """Add the run directory's own files to d: written aside (d/.collect-<pid>), then renamed in one by
     one, summary.json last (its presence marks a complete run directory); a previous collect's
     summary.json goes first. scene.toml stays as it is (the same text)."""
-    for stale in d.glob(".collect-*"):  # left by a killed collect
-        pid = stale.name.rsplit("-", 1)[-1]
-        if pid.isdigit() and not pid_alive(int(pid)):
-            shutil.rmtree(stale, ignore_errors=True)
-    tmp = d / f".collect-{os.getpid()}"
-    shutil.rmtree(tmp, ignore_errors=True)
     try:
-        write_run_dir(result, tmp)
-        made = sorted(p.name for p in tmp.iterdir() if p.name not in ("scene.toml", "summary.json"))
-        (d / "summary.json").unlink(missing_ok=True)
-        for name in made:
-            os.replace(tmp / name, d / name)
-        os.replace(tmp / "summary.json", d / "summary.json")
+        with safe_files.atomic_files(d, "summary.json", keep=("scene.toml",), prefix=".collect-") as tmp:
+            write_run_dir(result, tmp)
     except OSError as e:
         raise RunDirError(
             f"{d}: could not write the run directory's files ({e}); no summary.json was written"
         ) from None
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
 
 
 __all__ = ["CollectError", "CollectedRunResult", "NotRefinedWarning", "collect", "read_log", "render_dir"]

@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
-import shutil
 import threading
 from pathlib import Path
 
+from granchain.backends import LAMMPS, REFERENCE
 from granchain.postprocess.compare import compare_runs, write_compare
 from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain, write_run_dir
 from granchain.safe_files import UnsafeFileError, atomic_directory
 from granchain.workflows import run as run_module
 from granchain.workflows.errors import rk4_companions
-from granchain.workflows.run import Abandoned, check_resources, plan_for, run_scene, shared_reference_runs
+from granchain.workflows.run import calculate_scene, check_resources, plan_for, run_scene, shared_reference_runs
+from granchain.workflows.shared_runs import Abandoned
 
 
 def compare_scene(
@@ -43,10 +44,10 @@ def compare_scene(
     plan_rtol = rtol / 2 if scene.run.timestep is None else None
     # (run_scene plans each one, and runs it again finer if its measured peaks fell far below the
     # force scale: granchain.workflows.plan.refined_plan)
-    lam_scene, _ = plan_for(scene, "lammps", None, plan_rtol)
+    lam_scene, _ = plan_for(scene, LAMMPS, None, plan_rtol)
     # (a bad scene fails before any run)
-    ref_scene, _ = plan_for(reference_scene or scene, "reference", method, plan_rtol)
-    check_resources(lam_scene, "lammps", np_)
+    ref_scene, _ = plan_for(reference_scene or scene, REFERENCE, method, plan_rtol)
+    check_resources(lam_scene, LAMMPS, np_)
     # LAMMPS's plugin is built or found now, so that a missing compiler or a failed build is said
     # before any run (the reference's starts first, below)
     from granchain.lammps.build import build_plugin
@@ -60,19 +61,21 @@ def compare_scene(
     if error_estimate:
         for sc, m in ((ref_scene, method), (lam_scene, "verlet")):
             prefetch += [(c, "rk4") for c in rk4_companions(sc, m)]
-    ref_kw = dict(backend="reference", method=method, rtol=plan_rtol, error_estimate=error_estimate)
-    lam_kw = dict(backend="lammps", np_=np_, keep_files=True, rtol=plan_rtol, error_estimate=error_estimate)
+    ref_kw = dict(backend=REFERENCE, method=method, rtol=plan_rtol, error_estimate=error_estimate)
+    lam_kw = dict(backend=LAMMPS, np_=np_, rtol=plan_rtol, error_estimate=error_estimate)
     with shared_reference_runs(prefetch) as shared:
         if np_ == 1 and run_module.available_cores() >= 2:
             # LAMMPS (a child process) runs alongside the reference, from a thread of this process,
             # once both runs' checks and warnings are done (the reference's first): at once if the
             # second core is free, else (a worker makes companions there) after the reference's own
             # run, while this process waits for them (on Table I they take longer than that run)
-            ref, lam = _alongside(shared, reference_scene or scene, ref_kw, scene, lam_kw, after_ref_run=bool(prefetch))
+            ref, lam_calc = _alongside(
+                shared, reference_scene or scene, ref_kw, scene, lam_kw, after_ref_run=bool(prefetch)
+            )
         else:  # one core (or LAMMPS on several ranks): one after the other, the reference first
             ref = run_scene(reference_scene or scene, **ref_kw)
-            lam = run_scene(scene, **lam_kw)
-    files, work = lam.extra.pop("_files"), lam.extra.pop("_work")
+            lam_calc = calculate_scene(scene, **lam_kw)
+    lam = lam_calc.result
     try:
         rows = compare_runs(lam, ref, rtol)
         if out is not None:
@@ -80,20 +83,21 @@ def compare_scene(
             # replaced only when granchain wrote it (safe_files.atomic_directory)
             try:
                 with atomic_directory(out, "compare", overwrite=overwrite, owned=owned_by_granchain) as tmp:
-                    write_run_dir(lam, tmp / "lammps", extra_files=files)
-                    write_run_dir(ref, tmp / "reference")
+                    write_run_dir(lam, tmp / LAMMPS.name, extra_files=lam_calc.files)
+                    write_run_dir(ref, tmp / REFERENCE.name)
                     write_compare(rows, tmp)
             except UnsafeFileError as e:
                 raise RunDirError(str(e)) from None
     finally:
-        shutil.rmtree(work, ignore_errors=True)
+        lam_calc.discard()
     return rows, lam, ref
 
 
 def _alongside(shared, ref_scene, ref_kw: dict, lam_scene, lam_kw: dict, after_ref_run: bool):
-    """(reference result, LAMMPS result): LAMMPS's run_scene in a thread alongside the reference's here.
+    """(reference result, LAMMPS Calculation): LAMMPS's calculate_scene in a thread alongside the
+    reference's run_scene here.
 
-    The reference's checks and warnings come first, then LAMMPS's (the thread's run_scene waits for
+    The reference's checks and warnings come first, then LAMMPS's (the thread's calculate_scene waits for
     them before its run); an error in either stops both before any run. LAMMPS then starts at once
     or, after_ref_run, once the reference's own run is made (its error estimate then waits for the
     companions a worker process makes: this process and LAMMPS use the core it leaves idle). The
@@ -103,7 +107,7 @@ def _alongside(shared, ref_scene, ref_kw: dict, lam_scene, lam_kw: dict, after_r
     checked, go = threading.Event(), threading.Event()
     box: dict = {}
 
-    def lammps_checked() -> None:  # LAMMPS's run_scene, after its checks: wait for the reference's go
+    def lammps_checked() -> None:  # LAMMPS's calculate_scene, after its checks: wait for the reference's go
         checked.set()
         go.wait()
         if "stop" in box:
@@ -111,7 +115,7 @@ def _alongside(shared, ref_scene, ref_kw: dict, lam_scene, lam_kw: dict, after_r
 
     def lammps() -> None:
         try:
-            box["result"] = run_scene(lam_scene, before_run=lammps_checked, **lam_kw)
+            box["result"] = calculate_scene(lam_scene, before_run=lammps_checked, **lam_kw)
         except BaseException as e:  # given to the main thread
             box["error"] = e
         finally:
@@ -138,7 +142,7 @@ def _alongside(shared, ref_scene, ref_kw: dict, lam_scene, lam_kw: dict, after_r
             thread.join()
         got = box.get("result")
         if got is not None:
-            shutil.rmtree(got.extra["_work"], ignore_errors=True)
+            got.discard()
         raise
     go.set()  # (the reference's run_scene calls after_run unless it raised)
     thread.join()

@@ -19,6 +19,7 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
+from granchain.backends import Backend, backend_named
 from granchain.errors import UsageError
 from granchain.schedule import dump_stride, history_stride
 
@@ -44,6 +45,10 @@ FIXED_BYTES = 1e6
 #: bytes of one atom line of a granchain dump: 10 columns at %.17g (granchain/templates/*dump*.j2)
 DUMP_LINE_BYTES = 230
 DUMP_FRAME_HEADER_BYTES = 200
+
+
+#: the files of output_sizes every backend's run directory gets (the others are Backend.work_files)
+RUN_DIR_TABLES = ("histories.csv",)
 
 
 def output_sizes(scene) -> dict[str, float]:
@@ -97,15 +102,16 @@ def max_steps() -> float:
     return value
 
 
-def estimate(scene, backend: str = "reference") -> Estimate:
+def estimate(scene, backend: str | Backend = "reference") -> Estimate:
     """The steps, memory, disk and wall time of a planned scene's run (no "auto" left in it).
 
     Parameters
     ----------
     scene : Scene
         A planned scene: beads, end_time and timestep given.
-    backend : str
-        "reference" or "lammps" (LAMMPS writes its files in a work directory first: twice the disk).
+    backend : str or Backend
+        A backend or its name: the files of output_sizes it writes (Backend.work_files: LAMMPS's
+        dumps, first in a work directory) count beside the run directory's own tables.
 
     Returns
     -------
@@ -116,8 +122,8 @@ def estimate(scene, backend: str = "reference") -> Estimate:
     steps = scene.run.end_time / scene.run.timestep
     files = output_sizes(scene)
     history = files.get("histories.npy", 0.0)  # the histories as doubles, in memory until written
-    if backend != "lammps":  # LAMMPS's own files
-        files = {k: v for k, v in files.items() if k not in ("histories.npy", "chain.dump")}
+    kept = backend_named(backend).work_files
+    files = {k: v for k, v in files.items() if k in RUN_DIR_TABLES or k in kept}
     snapshots = 16.0 * beads * len(scene.outputs.snapshots)
     # the solver's arrays, the histories and snapshots kept until the run is written (LAMMPS's
     # whole-chain dump goes to disk and is only copied)
@@ -164,8 +170,26 @@ def _duration(seconds: float) -> str:
     return f"{seconds:.3g} s"
 
 
+def _check_disk(est: Estimate, source, places) -> None:
+    """Refuse a run whose files need more disk than is free at one of the places it writes to."""
+    for place in places:
+        free = free_disk(place)
+        if free is not None and est.disk > free:
+            big = max(est.files.items(), key=lambda kv: kv[1], default=("the run's files", est.disk))
+            raise ResourceError(
+                f"{source}: this run writes about {_size(est.disk)} ({big[0]} {_size(big[1])}), more than the "
+                f"{_size(free)} free at {place}: set a larger [outputs] dump_interval or history_interval, or "
+                "fewer histories, or write to a disk with more room"
+            )
+
+
 def check_run(
-    scene, backend: str = "reference", out=None, machine: bool = True, stacklevel: int = 2, planned_step: bool = False
+    scene,
+    backend: str | Backend = "reference",
+    out=None,
+    machine: bool = True,
+    stacklevel: int = 2,
+    planned_step: bool = False,
 ) -> Estimate:
     """Refuse a planned scene's run that cannot finish here, before anything runs; warn about a long one.
 
@@ -178,8 +202,9 @@ def check_run(
     ----------
     scene : Scene
         The planned scene.
-    backend : str
-        "reference" or "lammps".
+    backend : str or Backend
+        A backend or its name (Backend.work_in_tmp: its free disk is checked in the temporary
+        directory too).
     out : path or None
         The run directory to be written, if any.
     machine : bool
@@ -194,6 +219,7 @@ def check_run(
     Estimate
         The estimate the checks used.
     """
+    backend = backend_named(backend)
     est = estimate(scene, backend)
     source = scene.source
     run = scene.run
@@ -221,17 +247,9 @@ def check_run(
             "[outputs] histories or a larger history_interval/dump_interval, or a machine with more memory"
         )
     places = [out] if out is not None and machine else []
-    if backend == "lammps" and machine:
+    if backend.work_in_tmp and machine:
         places.append(tempfile.gettempdir())
-    for place in places:
-        free = free_disk(place)
-        if free is not None and est.disk > free:
-            big = max(est.files.items(), key=lambda kv: kv[1], default=("the run's files", est.disk))
-            raise ResourceError(
-                f"{source}: this run writes about {_size(est.disk)} ({big[0]} {_size(big[1])}), more than the "
-                f"{_size(free)} free at {place}: set a larger [outputs] dump_interval or history_interval, or "
-                "fewer histories, or write to a disk with more room"
-            )
+    _check_disk(est, source, places)
     if est.seconds > WARN_SECONDS:
         warnings.warn(
             f"{source}: this run makes {est.steps:.3g} steps on {est.beads} beads: about {_duration(est.seconds)} "

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from granchain import safe_files
+from granchain.backends import BACKENDS, LAMMPS, REFERENCE, FileIOBackend
 from granchain.errors import GranchainError
 from granchain.results import ChainSolution, RunResult, StoredRun
 
@@ -55,10 +56,10 @@ def run_dir_of(path: str | Path) -> Path:
                 f"{p / CAMPAIGN_RUN_DIR}: is a symbolic link; a campaign point's run/ is read only as itself"
             )
         return p / CAMPAIGN_RUN_DIR
-    if (p / "lammps" / "summary.json").exists() and (p / "reference" / "summary.json").exists():
+    lam, ref = p / LAMMPS.name, p / REFERENCE.name  # a compare directory's two runs
+    if (lam / "summary.json").exists() and (ref / "summary.json").exists():
         raise LoadRunError(
-            f"{p}: a compare directory (granchain compare): load each run, load_run('{p / 'lammps'}') and "
-            f"load_run('{p / 'reference'}')"
+            f"{p}: a compare directory (granchain compare): load each run, load_run('{lam}') and load_run('{ref}')"
         )
     raise LoadRunError(
         f"{p}: not a complete run directory (no summary.json; an interrupted run or a directory of "
@@ -244,12 +245,11 @@ def load_run(path: str | Path) -> RunResult:
     }
     if prov.get("finished_utc"):
         kw["finished_utc"] = _time(prov["finished_utc"])
-    if summary["backend"] == "lammps":
+    backend = BACKENDS.get(summary["backend"]) if isinstance(summary["backend"], str) else None
+    if backend is None:
+        return RunResult(**kw)
+    if isinstance(backend, FileIOBackend) and "collected" in prov:  # a run made elsewhere, collected
         from granchain.workflows.collect import CollectedRunResult
 
-        if "collected" in prov:
-            return CollectedRunResult(**kw, collected=prov["collected"])
-        from granchain.lammps.runner import LammpsRunResult
-
-        return LammpsRunResult(**kw)
-    return RunResult(**kw)
+        return CollectedRunResult(**kw, collected=prov["collected"])
+    return backend.result_type(**kw)

@@ -3,36 +3,27 @@
 from __future__ import annotations
 
 import os
-import threading
 import warnings
-from concurrent.futures import FIRST_COMPLETED, Future, wait
 from contextlib import contextmanager
-from dataclasses import replace
 from datetime import UTC, datetime
 from pathlib import Path
 
-import numpy as np
-
+from granchain.backends import BACKENDS, METHODS, REFERENCE, Backend, Calculation, backend_named
 from granchain.errors import UsageError
-from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH, InvariantError
-from granchain.peaks import lead_floor, stop_force_floor
-from granchain.problem import ChainProblem
-from granchain.reference.solver import solve_chain
+from granchain.invariants import InvariantError
 from granchain.results import RunResult
 from granchain.rundir import check_output_dir, write_run_dir
-from granchain.schedule import history_stride
+from granchain.workflows import shared_runs
 from granchain.workflows.guards import DUMP_FRAME_HEADER_BYTES as DUMP_FRAME_HEADER_BYTES
 from granchain.workflows.guards import DUMP_LINE_BYTES as DUMP_LINE_BYTES
 from granchain.workflows.guards import check_run, output_sizes
-
-BACKENDS = ("reference", "lammps")
+from granchain.workflows.shared_runs import Abandoned
 
 
 def run_reference(scene, method: str = "rk4") -> RunResult:
     """Run the pure-Python reference solver on a scene; a broken invariant stops it with the fix."""
-    with _with_fix(scene, method), np.errstate(over="ignore", invalid="ignore"):  # the watch reports blow-ups
-        sol = _solve_scene(scene, method)
-    return RunResult(scene=scene, backend="reference", solution=sol)
+    with _with_fix(scene, method):
+        return REFERENCE.calculate(scene, method).result
 
 
 @contextmanager
@@ -60,25 +51,6 @@ def _with_fix(scene, method: str):
         ) from None
 
 
-def _solve_scene(scene, method: str):
-    return solve_chain(
-        ChainProblem.from_scene(scene),
-        scene.run.end_time,
-        scene.run.timestep,
-        method,
-        histories=tuple(i - 1 for i in scene.outputs.histories),
-        history_stride=history_stride(scene),
-        snapshots=scene.outputs.snapshots,
-        stop_after=None if scene.run.stop_after_contact is None else scene.run.stop_after_contact - 1,
-        stop_floor=stop_force_floor(scene),
-        lead_floor=lead_floor(scene),
-        # blow-up and garbage detectors (granchain.invariants), not accuracy targets
-        max_overlap=OVERLAP_WATCH * float(min(scene.bead_radii)),
-        energy_watch=ENERGY_WATCH,
-        momentum_watch=MOMENTUM_WATCH,
-    )
-
-
 class UnstableTimestepError(UsageError):
     """The scene's time step is above the stability limit the planner predicts."""
 
@@ -97,17 +69,19 @@ class SmallChainRanksWarning(UserWarning):
     """More MPI ranks than a chain this short can use: the run is slower, its results the same."""
 
 
-def integrator(backend: str, method: str | None) -> str:
-    """The integrator a backend runs: reference rk4 (default) or verlet; LAMMPS velocity Verlet."""
-    if backend not in BACKENDS:
-        raise UsageError(f"backend = {backend!r} is not known; choose one of {', '.join(BACKENDS)}")
-    if method not in (None, "rk4", "verlet"):
-        raise UsageError(f"method = {method!r} is not known; choose rk4 or verlet")
-    if backend == "lammps":
-        if method not in (None, "verlet"):
-            raise UsageError(f"method = {method!r}: the LAMMPS backend integrates with velocity Verlet only")
-        return "verlet"
-    return method or "rk4"
+def integrator(backend: str | Backend, method: str | None) -> str:
+    """The integrator a backend runs (Backend.integrator): reference rk4 (default) or verlet; LAMMPS
+    velocity Verlet."""
+    backend = backend_named(backend)
+    if method not in (None, *METHODS):
+        raise UsageError(f"method = {method!r} is not known; choose {' or '.join(METHODS)}")
+    return backend.integrator(method)
+
+
+def ranks_refused(np_, backend: Backend) -> str:
+    """The refusal of MPI ranks on a backend that runs in one process."""
+    mpi = " or ".join(f"--backend {b.name}" for b in BACKENDS.values() if b.mpi)
+    return f"--np = {np_}: the {backend.name} backend runs in one process; MPI ranks are for {mpi} (drop --np)"
 
 
 def available_cores() -> int:
@@ -118,7 +92,7 @@ def available_cores() -> int:
         return os.cpu_count() or 1
 
 
-def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False, out=None, given=None) -> None:
+def check_resources(scene, backend: str | Backend, np_: int, oversubscribe: bool = False, out=None, given=None) -> None:
     """Refuse a run that cannot run as asked before anything runs: more steps than the step limit,
     more memory than this machine has available or more disk than is free at `out` (and LAMMPS's work
     directory), with the estimate and the fix (granchain.workflows.guards.check_run, for a planned
@@ -127,6 +101,7 @@ def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False, 
     with ranks on the reference backend or more ranks than cores (unless oversubscribe). Warns below
     MIN_BEADS_PER_RANK beads per rank (slow, not wrong: a user testing MPI on a short chain may mean
     it) and about a long run. given: the scene before planning, if planned (whose step is the planner's)."""
+    backend = backend_named(backend)
     if not isinstance(np_, int) or np_ < 1:
         raise UsageError(f"--np = {np_!r}: the number of MPI ranks must be a whole number >= 1")
     if not scene.needs_plan:
@@ -134,10 +109,8 @@ def check_resources(scene, backend: str, np_: int, oversubscribe: bool = False, 
         check_run(scene, backend, out=out, machine=not oversubscribe, stacklevel=3, planned_step=planned_step)
     if np_ == 1:
         return
-    if backend != "lammps":
-        raise UsageError(
-            f"--np = {np_}: the {backend} backend runs in one process; MPI ranks are for --backend lammps (drop --np)"
-        )
+    if not backend.mpi:
+        raise UsageError(ranks_refused(np_, backend))
     cores = available_cores()
     if np_ > cores and not oversubscribe:
         raise UsageError(
@@ -178,47 +151,6 @@ class PlanRefinedWarning(UserWarning):
     (granchain.workflows.plan.refined_plan says why)."""
 
 
-class Abandoned(Exception):
-    """A run or a wait for a shared run given up: the shared_reference_runs() block is being left
-    after another run failed (granchain compare's LAMMPS run in a thread, when the reference's failed)."""
-
-
-class SharedRuns:
-    """The reference runs made inside one shared_reference_runs() block, shared by threads.
-
-    runs: (scene, method) -> the RunResult, or a Future of it: a prefetch in the worker process or a
-    run being made by another thread (waited for; made again here if it failed, as serially).
-    """
-
-    def __init__(self):
-        self.runs: dict = {}
-        self.lock = threading.Lock()
-        self._stop = Future()
-
-    def abandon(self) -> None:
-        """Give up: runs not yet started and waits for shared runs raise Abandoned from now on."""
-        if not self._stop.done():
-            self._stop.set_result(None)
-
-    @property
-    def abandoned(self) -> bool:
-        return self._stop.done()
-
-    def wait(self, future):
-        """The future's result (None if it failed with an Exception); Abandoned if given up first."""
-        done, _ = wait([future, self._stop], return_when=FIRST_COMPLETED)
-        if future not in done:
-            raise Abandoned("the shared run is no longer waited for")
-        try:
-            return future.result()
-        except Exception:  # failed in the worker, the worker died, or another thread's run failed
-            return None
-
-
-#: the SharedRuns of the shared_reference_runs() block this process is in, else None
-_shared_runs: SharedRuns | None = None
-
-
 @contextmanager
 def shared_reference_runs(prefetch=()):
     """Inside this block a reference run of a scene and integrator made once is not made again.
@@ -227,32 +159,17 @@ def shared_reference_runs(prefetch=()):
     4 dt, and LAMMPS's (a bilinear or Thornton Verlet run is measured against RK4 at 2 dt and 4 dt,
     errors.against_rk4_because): the same companion scene, integrator and step, so the same numbers.
     Each caller gets its own RunResult (a shallow copy) around the shared solution. Yields the
-    SharedRuns: threads may run inside the block (compare runs LAMMPS in one); a thread still running
-    must be joined before the block is left (SharedRuns.abandon() makes its waits give up).
+    SharedRuns (granchain.workflows.shared_runs): threads may run inside the block (compare runs
+    LAMMPS in one); a thread still running must be joined before the block is left
+    (SharedRuns.abandon() makes its waits give up).
 
     prefetch: (scene, method) pairs that will be asked for, started at once in one worker process
     where this process may run on two cores or more (the pure-Python solver is single-threaded:
     the companions run while this process runs the reference's own run and LAMMPS). A prefetched run
     that failed in the worker is made again here when asked for, so its error is raised as before.
     """
-    global _shared_runs
-    outer = _shared_runs
-    _shared_runs = SharedRuns() if outer is None else outer
-    pool = None
-    try:
-        todo = [k for k in dict.fromkeys(prefetch) if k not in _shared_runs.runs]
-        if todo and available_cores() >= 2:
-            import multiprocessing
-            from concurrent.futures import ProcessPoolExecutor
-
-            pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("fork"))
-            for scene, method in todo:
-                _shared_runs.runs[(scene, method)] = pool.submit(_prefetched_run, scene, method)
-        yield _shared_runs
-    finally:
-        if pool is not None:
-            pool.shutdown(wait=False, cancel_futures=True)
-        _shared_runs = outer
+    with shared_runs.sharing(prefetch, _prefetched_run if available_cores() >= 2 else None) as shared:
+        yield shared
 
 
 def _prefetched_run(scene, method: str):
@@ -266,57 +183,17 @@ def _prefetched_run(scene, method: str):
         return None
 
 
-def _shared_run(scene, method: str):
-    """The shared reference run of (scene, method): made here, or waited for if prefetched or being
-    made by another thread. A prefetch not started yet is made here at once rather than after the
-    worker's queue; one that failed (or whose worker died), and another thread's run that raised,
-    are made again here, so that this caller gets the run's own error as it would serially."""
-    shared, key = _shared_runs, (scene, method)
-    while True:
-        with shared.lock:
-            got = shared.runs.get(key)
-            if got is None or (isinstance(got, Future) and got.cancel()):
-                mine = Future()  # made here: another thread asking meanwhile waits for it
-                mine.set_running_or_notify_cancel()
-                shared.runs[key] = mine
-                break
-        if isinstance(got, RunResult):
-            return replace(got, extra=dict(got.extra))
-        result = shared.wait(got)
-        with shared.lock:
-            if shared.runs.get(key) is got:
-                if result is None:
-                    del shared.runs[key]
-                else:
-                    shared.runs[key] = result
-    try:
-        if shared.abandoned:
-            raise Abandoned("not started: the block is being left")
-        result = run_reference(scene, method)
-    except BaseException as e:
-        with shared.lock:
-            if shared.runs.get(key) is mine:
-                del shared.runs[key]
-        mine.set_exception(e)
-        raise
-    with shared.lock:
-        shared.runs[key] = result
-    mine.set_result(result)
-    return replace(result, extra=dict(result.extra))
-
-
-def _execute(scene, backend: str, method: str, np_: int):
-    """(result, LAMMPS work directory or None): one run of a concrete scene."""
-    if backend == "reference":
-        if _shared_runs is None:
-            return run_reference(scene, method), None
-        return _shared_run(scene, method), None
-    if _shared_runs is not None and _shared_runs.abandoned:
+def _execute(scene, backend: Backend, method: str, np_: int) -> Calculation:
+    """One run of a concrete scene: its result, and its work files if the backend keeps any."""
+    shared = shared_runs.current()
+    if backend is REFERENCE:  # the yardstick's runs: made once inside a shared_reference_runs() block
+        return Calculation(
+            run_reference(scene, method) if shared is None else shared.get((scene, method), run_reference)
+        )
+    if shared is not None and shared.abandoned:
         raise Abandoned("not started: the block is being left")
-    from granchain.lammps.runner import run_lammps
-
-    with _with_fix(scene, "verlet"):
-        return run_lammps(scene, np_=np_)
+    with _with_fix(scene, method):
+        return backend.calculate(scene, method, np_)
 
 
 def _refined(given, plan, result):
@@ -328,22 +205,20 @@ def _refined(given, plan, result):
     return refined_plan(given, plan, result.solution)
 
 
-def _estimate_errors(result, plan, backend: str, method: str, np_: int):
+def _estimate_errors(result, plan, backend: Backend, method: str, np_: int):
     """The run's companions at 2 dt and 4 dt and its ErrorReport (granchain.workflows.errors)."""
-    from granchain.lammps.runner import cleanup
     from granchain.workflows.errors import estimate_errors
     from granchain.workflows.plan import plan_scene
 
     stable = (plan if plan is not None else plan_scene(result.scene, method=method)).stable_timestep
 
-    def run_one(scene):
-        companion, work = _execute(scene, backend, method, np_)
-        if work is not None:
-            cleanup(work)
-        return companion
+    def run_one(scene):  # a companion on the run's own backend: its work files are not wanted
+        companion = _execute(scene, backend, method, np_)
+        companion.discard()
+        return companion.result
 
     def run_rk4(scene):  # the independent reference with event location (errors.against_rk4_because)
-        return _execute(scene, "reference", "rk4", 1)[0]
+        return _execute(scene, REFERENCE, "rk4", 1).result
 
     return estimate_errors(result, run_one, method, stable, run_rk4=run_rk4)
 
@@ -396,17 +271,14 @@ def check_timestep(scene, method: str) -> None:
         )
 
 
-def _finish(result, work, given, scene, plan, backend: str, method: str, np_: int, rtol, error_estimate, after_run):
-    """(result, work directory): run_scene's run of the planned scene made again finer if its plan is
-    refined (_refined), then after_run() (if given), then its error estimate if asked for; on any error
-    its work directory is removed (the warnings name run_scene's caller, as run_scene's own do)."""
+def _finish(calc, given, scene, plan, backend, method: str, np_: int, rtol, error_estimate, after_run) -> Calculation:
+    """The Calculation of run_scene's run of the planned scene made again finer if its plan is
+    refined (_refined), then after_run() (if given), then its error estimate if asked for; on any
+    error its work directory is removed (the warnings name run_scene's caller, as run_scene's own do)."""
     try:
-        refined = _refined(given, plan, result)
+        refined = _refined(given, plan, calc.result)
         if refined is not None:  # the measured peaks were far below the force scale: run again, finer
-            from granchain.lammps.runner import cleanup
-
-            if work is not None:
-                cleanup(work)
+            calc.discard()
             plan = refined
             scene = refined.scene
             warnings.warn(
@@ -414,13 +286,14 @@ def _finish(result, work, given, scene, plan, backend: str, method: str, np_: in
                 + "refined "
                 + next(c.reason for c in plan.choices if c.name == "timestep").split("; refined ", 1)[-1],
                 PlanRefinedWarning,
-                stacklevel=3,
+                stacklevel=4,
             )
             msg = output_size_warning(scene)
             if msg:
-                warnings.warn(msg, OutputSizeWarning, stacklevel=3)
-            check_run(scene, backend, stacklevel=4, planned_step=True)  # finer: more steps, larger files
-            result, work = _execute(scene, backend, method, np_)
+                warnings.warn(msg, OutputSizeWarning, stacklevel=4)
+            check_run(scene, backend, stacklevel=5, planned_step=True)  # finer: more steps, larger files
+            calc = _execute(scene, backend, method, np_)
+        result = calc.result
         result.plan = plan
         if after_run is not None:
             after_run()
@@ -433,25 +306,21 @@ def _finish(result, work, given, scene, plan, backend: str, method: str, np_: in
                     f"{result.errors.error_estimate_contact} is {worst:.2g}, above rtol {target:g} (peaks.csv "
                     f"peak_force_error; a smaller [run] timestep or --rtol brings it down)",
                     AccuracyWarning,
-                    stacklevel=3,
+                    stacklevel=4,
                 )
     except BaseException:  # an error estimate failed or was interrupted: no work directory left behind
-        if work is not None:
-            from granchain.lammps.runner import cleanup
-
-            cleanup(work)
+        calc.discard()
         raise
-    return result, work
+    return calc
 
 
 def run_scene(
     scene,
-    backend: str = "reference",
+    backend: str | Backend = "reference",
     method: str | None = None,
     out: str | Path | None = None,
     overwrite: bool = False,
     np_: int = 1,
-    keep_files: bool = False,
     force: bool = False,
     rtol: float | None = None,
     oversubscribe: bool = False,
@@ -462,12 +331,41 @@ def run_scene(
     """Run a scene on a backend; if out is given, write the run directory (checked before the run).
 
     reference: method rk4 (default) or verlet. lammps: velocity Verlet with granchain's pair
-    styles, np_ MPI ranks; the run directory also gets the deck, data file, log and dumps.
+    styles, np_ MPI ranks; the run directory also gets the deck, data file, log and dumps (the
+    backend's work files, removed once copied). The other arguments are calculate_scene's.
+    """
+    calc = _calculate(
+        scene, backend, method, out, overwrite, np_, force, rtol, oversubscribe, error_estimate, before_run, after_run
+    )
+    try:
+        if out is not None:
+            write_run_dir(calc.result, out, overwrite=overwrite, extra_files=calc.files or None)
+    finally:
+        calc.discard()
+    return calc.result
+
+
+def calculate_scene(
+    scene,
+    backend: str | Backend = "reference",
+    method: str | None = None,
+    out: str | Path | None = None,
+    overwrite: bool = False,
+    np_: int = 1,
+    force: bool = False,
+    rtol: float | None = None,
+    oversubscribe: bool = False,
+    error_estimate: bool = False,
+    before_run=None,
+    after_run=None,
+) -> Calculation:
+    """Check, plan and run a scene on a backend: its Calculation, whose work files (a LAMMPS run's
+    deck, log and dumps) the caller copies into a run directory and then removes (Calculation.discard).
+
     A scene with "auto" values, or any scene when rtol is given, is planned first for the
     integrator this backend runs (result.plan). A fixed time step that the planner's error model
-    says misses rtol (default 1e-3) gives an AccuracyWarning before the run.
-    keep_files (lammps): keep LAMMPS's work directory and list its files in result.extra["_files"]
-    and ["_work"], for a caller that writes the run directory itself and then removes "_work".
+    says misses rtol (default 1e-3) gives an AccuracyWarning before the run. out: the run directory
+    the caller will write, checked before the run (its disk too).
     error_estimate: also run the scene at 2 dt and 4 dt and estimate every number's error
     (granchain.workflows.errors; result.errors, peaks.csv's *_error columns, summary.json).
     before_run: called once after the scene's checks and warnings, before its first run; after_run:
@@ -475,7 +373,17 @@ def run_scene(
     (granchain compare starts LAMMPS alongside the reference at one of them); what they raise stops
     the run.
     """
+    return _calculate(
+        scene, backend, method, out, overwrite, np_, force, rtol, oversubscribe, error_estimate, before_run, after_run
+    )
+
+
+def _calculate(
+    scene, backend, method, out, overwrite, np_, force, rtol, oversubscribe, error_estimate, before_run, after_run
+):
+    """calculate_scene's work (its warnings name the caller of run_scene or calculate_scene)."""
     started = datetime.now(UTC)
+    backend = backend_named(backend)
     method = integrator(backend, method)
     given = scene
     scene, plan = plan_for(scene, backend, method, rtol)
@@ -487,28 +395,13 @@ def run_scene(
     if plan is None or not any(c.name == "timestep" for c in plan.choices):  # a fixed step: does it do?
         msg = timestep_warning(scene, method, 1e-3 if rtol is None else rtol)
         if msg:
-            warnings.warn(msg, AccuracyWarning, stacklevel=2)
+            warnings.warn(msg, AccuracyWarning, stacklevel=3)
     msg = output_size_warning(scene)
     if msg:
-        warnings.warn(msg, OutputSizeWarning, stacklevel=2)
+        warnings.warn(msg, OutputSizeWarning, stacklevel=3)
     if before_run is not None:
         before_run()
-    result, work = _execute(scene, backend, method, np_)
-    result, work = _finish(result, work, given, scene, plan, backend, method, np_, rtol, error_estimate, after_run)
-    result.started_utc = started
-    if backend == "reference":
-        if out is not None:
-            write_run_dir(result, out, overwrite=overwrite)
-        return result
-    from granchain.lammps.runner import cleanup, output_files
-
-    if keep_files:  # the caller writes the run directory later and removes the work directory
-        result.extra["_files"] = output_files(work)
-        result.extra["_work"] = work
-        return result
-    try:
-        if out is not None:
-            write_run_dir(result, out, overwrite=overwrite, extra_files=output_files(work))
-    finally:
-        cleanup(work)
-    return result
+    calc = _execute(scene, backend, method, np_)
+    calc = _finish(calc, given, scene, plan, backend, method, np_, rtol, error_estimate, after_run)
+    calc.result.started_utc = started
+    return calc

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
+from granchain.backends import LAMMPS
 from granchain.errors import GranchainError
 
 #: the job script and the record of the submission, written in DIR beside the deck
@@ -119,9 +120,7 @@ def job_script(
         lines.append(f"#SBATCH -A {account}")
     if memory:
         lines.append(f"#SBATCH --mem={memory}")
-    run = [str(lmp), "-in", "deck.lmp", "-screen", "none"]
-    if ranks > 1:
-        run = [str(mpirun), "-np", str(ranks), *run]
+    run = LAMMPS.command(ranks, str(lmp), str(mpirun))
     lines += [
         "# written by granchain submit: plain LAMMPS on the deck granchain render wrote here; then",
         f"# granchain collect {shlex.quote(str(d))}   (granchain submit --wait does it when the job ends)",
@@ -177,9 +176,9 @@ def submit(
             "sbatch is not on PATH: submit from a login node of a SLURM cluster (or render the deck with "
             "'granchain render SCENE --out DIR' and run it there by hand)"
         )
-    concrete, plan = plan_for(scene, "lammps", None, None)
-    check_timestep(concrete, "verlet")
-    check_resources(concrete, "lammps", ranks, oversubscribe=True)  # the cores are the job's, not this machine's
+    concrete, plan = plan_for(scene, LAMMPS, None, None)
+    check_timestep(concrete, LAMMPS.integrator(None))
+    check_resources(concrete, LAMMPS, ranks, oversubscribe=True)  # the cores are the job's, not this machine's
     out = Path(out)
     script_text = job_script(out, ranks, walltime, queue, account, memory, _job_name(out))
     render_dir(concrete, out, plan, scene)

@@ -1,0 +1,97 @@
+"""The two built-in backends: the pure-numpy reference solver and LAMMPS with granchain's pair styles."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from granchain.backends.protocol import PROPERTIES, Backend, Calculation, FileIOBackend, WorkFiles
+from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
+from granchain.peaks import lead_floor, stop_force_floor
+from granchain.problem import ChainProblem
+from granchain.results import RunResult
+from granchain.schedule import history_stride
+
+
+class ReferenceBackend(Backend):
+    """granchain's own solver (granchain.reference): RK4 with event location, or velocity Verlet, in
+    this process; the yardstick the other backends and every error estimate are measured against."""
+
+    name = "reference"
+    title = "reference"
+    implemented_properties = tuple(PROPERTIES)
+    methods = ("rk4", "verlet")
+    method_text = "RK4 or velocity Verlet"
+
+    def calculate(self, scene, method: str, ranks: int = 1) -> Calculation:
+        """Solve the planned scene in this process (see :meth:`Backend.calculate`)."""
+        from granchain.reference.solver import solve_chain
+
+        with np.errstate(over="ignore", invalid="ignore"):  # the run watch reports blow-ups
+            sol = solve_chain(
+                ChainProblem.from_scene(scene),
+                scene.run.end_time,
+                scene.run.timestep,
+                method,
+                histories=tuple(i - 1 for i in scene.outputs.histories),
+                history_stride=history_stride(scene),
+                snapshots=scene.outputs.snapshots,
+                stop_after=None if scene.run.stop_after_contact is None else scene.run.stop_after_contact - 1,
+                stop_floor=stop_force_floor(scene),
+                lead_floor=lead_floor(scene),
+                # blow-up and garbage detectors (granchain.invariants), not accuracy targets
+                max_overlap=OVERLAP_WATCH * float(min(scene.bead_radii)),
+                energy_watch=ENERGY_WATCH,
+                momentum_watch=MOMENTUM_WATCH,
+            )
+        return Calculation(RunResult(scene=scene, backend=self.name, solution=sol))
+
+
+class LammpsBackend(FileIOBackend):
+    """LAMMPS with granchain's pair styles (granchain.lammps): the deck and data file rendered into a
+    work directory, run by LAMMPS in a worker process (on MPI ranks), its output files read back."""
+
+    name = "lammps"
+    title = "LAMMPS"
+    implemented_properties = tuple(p for p in PROPERTIES if p != "peak_overlap")  # no overlap column
+    methods = ("verlet",)
+    method_text = "velocity Verlet"
+    mpi = True
+    work_files = ("histories.npy", "chain.dump")
+
+    #: the input files :meth:`write_input` writes
+    INPUT, DATA = "deck.lmp", "chain.data"
+
+    @property
+    def result_type(self) -> type[RunResult]:
+        """LammpsRunResult: its provenance says which LAMMPS and which plugin ran it."""
+        from granchain.lammps.runner import LammpsRunResult
+
+        return LammpsRunResult
+
+    def calculate(self, scene, method: str = "verlet", ranks: int = 1) -> Calculation:
+        """Render, run and read back the planned scene in a work directory of its own (see
+        :meth:`Backend.calculate`); the Calculation's work files are LAMMPS's deck, log and dumps."""
+        from granchain.lammps import runner
+
+        result, work = runner.run_lammps(scene, np_=ranks)
+        return Calculation(result, WorkFiles(work, runner.output_files(work)))
+
+    def input_files(self, scene) -> dict[str, str]:
+        """deck.lmp and chain.data of the planned scene (granchain.templates.render_deck)."""
+        from granchain.templates import render_deck
+
+        deck = render_deck(scene)
+        return {self.INPUT: deck.deck, self.DATA: deck.data}
+
+    def command(self, ranks: int = 1, program: str = "lmp", mpirun: str = "mpirun") -> list[str]:
+        """``lmp -in deck.lmp -screen none``, under ``mpirun -np ranks`` for more than one rank."""
+        run = [program, "-in", self.INPUT, "-screen", "none"]
+        return [mpirun, "-np", str(ranks), *run] if ranks > 1 else run
+
+    def read_results(self, scene, directory: Path, wall_time: float, extra: dict | None = None) -> RunResult:
+        """The deck's output files in ``directory`` -> its result (granchain.lammps.runner.lammps_result)."""
+        from granchain.lammps.runner import lammps_result
+
+        return lammps_result(scene, Path(directory), wall_time, extra)
