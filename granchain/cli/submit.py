@@ -6,7 +6,7 @@ import sys
 
 
 def cmd_submit(args) -> int:
-    from granchain.cli import print_result, resolve_scene
+    from granchain.cli.common import print_result, resolve_scene
     from granchain.workflows.collect import collect
     from granchain.workflows.submit import cancel, submit, wait
 

@@ -1,0 +1,196 @@
+"""What the subcommands share: scene arguments, the plan's notes, --np, JSON and terminal output,
+and what a finished run prints."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+from granchain.backends import Backend, backend_named
+from granchain.results import OBSERVABLE_UNITS, printable
+from granchain.scene import Scene, load_scene
+
+DEFAULT_SCENE = "default"
+#: the help of a subcommand's SCENE argument
+SCENE_HELP = "scene file or bundled scene name"
+
+
+def shown(text) -> str:
+    """Text from a scene, a file or a path as printed on a terminal: control characters escaped
+    (a title's ESC sequences cannot retitle the window or clear the screen); newlines and tabs kept."""
+    return printable(str(text), keep="\n\t")
+
+
+def scene_name(scene: Scene) -> str:
+    """The scene's title (or file) as printed: control characters escaped."""
+    return printable(scene.title or scene.source or "")
+
+
+def json_safe(o):
+    """o with every non-finite float as None (null) and numpy numbers as Python's: strict JSON for
+    scripts (json.dumps refuses NaN with allow_nan=False)."""
+    if isinstance(o, dict):
+        return {str(k): json_safe(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [json_safe(v) for v in o]
+    if hasattr(o, "tolist") and not isinstance(o, (str, bytes)):  # numpy scalars and arrays
+        return json_safe(o.tolist())
+    if isinstance(o, float) and not math.isfinite(o):
+        return None
+    if isinstance(o, Path):
+        return str(o)
+    return o
+
+
+def print_json(data) -> None:
+    """data as strict JSON on stdout (one document; NaN and infinities as null)."""
+    print(json.dumps(json_safe(data), indent=2, allow_nan=False))
+
+
+def resolve_scene(arg: str | None) -> Scene:
+    """A scene from a path, or from the name of a bundled scene (the default scene if None)."""
+    return load_scene(arg or DEFAULT_SCENE)
+
+
+def fmt(v) -> str:
+    """A number as the result lines print it (6 significant digits; "-" for None)."""
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+def planned(scene: Scene, rtol: float | None, backend: str | Backend, method: str | None):
+    """The scene with its "auto" values (and, given rtol, its time step) chosen by the planner for
+    the integrator this backend runs; the plan's notes go to stderr (stdout may be a deck)."""
+    from granchain.progress import is_quiet
+    from granchain.workflows.run import integrator, plan_for
+
+    scene, plan = plan_for(scene, backend, method, rtol)
+    if plan is not None and not is_quiet():  # (--quiet: no plan lines either)
+        for c in plan.choices:
+            print(
+                f"plan ({integrator(backend, method)}): {c.name} = {c.value:.6g}  ({shown(c.reason)})", file=sys.stderr
+            )
+    return scene, plan
+
+
+def np_arg(text: str) -> int | str:
+    """--np: a whole number of MPI ranks, or "auto"."""
+    if text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of MPI ranks or 'auto', got {text!r}") from None
+
+
+def auto_np(scene: Scene, backend: str | Backend) -> int:
+    """--np auto: one rank where MPI does not pay (a backend without MPI, a chain shorter than the
+    measured crossover, one idle core), else granchain.schedule.auto_ranks over the idle cores; said
+    on stderr."""
+    from granchain.schedule import MPI_CROSSOVER_BEADS, auto_ranks, idle_cores
+    from granchain.workflows.run import available_cores
+
+    if not backend_named(backend).mpi:
+        return 1
+    cores = available_cores()
+    idle = idle_cores(cores)
+    n = auto_ranks(scene.chain.beads, idle)
+    print(
+        f"--np auto: {n} rank{'s' if n > 1 else ''} for {scene.chain.beads} beads on {idle} idle of {cores} cores "
+        f"(two ranks pay from {MPI_CROSSOVER_BEADS} beads on idle cores)",
+        file=sys.stderr,
+    )
+    return n
+
+
+def add_quiet(parser) -> None:
+    """-q/--quiet: no progress lines on stderr."""
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+
+
+def scene_stem(args) -> str:
+    """The name of the run's default output: the scene file's stem, or the default scene's name."""
+    return Path(args.scene).stem if args.scene else DEFAULT_SCENE
+
+
+def ended_too_soon(result, planned_end: bool) -> int:
+    """Say on stderr what the scene asked for that the run ended before measuring (a wave that had
+    not passed the window's end), with why; 1 when the end time was the planner's ("auto", which
+    promised to cover it), else 0 (a fixed end_time the user chose, now told what it missed)."""
+    from granchain.postprocess.observables import unmeasured_outputs
+
+    unmeasured = unmeasured_outputs(result.scene, result.solution)
+    for line in unmeasured:
+        print(f"granchain: not measured: {shown(line)}", file=sys.stderr)
+    return 1 if unmeasured and planned_end else 0
+
+
+def print_result(result, out) -> None:
+    """What `granchain run` (and `granchain collect`) prints about a finished run."""
+    scene = result.scene
+    s = result.summary()
+    print(f"scene      {scene_name(scene)}")
+    print(
+        f"backend    {s['backend']} ({s['method']}), dt = {s['timestep']:g} s, {s['steps']} steps, "
+        f"{s['wall_time']:.3g} s wall"
+    )
+    missing = s.get("observables_missing", {})
+    errors = (s.get("errors") or {}).get("observables", {})
+    for k, v in s["observables"].items():
+        label = f"{k} ({OBSERVABLE_UNITS.get(k, '?')})"
+        why = f"   not measured: {shown(missing[k])}" if v is None and k in missing else ""
+        bar = ""
+        if v is not None and k in errors:  # the measured error bar, or why there is none
+            e = errors[k]
+            bar = f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})"
+        print(f"  {label:38s} {fmt(v)}{bar}{why}")
+    end_errors = (s.get("errors") or {}).get("end_peaks", {})
+    for name, label in (("striker_peak_force", "striker's contact"), ("wall_peak_force", "wall's contact")):
+        value = s.get(name)
+        if value is None:
+            continue
+        e = end_errors.get(name)
+        bar = (
+            ""
+            if e is None
+            else (f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})")
+        )
+        print(f"  {name + ' (N)':38s} {fmt(value)}{bar}   (the {label} peak)")
+    c = s["conservation"]
+    ld = scene.loading
+    if ld.is_force:
+        print(f"  {'impulse of the load (N s)':38s} {fmt(c['impulse_delivered'])}   (A T delivered by the force)")
+    else:
+        who = "the striker's M V" if ld.kind == "striker" else "bead 1's m v0"
+        print(f"  {'momentum put in at t = 0 (N s)':38s} {fmt(scene.initial_momentum)}   ({who}; no force load)")
+    free = scene.effects.far_end == "free" and not scene.effects.precompression
+    print(
+        f"  {'momentum at the end (N s)':38s} {fmt(c['momentum'])}"
+        + ("   (a free chain keeps what was put in)" if free else "   (the wall or the static load takes some)")
+    )
+    err = fmt(c["energy_balance_error_relative"])
+    print(f"  {'energy balance error (1)':38s} {err}   (relative to the energy put in)")
+    e = s.get("errors")
+    if e is not None:
+        if e["why_none"]:
+            print(f"  {'error estimate':38s} none: {shown(e['why_none'])}")
+        else:
+            worst = e["error_estimate"]
+            where = f" at contact {e['error_estimate_contact']}" if worst is not None else ""
+            n_bad = len(e["unreliable_contacts"])
+            print(
+                f"  {'largest peak-force error (1)':38s} {fmt(worst)}{where}   (measured: "
+                + ("reference RK4 " if e.get("companion_method") == "rk4" else "")
+                + "runs at "
+                + ", ".join(f"{t:g}" for t in e["companion_timesteps"])
+                + f" s, {e['companion_wall_time']:.3g} s more)"
+            )
+            if n_bad:
+                print(f"  {'peaks without an estimate':38s} {n_bad}   (peaks.csv error_status says why)")
+    print(f"run directory: {shown(out)}")
