@@ -1,0 +1,349 @@
+"""The scene's model: frozen dataclasses for the chain, the contact law, the load, the run, the
+outputs and the effects, and the quantities derived from them (definitions live in granchain.physics).
+
+Contact i is the contact between bead i and bead i+1 (the paper's F_{i,i+1}); beads and contacts are
+numbered from 1 in scene files and output tables.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, make_dataclass
+
+import numpy as np
+
+from granchain.physics import materials as mat
+from granchain.physics.effects import effect_fields
+from granchain.physics.laws import ContactLaw, law_class
+from granchain.physics.positions import contact_quantum
+from granchain.scene.limits import AUTO
+from granchain.scene.writer import dump_toml, scene_to_dict
+
+
+@dataclass(frozen=True)
+class Chain:
+    """The [chain] section: how many beads, their radius and material (one each, or one per bead)."""
+
+    beads: int | None  # None: "auto"
+    radius: float  # m; with per-bead radii, bead 1's (the nominal one)
+    material: mat.Material  # with per-bead materials, bead 1's
+    material_name: str | None = None  # built-in name, or None for an inline [chain.material]
+    radii: tuple[float, ...] | None = None  # per-bead radii (a list or the taper rule), or None
+    materials: tuple[str, ...] | None = None  # per-bead built-in material names, or None
+
+
+@dataclass(frozen=True)
+class Contact:
+    """The [contact] section: the law (a name in granchain.physics.laws.LAWS) and its keys."""
+
+    law: str
+    unloading_coeff: float | None = None  # beta, bilinear only
+    plastic_stiffness: float | None = None  # k in N/m, bilinear only (explicit or from yield)
+    yield_pressure: float | None = None  # p_y in Pa, thornton only
+
+    @property
+    def law_class(self) -> type[ContactLaw]:
+        return law_class(self.law)
+
+
+@dataclass(frozen=True)
+class Loading:
+    """f(t) = amplitude for 0 < t <= duration (Eq. 4), or an initial velocity of bead 1."""
+
+    kind: str  # "step" | "impulse" | "velocity" | "striker"
+    amplitude: float = 0.0  # N (step, impulse)
+    duration: float = 0.0  # s (step, impulse)
+    velocity: float = 0.0  # m/s (velocity: of bead 1; striker: of the striker)
+    striker_radius: float = 0.0  # m (striker)
+    striker_material: mat.Material | None = None  # (striker) default: the chain's
+    striker_material_name: str | None = None
+    striker_mass: float | None = None  # kg (striker) default: from radius and density
+
+    @property
+    def impulse(self) -> float:
+        """I = A T (Eq. 4); for a velocity load, the momentum per unit mass is the velocity."""
+        return self.amplitude * self.duration
+
+    @property
+    def is_force(self) -> bool:
+        return self.kind in ("step", "impulse")
+
+
+@dataclass(frozen=True)
+class Run:
+    """The [run] section: end time and time step (None where the planner chooses), and an early stop."""
+
+    end_time: float | None  # s; None: "auto"
+    timestep: float | None  # s; None: "auto"
+    stop_after_contact: int | None = None  # stop once the leading wave has passed this contact
+
+
+@dataclass(frozen=True)
+class Outputs:
+    """The [outputs] section: which contacts' peaks and histories are kept, snapshots, the window."""
+
+    peak_force: bool | tuple[int, ...] = True  # True: every contact; or a tuple of contacts
+    histories: tuple[int, ...] = ()  # contacts whose force (and bead velocity) vs time is kept
+    snapshots: tuple[float, ...] = ()  # times of force/velocity profiles along the chain
+    window: tuple[int, int] | None = None  # contacts used for leading peak and wave speed
+    history_interval: float | str | None = None  # s between history samples ("auto", the default with histories)
+    dump_interval: float | str | None = None  # s between whole-chain LAMMPS dump frames (default: none; "auto")
+
+
+#: Effects beyond the paper's bare chain (granchain.physics.effects): one attribute per field of a
+#: registered effect (far_end "free" | "wall", dashpot gamma in N s/m, precompression F0 in N ...), each
+#: at its absent value unless the scene declares the effect
+Effects = make_dataclass(
+    "Effects",
+    [(name, type(absent), field(default=absent)) for name, absent in effect_fields().items()],
+    frozen=True,
+)
+Effects.__module__ = __name__
+Effects.__doc__ = "Effects beyond the paper's bare chain; each is absent unless the scene declares it."
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene: its sections as frozen dataclasses and the quantities derived from them.
+
+    Read one with :func:`granchain.scene.load_scene`, :func:`~granchain.scene.parse_scene` or
+    :func:`~granchain.scene.scene_from_dict`; :meth:`to_toml` writes it back.
+
+    Attributes
+    ----------
+    chain, contact, loading, run, outputs, effects
+        The sections (``effects`` holds every registered effect's fields, absent ones at their
+        absent value).
+    title : str
+        The scene's title, or "".
+    source : str or None
+        Where it was read from: a path, ``<bundled scene NAME>``, or None.
+    source_text : str or None
+        The text it was read from, copied into run directories.
+    """
+
+    chain: Chain
+    contact: Contact
+    loading: Loading
+    run: Run
+    outputs: Outputs = field(default_factory=Outputs)
+    effects: Effects = field(default_factory=Effects)
+    title: str = ""
+    source: str | None = None  # path of the scene file, if it came from one
+    source_text: str | None = None  # the file's text, copied into run directories
+
+    @property
+    def needs_plan(self) -> bool:
+        """Some value is "auto": run granchain.workflows.plan.plan_scene first."""
+        return (
+            self.chain.beads is None
+            or self.run.end_time is None
+            or self.run.timestep is None
+            or AUTO in (self.outputs.history_interval, self.outputs.dump_interval)
+        )
+
+    # ---- derived quantities (definitions live in granchain.physics) ----
+    @property
+    def n_contacts(self) -> int:
+        return self.chain.beads - 1
+
+    @property
+    def mass(self) -> float:
+        return mat.bead_mass(self.chain.material, self.chain.radius)
+
+    @property
+    def diameter(self) -> float:
+        return 2.0 * self.chain.radius
+
+    @property
+    def e_star(self) -> float:
+        return mat.effective_modulus(self.chain.material)
+
+    @property
+    def r_star(self) -> float:
+        return mat.effective_radius(self.chain.radius)
+
+    @property
+    def tau(self) -> float:
+        return mat.time_scale(self.chain.material, self.chain.radius)
+
+    @property
+    def force_scale(self) -> float:
+        return mat.force_scale(self.chain.material, self.chain.radius)
+
+    @property
+    def impulse_scale(self) -> float:
+        return mat.impulse_scale(self.chain.material, self.chain.radius)
+
+    def pair_law(self, e_star: float, r_star: float, materials: tuple = ()) -> ContactLaw:
+        """The contact law of two bodies of effective modulus E* and radius R* and their materials (a
+        flat has none): the law's for_pair, its mixing rules included."""
+        return self.contact.law_class.for_pair(self.contact, e_star, r_star, self.r_star, materials)
+
+    @property
+    def law(self) -> ContactLaw:
+        """The nominal bead-bead contact's law (bead 1's material and radius)."""
+        return self.pair_law(self.e_star, self.r_star, (self.chain.material, self.chain.material))
+
+    @property
+    def stiffness(self) -> float:
+        """Contact stiffness k of the nominal pair: Hertz k = 4 E* sqrt(R*)/3, the bilinear plastic slope."""
+        return float(self.law.k)
+
+    @property
+    def per_bead(self) -> bool:
+        """Beads differ in radius or material (tapered, decorated, impurity)."""
+        return self.chain.radii is not None or self.chain.materials is not None
+
+    @property
+    def bead_radii(self) -> np.ndarray:
+        n = self.chain.beads
+        return np.asarray(self.chain.radii) if self.chain.radii else np.full(n, self.chain.radius)
+
+    @property
+    def bead_materials(self) -> list:
+        n = self.chain.beads
+        if self.chain.materials:
+            return [mat.MATERIALS[name] for name in self.chain.materials]
+        return [self.chain.material] * n
+
+    @property
+    def bead_masses(self) -> np.ndarray:
+        return np.array([mat.bead_mass(m, r) for m, r in zip(self.bead_materials, self.bead_radii, strict=True)])
+
+    @property
+    def contact_quantum(self) -> float:
+        """The grid of contact radii and positions (contact_quantum)."""
+        return contact_quantum(self.bead_radii)
+
+    def contact_radius(self, r: float) -> float:
+        """A bead radius rounded up to the contact grid: contact distances R_i + R_j (pair_coeff d0) and
+        positions (bead_positions) are sums of these, exact doubles (contact_quantum says why)."""
+        q = self.contact_quantum
+        return math.ceil(float(r) / q) * q
+
+    @property
+    def bead_positions(self) -> np.ndarray:
+        """Centres of the beads at t = 0 before any precompression displacement, as LAMMPS's data file
+        has them and everything reading LAMMPS's positions back subtracts (displacements, the run
+        watch): in contact with zero force, x_1 = 0, x_(i+1) = x_i + R_i + R_(i+1) with the radii on the
+        contact grid (contact_radius): exact, every at-rest overlap in LAMMPS's arithmetic exactly 0."""
+        q = self.contact_quantum
+        rc = np.ceil(self.bead_radii / q) * q
+        return np.concatenate(([0.0], np.cumsum(rc[:-1] + rc[1:])))
+
+    def bead_pair_law(self, r1: float, m1, r2: float, m2) -> ContactLaw:
+        """The law of two beads (radius, material each): Hertz 4/3 E*_pair sqrt(R*_pair) (Johnson);
+        the plastic laws' mixing rules for two materials are the law's (ContactLaw.for_pair)."""
+        return self.pair_law(mat.pair_effective_modulus(m1, m2), mat.pair_effective_radius(r1, r2), (m1, m2))
+
+    @property
+    def bead_kinds(self) -> tuple[list[tuple[float, object]], list[int]]:
+        """Distinct (radius, material) kinds of the chain's beads, in order of first appearance, and
+        each bead's kind (one kind for a uniform chain)."""
+        kinds: list[tuple[float, object]] = []
+        index: dict = {}
+        kind_of = []
+        for r, m in zip(self.bead_radii.tolist(), self.bead_materials, strict=True):
+            key = (float(r), m)
+            if key not in index:
+                index[key] = len(kinds)
+                kinds.append(key)
+            kind_of.append(index[key])
+        return kinds, kind_of
+
+    def pair_stiffness(self, r1: float, m1, r2: float, m2) -> float:
+        """k of two beads (bead_pair_law)."""
+        return float(self.bead_pair_law(r1, m1, r2, m2).k)
+
+    @property
+    def contact_laws(self) -> list[ContactLaw]:
+        """The law of every bead-bead contact, in chain order."""
+        r, m = self.bead_radii, self.bead_materials
+        return [self.bead_pair_law(r[i], m[i], r[i + 1], m[i + 1]) for i in range(len(r) - 1)]
+
+    @property
+    def contact_stiffnesses(self) -> np.ndarray:
+        return np.array([float(law.k) for law in self.contact_laws])
+
+    @property
+    def input_impulse(self) -> float:
+        """Momentum put into the chain: A T (force loads), m v (bead 1), M V (striker)."""
+        ld = self.loading
+        if ld.is_force:
+            return ld.impulse
+        return (self.striker_mass if ld.kind == "striker" else self.mass) * ld.velocity
+
+    @property
+    def initial_momentum(self) -> float:
+        """Momentum at t = 0: bead 1's m v (velocity load), the striker's M V, else 0."""
+        ld = self.loading
+        if ld.kind == "velocity":
+            return float(self.bead_masses[0] if self.per_bead else self.mass) * ld.velocity
+        if ld.kind == "striker":
+            return self.striker_mass * ld.velocity
+        return 0.0
+
+    @property
+    def striker_mass(self) -> float:
+        ld = self.loading
+        return ld.striker_mass if ld.striker_mass is not None else mat.bead_mass(ld.striker_material, ld.striker_radius)
+
+    @property
+    def striker_law(self) -> ContactLaw:
+        """Striker on bead 1: the law of the striker and bead 1 (see bead_pair_law)."""
+        ld = self.loading
+        return self.bead_pair_law(ld.striker_radius, ld.striker_material, self.chain.radius, self.chain.material)
+
+    @property
+    def striker_stiffness(self) -> float:
+        return float(self.striker_law.k)
+
+    def flat_law(self, r: float, m) -> ContactLaw:
+        """A bead (radius, material) on a rigid flat: R* = R and E* = E/(1-nu^2) (Hertz, Thornton);
+        bilinear, k = 18.5 sigma_y R* with R* = R, i.e. twice the bead-bead k."""
+        return self.pair_law(mat.flat_effective_modulus(m), float(r), (m,))
+
+    @property
+    def wall_law(self) -> ContactLaw:
+        """Bead N on the rigid flat (flat_law of bead N's radius and material)."""
+        return self.flat_law(float(self.bead_radii[-1]), self.bead_materials[-1])
+
+    @property
+    def wall_stiffness(self) -> float:
+        return float(self.wall_law.k)
+
+    @property
+    def unloading_stiffness(self) -> float | None:
+        """k_u of the nominal contact (bilinear), else None."""
+        ku = getattr(self.law, "k_unloading", None)
+        return None if ku is None else float(ku)
+
+    @property
+    def peak_contacts(self) -> tuple[int, ...]:
+        """Contacts (1-based) in the peak-force table."""
+        if self.outputs.peak_force is True:
+            return tuple(range(1, self.n_contacts + 1))
+        if self.outputs.peak_force is False:
+            return ()
+        return tuple(self.outputs.peak_force)
+
+    @property
+    def window(self) -> tuple[int, int]:
+        """Contacts over which the leading peak and wave speed are measured.
+
+        Default: the second and third quarters of the chain, away from the loaded end (where the
+        wave forms) and from the free far end (where it reflects).
+        """
+        if self.outputs.window is not None:
+            return self.outputs.window
+        if isinstance(self.outputs.peak_force, tuple) and len(self.outputs.peak_force) >= 2:
+            return (min(self.outputs.peak_force), max(self.outputs.peak_force))
+        n = self.n_contacts
+        a = max(1, n // 4)
+        b = max(a + 1, (3 * n) // 4)
+        return (a, min(b, n))
+
+    def to_toml(self) -> str:
+        """The scene as TOML text; read back by :func:`parse_scene` to an equal scene."""
+        return dump_toml(scene_to_dict(self))

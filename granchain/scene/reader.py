@@ -1,0 +1,253 @@
+"""Reading a scene: a file, a bundled scene's name, TOML text or a dict, validated section by
+section and then as a whole (the scales its values give together, the effects it combines)."""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from pathlib import Path
+
+from granchain.physics import materials as mat
+from granchain.physics.effects import active_effects, refusal, sections
+from granchain.scene.limits import MAX_FORCE, MAX_SCENE_BYTES, MIN_TAU
+from granchain.scene.model import Chain, Scene
+from granchain.scene.read_sections import (
+    _read_chain,
+    _read_contact,
+    _read_effects,
+    _read_loading,
+    _read_outputs,
+    _read_run,
+)
+from granchain.scene.section import SceneError, _did_you_mean, _Section, _shown
+
+
+def bundled_scenes() -> dict[str, str]:
+    """The bundled example scenes: name -> TOML text."""
+    from importlib import resources
+
+    root = resources.files("granchain") / "scenes"
+    return {
+        p.name.removesuffix(".toml"): p.read_text(encoding="utf-8")
+        for p in sorted(root.iterdir(), key=lambda p: p.name)
+        if p.name.endswith(".toml")
+    }
+
+
+def load_scene(path_or_name: str | Path) -> Scene:
+    """Read and validate a scene.
+
+    Parameters
+    ----------
+    path_or_name : str or Path
+        A ``.toml`` scene file, or the name of a bundled scene (``granchain scenes`` lists them).
+
+    Returns
+    -------
+    Scene
+        The validated scene; values given as ``"auto"`` are left for :func:`granchain.plan`.
+
+    Raises
+    ------
+    SceneError
+        The file does not exist or is invalid; the message names the file, the key and the fix.
+    """
+    p = Path(path_or_name)
+    arg = str(path_or_name)
+    if not p.exists() and p.suffix != ".toml" and "/" not in arg and "\\" not in arg:
+        scenes = bundled_scenes()
+        if arg in scenes:
+            return parse_scene(scenes[arg], source=f"<bundled scene {arg}>")
+        raise SceneError(
+            f"{arg}: is neither a scene file nor a bundled scene; bundled: {', '.join(scenes)} "
+            "(or give the path of a .toml file)"
+        )
+    if not p.exists():
+        raise SceneError(f"{p}: no such scene file; give the path of a .toml scene (see 'granchain scenes')")
+    if not p.is_file():
+        raise SceneError(f"{p}: is not a file; give the path of a .toml scene (see 'granchain scenes')")
+    try:
+        with open(p, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            if size > MAX_SCENE_BYTES:
+                raise SceneError(
+                    f"{p}: is {size:,} bytes; a scene file is text of at most {MAX_SCENE_BYTES:,} bytes "
+                    "(a per-bead list of the longest varied chain takes about 3 MB)"
+                )
+            data = fh.read(min(size, MAX_SCENE_BYTES) + 1)  # a file that grows while read stops here
+        if len(data) > MAX_SCENE_BYTES:
+            raise SceneError(f"{p}: is over {MAX_SCENE_BYTES:,} bytes; a scene file is text of at most that")
+        text = data.decode("utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise SceneError(f"{p}: cannot be read as UTF-8 text ({e})") from None
+    return parse_scene(text, source=str(p))
+
+
+def parse_scene(text: str, source: str = "<scene>") -> Scene:
+    """Parse and validate scene TOML text.
+
+    Parameters
+    ----------
+    text : str
+        The scene as TOML.
+    source : str
+        What messages name as the scene's file.
+
+    Returns
+    -------
+    Scene
+        The validated scene, with ``source`` and ``source_text`` set.
+
+    Raises
+    ------
+    SceneError
+        The text is not TOML or not a valid scene.
+    """
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise SceneError(f"{source}: is not valid TOML: {e}") from None
+    except RecursionError:  # the TOML reader recurses once per level of nested arrays or tables
+        raise SceneError(
+            f"{source}: nests arrays or tables too deeply for a scene file (hundreds of levels); "
+            "no scene key takes more than a list of numbers"
+        ) from None
+    scene = scene_from_dict(data, source=source)
+    return _with_source(scene, source, text)
+
+
+def _with_source(scene: Scene, source: str, text: str) -> Scene:
+    from dataclasses import replace
+
+    return replace(scene, source=source, source_text=text)
+
+
+SECTIONS = ("title", "chain", "contact", "loading", "run", "outputs", *sections())
+
+
+def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
+    """Validate a scene given as a dict of sections (TOML read, or :func:`scene_to_dict`'s).
+
+    Parameters
+    ----------
+    data : dict
+        Section name -> table, as a scene file has them.
+    source : str
+        What messages name as the scene's file.
+
+    Returns
+    -------
+    Scene
+        The validated scene (``source_text`` None).
+
+    Raises
+    ------
+    SceneError
+        A section or key is missing, unknown or invalid, the values together leave double precision
+        or mechanics, or the declared effects do not go together.
+    """
+    for key in data:
+        if key not in SECTIONS:
+            raise SceneError(
+                f"{source}: unknown section or key {_shown(key)}; {_did_you_mean(key, SECTIONS)}"
+                f"allowed: {', '.join(SECTIONS)}"
+            )
+    for sec in ("chain", "contact", "loading", "run"):
+        if sec not in data:
+            raise SceneError(
+                f"{source}: missing section [{sec}]; every scene needs [chain], [contact], [loading] and [run]"
+            )
+    title = data.get("title", "")
+    if not isinstance(title, str):
+        raise SceneError(f"{source}: title = {_shown(title)} is invalid: a string")
+
+    chain = _read_chain(_Section(source, "chain", data["chain"]), source)
+    contact = _read_contact(_Section(source, "contact", data["contact"]), chain)
+    loading = _read_loading(_Section(source, "loading", data["loading"]), chain, source)
+    run = _read_run(_Section(source, "run", data["run"]), loading)
+    outputs = _read_outputs(_Section(source, "outputs", data.get("outputs", {})), chain, run)
+    effects = _read_effects(source, data)
+    scene = Scene(
+        effects=effects,
+        chain=chain,
+        contact=contact,
+        loading=loading,
+        run=run,
+        outputs=outputs,
+        title=title,
+        source=source,
+    )
+    _check_scales(scene, source)
+    why = refusal(active_effects(scene))
+    if why:
+        raise SceneError(f"{source}: {why}")
+    why = contact.law_class.unsupported(chain) if scene.per_bead else None
+    if why:
+        raise SceneError(f"{source}: {why}")
+    if chain.beads == 1 and loading.kind != "striker" and effects.far_end != "wall":
+        raise SceneError(
+            f"{source}: [chain] beads = 1 has no contact to load: a single bead needs a striker "
+            '([loading] kind = "striker") or a wall ([boundary] far_end = "wall") to touch'
+        )
+    return scene
+
+
+def _material_keys(chain: Chain) -> str:
+    return "[chain] material" if chain.material_name or chain.materials else "[chain.material] values"
+
+
+def _check_scales(scene: Scene, source: str) -> None:
+    """Refuse a scene whose values, each within its own range, together give a chain outside double
+    precision or outside any mechanics: a contact time scale below MIN_TAU, a law's constants that
+    over- or underflow, a dashpot that damps faster than an attosecond, a precompression beyond
+    MAX_FORCE. Each message names the keys the scene set that make it so, and the fix."""
+    chain = scene.chain
+    radii = (min(chain.radii), max(chain.radii)) if chain.radii else (chain.radius,)
+    names = sorted(set(chain.materials)) if chain.materials else [None]
+    materials = [mat.MATERIALS[n] for n in names] if chain.materials else [chain.material]
+    keys = f"[chain] radius and {_material_keys(chain)}"
+    for r in radii:
+        for m in materials:
+            tau = mat.time_scale(m, r)
+            if not (math.isfinite(tau) and tau >= MIN_TAU):
+                raise SceneError(
+                    f"{source}: {keys} give beads of radius {r:g} m a contact time scale tau = {tau:.3g} s, "
+                    f"below {MIN_TAU:g} s: no chain of real spheres is this fast; check the radius, density, "
+                    "youngs_modulus and poisson_ratio (a Poisson ratio near -1 makes E* unbounded)"
+                )
+    laws = {"the beads' contact": (scene.law, keys + " and [contact]")}
+    if scene.loading.kind == "striker":
+        laws["the striker's contact"] = (scene.striker_law, "[loading] radius, material and [contact]")
+    if scene.effects.far_end == "wall":
+        laws["the wall's contact"] = (scene.wall_law, keys + " and [contact]")
+    for what, (law, keys_of) in laws.items():
+        values = {
+            "k": law.k,
+            **{k: getattr(law, k) for k in ("yield_overlap", "yield_force", "k_unloading") if hasattr(law, k)},
+        }
+        for name, v in values.items():
+            v = float(v)
+            if not (math.isfinite(v) and v > 0.0):
+                raise SceneError(
+                    f"{source}: {keys_of} give {what} a law with {name} = {v:g}, outside double precision: "
+                    f"bring the {' and '.join(law.scene_keys) or 'material values'} closer to those of real beads "
+                    f"(e.g. {law.example_contact or 'brass: E = 115e9 Pa'})"
+                )
+    gamma = float(scene.effects.dashpot)
+    if gamma > 0.0:
+        m_min = float(min(mat.bead_mass(m, radii[0]) for m in materials))
+        if scene.loading.kind == "striker":
+            m_min = min(m_min, float(scene.striker_mass))
+        if m_min / gamma < MIN_TAU:
+            raise SceneError(
+                f"{source}: [damping] dashpot = {gamma:g} N s/m is invalid: it damps the lightest body "
+                f"({m_min:.3g} kg) in m/gamma = {m_min / gamma:.3g} s, under {MIN_TAU:g} s; a dashpot of at most "
+                f"{m_min / MIN_TAU:.3g} N s/m (a viscous contact is damped over microseconds: gamma of "
+                "about 1 to 100 N s/m for millimetre beads)"
+            )
+    f0 = float(scene.effects.precompression)
+    if f0 > MAX_FORCE:
+        raise SceneError(
+            f"{source}: [precompression] force = {f0:g} N is invalid: a static force F0 in N of at most {MAX_FORCE:g}"
+        )
