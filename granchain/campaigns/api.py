@@ -10,8 +10,8 @@ import time
 from pathlib import Path
 
 from granchain.campaigns import workspace as wsp
-from granchain.campaigns.cluster import SUBMIT, ClusterError, ClusterSettings, describe, merge
-from granchain.campaigns.cluster import check as check_cluster
+from granchain.campaigns.cluster_settings import SUBMIT, ClusterError, ClusterSettings, describe, merge
+from granchain.campaigns.cluster_settings import check as check_cluster
 from granchain.campaigns.execute import Executor, Runner, preflight, run_grid
 from granchain.campaigns.search import run_search
 from granchain.campaigns.spec import (
@@ -93,7 +93,7 @@ def write_record(ws: Path, campaign: Campaign, runner: Runner, entries: list[dic
 
 def cluster_settings(campaign: Campaign, cluster=None, ranks: int = 1) -> ClusterSettings | None:
     """The campaign file's [cluster] table with `cluster` over it: a kind ("slurm"), a dict of
-    settings (granchain.campaigns.cluster.ClusterSettings' fields; None values are not given), or a
+    settings (granchain.campaigns.cluster_settings.ClusterSettings' fields; None values are not given), or a
     ClusterSettings (used as it is). None: no batch cluster (local workers or --scheduler)."""
     if isinstance(cluster, ClusterSettings):
         settings = cluster
@@ -136,7 +136,7 @@ def run_campaign(
     is complete, and re-raises KeyboardInterrupt.
 
     cluster: worker jobs on a batch queue: "slurm" or "pbs", or a dict of settings ({"kind": "slurm",
-    "queue": ..., "jobs": 4, ...}; granchain.campaigns.cluster.ClusterSettings), over the file's
+    "queue": ..., "jobs": 4, ...}; granchain.campaigns.cluster_settings.ClusterSettings), over the file's
     [cluster] table. ranks: MPI ranks per point (or "auto"), over [campaign] ranks.
     """
     campaign = as_campaign(spec)
@@ -156,65 +156,82 @@ def run_campaign(
     runner = Runner(campaign, ws, ex, rerun=rerun, retry_failed=retry_failed, stream=stream)
     if settings is not None and settings.batch:
         runner.say(f"campaign: worker jobs: {describe(settings, ex.ranks)}")
-    if campaign.text:
-        wsp.write_text(ws / "campaign.toml", campaign.text)  # never through a link planted there
-    from granchain.scene import scene_from_dict
-
-    wsp.write_text(ws / "base.toml", scene_from_dict(campaign.base, source=campaign.base_source).to_toml())
-    entries: list[dict] = []
-    search_rows = None
+    _write_inputs(ws, campaign)
     try:
-        if campaign.kind == "grid":
-            jobs = [runner.job(p) for p in points]
-            entries = [
-                {"params": p.params, "job": j.id, "key": wsp.point_key(j.cached_statepoint)}
-                for p, j in zip(points, jobs, strict=True)
-            ]
-            write_record(ws, campaign, runner, entries)  # the table can be read while the points run
-            run_grid(campaign, runner, points)
-        else:
-            write_record(ws, campaign, runner, entries)
-            last = [time.monotonic()]
-
-            def search_entries(evaluated):
-                ordered = sorted(evaluated, key=lambda e: (e[2], e[0].params[campaign.search.key]))
-                return [{"params": p.params, "job": job, "key": key} for p, job, _, key in ordered]
-
-            def save(evaluated, rows):  # at most every 2 s: the record of a search in progress
-                if time.monotonic() - last[0] >= 2.0:
-                    write_record(ws, campaign, runner, search_entries(evaluated), rows)
-                    last[0] = time.monotonic()
-
-            evaluated, search_rows = run_search(campaign, runner, on_progress=save)
-            entries = search_entries(evaluated)
-            write_record(ws, campaign, runner, entries, search_rows)
+        _run_points(campaign, runner, ws, points)
         ex.check_failure()  # every batch job ended, none may be replaced: the points not run are missing
     except CampaignError:
         ex.close()
         write_tables(ws)
         raise
     except KeyboardInterrupt:
-        interrupted = time.time()
-        ex.close()
-        runner.forget_interrupted(interrupted)
-        if campaign.kind == "grid":
-            write_tables(ws)
-        if ex.jobs is not None and ex.jobs.jobs:
-            runner.say(f"campaign interrupted: cancelled its worker jobs {', '.join(ex.jobs.jobs)} (only those)")
-        runner.say(
-            "campaign interrupted: the points in flight are lost, the complete ones are kept; run the "
-            "same command again to complete only what is missing"
-        )
+        _stop_interrupted(campaign, runner, ex, ws)
         raise
     finally:
         ex.close()
     tables = write_tables(ws)
+    _say_failures(runner)
+    return tables, runner.report
+
+
+def _write_inputs(ws: Path, campaign: Campaign) -> None:
+    """The campaign file's text and its base scene as TOML, beside the points."""
+    if campaign.text:
+        wsp.write_text(ws / "campaign.toml", campaign.text)  # never through a link planted there
+    from granchain.scene import scene_from_dict
+
+    wsp.write_text(ws / "base.toml", scene_from_dict(campaign.base, source=campaign.base_source).to_toml())
+
+
+def _run_points(campaign: Campaign, runner: Runner, ws: Path, points: list) -> None:
+    """Run a grid's points, or a search, keeping the workspace's record of them current."""
+    if campaign.kind == "grid":
+        jobs = [runner.job(p) for p in points]
+        entries = [
+            {"params": p.params, "job": j.id, "key": wsp.point_key(j.cached_statepoint)}
+            for p, j in zip(points, jobs, strict=True)
+        ]
+        write_record(ws, campaign, runner, entries)  # the table can be read while the points run
+        run_grid(campaign, runner, points)
+        return
+    write_record(ws, campaign, runner, [])
+    last = [time.monotonic()]
+
+    def search_entries(evaluated):
+        ordered = sorted(evaluated, key=lambda e: (e[2], e[0].params[campaign.search.key]))
+        return [{"params": p.params, "job": job, "key": key} for p, job, _, key in ordered]
+
+    def save(evaluated, rows):  # at most every 2 s: the record of a search in progress
+        if time.monotonic() - last[0] >= 2.0:
+            write_record(ws, campaign, runner, search_entries(evaluated), rows)
+            last[0] = time.monotonic()
+
+    evaluated, search_rows = run_search(campaign, runner, on_progress=save)
+    write_record(ws, campaign, runner, search_entries(evaluated), search_rows)
+
+
+def _stop_interrupted(campaign: Campaign, runner: Runner, ex: Executor, ws: Path) -> None:
+    """After Ctrl-C: stop the workers (cancel this run's batch jobs), keep what is complete, say so."""
+    interrupted = time.time()
+    ex.close()
+    runner.forget_interrupted(interrupted)
+    if campaign.kind == "grid":
+        write_tables(ws)
+    if ex.jobs is not None and ex.jobs.jobs:
+        runner.say(f"campaign interrupted: cancelled its worker jobs {', '.join(ex.jobs.jobs)} (only those)")
+    runner.say(
+        "campaign interrupted: the points in flight are lost, the complete ones are kept; run the "
+        "same command again to complete only what is missing"
+    )
+
+
+def _say_failures(runner: Runner) -> None:
+    """The first 20 failed points with their messages, and how many more."""
     r = runner.report
     for params, message in r.messages[:20]:
         runner.say(f"campaign: point ({params_text(params)}) failed: {message}")
     if len(r.messages) > 20:
         runner.say(f"campaign: ... {len(r.messages) - 20} more failures (table.csv, column message)")
-    return tables, r
 
 
 def _job_ranks(campaign: Campaign, settings: ClusterSettings | None, points: list) -> int:

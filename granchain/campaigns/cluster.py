@@ -17,30 +17,28 @@ driver (:class:`JobCluster`):
 Everything in a ``[cluster]`` table is a name or a number checked against a strict pattern: a
 campaign file is shared, and nothing in it reaches the job script but these values. What a job must
 run before its worker starts (``source venv/bin/activate``, ``module load``) is a command-line or API
-setting of the user who runs the campaign (``--prologue``), never a file's.
+setting of the user who runs the campaign (``--prologue``), never a file's. The settings and their
+checks are granchain.campaigns.cluster_settings'; this module re-exports them.
 """
 
 from __future__ import annotations
 
-import re
 import shutil
 import subprocess
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from granchain.campaigns.cluster_settings import (
+    SUBMIT,
+    ClusterError,
+    ClusterSettings,
+    check,
+    describe,
+    from_table,
+    merge,
+)
 from granchain.errors import GranchainError
-
-KINDS = ("local", "slurm", "pbs")
-#: the keys a [cluster] table may hold (flags: --cluster, --queue, ...; the same names with dashes)
-KEYS = ("kind", "queue", "account", "walltime", "jobs", "cores_per_job", "memory", "interface", "replacements")
-#: the jobs' submit command per kind (its absence on PATH is refused before anything starts)
-SUBMIT = {"slurm": "sbatch", "pbs": "qsub"}
-
-_NAME = re.compile(r"^[A-Za-z0-9_.,:@+-]{1,64}$")
-_WALLTIME = re.compile(r"^(?:(\d+)-)?(\d{1,4}):([0-5]\d):([0-5]\d)$")
-_MEMORY = re.compile(r"^(\d+(?:\.\d+)?)\s*(B|kB|KB|MB|GB|TB|KiB|MiB|GiB|TiB)$")
-_INTERFACE = re.compile(r"^[A-Za-z0-9_.:-]{1,32}$")
 
 #: job states that SLURM reports for a job that holds no running worker any more
 ENDED = {
@@ -58,187 +56,8 @@ ENDED = {
 }
 
 
-class ClusterError(GranchainError, ValueError):
-    """A cluster setting is invalid, or the queue refused the jobs; the message says which and what to do."""
-
-
 class NoWorkerJobs(GranchainError, RuntimeError):
     """Every worker job ended and the replacement limit is reached: the campaign cannot go on."""
-
-
-@dataclass(frozen=True)
-class ClusterSettings:
-    """Where a campaign's workers run.
-
-    Parameters
-    ----------
-    kind : str
-        "local" (a LocalCluster on this machine), "slurm" or "pbs" (worker jobs through dask-jobqueue).
-    queue, account : str or None
-        The partition / queue (``#SBATCH -p``) and the account (``-A``); None: the site's default.
-    walltime : str
-        Each worker job's time limit, ``[D-]HH:MM:SS``. The workers leave a few minutes before it
-        (``--lifetime``): a point in flight goes back to the queue, a replacement job takes over.
-    jobs : int
-        Worker jobs kept in the queue.
-    cores_per_job : int or None
-        Cores each job asks for (None: ``ranks``, one worker per job); a job runs
-        ``cores_per_job // ranks`` worker processes.
-    memory : str or None
-        Memory per job (``"4GB"``, ``#SBATCH --mem``); None: the queue's default (the Dask workers'
-        memory limit is then 2 GB per core).
-    interface : str or None
-        The network interface the scheduler and the workers bind to (``ib0``, ``eth0``; ``lo`` when the
-        driver and every job share one machine, as in tests); None: Dask's choice.
-    replacements : int or None
-        How many ended jobs are replaced by new ones (None: 2 per job, at least 3).
-    prologue : tuple of str
-        Shell lines a job runs before its worker starts (``source /shared/venv/bin/activate``); the
-        caller's own, never a campaign file's.
-    log_directory : str or None
-        Where the jobs' stdout and stderr go (the workspace's ``jobs/`` by default).
-    """
-
-    kind: str = "local"
-    queue: str | None = None
-    account: str | None = None
-    walltime: str = "01:00:00"
-    jobs: int = 1
-    cores_per_job: int | None = None
-    memory: str | None = None
-    interface: str | None = None
-    replacements: int | None = None
-    prologue: tuple[str, ...] = ()
-    log_directory: str | None = None
-
-    @property
-    def batch(self) -> bool:
-        return self.kind in SUBMIT
-
-    def cores(self, ranks: int) -> int:
-        """Cores per job for points of `ranks` MPI ranks."""
-        return self.cores_per_job if self.cores_per_job is not None else ranks
-
-    def workers_per_job(self, ranks: int) -> int:
-        return max(1, self.cores(ranks) // ranks)
-
-    def memory_text(self, ranks: int) -> str:
-        return self.memory if self.memory is not None else f"{2 * self.cores(ranks)}GB"
-
-    def replacement_limit(self) -> int:
-        return self.replacements if self.replacements is not None else max(3, 2 * self.jobs)
-
-    def walltime_seconds(self) -> int:
-        m = _WALLTIME.match(self.walltime)
-        assert m is not None  # checked by check()
-        d, h, mi, s = (int(x) if x else 0 for x in m.groups())
-        return ((d * 24 + h) * 60 + mi) * 60 + s
-
-    def lifetime_seconds(self) -> int:
-        """A worker's --lifetime: the walltime less a margin (a tenth of it, at most 5 min, at least 20 s)."""
-        w = self.walltime_seconds()
-        return max(10, w - min(300, max(20, w // 10)))
-
-
-def _where(source: str | None, key: str) -> str:
-    flag = "--" + key.replace("_", "-")
-    return f"{source}: [cluster] {key}" if source else flag
-
-
-def check(settings: ClusterSettings, source: str | None = None, ranks: int = 1) -> ClusterSettings:
-    """Every setting checked (a CampaignError-like ClusterError naming the key or flag and the fix).
-
-    source: the campaign file the values came from (messages name its [cluster] key), or None (flags).
-    """
-    s = settings
-    if s.kind not in KINDS:
-        raise ClusterError(f"{_where(source, 'kind')} = {s.kind!r} is invalid: one of {', '.join(KINDS)}")
-    for key in ("queue", "account"):
-        v = getattr(s, key)
-        if v is not None and (not isinstance(v, str) or not _NAME.match(v)):
-            raise ClusterError(
-                f"{_where(source, key)} = {v!r} is invalid: a {key} name (letters, digits and _ . , : @ + -)"
-            )
-    if not isinstance(s.walltime, str) or not _WALLTIME.match(s.walltime):
-        raise ClusterError(
-            f"{_where(source, 'walltime')} = {s.walltime!r} is invalid: HH:MM:SS or D-HH:MM:SS, e.g. '02:00:00'"
-        )
-    if s.walltime_seconds() < 60:
-        raise ClusterError(f"{_where(source, 'walltime')} = {s.walltime!r}: at least a minute (00:01:00)")
-    for key, low in (("jobs", 1), ("cores_per_job", 1), ("replacements", 0)):
-        v = getattr(s, key)
-        if v is None and key != "jobs":
-            continue
-        if isinstance(v, bool) or not isinstance(v, int) or v < low or v > 100_000:
-            raise ClusterError(f"{_where(source, key)} = {v!r} is invalid: a whole number from {low} to 100000")
-    if s.cores_per_job is not None and s.cores_per_job < ranks:
-        raise ClusterError(
-            f"{_where(source, 'cores_per_job')} = {s.cores_per_job}: a point runs on {ranks} MPI ranks, so a job "
-            f"needs at least {ranks} cores (give cores_per_job >= ranks, a multiple of it)"
-        )
-    if s.memory is not None and (not isinstance(s.memory, str) or not _MEMORY.match(s.memory.strip())):
-        raise ClusterError(f"{_where(source, 'memory')} = {s.memory!r} is invalid: an amount such as '4GB' or '500MB'")
-    _check_interface(s, source)
-    for line in s.prologue:
-        if not isinstance(line, str) or "\n" in line or "\r" in line:
-            raise ClusterError(f"--prologue {line!r} is invalid: one shell line per --prologue")
-    return s
-
-
-def _check_interface(s: ClusterSettings, source: str | None) -> None:
-    if s.interface is not None:
-        if not isinstance(s.interface, str) or not _INTERFACE.match(s.interface):
-            raise ClusterError(f"{_where(source, 'interface')} = {s.interface!r} is invalid: a network interface name")
-        import psutil
-
-        have = sorted(psutil.net_if_addrs())
-        if s.interface not in have:
-            raise ClusterError(
-                f"{_where(source, 'interface')} = {s.interface!r}: this machine has no such network interface; "
-                f"it has {', '.join(have)}"
-            )
-
-
-def from_table(table, source: str) -> dict:
-    """The settings a campaign file's [cluster] table gives (validated by :func:`check` once merged)."""
-    if not isinstance(table, dict):
-        raise ClusterError(f"{source}: cluster = {table!r} must be a table: write it as a [cluster] section")
-    import difflib
-
-    out = {}
-    for key, value in table.items():
-        if key not in KEYS:
-            close = difflib.get_close_matches(str(key), KEYS, n=1, cutoff=0.6)
-            hint = f"did you mean {close[0]!r}? " if close else ""
-            extra = (
-                "; what a job runs before its worker (source, module load) is the --prologue flag of whoever "
-                "runs the campaign, not a campaign file's"
-                if key in ("prologue", "job_script_prologue", "python", "directives")
-                else ""
-            )
-            raise ClusterError(
-                f"{source}: [cluster] has unknown key {key!r}; {hint}allowed keys: {', '.join(KEYS)}{extra}"
-            )
-        out[key] = value
-    check(ClusterSettings(**{k: v for k, v in out.items()}), source)
-    return out
-
-
-def merge(file_values: dict | None, flags: dict, source: str | None = None) -> ClusterSettings | None:
-    """The campaign file's [cluster] values with the flags given (not None) over them; None: no cluster
-    asked for anywhere (the local cluster, or --workers / --scheduler)."""
-    values = dict(file_values or {})
-    values.update({k: v for k, v in flags.items() if v is not None and k != "prologue"})
-    if not values and not flags.get("prologue"):
-        return None
-    prologue = tuple(flags.get("prologue") or ())
-    try:
-        return ClusterSettings(**values, prologue=prologue)
-    except TypeError as e:  # an unknown key: from_table has refused it already; a caller's typo here
-        raise ClusterError(f"cluster settings: {e}") from None
-
-
-# ------------------------------------------------------------------------------- the job cluster
 
 
 @dataclass
@@ -571,25 +390,8 @@ class JobCluster:
             self._record()
 
 
-def describe(settings: ClusterSettings, ranks: int) -> str:
-    """'2 SLURM jobs of 2 cores (1 worker of 2 ranks each), queue debug, walltime 01:00:00'."""
-    s = settings
-    w = s.workers_per_job(ranks)
-    parts = [
-        f"{s.jobs} {s.kind.upper()} job{'s' if s.jobs != 1 else ''} of {s.cores(ranks)} "
-        f"core{'s' if s.cores(ranks) != 1 else ''} ({w} worker{'s' if w != 1 else ''}"
-        + (f" of {ranks} ranks" if ranks > 1 else "")
-        + " each)"
-    ]
-    if s.queue:
-        parts.append(f"queue {s.queue}")
-    if s.account:
-        parts.append(f"account {s.account}")
-    parts.append(f"walltime {s.walltime}")
-    return ", ".join(parts)
-
-
 __all__ = [
+    "SUBMIT",
     "ClusterError",
     "ClusterSettings",
     "JobCluster",

@@ -19,416 +19,26 @@ One LAMMPS instance per running point: each LAMMPS run is a child process of its
 (granchain.lammps.runner), and a worker keeps that child, with its LAMMPS instance and plugin loaded,
 for its next points (:class:`PersistentLammps`, granchain.lammps.server: no start-up per point). A
 child that crashed or reported a LAMMPS error fails its point only; the next point gets a new child.
+
+The modules: point_task (the task in a worker), dask_executor (the Dask client and its workers),
+campaign_progress (the progress line) and this one (the driver: what to run, submitting, collecting).
 """
 
 from __future__ import annotations
 
-import logging
-import os
-import socket
 import sys
-import threading
-import time
-import traceback
 import uuid
 import warnings
-import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from distributed.diagnostics.plugin import WorkerPlugin
-from tqdm import tqdm
-
 from granchain import progress
 from granchain.campaigns import workspace as wsp
-from granchain.campaigns.cluster import ClusterSettings, JobCluster, NoWorkerJobs
-from granchain.campaigns.spec import Campaign, CampaignError, Point, params_text
+from granchain.campaigns.campaign_progress import CampaignProgress
+from granchain.campaigns.dask_executor import Executor, PersistentLammps, QuietInterrupt
+from granchain.campaigns.model import Campaign, CampaignError, Point, params_text
+from granchain.campaigns.point_task import finished_before, one_line, run_point
 from granchain.errors import GranchainError
-
-# ------------------------------------------------------------------------------------ the task
-
-
-def run_point(payload: dict) -> dict:
-    """Run one point in a worker: write its run directory into its job directory, or failure.json.
-
-    payload: job_dir, scene (canonical dict), source, backend, method, rtol, error_estimate, code.
-    Returns {"job", "status": "done" | "failed", "message", "wall_time", "run_time", "warnings", "host", "pid"}
-    (also written to the job directory's task.json).
-    """
-    t0 = time.perf_counter()
-    job = Path(payload["job_dir"])
-    before = finished_before(job, payload)
-    if before is not None:
-        return before
-    caught: list[str] = []
-    status, message, detail, run_time = "done", None, None, None
-    try:
-        mine = wsp.code_version(payload["backend"])
-        if mine != payload["code"]:
-            raise CampaignError(
-                f"this worker ({socket.gethostname()}) runs {wsp.code_text(mine)}, the campaign "
-                f"{wsp.code_text(payload['code'])}: install the same granchain on every worker"
-            )
-        from granchain.scene import scene_from_dict
-        from granchain.workflows.run import run_scene
-
-        with progress.quiet(), warnings.catch_warnings(record=True) as w:
-            warnings.simplefilter("always")
-            scene = scene_from_dict(payload["scene"], source=payload["source"])
-            t_run = time.perf_counter()
-            run_scene(
-                scene,
-                backend=payload["backend"],
-                method=payload["method"],
-                rtol=payload["rtol"],
-                error_estimate=payload["error_estimate"],
-                out=job / wsp.RUN_DIR,
-                overwrite=True,
-                np_=payload.get("ranks", 1),
-            )
-        run_time = time.perf_counter() - t_run
-        caught = [str(x.message).splitlines()[0] for x in w]
-        (job / wsp.FAILURE).unlink(missing_ok=True)
-    except Exception as e:  # noqa: BLE001 - recorded with its message; the campaign goes on
-        status, message = "failed", one_line(e)
-        if not isinstance(e, GranchainError):  # a bug: keep where it happened
-            detail = traceback.format_exc()
-        try:
-            wsp.write_json(
-                job / wsp.FAILURE,
-                {"message": message, "type": type(e).__name__, "traceback": detail, "host": socket.gethostname()},
-            )
-        except OSError:  # a full or read-only disk: the point stays failed, its record below says why
-            pass
-    wall = time.perf_counter() - t0
-    record = {
-        "job": job.name,
-        "status": status,
-        "message": message,
-        "wall_time": wall,
-        "run_time": run_time,  # run_scene alone (the run and its run directory); the rest is the machinery's
-        "warnings": caught,
-        "host": socket.gethostname(),
-        "pid": os.getpid(),
-        "ranks": payload.get("ranks", 1),
-        "token": payload.get("token"),
-    }
-    try:
-        wsp.write_json(job / wsp.TASK, record)
-    except OSError:  # the record is a courtesy; the run directory is what counts
-        pass
-    return record
-
-
-def finished_before(job: Path, payload: dict) -> dict | None:
-    """The status of a point that is complete already, without running it again; None: run it.
-
-    A task Dask runs a second time (its worker, or the worker's batch job, ended before the scheduler
-    heard the result) finds its own run directory complete, with its own token in task.json: that
-    run stands. A point another campaign completed meanwhile stands too, unless this run reruns
-    everything (``rerun``)."""
-    if wsp.job_state(job) != "done":
-        return None
-    rec = wsp.read_json(job / wsp.TASK)
-    token = payload.get("token")
-    mine = isinstance(rec, dict) and token is not None and rec.get("token") == token
-    if not mine and payload.get("rerun"):
-        return None
-    out = {
-        "job": job.name,
-        "status": "done",
-        "message": None,
-        "wall_time": 0.0,
-        "run_time": None,
-        "warnings": [],
-        "host": socket.gethostname(),
-        "pid": os.getpid(),
-        "repeated": True,
-    }
-    if mine:
-        out.update({k: rec[k] for k in ("wall_time", "run_time", "warnings") if k in rec})
-    return out
-
-
-def one_line(e: BaseException) -> str:
-    """An exception as one line: a GranchainError's message; anything else with its type."""
-    text = " ".join(str(e).split()) or type(e).__name__
-    return text if isinstance(e, GranchainError) else f"{type(e).__name__}: {text}"
-
-
-# -------------------------------------------------------------------------------- the progress
-
-
-class CampaignProgress:
-    """done / running / failed with an ETA on stderr: a tqdm bar on a terminal, a line every
-    progress.LINE_EVERY seconds otherwise; nothing when quiet (granchain.progress)."""
-
-    def __init__(self, total: int, desc: str = "campaign", stream=None, workers: int = 1):
-        self.stream = sys.stderr if stream is None else stream
-        self.disabled = progress.is_quiet() or self.stream is None
-        self.tty = bool(not self.disabled and getattr(self.stream, "isatty", lambda: False)())
-        self.total, self.done, self.failed, self.pending, self.workers = total, 0, 0, 0, max(1, workers)
-        self.desc = f"granchain: {desc}"
-        self.t0 = time.perf_counter()
-        self._next_line = self.t0 + progress.DELAY
-        #: a callable giving the batch jobs' line ("jobs 1 pending, 2 running"), or None
-        self.jobs = None
-        self._bar = None
-        if self.tty:
-            self._bar = tqdm(total=total, desc=self.desc, unit="pt", file=self.stream, dynamic_ncols=True, leave=True)
-
-    @property
-    def running(self) -> int:
-        return min(self.pending, self.workers)
-
-    def _postfix(self) -> str:
-        text = f"done {self.done}, running {self.running}, failed {self.failed}"
-        jobs = self.jobs() if self.jobs is not None else None
-        return f"{text}; {jobs}" if jobs else text
-
-    def update(self, done: int = 0, failed: int = 0, pending: int | None = None, total: int | None = None) -> None:
-        self.done += done
-        self.failed += failed
-        if pending is not None:
-            self.pending = pending
-        if total is not None:
-            self.total = total
-        if self.disabled:
-            return
-        n = self.done + self.failed
-        if self._bar is not None:
-            if total is not None:
-                self._bar.total = total
-            self._bar.set_postfix_str(self._postfix(), refresh=False)
-            self._bar.update(n - self._bar.n)
-            return
-        now = time.perf_counter()
-        if now >= self._next_line:
-            self._line(now)
-            self._next_line = now + progress.LINE_EVERY
-
-    def _line(self, now: float) -> None:
-        n = self.done + self.failed
-        text = tqdm.format_meter(n, self.total or None, now - self.t0, prefix=self.desc, unit="pt")
-        try:
-            print(f"{text} ({self._postfix()})", file=self.stream, flush=True)
-        except (OSError, ValueError):
-            self.disabled = True
-
-    def close(self) -> None:
-        if self.disabled:
-            return
-        if self._bar is not None:
-            self._bar.set_postfix_str(self._postfix())
-            self._bar.close()
-            self._bar = None
-        elif time.perf_counter() - self.t0 >= progress.DELAY:
-            self._line(time.perf_counter())
-
-
-# -------------------------------------------------------------------------------- the executor
-
-
-def _ignore_sigint(signum, frame) -> None:
-    """A worker's SIGINT handler: Ctrl-C belongs to the driver, which stops the cluster."""
-
-
-class QuietInterrupt(WorkerPlugin):
-    """Dask worker plugin: Ctrl-C on a terminal reaches every process of the foreground group; a local
-    worker ignores it (no traceback; the driver stops the cluster) through a Python handler, which
-    exec resets, so the LAMMPS run a worker has started as a child process still stops at once."""
-
-    name = "granchain-quiet-interrupt"
-
-    def setup(self, worker) -> None:
-        import signal
-        import threading
-
-        if threading.current_thread() is threading.main_thread():
-            signal.signal(signal.SIGINT, _ignore_sigint)
-
-    def teardown(self, worker) -> None:
-        pass
-
-
-class PersistentLammps(WorkerPlugin):
-    """Dask worker plugin: the worker's single-rank LAMMPS runs reuse a LAMMPS child process kept
-    alive between points (granchain.lammps.server), which ends with the worker."""
-
-    name = "granchain-persistent-lammps"
-
-    def setup(self, worker) -> None:
-        from granchain.lammps import server
-
-        server.enable()
-
-    def teardown(self, worker) -> None:
-        from granchain.lammps import server
-
-        server.shutdown()
-
-
-class Executor:
-    """A Dask client made on first use: a LocalCluster of `workers` processes (one thread each), the
-    scheduler at `scheduler`, or worker jobs on a batch queue (`cluster`, granchain.campaigns.cluster).
-
-    ranks: MPI ranks per point (a local worker or a job's worker gets that many cores).
-    log_directory: where batch jobs write their output.
-    """
-
-    #: workers keep a LAMMPS child for their next points (PersistentLammps); False: a fresh process
-    #: per LAMMPS point, as before (benchmarks/bench_campaigns.py compares the two)
-    reuse_lammps = True
-
-    def __init__(
-        self,
-        workers: int | None = None,
-        scheduler: str | None = None,
-        cluster: ClusterSettings | None = None,
-        ranks: int = 1,
-        log_directory=None,
-    ):
-        if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
-            raise CampaignError(f"--workers = {workers!r}: give a whole number of worker processes >= 1")
-        if workers is not None and scheduler is not None:
-            raise CampaignError("--workers and --scheduler: the scheduler's cluster has its own workers; give one")
-        if cluster is not None and cluster.batch and (workers is not None or scheduler is not None):
-            raise CampaignError(
-                f"--cluster {cluster.kind} with --workers or --scheduler: the jobs are the workers (--jobs, "
-                "--cores-per-job); give one"
-            )
-        self.workers, self.scheduler = workers, scheduler
-        self.batch = cluster if cluster is not None and cluster.batch else None
-        self.ranks = ranks
-        self.log_directory = log_directory
-        self.client = None
-        self.cluster = None
-        self.jobs: JobCluster | None = None
-        self.failure: BaseException | None = None  # what ended the batch jobs' upkeep (NoWorkerJobs)
-        self._upkeep = None
-        self._stop = threading.Event()
-        self.futures: weakref.WeakSet = weakref.WeakSet()
-
-    @property
-    def nworkers(self) -> int:
-        if self.client is not None:
-            try:
-                return max(1, sum(self.client.nthreads().values()))
-            except Exception:  # noqa: BLE001 - only for the progress display
-                return 1
-        if self.batch is not None:
-            return self.batch.jobs * self.batch.workers_per_job(self.ranks)
-        return self.workers or max(1, _cores() // self.ranks)
-
-    def slot_cores(self) -> int:
-        """The cores one worker may give its point (for ranks = "auto")."""
-        if self.batch is not None:
-            return self.batch.cores(self.ranks) // self.batch.workers_per_job(self.ranks)
-        return max(1, _cores() // (self.workers or max(1, _cores() // self.ranks)))
-
-    def jobs_text(self) -> str | None:
-        return None if self.jobs is None else self.jobs.counts.text()
-
-    def start(self):
-        if self.client is not None:
-            return self.client
-        from distributed import Client, LocalCluster
-
-        if self.batch is not None:
-            self.jobs = JobCluster(self.batch, self.ranks, self.log_directory)
-            self.client = self.jobs.start()
-            if self.reuse_lammps and self.ranks == 1:
-                self.client.register_plugin(PersistentLammps())
-            self._upkeep = threading.Thread(target=self._keep_jobs, name="granchain-jobs", daemon=True)
-            self._upkeep.start()
-            return self.client
-        if self.scheduler is not None:
-            try:
-                self.client = Client(self.scheduler, timeout="20s")
-            except (OSError, TimeoutError) as e:
-                raise CampaignError(
-                    f"--scheduler {self.scheduler}: cannot connect ({e}); is the scheduler running "
-                    "(dask scheduler, or a dask-jobqueue cluster's scheduler_address)?"
-                ) from None
-            if self.reuse_lammps:
-                try:
-                    self.client.register_plugin(PersistentLammps())
-                except Exception as e:  # distributed re-raises a worker's failure as a bare Exception
-                    if "PersistentLammps" not in str(e) and "granchain" not in str(e):
-                        raise
-                    self.close()
-                    raise CampaignError(
-                        f"--scheduler {self.scheduler}: a worker cannot load this granchain's worker plugin "
-                        f"({e}): it runs another granchain; install the same granchain on every worker"
-                    ) from None
-            return self.client
-        self.cluster = LocalCluster(
-            n_workers=self.workers or max(1, _cores() // self.ranks),
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            # no dashboard; the scheduler's HTTP routes on a free port (the default 8787 may be taken)
-            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-            silence_logs=logging.ERROR,
-        )
-        self.client = Client(self.cluster)
-        self.client.register_plugin(QuietInterrupt())
-        if self.reuse_lammps:
-            self.client.register_plugin(PersistentLammps())
-        return self.client
-
-    def _keep_jobs(self) -> None:
-        """The batch jobs' upkeep, in a thread: poll the queue, replace ended jobs; when none is left
-        (NoWorkerJobs), cancel what is queued so that the driver's wait ends, and keep the reason."""
-        while not self._stop.wait(JobCluster.POLL):
-            try:
-                self.jobs.poll(force=True)
-            except NoWorkerJobs as e:
-                self.failure = e
-                try:
-                    self.client.cancel([f for f in self.futures if not f.done()], force=True)
-                except Exception:  # noqa: BLE001 - the client may be closing
-                    pass
-                return
-            except Exception:  # noqa: BLE001 - a queue command failing once is retried at the next poll
-                continue
-
-    def submit(self, payload: dict):
-        client = self.start()
-        key = f"granchain-point-{Path(payload['job_dir']).name[:12]}-{uuid.uuid4().hex[:8]}"
-        fut = client.submit(run_point, payload, key=key, pure=False)
-        self.futures.add(fut)  # cancelled together when no batch job is left (_keep_jobs)
-        return fut
-
-    def check_failure(self) -> None:
-        """Raise what stopped the batch jobs (NoWorkerJobs), if anything did."""
-        if self.failure is not None:
-            raise CampaignError(f"campaign stopped: {self.failure}")
-
-    def close(self) -> None:
-        self._stop.set()
-        if self._upkeep is not None and self._upkeep is not threading.current_thread():
-            self._upkeep.join(timeout=10)
-        self._upkeep = None
-        things = (self.client, self.cluster)
-        self.client = self.cluster = None
-        for thing in things:
-            if thing is not None:
-                try:
-                    thing.close()
-                except Exception:  # noqa: BLE001 - closing after Ctrl-C may find it half gone
-                    pass
-        if self.jobs is not None:
-            self.jobs.close()  # cancels every job this run submitted, and only those
-
-
-def _cores() -> int:
-    from granchain.workflows.run import available_cores
-
-    return available_cores()
-
-
-# ------------------------------------------------------------------------------------ the run
 
 
 @dataclass
@@ -661,3 +271,23 @@ def run_grid(campaign: Campaign, runner: Runner, points: list[Point]) -> RunRepo
     finally:
         prog.close()
     return r
+
+
+__all__ = [
+    "Campaign",
+    "CampaignError",
+    "CampaignProgress",
+    "Executor",
+    "PersistentLammps",
+    "Point",
+    "QuietInterrupt",
+    "RunReport",
+    "Runner",
+    "finished_before",
+    "one_line",
+    "planned_beads",
+    "point_ranks",
+    "preflight",
+    "run_grid",
+    "run_point",
+]

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from granchain import safe_files
 from granchain.campaigns import workspace as wsp
-from granchain.campaigns.spec import CampaignError
+from granchain.campaigns.model import CampaignError
 from granchain.campaigns.table import build_search_table, build_table, printable, read_record
 
 FORMATS = ("png", "pdf", "svg")

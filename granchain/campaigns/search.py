@@ -21,7 +21,7 @@ import numpy as np
 
 from granchain import safe_files
 from granchain.campaigns import workspace as wsp
-from granchain.campaigns.spec import Campaign, CampaignError, Predicate, Search, params_text
+from granchain.campaigns.model import Campaign, CampaignError, Predicate, Search, params_text
 
 
 def expected_runs(search: Search) -> int:
@@ -171,7 +171,7 @@ def run_search(campaign: Campaign, runner, on_progress=None) -> tuple[list, list
     caller keeps the workspace's record current, so a killed driver leaves a readable table)."""
     from distributed import as_completed
 
-    from granchain.campaigns.execute import CampaignProgress
+    from granchain.campaigns.campaign_progress import CampaignProgress
 
     s = campaign.search
     outers = campaign.grid()

@@ -43,7 +43,7 @@ from pathlib import Path
 
 from granchain import safe_files
 from granchain._version import __version__
-from granchain.campaigns.spec import CampaignError
+from granchain.campaigns.model import CampaignError
 
 RUN_DIR = "run"
 FAILURE = "failure.json"

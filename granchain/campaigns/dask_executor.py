@@ -1,0 +1,216 @@
+"""The Dask side of a campaign run: a client on a local cluster of worker processes, an existing
+scheduler, or worker jobs on a batch queue (granchain.campaigns.cluster), and the worker plugins that
+keep a LAMMPS child per worker and leave Ctrl-C to the driver."""
+
+from __future__ import annotations
+
+import logging
+import threading
+import uuid
+import weakref
+from pathlib import Path
+
+from distributed.diagnostics.plugin import WorkerPlugin
+
+from granchain.campaigns.cluster import ClusterSettings, JobCluster, NoWorkerJobs
+from granchain.campaigns.model import CampaignError
+from granchain.campaigns.point_task import run_point
+
+
+def _ignore_sigint(signum, frame) -> None:
+    """A worker's SIGINT handler: Ctrl-C belongs to the driver, which stops the cluster."""
+
+
+class QuietInterrupt(WorkerPlugin):
+    """Dask worker plugin: Ctrl-C on a terminal reaches every process of the foreground group; a local
+    worker ignores it (no traceback; the driver stops the cluster) through a Python handler, which
+    exec resets, so the LAMMPS run a worker has started as a child process still stops at once."""
+
+    name = "granchain-quiet-interrupt"
+
+    def setup(self, worker) -> None:
+        import signal
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGINT, _ignore_sigint)
+
+    def teardown(self, worker) -> None:
+        pass
+
+
+class PersistentLammps(WorkerPlugin):
+    """Dask worker plugin: the worker's single-rank LAMMPS runs reuse a LAMMPS child process kept
+    alive between points (granchain.lammps.server), which ends with the worker."""
+
+    name = "granchain-persistent-lammps"
+
+    def setup(self, worker) -> None:
+        from granchain.lammps import server
+
+        server.enable()
+
+    def teardown(self, worker) -> None:
+        from granchain.lammps import server
+
+        server.shutdown()
+
+
+class Executor:
+    """A Dask client made on first use: a LocalCluster of `workers` processes (one thread each), the
+    scheduler at `scheduler`, or worker jobs on a batch queue (`cluster`, granchain.campaigns.cluster).
+
+    ranks: MPI ranks per point (a local worker or a job's worker gets that many cores).
+    log_directory: where batch jobs write their output.
+    """
+
+    #: workers keep a LAMMPS child for their next points (PersistentLammps); False: a fresh process
+    #: per LAMMPS point, as before (benchmarks/bench_campaigns.py compares the two)
+    reuse_lammps = True
+
+    def __init__(
+        self,
+        workers: int | None = None,
+        scheduler: str | None = None,
+        cluster: ClusterSettings | None = None,
+        ranks: int = 1,
+        log_directory=None,
+    ):
+        if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+            raise CampaignError(f"--workers = {workers!r}: give a whole number of worker processes >= 1")
+        if workers is not None and scheduler is not None:
+            raise CampaignError("--workers and --scheduler: the scheduler's cluster has its own workers; give one")
+        if cluster is not None and cluster.batch and (workers is not None or scheduler is not None):
+            raise CampaignError(
+                f"--cluster {cluster.kind} with --workers or --scheduler: the jobs are the workers (--jobs, "
+                "--cores-per-job); give one"
+            )
+        self.workers, self.scheduler = workers, scheduler
+        self.batch = cluster if cluster is not None and cluster.batch else None
+        self.ranks = ranks
+        self.log_directory = log_directory
+        self.client = None
+        self.cluster = None
+        self.jobs: JobCluster | None = None
+        self.failure: BaseException | None = None  # what ended the batch jobs' upkeep (NoWorkerJobs)
+        self._upkeep = None
+        self._stop = threading.Event()
+        self.futures: weakref.WeakSet = weakref.WeakSet()
+
+    @property
+    def nworkers(self) -> int:
+        if self.client is not None:
+            try:
+                return max(1, sum(self.client.nthreads().values()))
+            except Exception:  # noqa: BLE001 - only for the progress display
+                return 1
+        if self.batch is not None:
+            return self.batch.jobs * self.batch.workers_per_job(self.ranks)
+        return self.workers or max(1, _cores() // self.ranks)
+
+    def slot_cores(self) -> int:
+        """The cores one worker may give its point (for ranks = "auto")."""
+        if self.batch is not None:
+            return self.batch.cores(self.ranks) // self.batch.workers_per_job(self.ranks)
+        return max(1, _cores() // (self.workers or max(1, _cores() // self.ranks)))
+
+    def jobs_text(self) -> str | None:
+        return None if self.jobs is None else self.jobs.counts.text()
+
+    def start(self):
+        if self.client is not None:
+            return self.client
+        from distributed import Client, LocalCluster
+
+        if self.batch is not None:
+            self.jobs = JobCluster(self.batch, self.ranks, self.log_directory)
+            self.client = self.jobs.start()
+            if self.reuse_lammps and self.ranks == 1:
+                self.client.register_plugin(PersistentLammps())
+            self._upkeep = threading.Thread(target=self._keep_jobs, name="granchain-jobs", daemon=True)
+            self._upkeep.start()
+            return self.client
+        if self.scheduler is not None:
+            try:
+                self.client = Client(self.scheduler, timeout="20s")
+            except (OSError, TimeoutError) as e:
+                raise CampaignError(
+                    f"--scheduler {self.scheduler}: cannot connect ({e}); is the scheduler running "
+                    "(dask scheduler, or a dask-jobqueue cluster's scheduler_address)?"
+                ) from None
+            if self.reuse_lammps:
+                try:
+                    self.client.register_plugin(PersistentLammps())
+                except Exception as e:  # distributed re-raises a worker's failure as a bare Exception
+                    if "PersistentLammps" not in str(e) and "granchain" not in str(e):
+                        raise
+                    self.close()
+                    raise CampaignError(
+                        f"--scheduler {self.scheduler}: a worker cannot load this granchain's worker plugin "
+                        f"({e}): it runs another granchain; install the same granchain on every worker"
+                    ) from None
+            return self.client
+        self.cluster = LocalCluster(
+            n_workers=self.workers or max(1, _cores() // self.ranks),
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            # no dashboard; the scheduler's HTTP routes on a free port (the default 8787 may be taken)
+            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+            silence_logs=logging.ERROR,
+        )
+        self.client = Client(self.cluster)
+        self.client.register_plugin(QuietInterrupt())
+        if self.reuse_lammps:
+            self.client.register_plugin(PersistentLammps())
+        return self.client
+
+    def _keep_jobs(self) -> None:
+        """The batch jobs' upkeep, in a thread: poll the queue, replace ended jobs; when none is left
+        (NoWorkerJobs), cancel what is queued so that the driver's wait ends, and keep the reason."""
+        while not self._stop.wait(JobCluster.POLL):
+            try:
+                self.jobs.poll(force=True)
+            except NoWorkerJobs as e:
+                self.failure = e
+                try:
+                    self.client.cancel([f for f in self.futures if not f.done()], force=True)
+                except Exception:  # noqa: BLE001 - the client may be closing
+                    pass
+                return
+            except Exception:  # noqa: BLE001 - a queue command failing once is retried at the next poll
+                continue
+
+    def submit(self, payload: dict):
+        client = self.start()
+        key = f"granchain-point-{Path(payload['job_dir']).name[:12]}-{uuid.uuid4().hex[:8]}"
+        fut = client.submit(run_point, payload, key=key, pure=False)
+        self.futures.add(fut)  # cancelled together when no batch job is left (_keep_jobs)
+        return fut
+
+    def check_failure(self) -> None:
+        """Raise what stopped the batch jobs (NoWorkerJobs), if anything did."""
+        if self.failure is not None:
+            raise CampaignError(f"campaign stopped: {self.failure}")
+
+    def close(self) -> None:
+        self._stop.set()
+        if self._upkeep is not None and self._upkeep is not threading.current_thread():
+            self._upkeep.join(timeout=10)
+        self._upkeep = None
+        things = (self.client, self.cluster)
+        self.client = self.cluster = None
+        for thing in things:
+            if thing is not None:
+                try:
+                    thing.close()
+                except Exception:  # noqa: BLE001 - closing after Ctrl-C may find it half gone
+                    pass
+        if self.jobs is not None:
+            self.jobs.close()  # cancels every job this run submitted, and only those
+
+
+def _cores() -> int:
+    from granchain.workflows.run import available_cores
+
+    return available_cores()
