@@ -316,110 +316,79 @@ def _timestep_choice(scene, method: str, rtol_plan: float, omega: float, stiffes
     return PlanChoice("timestep", dt_new, why)
 
 
-def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", peak_ratio: float = 1.0) -> Plan:
-    """Fill "auto" values (and the time step, when rtol is given) with the reasons.
+def _one_bead_end_time(scene, impacts) -> PlanChoice:
+    """A one-bead scene's end time: 1.5 x its impacts' contact times, after the load."""
+    load = scene.loading.duration if scene.loading.is_force else 0.0
+    end = load + 1.5 * sum(i["duration"] for _, i in impacts)
+    return PlanChoice(
+        "end_time",
+        end,
+        "one bead: 1.5 x the contact time of "
+        + " then ".join(f"the {name}'s impact ({i['duration']:.3g} s)" for name, i in impacts)
+        + (f", after a load of {load:.3g} s" if load else ""),
+    )
 
-    peak_ratio: the run's force scale over its smallest measured peak, when a first run measured it
-    (refined_plan); the time step and the output intervals are planned for rtol / peak_ratio.
-    """
-    if rtol is not None and not (MIN_RTOL <= rtol < 1):
-        raise UsageError(
-            f"--rtol = {rtol!r}: a relative tolerance must be at least {MIN_RTOL:g} (round-off) and below 1"
+
+def _front_end_time(scene, last: int | None, slow: float) -> PlanChoice:
+    """The end time of a chain: the slowest leading front passes the last measured contact
+    (front_travel_time), after a long load; at least the pulse of an impulse and the last snapshot."""
+    if last is None:
+        raise SceneError(
+            f'{scene.source}: end_time = "auto" needs the contacts you measure: give [outputs] '
+            "window, histories or a peak_force list"
         )
-    rtol_eff = 1e-3 if rtol is None else rtol
-    rtol_plan = rtol_eff / peak_ratio  # what the step must meet at the run's force scale
-    choices: list[PlanChoice] = []
-    omega, stiffest = highest_frequency(scene)
-    stable = STABILITY[method] / omega
-    dt = scene.run.timestep
-    if dt is None or rtol is not None:
-        choice = _timestep_choice(scene, method, rtol_plan, omega, stiffest, stable)
-        dt = choice.value
-        choices.append(choice)
-    last = last_measured_contact(scene)
-    slow, fast = wave_speeds(scene)
-    end = scene.run.end_time
-    impacts = one_bead_impacts(scene)
-    if end is None and impacts:
-        load = scene.loading.duration if scene.loading.is_force else 0.0
-        end = load + 1.5 * sum(i["duration"] for _, i in impacts)
-        choices.append(
-            PlanChoice(
-                "end_time",
-                end,
-                "one bead: 1.5 x the contact time of "
-                + " then ".join(f"the {name}'s impact ({i['duration']:.3g} s)" for name, i in impacts)
-                + (f", after a load of {load:.3g} s" if load else ""),
-            )
-        )
-    if end is None:
-        if last is None:
-            raise SceneError(
-                f'{scene.source}: end_time = "auto" needs the contacts you measure: give [outputs] '
-                "window, histories or a peak_force list"
-            )
-        ld = scene.loading
-        step = step_equivalent(scene)
-        load = step[1] if step is not None and step[1] < 1e3 else 0.0
-        travel = front_travel_time(scene, last, slow)
-        # a long load's leading peak trails its front; a precompressed chain's front is sonic, its
-        # peak forms within a few periods of it (dispersion): at most PRECOMPRESSED_TAIL of the travel
-        end = travel + min(load, PRECOMPRESSED_TAIL * travel if scene.effects.precompression else travel)
-        if ld.kind == "impulse" and end < ld.duration:
-            end = ld.duration  # an impulse is measured whole: the run lasts at least the pulse
-        if scene.outputs.snapshots and end < max(scene.outputs.snapshots):
-            end = max(scene.outputs.snapshots)  # every requested snapshot is taken
-        choices.append(
-            PlanChoice(
-                "end_time",
-                end,
-                f"the leading wave (no slower than {slow:.4g} m/s on the nominal chain"
-                + (", each contact's own stiffness and masses" if scene.per_bead else "")
-                + (", and the precompressed chain's sound speed" if scene.effects.precompression else "")
-                + f") passes contact {last} by {travel:.3g} s, after a load of {load:.3g} s"
-                + (", and the last snapshot is taken" if scene.outputs.snapshots else ""),
-            )
-        )
-    beads = scene.chain.beads
-    if beads is None:
-        if last is None:
-            last = 1
-        lead, d = leading_edge_speed(scene), scene.diameter
-        n = math.ceil(1.1 * (end + last * d / fast) / (d / lead + d / fast)) + 5
-        n = max(n, last + 5)
-        choices.append(
-            PlanChoice(
-                "beads",
-                n,
-                f"a reflection from bead N (into the chain at up to {lead:.4g} m/s, back at up to "
-                f"{fast:.4g} m/s) reaches contact {last} after t_end = {end:.3g} s: "
-                "N > (t_end + L D / c_back) / (D / c_lead + D / c_back), +10% and 5 beads",
-            )
-        )
-        beads = n
-    d = scene_to_dict(scene)
-    d["chain"]["beads"] = beads
-    # a finer step is always allowed: the step also fits inside the end time and any explicit output
-    # interval (a 1e-18 s load with history_interval = 1e-7 s: the interval stands, the step is the load's)
-    given = [v for v in (scene.outputs.history_interval, scene.outputs.dump_interval) if isinstance(v, float)]
-    d["run"] = {"end_time": end, "timestep": min([dt, end, *given])}
-    stop = scene.run.stop_after_contact
-    if scene.run.end_time is None and stop is None and last is not None and not scene.outputs.snapshots:
-        stop = last
-        choices.append(
-            PlanChoice(
-                "stop_after_contact",
-                stop,
-                f"stop as soon as the leading wave has passed contact "
-                f"{stop} (its force below half its peak), both backends",
-            )
-        )
-    if stop is not None:
-        d["run"]["stop_after_contact"] = stop
-    # output intervals: the largest sampling interval whose dump-derived peaks (three-point parabola,
-    # postprocess.dumps.peaks_from_samples) stay within rtol at the stiffest frequency: the parabola
-    # misses a cosine's peak by about (omega D)^4 / 16 (measured on dumps: (omega D)^4 / 100); a
-    # multiple of the time step
+    ld = scene.loading
+    step = step_equivalent(scene)
+    load = step[1] if step is not None and step[1] < 1e3 else 0.0
+    travel = front_travel_time(scene, last, slow)
+    # a long load's leading peak trails its front; a precompressed chain's front is sonic, its
+    # peak forms within a few periods of it (dispersion): at most PRECOMPRESSED_TAIL of the travel
+    end = travel + min(load, PRECOMPRESSED_TAIL * travel if scene.effects.precompression else travel)
+    if ld.kind == "impulse" and end < ld.duration:
+        end = ld.duration  # an impulse is measured whole: the run lasts at least the pulse
+    if scene.outputs.snapshots and end < max(scene.outputs.snapshots):
+        end = max(scene.outputs.snapshots)  # every requested snapshot is taken
+    return PlanChoice(
+        "end_time",
+        end,
+        f"the leading wave (no slower than {slow:.4g} m/s on the nominal chain"
+        + (", each contact's own stiffness and masses" if scene.per_bead else "")
+        + (", and the precompressed chain's sound speed" if scene.effects.precompression else "")
+        + f") passes contact {last} by {travel:.3g} s, after a load of {load:.3g} s"
+        + (", and the last snapshot is taken" if scene.outputs.snapshots else ""),
+    )
+
+
+def _beads_choice(scene, end: float, last: int, fast: float) -> PlanChoice:
+    """The number of beads: no reflection from bead N reaches contact `last` before the end (see the
+    module docstring)."""
+    lead, d = leading_edge_speed(scene), scene.diameter
+    n = math.ceil(1.1 * (end + last * d / fast) / (d / lead + d / fast)) + 5
+    n = max(n, last + 5)
+    return PlanChoice(
+        "beads",
+        n,
+        f"a reflection from bead N (into the chain at up to {lead:.4g} m/s, back at up to "
+        f"{fast:.4g} m/s) reaches contact {last} after t_end = {end:.3g} s: "
+        "N > (t_end + L D / c_back) / (D / c_lead + D / c_back), +10% and 5 beads",
+    )
+
+
+def _stop_choice(scene, last: int) -> PlanChoice:
+    """The stop check at the last measured contact."""
+    return PlanChoice(
+        "stop_after_contact",
+        last,
+        f"stop as soon as the leading wave has passed contact {last} (its force below half its peak), both backends",
+    )
+
+
+def _output_interval_choices(scene, d: dict, omega: float, end: float, rtol_plan: float) -> list[PlanChoice]:
+    """The "auto" output intervals, written into d["outputs"]: the largest sampling interval whose
+    dump-derived peaks (three-point parabola, postprocess.dumps.peaks_from_samples) stay within rtol at
+    the stiffest frequency: the parabola misses a cosine's peak by about (omega D)^4 / 16 (measured on
+    dumps: (omega D)^4 / 100); a multiple of the time step."""
+    choices = []
     o = scene.outputs
     for key in ("history_interval", "dump_interval"):
         if getattr(o, key) == AUTO:
@@ -434,6 +403,69 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
                     f"((omega_max D)^4 / 16 <= rtol, D <= {(16.0 * rtol_plan) ** 0.25 / omega:.3g} s)",
                 )
             )
+    return choices
+
+
+def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", peak_ratio: float = 1.0) -> Plan:
+    """Fill "auto" values (and the time step, when rtol is given) with the reasons.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene as given, "auto" values allowed.
+    rtol : float, optional
+        The relative tolerance the time step is planned for; without it a given time step stands.
+    method : str
+        The integrator: "rk4" or "verlet".
+    peak_ratio : float
+        The run's force scale over its smallest measured peak, when a first run measured it
+        (refined_plan); the time step and the output intervals are planned for rtol / peak_ratio.
+
+    Returns
+    -------
+    Plan
+        The concrete scene and each choice with its reason, in the order: time step, end time, beads,
+        stop check, output intervals.
+    """
+    if rtol is not None and not (MIN_RTOL <= rtol < 1):
+        raise UsageError(
+            f"--rtol = {rtol!r}: a relative tolerance must be at least {MIN_RTOL:g} (round-off) and below 1"
+        )
+    rtol_eff = 1e-3 if rtol is None else rtol
+    rtol_plan = rtol_eff / peak_ratio  # what the step must meet at the run's force scale
+    choices: list[PlanChoice] = []
+    omega, stiffest = highest_frequency(scene)
+    stable = STABILITY[method] / omega
+    dt = scene.run.timestep
+    if dt is None or rtol is not None:
+        choices.append(_timestep_choice(scene, method, rtol_plan, omega, stiffest, stable))
+        dt = choices[-1].value
+    last = last_measured_contact(scene)
+    slow, fast = wave_speeds(scene)
+    end = scene.run.end_time
+    if end is None:
+        impacts = one_bead_impacts(scene)
+        choices.append(_one_bead_end_time(scene, impacts) if impacts else _front_end_time(scene, last, slow))
+        end = choices[-1].value
+    beads = scene.chain.beads
+    if beads is None:
+        if last is None:
+            last = 1
+        choices.append(_beads_choice(scene, end, last, fast))
+        beads = choices[-1].value
+    d = scene_to_dict(scene)
+    d["chain"]["beads"] = beads
+    # a finer step is always allowed: the step also fits inside the end time and any explicit output
+    # interval (a 1e-18 s load with history_interval = 1e-7 s: the interval stands, the step is the load's)
+    given = [v for v in (scene.outputs.history_interval, scene.outputs.dump_interval) if isinstance(v, float)]
+    d["run"] = {"end_time": end, "timestep": min([dt, end, *given])}
+    stop = scene.run.stop_after_contact
+    if scene.run.end_time is None and stop is None and last is not None and not scene.outputs.snapshots:
+        choices.append(_stop_choice(scene, last))
+        stop = last
+    if stop is not None:
+        d["run"]["stop_after_contact"] = stop
+    choices += _output_interval_choices(scene, d, omega, end, rtol_plan)
     planned = scene_from_dict(d, source=scene.source or "<scene>")
     planned = replace(planned, source=scene.source, source_text=None)
     return Plan(scene=planned, rtol=rtol_eff, method=method, choices=choices, omega_max=omega, stable_timestep=stable)
