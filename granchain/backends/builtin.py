@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from typing_extensions import override
 
 from granchain.backends.protocol import PROPERTIES, Backend, Calculation, FileIOBackend, WorkFiles
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
@@ -24,6 +25,7 @@ class ReferenceBackend(Backend):
     methods = ("rk4", "verlet")
     method_text = "RK4 or velocity Verlet"
 
+    @override
     def calculate(self, scene, method: str, ranks: int = 1) -> Calculation:
         """Solve the planned scene in this process (see :meth:`Backend.calculate`)."""
         from granchain.reference.solver import solve_chain
@@ -64,12 +66,14 @@ class LammpsBackend(FileIOBackend):
     INPUT, DATA = "deck.lmp", "chain.data"
 
     @property
+    @override
     def result_type(self) -> type[RunResult]:
         """LammpsRunResult: its provenance says which LAMMPS and which plugin ran it."""
         from granchain.lammps.runner import LammpsRunResult
 
         return LammpsRunResult
 
+    @override
     def calculate(self, scene, method: str = "verlet", ranks: int = 1) -> Calculation:
         """Render, run and read back the planned scene in a work directory of its own (see
         :meth:`Backend.calculate`); the Calculation's work files are LAMMPS's deck, log and dumps."""
@@ -78,6 +82,7 @@ class LammpsBackend(FileIOBackend):
         result, work = runner.run_lammps(scene, np_=ranks)
         return Calculation(result, WorkFiles(work, runner.output_files(work)))
 
+    @override
     def input_files(self, scene) -> dict[str, str]:
         """deck.lmp and chain.data of the planned scene (granchain.templates.render_deck)."""
         from granchain.templates import render_deck
@@ -85,11 +90,13 @@ class LammpsBackend(FileIOBackend):
         deck = render_deck(scene)
         return {self.INPUT: deck.deck, self.DATA: deck.data}
 
+    @override
     def command(self, ranks: int = 1, program: str = "lmp", mpirun: str = "mpirun") -> list[str]:
         """``lmp -in deck.lmp -screen none``, under ``mpirun -np ranks`` for more than one rank."""
         run = [program, "-in", self.INPUT, "-screen", "none"]
         return [mpirun, "-np", str(ranks), *run] if ranks > 1 else run
 
+    @override
     def read_results(self, scene, directory: Path, wall_time: float, extra: dict | None = None) -> RunResult:
         """The deck's output files in ``directory`` -> its result (granchain.lammps.runner.lammps_result)."""
         from granchain.lammps.runner import lammps_result

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from granchain.backends import LAMMPS, Backend
 from granchain.errors import UsageError
 from granchain.physics.laws import LAWS
 from granchain.physics.materials import YIELD_PRESSURE_FACTOR
@@ -131,7 +132,7 @@ def _measured(result) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def compare_laws(
     scene,
     laws: tuple[str, ...] = ("thornton", "bilinear"),
-    backend: str = "lammps",
+    backend: str | Backend = LAMMPS.name,
     method: str | None = None,
     rtol: float | None = None,
     error_estimate: bool = True,
