@@ -84,7 +84,7 @@ def check_solution(scene, sol, steps: int | None = None) -> None:
     the same bounds, templates/watch.lmp.j2): it also uses the running maximum of the energy put in.
 
     Raises InvariantError for the first broken invariant found: finite state, energy balance at
-    every energy sample, momentum of a free chain at the end.
+    every energy sample, and momentum at the end where no effect exerts external forces.
     """
     steps = sol.steps if steps is None else steps
     u, v = np.asarray(sol.displacement), np.asarray(sol.velocity)

@@ -16,7 +16,10 @@ from granchain.physics.laws import ContactLaw
 
 @dataclass(frozen=True)
 class ChainProblem:
-    """A chain of point masses joined by contact springs, loaded at bead 1."""
+    """A chain of point masses joined by contact springs, loaded at bead 1: the paper's Eqs. 1-3,
+    m_i u_i'' = F_(i-1,i)(alpha_(i-1,i)) - F_(i,i+1)(alpha_(i,i+1)) with the overlaps of Eq. 2 and
+    the load on bead 1 (a step f(t) = A for 0 < t <= T, Eq. 4, or an initial velocity), and the
+    effects' fields (a wall, a striker, a dashpot, precompression)."""
 
     mass: np.ndarray  # (N,) kg
     law: ContactLaw  # over the N-1 contacts (parameters scalar or one per contact)
