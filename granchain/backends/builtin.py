@@ -65,6 +65,14 @@ class LammpsBackend(FileIOBackend):
     #: the input files :meth:`write_input` writes
     INPUT, DATA = "deck.lmp", "chain.data"
 
+    @override
+    def prepare(self) -> None:
+        """Build granchain's LAMMPS plugin, or find it built (a missing compiler or a failed build is
+        a PluginError)."""
+        from granchain.lammps.build import build_plugin
+
+        build_plugin()
+
     @property
     @override
     def result_type(self) -> type[RunResult]:

@@ -141,6 +141,10 @@ class Backend:
             raise UsageError(f"method = {method!r}: the {self.title} backend integrates with {self.method_text} only")
         return method
 
+    def prepare(self) -> None:
+        """Make the backend ready to run, so that what would stop every run (a plugin that does not
+        build) is said before any run starts; nothing for a backend that needs nothing."""
+
     @property
     def result_type(self) -> type[RunResult]:
         """The RunResult class of this backend's runs (what a run directory is read back as)."""

@@ -50,9 +50,7 @@ def compare_scene(
     check_resources(lam_scene, LAMMPS, np_)
     # LAMMPS's plugin is built or found now, so that a missing compiler or a failed build is said
     # before any run (the reference's starts first, below)
-    from granchain.lammps.build import build_plugin
-
-    build_plugin()
+    LAMMPS.prepare()
     # the RK4 error-bar companions at 2 dt and 4 dt: LAMMPS's are the reference's own when both run
     # the same step (a bilinear or Thornton scene with a fixed step), each made once; and they are
     # started at once in a worker process on a second core (shared_reference_runs), while this one
