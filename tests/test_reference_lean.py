@@ -4,7 +4,7 @@ RK4Integrator.lean_step (event location, no dashpot) steps between two pairs of 
 instead of saving and restoring the state, hands the first stage the state's overlaps (alpha_now)
 and screens the turning contacts once for the event location and end_piece; end_piece, the peak
 tracking and the leading pulse treat a handful of turning contacts on Python floats. Switched off
-(integrators._LEAN = False and every _SCALAR_CONTACTS = -1) the solver runs the plain step and the
+(rk4._LEAN = False and every _SCALAR_CONTACTS = -1) the solver runs the plain step and the
 numpy paths, as before these changes: every array of the solution must be the same bits.
 """
 
@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from granchain.problem import ChainProblem
-from granchain.reference import integrators, observers, solver
+from granchain.reference import events, integrators, observers, rk4, solver
 from granchain.reference.state import ChainState
 from granchain.scene import load_scene, parse_scene
 from tests.scenegen import scene_texts
@@ -25,12 +25,12 @@ from tests.scenegen import scene_texts
 @contextmanager
 def plain():
     """The plain step and the numpy paths (the solver before the lean step)."""
-    saved = integrators._LEAN, integrators._SCALAR_CONTACTS, observers._SCALAR_CONTACTS
-    integrators._LEAN, integrators._SCALAR_CONTACTS, observers._SCALAR_CONTACTS = False, -1, -1
+    saved = rk4._LEAN, events._SCALAR_CONTACTS, observers._SCALAR_CONTACTS
+    rk4._LEAN, events._SCALAR_CONTACTS, observers._SCALAR_CONTACTS = False, -1, -1
     try:
         yield
     finally:
-        integrators._LEAN, integrators._SCALAR_CONTACTS, observers._SCALAR_CONTACTS = saved
+        rk4._LEAN, events._SCALAR_CONTACTS, observers._SCALAR_CONTACTS = saved
 
 
 def solve(scene, end_time: float, timestep: float):

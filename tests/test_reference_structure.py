@@ -1,4 +1,4 @@
-"""The reference solver's structure (issue 13 item 4): integrators plus observers over one state.
+"""The reference solver's structure: integrators plus observers over one state.
 
 Its behaviour is tests/test_reference.py's and the others'; here: the rules of the structure (short,
 annotated functions; the public names other modules import), and that the two halves which now
@@ -19,6 +19,7 @@ from tests.conftest import PLASTIC_LAWS, make_scene
 
 REFERENCE = Path(solver.__file__).parent
 MAX_LINES = 80
+MAX_MODULE_LINES = 600
 
 
 def functions():
@@ -29,7 +30,20 @@ def functions():
                 yield path.name, node
 
 
-@pytest.mark.parametrize("name", ["solver.py", "state.py", "integrators.py", "observers.py", "hermite.py"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "solver.py",
+        "state.py",
+        "integrators.py",
+        "stepping.py",
+        "verlet.py",
+        "rk4.py",
+        "events.py",
+        "observers.py",
+        "hermite.py",
+    ],
+)
 def test_functions_are_short_and_public_ones_annotated(name):
     for file, fn in functions():
         if file != name:
@@ -43,11 +57,19 @@ def test_functions_are_short_and_public_ones_annotated(name):
         assert not missing and fn.returns is not None, f"{file}: {fn.name} lacks type hints ({missing or 'return'})"
 
 
+def test_modules_are_at_most_600_lines():
+    for path in sorted(REFERENCE.glob("*.py")):
+        lines = len(path.read_text().splitlines())
+        assert lines <= MAX_MODULE_LINES, f"{path.name} has {lines} lines"
+
+
 def test_the_names_other_modules_import_stay():
     # scipy_solver imports _hermite_max; tests and workflows import these from solver
     assert solver._hermite_max is hermite_max
     assert solver.EventLocationError is integrators.EventLocationError
     assert solver.KINK_ROUNDOFF == integrators.KINK_ROUNDOFF
+    for name in integrators.__all__:  # the overview module names every integrator's public name
+        assert hasattr(integrators, name), name
     assert solver.METHODS == ("rk4", "verlet")
     for name in (
         "solve_chain",
