@@ -10,7 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from granchain.cli import main, resolve_scene
 from granchain.rundir import read_peaks
 from granchain.scene import parse_scene
-from granchain.workflows.errors import companion_scene
+from granchain.workflows.errors import against_rk4_factors, companion_scene
 from granchain.workflows.run import plan_for, run_scene
 
 from .scenegen import scenes
@@ -329,14 +329,21 @@ def test_estimates_hold_on_generated_hertz_scenes(integ, sc):
 
 
 def test_compare_makes_each_rk4_companion_once(tmp_path, monkeypatch):
-    """A bilinear scene with a fixed step: LAMMPS's RK4 companions (errors.against_rk4_because) are
-    the reference's own at 2 dt and 4 dt, so compare makes them once (shared_reference_runs); on two
-    cores a worker process makes them, with the same numbers."""
+    """A bilinear scene with a fixed step at which RK4's own step for its share of Verlet's error is
+    below SHARED_BELOW dt: LAMMPS's RK4 companions (errors.against_rk4_because) are the reference's own
+    at 2 dt and 4 dt, so compare makes them once (shared_reference_runs); on two cores a worker process
+    makes them, with the same numbers."""
     import granchain.workflows.run as run_module
 
     sc, _ = plan_for(parse_scene(BILINEAR_CHAIN, source="b.toml"), "lammps", None, 1e-3)
+    # RK4's step for a share of Verlet's error goes as dt^(1/2), so h / dt as dt^(-1/2): a step this
+    # much larger than the planned one brings h / dt to 2.5
+    f1 = against_rk4_factors(sc)[0]
+    dt = sc.run.timestep * max(1.0, f1 / 2.5) ** 2
+    sc = replace(sc, run=replace(sc.run, timestep=dt))
+    assert against_rk4_factors(sc) == (2.0, 4.0)
     p = tmp_path / "b.toml"
-    p.write_text(BILINEAR_CHAIN.replace('timestep = "auto"', f"timestep = {sc.run.timestep!r}"))
+    p.write_text(BILINEAR_CHAIN.replace('timestep = "auto"', f"timestep = {dt!r}"))
     made = []
     real = run_module.run_reference
 

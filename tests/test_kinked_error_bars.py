@@ -1,0 +1,102 @@
+"""Error bars on the kinked laws (bilinear, Thornton) stay truthful at the companions' own step.
+
+A Verlet run (reference or LAMMPS) on a law whose slope jumps at kinks is measured against RK4 runs
+(event location) at RK4's own step for a share of Verlet's predicted error (workflows.errors
+.against_rk4_factors), far coarser than the run's. Whether that step is fine enough is checked run by
+run (errorbars.against_reference: no estimate where RK4's own error is not small beside the distance);
+here, on generated scenes, the estimates given are within [1/3, 3] of the true error. The truth is RK4
+at the run's own dt: its error is below the companions' by (companion step / dt)^4 and below
+Verlet's by about (omega dt)^2.
+"""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from granchain.lammps import server
+from granchain.workflows import errors
+from granchain.workflows.plan import STABILITY, highest_frequency, predicted_error
+from granchain.workflows.run import plan_for, run_scene
+
+from .conftest import make_scene
+from .scenegen import scenes
+
+KINKED = ("bilinear", "thornton")
+
+
+def kinked_scenes(max_beads: int):
+    """Generated scenes of a kinked law without a dashpot (with one, Richardson stays: RK4 cannot locate
+    the dashpot's clip, errors.withheld_because)."""
+    return st.sampled_from(KINKED).flatmap(
+        lambda law: scenes(law=law, max_beads=max_beads).filter(lambda s: not s.effects.dashpot)
+    )
+
+
+def effectivity(sc, backend: str) -> np.ndarray:
+    """Estimated / true peak-force error of a Verlet run of sc (planned for rtol 1e-3) on the backend,
+    wherever the true error is above round-off and an estimate is given."""
+    method = None if backend == "lammps" else "verlet"
+    sc, _ = plan_for(sc, backend, method, 1e-3)
+    sc = replace(sc, outputs=replace(sc.outputs, histories=(), snapshots=(), history_interval=None, dump_interval=None))
+    got = run_scene(sc, backend=backend, method=method, error_estimate=True)
+    assert got.errors.against == "rk4", got.errors.why_none
+    truth = run_scene(sc, method="rk4")
+    a, b = got.solution, truth.solution
+    true = np.abs(a.peak_force - b.peak_force)
+    above = a.complete & b.complete & (true > 1e3 * np.spacing(np.abs(a.peak_force)))
+    est = got.errors.peak_force
+    ok = above & est.reliable
+    return est.error[ok] / true[ok]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("backend", ["reference", "lammps"])
+@settings(max_examples=4, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
+@given(sc=kinked_scenes(max_beads=24))
+def test_kinked_law_estimates_are_within_a_factor_3_of_the_true_error(backend, sc):
+    ratio = effectivity(sc, backend)
+    assert np.all((ratio >= 1 / 3) & (ratio <= 3)), f"ratios {np.sort(ratio)[[0, -1]]}"
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
+@given(sc=kinked_scenes(max_beads=60))
+def test_rk4_companions_aim_at_a_share_of_verlet_error_within_stability(sc):
+    """The RK4 companions' step h (and 2 h): RK4's predicted error at h at most RK4_COMPANION_SHARE of
+    the Verlet run's predicted error, within half RK4's stability limit; never below 2 dt unless that
+    is unstable."""
+    sc, _ = plan_for(sc, "lammps", None, 1e-3)
+    omega = highest_frequency(sc)[0]
+    dt = sc.run.timestep
+    f1, f2 = errors.against_rk4_factors(sc)
+    assert f2 == pytest.approx(2 * f1)
+    h = f1 * dt
+    if f1 >= errors.SHARED_BELOW:
+        target = errors.RK4_COMPANION_SHARE * predicted_error("verlet", omega, 0.0, dt)
+        assert predicted_error("rk4", omega, 0.0, h) <= target * (1 + 1e-9)
+        assert h <= 0.5 * STABILITY["rk4"] / omega * (1 + 1e-12)
+    else:
+        assert (f1, f2) in ((2.0, 4.0), (1.0, 2.0))
+
+
+def test_lammps_companions_share_one_kept_lammps_instance():
+    """Richardson's LAMMPS companions (2 dt, 4 dt) run on one kept LAMMPS child: the second is that
+    child's second run, not a new process paying LAMMPS's start-up again; after them no child is left."""
+    sc = make_scene(beads=12, end_time=3e-5, timestep=2e-8)
+    got = run_scene(sc, backend="lammps")
+    from granchain.lammps.runner import cleanup, run_lammps
+
+    runs = []
+
+    def run_one(scene):
+        result, work = run_lammps(scene)
+        cleanup(work)
+        runs.append(result.extra["instance_run"])
+        return result
+
+    report = errors.estimate_errors(got, run_one, "verlet", stable_timestep=1.0)
+    assert report.why_none is None and len(report.wall_times) == 2
+    assert runs == [1, 2]
+    assert not server.enabled() and server.children() == []
