@@ -10,6 +10,10 @@ run, side by side, so the ratio holds under load where the absolute times do not
 median ratio over the repetitions and its range, and what the companions were (Richardson at 2 dt and
 4 dt, or RK4 at multiples of the run's dt for Verlet on a kinked law).
 
+On a loaded machine wall times swing with the other processes; the CPU column is the same ratio in
+CPU time (this process and its LAMMPS children, os.times): the companions' (inside estimate_errors)
+over everything else of the run (planning and writing included, so slightly more than the run's own).
+
 --long adds the long loads (elastic-step-40N, plastic-long-load-table1 on LAMMPS) and two spheres
 (classic-two-spheres: LAMMPS's start-up is all of the run).
 """
@@ -20,10 +24,12 @@ import argparse
 import os
 import statistics
 import warnings
+from contextlib import contextmanager
 
 os.environ.setdefault("GRANCHAIN_QUIET", "1")
 
 from granchain.cli import resolve_scene  # noqa: E402
+from granchain.workflows import errors  # noqa: E402
 from granchain.workflows.run import run_scene  # noqa: E402
 
 #: law -> its bundled short impulse
@@ -41,14 +47,45 @@ LONG = (
 )
 
 
-def price_of(scene_name: str, backend: str, method: str | None) -> tuple[float, float, str]:
-    """(run wall time, companions' wall time, the companions' steps as multiples of dt) of one run."""
-    r = run_scene(resolve_scene(scene_name), backend=backend, method=method, rtol=1e-3, error_estimate=True)
+def cpu() -> float:
+    """CPU seconds of this process and its reaped children (LAMMPS runs) so far."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
+
+
+@contextmanager
+def companions_cpu(spent: list):
+    """While inside, the CPU time of every estimate_errors call (the companions) is added to spent."""
+    real = errors.estimate_errors
+
+    def timed(*args, **kwargs):
+        t0 = cpu()
+        try:
+            return real(*args, **kwargs)
+        finally:
+            spent.append(cpu() - t0)
+
+    errors.estimate_errors = timed
+    try:
+        yield
+    finally:
+        errors.estimate_errors = real
+
+
+def price_of(scene_name: str, backend: str, method: str | None) -> tuple[float, float, float, str]:
+    """(run wall time, companions' wall time, companions' CPU over the rest's, the companions' steps as
+    multiples of dt) of one run."""
+    spent: list[float] = []
+    t0 = cpu()
+    with companions_cpu(spent):
+        r = run_scene(resolve_scene(scene_name), backend=backend, method=method, rtol=1e-3, error_estimate=True)
+    total = cpu() - t0
     price = r.price()
     dt = r.scene.run.timestep
     kind = "RK4 " if r.errors.against == "rk4" else ""
     steps = kind + ", ".join(f"{t / dt:.3g}" for t in r.errors.timesteps) + " dt"
-    return float(price["wall_time"]), float(price["error_estimate"] or 0.0), steps
+    comp = sum(spent)
+    return float(price["wall_time"]), float(price["error_estimate"] or 0.0), comp / (total - comp), steps
 
 
 def main() -> None:
@@ -61,16 +98,17 @@ def main() -> None:
     cases = [(law, SCENES[law], b, m, label) for law in args.cases.split(",") for label, b, m in BACKENDS]
     if args.long:
         cases += [(law, name, b, m, b) for law, name, b, m in LONG]
-    print("| law | scene | backend | run (s) | companions (s) | price: median (min - max) | companions at |")
-    print("|---|---|---|---|---|---|---|")
+    print("| law | scene | backend | run (s) | companions (s) | price: median (min - max) | CPU | companions at |")
+    print("|---|---|---|---|---|---|---|---|")
     for law, name, backend, method, label in cases:
         got = [price_of(name, backend, method) for _ in range(args.reps)]
-        ratios = [c / r for r, c, _ in got]
-        run = statistics.median(r for r, _, _ in got)
-        comp = statistics.median(c for _, c, _ in got)
+        ratios = [c / r for r, c, _, _ in got]
+        run = statistics.median(g[0] for g in got)
+        comp = statistics.median(g[1] for g in got)
+        cpu_ratio = statistics.median(g[2] for g in got)
         print(
             f"| {law} | {name} | {label} | {run:.3g} | {comp:.3g} | {statistics.median(ratios):.2f} "
-            f"({min(ratios):.2f} - {max(ratios):.2f}) | {got[0][2]} |",
+            f"({min(ratios):.2f} - {max(ratios):.2f}) | {cpu_ratio:.2f} | {got[0][3]} |",
             flush=True,
         )
 
