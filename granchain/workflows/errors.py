@@ -240,7 +240,7 @@ def estimate_errors(result, run_one, method: str, stable_timestep: float, run_rk
     report.why_none = withheld_because(method, scene)
     if report.why_none:
         return report
-    with kept_lammps(result.backend):
+    with kept_lammps():
         runs = _richardson_runs(report, scene, run_one, stable_timestep)
     if runs is None:
         return report
@@ -249,13 +249,10 @@ def estimate_errors(result, run_one, method: str, stable_timestep: float, run_rk
 
 
 @contextmanager
-def kept_lammps(backend: str):
-    """LAMMPS companions run on one kept LAMMPS child (granchain.lammps.server): the second does not
-    pay LAMMPS's start-up again (process, import, plugin load), which alone costs more than a short
-    run's integration. Other backends: nothing."""
-    if backend != "lammps":
-        yield
-        return
+def kept_lammps():
+    """Within, single-rank LAMMPS runs share one kept LAMMPS child (granchain.lammps.server): of two
+    LAMMPS companions the second does not pay LAMMPS's start-up again (process, import, plugin load),
+    which alone costs more than a short run's integration. Companions of other backends start none."""
     from granchain.lammps import server
 
     with server.persistent():
