@@ -16,7 +16,8 @@ a run directory; granchain.workflows.load.load_run reads one back into the same 
                     arrival_time (contacts numbered from 1; peak_force: the largest of the run;
                     complete: 1 if that peak is complete, see peaks.complete_peaks; leading_pulse_force
                     and arrival_time: the first maximum and its time, see peaks.leading_pulse; nan
-                    until then)
+                    until then; a precompressed chain: dynamic_peak_force, dynamic_leading_pulse_force
+                    and front_time, the half-amplitude arrival, see postprocess.fronts)
     histories.csv   time, force_<i>, velocity_<i> for each requested contact i (if requested)
     snapshots.csv   time, bead, displacement, velocity, contact_force (if requested)
     energy.csv      time, kinetic, potential, dissipated, work
@@ -91,9 +92,13 @@ class ChainSolution:
     # (N-1,) m, the largest overlap of each contact (0 if never compressed); the reference tracks it,
     # LAMMPS does not (None: its results dump has no such column)
     peak_overlap: np.ndarray | None = None
+    # each contact's crossing-time ladder (N-1, LADDER_SLOTS + 1) and the half-amplitude arrival read
+    # off it (N-1,) s (granchain.postprocess.fronts); empty / nan from a backend without the ladder
+    front_ladder: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    front_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self):
-        for name in ("leading_pulse_force", "leading_pulse_time"):
+        for name in ("leading_pulse_force", "leading_pulse_time", "front_time"):
             if np.size(getattr(self, name)) == 0:
                 setattr(self, name, np.full(np.shape(self.peak_force), np.nan))
         self.complete = np.asarray(self.complete, dtype=bool)
@@ -573,6 +578,7 @@ PEAK_UNITS = {
     "arrival_time": "s",
     "dynamic_peak_force": "N",  # precompressed chains: peak_force - F0
     "dynamic_leading_pulse_force": "N",
+    "front_time": "s",  # precompressed chains: the half-amplitude arrival (postprocess.fronts)
     "peak_force_error": "N",
     "time_of_peak_error": "s",
     "error_status": "text",
@@ -649,6 +655,8 @@ def peak_columns(result: RunResult) -> dict[str, np.ndarray]:
     if f0:  # a precompressed contact carries F0 at rest: the wave is the dynamic force F - F0
         cols["dynamic_peak_force"] = s.peak_force[idx] - f0
         cols["dynamic_leading_pulse_force"] = s.leading_pulse_force[idx] - f0
+        # the front's arrival there: the half-amplitude arrival (postprocess.fronts.front_times)
+        cols["front_time"] = s.front_time[idx]
     e = result.errors
     if e is not None and e.peak_force is not None:
         cols["peak_force_error"] = e.peak_force.error[idx]

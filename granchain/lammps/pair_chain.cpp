@@ -60,6 +60,7 @@ void PairChainBase::settings(int narg, char **arg)
   gamma = 0.0;
   lead = false;
   peaks_all = false;
+  ladder_per_octave = 0;
   int i = 0;
   while (i < narg) {
     if (strcmp(arg[i], "dashpot") == 0 && i + 1 < narg) {
@@ -73,14 +74,23 @@ void PairChainBase::settings(int narg, char **arg)
       lead_f0 = utils::numeric(FLERR, arg[i + 2], false, lmp);
       if (lead_floor <= 0.0) error->all(FLERR, "pair_style {} lead needs floor > 0", force->pair_style);
       i += 3;
+    } else if (strcmp(arg[i], "ladder") == 0 && i + 2 < narg) {
+      ladder_per_octave = utils::inumeric(FLERR, arg[i + 1], false, lmp);
+      ladder_slots = utils::inumeric(FLERR, arg[i + 2], false, lmp);
+      if (ladder_per_octave < 1 || ladder_slots < 1)
+        error->all(FLERR, "pair_style {} ladder needs rungs per octave >= 1 and slots >= 1", force->pair_style);
+      i += 3;
     } else if (strcmp(arg[i], "peaks") == 0 && i + 1 < narg && strcmp(arg[i + 1], "all") == 0) {
       peaks_all = true;
       i += 2;
     } else {
-      error->all(FLERR, "Illegal pair_style {} command: expected [dashpot gamma] [lead floor F0] [peaks all]",
+      error->all(FLERR,
+                 "Illegal pair_style {} command: expected [dashpot gamma] [lead floor F0] [ladder per_octave slots] "
+                 "[peaks all]",
                  force->pair_style);
     }
   }
+  if (ladder_per_octave && !lead) error->all(FLERR, "pair_style {} ladder needs lead floor F0", force->pair_style);
 }
 
 int PairChainBase::index_of(const char *name)
@@ -119,6 +129,16 @@ void PairChainBase::init_style()
   if (lead) {
     idx[FLEAD] = index_of("flead");
     idx[TLEAD] = index_of("tlead");
+  }
+  ladder_idx = -1;
+  if (ladder_per_octave) {
+    int flag, cols;
+    ladder_idx = atom->find_custom("ladder", flag, cols);
+    if (ladder_idx < 0 || flag != 1 || cols != ladder_slots + 1)
+      error->all(FLERR,
+                 "pair {} ladder {} {} needs the per-atom array d2_ladder of {} columns: add 'fix ID all "
+                 "property/atom d2_ladder {}' before the run (granchain's decks do)",
+                 force->pair_style, ladder_per_octave, ladder_slots, ladder_slots + 1, ladder_slots + 1);
   }
   if (history) {
     idx[AMAX] = index_of("amax");
@@ -179,6 +199,28 @@ void PairChainBase::track_peaks(const PeakStep &ps, const double *fc, const doub
   for (int i = 0; i < nlocal; i++) track_one(ps, i, fc, fprev, fprev2);
 }
 
+// the crossing-time ladder of owned contact i (granchain.postprocess.fronts): while its leading pulse is
+// not frozen, the time its force rose through each rung F0 + floor * 2^(k / per_octave), k = 0, 1, ...,
+// on the line between the previous sample and this one (the first sample: its own time). A rung above
+// the floor is crossed upwards at most once before the leading pulse (crossing it again needs a maximum
+// above it first, and that maximum is the leading pulse). Row: [rungs crossed, then a ring of the last
+// `slots` crossing times, rung k in column 1 + k % slots]; pow() as Python's float ** (the same libm)
+void PairChainBase::climb(const PeakStep &ps, int i, const double *fc, const double *fprev) const
+{
+  double *row = ps.ladder[i];
+  int k = (int) row[0];
+  double level = lead_f0 + lead_floor * pow(2.0, (double) k / ladder_per_octave);
+  while (fc[i] >= level) {
+    double tc = ps.t;
+    if (std::isfinite(t_fprev) && fc[i] > fprev[i] && fprev[i] < level)
+      tc = t_fprev + (level - fprev[i]) / (fc[i] - fprev[i]) * (ps.t - t_fprev);
+    row[1 + k % ladder_slots] = tc;
+    k++;
+    row[0] = k;
+    level = lead_f0 + lead_floor * pow(2.0, (double) k / ladder_per_octave);
+  }
+}
+
 // a new sample makes this sample's written contacts the previous one's; a force evaluation that is not
 // a new sample (a run's setup recomputing the state it starts in) writes fc again, fprev stays
 void PairChainBase::start_active(bool new_sample)
@@ -218,6 +260,7 @@ PairChainBase::PeakStep PairChainBase::peak_step(double t, bool new_sample)
   ps.fmin = vec(FMIN);
   ps.flead = lead ? vec(FLEAD) : nullptr;
   ps.tlead = lead ? vec(TLEAD) : nullptr;
+  ps.ladder = ladder_idx >= 0 ? atom->darray[ladder_idx] : nullptr;
   return ps;
 }
 

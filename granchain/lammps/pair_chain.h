@@ -11,6 +11,8 @@
  *                                never pulls); needs 'comm_modify vel yes' and the vector d_edash,
  *                                the dashpot energy of each contact so far
  *   pair_style chain/<law> lead floor F0   tracks the leading pulse (d_flead, d_tlead)
+ *   pair_style chain/<law> lead floor F0 ladder P S   also records each contact's crossing-time ladder
+ *                                (d2_ladder: P rungs per octave above F0 + floor, the last S kept)
  *   pair_style chain/<law> peaks all   runs every contact's peak bookkeeping every step instead of only the
  *                                contacts written at this sample or the previous one (the same numbers,
  *                                slower: a check of the shortcut, tests/test_peak_tracking.py)
@@ -45,6 +47,8 @@
  *   d_flead, d_tlead   (with 'lead floor F0') the leading pulse: the first maximum of the contact's
  *            force (a sample above both neighbours, refined like the peak) that rises more than
  *            floor above F0, and its time, frozen from then on; 0 until then
+ *   d2_ladder (with 'ladder P S', fix ID all property/atom d2_ladder S+1) the crossing-time ladder:
+ *            [rungs crossed, the last S rungs' crossing times], rungs F0 + floor * 2^(k/P) (climb)
  * The neighbour list may be checked every N > 1 steps (neigh_modify every N delay 0 check yes): a run
  * with a dangerous build (a bead moved more than half the skin between two checks), which LAMMPS only
  * counts, fails at its end.
@@ -86,6 +90,8 @@ class PairChainBase : public Pair {
   bool lead;       // track the leading pulse (d_flead, d_tlead): pair_style ... lead floor F0
   bool peaks_all;  // 'peaks all': every contact's peak bookkeeping every step (a check of track_active)
   double lead_floor = 0.0, lead_f0 = 0.0;
+  int ladder_per_octave = 0, ladder_slots = 0;    // the crossing-time ladder: pair_style ... ladder P S
+  int ladder_idx = -1;                            // d2_ladder in atom->darray
   double **d0;
   double t_fc, t_fprev, t_fprev2;    // times of the current and the two previous samples
   double *amax_comm;         // the d_amax vector during forward comm
@@ -104,9 +110,11 @@ class PairChainBase : public Pair {
     double t, a, b, det;
     bool refine;
     double *fpeak, *tpeak, *fmin, *flead, *tlead;
+    double **ladder;    // d2_ladder rows, or null without 'ladder'
   };
   PeakStep peak_step(double t, bool new_sample);
   void track_peaks(const PeakStep &ps, const double *fc, const double *fprev, const double *fprev2);
+  void climb(const PeakStep &ps, int i, const double *fc, const double *fprev) const;
   // the owned contacts the pair loop wrote a force for at this sample (act_fc) and at the previous one
   // (act_fprev), by local index: every other contact has fc = fprev = 0 and nothing to track
   // (track_active). act_fprev is usable while the local indices stay those of the previous sample
@@ -133,6 +141,9 @@ __attribute__((always_inline)) inline void PairChainBase::track_one(const PeakSt
 {
   double *fpeak = ps.fpeak, *tpeak = ps.tpeak, *fmin = ps.fmin;
   fmin[i] = MIN(fmin[i], fc[i]);
+  // a rung not crossed yet lies above every sample and every refined maximum so far (climb), so only a
+  // sample at or above the running peak can cross one: the ladder costs one comparison otherwise
+  if (ps.ladder && fc[i] >= fpeak[i] && ps.flead[i] == 0.0) climb(ps, i, fc, fprev);
   if (fc[i] > fpeak[i]) {
     fpeak[i] = fc[i];
     tpeak[i] = ps.t;

@@ -33,10 +33,11 @@ from granchain.errors import GranchainError
 from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution
 from granchain.lammps import server, worker
 from granchain.lammps.build import PLUGIN_NAME, build_plugin, mpich_file, plugin_dir, plugin_env, plugin_key
-from granchain.peaks import complete_peaks, leading_pulse, unreached_as_nan
+from granchain.peaks import complete_peaks, lead_floor, leading_pulse, unreached_as_nan
 from granchain.physics.effects import active_effects
 from granchain.physics.effects import work as effects_work
 from granchain.postprocess.dumps import read_dump
+from granchain.postprocess.fronts import front_times
 from granchain.postprocess.histories import read_histories
 from granchain.problem import ChainProblem, precompressed_displacements
 from granchain.progress import Progress
@@ -422,11 +423,31 @@ def read_results(work: Path) -> dict[str, np.ndarray]:
     tpeak, fmin, flead, tlead, amax: whichever the deck declared), as float64 read from %.17g text,
     so exactly the doubles LAMMPS held.
     """
-    p = Path(work) / RESULTS_DUMP
+    names, data = _read_atom_dump(Path(work) / RESULTS_DUMP, "the deck writes it as its last file")
+    return {c.removeprefix("d_"): data[:, names.index(c)] for c in RESULT_COLUMNS if c in names}
+
+
+#: each contact's crossing-time ladder at the end of the run (the deck's results block, before RESULTS_DUMP)
+LADDER_DUMP = "ladder.dump"
+
+
+def read_ladder(work: Path) -> np.ndarray | None:
+    """Every atom's crossing-time ladder (LADDER_DUMP: d2_ladder's columns, by atom ID), or None
+    from a deck that writes none."""
+    p = Path(work) / LADDER_DUMP
+    if not p.exists():
+        return None
+    names, data = _read_atom_dump(p, "the deck writes it before its results")
+    return data[:, [k for k, c in enumerate(names) if c.startswith("d2_ladder[")]]
+
+
+def _read_atom_dump(p: Path, written: str) -> tuple[list[str], np.ndarray]:
+    """A per-atom dump custom file of one snapshot, every atom in ID order: (its column names, its
+    rows as float64 from %.17g text). ResultsError when it is missing, cut off or out of order."""
     try:
         lines = safe_files.read_text(p, RESULTS_LIMIT).split("\n", 9)
     except FileNotFoundError:
-        raise ResultsError(f"{p}: missing; the deck writes it as its last file when the run has finished") from None
+        raise ResultsError(f"{p}: missing; {written} when the run has finished") from None
     except (OSError, UnicodeDecodeError) as e:
         raise ResultsError(f"{p}: cannot be read as the deck's results ({e})") from None
     header = [x + "\n" for x in lines[:9]] + [""] * (9 - min(len(lines), 9))
@@ -452,7 +473,7 @@ def read_results(work: Path) -> dict[str, np.ndarray]:
     ids = data[:, names.index("id")].astype(int)
     if not np.array_equal(ids, np.arange(1, natoms + 1)):
         raise ResultsError(f"{p}: atom IDs are not 1..{natoms} in order (the deck writes it sorted by ID)")
-    return {c.removeprefix("d_"): data[:, names.index(c)] for c in RESULT_COLUMNS if c in names}
+    return names, data
 
 
 #: the run watch's stop: fix halt's message, or fix chain/energy's for its energy balance (fix_modify ... watch)
@@ -528,6 +549,12 @@ def read_solution(
         flead, tlead = leading_pulse(res["flead"][o : o + n - 1], res["tlead"][o : o + n - 1], tpeak)
     else:  # a deck without the leading-pulse vectors (the built-in granular yardstick)
         flead, tlead = np.full(n - 1, np.nan), np.full(n - 1, np.nan)
+    ladder, front = read_ladder(work), np.full(n - 1, np.nan)
+    if ladder is not None:  # the crossing-time ladder and the half-amplitude arrival (postprocess.fronts)
+        ladder = ladder[o : o + n - 1]
+        front = front_times(ladder, flead, scene.effects.precompression, lead_floor(scene))
+    else:
+        ladder = np.zeros((0, 0))
     u = res["x"][o : o + n] - scene.bead_positions  # the data file's positions (render_data)
     v = res["vx"][o : o + n]
     amax = res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1)
@@ -591,6 +618,8 @@ def read_solution(
         complete=complete_peaks(fpeak, fmin, tpeak, f0),
         leading_pulse_force=flead,
         leading_pulse_time=tlead,
+        front_ladder=ladder,
+        front_time=front,
         history_contacts=hist,
         history_time=h_t,
         history_force=h_f,

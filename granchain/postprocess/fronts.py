@@ -1,4 +1,15 @@
-"""Loading and unloading fronts of a bilinear chain under a long step load (Sec. III B, Table I).
+"""Fronts: a contact's half-amplitude arrival from its crossing-time ladder; the loading and unloading
+fronts of a bilinear chain under a long step load (Sec. III B, Table I).
+
+The crossing-time ladder (both backends, in the run: the pair styles' d2_ladder, the reference's
+observers.CrossingLadder): rung k is the force level F0 + lead_floor * 2^(k / LADDER_PER_OCTAVE) above
+the static force; each contact records the time its force rose through each rung, interpolated
+inside the step (Verlet and LAMMPS: on the line between the two force samples; RK4: on the step's
+Hermite interpolant of the overlap), until its leading pulse (peaks.leading_pulse) is frozen, and
+keeps the last LADDER_SLOTS of them. A rung above the floor is crossed upwards at most once before
+the leading pulse, so the ladder is the rise that led to it. front_times reads the half-amplitude
+arrival off it: the time the dynamic force F - F0 rose through FRONT_FRACTION of the leading pulse's
+rise (the amplitude), interpolated between rungs (docs/observables.md).
 
 long_load_fronts(scene, solution) measures, from the run's snapshots and peak forces, the plateau
 values the quasi-steady model of Eqs. 35-38 predicts (physics.models.long_load_bilinear):
@@ -17,7 +28,91 @@ include one of each phase that is to be measured; values of a missing phase are 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+#: rungs per octave of the crossing-time ladder: close enough that a cubic through four rungs around
+#: half the amplitude reads the crossing to far below the time step's error (the deck passes it to the
+#: pair styles: templates/contact.lmp.j2)
+LADDER_PER_OCTAVE = 8
+#: crossing times each contact keeps (a ring of the last ones): half the amplitude lies an octave
+#: (LADDER_PER_OCTAVE rungs) below the leading pulse, and the cubic needs one rung below it
+LADDER_SLOTS = 16
+#: the front's arrival at a contact: when its dynamic force rose through this fraction of its amplitude
+FRONT_FRACTION = 0.5
+#: the smallest amplitude, as a fraction of the static force F0, whose arrival is read: LAMMPS integrates
+#: absolute positions and resolves a precompressed contact's total force only to steps of about 1.5e-9
+#: F0 (a 300-bead brass chain at F0 = 100 N), and ahead of a small front such steps made maxima of up to
+#: 1.8e-8 F0 above F0 that counted as leading pulses (above the leading pulse's floor), 0.25-0.4 ms early
+FRONT_RESOLUTION = 1e-6
+
+
+def ladder_level(k: int, floor: float) -> float:
+    """Rung k's rise above F0 (N): floor * 2^(k / LADDER_PER_OCTAVE), as the pair styles compute it
+    (Python's float ** is C's pow, the same bits)."""
+    return floor * 2.0 ** (k / LADDER_PER_OCTAVE)
+
+
+def front_times(ladder: np.ndarray, lead_force: np.ndarray, f0: float, floor: float) -> np.ndarray:
+    """Each contact's half-amplitude arrival (s) from its crossing-time ladder; nan where it has none.
+
+    Parameters
+    ----------
+    ladder : ndarray (contacts, LADDER_SLOTS + 1)
+        Rungs crossed, then the ring of crossing times (rung k in column 1 + k % LADDER_SLOTS).
+    lead_force : ndarray (contacts,)
+        The leading pulse's total force (nan: none); its rise above f0 is the amplitude.
+    f0, floor : float
+        The static force and the leading pulse's floor the ladder's rungs were laid from.
+
+    Returns
+    -------
+    ndarray
+        The time the dynamic force rose through FRONT_FRACTION of the amplitude: a cubic in the rung
+        index through the four rungs around that level (a line through the two around it where the
+        ring no longer holds the four); nan without a leading pulse, with an amplitude at most
+        FRONT_RESOLUTION F0 (one that cannot be told from the total force's resolution), or without
+        both rungs around the level.
+    """
+    ladder = np.asarray(ladder, dtype=float)
+    out = np.full(ladder.shape[0], np.nan)
+    lead_force = np.asarray(lead_force, dtype=float)
+    for i in np.flatnonzero(np.isfinite(lead_force) & (lead_force - f0 > FRONT_RESOLUTION * f0)):
+        out[i] = _front_time(ladder[i], float(lead_force[i]) - f0, floor)
+    return out
+
+
+def _front_time(row: np.ndarray, amplitude: float, floor: float) -> float:
+    """One contact's half-amplitude arrival from its ladder row (front_times)."""
+    level = FRONT_FRACTION * amplitude
+    if not level >= floor:
+        return math.nan
+    crossed = int(row[0])
+    lowest = max(0, crossed - LADDER_SLOTS)  # the rungs the ring still holds: lowest .. crossed - 1
+    k = int(math.floor(LADDER_PER_OCTAVE * math.log2(level / floor)))
+    while k > 0 and ladder_level(k, floor) > level:  # rung k at or below the level, rung k + 1 above it
+        k -= 1
+    while ladder_level(k + 1, floor) <= level:
+        k += 1
+    if k < lowest or k + 1 >= crossed:
+        return math.nan
+
+    def t(j: int) -> float:
+        return float(row[1 + j % LADDER_SLOTS])
+
+    x = LADDER_PER_OCTAVE * math.log2(level / floor) - k  # in [0, 1): the level between rungs k and k + 1
+    if k - 1 < lowest or k + 2 >= crossed:
+        return t(k) + x * (t(k + 1) - t(k))
+    # Lagrange cubic through rungs k - 1 .. k + 2 (equally spaced in the rung index)
+    w = (
+        -x * (x - 1) * (x - 2) / 6,
+        (x + 1) * (x - 1) * (x - 2) / 2,
+        -(x + 1) * x * (x - 2) / 2,
+        (x + 1) * x * (x - 1) / 6,
+    )
+    return sum(wj * t(k - 1 + j) for j, wj in enumerate(w))
+
 
 #: the part of a region used for its plateau value (from its rear edge, in fractions of its length)
 PLATEAU = (0.2, 0.8)

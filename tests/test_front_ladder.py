@@ -1,0 +1,245 @@
+"""The front's half-amplitude arrival (postprocess.fronts): each contact's crossing-time ladder, recorded
+the same way by the pair styles and the reference, read off at half the leading pulse's rise; on a
+precompressed chain it is the wave speed's arrival, and its speed tends to the sound speed c0."""
+
+import math
+import re
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from granchain.peaks import lead_floor
+from granchain.physics.materials import MATERIALS
+from granchain.physics.models import precompressed_sound_speed
+from granchain.postprocess.fronts import (
+    FRONT_FRACTION,
+    FRONT_RESOLUTION,
+    LADDER_PER_OCTAVE,
+    LADDER_SLOTS,
+    front_times,
+    ladder_level,
+)
+from granchain.postprocess.observables import fit_wave_speed, measure_observables
+from granchain.problem import contact_positions
+from granchain.scene import parse_scene
+from granchain.templates import render_deck
+from granchain.workflows.run import plan_for, run_scene
+from tests.scenegen import scenes
+
+
+def test_the_deck_lays_the_ladder_the_fronts_module_reads():
+    sc, _ = plan_for(parse_scene(PRECOMPRESSED.format(beads=30, material="brass", radius=4.76e-3, f0=100.0, amp=0.1)))
+    deck = render_deck(sc).deck
+    m = re.search(r"^pair_style\s+chain/\S+ .*\bladder (\d+) (\d+)", deck, re.M)
+    assert m and (int(m.group(1)), int(m.group(2))) == (LADDER_PER_OCTAVE, LADDER_SLOTS)
+    yardstick = render_deck(sc, yardstick="builtin").deck  # (its ladder stays empty: pair_style granular)
+    for d in (deck, yardstick):
+        assert re.search(rf"^fix\s+\S+ all property/atom d2_ladder {LADDER_SLOTS + 1}$", d, re.M)
+
+
+def ladder_of(rise, t_grid: np.ndarray, f0: float, floor: float, peak: float) -> np.ndarray:
+    """The ladder row of a force rising as rise(t) (exact crossing times by bisection on t_grid)."""
+    crossed, ring = 0, np.zeros(LADDER_SLOTS)
+    while f0 + ladder_level(crossed, floor) <= f0 + peak:
+        level = ladder_level(crossed, floor)
+        lo, hi = t_grid[0], t_grid[-1]
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if rise(mid) < level else (lo, mid)
+        ring[crossed % LADDER_SLOTS] = 0.5 * (lo + hi)
+        crossed += 1
+    return np.concatenate([[crossed], ring])
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    amplitude=st.floats(1e-3, 1e4),
+    width=st.floats(1e-7, 1e-3),
+    floor_fraction=st.floats(1e-7, 1e-2),
+    f0=st.sampled_from([0.0, 1.0, 250.0]),
+)
+def test_front_times_reads_the_half_amplitude_crossing_off_the_ladder(amplitude, width, floor_fraction, f0):
+    """A smooth rise to its amplitude: the time read off the ladder is where the rise crosses
+    FRONT_FRACTION of it, to far below the rise time (the cubic between rungs)."""
+
+    def rise(t):
+        return amplitude * (1.0 - math.exp(-((t / width) ** 2)))
+
+    t = np.array([0.0, 4.0 * width])
+    peak = rise(t[-1])
+    level = FRONT_FRACTION * peak
+    lo, hi = t[0], t[-1]
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if rise(mid) < level else (lo, mid)
+    floor = floor_fraction * amplitude
+    row = ladder_of(rise, t, f0, floor, peak)
+    got = front_times(row[None, :], np.array([f0 + peak]), f0, floor)[0]
+    assert abs(got - 0.5 * (lo + hi)) < 1e-4 * width
+
+
+def test_front_times_is_nan_without_a_leading_pulse_or_its_rungs():
+    floor = 1e-3
+    row = np.concatenate([[3.0], np.arange(1.0, LADDER_SLOTS + 1)])  # three rungs crossed
+    assert np.isnan(front_times(row[None, :], np.array([np.nan]), 0.0, floor)[0])
+    # an amplitude far above the rungs crossed: half of it was never climbed
+    assert np.isnan(front_times(row[None, :], np.array([1e3]), 0.0, floor)[0])
+    # below the floor: nothing to read
+    assert np.isnan(front_times(row[None, :], np.array([1.5 * floor]), 0.0, floor)[0])
+    # an amplitude LAMMPS cannot tell from the total force's resolution (FRONT_RESOLUTION F0): not read
+    amplitude, floor = 5e-5, 1e-7
+    rise = ladder_of(lambda t: amplitude * t, np.array([0.0, 1.0]), 0.0, floor, amplitude)
+    for f0, readable in (
+        (1.0, True),
+        (0.5 * amplitude / FRONT_RESOLUTION, True),
+        (2 * amplitude / FRONT_RESOLUTION, False),
+    ):
+        got = front_times(rise[None, :], np.array([f0 + amplitude]), f0, floor)[0]
+        assert np.isfinite(got) == readable
+
+
+def kept(row: np.ndarray, f0: float, floor: float) -> tuple[np.ndarray, np.ndarray]:
+    """A ladder row's kept rungs in order: (their total forces, their crossing times)."""
+    crossed = int(row[0])
+    k = np.arange(max(0, crossed - LADDER_SLOTS), crossed)
+    return np.array([f0 + ladder_level(int(j), floor) for j in k]), row[1 + k % LADDER_SLOTS]
+
+
+#: how closely the two backends' forces agree step for step (tests/test_lammps.py: 1e-9 of the force)
+FORCE_AGREEMENT = 1e-8
+
+
+@settings(max_examples=6, deadline=None)
+@given(scene=scenes(max_beads=40, precompressed=True))
+def test_lammps_and_reference_verlet_climb_the_same_ladder(scene):
+    """Generated precompressed chains (every law, loading and effect): the pair styles and the
+    reference's Verlet record the same rungs, each at the same time as far as their forces agree
+    (a force apart by FORCE_AGREEMENT of itself crosses a rung that much force later, at the rise's
+    slope there), and the same half-amplitude arrivals."""
+    sc, _ = plan_for(scene, "lammps", None, 1e-2)
+    lam = run_scene(sc, backend="lammps", rtol=1e-2).solution
+    ref = run_scene(sc, method="verlet", rtol=1e-2).solution
+    f0, floor = float(sc.effects.precompression), lead_floor(sc)
+    assert lam.front_ladder.shape == ref.front_ladder.shape == (sc.chain.beads - 1, LADDER_SLOTS + 1)
+    np.testing.assert_array_equal(lam.front_ladder[:, 0], ref.front_ladder[:, 0])
+    for a, b in zip(lam.front_ladder, ref.front_ladder, strict=True):
+        force, t_ref = kept(b, f0, floor)
+        t_lam = kept(a, f0, floor)[1]
+        if force.size < 2:
+            np.testing.assert_allclose(t_lam, t_ref, rtol=1e-9)
+            continue
+        slope = np.abs(np.gradient(force, t_ref))  # the rise's dF/dt at each rung
+        assert np.all(np.abs(t_lam - t_ref) <= FORCE_AGREEMENT * force / slope + 1e-12 * t_ref)
+    np.testing.assert_array_equal(np.isfinite(lam.front_time), np.isfinite(ref.front_time))
+    ok = np.isfinite(ref.front_time)
+    np.testing.assert_allclose(lam.front_time[ok], ref.front_time[ok], rtol=1e-6)
+
+
+PRECOMPRESSED = """
+[chain]
+beads = {beads}
+radius = {radius!r}
+material = "{material}"
+
+[contact]
+law = "hertz"
+
+[loading]
+kind = "step"
+amplitude = {amp!r}
+duration = 1.0
+
+[run]
+end_time = "auto"
+timestep = "auto"
+
+[precompression]
+force = {f0!r}
+
+[outputs]
+peak_force = true
+"""
+
+
+def sound_speed(sc) -> float:
+    """c0 of a uniform precompressed Hertz chain (physics.models), centres the static overlap closer."""
+    f0 = float(sc.effects.precompression)
+    spacing = sc.diameter - float(sc.law.static_overlap(f0))
+    return precompressed_sound_speed(float(sc.law.k), f0, sc.mass, spacing)
+
+
+def speeds(sc, sol, contacts: np.ndarray) -> tuple[float, float]:
+    """(half-amplitude, first-maximum) speeds fitted over the contacts given (1-based)."""
+    at = contact_positions(sc)
+    half = fit_wave_speed(contacts, sol.front_time[contacts - 1], sc.diameter, at)
+    first = fit_wave_speed(contacts, sol.leading_pulse_time[contacts - 1], sc.diameter, at)
+    return half[0], first[0]
+
+
+def test_half_amplitude_arrival_is_computed_from_the_solution_by_both_backends_alike():
+    """front_time is what front_times makes of the solution's own ladder and leading pulse."""
+    sc, _ = plan_for(
+        parse_scene(PRECOMPRESSED.format(beads=40, material="chrome-steel-52100", radius=3e-3, f0=20.0, amp=0.5)),
+        "lammps",
+    )
+    for sol in (run_scene(sc, backend="lammps").solution, run_scene(sc, method="rk4").solution):
+        again = front_times(sol.front_ladder, sol.leading_pulse_force, 20.0, lead_floor(sc))
+        np.testing.assert_array_equal(np.isfinite(again), np.isfinite(sol.front_time))
+        ok = np.isfinite(again)
+        assert ok.sum() > 10
+        np.testing.assert_array_equal(again[ok], sol.front_time[ok])
+
+
+@pytest.mark.slow
+@settings(max_examples=3, deadline=None)
+@given(
+    material=st.sampled_from(sorted(m for m in MATERIALS if MATERIALS[m].youngs_modulus > 1e10)),
+    radius=st.floats(2e-3, 8e-3),
+    f0=st.floats(5.0, 200.0),
+)
+def test_precompressed_front_speed_tends_to_c0(material, radius, f0):
+    """A step of 1e-3 F0 on a 300-bead precompressed Hertz chain: the half-amplitude speed is within
+    0.5% of c0 on LAMMPS and on the reference (RK4), the two agree within their fit errors, the speed
+    over the chain's far half is closer to c0 than over its near half (dispersion's lag grows ever
+    slower), and a larger perturbation (1e-1 F0) moves it further from c0; the first maximum lags more."""
+    text = PRECOMPRESSED.format(beads=300, material=material, radius=radius, f0=f0, amp=1e-3 * f0)
+    sc0 = parse_scene(text, source="precompressed.toml")
+    lam_sc, _ = plan_for(sc0, "lammps", None, 5e-4)
+    ref_sc, _ = plan_for(sc0, "reference", "rk4", 5e-4)
+    lam = run_scene(lam_sc, backend="lammps").solution
+    ref = run_scene(ref_sc, method="rk4").solution
+    c0 = sound_speed(lam_sc)
+    obs = [measure_observables(s, sol) for s, sol in ((lam_sc, lam), (ref_sc, ref))]
+    for o in obs:
+        assert abs(o["wave_speed"] / c0 - 1) < 5e-3
+    assert abs(obs[0]["wave_speed"] - obs[1]["wave_speed"]) <= 3 * math.hypot(
+        obs[0]["wave_speed_stderr"], obs[1]["wave_speed_stderr"]
+    )
+    a, b = lam_sc.window
+    near, far = np.arange(a, (a + b) // 2), np.arange((a + b) // 2, b + 1)
+    v_near, v_far, first_far = speeds(ref_sc, ref, near)[0], *speeds(ref_sc, ref, far)
+    assert abs(v_far / c0 - 1) < abs(v_near / c0 - 1)
+    assert abs(first_far / c0 - 1) > abs(v_far / c0 - 1)
+    big = parse_scene(text.replace(f"amplitude = {1e-3 * f0!r}", f"amplitude = {1e-1 * f0!r}"), source="big.toml")
+    big_sc, _ = plan_for(big, "lammps", None, 5e-4)
+    v_big = measure_observables(big_sc, run_scene(big_sc, backend="lammps").solution)["wave_speed"]
+    assert abs(v_big / c0 - 1) > abs(obs[0]["wave_speed"] / c0 - 1)
+
+
+def test_a_precompressed_chains_wave_speed_is_its_half_amplitude_arrivals():
+    """On a precompressed chain the wave speed fits the half-amplitude arrivals, not the first maxima;
+    without precompression it stays the first maximum's (the paper's definition)."""
+    sc, _ = plan_for(
+        parse_scene(PRECOMPRESSED.format(beads=60, material="brass", radius=4.76e-3, f0=100.0, amp=0.1)), "lammps"
+    )
+    sol = run_scene(sc, method="verlet").solution
+    a, b = sc.window
+    c = np.arange(a, b + 1)
+    half, first = speeds(sc, sol, c)
+    assert half != first
+    assert measure_observables(sc, sol)["wave_speed"] == pytest.approx(half, rel=1e-12)
+    bare = replace(sc, effects=replace(sc.effects, precompression=0.0))  # (its contacts one diameter apart)
+    assert measure_observables(bare, sol)["wave_speed"] == pytest.approx(speeds(bare, sol, c)[1], rel=1e-12)
