@@ -108,7 +108,8 @@ def kept(row: np.ndarray, f0: float, floor: float) -> tuple[np.ndarray, np.ndarr
     return np.array([f0 + ladder_level(int(j), floor) for j in k]), row[1 + k % LADDER_SLOTS]
 
 
-#: how closely the two backends' forces agree step for step (tests/test_lammps.py: 1e-9 of the force)
+#: the two backends' forces agree step for step to about 1e-9 of themselves (tests/test_lammps.py);
+#: on a rise the samples that bracket a rung are a few steps of that apart
 FORCE_AGREEMENT = 1e-8
 
 
@@ -116,26 +117,38 @@ FORCE_AGREEMENT = 1e-8
 @given(scene=scenes(max_beads=40, precompressed=True))
 def test_lammps_and_reference_verlet_climb_the_same_ladder(scene):
     """Generated precompressed chains (every law, loading and effect): the pair styles and the
-    reference's Verlet record the same rungs, each at the same time as far as their forces agree
-    (a force apart by FORCE_AGREEMENT of itself crosses a rung that much force later, at the rise's
-    slope there), and the same half-amplitude arrivals."""
+    reference's Verlet record the same rungs, each at the same time as far as their forces agree (a
+    force apart by df crosses a rung df / (dF/dt) later; df: twice the largest difference of their
+    force histories, peaks and leading pulses, and at least FORCE_AGREEMENT of the force), and the same
+    half-amplitude arrivals."""
     sc, _ = plan_for(scene, "lammps", None, 1e-2)
     lam = run_scene(sc, backend="lammps", rtol=1e-2).solution
     ref = run_scene(sc, method="verlet", rtol=1e-2).solution
     f0, floor = float(sc.effects.precompression), lead_floor(sc)
+    apart = [lam.history_force - ref.history_force, lam.peak_force - ref.peak_force]
+    apart.append(np.nan_to_num(lam.leading_pulse_force - ref.leading_pulse_force))
+    df = 2 * max(float(np.max(np.abs(d), initial=0.0)) for d in apart) + 1e-12 * f0
     assert lam.front_ladder.shape == ref.front_ladder.shape == (sc.chain.beads - 1, LADDER_SLOTS + 1)
-    np.testing.assert_array_equal(lam.front_ladder[:, 0], ref.front_ladder[:, 0])
-    for a, b in zip(lam.front_ladder, ref.front_ladder, strict=True):
+    tol = np.zeros(sc.chain.beads - 1)  # each contact's time tolerance: the largest of its rungs'
+    for c, (a, b) in enumerate(zip(lam.front_ladder, ref.front_ladder, strict=True)):
+        if a[0] != b[0]:  # a leading pulse within df of a rung: one run crossed it, the other not
+            top = f0 + ladder_level(int(min(a[0], b[0])), floor)
+            assert abs(a[0] - b[0]) == 1 and abs(ref.leading_pulse_force[c] - top) <= df
+            tol[c] = np.inf
+            continue
         force, t_ref = kept(b, f0, floor)
         t_lam = kept(a, f0, floor)[1]
         if force.size < 2:
             np.testing.assert_allclose(t_lam, t_ref, rtol=1e-9)
             continue
-        slope = np.abs(np.gradient(force, t_ref))  # the rise's dF/dt at each rung
-        assert np.all(np.abs(t_lam - t_ref) <= FORCE_AGREEMENT * force / slope + 1e-12 * t_ref)
-    np.testing.assert_array_equal(np.isfinite(lam.front_time), np.isfinite(ref.front_time))
-    ok = np.isfinite(ref.front_time)
-    np.testing.assert_allclose(lam.front_time[ok], ref.front_time[ok], rtol=1e-6)
+        # the rise's dF/dt at each rung but the top one, just below the maximum, where it flattens
+        slope = np.abs(np.gradient(force, t_ref))[:-1]
+        bound = np.maximum(df, FORCE_AGREEMENT * force[:-1]) / slope
+        assert np.all(np.abs(t_lam - t_ref)[:-1] <= bound)
+        tol[c] = np.max(bound)
+    both = np.isfinite(lam.front_time) & np.isfinite(ref.front_time)
+    assert np.array_equal(both, np.isfinite(lam.front_time) | np.isfinite(ref.front_time))
+    assert np.all(np.abs(lam.front_time - ref.front_time)[both] <= tol[both])
 
 
 PRECOMPRESSED = """
