@@ -22,7 +22,24 @@ from granchain.scene.writer import dump_toml, scene_to_dict
 
 @dataclass(frozen=True)
 class Chain:
-    """The [chain] section: how many beads, their radius and material (one each, or one per bead)."""
+    """The [chain] section: how many beads, their radius and material (one each, or one per bead).
+
+    Attributes
+    ----------
+    beads : int or None
+        N, the number of beads; None where the scene says "auto" (the planner chooses).
+    radius : float
+        R in m; with per-bead radii, bead 1's (the nominal bead the paper's scales use).
+    material : Material
+        The beads' material (density, Young's modulus, Poisson's ratio, yield strength); with
+        per-bead materials, bead 1's.
+    material_name : str or None
+        The material's built-in name, or None for an inline ``[chain.material]`` table.
+    radii : tuple of float or None
+        Every bead's radius in m (a list or the taper rule), or None when all are ``radius``.
+    materials : tuple of str or None
+        Every bead's built-in material name, or None when all are ``material``.
+    """
 
     beads: int | None  # None: "auto"
     radius: float  # m; with per-bead radii, bead 1's (the nominal one)
@@ -34,7 +51,24 @@ class Chain:
 
 @dataclass(frozen=True)
 class Contact:
-    """The [contact] section: the law (a name in granchain.physics.laws.LAWS) and its keys."""
+    """The [contact] section: the law (a name in granchain.physics.laws.LAWS) and its keys.
+
+    Each law reads its own keys (``ContactLaw.read_contact``); the other laws' stay None.
+
+    Attributes
+    ----------
+    law : str
+        The law's name ("hertz", "bilinear", "thornton").
+    unloading_coeff : float or None
+        beta, the residual-to-maximum overlap ratio of the bilinear law, 0 <= beta < 1.
+    plastic_stiffness : float or None
+        The bilinear law's loading stiffness k in N/m of the nominal pair: given, or
+        18.5 sigma_y R* from the material's yield strength (Sec. III); None on a chain of several
+        materials, where each contact's comes from its softer bead.
+    yield_pressure : float or None
+        Thornton's limiting contact pressure p_y in Pa; None where each contact's comes from the
+        softer bead's yield strength.
+    """
 
     law: str
     unloading_coeff: float | None = None  # beta, bilinear only
@@ -43,12 +77,34 @@ class Contact:
 
     @property
     def law_class(self) -> type[ContactLaw]:
+        """The registered ContactLaw subclass of ``law``."""
         return law_class(self.law)
 
 
 @dataclass(frozen=True)
 class Loading:
-    """f(t) = amplitude for 0 < t <= duration (Eq. 4), or an initial velocity of bead 1."""
+    """The [loading] section: f(t) = A for 0 < t <= T on bead 1 (Eq. 4), or a velocity at t = 0.
+
+    Attributes
+    ----------
+    kind : str
+        "step" (amplitude and duration given), "impulse" (I and T given, A = I / T), "velocity"
+        (bead 1 moves at t = 0) or "striker" (a sphere hits bead 1).
+    amplitude : float
+        A in N (step, impulse; else 0).
+    duration : float
+        T, the loading time in s (step, impulse; else 0).
+    velocity : float
+        In m/s: bead 1's at t = 0 (velocity) or the striker's (striker); else 0.
+    striker_radius : float
+        The striker's radius in m (striker; default bead 1's).
+    striker_material : Material or None
+        The striker's material (striker; default the chain's).
+    striker_material_name : str or None
+        Its built-in name, or None for an inline table.
+    striker_mass : float or None
+        The striker's mass in kg if the scene gives it; None: from its radius and density.
+    """
 
     kind: str  # "step" | "impulse" | "velocity" | "striker"
     amplitude: float = 0.0  # N (step, impulse)
@@ -61,17 +117,29 @@ class Loading:
 
     @property
     def impulse(self) -> float:
-        """I = A T (Eq. 4); for a velocity load, the momentum per unit mass is the velocity."""
+        """The force load's impulse I = A T (Eq. 4), N s; 0 for a velocity or striker load (their
+        momentum is Scene.input_impulse)."""
         return self.amplitude * self.duration
 
     @property
     def is_force(self) -> bool:
+        """The load is a force f(t) on bead 1 (step or impulse), not an initial velocity."""
         return self.kind in ("step", "impulse")
 
 
 @dataclass(frozen=True)
 class Run:
-    """The [run] section: end time and time step (None where the planner chooses), and an early stop."""
+    """The [run] section: end time and time step (None where the planner chooses), and an early stop.
+
+    Attributes
+    ----------
+    end_time : float or None
+        The simulated time in s; None: "auto".
+    timestep : float or None
+        The time step dt in s; None: "auto".
+    stop_after_contact : int or None
+        The stop check: stop once the leading wave has passed this contact (1-based), or None.
+    """
 
     end_time: float | None  # s; None: "auto"
     timestep: float | None  # s; None: "auto"
@@ -80,7 +148,23 @@ class Run:
 
 @dataclass(frozen=True)
 class Outputs:
-    """The [outputs] section: which contacts' peaks and histories are kept, snapshots, the window."""
+    """The [outputs] section: which contacts' peaks and histories are kept, snapshots, the window.
+
+    Attributes
+    ----------
+    peak_force : bool or tuple of int
+        True: every contact's peak force; False: none; or the contacts (1-based) to tabulate.
+    histories : tuple of int
+        Contacts whose force (and bead velocity) against time is kept.
+    snapshots : tuple of float
+        Times in s of force and velocity profiles along the chain.
+    window : tuple of int or None
+        The first and last contact of the window, or None for the default (``Scene.window``).
+    history_interval : float, str or None
+        s between history samples, "auto" (the default with histories) or None.
+    dump_interval : float, str or None
+        s between whole-chain LAMMPS dump frames, "auto", or None (the default: no dump).
+    """
 
     peak_force: bool | tuple[int, ...] = True  # True: every contact; or a tuple of contacts
     histories: tuple[int, ...] = ()  # contacts whose force (and bead velocity) vs time is kept
@@ -99,7 +183,14 @@ Effects = make_dataclass(
     frozen=True,
 )
 Effects.__module__ = __name__
-Effects.__doc__ = "Effects beyond the paper's bare chain; each is absent unless the scene declares it."
+Effects.__doc__ = """Effects beyond the paper's bare chain; each is absent unless the scene declares it.
+
+The fields are those of the registered effects (``granchain.physics.effects.effect_fields``), each
+at its absent value unless the scene declares the effect: ``far_end`` ("free", or "wall": a rigid
+flat touching bead N), ``dashpot`` (gamma in N s/m, 0: none) and ``precompression`` (the static
+force F0 in N, 0: none). A striker is a kind of load and per-bead radii and materials are the
+chain's; they have no field here.
+"""
 
 
 @dataclass(frozen=True)
@@ -145,34 +236,42 @@ class Scene:
     # ---- derived quantities (definitions live in granchain.physics) ----
     @property
     def n_contacts(self) -> int:
+        """The number of bead-bead contacts, N - 1 (a wall's contact not counted)."""
         return self.chain.beads - 1
 
     @property
     def mass(self) -> float:
+        """The nominal bead's mass m = rho 4/3 pi R^3 (bead 1's radius and material), kg."""
         return mat.bead_mass(self.chain.material, self.chain.radius)
 
     @property
     def diameter(self) -> float:
+        """The nominal bead's diameter D = 2R, m."""
         return 2.0 * self.chain.radius
 
     @property
     def e_star(self) -> float:
+        """E* = E / (2 (1 - nu^2)) of two nominal beads (Sec. II A), Pa."""
         return mat.effective_modulus(self.chain.material)
 
     @property
     def r_star(self) -> float:
+        """R* = R / 2 of two nominal beads (Sec. II A), m."""
         return mat.effective_radius(self.chain.radius)
 
     @property
     def tau(self) -> float:
+        """The chain's intrinsic time scale tau = sqrt(pi rho R*^2 / (4 E*)) (Eq. 7), s."""
         return mat.time_scale(self.chain.material, self.chain.radius)
 
     @property
     def force_scale(self) -> float:
+        """E* R*^2, the force scale of the nondimensional force F~ (Eq. 5), N."""
         return mat.force_scale(self.chain.material, self.chain.radius)
 
     @property
     def impulse_scale(self) -> float:
+        """E* R*^2 tau, the impulse scale of the nondimensional impulse I~ (Eq. 6), N s."""
         return mat.impulse_scale(self.chain.material, self.chain.radius)
 
     def pair_law(self, e_star: float, r_star: float, materials: tuple = ()) -> ContactLaw:
@@ -197,11 +296,13 @@ class Scene:
 
     @property
     def bead_radii(self) -> np.ndarray:
+        """Every bead's radius, bead 1 first, m."""
         n = self.chain.beads
         return np.asarray(self.chain.radii) if self.chain.radii else np.full(n, self.chain.radius)
 
     @property
     def bead_materials(self) -> list:
+        """Every bead's Material, bead 1 first."""
         n = self.chain.beads
         if self.chain.materials:
             return [mat.MATERIALS[name] for name in self.chain.materials]
@@ -209,6 +310,7 @@ class Scene:
 
     @property
     def bead_masses(self) -> np.ndarray:
+        """Every bead's mass, bead 1 first, kg."""
         return np.array([mat.bead_mass(m, r) for m, r in zip(self.bead_materials, self.bead_radii, strict=True)])
 
     @property
@@ -264,6 +366,7 @@ class Scene:
 
     @property
     def contact_stiffnesses(self) -> np.ndarray:
+        """k of every bead-bead contact's law, in chain order (N/m^(3/2) Hertz and Thornton, N/m bilinear)."""
         return np.array([float(law.k) for law in self.contact_laws])
 
     @property
@@ -286,6 +389,7 @@ class Scene:
 
     @property
     def striker_mass(self) -> float:
+        """The striker's mass M: the scene's, else rho 4/3 pi R^3 of its radius and material, kg."""
         ld = self.loading
         return ld.striker_mass if ld.striker_mass is not None else mat.bead_mass(ld.striker_material, ld.striker_radius)
 
@@ -297,6 +401,7 @@ class Scene:
 
     @property
     def striker_stiffness(self) -> float:
+        """k of the striker's contact on bead 1 (striker_law)."""
         return float(self.striker_law.k)
 
     def flat_law(self, r: float, m) -> ContactLaw:
@@ -311,6 +416,7 @@ class Scene:
 
     @property
     def wall_stiffness(self) -> float:
+        """k of bead N's contact on the wall (wall_law)."""
         return float(self.wall_law.k)
 
     @property
@@ -332,8 +438,9 @@ class Scene:
     def window(self) -> tuple[int, int]:
         """Contacts over which the leading peak and wave speed are measured.
 
-        Default: the second and third quarters of the chain, away from the loaded end (where the
-        wave forms) and from the free far end (where it reflects).
+        The scene's ``[outputs] window`` if given; else, with a list of peak contacts, its first to
+        its last; else the second and third quarters of the chain, away from the loaded end (where
+        the wave forms) and from the far end (where it reflects).
         """
         if self.outputs.window is not None:
             return self.outputs.window

@@ -103,8 +103,8 @@ def _toml_value(v: Any) -> str:
 
 
 def _toml_char(c: str) -> str:
-    """One character of a TOML basic string: quote and backslash escaped, control characters as
-    \\uXXXX (TOML allows none raw), a lone surrogate (not a Unicode scalar value) as U+FFFD."""
+    r"""One character of a TOML basic string: quote and backslash escaped, control characters as
+    \uXXXX (TOML allows none raw), a lone surrogate (not a Unicode scalar value) as U+FFFD."""
     if c in '"\\':
         return "\\" + c
     o = ord(c)
