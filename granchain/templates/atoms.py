@@ -30,6 +30,23 @@ class AtomLayout:
     registry order after the beads'.
 
     Contact i (beads i and i+1) lives on the atom of bead i, ID i + offset.
+
+    Attributes
+    ----------
+    beads : int
+        N, the chain's beads.
+    extra_types : tuple of str
+        The effects' atom types ("striker", "wall"), in registry order.
+    offset : int
+        Atoms in front of bead 1 (Effect.beads_in_front): 1 with a striker, else 0.
+    skin : float
+        The neighbour skin in m: 0.2 x the smallest bead diameter.
+    rmax : float
+        The largest radius of a body that moves (beads, a striker), m.
+    bead_types : int
+        The bead kinds (Scene.bead_kinds): atom types 1..bead_types.
+    last_bead_type : int
+        Bead N's atom type.
     """
 
     beads: int
@@ -42,6 +59,7 @@ class AtomLayout:
 
     @classmethod
     def of(cls, scene) -> AtomLayout:
+        """The layout of a scene's deck: its beads, bead kinds and the atoms of the effects it declares."""
         skin = 0.2 * 2.0 * float(min(scene.bead_radii)) if scene.per_bead else 0.2 * scene.diameter
         rmax = largest_radius(scene)
         active = active_effects(scene)
@@ -59,6 +77,7 @@ class AtomLayout:
 
     @property
     def striker(self) -> bool:
+        """A striker atom: ID 1, in front of bead 1."""
         return "striker" in self.extra_types
 
     @property
@@ -75,6 +94,7 @@ class AtomLayout:
 
     @property
     def natoms(self) -> int:
+        """The deck's atoms: the beads and the effects' atoms."""
         return self.beads + len(self.extra_types)
 
     @property
@@ -89,6 +109,7 @@ class AtomLayout:
 
     @property
     def wall_id(self) -> int:
+        """The wall's atom: the last, after bead N."""
         return self.last_id + 1
 
     def ids(self, contacts) -> list[int]:
@@ -133,6 +154,15 @@ def bead_kinds(scene) -> tuple[list[tuple[float, object]], list[int]]:
 
 
 def render_data(scene) -> str:
+    """The text of chain.data, the LAMMPS data file (atom_style sphere) the deck reads.
+
+    One line per atom, "ID type diameter density x 0 0", in ID order: the effects' atoms in front
+    (a striker), the beads, the others (a wall; Effect.data_atoms). The beads touch with zero force
+    on the contact grid (Scene.bead_positions: every at-rest overlap exactly 0 in LAMMPS's
+    arithmetic), displaced by the static displacements of a precompression. The box spans the atoms
+    with 2 rmax to spare along x, and +-4 rmax across, wider than cutoff + skin, so that no body
+    sees its own periodic image.
+    """
     n, d = scene.chain.beads, scene.diameter
     lay = atom_layout(scene)
     rmax = largest_radius(scene)
@@ -178,7 +208,19 @@ def render_data(scene) -> str:
 
 @dataclass(frozen=True)
 class PairCoeff:
-    """One pair_coeff line: atom types I and J, their contact's law and contact distance d0."""
+    """One pair_coeff line: atom types I and J, their contact's law and contact distance d0.
+
+    Attributes
+    ----------
+    i, j : int
+        The two atom types.
+    law : ContactLaw
+        The law of a contact between them (Scene.bead_pair_law, or an effect's: the wall's flat_law,
+        the striker's).
+    d0 : float
+        The contact distance in m, at which the overlap is 0: R_i + R_j on the contact grid
+        (Scene.contact_radius), R for a bead on the wall.
+    """
 
     i: int
     j: int

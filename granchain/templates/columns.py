@@ -41,7 +41,16 @@ def result_columns(declared) -> list[str]:
 @dataclass(frozen=True)
 class PerAtom:
     """The per-atom vectors a deck declares (fix contact ... property/atom) and, of them, the
-    energies dissipated so far; the results dump writes the RESULT_COLUMNS among them."""
+    energies dissipated so far; the results dump writes the RESULT_COLUMNS among them.
+
+    Attributes
+    ----------
+    vectors : tuple of str
+        Every per-atom vector the deck declares (d_NAME), in declaration order.
+    dissipated : tuple of str
+        Those holding energy dissipated so far at the atom's contact, J (a law's d_edis, a
+        dashpot's): their sum is the energy balance's dissipated term.
+    """
 
     vectors: tuple[str, ...]
     dissipated: tuple[str, ...] = ()
@@ -57,6 +66,7 @@ class PerAtom:
 
     @property
     def results(self) -> list[str]:
+        """The columns of the results dump this deck writes (result_columns of its vectors)."""
         return result_columns(self.vectors)
 
 

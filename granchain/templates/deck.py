@@ -50,6 +50,7 @@ class DeckOptions:
     energy_fix: bool = False
 
     def __post_init__(self):
+        """Refuse an unknown history_file and a neigh_every below 1 (UsageError)."""
         if self.history_file not in ("dump", "npy"):
             raise UsageError(f"history_file = {self.history_file!r}: 'dump' or 'npy'")
         if not (isinstance(self.neigh_every, int) and self.neigh_every >= 1):
@@ -68,7 +69,17 @@ DECK_OPTIONS = PLUGIN_DECK_OPTIONS
 
 @dataclass(frozen=True)
 class Deck:
-    """A rendered deck: the text of deck.lmp, of the data file chain.data it reads, and its step count."""
+    """A rendered deck: the text of deck.lmp, of the data file chain.data it reads, and its step count.
+
+    Attributes
+    ----------
+    deck : str
+        The text of deck.lmp.
+    data : str
+        The text of chain.data (render_data).
+    total_steps : int
+        The steps of the whole run, every segment of the step plan (Schedule.total).
+    """
 
     deck: str  # deck.lmp
     data: str  # chain.data

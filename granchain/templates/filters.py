@@ -13,9 +13,9 @@ def float_repr(x) -> str:
 
 
 def comment(text) -> str:
-    """Any text (a scene's title, a file name) as the payload of one inert comment line of a deck.
+    r"""Any text (a scene's title, a file name) as the payload of one inert comment line of a deck.
 
-    LAMMPS reads a line up to '\\n' only, joins the next line when the last non-blank character is
+    LAMMPS reads a line up to '\n' only, joins the next line when the last non-blank character is
     '&', keeps reading while a line holds an odd number of triple quotes, loses the line end after a
     NUL, and only then drops the comment (input.cpp: Input::file, Input::parse). So: every character
     that is not printable (line and paragraph breaks of C and of str.splitlines, NUL, tabs, other
