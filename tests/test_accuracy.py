@@ -28,7 +28,7 @@ def test_work_precision_study(tmp_path):
     assert study.dump_errors and study.dump_errors[0][2] < 1e-12  # every step + same rule: exact
     text = (tmp_path / "accuracy.md").read_text()
     assert "cheapest method" in text and "One-time costs" in text
-    # the current plan's point (issue 15 item 5): each integrator at the step planned for rtol 1e-3,
+    # the current plan's point: each integrator at the step planned for rtol 1e-3,
     # measured; the planner's error model is calibrated with a margin, so the plan meets it
     from granchain.workflows.accuracy import PLAN_RTOL
 

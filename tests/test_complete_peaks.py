@@ -1,4 +1,4 @@
-"""Complete peaks (issue 11, defect 3) and the end-of-run state in the summary (defect 6).
+"""Complete peaks and the end-of-run state in the summary.
 
 A contact's peak is complete once its force has fallen to PEAK_PASSED_FRACTION of the peak (both
 above the static force) at some sample after the peak (granchain.peaks.complete_peaks). A peak

@@ -1,4 +1,4 @@
-"""Issue 15: every run carries a measured error estimate (companion runs at 2 dt and 4 dt)."""
+"""Every run carries a measured error estimate (companion runs at 2 dt and 4 dt, or RK4 on a kinked law)."""
 
 import json
 from dataclasses import replace
@@ -155,9 +155,9 @@ CASES = (
         for integ in ("lammps", "verlet", "rk4")
     ]
     # bilinear with Verlet: measured against RK4 (the law's slope jumps at kinks the contacts cross; Richardson
-    # gave 3 of 59 peaks an estimate there before, errors.against_rk4_because)
+    # gives 3 of 59 peaks an estimate there, errors.against_rk4_because)
     + [("plastic-short-impulse", "lammps"), ("plastic-short-impulse", "verlet")]
-    # RK4 locates the kinks: 33 of 59 estimated, 0.79-3.0 of the true error (stop 22, the order-range rule)
+    # RK4 locates the kinks: 33 of 59 estimated, 0.79-3.0 of the true error (the order-range rule)
     + [("plastic-short-impulse", "rk4")]
     + [("thornton-short-impulse", "lammps"), ("thornton-short-impulse", "verlet")]
     + [
@@ -183,7 +183,7 @@ CASES = (
 @pytest.mark.slow
 @pytest.mark.parametrize("name,integ", CASES)
 def test_estimated_error_is_within_a_factor_3_of_the_true_error(name, integ):
-    """Issue 15's validation: estimated / true error (true: a run at dt / 16) in [1/3, 3] wherever
+    """The validation: estimated / true error (true: a run at dt / 16) in [1/3, 3] wherever
     the true error is above round-off and an estimate is given, and an estimate for most peaks.
 
     On a law with slope kinks Verlet's error follows no order (errors.against_rk4_because), so its run
@@ -306,7 +306,7 @@ def test_granchain_compare_shows_both_error_bars(tmp_path, capsys):
 @settings(max_examples=8, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
 @given(sc=scenes(law="hertz", max_beads=30).filter(lambda s: not s.effects.dashpot))
 def test_estimates_hold_on_generated_hertz_scenes(integ, sc):
-    """Issue 15 item 3 on generated scenes (walls, strikers, precompression, tapers, materials): the
+    """The same on generated scenes (walls, strikers, precompression, tapers, materials): the
     bar of the bundled scenes. Measured over 12 generated scenes per case (README, the note): Hertz
     without a dashpot meets it with Verlet and LAMMPS (ratios 0.96-1.6); with a dashpot (Verlet's
     first order), with the plastic laws' kinks and with RK4 (Hertz onsets from touching beads are

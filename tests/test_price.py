@@ -1,4 +1,4 @@
-"""Every run states its price (issue 15 item 4): summary.json's "price"."""
+"""Every run states its price: summary.json's "price"."""
 
 import json
 
