@@ -536,13 +536,52 @@ def energy_column_names(path: Path, scene) -> list[str]:
 def read_solution(
     scene, work: Path, total_steps: int, wall_time: float, end_time: float | None = None
 ) -> ChainSolution:
-    n, m = scene.chain.beads, scene.mass
-    ld = scene.loading
+    """A finished deck's results in work as the solution every backend returns (results.ChainSolution).
+
+    Atoms are read by ID (templates.atom_layout: a striker is atom 1, bead i atom i + offset, contact i
+    lives on atom i + offset): the peaks (peak_fields), the energy samples (energy_fields), the
+    histories and snapshots (history_fields, snapshot_fields), the final state and the effects' own
+    contacts (Effect.end_fields). end_time: the run's last time if it stopped early.
+    """
+    n, ld = scene.chain.beads, scene.loading
     res = read_results(work)  # by atom ID: templates.RESULT_COLUMNS
-    lay = atom_layout(scene)
-    o = lay["offset"]  # a striker is atom 1; bead i is atom i + o; contact i lives on atom i + o
+    o = atom_layout(scene)["offset"]
+    end = scene.run.end_time if end_time is None else end_time
+    v = res["vx"][o : o + n]
+    masses = scene.bead_masses if scene.per_bead else scene.mass
+    times = step_times_of(scene)
+    # the extra atoms' results (Effect.end_fields: the wall's contact lives on bead N's atom)
+    ends = {
+        k: x
+        for effect in active_effects(scene)
+        for k, x in effect.end_fields(res["fpeak"], res["tpeak"], res["vx"], o + n - 1).items()
+    }
+    return ChainSolution(
+        method="verlet",
+        timestep=scene.run.timestep,
+        steps=total_steps,
+        wall_time=wall_time,
+        end_time=end,
+        **peak_fields(scene, work, res, o),
+        **history_fields(scene, work, times),
+        **snapshot_fields(scene, work, times, o),
+        **energy_fields(scene, work),
+        displacement=res["x"][o : o + n] - scene.bead_positions,  # the data file's positions (render_data)
+        velocity=v,
+        alpha_max=res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1),
+        impulse_delivered=ld.amplitude * min(ld.duration, end) if ld.is_force else 0.0,
+        momentum=float(np.sum(masses * v)) + (scene.striker_mass * float(res["vx"][0]) if o else 0.0),
+        **ends,
+    )
+
+
+def peak_fields(scene, work: Path, res: dict[str, np.ndarray], o: int) -> dict[str, np.ndarray]:
+    """The solution's per-contact peak fields from the results dump (res) and the ladder dump: the
+    running peak, its time and what completes it, the leading pulse, the crossing-time ladder and
+    the half-amplitude arrival read off it (postprocess.fronts). o: the atom of contact 1 less one."""
+    n, f0 = scene.chain.beads, scene.effects.precompression
     fpeak = res["fpeak"][o : o + n - 1]
-    tpeak = unreached_as_nan(fpeak, res["tpeak"][o : o + n - 1], scene.effects.precompression)
+    tpeak = unreached_as_nan(fpeak, res["tpeak"][o : o + n - 1], f0)
     # the smallest force since each peak (a deck without d_fmin: no peak counts as complete)
     fmin = res["fmin"][o : o + n - 1] if "fmin" in res else fpeak
     if "flead" in res:
@@ -550,20 +589,32 @@ def read_solution(
     else:  # a deck without the leading-pulse vectors (the built-in granular yardstick)
         flead, tlead = np.full(n - 1, np.nan), np.full(n - 1, np.nan)
     ladder, front = read_ladder(work), np.full(n - 1, np.nan)
-    if ladder is not None:  # the crossing-time ladder and the half-amplitude arrival (postprocess.fronts)
+    if ladder is not None:  # a precompressed chain's deck
         ladder = ladder[o : o + n - 1]
-        front = front_times(ladder, flead, scene.effects.precompression, lead_floor(scene))
+        front = front_times(ladder, flead, f0, lead_floor(scene))
     else:
         ladder = np.zeros((0, 0))
-    u = res["x"][o : o + n] - scene.bead_positions  # the data file's positions (render_data)
-    v = res["vx"][o : o + n]
-    amax = res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1)
+    return {
+        "peak_force": fpeak,
+        "time_of_peak": tpeak,
+        "force_min_after_peak": fmin,
+        "complete": complete_peaks(fpeak, fmin, tpeak, f0),
+        "leading_pulse_force": flead,
+        "leading_pulse_time": tlead,
+        "front_ladder": ladder,
+        "front_time": front,
+    }
 
+
+def energy_fields(scene, work: Path) -> dict[str, np.ndarray]:
+    """The energy samples (energy.txt: time, kinetic, stored, dissipated) and the energy put in by then:
+    the initial kinetic + stored + dissipated energy, the work of f(t) (A times bead 1's displacement
+    while it acts) and of the effects' external forces (Effect.work: precompression's static ones)."""
+    ld = scene.loading
     e = np.loadtxt(io.StringIO(_result_text(work / "energy.txt", RESULTS_LIMIT)), comments="#", ndmin=2)
     # the deck appends the end of the run (energy.lmp.j2); where the last periodic sample is that, keep one
     keep = np.append(e[1:, 0] != e[:-1, 0], True)
     e = e[keep]
-    f0 = scene.effects.precompression
     names = energy_column_names(work / "energy.txt", scene)
     if "dissipated" not in names:  # no dissipation column: an elastic law without a dashpot
         e = np.insert(e, 3, 0.0, axis=1)
@@ -571,8 +622,6 @@ def read_solution(
     col = {name: e[:, k] for k, name in enumerate(names)}
     et, ke, pe, ed, x1 = (col[k] for k in ("time", "kinetic", "potential", "dissipated", "x1"))
     x1_0 = x1[0] if et[0] == 0.0 else float(x1_static(scene))
-    # energy put in: the initial kinetic + stored + dissipated energy, the work of f(t) (A times bead
-    # 1's displacement while it acts), and the work of the static precompression forces
     work_done = np.full(et.shape, ke[0] + pe[0] + ed[0]) if et[0] == 0.0 else np.zeros(et.shape)
     if ld.is_force:
         dx = x1 - x1_0
@@ -580,69 +629,42 @@ def read_solution(
             x1_end = float(np.loadtxt(io.StringIO(_result_text(work / "load_end.txt", 4096)), ndmin=1)[1])
             dx = np.where(et > ld.duration, x1_end - x1_0, dx)
         work_done = work_done + ld.amplitude * dx
-    # the work of the effects' external forces (Effect.work: precompression's static ones)
     xn = col.get("xN", x1)  # bead N's x where an effect needs it (energy_columns)
     work_done = work_done + effects_work(ChainProblem.from_scene(scene), x1 - x1_0, xn - xn[0])
+    return {"energy_time": et, "kinetic": ke, "potential": pe, "dissipated": ed, "work": work_done}
 
-    times = step_times_of(scene)
+
+def history_fields(scene, work: Path, times: np.ndarray) -> dict:
+    """The requested contacts' force and left-bead velocity histories (histories.npy, written by fix
+    chain/history, or histories.dump); times: the time after every step."""
     hist = tuple(i - 1 for i in scene.outputs.histories)
     h_t = np.zeros(0)
     h_f = h_v = np.zeros((0, len(hist)))
     if hist:
-        h_t, h_f, h_v = read_histories(work, times)  # histories.npy (fix chain/history) or histories.dump
-    snaps = scene.outputs.snapshots
+        h_t, h_f, h_v = read_histories(work, times)
+    return {"history_contacts": hist, "history_time": h_t, "history_force": h_f, "history_velocity": h_v}
+
+
+def snapshot_fields(scene, work: Path, times: np.ndarray, o: int) -> dict[str, np.ndarray]:
+    """The whole-chain snapshots (snapshot_K.dump): displacements from the unloaded chain (a
+    precompressed chain's static displacement added: displace/atom counts from t = 0), velocities
+    and contact forces. o: the atom of bead 1 less one."""
+    n, snaps = scene.chain.beads, scene.outputs.snapshots
     s_u, s_v, s_f = [], [], []
     u_static = np.zeros(n)
-    if f0:
+    if scene.effects.precompression:
         u_static = precompressed_displacements(scene)[0]
     for k in range(len(snaps)):
         dd = read_dump(work / f"snapshot_{k}.dump", times)
-        s_u.append(dd.columns["v_ux"][-1][o : o + n] + u_static)  # displace/atom counts from t = 0
+        s_u.append(dd.columns["v_ux"][-1][o : o + n] + u_static)
         s_v.append(dd.columns["v_vel"][-1][o : o + n])
         s_f.append(dd.columns["d_fc"][-1][o : o + n - 1])
-    # the extra atoms' results (Effect.end_fields: the wall's contact lives on bead N's atom)
-    ends = {
-        k: v
-        for e in active_effects(scene)
-        for k, v in e.end_fields(res["fpeak"], res["tpeak"], res["vx"], o + n - 1).items()
+    return {
+        "snapshot_time": np.asarray(snaps, dtype=float),
+        "snapshot_displacement": np.array(s_u).reshape(len(snaps), n),
+        "snapshot_velocity": np.array(s_v).reshape(len(snaps), n),
+        "snapshot_force": np.array(s_f).reshape(len(snaps), n - 1),
     }
-    return ChainSolution(
-        method="verlet",
-        timestep=scene.run.timestep,
-        steps=total_steps,
-        wall_time=wall_time,
-        end_time=scene.run.end_time if end_time is None else end_time,
-        peak_force=fpeak,
-        time_of_peak=tpeak,
-        force_min_after_peak=fmin,
-        complete=complete_peaks(fpeak, fmin, tpeak, f0),
-        leading_pulse_force=flead,
-        leading_pulse_time=tlead,
-        front_ladder=ladder,
-        front_time=front,
-        history_contacts=hist,
-        history_time=h_t,
-        history_force=h_f,
-        history_velocity=h_v,
-        snapshot_time=np.asarray(snaps, dtype=float),
-        snapshot_displacement=np.array(s_u).reshape(len(snaps), n),
-        snapshot_velocity=np.array(s_v).reshape(len(snaps), n),
-        snapshot_force=np.array(s_f).reshape(len(snaps), n - 1),
-        energy_time=et,
-        kinetic=ke,
-        potential=pe,
-        dissipated=ed,
-        work=work_done,
-        displacement=u,
-        velocity=v,
-        alpha_max=amax,
-        impulse_delivered=ld.amplitude * min(ld.duration, scene.run.end_time if end_time is None else end_time)
-        if ld.is_force
-        else 0.0,
-        momentum=float(np.sum((scene.bead_masses if scene.per_bead else m) * v))
-        + (scene.striker_mass * float(res["vx"][0]) if o else 0.0),
-        **ends,
-    )
 
 
 def output_files(work: Path) -> dict[str, Path]:
