@@ -63,6 +63,10 @@ def validate(campaign: Campaign) -> list:
 
 
 def write_record(ws: Path, campaign: Campaign, runner: Runner, entries: list[dict], search_rows=None) -> None:
+    """Write campaign.json, the workspace's record of this campaign run: its settings, the code, the
+    varied keys, the search, the points in order (entries: {"params", "job", "key"}) and a search's
+    rows. Written before the points run and kept current, so that the table can be read meanwhile
+    and after a killed driver."""
     record = {
         "schema": wsp.RECORD_SCHEMA,
         "kind": campaign.kind,

@@ -30,6 +30,7 @@ class CampaignProgress:
 
     @property
     def running(self) -> int:
+        """Points running now: those submitted and not finished, at most one per worker."""
         return min(self.pending, self.workers)
 
     def _postfix(self) -> str:
@@ -38,6 +39,9 @@ class CampaignProgress:
         return f"{text}; {jobs}" if jobs else text
 
     def update(self, done: int = 0, failed: int = 0, pending: int | None = None, total: int | None = None) -> None:
+        """Count points done and failed (added), set the points submitted and not finished and the
+        total (a search's changes as bisections end), and show it: the bar at once, a line when one
+        is due."""
         self.done += done
         self.failed += failed
         if pending is not None:
@@ -67,6 +71,7 @@ class CampaignProgress:
             self.disabled = True
 
     def close(self) -> None:
+        """Show the final counts: close the bar, or a last line if the campaign took long enough to show any."""
         if self.disabled:
             return
         if self._bar is not None:

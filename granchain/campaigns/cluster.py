@@ -73,6 +73,8 @@ class JobState:
 
 @dataclass
 class JobCounts:
+    """The batch jobs as the driver last counted them, for the progress line."""
+
     pending: int = 0
     running: int = 0
     ended: int = 0
@@ -81,6 +83,7 @@ class JobCounts:
     why: str = ""  # why the pending jobs wait, as the queue says (Resources, Priority, ...)
 
     def text(self) -> str:
+        """'jobs 1 pending (Priority), 2 running, 1 ended (1 replaced)'."""
         t = f"jobs {self.pending} pending" + (f" ({self.why})" if self.pending and self.why else "")
         t += f", {self.running} running"
         return t + (f", {self.ended} ended ({self.replaced} replaced)" if self.ended else "")

@@ -72,6 +72,7 @@ class ClusterSettings:
 
     @property
     def batch(self) -> bool:
+        """The workers are batch jobs (slurm, pbs), not a LocalCluster."""
         return self.kind in SUBMIT
 
     def cores(self, ranks: int) -> int:
@@ -79,15 +80,19 @@ class ClusterSettings:
         return self.cores_per_job if self.cores_per_job is not None else ranks
 
     def workers_per_job(self, ranks: int) -> int:
+        """Dask worker processes per job for points of `ranks` MPI ranks: cores // ranks, at least 1."""
         return max(1, self.cores(ranks) // ranks)
 
     def memory_text(self, ranks: int) -> str:
+        """Memory per job: the setting, else 2 GB per core (the Dask workers' memory limit)."""
         return self.memory if self.memory is not None else f"{2 * self.cores(ranks)}GB"
 
     def replacement_limit(self) -> int:
+        """How many ended jobs may be replaced: the setting, else 2 per job, at least 3."""
         return self.replacements if self.replacements is not None else max(3, 2 * self.jobs)
 
     def walltime_seconds(self) -> int:
+        """The walltime in s."""
         m = _WALLTIME.match(self.walltime)
         assert m is not None  # checked by check()
         d, h, mi, s = (int(x) if x else 0 for x in m.groups())

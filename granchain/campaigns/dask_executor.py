@@ -11,6 +11,7 @@ import weakref
 from pathlib import Path
 
 from distributed.diagnostics.plugin import WorkerPlugin
+from typing_extensions import override
 
 from granchain.campaigns.cluster import ClusterSettings, JobCluster, NoWorkerJobs
 from granchain.campaigns.model import CampaignError
@@ -28,6 +29,7 @@ class QuietInterrupt(WorkerPlugin):
 
     name = "granchain-quiet-interrupt"
 
+    @override
     def setup(self, worker) -> None:
         import signal
         import threading
@@ -35,6 +37,7 @@ class QuietInterrupt(WorkerPlugin):
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, _ignore_sigint)
 
+    @override
     def teardown(self, worker) -> None:
         pass
 
@@ -45,11 +48,13 @@ class PersistentLammps(WorkerPlugin):
 
     name = "granchain-persistent-lammps"
 
+    @override
     def setup(self, worker) -> None:
         from granchain.lammps import server
 
         server.enable()
 
+    @override
     def teardown(self, worker) -> None:
         from granchain.lammps import server
 
@@ -99,6 +104,8 @@ class Executor:
 
     @property
     def nworkers(self) -> int:
+        """Points that can run at once: the client's worker threads once it runs; before, the batch
+        jobs' workers, or the local workers it will start (--workers, else cores // ranks)."""
         if self.client is not None:
             try:
                 return max(1, sum(self.client.nthreads().values()))
@@ -115,9 +122,22 @@ class Executor:
         return max(1, _cores() // (self.workers or max(1, _cores() // self.ranks)))
 
     def jobs_text(self) -> str | None:
+        """The batch jobs' counts for the progress line (JobCounts.text), or None without batch jobs."""
         return None if self.jobs is None else self.jobs.counts.text()
 
     def start(self):
+        """The Dask client, made on first use: the batch jobs (with their upkeep thread), a client of
+        the scheduler, or a LocalCluster of one-thread worker processes; with the worker plugins
+        (PersistentLammps if reuse_lammps, on a batch queue for single-rank points only;
+        QuietInterrupt on local workers).
+
+        Raises
+        ------
+        CampaignError
+            The scheduler cannot be reached, or its workers run another granchain.
+        ClusterError
+            The queue cannot take the jobs.
+        """
         if self.client is not None:
             return self.client
         from distributed import Client, LocalCluster
@@ -182,6 +202,7 @@ class Executor:
                 continue
 
     def submit(self, payload: dict):
+        """Submit one point's task (run_point of the payload, named by its job directory); returns the future."""
         client = self.start()
         key = f"granchain-point-{Path(payload['job_dir']).name[:12]}-{uuid.uuid4().hex[:8]}"
         fut = client.submit(run_point, payload, key=key, pure=False)
@@ -194,6 +215,8 @@ class Executor:
             raise CampaignError(f"campaign stopped: {self.failure}")
 
     def close(self) -> None:
+        """Stop the batch jobs' upkeep, close the client and any cluster this executor started, and
+        cancel the batch jobs this run submitted (only those)."""
         self._stop.set()
         if self._upkeep is not None and self._upkeep is not threading.current_thread():
             self._upkeep.join(timeout=10)

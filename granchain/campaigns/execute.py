@@ -43,7 +43,29 @@ from granchain.errors import GranchainError
 
 @dataclass
 class RunReport:
-    """What one `campaign run` did (counts are points)."""
+    """What one `campaign run` did (counts are points).
+
+    Attributes
+    ----------
+    points : int
+        The campaign's points (a search's: the runs its bisections asked for).
+    cached : int
+        Complete before this run, not run again.
+    ran : int
+        Submitted to Dask by this run.
+    done, failed : int
+        Completed, and failed (failure.json), in this run.
+    failed_before : int
+        Failed before and not retried (``retry_failed``).
+    lost : int
+        Without a result: a worker running it was lost three times, or its task was cancelled.
+    stale : int
+        Computed before by other code, so run again.
+    stale_codes : list of dict
+        That other code (granchain version, source hash, plugin hash), each once.
+    messages : list of tuple
+        (params, message) of the points that failed or were lost.
+    """
 
     points: int = 0
     cached: int = 0  # complete before this run, not run again
@@ -91,6 +113,8 @@ class Runner:
                 pass
 
     def job(self, point: Point):
+        """The point's signac job, created if new: its state point is the canonical scene, backend,
+        method, rtol, error_estimate and the code (granchain.campaigns.workspace.statepoint)."""
         sp = wsp.statepoint(
             point.scene_dict, self.c.backend, self.method, self.c.rtol, self.c.error_estimate, self.code
         )
@@ -122,6 +146,8 @@ class Runner:
         return point_ranks(self.c, point.scene, self.ex.slot_cores())
 
     def payload(self, job, point: Point) -> dict:
+        """What run_point needs in the worker: the job directory, the canonical scene, the backend,
+        method, rtol, error_estimate and code, the point's MPI ranks, and this run's token."""
         return {
             "ranks": self.ranks(point),
             "token": self.token,
@@ -164,10 +190,12 @@ class Runner:
         return r
 
     def say(self, text: str) -> None:
+        """'granchain: text' on the driver's stream, unless quiet."""
         if not progress.is_quiet():
             print(f"granchain: {text}", file=self.stream, flush=True)
 
     def say_plan(self, todo: int) -> None:
+        """Before the runs: the points, how many are complete, to run, failed before, and stale."""
         r = self.report
         parts = [f"{r.points} points", f"{r.cached} complete", f"{todo} to run"]
         if r.failed_before:

@@ -48,22 +48,30 @@ _TOKEN = re.compile(
 
 @dataclass(frozen=True)
 class Num:
+    """A number of the expression, as a float."""
+
     value: float
 
 
 @dataclass(frozen=True)
 class Name:
+    """A name the expression reads (``loading.amplitude``, ``impulse``): looked up for each point."""
+
     name: str
 
 
 @dataclass(frozen=True)
 class Unary:
+    """A sign, "+" or "-", applied to its operand (a tree)."""
+
     op: str
     operand: object
 
 
 @dataclass(frozen=True)
 class Binary:
+    """An operation "+", "-", "*", "/" or "**" on two trees."""
+
     op: str
     left: object
     right: object

@@ -28,7 +28,15 @@ def params_text(params: dict) -> str:
 
 @dataclass(frozen=True)
 class Axis:
-    """One axis of the grid: a single [vary] key, or the keys of [zip] (values: one tuple per step)."""
+    """One axis of the grid: a single [vary] key, or the keys of [zip] (values: one tuple per step).
+
+    Attributes
+    ----------
+    keys : tuple of str
+        The key, or the [zip] keys that vary together (dotted scene keys, or free parameters).
+    values : tuple of tuple
+        The axis's steps, each a tuple of one value per key.
+    """
 
     keys: tuple[str, ...]
     values: tuple[tuple, ...]
@@ -36,7 +44,20 @@ class Axis:
 
 @dataclass(frozen=True)
 class Predicate:
-    """quantity op value, on one run: ``pulses at contact 20 > 1``."""
+    """quantity op value, on one run: ``pulses at contact 20 > 1``.
+
+    Attributes
+    ----------
+    quantity : str
+        "pulses" (distinct pulses in one contact's force history) or an observable of summary.json
+        (granchain.campaigns.spec.OBSERVABLES).
+    op : str
+        The comparison, one of ``> >= < <= == !=``.
+    value : float
+        What the quantity is compared with, in the quantity's unit.
+    contact : int or None
+        The contact (1-based) whose history the pulses are counted in; None for an observable.
+    """
 
     quantity: str
     op: str
@@ -45,10 +66,12 @@ class Predicate:
 
     @property
     def text(self) -> str:
+        """The predicate as messages and the search table write it: ``pulses at contact 20 > 1``."""
         where = f" at contact {self.contact}" if self.contact is not None else ""
         return f"{self.quantity}{where} {self.op} {_num_text(self.value)}"
 
     def holds(self, x: float) -> bool:
+        """Whether the predicate holds for a run whose quantity is x."""
         v = self.value
         return {
             ">": x > v,
@@ -63,7 +86,22 @@ class Predicate:
 @dataclass(frozen=True)
 class Search:
     """The [search] table: bisect ``key`` over [low, high] (on a log or linear scale) to ``tolerance``
-    until ``predicate`` flips."""
+    until ``predicate`` flips.
+
+    Attributes
+    ----------
+    key : str
+        The searched key (a dotted scene key, or a free parameter that [derive] reads).
+    low, high : float
+        The range the bracket starts as, in the key's unit.
+    scale : str
+        "log" (geometric midpoints; low > 0) or "linear".
+    tolerance : float
+        When the bracket [lo, hi] is narrow enough: log, hi/lo - 1 <= tolerance; linear,
+        hi - lo <= tolerance in the key's unit.
+    predicate : Predicate
+        What is tested on each run.
+    """
 
     key: str
     low: float
@@ -73,9 +111,11 @@ class Search:
     predicate: Predicate
 
     def midpoint(self, lo: float, hi: float) -> float:
+        """The bracket's next value: sqrt(lo hi) on a log scale, (lo + hi) / 2 on a linear one."""
         return math.sqrt(lo * hi) if self.scale == "log" else 0.5 * (lo + hi)
 
     def converged(self, lo: float, hi: float) -> bool:
+        """The bracket is within the tolerance (in either order of its ends)."""
         a, b = min(lo, hi), max(lo, hi)
         return (b / a - 1.0 <= self.tolerance) if self.scale == "log" else (b - a <= self.tolerance)
 
@@ -87,7 +127,17 @@ class Search:
 
 @dataclass(frozen=True)
 class Point:
-    """One point: its parameters (varied, free and derived keys) and its validated scene."""
+    """One point: its parameters (varied, free and derived keys) and its validated scene.
+
+    Attributes
+    ----------
+    index : int
+        Its place in the grid, from 0 (messages count from 1).
+    params : dict
+        Key -> value of every varied, searched, free and derived key.
+    scene : Scene
+        The base scene with the point's scene keys set, validated.
+    """
 
     index: int
     params: dict
@@ -101,7 +151,17 @@ class Point:
 
 @dataclass(frozen=True)
 class Derived:
-    """One [derive] key: its expression's text and parsed tree (granchain.campaigns.expr)."""
+    """One [derive] key: its expression's text and parsed tree (granchain.campaigns.expr).
+
+    Attributes
+    ----------
+    key : str
+        The key it sets (a dotted scene key, or a free parameter later keys read).
+    text : str
+        The expression as the file writes it.
+    tree : object
+        Its parsed tree (expr.parse), evaluated for each point.
+    """
 
     key: str
     text: str
@@ -110,7 +170,45 @@ class Derived:
 
 @dataclass(frozen=True)
 class Campaign:
-    """A validated campaign file (granchain.campaigns.spec describes the file)."""
+    """A validated campaign file (granchain.campaigns.spec describes the file).
+
+    Attributes
+    ----------
+    source : str
+        What messages name as the file: its path, or ``<campaign dict>``.
+    text : str
+        The file's text ("" for a dict), copied into the workspace as campaign.toml.
+    base : dict
+        The base scene, canonical (granchain.scene.scene_to_dict of the validated scene).
+    base_source : str
+        Where the base scene came from: a bundled scene's name, a path, or the inline [scene].
+    backend : str
+        "reference" or "lammps".
+    method : str or None
+        "rk4" or "verlet"; None: the backend's default.
+    rtol : float or None
+        The tolerance every point is planned for; None: the scene's own values (the planner's
+        default tolerance for those left "auto").
+    error_estimate : bool
+        Every observable gets its measured error (the 2 dt and 4 dt companions).
+    kind : str
+        "grid" or "search".
+    axes : tuple of Axis
+        The grid's axes ([vary] keys, and [zip] as one); a search's outer points.
+    derive : tuple of Derived
+        The [derive] keys, in file order.
+    search : Search or None
+        The [search] table (kind "search").
+    regime_contact : int or None
+        The contact whose force history gives the table's pulses and regime; None: the last of the
+        scene's [outputs] histories.
+    title : str
+        The campaign's title, or "".
+    ranks : int or str
+        MPI ranks per point, or "auto" (granchain.campaigns.execute.point_ranks).
+    cluster : dict or None
+        The [cluster] table's values (granchain.campaigns.cluster_settings), or None.
+    """
 
     source: str
     text: str
@@ -139,6 +237,7 @@ class Campaign:
 
     @property
     def outer_keys(self) -> tuple[str, ...]:
+        """The grid's keys, in table order: a search's outer keys (the searched and derived keys not among them)."""
         return tuple(k for a in self.axes for k in a.keys)
 
     def grid(self) -> list[dict]:

@@ -1,11 +1,11 @@
-"""Figures of a campaign table: an observable against a key, one line per value of the other varied
+r"""Figures of a campaign table: an observable against a key, one line per value of the other varied
 keys (with error bars from ``<observable>_error``), or a 2D map over two keys.
 
 Axes are logarithmic when the values are positive and span at least a factor LOG_SPAN. The plotted
 numbers are written beside each figure (``<figure>.csv``).
 
 Every text drawn (title, axis labels, legend) is the campaign file's own text, not matplotlib
-mathtext (a title ``$\\frac{1}{$`` is drawn as it is written) and with control characters escaped.
+mathtext (a title ``$\frac{1}{$`` is drawn as it is written) and with control characters escaped.
 Files are written aside and renamed, never through a symbolic link (granchain.safe_files).
 """
 

@@ -76,7 +76,37 @@ def read_history(run_dir: Path, contact: int) -> np.ndarray | None:
 
 @dataclass
 class Bisection:
-    """One outer point's search: the bracket [a, b] of the key with the predicate at each end."""
+    """One outer point's search: the bracket [a, b] of the key with the predicate at each end.
+
+    Attributes
+    ----------
+    index : int
+        The outer point's place in the grid, from 0.
+    outer : dict
+        Its grid parameters (the outer keys).
+    search : Search
+        The [search] table.
+    status : str
+        "running", "found" (the bracket is within the tolerance), "no flip" (the predicate is the
+        same at both ends of the range) or "failed" (a run gave no quantity; ``message`` says why).
+    message : str or None
+        Why it has no transition.
+    a, b : float or None
+        The bracket's ends, in the key's unit: a where the predicate is as at ``search.low``, b
+        where it is as at ``search.high`` (set once both ends have run).
+    holds_a, holds_b : bool or None
+        The predicate at each end.
+    quantity_a, quantity_b : float or None
+        The predicate's quantity at each end.
+    requested : set of float
+        Values whose run has been asked for.
+    results : dict
+        Value -> (quantity, whether the predicate holds) of every run finished.
+    runs : int
+        Runs finished (cached ones included).
+    counted : bool
+        The progress display's total has been corrected for what this bisection took.
+    """
 
     index: int
     outer: dict
@@ -148,6 +178,10 @@ class Bisection:
             self.b, self.quantity_b = value, quantity
 
     def row(self) -> dict:
+        """Its row of the search table: the outer parameters, the final bracket (KEY_low, KEY_high),
+        ``transition`` (the bracket's midpoint) and ``transition_error`` (its half width, (b - a) / 2),
+        ``width`` (in the tolerance's measure), the predicate and its quantity at each end, runs,
+        status and message; the bracket's columns blank unless found."""
         s = self.search
         row = dict(self.outer)
         done = self.status == "found"

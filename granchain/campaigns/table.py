@@ -1,4 +1,4 @@
-"""The campaign table: one row per point, read from the workspace (its run directories are the truth).
+r"""The campaign table: one row per point, read from the workspace (its run directories are the truth).
 
 Columns, in order:
 
@@ -16,7 +16,7 @@ Columns, in order:
   (the signac job id: the directory WS/workspace/<job>).
 
 Written as table.csv (floats round-trip) and table.parquet; a search adds search.csv / search.parquet.
-The terminal view (format_table) prints control characters of any value escaped (``\\x1b``): a
+The terminal view (format_table) prints control characters of any value escaped (``\x1b``): a
 string parameter of a campaign file someone else wrote cannot move the cursor or retitle the terminal.
 A workspace's record (campaign.json) is checked before it is used: a job id that is not signac's
 (32 hex digits) never becomes a path.
@@ -50,6 +50,8 @@ def _scalar(v):
 
 
 def regime_contact(record: dict, sp_scene: dict) -> int | None:
+    """The contact whose force history gives a row's pulses and regime: the record's
+    regime_contact, else the last of the point's scene's [outputs] histories, else None."""
     rc = record.get("regime_contact")
     if rc is not None:
         return rc
@@ -150,6 +152,8 @@ def build_table(ws: str | Path):
 
 
 def build_search_table(ws: str | Path):
+    """The search table of a workspace as a pandas DataFrame: one row per outer point (its bracket,
+    transition, runs and status: Bisection.row), as the record keeps it; a CampaignError for a grid."""
     import pandas as pd
 
     record = read_record(Path(ws))
@@ -232,8 +236,8 @@ def _write_atomic(df, path: Path, fmt: str) -> None:
 
 
 def printable(text: str) -> str:
-    """text with control and format characters escaped (ESC as \\x1b, a newline as \\n, U+202E as
-    \\u202e): safe to print on a terminal, one line."""
+    r"""text with control and format characters escaped (ESC as \x1b, a newline as \n, U+202E as
+    \u202e): safe to print on a terminal, one line."""
     out = []
     for ch in text:
         if ch == "\\":

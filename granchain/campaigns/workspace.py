@@ -149,6 +149,7 @@ class WorkspaceWriteError(CampaignError, OSError):
         self.errno, self.strerror = code, message
 
     def __str__(self) -> str:
+        """The message alone (OSError's would put the errno in front)."""
         return self.strerror
 
 
@@ -385,4 +386,5 @@ def stale_versions(project, code: dict) -> dict[str, dict]:
 
 
 def code_text(code: dict) -> str:
+    """A code record (code_version) for messages: 'granchain 1.0, source 0123abcd..., plugin ...'."""
     return ", ".join(f"{k} {v}" for k, v in code.items())
