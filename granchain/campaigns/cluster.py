@@ -62,7 +62,22 @@ class NoWorkerJobs(GranchainError, RuntimeError):
 
 @dataclass
 class JobState:
-    """One submitted job as the driver last saw it."""
+    """One submitted job as the driver last saw it.
+
+    Attributes
+    ----------
+    job_id : str
+        The queue's id of the job.
+    name : str
+        dask-jobqueue's name of it (its workers are named ``<name>-<i>``).
+    state : str
+        The queue's state (PENDING, RUNNING, one of ENDED), "ENDED" for a job the queue no longer
+        knows, or RUNNING for one whose workers connected where the queue cannot be asked.
+    seen_running : bool
+        It has run (a worker of it connected, or the queue said RUNNING).
+    ended_at : float or None
+        When the driver saw it end (time.monotonic), or None.
+    """
 
     job_id: str
     name: str
