@@ -343,3 +343,15 @@ def test_every_effect_closes_the_energy_balance_on_both_backends(name):
     assert lam.work[-1] == pytest.approx(verlet.work[-1], rel=1e-9), name
     assert lam.dissipated[-1] == pytest.approx(verlet.dissipated[-1], rel=1e-9, abs=1e-12 * scale), name
     assert rel(lam.peak_force, verlet.peak_force) < 1e-9, name
+
+
+def test_effects_hold_every_registered_field(monkeypatch):
+    """Scene.effects has an attribute for each registered effect's field, at its absent value; a
+    registered field without one is refused when granchain.scene is imported, naming the field."""
+    import granchain.scene.model as model
+
+    assert {f.name: f.default for f in dataclasses.fields(Effects)} == effect_fields()
+    model._check_effects_match_the_registry()
+    monkeypatch.setattr(model, "effect_fields", lambda: {**effect_fields(), "new_field": 0.0})
+    with pytest.raises(RuntimeError, match="new_field"):
+        model._check_effects_match_the_registry()

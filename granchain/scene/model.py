@@ -8,7 +8,7 @@ numbered from 1 in scene files and output tables.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, make_dataclass
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -174,23 +174,41 @@ class Outputs:
     dump_interval: float | str | None = None  # s between whole-chain LAMMPS dump frames (default: none; "auto")
 
 
-#: Effects beyond the paper's bare chain (granchain.physics.effects): one attribute per field of a
-#: registered effect (far_end "free" | "wall", dashpot gamma in N s/m, precompression F0 in N ...), each
-#: at its absent value unless the scene declares the effect
-Effects = make_dataclass(
-    "Effects",
-    [(name, type(absent), field(default=absent)) for name, absent in effect_fields().items()],
-    frozen=True,
-)
-Effects.__module__ = __name__
-Effects.__doc__ = """Effects beyond the paper's bare chain; each is absent unless the scene declares it.
+@dataclass(frozen=True)
+class Effects:
+    """Effects beyond the paper's bare chain; each is absent unless the scene declares it.
 
-The fields are those of the registered effects (``granchain.physics.effects.effect_fields``), each
-at its absent value unless the scene declares the effect: ``far_end`` ("free", or "wall": a rigid
-flat touching bead N), ``dashpot`` (gamma in N s/m, 0: none) and ``precompression`` (the static
-force F0 in N, 0: none). A striker is a kind of load and per-bead radii and materials are the
-chain's; they have no field here.
-"""
+    One attribute per field of a registered effect (``granchain.physics.effects.effect_fields``),
+    at its absent value unless the scene declares the effect. A striker is a kind of load and
+    per-bead radii and materials are the chain's; they have no field here.
+
+    Attributes
+    ----------
+    far_end : str
+        "free", or "wall": a rigid flat touching bead N ([boundary] far_end).
+    dashpot : float
+        gamma in N s/m, a linear dashpot on every closing contact; 0: none ([damping] dashpot).
+    precompression : float
+        The static force F0 in N holding the chain together; 0: none ([precompression] force).
+    """
+
+    far_end: str = "free"
+    dashpot: float = 0.0
+    precompression: float = 0.0
+
+
+def _check_effects_match_the_registry() -> None:
+    """Effects' attributes are the registered effects' fields with their absent values: a new
+    effect's field (Effect.fields) needs its attribute above, or scenes could not hold it."""
+    declared = {f.name: f.default for f in fields(Effects)}
+    if declared != effect_fields():
+        raise RuntimeError(
+            f"granchain.scene.Effects declares {declared}, the effect registry {effect_fields()}: "
+            "give every registered effect's field an attribute of Effects with its absent value"
+        )
+
+
+_check_effects_match_the_registry()
 
 
 @dataclass(frozen=True)
