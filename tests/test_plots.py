@@ -533,3 +533,18 @@ def test_plot_functions_return_figures_and_save_only_when_asked(snaps_run, tmp_p
     assert_valid(elsewhere / f"{kind}.png", "png")
     plot(r, save=True)
     assert (r / f"{kind}.png").exists() and (r / f"{kind}_plot.csv").exists()
+
+
+def test_a_long_title_is_wrapped_inside_the_figure(tmp_path):
+    """A scene title far wider than the figure is drawn on several lines within the figure's width."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from granchain.workflows.plots.canvas import ChainFigure
+
+    fig = ChainFigure(figsize=(6.4, 4.8))
+    ax = fig.add_subplot()
+    ax.set_title("a scene title that describes its chain in far too many words, " * 4, fontsize=9)
+    FigureCanvasAgg(fig).draw()
+    box = ax.title.get_window_extent(fig.canvas.get_renderer())
+    assert box.x0 >= 0
+    assert box.x1 <= fig.bbox.x1

@@ -55,6 +55,13 @@ class ChainFigure(Figure):
         self.savefig(buf, format="png", bbox_inches="tight")
         return buf.getvalue()
 
+    def draw(self, renderer) -> None:
+        """Draw the figure with every axes title wrapped inside the figure's width: a scene's title
+        is the user's text, of any length, and a title wider than the figure is cut at its edges."""
+        for ax in self.axes:
+            ax.title.set_wrap(True)
+        super().draw(renderer)
+
 
 def _new_figure(**kw) -> Figure:
     """A Figure outside pyplot: no backend is chosen or changed, no global figure list grows."""
