@@ -215,9 +215,11 @@ def test_half_amplitude_arrival_is_computed_from_the_solution_by_both_backends_a
 )
 def test_precompressed_front_speed_tends_to_c0(material, radius, f0):
     """A step of 1e-3 F0 on a 300-bead precompressed Hertz chain: the half-amplitude speed is within
-    0.5% of c0 on LAMMPS and on the reference (RK4), the two agree within their fit errors, the speed
-    over the chain's far half is closer to c0 than over its near half (dispersion's lag grows ever
-    slower), and a larger perturbation (1e-1 F0) moves it further from c0; the first maximum lags more."""
+    0.5% of c0 on LAMMPS and on the reference (RK4), the two agree as granchain compare asks (within
+    its rtol 1e-3 and the fits' errors), the speed over the chain's far half is closer to c0 than over
+    its near half (dispersion's lag grows ever slower) and the first maximum lags more there; a larger
+    perturbation (1e-1 F0) is faster (the nonlinear wave's speed rises with the force ratio, ref. 9):
+    the small one's speed is c0's, less the dispersive lag, and not a nonlinear wave's."""
     text = PRECOMPRESSED.format(beads=300, material=material, radius=radius, f0=f0, amp=1e-3 * f0)
     sc0 = parse_scene(text, source="precompressed.toml")
     lam_sc, _ = plan_for(sc0, "lammps", None, 5e-4)
@@ -228,9 +230,8 @@ def test_precompressed_front_speed_tends_to_c0(material, radius, f0):
     obs = [measure_observables(s, sol) for s, sol in ((lam_sc, lam), (ref_sc, ref))]
     for o in obs:
         assert abs(o["wave_speed"] / c0 - 1) < 5e-3
-    assert abs(obs[0]["wave_speed"] - obs[1]["wave_speed"]) <= 3 * math.hypot(
-        obs[0]["wave_speed_stderr"], obs[1]["wave_speed_stderr"]
-    )
+    apart = abs(obs[0]["wave_speed"] - obs[1]["wave_speed"])
+    assert apart <= 1e-3 * obs[1]["wave_speed"] + obs[0]["wave_speed_stderr"] + obs[1]["wave_speed_stderr"]
     a, b = lam_sc.window
     near, far = np.arange(a, (a + b) // 2), np.arange((a + b) // 2, b + 1)
     v_near, v_far, first_far = speeds(ref_sc, ref, near)[0], *speeds(ref_sc, ref, far)
@@ -239,7 +240,7 @@ def test_precompressed_front_speed_tends_to_c0(material, radius, f0):
     big = parse_scene(text.replace(f"amplitude = {1e-3 * f0!r}", f"amplitude = {1e-1 * f0!r}"), source="big.toml")
     big_sc, _ = plan_for(big, "lammps", None, 5e-4)
     v_big = measure_observables(big_sc, run_scene(big_sc, backend="lammps").solution)["wave_speed"]
-    assert abs(v_big / c0 - 1) > abs(obs[0]["wave_speed"] / c0 - 1)
+    assert v_big > obs[0]["wave_speed"]
 
 
 def test_a_precompressed_chains_wave_speed_is_its_half_amplitude_arrivals():
