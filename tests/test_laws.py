@@ -3,13 +3,14 @@ every parameter set in its ranges and every overlap and history (hypothesis)."""
 
 import dataclasses
 import math
+import pickle
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from granchain.physics.laws import LAWS, ThorntonLaw
+from granchain.physics.laws import LAWS, LawCoefficients, ThorntonLaw, contact_keys
 from granchain.physics.laws.bilinear import bilinear_dissipated, bilinear_energy, bilinear_force, unloading_stiffness
 from granchain.physics.laws.hertz import hertz_energy, hertz_force
 from granchain.physics.models import dissipation_per_cycle
@@ -51,6 +52,29 @@ def test_registry_entry_is_complete(name):
     cls = LAWS[name]
     assert cls.name == name and cls.pair_style == f"chain/{name}"
     assert dataclasses.fields(cls)[0].name == "k"
+    # the [contact] values: a frozen dataclass whose fields are the scene keys, each with its range
+    assert issubclass(cls.Coefficients, LawCoefficients) and cls.Coefficients.__dataclass_params__.frozen
+    assert cls.scene_keys == tuple(f.name for f in dataclasses.fields(cls.Coefficients))
+    assert set(cls.scene_key_ranges) == set(cls.scene_keys) and set(cls.example_contact) <= set(cls.scene_keys)
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+def test_a_scene_holds_its_laws_coefficients(name):
+    from granchain.scene import parse_scene, scene_from_dict, scene_to_dict
+
+    from .conftest import make_scene_text
+
+    cls = LAWS[name]
+    sc = parse_scene(make_scene_text(law=name), source="t.toml")
+    assert type(sc.contact.coefficients) is cls.Coefficients
+    assert {k: getattr(sc.contact.coefficients, k) for k in cls.example_contact} == cls.example_contact
+    # each key reads on the contact too; another law's key reads None
+    for key in contact_keys():
+        assert getattr(sc.contact, key) == (getattr(sc.contact.coefficients, key) if key in cls.scene_keys else None)
+    with pytest.raises(AttributeError):
+        sc.contact.no_such_key  # noqa: B018
+    back = scene_from_dict(scene_to_dict(sc), source="t.toml")
+    assert back.contact == sc.contact and pickle.loads(pickle.dumps(sc.contact)) == sc.contact
 
 
 @pytest.mark.parametrize("name", LAW_NAMES)

@@ -14,7 +14,7 @@ import numpy as np
 
 from granchain.physics import materials as mat
 from granchain.physics.effects import effect_fields
-from granchain.physics.laws import ContactLaw, law_class
+from granchain.physics.laws import ContactLaw, LawCoefficients, contact_keys, law_class
 from granchain.physics.positions import contact_quantum
 from granchain.scene.limits import AUTO
 from granchain.scene.writer import dump_toml, scene_to_dict
@@ -51,34 +51,30 @@ class Chain:
 
 @dataclass(frozen=True)
 class Contact:
-    """The [contact] section: the law (a name in granchain.physics.laws.LAWS) and its keys.
-
-    Each law reads its own keys (``ContactLaw.read_contact``); the other laws' stay None.
+    """The [contact] section: the law (a name in granchain.physics.laws.LAWS) and its values.
 
     Attributes
     ----------
     law : str
-        The law's name ("hertz", "bilinear", "thornton").
-    unloading_coeff : float or None
-        beta, the residual-to-maximum overlap ratio of the bilinear law, 0 <= beta < 1.
-    plastic_stiffness : float or None
-        The bilinear law's loading stiffness k in N/m of the nominal pair: given, or
-        18.5 sigma_y R* from the material's yield strength (Sec. III); None on a chain of several
-        materials, where each contact's comes from its softer bead.
-    yield_pressure : float or None
-        Thornton's limiting contact pressure p_y in Pa; None where each contact's comes from the
-        softer bead's yield strength.
+        The law's name (a key of granchain.physics.laws.LAWS).
+    coefficients : granchain.physics.laws.LawCoefficients
+        The law's [contact] values (its ``Coefficients``). Each also reads as ``contact.<key>``
+        (``contact.unloading_coeff``): None where this contact's law has no such key.
     """
 
     law: str
-    unloading_coeff: float | None = None  # beta, bilinear only
-    plastic_stiffness: float | None = None  # k in N/m, bilinear only (explicit or from yield)
-    yield_pressure: float | None = None  # p_y in Pa, thornton only
+    coefficients: LawCoefficients = field(default_factory=LawCoefficients)
 
     @property
     def law_class(self) -> type[ContactLaw]:
         """The registered ContactLaw subclass of ``law``."""
         return law_class(self.law)
+
+    def __getattr__(self, name: str):
+        # a [contact] key of any registered law: this law's value, None where it has no such key
+        if not name.startswith("_") and name in contact_keys():
+            return getattr(self.coefficients, name, None)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -295,7 +291,7 @@ class Scene:
     def pair_law(self, e_star: float, r_star: float, materials: tuple = ()) -> ContactLaw:
         """The contact law of two bodies of effective modulus E* and radius R* and their materials (a
         flat has none): the law's for_pair, its mixing rules included."""
-        return self.contact.law_class.for_pair(self.contact, e_star, r_star, self.r_star, materials)
+        return self.contact.law_class.for_pair(self.contact.coefficients, e_star, r_star, self.r_star, materials)
 
     @property
     def law(self) -> ContactLaw:

@@ -139,7 +139,7 @@ def _read_chain(s: _Section, source: str) -> Chain:
 
 def _read_contact(s: _Section, chain: Chain) -> Contact:
     law = s.choice("law", LAWS)
-    return Contact(law=law, **law_class(law).read_contact(s, chain))
+    return Contact(law=law, coefficients=law_class(law).read_contact(s, chain))
 
 
 def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:

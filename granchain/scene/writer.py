@@ -63,7 +63,7 @@ def scene_to_dict(scene) -> dict:
             "youngs_modulus": c.material.youngs_modulus,
             "poisson_ratio": c.material.poisson_ratio,
         }
-        if c.material.yield_strength is not None and scene.contact.law != "bilinear":
+        if c.material.yield_strength is not None and not scene.contact.law_class.yield_strength_in_contact:
             material["yield_strength"] = c.material.yield_strength
     d: dict[str, Any] = {}
     if scene.title:

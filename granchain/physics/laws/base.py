@@ -14,8 +14,10 @@ on them; tests/test_laws.py and tests/test_kernels.py check them for every regis
    ``name`` (the scene's ``[contact] law``), ``pair_style`` (the C++ style, ``chain/<name>``),
    ``history`` (True when the force depends on alpha_max, the largest overlap so far: the only
    history a law may keep; the backends store it per contact, d_amax in LAMMPS, and update it as
-   alpha_max = max(alpha_max, alpha) after every step), ``scene_keys`` (the ``[contact]`` keys it
-   reads besides ``law``), ``parameter_ranges`` (valid values of each parameter, for the tests).
+   alpha_max = max(alpha_max, alpha) after every step), ``Coefficients`` (a frozen dataclass
+   subclassing LawCoefficients, one field per ``[contact]`` key the law reads besides ``law``: a
+   scene's Contact holds one, and ``scene_keys`` lists its fields), ``parameter_ranges`` (valid values
+   of each parameter, for the tests).
 2. ``force(alpha, alpha_max)`` with alpha_max the history *before* this step: the law takes
    max(alpha_max, alpha) itself, so a stale history below alpha gives the loading curve. The force
    is never negative. ``force_into`` is the same into preallocated arrays (the solver's inner loop;
@@ -32,9 +34,10 @@ on them; tests/test_laws.py and tests/test_kernels.py check them for every regis
    the law has no such kink).
 5. ``pair_coefficients()``: the numbers of ``pair_coeff I J k d0 [extras]`` after d0, k first and
    d0 inserted by the deck: the C++ kernel reads them in this order.
-6. ``read_contact(section, chain)`` reads and validates its scene keys (section: scene._Section) and
-   returns the Contact fields; ``for_pair(contact, e_star, r_star, nominal_r_star)`` the law of one
-   pair of bodies (bead-bead, bead-wall with the flat's E* and R* = R, striker-bead).
+6. ``read_contact(section, chain)`` reads and validates its scene keys (section: scene's Section) and
+   returns its Coefficients; ``for_pair(coefficients, e_star, r_star, nominal_r_star)`` the law of one
+   pair of bodies (bead-bead, bead-wall with the flat's E* and R* = R, striker-bead);
+   ``contact_to_dict(contact)`` the ``[contact]`` table a scene file writes back.
 7. Register the class in granchain/physics/laws/__init__.py (LAWS, the only list of laws) and the C++
    kernel in granchain/lammps/plugin.cpp; the planner's estimates (expected_peak_force, wave speeds)
    are class methods over a scene.
@@ -70,13 +73,25 @@ class Kink(NamedTuple):
 
 
 @dataclass(frozen=True)
+class LawCoefficients:
+    """A law's ``[contact]`` values as a scene gives them (ContactLaw.Coefficients): one field per key,
+    None where the scene leaves the value to the materials. This base has none (the Hertz law's)."""
+
+
+@dataclass(frozen=True)
 class ContactLaw:
     """A normal contact law of a bead pair: per-contact parameters and vectorised functions."""
 
     name: ClassVar[str] = ""
     pair_style: ClassVar[str] = ""
     history: ClassVar[bool] = False
+    #: the law's [contact] values (rule 1): one field per key
+    Coefficients: ClassVar[type[LawCoefficients]] = LawCoefficients
+    #: the [contact] keys the law reads besides law: its Coefficients' fields, in their order
     scene_keys: ClassVar[tuple[str, ...]] = ()
+    #: read_contact turns [chain.material] yield_strength into one of its [contact] values (the bilinear
+    #: k = 18.5 sigma_y R*): a scene written back leaves the yield strength out of the material
+    yield_strength_in_contact: ClassVar[bool] = False
     #: dF/dalpha jumps at a kink that a contact's overlap crosses while it moves (bilinear: closing at
     #: alpha = 0 and reaching zero force; Thornton: reloading past d_max): fixed-step Verlet's error
     #: then depends on where in a step that happens and follows no order in dt, so its error bars come
@@ -93,6 +108,10 @@ class ContactLaw:
     scene_key_ranges: ClassVar[dict[str, tuple[float, float]]] = {}
 
     k: ArrayLike
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        cls.scene_keys = tuple(f.name for f in dataclasses.fields(cls.Coefficients))
 
     # ---- the law itself
     def force(self, alpha: ArrayLike, alpha_max: ArrayLike | None = None) -> np.ndarray:
@@ -247,11 +266,24 @@ class ContactLaw:
         return type(self)(**{f.name: getattr(whole, f.name)[start:stop] for f in dataclasses.fields(self)})
 
     @classmethod
-    def read_contact(cls, section, chain) -> dict:
-        """Read and validate this law's [contact] keys; the Contact fields (besides law)."""
+    def read_contact(cls, section, chain) -> LawCoefficients:
+        """Read and validate this law's ``[contact]`` keys.
+
+        Parameters
+        ----------
+        section : granchain.scene.section.Section
+            The ``[contact]`` table.
+        chain : granchain.scene.Chain
+            The scene's chain (its materials may give a value the table leaves out).
+
+        Returns
+        -------
+        LawCoefficients
+            The law's Coefficients, as the scene's Contact holds them.
+        """
         forbid_others(section, cls)
         section.finish(("law", *cls.scene_keys))
-        return {}
+        return cls.Coefficients()
 
     @classmethod
     def unsupported(cls, chain) -> str | None:
@@ -259,18 +291,22 @@ class ContactLaw:
         return None
 
     @classmethod
-    def for_pair(cls, contact, e_star: float, r_star: float, nominal_r_star: float, materials=()) -> ContactLaw:
+    def for_pair(
+        cls, coefficients: LawCoefficients, e_star: float, r_star: float, nominal_r_star: float, materials=()
+    ) -> ContactLaw:
         """The law of one contact: two bodies of effective modulus E* and radius R* (a bead on a flat:
-        the flat's E* and R* = R), the scene's [contact] values, the nominal pair's R* (bead 1 on bead
-        2) and the materials of the bodies that touch (the flat has none), for laws whose mixing rule
-        reads them (the softer material's yield: docs/effects.md)."""
+        the flat's E* and R* = R), the scene's [contact] values (the law's Coefficients), the nominal
+        pair's R* (bead 1 on bead 2) and the materials of the bodies that touch (the flat has none),
+        for laws whose mixing rule reads them (the softer material's yield: docs/effects.md)."""
         raise NotImplementedError
 
     @classmethod
     def contact_to_dict(cls, contact) -> dict:
-        """The [contact] table of a scene file for this law (scene_to_dict)."""
+        """The [contact] table of a scene file for this law (scene_to_dict): law and the Coefficients
+        of `contact` (a scene's Contact) the scene gave."""
         # (None: a value the scene left to the materials, e.g. a yield_pressure from the yield strength)
-        return {"law": cls.name, **{k: getattr(contact, k) for k in cls.scene_keys if getattr(contact, k) is not None}}
+        values = {k: getattr(contact.coefficients, k) for k in cls.scene_keys}
+        return {"law": cls.name, **{k: v for k, v in values.items() if v is not None}}
 
 
 #: what a model may need besides its law (ContactLaw.model_domains): the paper's chain in a loading

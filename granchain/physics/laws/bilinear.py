@@ -25,7 +25,7 @@ import numpy as np
 
 from granchain.physics import materials as mat
 from granchain.physics import models
-from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, forbid_others
+from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, LawCoefficients, forbid_others
 
 _multiply, _subtract, _greater, _less = np.multiply, np.subtract, np.greater, np.less  # (one lookup, not two)
 _ZERO_FORCE, _RELOADING = "zero force at beta alpha_max", "reloading meets alpha_max"  # (the kinks' kinds)
@@ -80,6 +80,17 @@ def bilinear_dissipated(alpha_max: ArrayLike, k: ArrayLike, beta: ArrayLike) -> 
 
 
 @dataclass(frozen=True)
+class BilinearCoefficients(LawCoefficients):
+    """The bilinear law's [contact] values."""
+
+    #: beta, the residual-to-maximum overlap ratio, 0 <= beta < 1
+    unloading_coeff: float
+    #: k in N/m, given or from the material's yield strength (k = 18.5 sigma_y R*); None on a chain of
+    #: several materials, where each contact's k comes from the softer bead's yield strength
+    plastic_stiffness: float | None = None
+
+
+@dataclass(frozen=True)
 class BilinearLaw(ContactLaw):
     """Walton-Braun bilinear elastoplastic contacts (plastic stiffness k, unloading coefficient beta)."""
 
@@ -90,7 +101,8 @@ class BilinearLaw(ContactLaw):
     slope_kinks: ClassVar[bool] = True
     # a negative overlap: alpha - beta max(alpha_max, alpha) < 0 as for alpha = 0 (alpha_max >= 0), so +0.0
     force_into_any_sign: ClassVar[bool] = True
-    scene_keys: ClassVar[tuple[str, ...]] = ("unloading_coeff", "plastic_stiffness")
+    Coefficients: ClassVar[type[LawCoefficients]] = BilinearCoefficients
+    yield_strength_in_contact: ClassVar[bool] = True
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "beta": (0.0, 0.99)}
     example_contact: ClassVar[dict[str, float]] = {"unloading_coeff": 0.8, "plastic_stiffness": 2.43e7}
     scene_key_ranges: ClassVar[dict[str, tuple[float, float]]] = {
@@ -193,7 +205,7 @@ class BilinearLaw(ContactLaw):
         return alpha_max
 
     @classmethod
-    def read_contact(cls, s, chain) -> dict:
+    def read_contact(cls, s, chain) -> BilinearCoefficients:
         forbid_others(s, cls)
         beta = s.number(
             "unloading_coeff",
@@ -222,7 +234,7 @@ class BilinearLaw(ContactLaw):
             if lacking:
                 raise s.error(f"[contact] law = 'bilinear' on a chain of several materials needs {lacking}")
             s.finish(("law", *cls.scene_keys))
-            return {"unloading_coeff": beta, "plastic_stiffness": None}
+            return BilinearCoefficients(unloading_coeff=beta, plastic_stiffness=None)
         if k is None and ys is None:
             raise s.error(
                 "[contact] law = 'bilinear' needs a stiffness: give plastic_stiffness (N/m) or "
@@ -236,22 +248,24 @@ class BilinearLaw(ContactLaw):
         if k is None:
             k = mat.plastic_stiffness_from_yield(ys, chain.radius)
         s.finish(("law", *cls.scene_keys))
-        return {"unloading_coeff": beta, "plastic_stiffness": k}
+        return BilinearCoefficients(unloading_coeff=beta, plastic_stiffness=k)
 
     @classmethod
-    def for_pair(cls, contact, e_star, r_star, nominal_r_star, materials=()):
-        if contact.plastic_stiffness is None:  # several materials: 18.5 sigma_y R* of the pair, the softer's sigma_y
+    def for_pair(cls, coefficients, e_star, r_star, nominal_r_star, materials=()):
+        beta = coefficients.unloading_coeff
+        if coefficients.plastic_stiffness is None:  # several materials: 18.5 sigma_y R* of the pair, the softer's
             k = mat.PLASTIC_STIFFNESS_FACTOR * min(m.yield_strength for m in materials) * r_star
-            return cls(k=k, beta=contact.unloading_coeff)
-        k = float(contact.plastic_stiffness)
-        return cls(k=k if r_star == nominal_r_star else k * (r_star / nominal_r_star), beta=contact.unloading_coeff)
+            return cls(k=k, beta=beta)
+        k = float(coefficients.plastic_stiffness)
+        return cls(k=k if r_star == nominal_r_star else k * (r_star / nominal_r_star), beta=beta)
 
     # ---- the planner's estimates
     @classmethod
     def expected_peak_force(cls, scene, impulse: float, step) -> float:
         """Eq. A2 for an impulse; a long load cannot push a linear contact past 2 A; x1.5 margin."""
         k, m = scene.stiffness, scene.mass
-        f = models.linear_chain_impulse_response(impulse, k, m, scene.contact.unloading_coeff)["F_p"]  # Eq. A2
+        beta = scene.contact.coefficients.unloading_coeff
+        f = models.linear_chain_impulse_response(impulse, k, m, beta)["F_p"]  # Eq. A2
         if step is not None:
             f = min(f, 2.0 * step[0])
         return 1.5 * f
@@ -292,7 +306,7 @@ class BilinearLaw(ContactLaw):
         """Eq. 27's exponential decay from Eq. A2's first peak, drawn a little past the transition
         (Eq. 30) to show where the two meet, and Eq. 34's inverse decay from the transition on."""
         m, k = scene.mass, scene.stiffness
-        beta = scene.contact.unloading_coeff
+        beta = scene.contact.coefficients.unloading_coeff
         curves: dict[str, np.ndarray] = {}
         f1 = models.linear_chain_impulse_response(scene.input_impulse, k, m, beta)["F_p"]
         lam = models.exponential_decay_rate(k, m, beta)
@@ -317,7 +331,7 @@ def _short_load_predictions(scene) -> list[dict]:
     and the inverse decay's exponent (Eq. 34)."""
     m, k = scene.mass, scene.stiffness
     fs = scene.force_scale
-    beta = scene.contact.unloading_coeff
+    beta = scene.contact.coefficients.unloading_coeff
     lin = models.linear_chain_impulse_response(scene.input_impulse, k, m, beta)
     short_valid = "short loading (T much shorter than the contact time pi sqrt(m/2k)); first contacts"
 
@@ -378,7 +392,7 @@ def _long_load_predictions(scene, amplitude: float, duration: float) -> list[dic
     """Long loading (Sec. III B): the steady fronts until they first collide (Eqs. 35-38)."""
     try:
         r = models.long_load_bilinear(
-            amplitude, duration, scene.stiffness, scene.contact.unloading_coeff, scene.mass, scene.diameter
+            amplitude, duration, scene.stiffness, scene.contact.coefficients.unloading_coeff, scene.mass, scene.diameter
         )
     except ZeroDivisionError:  # beta ~ 0: c_u = c, the fronts never merge (Eq. 36's x_t is infinite)
         r = {}

@@ -45,7 +45,6 @@ class HertzLaw(ContactLaw):
     name: ClassVar[str] = "hertz"
     pair_style: ClassVar[str] = "chain/hertz"
     history: ClassVar[bool] = False
-    scene_keys: ClassVar[tuple[str, ...]] = ()
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12)}
     example_contact: ClassVar[dict[str, float]] = {}
     scene_key_ranges: ClassVar[dict[str, tuple[float, float]]] = {}
@@ -115,7 +114,7 @@ class HertzLaw(ContactLaw):
         return [Kink(np.zeros(np.shape(alpha_max)), "zero overlap")]
 
     @classmethod
-    def for_pair(cls, contact, e_star, r_star, nominal_r_star, materials=()):
+    def for_pair(cls, coefficients, e_star, r_star, nominal_r_star, materials=()):
         return cls(k=mat.hertz_contact_stiffness(e_star, r_star))
 
     # ---- the planner's estimates (granchain.physics.estimates dispatches here)

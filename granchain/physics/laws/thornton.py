@@ -31,7 +31,7 @@ import numpy as np
 
 from granchain.physics import materials as mat
 from granchain.physics import models
-from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, forbid_others
+from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, LawCoefficients, forbid_others
 from granchain.physics.laws.hertz import HertzLaw, hertz_force
 
 
@@ -55,6 +55,15 @@ def restitution_coefficient(v0: float, vy: float) -> float:
 
 
 @dataclass(frozen=True)
+class ThorntonCoefficients(LawCoefficients):
+    """The Thornton law's [contact] values."""
+
+    #: p_y in Pa, Thornton's limiting contact pressure; None: 1.6 sigma_y of the softer bead of each
+    #: contact (materials.YIELD_PRESSURE_FACTOR)
+    yield_pressure: float | None = None
+
+
+@dataclass(frozen=True)
 class ThorntonLaw(ContactLaw):
     """Thornton's elastic-perfectly-plastic contacts: Hertz stiffness k, yield overlap d_y."""
 
@@ -65,7 +74,7 @@ class ThorntonLaw(ContactLaw):
     # there (generated scenes, Richardson: 94 of 125 peaks estimated, one 17x off; against RK4: 172 of
     # 179, 0.97-1.54; docs/error-bars.md)
     slope_kinks: ClassVar[bool] = True
-    scene_keys: ClassVar[tuple[str, ...]] = ("yield_pressure",)
+    Coefficients: ClassVar[type[LawCoefficients]] = ThorntonCoefficients
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "yield_overlap": (1e-9, 1e-4)}
     #: brass beads of R = 4.76 mm: p_y = k / (pi R*) makes the plastic slope S = pi p_y R* equal the
     #: paper's bilinear plastic stiffness k = 2.43e7 N/m (the bilinear example), so the two laws load alike
@@ -227,7 +236,7 @@ class ThorntonLaw(ContactLaw):
 
     # ---- scenes
     @classmethod
-    def read_contact(cls, s, chain) -> dict:
+    def read_contact(cls, s, chain) -> ThorntonCoefficients:
         forbid_others(s, cls)
         if not s.has("yield_pressure"):
             lacking = mat.lacking_yield_strength(chain)
@@ -240,7 +249,7 @@ class ThorntonLaw(ContactLaw):
                     f"pressure of about {mat.YIELD_PRESSURE_FACTOR} sigma_y"
                 )
             s.finish(("law", *cls.scene_keys))
-            return {"yield_pressure": None}
+            return ThorntonCoefficients(yield_pressure=None)
         p_y = s.number(
             "yield_pressure",
             low=1e3,
@@ -250,12 +259,12 @@ class ThorntonLaw(ContactLaw):
             what="Thornton's limiting contact pressure p_y in Pa, 1e3 to 1e13 (not the yield strength)",
         )
         s.finish(("law", *cls.scene_keys))
-        return {"yield_pressure": p_y}
+        return ThorntonCoefficients(yield_pressure=p_y)
 
     @classmethod
-    def for_pair(cls, contact, e_star, r_star, nominal_r_star, materials=()):
+    def for_pair(cls, coefficients, e_star, r_star, nominal_r_star, materials=()):
         # without a given p_y: the softer body's yield sets it (docs/effects.md, mixing rules)
-        p_y = contact.yield_pressure
+        p_y = coefficients.yield_pressure
         if p_y is None:
             p_y = mat.YIELD_PRESSURE_FACTOR * min(m.yield_strength for m in materials)
         return cls(k=mat.hertz_contact_stiffness(e_star, r_star), yield_overlap=yield_overlap(p_y, e_star, r_star))
