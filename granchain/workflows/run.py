@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -401,7 +401,13 @@ def _calculate(
         warnings.warn(msg, OutputSizeWarning, stacklevel=3)
     if before_run is not None:
         before_run()
-    calc = _execute(scene, backend, method, np_)
-    calc = _finish(calc, given, scene, plan, backend, method, np_, rtol, error_estimate, after_run)
+    # with an error estimate the run and its companions share one kept LAMMPS child: the companions
+    # do not pay LAMMPS's start-up (process, import, plugin load) again, which alone costs more than a
+    # short run's integration (benchmarks/RESULTS.md, the price of error bars)
+    from granchain.workflows.errors import kept_lammps
+
+    with kept_lammps() if error_estimate else nullcontext():
+        calc = _execute(scene, backend, method, np_)
+        calc = _finish(calc, given, scene, plan, backend, method, np_, rtol, error_estimate, after_run)
     calc.result.started_utc = started
     return calc
