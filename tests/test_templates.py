@@ -109,8 +109,8 @@ def test_template_values_are_strict_single_lines():
 
 def test_decks_reuse_the_compiled_templates(monkeypatch):
     """One jinja2 environment per process keeps the compiled templates: a second deck compiles none
-    (compiling them all again cost 40-70 ms of every campaign point, issue 18 item 4; a decorator that
-    slid onto another function once did that unnoticed)."""
+    (compiling them all again costs 40-70 ms of every campaign point, and a decorator on the wrong
+    function would do that unnoticed)."""
     scenes = [BASE, resolve_scene("effect-precompression")]
     for sc in scenes:  # (first use: every template they include compiled once)
         render_deck(sc)

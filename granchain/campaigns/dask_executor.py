@@ -70,7 +70,7 @@ class Executor:
     """
 
     #: workers keep a LAMMPS child for their next points (PersistentLammps); False: a fresh process
-    #: per LAMMPS point, as before (benchmarks/bench_campaigns.py compares the two)
+    #: per LAMMPS point (benchmarks/bench_campaigns.py compares the two)
     reuse_lammps = True
 
     def __init__(

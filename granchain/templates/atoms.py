@@ -71,8 +71,8 @@ class AtomLayout:
     @property
     def binsize(self) -> float:
         """Bins for neighbour builds and atom sorting: 2 x (the contact distance + skin), wider than
-        LAMMPS's default half of it. A chain along x needs few bins across; at the default 1e6 beads
-        took 83 million bins (a third of a GB)."""
+        LAMMPS's default half of it. A chain along x needs few bins across; at LAMMPS's default,
+        1e6 beads take 83 million bins (a third of a GB)."""
         return 2.0 * (2.0 * self.rmax + self.skin)
 
     @property

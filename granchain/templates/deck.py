@@ -39,7 +39,7 @@ class DeckOptions:
         end of each run (granchain.postprocess.histories reads both)
     energy_fix: the energy samples and the run watch's energy balance by the plugin's fix chain/energy
         (the samples' lines kept in memory and written at each run's end; the balance computed once
-        from the sample's own numbers) instead of fix print, which flushed every line, and the balance
+        from the sample's own numbers) instead of fix print, which flushes every line, and the balance
         as LAMMPS variables read by fix ave/time and fix halt
     """
 
