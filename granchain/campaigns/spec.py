@@ -65,7 +65,7 @@ from granchain.campaigns.model import (
     params_text,
     scene_numbers,
 )
-from granchain.scene import SECTIONS, SceneError, load_scene, scene_from_dict, scene_to_dict
+from granchain.scene import SECTIONS, SceneError, _did_you_mean, load_scene, scene_from_dict, scene_to_dict
 
 KINDS = ("grid", "search")
 BACKENDS = ("reference", "lammps")
@@ -329,13 +329,6 @@ def _check_size(data: dict, source: str) -> None:
                 f"{source}: the grid of {keys} has {count:g} points or more; a campaign has at most {MAX_POINTS} "
                 "(granchain.campaigns.spec.MAX_POINTS): reduce num or the lists"
             )
-
-
-def _did_you_mean(key: str, known) -> str:
-    import difflib
-
-    close = difflib.get_close_matches(str(key), list(known), n=1, cutoff=0.6)
-    return f"did you mean {close[0]!r}? " if close else ""
 
 
 def _read_base(c: dict, inline: dict | None, source: str, base_dir) -> tuple[dict, str]:
