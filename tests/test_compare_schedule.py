@@ -75,7 +75,6 @@ _before: set = set()
 def _work_dirs_before():
     global _before
     _before = {d for d, pid, _ in work_dirs() if pid == os.getpid()}
-    yield
 
 
 def own_work_dirs() -> list:

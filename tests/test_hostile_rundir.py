@@ -147,9 +147,11 @@ def test_a_damaged_summary_or_peak_table_is_a_run_dir_error(result, tmp_path_fac
     d = rundir.write_run_dir(result, tmp_path_factory.mktemp("d") / "r")
     (d / name).write_bytes(content if isinstance(content, bytes) else content.encode())
     try:
-        out = read_summary(d) if name == "summary.json" else read_peaks(d)
+        out, refused = read_summary(d) if name == "summary.json" else read_peaks(d), None
     except RunDirError as e:
-        assert str(d / name) in str(e)
+        out, refused = None, str(e)
+    if refused is not None:
+        assert str(d / name) in refused
     else:  # what parses is what a reader gets: a JSON object, a table with whole contact numbers
         assert isinstance(out, dict)
         if name == "peaks.csv":
@@ -233,9 +235,13 @@ def test_write_helpers_leave_nothing_on_a_full_disk(tmp_path, monkeypatch):
     class Full(Exception):
         pass
 
-    with pytest.raises(Full), safe_files.open_for_write(p) as fh:
-        fh.write("partial")
-        raise Full
+    def interrupted_write():
+        with safe_files.open_for_write(p) as fh:
+            fh.write("partial")
+            raise Full
+
+    with pytest.raises(Full):
+        interrupted_write()
     assert json.loads(p.read_text()) == {"old": 1} and sorted(x.name for x in tmp_path.iterdir()) == ["f.json"]
 
 

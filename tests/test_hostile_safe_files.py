@@ -78,9 +78,14 @@ def test_reads_stop_at_their_limit_and_copies_at_theirs(tmp_path):
 def test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary_one(tmp_path):
     p = tmp_path / "f"
     sf.write_text(p, "old")
-    with pytest.raises(OSError), sf.open_for_write(p) as fh:
-        fh.write("half")
-        raise OSError(28, "No space left on device")
+
+    def full_disk_write():
+        with sf.open_for_write(p) as fh:
+            fh.write("half")
+            raise OSError(28, "No space left on device")
+
+    with pytest.raises(OSError, match="No space left"):
+        full_disk_write()
     assert p.read_text() == "old" and [x.name for x in tmp_path.iterdir()] == ["f"]
 
 
