@@ -51,6 +51,7 @@ class UnsafeFileError(OSError):
     unreadable text, or a directory it does not own."""
 
     def __str__(self) -> str:
+        """The refusal's message (the path and why)."""
         return self.strerror or super().__str__()
 
 

@@ -170,6 +170,7 @@ class Backend:
         raise NotImplementedError
 
     def __repr__(self) -> str:
+        """The backend's name, for reprs and messages."""
         return f"<granchain backend {self.name}>"
 
 

@@ -63,6 +63,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The ``granchain`` command: parse argv, run the subcommand, return its exit status (a
+    GranchainError is one line and exit 2; anything else keeps its traceback)."""
     from granchain import progress
 
     argv = sys.argv[1:] if argv is None else list(argv)

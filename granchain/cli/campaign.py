@@ -10,6 +10,7 @@ from granchain.errors import UsageError
 
 
 def cmd_campaign_run(args) -> int:
+    """``granchain campaign run``: run a campaign file's points into its workspace and print its table."""
     from granchain.campaigns.api import run_campaign
     from granchain.campaigns.table import format_table
 
@@ -65,6 +66,7 @@ def cmd_campaign_run(args) -> int:
 
 
 def cmd_campaign_table(args) -> int:
+    """``granchain campaign table``: a workspace's table (or a search's transitions), also as CSV."""
     from granchain.campaigns.table import format_table, write_tables
 
     tables = write_tables(args.workspace)
@@ -83,6 +85,7 @@ def cmd_campaign_table(args) -> int:
 
 
 def cmd_campaign_plot(args) -> int:
+    """``granchain campaign plot``: an observable against a varied key, with its error bars."""
     from granchain.campaigns.plot import plot_campaign
 
     paths = plot_campaign(

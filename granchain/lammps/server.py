@@ -50,13 +50,16 @@ class LammpsServer:
 
     @property
     def alive(self) -> bool:
+        """Whether the served LAMMPS child is running."""
         return self.proc is not None and self.proc.poll() is None
 
     @property
     def pid(self) -> int | None:
+        """The served child's process ID (None before it starts)."""
         return None if self.proc is None else self.proc.pid
 
     def start(self, plugin: Path | None = None) -> None:
+        """Start the served child (``granchain.lammps.worker --serve``) with the plugin's environment."""
         self.plugin = plugin
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "granchain.lammps.worker", "--serve"],

@@ -175,6 +175,7 @@ def _die_with_parent() -> None:
 
 
 def main(run_dir: str) -> int:
+    """Run the deck in run_dir in this process's LAMMPS and write worker.json (the worker's entry point)."""
     _die_with_parent()
     t0 = time.perf_counter()
     d = Path(run_dir)

@@ -97,6 +97,7 @@ class RK4Integrator(Integrator):
             self.current = 0
 
     def start(self, state: ChainState) -> None:
+        """Set the integrator up for a run from this state (the plastic history's floor)."""
         # alpha_max follows the running maximum of the overlap since t = 0, whose start is the t = 0
         # overlap (precompressed: a few units of round-off off the static alpha_max); it joins the
         # history at the first step's end, so the first step sees the history the problem set
@@ -105,6 +106,9 @@ class RK4Integrator(Integrator):
     def step(
         self, state: ChainState, t0: float, t1: float, h: float, a_ext: float, on_split: Sequence[SplitHook]
     ) -> float:
+        """Advance the state from t0 by one step h (to t1), locating the law's kinks inside it.
+
+        Returns the time the step started from (a split step's last piece starts later)."""
         if not self.event_location:
             self.rk4(state, h, a_ext)
             self.end_piece(state, t0, t1, state.u[:-1] - state.u[1:], state.v[:-1] - state.v[1:])
@@ -152,6 +156,7 @@ class RK4Integrator(Integrator):
         return t
 
     def too_many_splits(self, state: ChainState, t: float, h_sub: float, crossing: tuple) -> EventLocationError:
+        """The error for a step whose event location split it max_splits times (a solver bug)."""
         s_ev, contact, kind = crossing
         return EventLocationError(
             f"RK4 event location split step {state.step + 1} (t = {t:.6g} s, time step "
@@ -462,6 +467,7 @@ class RK4Integrator(Integrator):
             self.history_floor = None
 
     def contact_forces(self, state: ChainState) -> np.ndarray:
+        """Each contact's force at the state's overlaps and velocities (the dashpot clipped at zero)."""
         law, u, v = state.law, state.u, state.v
         alpha = u[:-1] - u[1:]
         f = law.force(alpha, state.alpha_hist)

@@ -19,6 +19,7 @@ from granchain.schedule import step_plan
 
 
 def solve_chain_dop853(problem: ChainProblem, end_time: float, rtol: float, atol: float | None = None) -> ChainSolution:
+    """A Hertz chain solved by SciPy's DOP853 at rtol (the accuracy study's outside yardstick)."""
     from scipy.integrate import solve_ivp
 
     if not isinstance(problem.law, HertzLaw):

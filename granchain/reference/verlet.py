@@ -24,6 +24,7 @@ class VerletIntegrator(Integrator):
         self.consts: dict[float, tuple[np.ndarray, np.ndarray]] = {}
 
     def start_segment(self, state: ChainState, seg_start: float) -> None:
+        """Start a segment at seg_start (the dashpot's forces again at full-step velocities, as LAMMPS)."""
         if state.gamma and seg_start > 0.0:
             # LAMMPS starts each run by recomputing forces with the full-step velocities; the dashpot
             # is the only force that notices, and the reference does the same to stay step for step
@@ -32,6 +33,7 @@ class VerletIntegrator(Integrator):
     def step(
         self, state: ChainState, t0: float, t1: float, h: float, a_ext: float, on_split: Sequence[SplitHook]
     ) -> float:
+        """Advance the state from t0 by one velocity Verlet step h (to t1); returns t0."""
         u, v, a_int, kick = state.u, state.v, state.a_int, self.kick
         half = 0.5 * h
         consts = self.consts.get(h)
@@ -58,4 +60,5 @@ class VerletIntegrator(Integrator):
         return t0
 
     def contact_forces(self, state: ChainState) -> np.ndarray:
+        """Each contact's force from the last force evaluation (at this step's end, what LAMMPS dumps)."""
         return state.fc.copy()  # the last force evaluation, at this step's end: what LAMMPS dumps

@@ -71,6 +71,7 @@ class Contact:
         return law_class(self.law)
 
     def __getattr__(self, name: str):
+        """A [contact] key of any registered law: this law's value, None where it has no such key."""
         # a [contact] key of any registered law: this law's value, None where it has no such key
         if not name.startswith("_") and name in contact_keys():
             return getattr(self.coefficients, name, None)

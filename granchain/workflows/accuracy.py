@@ -34,6 +34,8 @@ PLAN_RTOL = 1e-3
 
 @dataclass
 class Point:
+    """One point of the work-precision diagram: an integrator at one setting, its cost and errors."""
+
     method: str
     setting: float  # time step (s) or, for dop853, rtol
     steps: int
@@ -44,6 +46,8 @@ class Point:
 
 @dataclass
 class AccuracyStudy:
+    """A work-precision study of a scene: every point against a converged RK4 run."""
+
     scene: object
     contacts: np.ndarray  # 1-based measured contacts
     reference_timestep: float
@@ -54,6 +58,8 @@ class AccuracyStudy:
     plan_points: list[Point] = field(default_factory=list)  # each method at the step planned for PLAN_RTOL
 
     def orders(self) -> dict[str, float]:
+        """Each integrator's observed order: the slope of log error over log step (errors above the
+        reference's own)."""
         out = {}
         for m in sorted({p.method for p in self.points} - {"dop853"}):
             pts = [p for p in self.points if p.method == m and p.error_peak > 10 * self.reference_error]
@@ -62,6 +68,7 @@ class AccuracyStudy:
         return out
 
     def cheapest(self, target: float) -> Point | None:
+        """The cheapest point (wall time) whose peak-force error is at most target, or None."""
         ok = [p for p in self.points if p.error_peak <= target]
         return min(ok, key=lambda p: p.wall_time) if ok else None
 
@@ -79,6 +86,8 @@ def _errors(scene, sol, ref, idx) -> tuple[float, float | None]:
 def accuracy_study(
     scene, methods=("lammps", "rk4", "verlet", "dop853"), levels: int = 5, repeats: int = 3, dump_intervals: bool = True
 ) -> AccuracyStudy:
+    """Run the scene with each method at `levels` settings (``repeats`` timings each) against a
+    converged RK4 run: errors, orders and prices for the work-precision diagram."""
     if scene.needs_plan:
         scene = plan_scene(scene).scene
     a, b = scene.window
@@ -274,6 +283,7 @@ def _write_study_files(study: AccuracyStudy, out: Path) -> None:
 
 
 def summary_text(study: AccuracyStudy) -> str:
+    """The study as Markdown: the measured contacts, the yardstick's own error, and a table per method."""
     lines = [
         f"# Work-precision: {study.scene.title or study.scene.source}",
         "",

@@ -204,6 +204,7 @@ class CollectedRunResult(LammpsRunResult):
     collected: dict = field(default_factory=dict)
 
     def provenance(self) -> dict:
+        """The run's provenance, with where and how the collected run was made."""
         p = super().provenance()
         p["collected"] = self.collected
         return p

@@ -69,6 +69,7 @@ def p_y(scene) -> float:
 
 
 def scene_with_law(scene, contact: dict):
+    """The scene with its [contact] table replaced by `contact` (a law's equivalent contact)."""
     d = scene_to_dict(scene)
     d["contact"] = contact
     if contact["law"] == "bilinear" and isinstance(d["chain"].get("material"), dict):
@@ -78,6 +79,8 @@ def scene_with_law(scene, contact: dict):
 
 @dataclass
 class LawRun:
+    """The scene under one contact law: its run and the measured peak forces with their errors."""
+
     law: str
     contact: dict
     result: object  # RunResult
@@ -90,10 +93,13 @@ class LawRun:
 
 @dataclass
 class LawComparison:
+    """The same chain and load under two or more contact laws, side by side."""
+
     scene: object
     runs: list[LawRun] = field(default_factory=list)
 
     def table(self) -> list[dict]:
+        """One row per law: its contact, decay fit (rate, exponent, transition contact) with uncertainties."""
         rows = []
         for r in self.runs:
             rows.append(
