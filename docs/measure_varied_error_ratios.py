@@ -4,10 +4,12 @@ generated chains of a kinked law (tests/scenegen.scenes, without a dashpot).
 
     python docs/measure_varied_error_ratios.py BACKEND METHOD N [LAW]   # e.g. reference rk4 8; lammps verlet 8 bilinear
 
+A "round-off" status is a bound, not an estimate: its peaks are counted apart (true error / bound).
 The true error is the distance to the same run at dt / 8 (its own error is 1/64 of the run's for Verlet, 1/4096
 for RK4); for Verlet on a kinked law (bilinear, Thornton), whose error follows no order in dt, the distance to
-RK4 (event location) at the run's dt instead. Prints one row per scene and a summary: how many estimates fall
-within [1/3, 3] of the true error, and the statuses of those without one.
+RK4 (event location) at the run's dt instead, counted where it is above that run's own round-off (1e3
+ulps, and workflows.errors.roundoff_floor where the run has one). Prints one row per scene and a summary: how
+many estimates fall within [1/3, 3] of the true error, and the statuses of those without one.
 """
 
 import sys
@@ -19,6 +21,7 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[1]))
+from granchain.workflows.errors import roundoff_floor
 from granchain.workflows.run import plan_for, run_scene
 from tests.scenegen import scenes
 from tests.test_varied_chains import varied_chains
@@ -28,7 +31,7 @@ backend, method, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
 law = sys.argv[4] if len(sys.argv) > 4 else None
 method = None if backend == "lammps" else method
 chains = varied_chains() if law is None else scenes(law=law, max_beads=30).filter(lambda s: not s.effects.dashpot)
-ratios, statuses, rows = [], Counter(), []
+ratios, statuses, rows, bounds = [], Counter(), [], []
 
 
 @settings(max_examples=n, deadline=None, suppress_health_check=list(HealthCheck), database=None)
@@ -44,12 +47,17 @@ def study(sc):
     a, b = got.solution, fine.solution
     measured = a.complete & b.complete
     true = np.abs(a.peak_force - b.peak_force)
-    above = measured & (true > 1e3 * np.spacing(np.abs(a.peak_force)))
+    # the true error is known above the finer run's own round-off (1e3 ulps; its floor where it has one)
+    floor = roundoff_floor(fine.scene, b)
+    floor = np.zeros_like(true) if floor is None else np.nan_to_num(floor)
+    above = measured & (true > np.maximum(1e3 * np.spacing(np.abs(a.peak_force)), floor))
     est = got.errors.peak_force
     if est is None:
         rows.append(f"{sc.chain.beads} beads: no estimate ({got.errors.why_none})")
         return
-    ok = above & est.reliable
+    rnd = measured & (est.status == "round-off")
+    bounds.extend((true[rnd] / est.error[rnd]).tolist())
+    ok = above & est.reliable & ~rnd
     r = est.error[ok] / true[ok]
     ratios.extend(r.tolist())
     statuses.update(str(s).split(":")[0].split(" (")[0] for s in est.status[measured & ~est.reliable])
@@ -69,3 +77,6 @@ for row in rows:
 inside = int(np.sum((r >= 1 / 3) & (r <= 3)))
 print(f"{backend} {method or 'verlet'}: {inside}/{r.size} estimates within [1/3, 3] of the true error "
       f"(min {r.min():.2g}, median {np.median(r):.2g}, max {r.max():.2g}); without an estimate: {dict(statuses)}")
+bd = np.asarray(bounds)
+if bd.size:
+    print(f"round-off bounds: {bd.size}, true error / bound at most {bd.max():.2g}")

@@ -70,6 +70,9 @@ NEXT_TERM = 1.0
 MIN_ORDER = 1.0
 #: differences below this many units in the last place of the value are round-off
 ROUNDOFF_ULPS = 64.0
+#: differences up to this many times the run's round-off floor are noise, not the step's error: a
+#: difference of two runs carries both their round-off (each at most the floor)
+ROUNDOFF_MARGIN = 2.0
 #: the most an estimate may overstate the error: the issue's bar (estimated / true within 1/3 - 3)
 MAX_OVERESTIMATE = 3.0
 
@@ -105,6 +108,7 @@ def richardson(
     times: tuple[np.ndarray, np.ndarray, np.ndarray | None] | None = None,
     jump_time: float | None = None,
     orders: tuple[float, float] | None = None,
+    floor: np.ndarray | None = None,
 ) -> ErrorBars:
     """Error estimates of `fine` (the values at dt) from the same quantities at 2 dt and 4 dt.
 
@@ -124,6 +128,10 @@ def richardson(
         The lowest and highest order this integrator's error can show on this scene (default
         (order, order)): an observed order outside them, widened by ORDER_SLACK (and above, at
         most highest_trusted_order(order)), leaves the item without an estimate.
+    floor : array_like, optional
+        The run's own round-off in each item (workflows.errors.roundoff_floor; nan or absent: only
+        ROUNDOFF_ULPS of the value): where the differences, or the Richardson estimate, are within
+        it the item is "round-off" with this bound (module docstring).
 
     Returns
     -------
@@ -141,6 +149,7 @@ def richardson(
     # the nominal order overstates by at most (2^(p+1) - 1) / (2^p - 1) < 2.2, and never beyond
     # highest_trusted_order (effect-striker, RK4: observed 4.8-4.9 on 65 of 94 peaks, within 1/3-3)
     accepted = (max(MIN_ORDER, lo - ORDER_SLACK), min(hi + NEXT_TERM, highest_trusted_order(order)))
+    fl = np.zeros(n) if floor is None else np.nan_to_num(np.broadcast_to(np.asarray(floor, dtype=float), (n,)))
     for i in range(n):
         err[i], used[i], status[i] = _one(
             f[i],
@@ -150,11 +159,25 @@ def richardson(
             None if times is None else tuple(None if t is None else float(np.atleast_1d(t)[i]) for t in times),
             jump_time,
             accepted,
+            fl[i],
         )
     return ErrorBars(err, status, used)
 
 
-def _one(f, c, cc, p, times, jump_time, accepted):
+def _one(f, c, cc, p, times, jump_time, accepted, floor=0.0):
+    e, used, status = _richardson_one(f, c, cc, p, times, jump_time, accepted, floor)
+    unmeasured = status.startswith("not measured") or "another pulse" in status
+    if floor > 0.0 and status != "round-off" and not unmeasured:
+        # the three runs' differences are within a few times the run's own round-off: whatever they say
+        # (an order, a sign change), the error is the round-off's, and the bound is the floor
+        d1 = abs(f - c)
+        d2 = abs(c - cc) if cc is not None and np.isfinite(cc) else 0.0
+        if max(d1, d2) <= ROUNDOFF_MARGIN * floor or (np.isfinite(e) and e <= floor):
+            return float(floor), float(p), "round-off"
+    return e, used, status
+
+
+def _richardson_one(f, c, cc, p, times, jump_time, accepted, floor):
     if not (np.isfinite(f) and np.isfinite(c)):
         return math.nan, math.nan, "not measured: missing in the run or its 2 dt companion"
     if times is not None and jump_time is not None:
@@ -169,7 +192,7 @@ def _one(f, c, cc, p, times, jump_time, accepted):
                 "unreliable: another pulse in a companion run (its time moved by more than half the shortest period)",
             )
     d1 = f - c
-    ulp = ROUNDOFF_ULPS * np.spacing(max(abs(f), abs(c)))
+    ulp = max(ROUNDOFF_ULPS * np.spacing(max(abs(f), abs(c))), floor)
     if abs(d1) <= ulp:
         return float(ulp), float(p), "round-off"
     if cc is None:
