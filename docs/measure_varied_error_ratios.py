@@ -64,8 +64,13 @@ def study(sc):
     kind = ("per-bead" if sc.per_bead else "uniform") + f" {sc.contact.law}"
     extra = (" F0 " if sc.effects.precompression else " ") + ("wall" if sc.effects.far_end == "wall" else "")
     inside = int(np.sum((r >= 1 / 3) & (r <= 3)))
+    for i in np.flatnonzero(ok):  # each peak outside, with what its three runs said
+        q = est.error[i] / true[i]
+        if not 1 / 3 <= q <= 3:
+            rows.append(f"    contact {i + 1}: {q:.3g} ({est.status[i]}; true {true[i]:.2e}, F {a.peak_force[i]:.4g} N)")
     price = got.price()
-    rows.append(f"{sc.chain.beads:3d} beads {kind}{extra}: {inside}/{r.size} within 1/3-3, range "
+    rows.insert(len(rows) - sum(1 for i in np.flatnonzero(ok) if not 1 / 3 <= est.error[i] / true[i] <= 3),
+                f"{sc.chain.beads:3d} beads {kind}{extra}: {inside}/{r.size} within 1/3-3, range "
                 f"{(r.min() if r.size else np.nan):.2g}-{(r.max() if r.size else np.nan):.2g}; "
                 f"price {price['error_estimate'] / price['wall_time']:.2f}")
 
