@@ -67,7 +67,7 @@ def study(sc):
     for i in np.flatnonzero(ok):  # each peak outside, with what its three runs said
         q = est.error[i] / true[i]
         if not 1 / 3 <= q <= 3:
-            rows.append(f"    contact {i + 1}: {q:.3g} ({est.status[i]}; true {true[i]:.2e}, F {a.peak_force[i]:.4g} N)")
+            rows.append(f"    contact {i + 1}: {q:.3g} ({est.status[i]}; true {true[i]:.2e}, {a.peak_force[i]:.4g} N)")
     price = got.price()
     rows.insert(len(rows) - sum(1 for i in np.flatnonzero(ok) if not 1 / 3 <= est.error[i] / true[i] <= 3),
                 f"{sc.chain.beads:3d} beads {kind}{extra}: {inside}/{r.size} within 1/3-3, range "
