@@ -26,8 +26,14 @@ status says so.
 Other ways an estimate fails, each with its own status (never a small number in their place):
 - the peak is another pulse in a companion run: its time moved by more than half the shortest
   period of the chain (pi / omega_max) between two runs;
-- round-off: the differences are below ROUNDOFF_ULPS units in the last place of the value (the
-  error is at most that, and is reported as that bound);
+- round-off: the differences are below ROUNDOFF_ULPS units in the last place of the value, or
+  below ROUNDOFF_MARGIN times the run's own round-off floor where the caller gives one (the
+  reference: sqrt(steps) eps U dF/dalpha, workflows.errors.roundoff_floor), or Richardson's
+  estimate is below that floor (the error is at most the floor, and is reported as that bound). A
+  step far finer than accuracy needs (set by a chain's smallest beads) leaves step errors near
+  1e-15 of the force, and the three runs' differences are round-off that can look like any order:
+  on a brass chain tapered by 0.8 at F0 = 0.3 N Richardson gave 0.013-0.62 of the distance to a
+  run at dt / 16, itself round-off (docs/error-bars.md);
 - not measured: the quantity is missing (nan) in one of the runs (a peak not complete, a contact
   not reached).
 
@@ -36,7 +42,8 @@ Statuses (the `*_error_status` columns and summary entries):
     "observed order q"           a clearly lower q within the integrator's range, used instead
     "nominal order p (observed q)"  a higher q within the integrator's range (a mixture of orders)
     "order not checked"          no 4 dt run (it would be unstable): nominal order assumed
-    "round-off"                  differences at round-off: the error is at most the bound given
+    "round-off"                  differences (or the estimate) at round-off: the error is at most
+                                 the bound given (a bound, not an estimate)
     "unreliable: ..."            no estimate; the reason follows (an order outside the range:
                                  the status gives the nominal value, not a bound)
     "not measured: ..."          no estimate; the reason follows
