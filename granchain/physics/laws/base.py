@@ -110,11 +110,27 @@ class ContactLaw:
     k: ArrayLike
 
     def __init_subclass__(cls, **kwargs) -> None:
+        """Derive a subclass's ``scene_keys`` from its Coefficients' fields (rule 1), so the two never differ."""
         super().__init_subclass__(**kwargs)
         cls.scene_keys = tuple(f.name for f in dataclasses.fields(cls.Coefficients))
 
     # ---- the law itself
     def force(self, alpha: ArrayLike, alpha_max: ArrayLike | None = None) -> np.ndarray:
+        """The contact force F(alpha) of Eq. 1, never negative and zero where alpha <= 0 (rule 2).
+
+        Parameters
+        ----------
+        alpha : array_like
+            The overlap of each contact, alpha = u_i - u_{i+1} (Eq. 2; may be negative: apart).
+        alpha_max : array_like, optional
+            The largest overlap so far before this step (laws with history; None: a virgin contact).
+            The law takes max(alpha_max, alpha) itself.
+
+        Returns
+        -------
+        numpy.ndarray
+            The force of each contact (N).
+        """
         raise NotImplementedError
 
     def force_into(self, alpha: np.ndarray, alpha_max: np.ndarray, out: np.ndarray, tmp: np.ndarray) -> None:
@@ -122,9 +138,13 @@ class ContactLaw:
         out[:] = self.force(alpha, alpha_max)
 
     def energy(self, alpha: ArrayLike, alpha_max: ArrayLike | None = None) -> np.ndarray:
+        """The recoverable energy stored in each contact at overlap alpha with history alpha_max (J):
+        with ``dissipated(max(alpha_max, alpha))`` it adds up to the work done on the contact (rule 2)."""
         raise NotImplementedError
 
     def dissipated(self, alpha_max: ArrayLike) -> np.ndarray:
+        """The energy a contact has dissipated once its largest overlap reached alpha_max (J; the
+        bilinear law's is Eq. 20). Zero here: an elastic law dissipates nothing."""
         return np.zeros_like(np.asarray(alpha_max, dtype=float))
 
     def update_history(self, alpha_max: np.ndarray, alpha: np.ndarray) -> None:
@@ -148,12 +168,28 @@ class ContactLaw:
         raise NotImplementedError
 
     def max_stiffness(self, force: ArrayLike) -> np.ndarray:
+        """The stiffest dF/dalpha of a contact loaded up to `force`: ``tangent_stiffness`` unless a law
+        says otherwise."""
         return self.tangent_stiffness(force)
 
     def kinks(self, alpha_max: np.ndarray) -> list[Kink]:
+        """Where the force or one of its derivatives jumps, for RK4's event location (rule 4).
+
+        Parameters
+        ----------
+        alpha_max : numpy.ndarray
+            The largest overlap so far of each contact.
+
+        Returns
+        -------
+        list of Kink
+            Each kink's overlap level per contact, what happens there and the contacts it applies to.
+        """
         raise NotImplementedError
 
     def turn_level(self, alpha_max: np.ndarray) -> np.ndarray | None:
+        """The overlap above which a contact whose overlap turns from rising to falling starts unloading
+        on another curve (rule 4), one per contact; None here: the law has no such kink."""
         return None
 
     def kink_screens(self, alpha_max: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> list:

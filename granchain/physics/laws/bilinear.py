@@ -22,6 +22,7 @@ from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
+from typing_extensions import override
 
 from granchain.physics import materials as mat
 from granchain.physics import models
@@ -140,6 +141,7 @@ class BilinearLaw(ContactLaw):
         """k_u = k / (1 - beta), computed once (the solver's inner loop reads it every step)."""
         return unloading_stiffness(self.k, self.beta)
 
+    @override
     def force(self, alpha, alpha_max=None):
         return bilinear_force(alpha, 0.0 if alpha_max is None else alpha_max, self.k, self.beta)
 
@@ -149,6 +151,7 @@ class BilinearLaw(ContactLaw):
         about half again the cost of a whole call on a short chain (force_into runs four times an RK4 step)."""
         return np.array(self.beta, dtype=float), np.array(self.k_unloading, dtype=float), np.array(0.0)
 
+    @override
     def force_into(self, alpha, alpha_max, out, tmp):
         # F = max(k_u (alpha - beta max(alpha_max, alpha)), 0); with alpha_max frozen this is the
         # loading line k alpha wherever alpha >= alpha_max
@@ -159,23 +162,29 @@ class BilinearLaw(ContactLaw):
         _multiply(out, ku, out)
         np.maximum(out, zero, out=out)
 
+    @override
     def energy(self, alpha, alpha_max=None):
         return bilinear_energy(alpha, 0.0 if alpha_max is None else alpha_max, self.k, self.beta)
 
+    @override
     def dissipated(self, alpha_max):
         return bilinear_dissipated(alpha_max, self.k, self.beta)
 
+    @override
     def loading_force(self, alpha):
         """The force never exceeds the loading line: the peak is k alpha_max."""
         return np.asarray(self.k) * np.maximum(alpha, 0.0)
 
+    @override
     def static_overlap(self, force):
         return np.asarray(force, dtype=float) / np.asarray(self.k, dtype=float)
 
+    @override
     def tangent_stiffness(self, force=None):
         """k_u at any force: unloading is the stiffer line."""
         return np.asarray(self.k_unloading)
 
+    @override
     def kinks(self, alpha_max):
         beta, _, zero = self._operands  # (0-d operands: the RK4 event location asks at every piece)
         return [
@@ -185,6 +194,7 @@ class BilinearLaw(ContactLaw):
             Kink(alpha_max, _RELOADING, where=_greater(alpha_max, zero), from_below=True),
         ]
 
+    @override
     def kink_screens(self, alpha_max, a0, a1):
         # ContactLaw.kink_screens over kinks(alpha_max), the same arrays, with the reloading kink's
         # where (a whole-chain comparison) and the Kinks made only for a kink some contact straddles
@@ -200,11 +210,13 @@ class BilinearLaw(ContactLaw):
             out.append((Kink(alpha_max, _RELOADING, where=_greater(alpha_max, zero), from_below=True), alpha_max, idx))
         return out
 
+    @override
     def turn_level(self, alpha_max):
         # a turn from loading to unloading at a new alpha_max (slope k -> k_u)
         return alpha_max
 
     @classmethod
+    @override
     def read_contact(cls, s, chain) -> BilinearCoefficients:
         forbid_others(s, cls)
         beta = s.number(
@@ -251,6 +263,7 @@ class BilinearLaw(ContactLaw):
         return BilinearCoefficients(unloading_coeff=beta, plastic_stiffness=k)
 
     @classmethod
+    @override
     def for_pair(cls, coefficients, e_star, r_star, nominal_r_star, materials=()):
         beta = coefficients.unloading_coeff
         if coefficients.plastic_stiffness is None:  # several materials: 18.5 sigma_y R* of the pair, the softer's
@@ -272,6 +285,8 @@ class BilinearLaw(ContactLaw):
 
     @classmethod
     def loading_is_linear(cls) -> bool:
+        """True: the virgin curve is the loading line F = k alpha (Fig. 4), so the planner's and the
+        regimes' estimates take their linear forms."""
         return True
 
     @classmethod
@@ -292,6 +307,7 @@ class BilinearLaw(ContactLaw):
 
     # ---- the law's models (ContactLaw rule 8)
     @classmethod
+    @override
     def predictions(cls, scene) -> list[dict]:
         """The paper's bilinear-chain models (Sec. III): short loading's first contacts and decay
         regimes (Eqs. A1-A4, 20-34), and under a force load the steady fronts (Eqs. 35-38)."""
@@ -302,6 +318,7 @@ class BilinearLaw(ContactLaw):
         return out
 
     @classmethod
+    @override
     def model_curves(cls, scene, contacts, applies):
         """Eq. 27's exponential decay from Eq. A2's first peak, drawn a little past the transition
         (Eq. 30) to show where the two meet, and Eq. 34's inverse decay from the transition on."""

@@ -13,6 +13,7 @@ from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
+from typing_extensions import override
 
 from granchain.physics import materials as mat
 from granchain.physics import models
@@ -84,6 +85,7 @@ class HertzLaw(ContactLaw):
         "wall_peak_force": (("wall_impact_peak_force", "Hertz impact (bead on the flat)"),),
     }
 
+    @override
     def force(self, alpha, alpha_max=None):
         return hertz_force(alpha, self.k)
 
@@ -92,28 +94,35 @@ class HertzLaw(ContactLaw):
         """k as an array (0-d for a scalar): a cheaper operand than a float in force_into (four calls an RK4 step)."""
         return np.array(self.k, dtype=float)
 
+    @override
     def force_into(self, alpha, alpha_max, out, tmp):
         np.sqrt(alpha, out=tmp)
         _multiply(alpha, tmp, out)
         _multiply(out, self._k, out)
 
+    @override
     def energy(self, alpha, alpha_max=None):
         return hertz_energy(alpha, self.k)
 
+    @override
     def loading_force(self, alpha):
         return hertz_force(alpha, self.k)
 
+    @override
     def static_overlap(self, force):
         return (np.asarray(force, dtype=float) / np.asarray(self.k, dtype=float)) ** (2.0 / 3.0)
 
+    @override
     def tangent_stiffness(self, force):
         return hertz_tangent_stiffness(force, self.k)
 
+    @override
     def kinks(self, alpha_max):
         # F'' is infinite at zero overlap: the contact opens or closes
         return [Kink(np.zeros(np.shape(alpha_max)), "zero overlap")]
 
     @classmethod
+    @override
     def for_pair(cls, coefficients, e_star, r_star, nominal_r_star, materials=()):
         return cls(k=mat.hertz_contact_stiffness(e_star, r_star))
 
@@ -132,7 +141,8 @@ class HertzLaw(ContactLaw):
 
     @classmethod
     def loading_is_linear(cls) -> bool:
-        """The virgin curve is a line (the striker's piston amplitude, Eqs. 12 and 19)."""
+        """Whether the virgin curve is a line: no, F = k alpha^(3/2) (Eq. 16), so the planner's and the
+        regimes' estimates take their Hertz forms."""
         return False
 
     @classmethod
@@ -154,12 +164,14 @@ class HertzLaw(ContactLaw):
 
     # ---- the law's models (ContactLaw rule 8)
     @classmethod
+    @override
     def predictions(cls, scene) -> list[dict]:
         """The effects' Hertz models, then the paper's (Sec. II): Eq. 8 and Nesterenko's speed at its
         force for short loads, the long-load fronts (Eqs. 12, 15, 19) under a force load."""
         return _effect_predictions(scene) + _chain_predictions(scene)
 
     @classmethod
+    @override
     def measured_models(cls, scene, values, observables):
         """Nesterenko's solitary-wave speed at the run's leading peak (ref. 9) and, on a precompressed
         chain, his V_s(f_r) with f_r the largest contact force over F0 (Nesterenko 2001)."""
@@ -175,6 +187,7 @@ class HertzLaw(ContactLaw):
         return out
 
     @classmethod
+    @override
     def model_curves(cls, scene, contacts, applies):
         """Eq. 8's peak (short load) and the long-load bounds, Eqs. 15 and 19 with Nesterenko's peak of
         a solitary wave at the front speed (Fig. 3): constant along the chain."""

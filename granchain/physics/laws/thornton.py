@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
+from typing_extensions import override
 
 from granchain.physics import materials as mat
 from granchain.physics import models
@@ -115,6 +116,7 @@ class ThorntonLaw(ContactLaw):
         return plastic, fmax, np.where(plastic, kp, k), np.where(plastic, dp, 0.0)
 
     # ---- the law
+    @override
     def force(self, alpha, alpha_max=None):
         a = np.maximum(np.asarray(alpha, dtype=float), 0.0)
         am = a if alpha_max is None else np.maximum(alpha_max, a)
@@ -122,9 +124,11 @@ class ThorntonLaw(ContactLaw):
         s = np.maximum(a - dp, 0.0)
         return kp * s * np.sqrt(s)
 
+    @override
     def force_into(self, alpha, alpha_max, out, tmp):
         out[:] = self.force(alpha, alpha_max)
 
+    @override
     def energy(self, alpha, alpha_max=None):
         a = np.maximum(np.asarray(alpha, dtype=float), 0.0)
         am = a if alpha_max is None else np.maximum(alpha_max, a)
@@ -132,6 +136,7 @@ class ThorntonLaw(ContactLaw):
         s = np.maximum(a - dp, 0.0)
         return 0.4 * kp * s * s * np.sqrt(s)
 
+    @override
     def dissipated(self, alpha_max):
         am = np.maximum(np.asarray(alpha_max, dtype=float), 0.0)
         plastic, fmax, _, dp = self.unloading(am)
@@ -142,17 +147,20 @@ class ThorntonLaw(ContactLaw):
         work = 0.4 * k * dy * dy * np.sqrt(dy) + fy * x + 0.5 * s * x * x  # along the virgin curve
         return np.where(plastic, work - 0.4 * fmax * (am - dp), 0.0)
 
+    @override
     def loading_force(self, alpha):
         a = np.maximum(np.asarray(alpha, dtype=float), 0.0)
         dy = np.asarray(self.yield_overlap, dtype=float)
         return np.where(a > dy, self.yield_force + self.plastic_slope * (a - dy), hertz_force(a, self.k))
 
+    @override
     def static_overlap(self, force):
         f = np.asarray(force, dtype=float)
         fy = self.yield_force
         hertz = (f / np.asarray(self.k, dtype=float)) ** (2.0 / 3.0)
         return np.where(f > fy, np.asarray(self.yield_overlap) + (f - fy) / self.plastic_slope, hertz)
 
+    @override
     def tangent_stiffness(self, force):
         """Unloading from F_max = force is the stiffest: 3/2 k_p^(2/3) F^(1/3) (the plastic line's S and
         the Hertz slope below it are smaller: R_p >= R*)."""
@@ -161,6 +169,7 @@ class ThorntonLaw(ContactLaw):
         _, _, kp, _ = self.unloading(am)
         return 1.5 * np.cbrt(kp * kp * f)
 
+    @override
     def kinks(self, alpha_max):
         am = np.asarray(alpha_max, dtype=float)
         dy = np.broadcast_to(np.asarray(self.yield_overlap, dtype=float), am.shape)
@@ -174,6 +183,7 @@ class ThorntonLaw(ContactLaw):
             Kink(np.array(dy), "yield at d_y", where=am < dy, from_below=True),
         ]
 
+    @override
     def turn_level(self, alpha_max):
         # a turn above d_max and d_y leaves the plastic line for a new unloading curve
         return np.maximum(alpha_max, self.yield_overlap)
@@ -189,6 +199,7 @@ class ThorntonLaw(ContactLaw):
     }
 
     @classmethod
+    @override
     def predictions(cls, scene) -> list[dict]:
         """Thornton's (1997) closed forms for the nominal bead pair: F_y, d_y, the impact velocity at
         which the contact first yields, (1/2) m* v_y^2 = (2/5) F_y d_y (the Hertz energy at d_y; m* = m/2
@@ -236,6 +247,7 @@ class ThorntonLaw(ContactLaw):
 
     # ---- scenes
     @classmethod
+    @override
     def read_contact(cls, s, chain) -> ThorntonCoefficients:
         forbid_others(s, cls)
         if not s.has("yield_pressure"):
@@ -262,6 +274,7 @@ class ThorntonLaw(ContactLaw):
         return ThorntonCoefficients(yield_pressure=p_y)
 
     @classmethod
+    @override
     def for_pair(cls, coefficients, e_star, r_star, nominal_r_star, materials=()):
         # without a given p_y: the softer body's yield sets it (docs/effects.md, mixing rules)
         p_y = coefficients.yield_pressure
@@ -270,6 +283,7 @@ class ThorntonLaw(ContactLaw):
         return cls(k=mat.hertz_contact_stiffness(e_star, r_star), yield_overlap=yield_overlap(p_y, e_star, r_star))
 
     @classmethod
+    @override
     def unsupported(cls, chain) -> str | None:
         return None
 
@@ -277,10 +291,14 @@ class ThorntonLaw(ContactLaw):
     # contacts dissipate, so Hertz's estimates bound the force from above
     @classmethod
     def expected_peak_force(cls, scene, impulse: float, step) -> float:
+        """The Hertz law's estimate (Eq. 8, capped by Eq. 15's wave for steps, x1.5): Thornton's virgin curve
+        is Hertz up to F_y and softer beyond, and its contacts dissipate, so it bounds the force from above."""
         return HertzLaw.expected_peak_force(scene, impulse, step)
 
     @classmethod
     def loading_is_linear(cls) -> bool:
+        """False: the virgin curve starts Hertzian (k d^(3/2) up to d_y), so the estimates take their
+        Hertz forms."""
         return False
 
     @classmethod
@@ -297,4 +315,5 @@ class ThorntonLaw(ContactLaw):
 
     @classmethod
     def leading_edge_speed(cls, scene, expected_force: float, step) -> float:
+        """The fastest a disturbance can enter the undisturbed chain: the fastest of ``wave_speeds``."""
         return cls.wave_speeds(scene, expected_force, step)[1]
