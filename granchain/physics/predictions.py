@@ -27,6 +27,10 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Prediction:
+    """One value of a model of the paper (or a quantity of the scene itself) for a scene, with its
+    equation, the model's domain of validity and whether the scene is inside it (``applicability``).
+    What `granchain predict` prints and `compare` and the plots check runs against."""
+
     name: str
     value: float
     unit: str
@@ -37,6 +41,7 @@ class Prediction:
     applies_reason: str = ""  # why it does or does not apply, with the scene's numbers
 
     def as_dict(self) -> dict:
+        """Its fields as a dict (`granchain predict --json`)."""
         return asdict(self)
 
 
@@ -44,6 +49,9 @@ class Prediction:
 
 
 class Applicability(NamedTuple):
+    """Whether a model applies to a scene (its domain of validity holds there) and why, in words with
+    the scene's numbers: ``applicability``'s answer."""
+
     applies: bool
     reason: str
 

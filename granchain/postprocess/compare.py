@@ -15,6 +15,9 @@ from granchain.physics.predictions import applicability, predict
 
 @dataclass(frozen=True)
 class CompareRow:
+    """One row of `granchain compare`: a quantity as two runs of the same scene measured it, each run's
+    error bar, and the model it is checked against where one applies (the law's ``compare_models``)."""
+
     quantity: str
     unit: str
     a: float | None  # first run (LAMMPS in `granchain compare`)
@@ -29,6 +32,7 @@ class CompareRow:
 
     @property
     def rel_diff(self) -> float | None:
+        """|a - b| / max(|a|, |b|) (0 where both are 0); None unless both runs measured the quantity."""
         if self.a is None or self.b is None:
             return None
         scale = max(abs(self.a), abs(self.b))
@@ -36,12 +40,15 @@ class CompareRow:
 
     @property
     def rel_model(self) -> float | None:
+        """|b - model| / |model| of the second run (the reference); None where no model applies or is 0,
+        or the second run did not measure the quantity."""
         if not self.model_applies or self.model is None or self.b is None or self.model == 0:
             return None
         return abs(self.b - self.model) / abs(self.model)
 
     @property
     def measured(self) -> bool:
+        """Whether either run measured the quantity."""
         return self.a is not None or self.b is not None
 
     @property
@@ -257,6 +264,8 @@ def _header(names) -> list[str]:
 
 
 def format_table(rows: list[CompareRow], names=("lammps", "reference")) -> str:
+    """The rows as an aligned text table (what `granchain compare` prints), the runs' columns named
+    `names`."""
     header = _header(names)
     table = [header] + [_cells(r) for r in rows]
     widths = [max(len(row[i]) for row in table) for i in range(len(header))]
@@ -265,6 +274,8 @@ def format_table(rows: list[CompareRow], names=("lammps", "reference")) -> str:
 
 
 def write_compare(rows: list[CompareRow], out_dir: str | Path, names=("lammps", "reference")) -> None:
+    """Write the rows to `out_dir` as compare.csv and compare.md (a FAIL in bold), the runs' columns
+    named `names`."""
     out = Path(out_dir)
     header = _header(names)
     with open(out / "compare.csv", "w", newline="") as fh:
