@@ -52,6 +52,9 @@ STABILITY = {"rk4": 2.8, "verlet": 2.0}
 
 @dataclass(frozen=True)
 class PlanChoice:
+    """One choice of the planner (time step, end time, beads, an output interval, the stop check): its
+    value and the reason, in words with the scene's numbers."""
+
     name: str
     value: float
     reason: str
@@ -59,6 +62,10 @@ class PlanChoice:
 
 @dataclass
 class Plan:
+    """The planner's choices for a scene (``plan_scene``): the concrete scene they make, the rtol and
+    integrator planned for, each choice with its reason, omega_max and the stable step
+    STABILITY[method] / omega_max."""
+
     scene: Scene  # concrete: no "auto" left
     rtol: float
     method: str
