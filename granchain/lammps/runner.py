@@ -418,6 +418,7 @@ def invariant_from_lammps(err: LammpsError, scene) -> InvariantError | None:
 
 
 def output_files(work: Path) -> dict[str, Path]:
+    """The files of a LAMMPS work directory a run directory keeps (OUTPUT_GLOBS), by name."""
     files: dict[str, Path] = {}
     for pattern in OUTPUT_GLOBS:
         for p in sorted(work.glob(pattern)):
@@ -426,6 +427,7 @@ def output_files(work: Path) -> dict[str, Path]:
 
 
 def cleanup(work: Path) -> None:
+    """Remove a LAMMPS work directory and everything in it (what is missing is not an error)."""
     shutil.rmtree(work, ignore_errors=True)
 
 

@@ -36,6 +36,8 @@ DUMP_COLUMNS = ("d_fc", "v_vel", "v_ux")
 
 @dataclass
 class DumpData:
+    """A LAMMPS dump read back: its frames' steps and times, the bead IDs, and each column by name."""
+
     step: np.ndarray  # (frames,)
     time: np.ndarray  # (frames,) s
     ids: np.ndarray  # (atoms,) bead IDs, sorted

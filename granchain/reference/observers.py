@@ -24,6 +24,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+from typing_extensions import override
 
 from granchain.invariants import InvariantError, energy_violation, momentum_violation
 from granchain.peaks import PEAK_PASSED_FRACTION, complete_peaks, unreached_as_nan
@@ -93,6 +94,7 @@ class PeakTracker(Observer):
         raise NotImplementedError
 
     def peak_fields(self, peak_force: np.ndarray, tmax: np.ndarray, force_min: np.ndarray) -> dict[str, Any]:
+        """The peak fields of ChainSolution from the running peaks (nan where a contact was not reached)."""
         self.time_of_peak = unreached_as_nan(peak_force, tmax, self.f0)
         return {
             "peak_overlap": self.amax,
@@ -115,6 +117,7 @@ class HermitePeaks(PeakTracker):
         self.amin = self.amax.copy()  # smallest overlap at a piece end since the peak
         self.rising = np.empty(self.amax.shape, dtype=bool)
 
+    @override
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
         alpha_new = state.alpha_now
         if self.ladder is not None:
@@ -146,9 +149,11 @@ class HermitePeaks(PeakTracker):
                 listener(state, turning)
         return False
 
+    @override
     def after_split(self, state: ChainState, t0: float, t1: float) -> None:
         self.after_step(state, t0, t1)
 
+    @override
     def peak_at(self, state: ChainState, ix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         # at a contact's maximum its running peak is that maximum; the force there: F is monotone in
         # the overlap at a fixed history. Whole-chain evaluation: per-contact stiffness arrays
@@ -156,11 +161,13 @@ class HermitePeaks(PeakTracker):
         f = np.asarray(state.law.force(np.maximum(self.amax, 0.0), state.alpha_hist), dtype=float)
         return f[ix], self.tmax[ix]
 
+    @override
     def now_and_peak(self, state: ChainState, c: int) -> tuple[float, float]:
         # whole-chain evaluation (every STOP_CHECK_EVERY steps), as in peak_at
         now = float(state.law.force(state.overlap(), state.alpha_hist)[c])
         return now, float(state.law.force_at_peak_overlap(self.amax)[c])
 
+    @override
     def finish(self, state: ChainState) -> dict[str, Any]:
         law = state.law
         peak_force = np.asarray(law.force_at_peak_overlap(self.amax), dtype=float)
@@ -186,6 +193,7 @@ class ForceSamplePeaks(PeakTracker):
         self.u_left, self.u_right = state.u[:-1], state.u[1:]  # (u changes in place)
         self.rising = np.empty(n - 1, dtype=bool)
 
+    @override
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
         # the three samples rotate through three arrays (the oldest is overwritten with the new one)
         f_now = self.f_prev2
@@ -234,12 +242,15 @@ class ForceSamplePeaks(PeakTracker):
         for listener in self.listeners:
             listener(state, ix)
 
+    @override
     def peak_at(self, state: ChainState, ix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return self.fpk[ix], self.tpk[ix]
 
+    @override
     def now_and_peak(self, state: ChainState, c: int) -> tuple[float, float]:
         return state.fc[c], self.fpk[c]
 
+    @override
     def finish(self, state: ChainState) -> dict[str, Any]:
         return self.peak_fields(self.fpk, self.tpk, self.fmin)
 
@@ -284,6 +295,7 @@ class LeadingPulse(Observer):
             if self.ladder is not None:
                 self.ladder.freeze(k)
 
+    @override
     def finish(self, state: ChainState) -> dict[str, Any]:
         reached = np.isfinite(self.peaks.time_of_peak)  # the peak tracker finished first
         force = np.where(reached, self.force, np.nan)
@@ -332,23 +344,28 @@ class Recorder(Observer):
         self.snaps: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
     def record(self, state: ChainState, t: float) -> None:
+        """Append one history row at time t: the recorded contacts' forces and beads' velocities."""
         self.h_t[self.rows] = t
         self.h_f[self.rows] = self.forces(state)[self.idx]
         self.h_v[self.rows] = state.v[self.idx]
         self.rows += 1
 
+    @override
     def start(self, state: ChainState) -> None:
         if self.every:
             self.record(state, 0.0)
 
+    @override
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
         self.record(state, t1)
         return False
 
+    @override
     def at_breakpoint(self, state: ChainState, stopped: bool) -> None:
         if not stopped and state.t in self.snapshot_times:
             self.snaps[state.t] = (state.u.copy(), state.v.copy(), self.forces(state))
 
+    @override
     def finish(self, state: ChainState) -> dict[str, Any]:
         n, snaps = self.n, self.snaps
         snap_t = np.asarray(sorted(snaps))
@@ -396,6 +413,7 @@ class EnergyLedger(Observer):
         return w
 
     def row(self, state: ChainState, t: float) -> None:
+        """Append one energy row at time t (kinetic, potential and dissipated energy, the work done) and pass it to the listeners."""
         law, v = state.law, state.v
         ke = 0.5 * float(np.dot(state.mass_ke, v * v))
         pe = float(np.sum(law.energy(state.overlap(), state.alpha_hist)))
@@ -405,20 +423,24 @@ class EnergyLedger(Observer):
         for listener in self.listeners:
             listener(state, row)
 
+    @override
     def start(self, state: ChainState) -> None:
         self.row(state, 0.0)
 
+    @override
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
         if t1 < state.seg_end:  # a breakpoint takes its own row
             self.row(state, t1)
         return False
 
+    @override
     def at_breakpoint(self, state: ChainState, stopped: bool) -> None:
         p = self.problem
         if not stopped and p.amplitude and state.t == p.duration:
             self.u0_at_load_end = float(state.u[p.front])
         self.row(state, state.t)
 
+    @override
     def finish(self, state: ChainState) -> dict[str, Any]:
         e = np.asarray(self.rows)
         # remove duplicate times (a breakpoint may coincide with a periodic sample)
@@ -458,10 +480,12 @@ class RunWatch(Observer):
         if self.energy_watch is not None or self.momentum_watch is not None:
             ledger.listeners.append(self.check_energy)
 
+    @override
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
         self.check_state(state, t1)
         return False
 
+    @override
     def end_segment(self, state: ChainState) -> None:
         self.check_state(state, state.t)
 
@@ -518,6 +542,7 @@ class EarlyStop(Observer):
         self.stop_floor = stop_floor
         self.f0 = state.f0
 
+    @override
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
         now, peak = self.peaks.now_and_peak(state, self.contact)
         return peak > self.stop_floor and now - self.f0 < PEAK_PASSED_FRACTION * (peak - self.f0)

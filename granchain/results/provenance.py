@@ -29,7 +29,7 @@ def scene_hash(scene) -> str:
 
 
 def default_command() -> list[str]:
-    """This process's command line (sys.argv), "granchain" for the console script (or python -m
+    """The command line of this process (sys.argv), "granchain" for the console script (or python -m
     granchain.cli). Under the Python API it is the argv of the Python process that called it."""
     argv = [str(a) for a in sys.argv]
     if argv and (Path(argv[0]).name == "granchain" or argv[0].replace("\\", "/").endswith("granchain/cli.py")):

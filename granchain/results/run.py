@@ -46,6 +46,7 @@ class RunResult:
     stored: StoredRun | None = field(default=None, repr=False)
 
     def __init_subclass__(cls, **kw):
+        """Give a subclass the short display too."""
         # a subclass made a dataclass keeps the short display (the decorator adds __repr__ only
         # where the class body has none)
         super().__init_subclass__(**kw)
@@ -446,6 +447,7 @@ class Summary(dict):
     ``result.summary[...]``)."""
 
     def __call__(self) -> Summary:
+        """The summary itself (``result.summary()`` as well as ``result.summary[...]``)."""
         return self
 
 

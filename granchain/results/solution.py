@@ -59,6 +59,7 @@ class ChainSolution:
     front_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self):
+        """Fill the per-contact fields a backend left empty with nan (not measured)."""
         for name in ("leading_pulse_force", "leading_pulse_time", "front_time"):
             if np.size(getattr(self, name)) == 0:
                 setattr(self, name, np.full(np.shape(self.peak_force), np.nan))

@@ -59,9 +59,9 @@ def _num(v) -> str:
 
 
 def printable(text: str, limit: int | None = None, keep: str = "") -> str:
-    """text with its control characters escaped (ESC as \\x1b, a newline as \\n ...): scene text
+    r"""text with its control characters escaped (ESC as \x1b, a newline as \n ...): scene text
     shown on a terminal can neither move the cursor nor retitle the window. Cut to limit characters;
-    the characters in keep (e.g. "\\n" for a message of several lines) stay as they are."""
+    the characters in keep (e.g. "\n" for a message of several lines) stay as they are."""
     out = "".join(
         ch
         if ch.isprintable() or ch in keep
