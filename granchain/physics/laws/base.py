@@ -38,9 +38,10 @@ on them; tests/test_laws.py and tests/test_kernels.py check them for every regis
    returns its Coefficients; ``for_pair(coefficients, e_star, r_star, nominal_r_star)`` the law of one
    pair of bodies (bead-bead, bead-wall with the flat's E* and R* = R, striker-bead);
    ``contact_to_dict(contact)`` the ``[contact]`` table a scene file writes back.
-7. Register the class in granchain/physics/laws/__init__.py (LAWS, the only list of laws) and the C++
-   kernel in granchain/lammps/plugin.cpp; the planner's estimates (expected_peak_force, wave speeds)
-   are class methods over a scene.
+7. Register the class in granchain/physics/laws/__init__.py (LAWS, the only list of laws); the C++
+   kernel, struct Law<Name> in granchain/lammps/law_<name>.h, is compiled and registered from LAWS
+   (granchain.lammps.build). The planner's estimates (expected_peak_force, wave speeds) are class
+   methods over a scene.
 8. The law's analytic models (optional: a law without any has empty tables), which `granchain
    predict`, `compare` and the peak plot take from the law and nowhere else:
    ``model_domains`` names every model the law predicts and what it needs (a loading regime, "any",
