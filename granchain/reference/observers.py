@@ -413,7 +413,8 @@ class EnergyLedger(Observer):
         return w
 
     def row(self, state: ChainState, t: float) -> None:
-        """Append one energy row at time t (kinetic, potential and dissipated energy, the work done) and pass it to the listeners."""
+        """Append one energy row at time t (kinetic, potential and dissipated energy, the work done)
+        and pass it to the listeners."""
         law, v = state.law, state.v
         ke = 0.5 * float(np.dot(state.mass_ke, v * v))
         pe = float(np.sum(law.energy(state.overlap(), state.alpha_hist)))
