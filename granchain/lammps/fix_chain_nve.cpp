@@ -7,9 +7,9 @@
 #include "force.h"
 #include "group.h"
 #include "modify.h"
+#include "neighbor.h"
 #include "output.h"
 #include "timer.h"
-#include "neighbor.h"
 #include "update.h"
 
 #include <mpi.h>
@@ -17,7 +17,8 @@
 using namespace LAMMPS_NS;
 using namespace FixConst;
 
-FixChainNVE::FixChainNVE(LAMMPS *lmp, int narg, char **arg) : Fix(lmp, narg, arg), dtv(0.0), dtf(0.0), cached_ncalls(-1), cached_nlocal(-1), cached_dtf(0.0), ahead(false)
+FixChainNVE::FixChainNVE(LAMMPS *lmp, int narg, char **arg) :
+    Fix(lmp, narg, arg), dtv(0.0), dtf(0.0), cached_ncalls(-1), cached_nlocal(-1), cached_dtf(0.0), ahead(false)
 {
   if (narg != 3) error->all(FLERR, "Illegal fix chain/nve command: fix ID group chain/nve");
   dynamic_group_allow = 1;
@@ -51,8 +52,10 @@ void FixChainNVE::setup(int)
   int any = 0;
   MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, world);
   if (any)
-    error->all(FLERR, "fix chain/nve integrates along x only, but an atom of group {} has a y or z velocity or "
-               "force: use fix nve", group->names[igroup]);
+    error->all(FLERR,
+               "fix chain/nve integrates along x only, but an atom of group {} has a y or z velocity or "
+               "force: use fix nve",
+               group->names[igroup]);
 }
 
 // dtf / m of every owned atom, kept between neighbour builds (atoms are exchanged and sorted only at
@@ -80,12 +83,12 @@ void FixChainNVE::refresh_if_stale()
 // group test for group all: one tight loop over the x components (the same expressions as fix nve, so the
 // same doubles). With the pair style's rotated samples (3fe6675) the loop time went 0.83 / 0.81x at 1e3 /
 // 1e4 beads (bench_pair.py plugins); perf at 1e4 beads: the two passes 20% -> 13% of the samples
-#define CHAIN_NVE_BLOCKS                                                  \
-  double(*const __restrict xx)[3] = (double(*)[3]) atom->x[0];            \
-  double(*const __restrict vv)[3] = (double(*)[3]) atom->v[0];            \
+#define CHAIN_NVE_BLOCKS                                                   \
+  double(*const __restrict xx)[3] = (double(*)[3]) atom->x[0];             \
+  double(*const __restrict vv)[3] = (double(*)[3]) atom->v[0];             \
   const double(*const __restrict ff)[3] = (const double(*)[3]) atom->f[0]; \
-  const int *const __restrict mask = atom->mask;                          \
-  const int nlocal = atom->nlocal;                                        \
+  const int *const __restrict mask = atom->mask;                           \
+  const int nlocal = atom->nlocal;                                         \
   const double *const __restrict m = dtfm.data();
 
 void FixChainNVE::initial_integrate(int)

@@ -34,7 +34,7 @@ class FixChainNVE : public Fix {
   bigint cached_ncalls;
   int cached_nlocal;
   double cached_dtf;
-  bool ahead;    // the next step's initial_integrate was done by this step's final_integrate
+  bool ahead;                              // the next step's initial_integrate was done by this step's final_integrate
   std::vector<const Fix *> end_of_step;    // the fixes with end_of_step, as of setup
   bool can_run_ahead() const;
   void refresh();

@@ -2,7 +2,7 @@
 
 #include "pair_chain.h"
 
-#include "chain_laws.h"  // generated from the law registry: GRANCHAIN_LAWS(X), every law's header
+#include "chain_laws.h"    // generated from the law registry: GRANCHAIN_LAWS(X), every law's header
 
 #include "atom.h"
 #include "comm.h"
@@ -65,8 +65,7 @@ void PairChainBase::settings(int narg, char **arg)
   while (i < narg) {
     if (strcmp(arg[i], "dashpot") == 0 && i + 1 < narg) {
       gamma = utils::numeric(FLERR, arg[i + 1], false, lmp);
-      if (gamma < 0.0)
-        error->all(FLERR, "pair_style {} dashpot gamma must be >= 0, got {}", force->pair_style, gamma);
+      if (gamma < 0.0) error->all(FLERR, "pair_style {} dashpot gamma must be >= 0, got {}", force->pair_style, gamma);
       i += 2;
     } else if (strcmp(arg[i], "lead") == 0 && i + 2 < narg) {
       lead = true;
@@ -470,8 +469,10 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
       const double alpha = cf.d0 - r;
       const tagint ti = tag[i], tj = tag[j];
       if (ti - tj != 1 && tj - ti != 1)
-        error->one(FLERR, "beads {} and {} overlap but are not neighbours in the chain: beads passed through "
-                   "each other (time step too large for this load?)", ti, tj);
+        error->one(FLERR,
+                   "beads {} and {} overlap but are not neighbours in the chain: beads passed through "
+                   "each other (time step too large for this load?)",
+                   ti, tj);
       const int left = ti < tj ? i : j;
       double energy = 0.0;
       double *const eptr = (EV && eflag) ? &energy : nullptr;

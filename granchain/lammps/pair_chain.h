@@ -84,17 +84,17 @@ class PairChainBase : public Pair {
   void unpack_forward_comm(int, int, double *) override;
 
  protected:
-  const bool history;       // the law keeps alpha_max (d_amax, d_edis)
-  const char *vectors;      // the law's per-atom vectors, for the error messages
-  double gamma;    // dashpot coefficient, 0: none
-  bool lead;       // track the leading pulse (d_flead, d_tlead): pair_style ... lead floor F0
-  bool peaks_all;  // 'peaks all': every contact's peak bookkeeping every step (a check of track_active)
+  const bool history;     // the law keeps alpha_max (d_amax, d_edis)
+  const char *vectors;    // the law's per-atom vectors, for the error messages
+  double gamma;           // dashpot coefficient, 0: none
+  bool lead;              // track the leading pulse (d_flead, d_tlead): pair_style ... lead floor F0
+  bool peaks_all;         // 'peaks all': every contact's peak bookkeeping every step (a check of track_active)
   double lead_floor = 0.0, lead_f0 = 0.0;
   int ladder_per_octave = 0, ladder_slots = 0;    // the crossing-time ladder: pair_style ... ladder P S
   int ladder_idx = -1;                            // d2_ladder in atom->darray
   double **d0;
   double t_fc, t_fprev, t_fprev2;    // times of the current and the two previous samples
-  double *amax_comm;         // the d_amax vector during forward comm
+  double *amax_comm;                 // the d_amax vector during forward comm
   // the per-atom vectors, by their indices in atom->dvector (looked up once per run in init_style)
   enum { FC, FPREV, FPREV2, FPEAK, TPEAK, FMIN, FLEAD, TLEAD, AMAX, EDIS, EDASH, NVEC };
   int idx[NVEC];
@@ -124,20 +124,20 @@ class PairChainBase : public Pair {
   struct IJ {
     int i, j;
   };
-  std::vector<IJ> pairs;        // the neighbour list's pairs (i, j), in its order
-  bigint pairs_ncalls = -1;     // neighbor->ncalls when pairs was made
+  std::vector<IJ> pairs;       // the neighbour list's pairs (i, j), in its order
+  bigint pairs_ncalls = -1;    // neighbor->ncalls when pairs was made
   bool act_ready = false;
   void start_active(bool new_sample);
   void track_active(const PeakStep &ps, const double *fc, const double *fprev, const double *fprev2);
-  __attribute__((always_inline)) inline void track_one(const PeakStep &ps, int i, const double *fc, const double *fprev, const double *fprev2);
-
+  __attribute__((always_inline)) inline void track_one(const PeakStep &ps, int i, const double *fc, const double *fprev,
+                                                       const double *fprev2);
 };
 
 // running peak of owned contact i: the largest sample, refined by the vertex of the parabola
 // through the last three samples when the middle one is a local maximum; and the smallest sample
 // since the peak (granchain.results.complete_peaks), restarted by every new peak
-__attribute__((always_inline)) inline void PairChainBase::track_one(const PeakStep &ps, int i, const double *fc, const double *fprev,
-                                     const double *fprev2)
+__attribute__((always_inline)) inline void PairChainBase::track_one(const PeakStep &ps, int i, const double *fc,
+                                                                    const double *fprev, const double *fprev2)
 {
   double *fpeak = ps.fpeak, *tpeak = ps.tpeak, *fmin = ps.fmin;
   fmin[i] = MIN(fmin[i], fc[i]);

@@ -11,13 +11,13 @@
 #include "lammps.h"
 #include "pair_chain.h"
 
-#include "chain_laws.h"  // generated from the law registry: GRANCHAIN_LAWS(X), every law's header
+#include "chain_laws.h"    // generated from the law registry: GRANCHAIN_LAWS(X), every law's header
 
 using namespace LAMMPS_NS;
 
 extern "C" {
-typedef void *(lammpsplugin_factory1)(void *);
-typedef void *(lammpsplugin_factory2)(void *, int, char **);
+typedef void *(lammpsplugin_factory1) (void *);
+typedef void *(lammpsplugin_factory2) (void *, int, char **);
 typedef struct {
   const char *version;
   const char *style;
@@ -43,7 +43,10 @@ void lammpsplugin_init(void *, void *, void *);
 GRANCHAIN_LAWS(GRANCHAIN_EXTERN_PAIR)
 #undef GRANCHAIN_EXTERN_PAIR
 
-template <class Law> static Pair *creator(LAMMPS *lmp) { return new PairChain<Law>(lmp); }
+template <class Law> static Pair *creator(LAMMPS *lmp)
+{
+  return new PairChain<Law>(lmp);
+}
 
 template <class C> static Compute *compute_creator(LAMMPS *lmp, int narg, char **arg)
 {
