@@ -175,11 +175,11 @@ def _one(f, c, cc, p, times, jump_time, accepted, floor=0.0):
     e, used, status = _richardson_one(f, c, cc, p, times, jump_time, accepted, floor)
     unmeasured = status.startswith("not measured") or "another pulse" in status
     if floor > 0.0 and status != "round-off" and not unmeasured:
-        # the three runs' differences are within a few times the run's own round-off: whatever they say
+        # the differences are within the two runs' round-off, or the estimate within one's: whatever they say
         # (an order, a sign change), the error is the round-off's, and the bound is the floor
-        d1 = abs(f - c)
-        d2 = abs(c - cc) if cc is not None and np.isfinite(cc) else 0.0
-        if max(d1, d2) <= ROUNDOFF_MARGIN * floor or (np.isfinite(e) and e <= floor):
+        # (the runs at dt and 2 dt agreeing to within their round-off bound dt's step error by it too,
+        # whatever the 4 dt run says)
+        if abs(f - c) <= ROUNDOFF_MARGIN * floor or (np.isfinite(e) and e <= floor):
             return float(floor), float(p), "round-off"
     return e, used, status
 

@@ -135,3 +135,25 @@ def test_against_a_reference_another_pulse_or_a_missing_value_has_no_estimate():
     assert bars.status[0].startswith("against RK4") and bars.error[0] == pytest.approx(0.01)
     assert bars.status[1].startswith("unreliable: another pulse") and math.isnan(bars.error[1])
     assert bars.status[2].startswith("not measured") and math.isnan(bars.error[2])
+
+
+def test_differences_within_the_runs_round_off_floor_give_its_bound():
+    """With the run's round-off floor given: runs at dt and 2 dt within ROUNDOFF_MARGIN floors (whatever
+    order the three seem to show, or a sign change), or a Richardson estimate below one floor, are "round-off" with
+    the floor as the bound; differences well above it keep Richardson's number."""
+    from granchain.errorbars import ROUNDOFF_MARGIN
+
+    floor = 1e-12
+    q = 10.0
+    # noise that looks like order 3.2, a sign change, a clean order 4 whose estimate is below the floor,
+    # and a clean order 4 far above the floor
+    fine = np.array([q + 1.6e-13, q + 0.9e-12, q + 1e-13 * 15 / 16, q + 1e-6])
+    coarse = np.array([q + 1.6e-13 * 9.5, q - 0.9e-12, q + 1e-13 * 15, q + 1.6e-5])
+    coarser = np.array([q + 1.6e-13 * 9.5 * 9.5, q + 1.5e-12, q + 1e-13 * 15 * 16, q + 2.56e-4])
+    bars = richardson(fine, coarse, coarser, 4, orders=(2.5, 4.0), floor=np.full(4, floor))
+    assert list(bars.status[:3]) == ["round-off"] * 3
+    assert np.all(bars.error[:3] == floor)
+    assert bars.status[3] == "nominal order 4" and bars.error[3] == pytest.approx(1e-6, rel=1e-6)
+    assert ROUNDOFF_MARGIN * floor < abs(fine[3] - coarse[3])
+    # without a floor the first is Richardson's tiny number (the failure the floor fixes)
+    assert richardson(fine[:1], coarse[:1], coarser[:1], 4, orders=(2.5, 4.0)).error[0] < floor
