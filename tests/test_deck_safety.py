@@ -1,7 +1,7 @@
-"""No text from a scene or a file name reaches a LAMMPS deck except as an inert one-line comment.
+r"""No text from a scene or a file name reaches a LAMMPS deck except as an inert one-line comment.
 
 The title and the scene's source (a file name) are the only free texts the templates write; they go
-through the `comment` filter. LAMMPS reads a deck line by line (C fgets: only '\\n' ends a line), joins
+through the `comment` filter. LAMMPS reads a deck line by line (C fgets: only '\n' ends a line), joins
 a line whose last non-blank character is '&' to the next one, keeps reading while a line has an odd
 number of triple quotes, loses the line end after a NUL, then drops everything from the first '#'
 outside quotes. `lammps_lines` below does the same, so a deck's commands can be compared with those of
