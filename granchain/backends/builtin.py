@@ -73,6 +73,13 @@ class LammpsBackend(FileIOBackend):
 
         build_plugin()
 
+    @override
+    def code_version(self) -> dict[str, str]:
+        """The plugin's key (a hash of its sources and the LAMMPS version)."""
+        from granchain.lammps.build import plugin_key
+
+        return {"plugin": plugin_key()}
+
     @property
     @override
     def result_type(self) -> type[RunResult]:

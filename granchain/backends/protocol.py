@@ -145,6 +145,11 @@ class Backend:
         """Make the backend ready to run, so that what would stop every run (a plugin that does not
         build) is said before any run starts; nothing for a backend that needs nothing."""
 
+    def code_version(self) -> dict[str, str]:
+        """What besides granchain's own source makes this backend's numbers (part of a campaign
+        point's code version: a point made by another is stale); nothing for pure Python."""
+        return {}
+
     @property
     def result_type(self) -> type[RunResult]:
         """The RunResult class of this backend's runs (what a run directory is read back as)."""

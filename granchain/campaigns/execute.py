@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from granchain import progress
+from granchain.backends import backend_named
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.campaign_progress import CampaignProgress
 from granchain.campaigns.dask_executor import Executor, PersistentLammps, QuietInterrupt
@@ -164,10 +165,8 @@ class Runner:
 
     def prepare(self) -> None:
         """Before any run: the LAMMPS plugin is built here once (not by each local worker at once)."""
-        if self.c.backend == "lammps" and self.ex.scheduler is None:
-            from granchain.lammps.build import build_plugin
-
-            build_plugin()
+        if self.ex.scheduler is None:
+            backend_named(self.c.backend).prepare()
 
     def collect(self, future, params: dict, prog: CampaignProgress) -> dict:
         """A finished future's status (a lost task counts as lost, not failed)."""

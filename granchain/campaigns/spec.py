@@ -53,6 +53,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
+from granchain.backends import BACKENDS, METHODS
 from granchain.campaigns import expr
 from granchain.campaigns.model import (
     Axis,
@@ -68,7 +69,6 @@ from granchain.campaigns.model import (
 from granchain.scene import SECTIONS, SceneError, _did_you_mean, load_scene, scene_from_dict, scene_to_dict
 
 KINDS = ("grid", "search")
-BACKENDS = ("reference", "lammps")
 CAMPAIGN_KEYS = ("base", "backend", "method", "rtol", "error_estimate", "regime_contact", "title", "kind", "ranks")
 TABLES = ("campaign", "scene", "vary", "zip", "derive", "search", "cluster")
 SEARCH_KEYS = ("key", "range", "scale", "tolerance", "predicate")
@@ -201,15 +201,18 @@ def _read_settings(c: dict, source: str) -> dict:
     """[campaign] backend, method, rtol, error_estimate, regime_contact, title, checked."""
     backend = c.get("backend", "reference")
     if backend not in BACKENDS:
-        raise CampaignError(f"{source}: [campaign] backend = {backend!r} is invalid: one of 'reference', 'lammps'")
-    method = c.get("method")
-    if backend == "lammps" and method not in (None, "verlet"):
         raise CampaignError(
-            f"{source}: [campaign] method = {method!r}: the LAMMPS backend integrates with velocity Verlet only "
-            "(drop method)"
+            f"{source}: [campaign] backend = {backend!r} is invalid: one of {', '.join(map(repr, BACKENDS))}"
         )
-    if method not in (None, "rk4", "verlet"):
-        raise CampaignError(f"{source}: [campaign] method = {method!r} is invalid: 'rk4' or 'verlet'")
+    method = c.get("method")
+    runs = BACKENDS[backend]
+    if method in METHODS and method not in runs.methods:
+        raise CampaignError(
+            f"{source}: [campaign] method = {method!r}: the {runs.title} backend integrates with {runs.method_text} "
+            "only (drop method)"
+        )
+    if method not in (None, *METHODS):
+        raise CampaignError(f"{source}: [campaign] method = {method!r} is invalid: {' or '.join(map(repr, METHODS))}")
     rtol = c.get("rtol")
     if rtol is not None and (isinstance(rtol, bool) or not isinstance(rtol, (int, float)) or not 0 < rtol < 1):
         raise CampaignError(f"{source}: [campaign] rtol = {rtol!r} is invalid: a number between 0 and 1, e.g. 1e-3")
@@ -242,7 +245,7 @@ def check_ranks(ranks, backend: str, where: str) -> int | str:
             f"{where} = {ranks!r} is invalid: MPI ranks per point, a whole number from 1 to {MAX_RANKS}, or "
             "\"auto\" (the plan's --np auto rule for each point's chain)"
         )
-    if backend != "lammps" and ranks != 1:
+    if not BACKENDS[backend].mpi and ranks != 1:
         raise CampaignError(
             f"{where} = {ranks!r}: the {backend} backend runs a point in one process; MPI ranks are for "
             'backend = "lammps" (drop ranks)'

@@ -43,6 +43,7 @@ from pathlib import Path
 
 from granchain import safe_files
 from granchain._version import __version__
+from granchain.backends import backend_named
 from granchain.campaigns.model import CampaignError
 
 RUN_DIR = "run"
@@ -83,11 +84,7 @@ def code_version(backend: str) -> dict:
 def _code_version(backend: str) -> tuple:
     # the version string alone let two installs that differ in their source (a checkout with local
     # changes, a later commit of the same release) share points and pass the worker's check
-    code = {"granchain": __version__, "source": source_hash()}
-    if backend == "lammps":
-        from granchain.lammps.build import plugin_key
-
-        code["plugin"] = plugin_key()
+    code = {"granchain": __version__, "source": source_hash(), **backend_named(backend).code_version()}
     return tuple(code.items())
 
 
