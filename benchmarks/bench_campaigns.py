@@ -38,7 +38,7 @@ import time
 from pathlib import Path
 
 from granchain.campaigns import execute
-from granchain.campaigns.api import run_campaign, validate
+from granchain.campaigns.run import run_campaign, validate
 from granchain.campaigns.spec import parse_campaign
 
 SMALL = """

@@ -29,7 +29,7 @@ from contextlib import contextmanager
 os.environ.setdefault("GRANCHAIN_QUIET", "1")
 
 from granchain.cli import resolve_scene  # noqa: E402
-from granchain.workflows import errors  # noqa: E402
+from granchain.workflows import error_estimates as errors  # noqa: E402
 from granchain.workflows.run import run_scene  # noqa: E402
 
 #: law -> its bundled short impulse

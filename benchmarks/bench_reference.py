@@ -69,7 +69,7 @@ def run_scene(name: str, method: str, clock: str = "wall", factor: int = 1) -> f
     import time
 
     from granchain.scene import load_scene
-    from granchain.workflows.errors import companion_scene
+    from granchain.workflows.error_estimates import companion_scene
     from granchain.workflows.run import plan_for, run_reference
 
     scene = load_scene(name)

@@ -29,8 +29,8 @@ from pathlib import Path
 
 from bench_campaigns import TRIVIAL
 
-from granchain.campaigns.api import run_campaign
 from granchain.campaigns.cluster import ClusterSettings, JobCluster
+from granchain.campaigns.run import run_campaign
 from granchain.campaigns.spec import parse_campaign
 
 

@@ -8,7 +8,7 @@ A "round-off" status is a bound, not an estimate: its peaks are counted apart (t
 The true error is the distance to the same run at dt / 8 (its own error is 1/64 of the run's for Verlet, 1/4096
 for RK4); for Verlet on a kinked law (bilinear, Thornton), whose error follows no order in dt, the distance to
 RK4 (event location) at the run's dt instead, counted where it is above that run's own round-off (1e3
-ulps, and workflows.errors.roundoff_floor where the run has one). Prints one row per scene and a summary: how
+ulps, and workflows.error_estimates.roundoff_floor where the run has one). Prints one row per scene and a summary: how
 many estimates fall within [1/3, 3] of the true error, and the statuses of those without one.
 """
 
@@ -21,7 +21,7 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[1]))
-from granchain.workflows.errors import roundoff_floor
+from granchain.workflows.error_estimates import roundoff_floor
 from granchain.workflows.run import plan_for, run_scene
 from tests.scenegen import scenes
 from tests.test_varied_chains import varied_chains

@@ -25,7 +25,7 @@ lazily) and no module of granchain imports it (pyproject.toml, [tool.importlinte
 from __future__ import annotations
 
 from granchain._version import __version__
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 
 __all__ = [
     "GranchainError",
@@ -276,15 +276,15 @@ def compare(
 
     Returns
     -------
-    granchain.workflows.api.Comparison
+    granchain.workflows.comparison_frame.Comparison
         ``.table`` (pandas DataFrame by quantity, units in ``.attrs``), ``.ok``, ``.lammps`` and
         ``.reference`` (RunResults).
     """
     from pathlib import Path
 
     from granchain.backends import LAMMPS, REFERENCE
-    from granchain.workflows.api import Comparison
-    from granchain.workflows.compare import compare_scene
+    from granchain.workflows.compare_backends import compare_scene
+    from granchain.workflows.comparison_frame import Comparison
 
     rows, lam, ref = compare_scene(
         _scene(scene), rtol=rtol, out=out, overwrite=overwrite, method=method, np_=np_, error_estimate=error_estimate
@@ -344,7 +344,7 @@ def campaign(
         (``load_campaign(out, "points")`` has every run). Every point is validated before anything runs
         (a ``GranchainError`` names the bad point); failing points are recorded, not raised.
     """
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
 
     tables, _ = run_campaign(
         spec,
@@ -365,6 +365,6 @@ def load_campaign(ws, table: str | None = None):
     ``table``: "points" (one row per point), "search" (a search's transitions), or None (a search's
     transitions, a grid's points).
     """
-    from granchain.campaigns.api import load_campaign as _load
+    from granchain.campaigns.run import load_campaign as _load
 
     return _load(ws, table)

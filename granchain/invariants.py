@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 from granchain.physics.effects import external_forces
 from granchain.schedule import step_plan, step_times
 

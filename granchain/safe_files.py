@@ -16,7 +16,7 @@ The rules every reader and writer of such a directory follows:
 
 Every refusal is an :class:`UnsafeFileError`, an ``OSError`` whose ``str`` is one sentence naming the
 path and the fix, so code that already turns ``OSError`` into a user error (a ``GranchainError``)
-reports it the same way. (This module sits in the lowest import layer, beside ``granchain.errors``,
+reports it the same way. (This module sits in the lowest import layer, beside ``granchain.exceptions``,
 so it cannot raise a ``GranchainError`` itself.)
 """
 

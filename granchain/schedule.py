@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 from granchain.physics.estimates import highest_frequency
 
 STOP_CHECK_EVERY = 10  # steps between checks of a stop condition (the decks' fix halt uses the same)

@@ -13,9 +13,9 @@ from hypothesis import strategies as st
 from granchain.cli import bundled_scenes, main
 from granchain.physics import models
 from granchain.physics.laws import LAWS
+from granchain.physics.loading_regime import HERTZ_LONG_ABOVE, HERTZ_SHORT_BELOW, loading_regime
 from granchain.physics.predictions import EFFECT_DOMAINS, MODEL_DOMAINS, SCENE_QUANTITIES, applicability, predict
-from granchain.physics.regimes import HERTZ_LONG_ABOVE, HERTZ_SHORT_BELOW, loading_regime
-from granchain.postprocess.compare import CompareRow, compare_runs, format_table
+from granchain.postprocess.comparison_table import CompareRow, compare_runs, format_table
 from granchain.results import ChainSolution, RunResult
 from granchain.scene import SceneError, parse_scene, scene_from_dict
 from granchain.workflows.plan import plan_scene

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 
 from granchain.backends import BACKENDS, LAMMPS, METHODS, PROPERTIES, REFERENCE, FileIOBackend, backend_named
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 from granchain.results import ChainSolution
 from granchain.scene import parse_scene
 from granchain.workflows.run import calculate_scene, integrator

@@ -19,7 +19,7 @@ def test_lammps_grid_of_27_points_equals_granchain_run_bit_for_bit(tmp_path):
     `granchain run --backend lammps` writes for the same scene (run_scene here), to the bit."""
     import signac
 
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
     from granchain.scene import scene_from_dict
     from granchain.workflows.run import run_scene
 
@@ -69,7 +69,7 @@ def test_kill_9_of_the_driver_then_rerun_runs_only_the_missing_points(tmp_path):
     import sys
     import time
 
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
 
     path = tmp_path / "forty.toml"
     path.write_text(campaign_text(FORTY, campaign='backend = "reference"\nmethod = "verlet"'))
@@ -148,7 +148,7 @@ def test_an_external_dask_scheduler_and_two_workers_give_the_same_table(tmp_path
     import sys
     import time
 
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
     from granchain.cli import main
 
     dask = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
@@ -285,7 +285,7 @@ def test_search_finds_the_single_wave_to_train_transition_following_a_to_the_min
 
     import numpy as np
 
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
     from granchain.campaigns.spec import load_campaign_file
 
     c = load_campaign_file(resources.files("granchain.campaigns") / "fig1-transition.toml")

@@ -181,7 +181,7 @@ def test_log_grid_values_are_readable_and_exact_at_the_ends():
 
 
 def test_a_point_above_the_stability_limit_is_refused_before_anything_runs(tmp_path):
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
 
     text = campaign_text('[vary]\n"run.timestep" = [5e-8, 5e-5]\n')
     with pytest.raises(CampaignError, match=r"point 2 \(run.timestep = 5e-05\) cannot run: .*stability limit"):
@@ -221,7 +221,7 @@ def test_reference_grid_equals_run_scene_bit_for_bit(tmp_path):
     import signac
 
     import granchain
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
     from granchain.scene import scene_from_dict
     from granchain.workflows.run import run_scene
 
@@ -258,7 +258,7 @@ def test_reference_grid_equals_run_scene_bit_for_bit(tmp_path):
 def test_failures_are_recorded_and_the_campaign_goes_on(tmp_path):
     """A point that breaks an invariant is recorded with its one-line message; the others complete;
     a rerun does not retry it unless asked; the CLI exits 1 and names it."""
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
     from granchain.cli import main
 
     path = tmp_path / "c.toml"
@@ -333,7 +333,7 @@ def test_stale_points_are_reported_and_run_again(tmp_path):
 
     import signac
 
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
 
     c = parse_campaign(
         campaign_text(
@@ -394,7 +394,7 @@ histories = [20]
 
 
 def test_a_search_whose_predicate_never_flips_says_so(tmp_path, capsys):
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
     from granchain.cli import main
 
     path = tmp_path / "noflip.toml"
@@ -419,7 +419,7 @@ def test_a_search_whose_predicate_never_flips_says_so(tmp_path, capsys):
 
 
 def test_search_predicate_contact_must_be_recorded(tmp_path):
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
 
     c = parse_campaign(
         campaign_text(
@@ -483,7 +483,7 @@ def test_cli_table_and_plot(tmp_path, capsys):
 def test_the_bundled_fig1_campaign_reads():
     from importlib import resources
 
-    from granchain.campaigns.api import validate
+    from granchain.campaigns.run import validate
     from granchain.campaigns.spec import load_campaign_file
 
     c = load_campaign_file(resources.files("granchain.campaigns") / "fig1-transition.toml")

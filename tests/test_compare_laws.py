@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from granchain.cli import main, resolve_scene
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 from granchain.physics.laws import LAWS
 from granchain.safe_files import MARKER
-from granchain.workflows.laws import compare_laws, equivalent_contact, scene_with_law, write_law_comparison
+from granchain.workflows.law_comparison import compare_laws, equivalent_contact, scene_with_law, write_law_comparison
 
 from .conftest import make_scene
 
@@ -82,7 +82,7 @@ def test_decay_fit_uncertainties_cover_the_truth(decay, power, transition, noise
     fitted decay rate and exponent lie within 2 standard errors of the truth about 95% of the time
     (at least 85%: a standard error 2x too small would cover 68%), and the transition range holds
     the true transition at least 80% of the time."""
-    from granchain.postprocess.regimes import fit_decay
+    from granchain.postprocess.response_regimes import fit_decay
 
     n = 60
     i = np.arange(1, n + 1, dtype=float)

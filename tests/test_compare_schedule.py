@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 import granchain.lammps.runner as runner
-import granchain.workflows.compare as compare_mod
+import granchain.workflows.compare_backends as compare_mod
 import granchain.workflows.run as run_mod
 from granchain.backends import REFERENCE, backend_named
 from granchain.cli import main

@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 
 from granchain.cli import resolve_scene
 from granchain.peaks import PEAK_PASSED_FRACTION, complete_peaks
-from granchain.postprocess.compare import compare_runs
+from granchain.postprocess.comparison_table import compare_runs
 from granchain.postprocess.dumps import complete_from_samples
 from granchain.postprocess.observables import fit_wave_speed, measure_observables
 from granchain.reference.solver import ChainProblem, solve_chain

@@ -10,7 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from granchain.cli import main, resolve_scene
 from granchain.rundir import read_peaks
 from granchain.scene import parse_scene
-from granchain.workflows.errors import against_rk4_factors, companion_scene
+from granchain.workflows.error_estimates import against_rk4_factors, companion_scene
 from granchain.workflows.run import plan_for, run_scene
 
 from .scenegen import scenes
@@ -233,8 +233,8 @@ def test_rk4_with_a_dashpot_runs_no_companion_and_says_why(tmp_path, dashpot):
 def test_a_companion_that_breaks_an_invariant_leaves_the_run_standing():
     """A coarser companion may blow up where the run did not: the run keeps its numbers, and the
     report says which companion failed and what that costs (no estimate, or no order check)."""
-    from granchain.errors import GranchainError
-    from granchain.workflows.errors import estimate_errors
+    from granchain.exceptions import GranchainError
+    from granchain.workflows.error_estimates import estimate_errors
 
     sc, plan = plan_for(parse_scene(WALL_CHAIN, source="wall.toml"), "reference", "verlet", 1e-2)
     got = run_scene(sc, method="verlet")
@@ -278,7 +278,7 @@ def test_a_measured_error_above_rtol_is_said_after_the_run():
 
 
 def test_compare_counts_a_difference_only_beyond_rtol_plus_both_errors():
-    from granchain.postprocess.compare import CompareRow
+    from granchain.postprocess.comparison_table import CompareRow
 
     def row(ea, eb):
         return CompareRow("q", "N", 100.0, 100.5, None, "", 1e-3, None, None, ea, eb)

@@ -1,4 +1,4 @@
-"""granchain.errorbars: Richardson error estimates and their failure modes, on synthetic sequences."""
+"""granchain.richardson: Richardson error estimates and their failure modes, on synthetic sequences."""
 
 import math
 
@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from granchain.errorbars import MAX_OVERESTIMATE, NEXT_TERM, ORDER, ORDER_SLACK, highest_trusted_order, richardson
+from granchain.richardson import MAX_OVERESTIMATE, NEXT_TERM, ORDER, ORDER_SLACK, highest_trusted_order, richardson
 
 values = st.floats(min_value=1e-3, max_value=1e6)
 rel_errors = st.floats(min_value=1e-9, max_value=1e-2)
@@ -23,7 +23,7 @@ def test_a_clean_order_p_sequence_gives_its_exact_error(q_true, rel, p, sign):
     assert bars.error[0] == pytest.approx(abs(c), rel=1e-6)
 
 
-#: (nominal order, the orders the integrator can show): workflows.errors.expected_orders's cases
+#: (nominal order, the orders the integrator can show): workflows.error_estimates.expected_orders's cases
 INTEGRATORS = [(2, None), (2, (2.0, 2.0)), (1, (1.0, 2.0)), (4, (2.5, 4.0))]
 
 
@@ -110,8 +110,8 @@ def test_missing_values_are_not_measured():
 def test_against_a_reference_the_estimate_is_within_1_to_3_of_the_true_error_or_none(q_true, rel, ref_share, q, signs):
     """A run with error e and an RK4 reference with a clean order-q error r (2.5 <= q: RK4's lowest
     order on a chain): where the reference's own error is small enough for a number, that number is
-    1-3 times |e| (errorbars.against_reference); where it is not, no number and the status says why."""
-    from granchain.errorbars import REFERENCE_SHARE, against_reference
+    1-3 times |e| (richardson.against_reference); where it is not, no number and the status says why."""
+    from granchain.richardson import REFERENCE_SHARE, against_reference
 
     e = signs[0] * rel * q_true
     r = signs[1] * ref_share * abs(e)
@@ -127,7 +127,7 @@ def test_against_a_reference_the_estimate_is_within_1_to_3_of_the_true_error_or_
 
 
 def test_against_a_reference_another_pulse_or_a_missing_value_has_no_estimate():
-    from granchain.errorbars import against_reference
+    from granchain.richardson import against_reference
 
     v, r, rc = np.array([10.0, 10.0, np.nan]), np.array([10.01, 10.01, 10.0]), np.array([10.01, 10.01, 10.0])
     t = (np.array([1.0, 1.0, 1.0]), np.array([1.0, 1.3, 1.0]))
@@ -141,7 +141,7 @@ def test_differences_within_the_runs_round_off_floor_give_its_bound():
     """With the run's round-off floor given: runs at dt and 2 dt within ROUNDOFF_MARGIN floors (whatever
     order the three seem to show, or a sign change), or a Richardson estimate below one floor, are "round-off" with
     the floor as the bound; differences well above it keep Richardson's number."""
-    from granchain.errorbars import ROUNDOFF_MARGIN
+    from granchain.richardson import ROUNDOFF_MARGIN
 
     floor = 1e-12
     q = 10.0

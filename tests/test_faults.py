@@ -161,7 +161,7 @@ def test_compare_says_a_plugin_build_failure_before_the_reference_runs(tmp_path,
     ran = []
     real = run_mod.run_scene
     monkeypatch.setattr(run_mod, "run_scene", lambda *a, **k: ran.append(k.get("backend")) or real(*a, **k))
-    import granchain.workflows.compare as compare_mod
+    import granchain.workflows.compare_backends as compare_mod
 
     monkeypatch.setattr(compare_mod, "run_scene", run_mod.run_scene)
     s = tmp_path / "s.toml"

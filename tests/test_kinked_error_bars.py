@@ -1,9 +1,9 @@
 """Error bars on the kinked laws (bilinear, Thornton) stay truthful at the companions' own step.
 
 A Verlet run (reference or LAMMPS) on a law whose slope jumps at kinks is measured against RK4 runs
-(event location) at RK4's own step for a share of Verlet's predicted error (workflows.errors
+(event location) at RK4's own step for a share of Verlet's predicted error (workflows.error_estimates
 .against_rk4_factors), far coarser than the run's. Whether that step is fine enough is checked run by
-run (errorbars.against_reference: no estimate where RK4's own error is not small beside the distance);
+run (richardson.against_reference: no estimate where RK4's own error is not small beside the distance);
 here, on generated scenes, the estimates given are within [1/3, 3] of the true error. The truth is RK4
 at the run's own dt: its error is below the companions' by (companion step / dt)^4 and below
 Verlet's by about (omega dt)^2.
@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from granchain.lammps import server
-from granchain.workflows import errors
+from granchain.workflows import error_estimates as errors
 from granchain.workflows.plan import STABILITY, highest_frequency, predicted_error
 from granchain.workflows.run import plan_for, run_scene
 

@@ -15,7 +15,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from granchain.errors import GranchainError, UsageError
+from granchain.exceptions import GranchainError, UsageError
 from granchain.schedule import step_plan, step_times
 from granchain.workflows import plots
 from granchain.workflows.plots import (

@@ -5,12 +5,12 @@ import pytest
 
 from granchain.cli import bundled_scenes, main, resolve_scene
 from granchain.lammps.runner import run_lammps
-from granchain.postprocess.compare import compare_runs, format_table
+from granchain.postprocess.comparison_table import compare_runs, format_table
 from granchain.postprocess.dumps import peaks_from_samples, read_dump
-from granchain.postprocess.regimes import classify_wave, count_pulses, fit_decay
+from granchain.postprocess.response_regimes import classify_wave, count_pulses, fit_decay
 from granchain.scene import parse_scene
 from granchain.schedule import step_plan, step_times
-from granchain.workflows.compare import compare_scene
+from granchain.workflows.compare_backends import compare_scene
 from granchain.workflows.plots import plot_run
 from granchain.workflows.run import run_scene
 
@@ -127,7 +127,7 @@ def test_compare_fails_when_the_solvers_get_different_physics(tmp_path, monkeypa
     assert "max_peak_force" in bad or "peak_force_contact_1" in bad or "dissipated_energy" in bad
     assert "FAIL" in format_table(rows)
 
-    import granchain.workflows.compare as wc
+    import granchain.workflows.compare_backends as wc
 
     real = wc.compare_scene
     monkeypatch.setattr(wc, "compare_scene", lambda s, **kw: real(s, reference_scene=other, **kw))

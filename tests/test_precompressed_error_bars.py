@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from granchain.physics import materials as mat
 from granchain.scene import parse_scene
-from granchain.workflows.errors import roundoff_floor
+from granchain.workflows.error_estimates import roundoff_floor
 from granchain.workflows.run import plan_for, run_scene
 
 from .conftest import make_scene_text
@@ -76,7 +76,7 @@ def test_dynamic_peaks_get_truthful_error_bars(integ, sc):
 
 def above_roundoff(true, fine) -> np.ndarray:
     """Where a true error (the distance to the run `fine`) is more than that run's own round-off: 1e3
-    ulps of the peak, and its round-off floor (workflows.errors.roundoff_floor) where it has one."""
+    ulps of the peak, and its round-off floor (workflows.error_estimates.roundoff_floor) where it has one."""
     a = np.asarray(fine.solution.peak_force, dtype=float)
     floor = roundoff_floor(fine.scene, fine.solution)
     floor = np.zeros_like(a) if floor is None else np.nan_to_num(floor)

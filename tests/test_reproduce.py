@@ -13,10 +13,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from granchain.campaigns.api import as_campaign, validate
+from granchain.campaigns.run import as_campaign, validate
 from granchain.reproduce import SECTIONS, campaign_specs, main, reproduce, run_section
-from granchain.reproduce.common import AGREES, DISAGREES, NOT_YET, Context, Figure, Row, SectionResult
 from granchain.reproduce.report import write_html, write_markdown
+from granchain.reproduce.sections import AGREES, DISAGREES, NOT_YET, Context, Figure, Row, SectionResult
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "paper-discrepancies.md"
 #: quick mode runs shorter chains and coarser steps than the docs' measurements: measured values

@@ -136,7 +136,7 @@ def write(tmp_path: Path, name: str, text: str) -> Path:
 def test_bad_cluster_tables_get_one_clear_message(table, message):
     campaign = 'backend = "lammps"\nranks = 2' if "cores_per_job" in table else 'backend = "reference"'
     text = campaign_text('[vary]\n"loading.amplitude" = [1.0]\n', campaign=campaign) + f"\n[cluster]\n{table}\n"
-    from granchain.campaigns.api import cluster_settings
+    from granchain.campaigns.run import cluster_settings
 
     def settings():
         c = parse_campaign(text)
@@ -147,7 +147,7 @@ def test_bad_cluster_tables_get_one_clear_message(table, message):
 
 
 def test_ranks_are_checked_before_anything_runs(tmp_path):
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
 
     with pytest.raises(CampaignError, match="ranks = 2: the reference backend runs a point in one process"):
         parse_campaign(campaign_text('[vary]\n"loading.amplitude" = [1.0]\n', campaign="ranks = 2"))
@@ -163,7 +163,7 @@ def test_ranks_are_checked_before_anything_runs(tmp_path):
 
 
 def test_a_cluster_without_its_submit_command_is_refused_clearly(tmp_path, monkeypatch):
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
 
     monkeypatch.setenv("PATH", str(tmp_path))  # no sbatch, no qsub
     c = parse_campaign(campaign_text('[vary]\n"loading.amplitude" = [1.0]\n'))
@@ -241,8 +241,8 @@ def test_a_task_run_again_finds_its_own_finished_point_and_does_not_run_it(tmp_p
     scheduler heard of it is submitted again by Dask: the task finds its own token in task.json and
     returns done without running (the scene here would fail if it ran)."""
     from granchain.campaigns import workspace as wsp
-    from granchain.campaigns.api import run_campaign
     from granchain.campaigns.execute import run_point
+    from granchain.campaigns.run import run_campaign
 
     c = parse_campaign(campaign_text('[vary]\n"loading.amplitude" = [1.0]\n'))
     tables, _ = run_campaign(c, tmp_path / "ws", workers=1)
@@ -268,7 +268,7 @@ def test_a_12_point_campaign_through_slurm_gives_the_local_table(tmp_path, no_jo
     """`campaign run --cluster slurm --jobs 2`: 12 LAMMPS points on two worker jobs, the table the
     local cluster gives (but for the wall times); both jobs ran points; none is left."""
     import granchain
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
     from granchain.cli import main
 
     text = campaign_text(REFERENCE_GRID, campaign='backend = "lammps"\nerror_estimate = false')
@@ -289,7 +289,7 @@ def test_a_12_point_campaign_through_slurm_gives_the_local_table(tmp_path, no_jo
 def test_an_mpi_point_with_ranks_2_gives_the_peaks_of_np_2(tmp_path, no_job_left):
     """[campaign] ranks = 2 on SLURM: the point runs on 2 MPI ranks inside its 2-core job, and its
     peaks.csv is the one `granchain run --np 2` writes for the same scene, to the bit."""
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
     from granchain.rundir import read_summary
     from granchain.scene import scene_from_dict
     from granchain.workflows.run import run_scene
@@ -377,7 +377,7 @@ def test_scancel_of_a_worker_job_mid_campaign_loses_and_redoes_nothing(tmp_path,
     """16 LAMMPS points on two worker jobs; one job is cancelled (scancel) once 4 points are complete:
     the campaign finishes on the other job and a replacement, every point complete, none of the points
     complete at the cancel written again, the table the local run gives."""
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
 
     path = write(tmp_path, "c.toml", campaign_text(SIXTEEN, campaign='backend = "lammps"'))
     ws = tmp_path / "ws"
@@ -409,7 +409,7 @@ def test_scancel_of_a_worker_job_mid_campaign_loses_and_redoes_nothing(tmp_path,
 def test_past_the_replacement_limit_the_campaign_stops_clearly_and_a_rerun_finishes_it(tmp_path, no_job_left):
     """One worker job, no replacement: cancelling it stops the campaign with one message naming the
     job and the limit (exit 2); the rerun runs only the missing points."""
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
 
     path = write(tmp_path, "c.toml", campaign_text(SIXTEEN, campaign='backend = "lammps"\nerror_estimate = false'))
     ws = tmp_path / "ws"

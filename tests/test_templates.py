@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 
 from granchain.cli import resolve_scene
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 from granchain.scene import SceneError, parse_scene
 from granchain.templates import _env, render_deck
 

@@ -343,7 +343,7 @@ def test_a_campaign_worker_keeps_its_lammps_child(tmp_path, monkeypatch):
     the others run on kept instances, and every run directory's
     peaks.csv and histories.csv are those of a campaign with a fresh process per point."""
     from granchain.campaigns import execute
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
     from granchain.campaigns.spec import parse_campaign
 
     c = parse_campaign(CAMPAIGN, source="reuse.toml")

@@ -36,7 +36,7 @@ CLOCK_KEYS = {"wall_time", "price", "provenance", "companion_wall_time", "overhe
 RENDER = r"""
 import json, sys, traceback
 from pathlib import Path
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 from granchain.scene import bundled_scenes, load_scene, parse_scene
 from granchain.templates import render_deck
 from granchain.workflows.plan import plan_scene

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from granchain.backends.builtin import LammpsBackend, ReferenceBackend
 from granchain.backends.protocol import PROPERTIES, Backend, Calculation, FileIOBackend, WorkFiles
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 
 #: the reference solver, in this process: the yardstick of every error estimate
 REFERENCE = ReferenceBackend()

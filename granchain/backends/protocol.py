@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
 
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 from granchain.results import RunResult
 
 #: what a backend may compute, each property with the ChainSolution fields that hold it (filled when

@@ -38,7 +38,7 @@ from granchain.campaigns.cluster_settings import (
     from_table,
     merge,
 )
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 
 #: job states that SLURM reports for a job that holds no running worker any more
 ENDED = {

@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 
 KINDS = ("local", "slurm", "pbs")
 #: the keys a [cluster] table may hold (flags: --cluster, --queue, ...; the same names with dashes)

@@ -39,7 +39,7 @@ from granchain.campaigns.campaign_progress import CampaignProgress
 from granchain.campaigns.dask_executor import Executor, PersistentLammps, QuietInterrupt
 from granchain.campaigns.model import Campaign, CampaignError, Point, params_text
 from granchain.campaigns.point_task import finished_before, one_line, run_point
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 
 
 @dataclass

@@ -28,7 +28,7 @@ import math
 import re
 from dataclasses import dataclass
 
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 
 
 class ExpressionError(GranchainError, ValueError):

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from granchain.campaigns import expr
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 from granchain.scene import Scene, SceneError, scene_from_dict, scene_to_dict
 
 

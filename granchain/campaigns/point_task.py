@@ -14,7 +14,7 @@ from pathlib import Path
 from granchain import progress
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.model import CampaignError
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 
 
 def run_point(payload: dict) -> dict:

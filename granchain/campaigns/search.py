@@ -37,7 +37,7 @@ def predicate_quantity(job_dir: str | Path, predicate: Predicate) -> tuple[float
     """(the predicate's quantity for a complete run, None) or (None, why it cannot be measured)."""
     run = Path(job_dir) / wsp.RUN_DIR
     if predicate.quantity == "pulses":
-        from granchain.postprocess.regimes import count_pulses
+        from granchain.postprocess.response_regimes import count_pulses
 
         force = read_history(run, predicate.contact)
         if force is None:

@@ -7,7 +7,7 @@ Columns, in order:
   (not computed by this code; a result of another granchain or plugin version exists);
 * ``pulses`` and ``regime``: distinct pulses in the force history of the regime contact
   (``regime_contact``, default the last of the scene's [outputs] histories) and 'single solitary wave'
-  / 'wave train' / 'no wave' (granchain.postprocess.regimes); blank without histories;
+  / 'wave train' / 'no wave' (granchain.postprocess.response_regimes); blank without histories;
 * every observable of summary.json with its estimated error (``<name>_error``, from the run's 2 dt and
   4 dt companions; blank where no estimate could be stood behind: summary.json ``errors`` says why),
   and ``error_estimate``, the largest relative peak-force error over the measured contacts;
@@ -80,7 +80,7 @@ def _history(run: Path, contact: int):
 
 def point_row(ws: Path, record: dict, entry: dict, stale: dict) -> dict:
     """One table row for one point of the record."""
-    from granchain.postprocess.regimes import classify_wave, count_pulses
+    from granchain.postprocess.response_regimes import classify_wave, count_pulses
 
     row = {k: _scalar(v) for k, v in entry["params"].items()}
     job_dir = ws / "workspace" / entry["job"]

@@ -14,21 +14,21 @@ import sys
 import warnings
 
 from granchain._version import __version__
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 from granchain.scene import bundled_scenes as bundled_scenes
 
-from .common import DEFAULT_SCENE as DEFAULT_SCENE
-from .common import auto_np as auto_np
-from .common import json_safe as json_safe
-from .common import np_arg as np_arg
-from .common import planned as planned
-from .common import print_json as print_json
-from .common import print_result as print_result
-from .common import resolve_scene as resolve_scene
-from .common import shown
 from .directories import add_collect_parser, add_plot_parser, add_render_parser
 from .info import add_doctor_parser, add_materials_parser, add_plan_parser, add_predict_parser, add_scenes_parser
 from .runs import add_accuracy_parser, add_compare_laws_parser, add_compare_parser, add_run_parser
+from .terminal import DEFAULT_SCENE as DEFAULT_SCENE
+from .terminal import auto_np as auto_np
+from .terminal import json_safe as json_safe
+from .terminal import np_arg as np_arg
+from .terminal import planned as planned
+from .terminal import print_json as print_json
+from .terminal import print_result as print_result
+from .terminal import resolve_scene as resolve_scene
+from .terminal import shown
 
 
 def build_parser() -> argparse.ArgumentParser:

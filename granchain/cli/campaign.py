@@ -6,12 +6,12 @@ import argparse
 import sys
 from pathlib import Path
 
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 
 
 def cmd_campaign_run(args) -> int:
     """``granchain campaign run``: run a campaign file's points into its workspace and print its table."""
-    from granchain.campaigns.api import run_campaign
+    from granchain.campaigns.run import run_campaign
     from granchain.campaigns.table import format_table
 
     out = args.out or f"runs/{Path(args.file).stem}-campaign"

@@ -6,9 +6,9 @@ from __future__ import annotations
 import sys
 
 from granchain.backends import LAMMPS
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 
-from .common import SCENE_HELP, planned, print_result, resolve_scene, shown
+from .terminal import SCENE_HELP, planned, print_result, resolve_scene, shown
 
 
 def add_plot_parser(sub) -> None:

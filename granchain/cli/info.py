@@ -5,11 +5,11 @@ from __future__ import annotations
 import math
 
 from granchain.backends import METHODS
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 from granchain.results import printable
 from granchain.scene import SceneError, bundled_scenes, parse_scene
 
-from .common import SCENE_HELP, print_json, resolve_scene, scene_name, shown
+from .terminal import SCENE_HELP, print_json, resolve_scene, scene_name, shown
 
 
 def add_predict_parser(sub) -> None:

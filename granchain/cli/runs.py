@@ -5,9 +5,9 @@ from __future__ import annotations
 import sys
 
 from granchain.backends import BACKENDS, LAMMPS, METHODS, REFERENCE, backend_named
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 
-from .common import (
+from .terminal import (
     DEFAULT_SCENE,
     SCENE_HELP,
     add_quiet,
@@ -124,8 +124,8 @@ def add_compare_parser(sub) -> None:
 
 def cmd_compare(args) -> int:
     """LAMMPS and the reference on one scene, one table; exit 1 when they differ beyond their errors."""
-    from granchain.postprocess.compare import format_table
-    from granchain.workflows.compare import compare_scene
+    from granchain.postprocess.comparison_table import format_table
+    from granchain.workflows.compare_backends import compare_scene
 
     scene = resolve_scene(args.scene)
     plan_rtol = args.rtol / 2 if scene.run.timestep is None else None  # as compare_scene plans
@@ -167,7 +167,7 @@ def cmd_compare(args) -> int:
 
 
 def _print_compare_json(args, scene, rows, lam, ref, out, bad) -> None:
-    from granchain.workflows.api import compare_frame
+    from granchain.workflows.comparison_frame import compare_frame
 
     table = compare_frame(rows).reset_index()
     print_json(
@@ -212,7 +212,7 @@ def add_compare_laws_parser(sub) -> None:
 def cmd_compare_laws(args) -> int:
     """One chain and load under several contact laws: each one's peak-force decay and its fits."""
     from granchain.rundir import check_output_dir
-    from granchain.workflows.laws import compare_laws, write_law_comparison
+    from granchain.workflows.law_comparison import compare_laws, write_law_comparison
 
     scene = resolve_scene(args.scene)
     out = args.out or f"runs/{scene_stem(args)}-laws"

@@ -7,7 +7,7 @@ import sys
 
 def cmd_submit(args) -> int:
     """``granchain submit``: a scene's deck run on a batch queue, awaited and collected with --wait."""
-    from granchain.cli.common import print_result, resolve_scene
+    from granchain.cli.terminal import print_result, resolve_scene
     from granchain.workflows.collect import collect
     from granchain.workflows.submit import cancel, submit, wait
 

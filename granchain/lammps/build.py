@@ -24,7 +24,7 @@ from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 from granchain.physics.laws import LAWS
 
 PLUGIN_NAME = "granchainplugin.so"

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from granchain import safe_files
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 from granchain.peaks import complete_peaks, lead_floor, leading_pulse, unreached_as_nan
 from granchain.physics.effects import active_effects
 from granchain.physics.effects import work as effects_work

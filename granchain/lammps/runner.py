@@ -26,7 +26,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from granchain import safe_files
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution
 from granchain.lammps import server, worker
 from granchain.lammps.build import PLUGIN_NAME, build_plugin, mpich_file, plugin_dir, plugin_env, plugin_key

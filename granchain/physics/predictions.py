@@ -9,8 +9,8 @@ from typing import NamedTuple
 
 from granchain.physics.laws import LAWS
 from granchain.physics.laws.base import EFFECT_DOMAINS
+from granchain.physics.loading_regime import loading_regime
 from granchain.physics.models import leading_peaks_exponential, transition_contact
-from granchain.physics.regimes import loading_regime
 
 __all__ = [
     "EFFECT_DOMAINS",
@@ -89,7 +89,7 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
     velocity of bead 1. A model applies when the scene has its contact law, uniform beads, no dashpot,
     no precompression, the paper's loading (a striker only as an equal-mass one, which hands bead 1
     its velocity) and the loading regime the model is for
-    (granchain.physics.regimes.loading_regime). A far-end wall leaves every model in force for
+    (granchain.physics.loading_regime.loading_regime). A far-end wall leaves every model in force for
     the incident wave, before the reflection reaches a contact. Given the measured `quantity` it is
     compared with, also whether the run measures what the model predicts (MEASURES_OTHER).
     """

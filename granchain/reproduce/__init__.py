@@ -21,8 +21,8 @@ from dataclasses import asdict
 from datetime import UTC, datetime
 from pathlib import Path
 
-from granchain.errors import GranchainError, UsageError
-from granchain.reproduce.common import Context, SectionResult, not_yet
+from granchain.exceptions import GranchainError, UsageError
+from granchain.reproduce.sections import Context, SectionResult, not_yet
 
 #: the sections, in the report's order: (module under granchain.reproduce, title)
 SECTIONS = (

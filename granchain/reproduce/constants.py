@@ -20,7 +20,17 @@ import math
 import numpy as np
 
 from granchain.physics import models
-from granchain.reproduce.common import NOT_YET, Context, Row, SectionResult, cost_of, histories, peaks, points, scene_of
+from granchain.reproduce.sections import (
+    NOT_YET,
+    Context,
+    Row,
+    SectionResult,
+    cost_of,
+    histories,
+    peaks,
+    points,
+    scene_of,
+)
 
 KEY, TITLE = "constants", "Eq. 8 and the Appendix constants A1-A4"
 K_LINEAR, I_LINEAR, I_EQ8 = 2.43e7, 0.1, 0.4

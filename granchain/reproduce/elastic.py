@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from granchain.physics import models
-from granchain.reproduce.common import (
+from granchain.reproduce.sections import (
     Context,
     Figure,
     Row,

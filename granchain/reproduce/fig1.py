@@ -4,7 +4,7 @@ a wave train, over amplitudes spanning at least three decades (a search campaign
 The campaign is the shipped granchain/campaigns/fig1-transition.toml (reference RK4, brass Hertz
 chain, bisection in log T), with the amplitudes and the tolerance of the mode. Definition of the
 transition (the paper gives none): the smallest T at which the force history at contact n has more
-than one pulse (granchain.postprocess.regimes.count_pulses: a pulse is a maximum above a fraction of
+than one pulse (granchain.postprocess.response_regimes.count_pulses: a pulse is a maximum above a fraction of
 the largest, separated by a dip), on a chain of 2n beads. n = 20 is the main definition; n = 10 (and
 30 in --full) show how the prefactor moves with it: the exponent is set by the Hertz chain's
 self-similarity (F -> a F, t -> a^(-1/6) t), the prefactor by where and how a "train" is counted.
@@ -18,7 +18,7 @@ from importlib import resources
 
 import numpy as np
 
-from granchain.reproduce.common import Context, Figure, Row, SectionResult, cost_of, points
+from granchain.reproduce.sections import Context, Figure, Row, SectionResult, cost_of, points
 
 KEY, TITLE = "fig1", "Fig. 1: single solitary wave -> wave train"
 MAIN_CONTACT = 20
@@ -110,7 +110,7 @@ def run(ctx: Context) -> SectionResult:
         ws = ctx.campaign(f"fig1-contact{n}", campaign(ctx.quick, n))
         res.campaigns.append(ws.name)
         tables.append(points(ws))
-        from granchain.campaigns.api import load_campaign
+        from granchain.campaigns.run import load_campaign
 
         s = load_campaign(ws, table="search")
         ok = s[np.isfinite(s["transition"].astype(float))] if "transition" in s else s.iloc[0:0]

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from granchain.physics import models
-from granchain.reproduce.common import Context, Figure, Row, SectionResult, campaign_section
+from granchain.reproduce.sections import Context, Figure, Row, SectionResult, campaign_section
 
 KEY, TITLE = "fig3", "Fig. 3: peak force over amplitude at fixed impulses, and the master curve"
 BRASS = {"radius": 4.76e-3, "material": "brass"}

@@ -2,9 +2,9 @@
 associated with a more complex nonlinear model", tested with Thornton's (1997) elastic-perfectly-
 plastic law (docs/laws.md): the Fig. 5 load (I = 0.1 N s over 1 us, 60 brass beads) on the
 bundled thornton-short-impulse scene and on its bilinear equivalent (equal plastic slopes,
-pi p_y R* = k, beta = 0.8: granchain.workflows.laws.equivalent_contact), each a campaign point (LAMMPS,
+pi p_y R* = k, beta = 0.8: granchain.workflows.law_comparison.equivalent_contact), each a campaign point (LAMMPS,
 planned for rtol 1e-3, error bars), each peak-force curve fitted exponential-then-inverse
-(granchain.postprocess.regimes.fit_decay). The paper's own nonlinear law is not printed: this tests the
+(granchain.postprocess.response_regimes.fit_decay). The paper's own nonlinear law is not printed: this tests the
 claim against one nonlinear law, not against the paper's.
 """
 
@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from granchain.postprocess.regimes import fit_decay
-from granchain.reproduce.common import Context, Figure, Row, SectionResult, cost_of, peaks, points
+from granchain.postprocess.response_regimes import fit_decay
+from granchain.reproduce.sections import Context, Figure, Row, SectionResult, cost_of, peaks, points
 
 KEY, TITLE = "laws", "Thornton vs bilinear: does the bilinear law capture the nonlinear law's phenomena?"
 LAWS = ("thornton", "bilinear")
@@ -21,10 +21,10 @@ LAWS = ("thornton", "bilinear")
 
 def campaigns() -> dict[str, dict]:
     """One campaign per law, by law name: the bundled thornton-short-impulse scene under Thornton's
-    law and under its bilinear equivalent (granchain.workflows.laws.equivalent_contact), each on
+    law and under its bilinear equivalent (granchain.workflows.law_comparison.equivalent_contact), each on
     LAMMPS planned for rtol 1e-3, with error bars. The same in both modes."""
     from granchain.scene import load_scene, scene_to_dict
-    from granchain.workflows.laws import equivalent_contact, scene_with_law
+    from granchain.workflows.law_comparison import equivalent_contact, scene_with_law
 
     base = load_scene("thornton-short-impulse")
     out = {}

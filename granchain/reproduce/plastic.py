@@ -6,7 +6,7 @@ Models, as derived (granchain.physics.predictions): the first peak from A2, the 
 contact lambda from Eq. 26 (Eq. 27 as derived: F_i = F_1 exp(-lambda (i - 1))), the secondary waves'
 peak from Eq. 30 as derived (omega dF), the transition where Eq. 30 first exceeds Eq. 27, and the
 inverse regime's exponent (1 + beta)/2 (Eq. 34). Measured: the peak force at every contact with its
-error bar, and the exponential-then-inverse fit (granchain.postprocess.regimes.fit_decay) for the
+error bar, and the exponential-then-inverse fit (granchain.postprocess.response_regimes.fit_decay) for the
 transition contact and the exponent. The leading-wave profile of Fig. 6 is read from the histories of
 contacts 1-8 at the instant contact 2 peaks.
 """
@@ -17,8 +17,8 @@ import numpy as np
 
 from granchain.physics import models
 from granchain.physics.predictions import leading_peaks_exponential, predict
-from granchain.postprocess.regimes import fit_decay
-from granchain.reproduce.common import (
+from granchain.postprocess.response_regimes import fit_decay
+from granchain.reproduce.sections import (
     NO_CLAIM,
     Context,
     Figure,

@@ -7,7 +7,7 @@ import html
 import math
 from pathlib import Path
 
-from granchain.reproduce.common import SectionResult
+from granchain.reproduce.sections import SectionResult
 
 ROW_HEADER = ["key", "quantity", "unit", "paper", "ours", "+-", "model", "verdict", "tolerance", "reason"]
 

@@ -5,8 +5,8 @@ the plateau values are measured by granchain.postprocess.fronts.long_load_fronts
 does) from the run directory's snapshots and peaks, and set against Eqs. 35-38 as derived
 (granchain.physics.models.long_load_bilinear). Quick: timestep 2e-7 s; full: the scene's 5e-8 s.
 Error bars: the bilinear law's slope jumps where contacts close, so Verlet's error follows no order
-(granchain.errorbars); each value's error is its distance to the same measurement on reference RK4
-runs (event location) at 2 dt, plus their own error from RK4 at 4 dt (errorbars.against_reference).
+(granchain.richardson); each value's error is its distance to the same measurement on reference RK4
+runs (event location) at 2 dt, plus their own error from RK4 at 4 dt (richardson.against_reference).
 x_t is resolved to one contact (a bead diameter): its error is at least half of that.
 Table I's rows are judged against the paper's numerical column; the "model" column is ours (Eqs. 35-38)
 and the paper's predicted value is in the reason.
@@ -20,7 +20,16 @@ import numpy as np
 
 from granchain.physics import models
 from granchain.postprocess.fronts import long_load_fronts
-from granchain.reproduce.common import Context, Figure, Row, SectionResult, campaign_section, peaks, scene_of, snapshots
+from granchain.reproduce.sections import (
+    Context,
+    Figure,
+    Row,
+    SectionResult,
+    campaign_section,
+    peaks,
+    scene_of,
+    snapshots,
+)
 
 KEY, TITLE = "table1", "Table I and Fig. 9: a long load on a bilinear chain"
 
@@ -81,9 +90,9 @@ def rk4_campaign(quick: bool) -> dict:
 
 
 def error_bars(ctx: Context, res: SectionResult, got: dict) -> dict[str, float | None]:
-    """Each measured plateau's error: against the RK4 runs at 2 dt and 4 dt (errorbars.against_reference)."""
-    from granchain.errorbars import against_reference
-    from granchain.reproduce.common import cost_of, points
+    """Each measured plateau's error: against the RK4 runs at 2 dt and 4 dt (richardson.against_reference)."""
+    from granchain.reproduce.sections import cost_of, points
+    from granchain.richardson import against_reference
 
     ws = ctx.campaign("table1-rk4", rk4_campaign(ctx.quick))
     res.campaigns.append(ws.name)

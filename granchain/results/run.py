@@ -28,7 +28,7 @@ class RunResult:
     estimates it as finished_utc minus the run's elapsed time, and says so). finished_utc: when the
     result was made, i.e. the end of the run. command: the command line that made the run (default:
     this Python process's sys.argv when the summary is written). errors: the run's measured error
-    estimates (granchain.workflows.errors.ErrorReport), None when none were made.
+    estimates (granchain.workflows.error_estimates.ErrorReport), None when none were made.
     """
 
     scene: object  # granchain.scene.Scene
@@ -39,7 +39,7 @@ class RunResult:
     started_utc: datetime | None = None
     finished_utc: datetime = field(default_factory=_now_utc)
     command: list[str] | None = None
-    errors: object | None = None  # granchain.workflows.errors.ErrorReport
+    errors: object | None = None  # granchain.workflows.error_estimates.ErrorReport
     # a result read back from a run directory (granchain.load_run): the directory, and what it keeps
     # that a solution cannot give again (summary.json; peaks.csv's error columns)
     path: Path | None = None
@@ -147,7 +147,7 @@ class RunResult:
             ),
             **({"extra": extra} if extra else {}),
             # the largest relative error of a measured peak, and every number's error and how it
-            # was obtained (granchain.workflows.errors); none without companion runs
+            # was obtained (granchain.workflows.error_estimates); none without companion runs
             "error_estimate": None if self.errors is None else self.errors.error_estimate,
             "errors": None if self.errors is None else self.errors.summary(s.wall_time),
             # what the run cost, split by where the time went (RunResult.price)
@@ -385,7 +385,7 @@ class RunResult:
                       "Output" rows of its timing breakdown; reference: the solver, whose histories
                       and energy samples are recorded inside its loop and counted here)
         output        LAMMPS: dumps and thermo during the runs plus reading the results back
-        error_estimate  the companion runs at 2 dt and 4 dt (granchain.workflows.errors), when made
+        error_estimate  the companion runs at 2 dt and 4 dt (granchain.workflows.error_estimates), when made
         steps, bead_steps (steps x moving beads, striker included), ns_per_bead_step (integration)
         A part the backend does not time is None, with the reason in "not_timed". A loaded run's is
         its summary's.

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 
 
 class SceneError(GranchainError, ValueError):

@@ -11,7 +11,7 @@ from importlib import resources
 import jinja2
 
 from granchain._version import __version__
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 from granchain.peaks import lead_floor, stop_force_floor
 from granchain.physics.effects import active_effects
 from granchain.results import scene_hash

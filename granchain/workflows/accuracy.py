@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from granchain import safe_files
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 from granchain.postprocess.observables import fit_wave_speed
 from granchain.problem import ChainProblem, contact_positions
 from granchain.reference.scipy_solver import solve_chain_dop853

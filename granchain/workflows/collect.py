@@ -38,7 +38,7 @@ import numpy as np
 
 from granchain import safe_files
 from granchain.backends import LAMMPS
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 from granchain.lammps.runner import (
     OUTPUT_GLOBS,
     LammpsError,

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from granchain.backends import Backend, backend_named
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 from granchain.schedule import dump_stride, history_stride
 
 #: the most steps a run may make unless GRANCHAIN_MAX_STEPS says otherwise: 1e9 steps of even a short

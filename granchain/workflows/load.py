@@ -32,7 +32,7 @@ import numpy as np
 
 from granchain import safe_files
 from granchain.backends import BACKENDS, LAMMPS, REFERENCE, FileIOBackend
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 from granchain.results import ChainSolution, RunResult, StoredRun
 
 #: a campaign point's run directory inside its job directory (granchain.campaigns.workspace.RUN_DIR)

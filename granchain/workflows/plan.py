@@ -30,7 +30,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 from granchain.physics.estimates import (
     damping_rate,
     expected_peak_force,

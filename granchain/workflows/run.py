@@ -9,7 +9,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from granchain.backends import BACKENDS, METHODS, REFERENCE, Backend, Calculation, backend_named
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 from granchain.invariants import InvariantError
 from granchain.results import RunResult
 from granchain.rundir import check_output_dir, write_run_dir
@@ -206,8 +206,8 @@ def _refined(given, plan, result):
 
 
 def _estimate_errors(result, plan, backend: Backend, method: str, np_: int):
-    """The run's companions at 2 dt and 4 dt and its ErrorReport (granchain.workflows.errors)."""
-    from granchain.workflows.errors import estimate_errors
+    """The run's companions at 2 dt and 4 dt and its ErrorReport (granchain.workflows.error_estimates)."""
+    from granchain.workflows.error_estimates import estimate_errors
     from granchain.workflows.plan import plan_scene
 
     stable = (plan if plan is not None else plan_scene(result.scene, method=method)).stable_timestep
@@ -367,7 +367,7 @@ def calculate_scene(
     says misses rtol (default 1e-3) gives an AccuracyWarning before the run. out: the run directory
     the caller will write, checked before the run (its disk too).
     error_estimate: also run the scene at 2 dt and 4 dt and estimate every number's error
-    (granchain.workflows.errors; result.errors, peaks.csv's *_error columns, summary.json).
+    (granchain.workflows.error_estimates; result.errors, peaks.csv's *_error columns, summary.json).
     before_run: called once after the scene's checks and warnings, before its first run; after_run:
     called once the run is made (and made again finer if refined), before its error estimate
     (granchain compare starts LAMMPS alongside the reference at one of them); what they raise stops
@@ -404,7 +404,7 @@ def _calculate(
     # with an error estimate the run and its companions share one kept LAMMPS child: the companions
     # do not pay LAMMPS's start-up (process, import, plugin load) again, which alone costs more than a
     # short run's integration (benchmarks/RESULTS.md, the price of error bars)
-    from granchain.workflows.errors import kept_lammps
+    from granchain.workflows.error_estimates import kept_lammps
 
     with kept_lammps() if error_estimate else nullcontext():
         calc = _execute(scene, backend, method, np_)

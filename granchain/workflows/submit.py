@@ -29,7 +29,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from granchain.backends import LAMMPS
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 
 #: the job script and the record of the submission, written in DIR beside the deck
 JOB_SCRIPT = "job.sh"

@@ -96,7 +96,7 @@ class ContactLaw:
     #: dF/dalpha jumps at a kink that a contact's overlap crosses while it moves (bilinear: closing at
     #: alpha = 0 and reaching zero force; Thornton: reloading past d_max): fixed-step Verlet's error
     #: then depends on where in a step that happens and follows no order in dt, so its error bars come
-    #: from RK4 runs, which locate the kinks (granchain.errorbars.against_reference)
+    #: from RK4 runs, which locate the kinks (granchain.richardson.against_reference)
     slope_kinks: ClassVar[bool] = False
     #: force_into takes any overlap and gives the force of max(alpha, 0), bit for bit (a negative one
     #: gives +0.0): the reference solver's force evaluation then skips clipping alpha first
@@ -212,7 +212,7 @@ class ContactLaw:
         """pair_coeff numbers after d0 in the C++ kernel's order (k first; the deck inserts d0)."""
         return [float(getattr(self, f.name)) for f in dataclasses.fields(self)]
 
-    # ---- the law's analytic models (rule 8; granchain.physics.predictions, postprocess.compare and the
+    # ---- the law's analytic models (rule 8; granchain.physics.predictions, postprocess.comparison_table and the
     # peak plot ask every law for its own)
     #: the law's name in running text ("a uniform Hertz chain"); empty: its name
     label: ClassVar[str] = ""
@@ -347,7 +347,7 @@ class ContactLaw:
 
 
 #: what a model may need besides its law (ContactLaw.model_domains): the paper's chain in a loading
-#: regime (granchain.physics.regimes: "short", "long"), at "any" loading time, or a two-body impact
+#: regime (granchain.physics.loading_regime: "short", "long"), at "any" loading time, or a two-body impact
 #: ("collision": two beads, bead 1 given a velocity, a free far end)
 CHAIN_NEEDS = ("short", "long", "any", "collision")
 

@@ -15,7 +15,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter
 
 from granchain import safe_files
-from granchain.errors import GranchainError, UsageError
+from granchain.exceptions import GranchainError, UsageError
 from granchain.results import printable
 
 
@@ -131,7 +131,7 @@ MARKER_SIZE = 3.0
 
 
 def _error_bars(ax, x: np.ndarray, y: np.ndarray, err: np.ndarray | None, color, label: str = "") -> int:
-    """Error bars of the measured peak-force errors (granchain.workflows.errors) where they reach beyond
+    """Error bars of the measured peak-force errors (granchain.workflows.error_estimates) where they reach beyond
     the marker, decided in display space once the axes' limits are final; returns how many were drawn."""
     if err is None:
         return 0

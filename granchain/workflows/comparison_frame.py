@@ -12,7 +12,7 @@ from granchain.results import RunResult, printable
 @dataclass(repr=False)
 class Comparison:
     """LAMMPS against the reference on one scene: ``table`` (pandas DataFrame indexed by quantity),
-    ``lammps`` and ``reference`` (the two RunResults), ``rows`` (postprocess.compare.CompareRow),
+    ``lammps`` and ``reference`` (the two RunResults), ``rows`` (postprocess.comparison_table.CompareRow),
     ``rtol``, and ``path`` (the compare directory, when one was written).
 
     ``ok`` is True when every measured quantity agrees within rtol plus both runs' measured errors.

@@ -1,8 +1,8 @@
 """granchain compare-laws: the same chain and load under two (or more) contact laws, side by side.
 
-Issue 14's test of the paper's claim (Sec. III, Fig. 4) that the bilinear Walton-Braun law captures
+A test of the paper's claim (Sec. III, Fig. 4) that the bilinear Walton-Braun law captures
 the key phenomena of a nonlinear elastoplastic law: the peak force along the chain under each law,
-with its error bars, and the exponential-then-inverse decay fit (granchain.postprocess.regimes
+with its error bars, and the exponential-then-inverse decay fit (granchain.postprocess.response_regimes
 .fit_decay) of each, in one table and one figure.
 
 Comparable laws. A law the scene does not give is set up from the scene's own law so that both load
@@ -24,10 +24,10 @@ from pathlib import Path
 import numpy as np
 
 from granchain.backends import LAMMPS, Backend
-from granchain.errors import UsageError
+from granchain.exceptions import UsageError
 from granchain.physics.laws import LAWS
 from granchain.physics.materials import YIELD_PRESSURE_FACTOR
-from granchain.postprocess.regimes import DecayFit, fit_decay
+from granchain.postprocess.response_regimes import DecayFit, fit_decay
 from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain
 from granchain.safe_files import UnsafeFileError, atomic_directory
 from granchain.scene import scene_from_dict, scene_to_dict

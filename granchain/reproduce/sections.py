@@ -117,7 +117,7 @@ class Context:
         """Run (or find complete) one campaign in OUT/ws/<mode>-<name>; returns that workspace
         directory (``points`` reads its table) and keeps the campaign's report (points run, cached,
         failed) for the report's metadata."""
-        from granchain.campaigns.api import run_campaign
+        from granchain.campaigns.run import run_campaign
 
         ws = self.out / "ws" / f"{self.mode}-{name}"
         ws.mkdir(parents=True, exist_ok=True)
@@ -140,7 +140,7 @@ class Context:
 
 def points(ws: Path):
     """The campaign's points table (pandas), with the run directory of each point as column `run`."""
-    from granchain.campaigns.api import load_campaign
+    from granchain.campaigns.run import load_campaign
 
     df = load_campaign(ws, table="points")
     df["run"] = [ws / "workspace" / str(j) / "run" for j in df["job"]]

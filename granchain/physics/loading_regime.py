@@ -1,6 +1,6 @@
 """The loading regime a scene is in, expected from the scene alone: short load (single solitary wave),
 long load (wave train behind a steady front) or the transition between them (Sec. II B, Sec. III).
-What a run measured (pulses, decay regimes) is granchain.postprocess.regimes."""
+What a run measured (pulses, decay regimes) is granchain.postprocess.response_regimes."""
 
 from __future__ import annotations
 

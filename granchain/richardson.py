@@ -7,7 +7,7 @@ Verlet 2):
     Q(dt) = Q* + C dt^p + ...   =>   error of Q(dt) ~ (Q(dt) - Q(2 dt)) / (2^p - 1)
 
 The third run checks the order: the observed order is log2((Q(2dt) - Q(4dt)) / (Q(dt) - Q(2dt))).
-Each integrator declares the orders its error can show on a scene, lo-hi (workflows.errors
+Each integrator declares the orders its error can show on a scene, lo-hi (workflows.error_estimates
 .expected_orders: Verlet 2-2; Verlet with a dashpot 1-2, a mixture of the dashpot's first-order
 term and Verlet's second; RK4 2.5-4, its 4 lowered to 1 + 3/2 near a Hertzian onset). An observed
 order is accepted in lo - ORDER_SLACK ... hi + NEXT_TERM (at least MIN_ORDER, at most
@@ -28,7 +28,7 @@ Other ways an estimate fails, each with its own status (never a small number in 
   period of the chain (pi / omega_max) between two runs;
 - round-off: the differences are below ROUNDOFF_ULPS units in the last place of the value, or
   below ROUNDOFF_MARGIN times the run's own round-off floor where the caller gives one (the
-  reference: sqrt(steps) eps U dF/dalpha, workflows.errors.roundoff_floor), or Richardson's
+  reference: sqrt(steps) eps U dF/dalpha, workflows.error_estimates.roundoff_floor), or Richardson's
   estimate is below that floor (the error is at most the floor, and is reported as that bound). A
   step far finer than accuracy needs (set by a chain's smallest beads) leaves step errors near
   1e-15 of the force, and the three runs' differences are round-off that can look like any order:
@@ -104,6 +104,7 @@ class ErrorBars:
 
     @property
     def reliable(self) -> np.ndarray:
+        """Which items have an error estimate (a number, not only a status)."""
         return np.isfinite(self.error)
 
 
@@ -136,7 +137,7 @@ def richardson(
         (order, order)): an observed order outside them, widened by ORDER_SLACK (and above, at
         most highest_trusted_order(order)), leaves the item without an estimate.
     floor : array_like, optional
-        The run's own round-off in each item (workflows.errors.roundoff_floor; nan or absent: only
+        The run's own round-off in each item (workflows.error_estimates.roundoff_floor; nan or absent: only
         ROUNDOFF_ULPS of the value): where the differences, or the Richardson estimate, are within
         it the item is "round-off" with this bound (module docstring).
 
@@ -237,7 +238,7 @@ def _richardson_one(f, c, cc, p, times, jump_time, accepted, floor):
 
 
 #: RK4's own error, from its runs at h and 2 h, taken at its lowest order on a chain (1 + 3/2 at a
-#: Hertzian onset; workflows.errors.RK4_ONSET_ORDER): the larger, conservative bound
+#: Hertzian onset; workflows.error_estimates.RK4_ONSET_ORDER): the larger, conservative bound
 REFERENCE_ORDER = 2.5
 #: the reference's error may be at most this fraction of the distance it measures: the estimate
 #: (distance + reference error) is then within 1 - 3 times a true error in distance +- reference error

@@ -1,7 +1,7 @@
 """Response regimes: single solitary wave vs wave train (Sec. II B), and the two force-decay regimes
 of elastoplastic chains (exponential, then inverse power law; Sec. III A), measured from a run's
 force histories and peaks. The regime expected from the scene alone is
-granchain.physics.regimes.loading_regime."""
+granchain.physics.loading_regime.loading_regime."""
 
 from __future__ import annotations
 

@@ -3,7 +3,7 @@
 estimate_errors(result, ...) runs the companions of a finished run (the same scene and plan, the
 time step doubled and quadrupled; no histories, snapshots or dumps, which no estimate needs) and
 returns an ErrorReport: for every contact its peak force, time of peak and leading pulse with an
-error estimate and a status (granchain.errorbars), the same for every scalar observable, the
+error estimate and a status (granchain.richardson), the same for every scalar observable, the
 largest relative error over the measured contacts, and what the companions cost.
 
 Orders: RK4 4, velocity Verlet (reference and LAMMPS) 2, but 1 for Verlet with a dashpot: the
@@ -24,10 +24,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from granchain.errorbars import ORDER, ErrorBars, against_reference, richardson
-from granchain.errors import GranchainError
+from granchain.exceptions import GranchainError
 from granchain.postprocess.observables import measure_observables
 from granchain.progress import labelled
+from granchain.richardson import ORDER, ErrorBars, against_reference, richardson
 
 #: scalar observables that get an error estimate, and the time each is measured at (for the check
 #: that a companion measured the same pulse)
@@ -63,10 +63,10 @@ class ErrorReport:
                 key = s.split(":")[0].split(" (")[0]  # the kind, without its numbers
                 counts[key] = counts.get(key, 0) + 1
         return {
-            "method": "Richardson extrapolation over runs at dt, 2 dt and 4 dt (granchain.errorbars)"
+            "method": "Richardson extrapolation over runs at dt, 2 dt and 4 dt (granchain.richardson)"
             if self.against is None
             else "the distance to RK4 (reference, event location) at 2 dt, plus its own error from RK4 at 4 dt "
-            "(granchain.errorbars.against_reference)",
+            "(granchain.richardson.against_reference)",
             "companion_method": self.against,
             "order": self.order,
             "companion_timesteps": self.timesteps,
@@ -107,7 +107,7 @@ RK4_ONSET_ORDER = 2.5
 
 
 def expected_orders(method: str, scene) -> tuple[float, float]:
-    """The lowest and highest order the integrator's error can show on this scene (errorbars)."""
+    """The lowest and highest order the integrator's error can show on this scene (richardson)."""
     if method == "verlet" and scene.effects.dashpot:
         return 1.0, 2.0  # the dashpot's first-order term and Verlet's second
     if method == "rk4":
@@ -196,7 +196,7 @@ def rk4_companions(scene, method: str) -> list:
 
 #: the RK4 companions a Verlet run is measured against aim at this fraction of the Verlet run's
 #: predicted error (the planner's error model): small beside the distance they measure
-#: (errorbars.REFERENCE_SHARE checks it run by run: where it is not, no estimate), at the largest
+#: (richardson.REFERENCE_SHARE checks it run by run: where it is not, no estimate), at the largest
 #: step that reaches it. RK4's error goes as h^4, so this share sets the step only weakly (0.02 -> 0.1:
 #: 1.5x the step). Measured on the bundled bilinear and Thornton short impulses (LAMMPS, planned for
 #: rtol 1e-3, true error against dt / 8): at 0.02, 59 of 59 and 39 of 39 peaks estimated; at 0.1, 58
@@ -292,7 +292,7 @@ def _richardson_runs(report: ErrorReport, scene, run_one, stable_timestep: float
 
 
 def _richardson_bars(report: ErrorReport, result, runs: list, method: str) -> None:
-    """Richardson's error bars of every number of the run from its companions (errorbars.richardson)."""
+    """Richardson's error bars of every number of the run from its companions (richardson.richardson)."""
     scene, sol = result.scene, result.solution
     p = report.order
     coarse = runs[0]
@@ -369,7 +369,7 @@ def roundoff_floor(scene, sol) -> np.ndarray | None:
 
 
 def _against_rk4(result, run_rk4) -> ErrorReport:
-    """A Verlet run's error report against RK4 runs at 2 dt and 4 dt, or dt and 2 dt (errorbars.against_reference)."""
+    """A Verlet run's error report against RK4 runs at 2 dt and 4 dt, or dt and 2 dt (richardson.against_reference)."""
     from granchain.workflows.plan import highest_frequency, plan_scene
 
     scene, sol = result.scene, result.solution

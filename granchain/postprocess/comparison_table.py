@@ -54,7 +54,7 @@ class CompareRow:
     @property
     def ok(self) -> bool:
         """Not a failure: the two runs agree within rtol plus their combined measured errors (each
-        run's error bar, granchain.workflows.errors; 0 where a run has none), or neither measured the
+        run's error bar, granchain.workflows.error_estimates; 0 where a run has none), or neither measured the
         quantity (then the row reads "not measured: <reason>", never "yes"). A quantity one run has
         and the other lacks is a failure. The model columns never make a row fail or pass."""
         if not self.measured:

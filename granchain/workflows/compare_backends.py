@@ -6,11 +6,11 @@ import threading
 from pathlib import Path
 
 from granchain.backends import LAMMPS, REFERENCE
-from granchain.postprocess.compare import compare_runs, write_compare
+from granchain.postprocess.comparison_table import compare_runs, write_compare
 from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain, write_run_dir
 from granchain.safe_files import UnsafeFileError, atomic_directory
 from granchain.workflows import run as run_module
-from granchain.workflows.errors import rk4_companions
+from granchain.workflows.error_estimates import rk4_companions
 from granchain.workflows.run import calculate_scene, check_resources, plan_for, run_scene, shared_reference_runs
 from granchain.workflows.shared_runs import Abandoned
 
