@@ -21,13 +21,16 @@ def test_work_precision_study(tmp_path):
     orders = study.orders()
     print(orders, study.reference_error)
     assert orders["rk4"] > 3.3
-    assert 1.7 < orders["verlet"] < 2.5 and 1.7 < orders["lammps"] < 2.5
+    assert 1.7 < orders["verlet"] < 2.5
+    assert 1.7 < orders["lammps"] < 2.5
     # the converged reference is far more accurate than anything it judges
     assert study.reference_error < 0.01 * min(p.error_peak for p in study.points if p.error_peak > 0)
     assert study.cheapest(1e-2) is not None
-    assert study.dump_errors and study.dump_errors[0][2] < 1e-12  # every step + same rule: exact
+    assert study.dump_errors
+    assert study.dump_errors[0][2] < 1e-12
     text = (tmp_path / "accuracy.md").read_text()
-    assert "cheapest method" in text and "One-time costs" in text
+    assert "cheapest method" in text
+    assert "One-time costs" in text
     # the current plan's point: each integrator at the step planned for rtol 1e-3,
     # measured; the planner's error model is calibrated with a margin, so the plan meets it
     from granchain.workflows.accuracy import PLAN_RTOL
@@ -36,4 +39,5 @@ def test_work_precision_study(tmp_path):
     for q in study.plan_points:
         print(f"plan {q.method}: dt {q.setting:.3g} s, error {q.error_peak:.2e}")
         assert q.error_peak <= PLAN_RTOL
-    assert "The planner's choice" in text and "(planned)" in (tmp_path / "accuracy.csv").read_text()
+    assert "The planner's choice" in text
+    assert "(planned)" in (tmp_path / "accuracy.csv").read_text()

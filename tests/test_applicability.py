@@ -48,19 +48,23 @@ def test_long_load_models_do_not_apply_to_a_short_pulse():
     p = verdicts(sc)
     for name in ("front_speed_lower", "front_speed_upper", "long_load_peak_force_lower", "long_load_peak_force_upper"):
         assert not p[name].applies, name
-        assert "short load" in p[name].applies_reason and "long load" in p[name].applies_reason
+        assert "short load" in p[name].applies_reason
+        assert "long load" in p[name].applies_reason
     # the peak plot of a 42 kN short pulse draws Eq. 8, not the 0.78 and 1.07 MN long-load lines
     skipped = {}
     curves = model_curves(sc, np.arange(1.0, 100.0), skipped)
     assert list(curves) == ["Eq. 8 (short load)"]
-    assert any("Eq. 15" in label for label in skipped) and any("Eq. 19" in label for label in skipped)
+    assert any("Eq. 15" in label for label in skipped)
+    assert any("Eq. 19" in label for label in skipped)
 
 
 def test_a_long_pulse_gets_the_long_load_models_and_not_eq8():
     sc = bundled("elastic-long-pulse")  # T/tau = 129: a wave train (Sec. II B)
     p = verdicts(sc)
-    assert not p["short_load_peak_force"].applies and "long load" in p["short_load_peak_force"].applies_reason
-    assert p["long_load_peak_force_upper"].applies and p["long_load_peak_force_lower"].applies
+    assert not p["short_load_peak_force"].applies
+    assert "long load" in p["short_load_peak_force"].applies_reason
+    assert p["long_load_peak_force_upper"].applies
+    assert p["long_load_peak_force_lower"].applies
     assert sorted(model_curves(sc, np.arange(1.0, 200.0))) == [
         "Eq. 15 + Nesterenko (long load)",
         "Eq. 19 + Nesterenko (long load)",
@@ -69,7 +73,8 @@ def test_a_long_pulse_gets_the_long_load_models_and_not_eq8():
 
 def test_dashpot_rules_out_eq8():
     p = verdicts(bundled("effect-dashpot"))["short_load_peak_force"]
-    assert not p.applies and "dashpot" in p.applies_reason
+    assert not p.applies
+    assert "dashpot" in p.applies_reason
     assert model_curves(bundled("effect-dashpot"), np.arange(1.0, 100.0)) == {}
 
 
@@ -77,32 +82,42 @@ def test_tapered_chain_rules_out_the_wave_speed_models():
     sc = bundled("effect-tapered")
     for name in ("short_load_wave_speed", "nesterenko_wave_speed", "short_load_peak_force"):
         a = applicability(name, sc)
-        assert not a.applies and "monodisperse" in a.reason and "tapered" in a.reason, name
+        assert not a.applies, name
+        assert "monodisperse" in a.reason, name
+        assert "tapered" in a.reason, name
 
 
 def test_table1_scene_gets_no_hertz_and_no_short_load_model():
     sc = bundled("plastic-long-load-table1")
     for name in ("front_speed_lower", "front_speed_upper", "long_load_peak_force_upper", "short_load_peak_force"):
         a = applicability(name, sc)
-        assert not a.applies and "hertz model" in a.reason and "bilinear" in a.reason
+        assert not a.applies
+        assert "hertz model" in a.reason
+        assert "bilinear" in a.reason
     p = verdicts(sc)
-    assert not p["first_contact_peak_force"].applies and "long load" in p["first_contact_peak_force"].applies_reason
+    assert not p["first_contact_peak_force"].applies
+    assert "long load" in p["first_contact_peak_force"].applies_reason
     assert all(p[f"long_load_{k}"].applies for k in ("c", "c_u", "v_1", "v_t", "x_t", "F_2", "v_2"))
     # c is the loading front's speed: not what the measured wave_speed (times of peak) is
     a = applicability("long_load_c", sc, quantity="wave_speed")
-    assert not a.applies and "times of peak" in a.reason
+    assert not a.applies
+    assert "times of peak" in a.reason
 
 
 def test_precompression_and_heavy_striker_rule_out_eq8():
     a = applicability("short_load_peak_force", bundled("effect-precompression"))
-    assert not a.applies and "precompression" in a.reason
+    assert not a.applies
+    assert "precompression" in a.reason
     a = applicability("short_load_peak_force", bundled("effect-striker"))
-    assert not a.applies and "striker" in a.reason and "long load" in a.reason
+    assert not a.applies
+    assert "striker" in a.reason
+    assert "long load" in a.reason
 
 
 def test_wall_leaves_the_models_for_the_incident_wave():
     a = applicability("short_load_peak_force", bundled("effect-wall"))
-    assert a.applies and "reflection" in a.reason
+    assert a.applies
+    assert "reflection" in a.reason
 
 
 def test_velocity_kick_is_the_short_load_limit():
@@ -143,12 +158,17 @@ def test_compare_shows_na_beside_a_dashpot_chain_and_not_measured_rows():
     ref = run_scene(sc, backend="reference")
     rows = {r.quantity: r for r in compare_runs(ref, ref)}
     lead = rows["leading_peak_force"]
-    assert lead.a is None and lead.b is None
-    assert lead.verdict.startswith("not measured: ") and "contact 21" in lead.verdict
-    assert lead.model is None and lead.model_applies is False
-    assert lead.model_source.startswith("n/a: Eq. 8: ") and "dashpot" in lead.model_source
+    assert lead.a is None
+    assert lead.b is None
+    assert lead.verdict.startswith("not measured: ")
+    assert "contact 21" in lead.verdict
+    assert lead.model is None
+    assert lead.model_applies is False
+    assert lead.model_source.startswith("n/a: Eq. 8: ")
+    assert "dashpot" in lead.model_source
     table = format_table(list(rows.values()))
-    assert "not measured: " in table and "n/a" in table
+    assert "not measured: " in table
+    assert "n/a" in table
     line = next(x for x in table.splitlines() if x.startswith("leading_peak_force "))
     assert " yes " not in line
     assert all(r.ok for r in rows.values())  # n/a and not measured are not failures
@@ -159,8 +179,11 @@ def test_compare_keeps_eq8_beside_a_short_pulse_that_reached_the_window():
     ref = run_scene(sc, backend="reference", rtol=1e-2)
     rows = {r.quantity: r for r in compare_runs(ref, ref)}
     lead = rows["leading_peak_force"]
-    assert lead.model_applies and lead.model_source == "Eq. 8" and lead.verdict == "yes"
-    assert lead.rel_model is not None and lead.rel_model < 0.1
+    assert lead.model_applies
+    assert lead.model_source == "Eq. 8"
+    assert lead.verdict == "yes"
+    assert lead.rel_model is not None
+    assert lead.rel_model < 0.1
 
 
 # ------------------------------------------------------------------ properties over every scene
@@ -236,7 +259,8 @@ def test_every_prediction_states_whether_it_applies(d):
     sc = _scene(d)
     preds = predict(sc)
     for p in preds:
-        assert isinstance(p.applies, bool) and p.applies_reason, p.name
+        assert isinstance(p.applies, bool), p.name
+        assert p.applies_reason, p.name
         assert (p.applies, p.applies_reason) == tuple(applicability(p.name, sc))
         assert p.applies or p.name not in SCENE_QUANTITIES
     json.dumps([p.as_dict() for p in preds])
@@ -256,7 +280,8 @@ def test_with_a_dashpot_no_model_applies(d):
     sc = _scene(d)
     for name in MODEL_DOMAINS:
         a = applicability(name, sc)
-        assert not a.applies and "dashpot" in a.reason, name
+        assert not a.applies, name
+        assert "dashpot" in a.reason, name
     assert model_curves(sc, np.arange(1.0, float(sc.chain.beads))) == {}
 
 
@@ -275,14 +300,16 @@ def test_tapered_or_precompressed_chains_get_no_model(d, taper):
         d["precompression"] = {"force": 10.0}
         d["loading"] = {"kind": "velocity", "velocity": 1.0} if d["loading"]["kind"] == "striker" else d["loading"]
     sc = _scene(d)
-    assert sc.per_bead == taper and bool(sc.effects.precompression) != taper
+    assert sc.per_bead == taper
+    assert bool(sc.effects.precompression) != taper
     for name, (law, needs) in MODEL_DOMAINS.items():
         a = applicability(name, sc)
         if needs in EFFECT_DOMAINS:  # the effects' own models: the precompressed chain's c0 is for it
             inside = needs == "precompressed" and not taper and sc.contact.law == law and not sc.effects.dashpot
             assert a.applies == inside, (name, a)
             continue
-        assert not a.applies and ("monodisperse" if taper else "precompression") in a.reason, name
+        assert not a.applies, name
+        assert ("monodisperse" if taper else "precompression") in a.reason, name
 
 
 def _synthetic_run(scene, reach: float, scale: float) -> RunResult:
@@ -318,7 +345,8 @@ def test_compare_rows_na_or_unmeasured_are_never_yes_or_failures_of_the_model(d,
     assert all(isinstance(r, CompareRow) for r in rows)
     for r in rows:
         if r.model_applies is False:
-            assert r.model is None and r.rel_model is None
+            assert r.model is None
+            assert r.rel_model is None
             assert r.model_source.startswith("n/a: ")
         if r.model_applies is not None:
             # the verdict is the two runs' agreement alone, whatever the model says
@@ -326,7 +354,8 @@ def test_compare_rows_na_or_unmeasured_are_never_yes_or_failures_of_the_model(d,
             if r.measured:
                 assert r.verdict == expected
         if not r.measured:
-            assert r.verdict.startswith("not measured: ") and r.ok
+            assert r.verdict.startswith("not measured: ")
+            assert r.ok
         else:
             assert r.verdict in ("yes", "FAIL")
     # identical runs never fail
@@ -357,15 +386,18 @@ def test_regime_thresholds_hold_on_the_reference_solver(where):
         outputs="window = [40, 80]",
     )
     sc = plan_scene(parse_scene(text), rtol=1e-2).scene
-    assert loading_regime(sc).regime == where and math.isclose(loading_regime(sc).ratio, factor, rel_tol=0.02)
+    assert loading_regime(sc).regime == where
+    assert math.isclose(loading_regime(sc).ratio, factor, rel_tol=0.02)
     peak = run_scene(sc, rtol=1e-2).observables()["leading_peak_force"]
     p = verdicts(sc)
     m, d, k = sc.mass, sc.diameter, sc.stiffness
     print(f"{where}: T = {loading_regime(sc).ratio:.3g} T_c, peak {peak:.4g} N; {loading_regime(sc).text}")
     if where == "short":
-        assert p["short_load_peak_force"].applies and not p["long_load_peak_force_upper"].applies
+        assert p["short_load_peak_force"].applies
+        assert not p["long_load_peak_force_upper"].applies
         assert abs(peak / p["short_load_peak_force"].value - 1) < 0.1
     else:
-        assert p["long_load_peak_force_upper"].applies and not p["short_load_peak_force"].applies
+        assert p["long_load_peak_force_upper"].applies
+        assert not p["short_load_peak_force"].applies
         lo = models.solitary_wave_peak_force(models.front_speed_lower(sc.loading.amplitude, k, m, d), k, m, d)
         assert 0.9 * lo < peak < p["long_load_peak_force_upper"].value

@@ -19,9 +19,12 @@ from .scenegen import overlap_fraction, scene_texts
 
 def test_every_backend_declares_what_the_code_asks_of_it():
     for name, backend in BACKENDS.items():
-        assert backend.name == name and backend_named(name) is backend
-        assert backend.implemented_properties and set(backend.implemented_properties) <= set(PROPERTIES)
-        assert backend.methods and set(backend.methods) <= set(METHODS)
+        assert backend.name == name
+        assert backend_named(name) is backend
+        assert backend.implemented_properties
+        assert set(backend.implemented_properties) <= set(PROPERTIES)
+        assert backend.methods
+        assert set(backend.methods) <= set(METHODS)
         assert backend.integrator(None) == backend.methods[0]
         assert set(backend.work_files) <= {"histories.npy", "histories.csv", "chain.dump"}
     fields = {f.name for f in dataclasses.fields(ChainSolution)}
@@ -35,7 +38,8 @@ def test_an_unknown_backend_or_method_is_refused_with_the_choices():
         integrator("reference", "euler")
     with pytest.raises(UsageError, match="the LAMMPS backend integrates with velocity Verlet only"):
         integrator(LAMMPS, "rk4")
-    assert integrator(REFERENCE, None) == "rk4" and integrator("lammps", None) == "verlet"
+    assert integrator(REFERENCE, None) == "rk4"
+    assert integrator("lammps", None) == "verlet"
 
 
 def test_the_file_backend_writes_its_input_and_names_its_command(tmp_path):

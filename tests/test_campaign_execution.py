@@ -34,7 +34,9 @@ def test_lammps_grid_of_27_points_equals_granchain_run_bit_for_bit(tmp_path):
     tables, report = run_campaign(c, ws, workers=2)
     df = tables["table"]
     assert (report.points, report.done, report.failed) == (27, 27, 0)
-    assert len(df) == 27 and set(df["status"]) == {"done"} and df["bead_steps"].gt(0).all()
+    assert len(df) == 27
+    assert set(df["status"]) == {"done"}
+    assert df["bead_steps"].gt(0).all()
     project = signac.get_project(str(ws), search=False)
     assert len(project) == 27
     for job in project:
@@ -293,9 +295,11 @@ def test_search_finds_the_single_wave_to_train_transition_following_a_to_the_min
     s = tables["search"]
     assert list(s["status"]) == ["found"] * 3
     assert (s["width"] <= 0.002).all()
-    assert list(s["quantity_low"]) == [1.0] * 3 and (s["quantity_high"] >= 2).all()
+    assert list(s["quantity_low"]) == [1.0] * 3
+    assert (s["quantity_high"] >= 2).all()
     slope = np.polyfit(np.log(s["loading.amplitude"]), np.log(s["transition"]), 1)[0]
     assert abs(slope / (-1 / 6) - 1) < 0.02, slope
     assert len(tables["table"]) == report.points == s["runs"].sum()
     again, report2 = run_campaign(c, tmp_path / "ws", workers=2)  # every bisection step from the cache
-    assert report2.ran == 0 and again["search"].equals(s)
+    assert report2.ran == 0
+    assert again["search"].equals(s)

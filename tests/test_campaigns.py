@@ -28,7 +28,7 @@ def campaign_text(
 
 
 @pytest.mark.parametrize(
-    "text, values, expected",
+    ("text", "values", "expected"),
     [
         ("impulse / amplitude", {"impulse": 0.4, "amplitude": 100.0}, 0.004),
         ("2 ** 3 ** 2", {}, 512.0),  # right-associative
@@ -44,7 +44,7 @@ def test_expression_values(text, values, expected):
 
 
 @pytest.mark.parametrize(
-    "text, fragment",
+    ("text", "fragment"),
     [
         ("__import__('os').system('true')", "is not allowed"),  # no calls, no strings, no attributes
         ("a[0]", "is not allowed"),
@@ -92,9 +92,11 @@ def test_grid_vary_zip_derive():
     assert len(points) == 3 * 2 * 2
     assert c.varied_keys == ("loading.amplitude", "impulse", "chain.beads", "run.end_time", "loading.duration")
     p = points[-1]
-    assert p.params["loading.amplitude"] == 100.0 and p.params["chain.beads"] == 24
+    assert p.params["loading.amplitude"] == 100.0
+    assert p.params["chain.beads"] == 24
     assert p.scene.loading.duration == pytest.approx(2e-5 / 100.0, rel=1e-15)
-    assert p.scene.chain.beads == 24 and p.scene.run.end_time == 1.2e-4
+    assert p.scene.chain.beads == 24
+    assert p.scene.run.end_time == 1.2e-4
     assert [q.params["loading.amplitude"] for q in points[::4]] == [1.0, 10.0, 100.0]
 
 
@@ -129,7 +131,7 @@ BAD_CAMPAIGNS = [
 ]
 
 
-@pytest.mark.parametrize("body, message", BAD_CAMPAIGNS)
+@pytest.mark.parametrize(("body", "message"), BAD_CAMPAIGNS)
 def test_bad_campaign_files_get_one_clear_message(body, message):
     with pytest.raises(CampaignError, match=message):
         parse_campaign(campaign_text(body)).points()
@@ -159,7 +161,9 @@ def test_search_file_validation():
     predicate = { quantity = "pulses", contact = 5, op = ">", value = 1 }
     """
     c = parse_campaign(campaign_text(good))
-    assert c.kind == "search" and c.search.scale == "log" and c.search.predicate.text == "pulses at contact 5 > 1"
+    assert c.kind == "search"
+    assert c.search.scale == "log"
+    assert c.search.predicate.text == "pulses at contact 5 > 1"
     assert c.varied_keys == ("loading.amplitude", "loading.duration")
     for bad, message in [
         (good.replace('key = "loading.duration"', 'key = "loading.amplitude"'), "also varied"),
@@ -176,7 +180,9 @@ def test_search_file_validation():
 def test_log_grid_values_are_readable_and_exact_at_the_ends():
     c = parse_campaign(campaign_text('[vary]\n"loading.amplitude" = { log = [1e2, 1e6], num = 9 }\n'))
     vals = [p["loading.amplitude"] for p in c.grid()]
-    assert vals[0] == 100.0 and vals[-1] == 1e6 and vals[2] == 1000.0
+    assert vals[0] == 100.0
+    assert vals[-1] == 1e6
+    assert vals[2] == 1000.0
     assert all(math.isclose(b / a, math.sqrt(10), rel_tol=1e-11) for a, b in zip(vals, vals[1:], strict=False))
 
 
@@ -230,20 +236,20 @@ def test_reference_grid_equals_run_scene_bit_for_bit(tmp_path):
     tables, report = run_campaign(c, ws, workers=2)
     df = tables["table"]
     assert (report.points, report.ran, report.done, report.failed) == (12, 12, 12, 0)
-    assert len(df) == 12 and set(df["status"]) == {"done"}
+    assert len(df) == 12
+    assert set(df["status"]) == {"done"}
     assert list(df.columns[:4]) == ["loading.amplitude", "loading.duration", "chain.beads", "outputs.histories"]
-    assert df["bead_steps"].gt(0).all() and df["wall_time"].gt(0).all()
+    assert df["bead_steps"].gt(0).all()
+    assert df["wall_time"].gt(0).all()
     assert set(df["regime"]) == {"single solitary wave"}
     assert df["max_peak_force_error"].notna().any()
     project = signac.get_project(str(ws), search=False)
     assert len(project) == 12
     for job in project:
         sp = job.statepoint()
-        assert (
-            sp["backend"] == "reference"
-            and sp["method"] == "verlet"
-            and sp["code"] == {"granchain": granchain.__version__, "source": wsp.source_hash()}
-        )
+        assert sp["backend"] == "reference"
+        assert sp["method"] == "verlet"
+        assert sp["code"] == {"granchain": granchain.__version__, "source": wsp.source_hash()}
         scene = scene_from_dict(sp["scene"])
         out = tmp_path / f"direct-{job.id}"
         run_scene(scene, backend="reference", method="verlet", rtol=1e-3, error_estimate=True, out=out)
@@ -252,7 +258,8 @@ def test_reference_grid_equals_run_scene_bit_for_bit(tmp_path):
     assert (report2.cached, report2.ran) == (12, 0)
     assert again["table"].equals(df)
     assert granchain.load_campaign(ws).equals(df)
-    assert (ws / "table.csv").is_file() and (ws / "table.parquet").is_file()
+    assert (ws / "table.csv").is_file()
+    assert (ws / "table.parquet").is_file()
 
 
 def test_failures_are_recorded_and_the_campaign_goes_on(tmp_path):
@@ -322,7 +329,8 @@ def test_a_worker_on_other_source_is_refused(tmp_path):
     )
     assert out["status"] == "failed"
     assert "install the same granchain on every worker" in out["message"]
-    assert f"source {wsp.source_hash()}" in out["message"] and "source 0000000000000000" in out["message"]
+    assert f"source {wsp.source_hash()}" in out["message"]
+    assert "source 0000000000000000" in out["message"]
     assert not (tmp_path / "job" / "run").exists()
 
 
@@ -407,7 +415,9 @@ def test_a_search_whose_predicate_never_flips_says_so(tmp_path, capsys):
     )
     tables, report = run_campaign(path, tmp_path / "ws", workers=1)
     row = tables["search"].iloc[0]
-    assert row["status"] == "no flip" and row["runs"] == 2 and report.ran == 2
+    assert row["status"] == "no flip"
+    assert row["runs"] == 2
+    assert report.ran == 2
     message = (
         "pulses at contact 20 > 1 is false at both ends of loading.duration's range [1e-06, 1e-05] "
         "(pulses = 1 and 1; loading.amplitude = 100): it never flips in the range; widen [search] range"
@@ -450,7 +460,8 @@ def test_cli_table_and_plot(tmp_path, capsys):
     )
     ws = tmp_path / "ws"
     df = granchain.campaign(data, ws, workers=2)
-    assert len(df) == 4 and set(df["status"]) == {"done"}
+    assert len(df) == 4
+    assert set(df["status"]) == {"done"}
     capsys.readouterr()
     assert main(["campaign", "table", str(ws), "--csv"]) == 0
     out = capsys.readouterr().out
@@ -473,7 +484,8 @@ def test_cli_table_and_plot(tmp_path, capsys):
         == 0
     )
     png = Path(capsys.readouterr().out.strip())
-    assert png.name == "max_peak_force-vs-loading.amplitude-by-loading.duration.png" and png.stat().st_size > 1000
+    assert png.name == "max_peak_force-vs-loading.amplitude-by-loading.duration.png"
+    assert png.stat().st_size > 1000
     assert main(["campaign", "plot", str(ws), "--x", "loading.amplitude", "--y", "wave_sped"]) == 2
     assert "--y 'wave_sped' is not a column of the table" in capsys.readouterr().err
     assert main(["campaign", "table", str(tmp_path)]) == 2
@@ -487,12 +499,13 @@ def test_the_bundled_fig1_campaign_reads():
     from granchain.campaigns.spec import load_campaign_file
 
     c = load_campaign_file(resources.files("granchain.campaigns") / "fig1-transition.toml")
-    assert c.kind == "search" and c.outer_keys == ("loading.amplitude",)
+    assert c.kind == "search"
+    assert c.outer_keys == ("loading.amplitude",)
     validate(c)
 
 
 @pytest.mark.parametrize(
-    "body, message",
+    ("body", "message"),
     [
         (
             '[vary]\n"loading.amplitude" = { log = [1.0, 10.0], num = 1000000000000 }\n',

@@ -144,7 +144,8 @@ def test_stopped_run_really_stopped_early(tmp_path):
     job = render(tmp_path, STOPPED)
     assert lmp(job).returncode == 0
     s = collect(job).summary()
-    assert s["end_time"] < 4e-4 and s["steps"] < 4e-4 / 2e-8
+    assert s["end_time"] < 4e-4
+    assert s["steps"] < 4e-4 / 2e-8
 
 
 def test_results_dump_holds_every_result_column(tmp_path):
@@ -241,7 +242,9 @@ def test_an_unfinished_run_is_refused_with_the_logs_last_lines(tmp_path):
     with pytest.raises(CollectError) as e:
         collect(job)
     msg = str(e.value)
-    assert "did not finish" in msg and RESULTS_DUMP in msg and "Last lines of log.lammps" in msg
+    assert "did not finish" in msg
+    assert RESULTS_DUMP in msg
+    assert "Last lines of log.lammps" in msg
     last = (job / "log.lammps").read_text().strip().splitlines()[-1]
     assert last in msg
     assert listing(job) == before  # nothing written, nothing half-written
@@ -255,7 +258,8 @@ def test_a_cut_off_results_dump_is_refused(tmp_path):
     (job / RESULTS_DUMP).write_text(text[: len(text) // 2])
     with pytest.raises(CollectError, match="cut off"):
         collect(job)
-    assert not (job / "summary.json").exists() and not (job / "peaks.csv").exists()
+    assert not (job / "summary.json").exists()
+    assert not (job / "peaks.csv").exists()
 
 
 def test_a_log_that_did_not_end_is_refused(tmp_path):
@@ -286,7 +290,8 @@ def test_a_scene_that_does_not_match_the_deck_is_refused(tmp_path):
     (job / "scene.toml").write_text(changed)
     with pytest.raises(CollectError, match="scene.toml: does not match deck.lmp"):
         collect(job)
-    assert not (job / "summary.json").exists() and not (job / "peaks.csv").exists()
+    assert not (job / "summary.json").exists()
+    assert not (job / "peaks.csv").exists()
     (job / "scene.toml").write_text(toml)  # the right one back: it collects
     collect(job)
     assert json.loads((job / "summary.json").read_text())["backend"] == "lammps"

@@ -36,7 +36,8 @@ def test_compare_laws_on_the_reference_writes_one_table_and_one_figure(tmp_path)
     assert [r.law for r in cmp.runs] == ["thornton", "bilinear"]
     for r in cmp.runs:
         assert r.result.scene.contact.law == r.law
-        assert r.peak_force.size >= 6 and np.all(np.isfinite(r.peak_force))
+        assert r.peak_force.size >= 6
+        assert np.all(np.isfinite(r.peak_force))
         # the decay curve: no holes, from contact 1
         assert list(r.contacts) == list(range(1, r.contacts.size + 1))
     out = write_law_comparison(cmp, tmp_path / "laws")
@@ -49,7 +50,8 @@ def test_compare_laws_on_the_reference_writes_one_table_and_one_figure(tmp_path)
 
 def test_bad_laws_fail_before_any_run(tmp_path, capsys):
     assert main(["compare-laws", "plastic-short-impulse", "--laws", "thornton,nope", "--out", str(tmp_path / "x")]) == 2
-    assert "nope" in capsys.readouterr().err and not (tmp_path / "x").exists()
+    assert "nope" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
     with pytest.raises(UsageError, match="two different"):
         compare_laws(resolve_scene("plastic-short-impulse"), ("bilinear", "bilinear"))
 
@@ -75,7 +77,7 @@ def test_compare_laws_quiet_prints_no_progress(tmp_path, capsys, monkeypatch, qu
 
 
 @pytest.mark.parametrize(
-    "decay,power,transition,noise", [(0.3, 1.5, 15, 0.02), (0.15, 0.9, 25, 0.01), (0.5, 2.0, 10, 0.05)]
+    ("decay", "power", "transition", "noise"), [(0.3, 1.5, 15, 0.02), (0.15, 0.9, 25, 0.01), (0.5, 2.0, 10, 0.05)]
 )
 def test_decay_fit_uncertainties_cover_the_truth(decay, power, transition, noise):
     """On peak-force curves exponential then inverse with log-normal scatter (200 fixed draws), the

@@ -231,7 +231,8 @@ def test_a_failed_reference_run_raises_its_error_and_leaves_nothing(tmp_path, mo
     monkeypatch.setattr(runner, "run_lammps", lammps)
     monkeypatch.setattr(run_mod, "run_reference", reference)
     one = error_of(p, tmp_path / "one", monkeypatch, 1, estimate, capsys)
-    assert "invented for the test" in one and lammps_runs == []
+    assert "invented for the test" in one
+    assert lammps_runs == []
     two = error_of(p, tmp_path / "two", monkeypatch, 2, estimate, capsys)
     assert said(two) == said(one)
     # without companions LAMMPS started alongside and finished its run: its directory is gone
@@ -261,7 +262,8 @@ def test_a_failed_lammps_run_raises_its_error_after_the_reference(tmp_path, monk
     monkeypatch.setattr(runner, "render_deck", broken)
     monkeypatch.setattr(run_mod, "run_reference", reference)
     one = error_of(p, tmp_path / "one", monkeypatch, 1, estimate, capsys)
-    assert "bogus_command" in one and done[0] == 1.0
+    assert "bogus_command" in one
+    assert done[0] == 1.0
     done.clear()
     two = error_of(p, tmp_path / "two", monkeypatch, 2, estimate, capsys)
     assert said(two).splitlines()[:2] == said(one).splitlines()[:2]
@@ -284,12 +286,14 @@ def test_a_step_lammps_refuses_fails_before_any_run(tmp_path, monkeypatch, capsy
     monkeypatch.setattr(runner, "run_lammps", lambda *a, **k: runs.append("lammps") or real_lammps(*a, **k))
     monkeypatch.setattr(run_mod, "run_reference", lambda *a, **k: runs.append("reference") or real_reference(*a, **k))
     two = error_of(p, tmp_path / "two", monkeypatch, 2, "off", capsys)
-    assert "above the stability limit" in said(two) and runs == []
+    assert "above the stability limit" in said(two)
+    assert runs == []
     with pytest.raises(UnstableTimestepError):
         compare_mod.compare_scene(parse_scene(p.read_text(), source=str(p)))
     assert runs == []
     one = error_of(p, tmp_path / "one", monkeypatch, 1, "off", capsys)
-    assert said(one) == said(two) and runs == ["reference"]
+    assert said(one) == said(two)
+    assert runs == ["reference"]
 
 
 def test_shared_runs_are_made_once_across_threads_and_waits_give_up_when_abandoned(monkeypatch):
@@ -321,7 +325,8 @@ def test_shared_runs_are_made_once_across_threads_and_waits_give_up_when_abandon
         a.join(60)
         b.join(60)
     assert made == ["a"]  # b waited for a's run
-    assert got["a"].solution is got["b"].solution and got["a"] is not got["b"]
+    assert got["a"].solution is got["b"].solution
+    assert got["a"] is not got["b"]
 
     shared = SharedRuns()
     never = Future()
@@ -337,4 +342,5 @@ def test_shared_runs_are_made_once_across_threads_and_waits_give_up_when_abandon
     t.start()
     shared.abandon()
     t.join(10)
-    assert not t.is_alive() and len(errors) == 1
+    assert not t.is_alive()
+    assert len(errors) == 1

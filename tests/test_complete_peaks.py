@@ -46,7 +46,8 @@ def default_run(tmp_path_factory):
 def test_default_scene_peaks_at_the_end_are_incomplete(default_run):
     res, out = default_run
     s = res.solution
-    assert s.complete.dtype == bool and s.complete.shape == s.peak_force.shape
+    assert s.complete.dtype == bool
+    assert s.complete.shape == s.peak_force.shape
     # the contacts 97-99: "peaks" of 24643 N, 957 N and 1 N at time_of_peak = end_time
     at_end = np.flatnonzero(s.time_of_peak >= s.end_time)
     assert {96, 97, 98} <= set(at_end.tolist())
@@ -54,7 +55,8 @@ def test_default_scene_peaks_at_the_end_are_incomplete(default_run):
     # contact 96 peaked 3 us before the end (its force is still at 82% of the peak): not complete either
     assert not s.complete[95]
     # every contact the wave has passed is complete
-    assert s.complete[:90].all() and s.complete.sum() == 95
+    assert s.complete[:90].all()
+    assert s.complete.sum() == 95
     # peaks.csv and summary.json say so
     p = read_peaks(out)
     assert p["complete"].dtype == bool
@@ -62,7 +64,8 @@ def test_default_scene_peaks_at_the_end_are_incomplete(default_run):
     summ = read_summary(out)
     st_ = summ["peaks"]
     assert st_["complete"] + st_["incomplete"] + st_["unreached"] == len(p["contact"])
-    assert st_["incomplete"] == 4 and st_["unreached"] == 0
+    assert st_["incomplete"] == 4
+    assert st_["unreached"] == 0
     assert st_["complete"] == int(np.sum(s.complete))
     assert summ["observables_missing"] == {}
 
@@ -74,11 +77,14 @@ def test_default_scene_cut_short_leading_peak_missing_with_reason(default_run, t
     sc = _with_end_time(resolve_scene("default"), t74 - 1e-6)
     short = run_scene(sc, out=tmp_path / "r")
     s = short.solution
-    assert np.isfinite(s.time_of_peak[73]) and not s.complete[73]
+    assert np.isfinite(s.time_of_peak[73])
+    assert not s.complete[73]
     obs = short.observables()
-    assert obs["leading_peak_force"] is None and obs["leading_peak_force_nondim"] is None
+    assert obs["leading_peak_force"] is None
+    assert obs["leading_peak_force_nondim"] is None
     missing = read_summary(tmp_path / "r")["observables_missing"]
-    assert "no leading pulse yet" in missing["leading_peak_force"] and "74" in missing["leading_peak_force"]
+    assert "no leading pulse yet" in missing["leading_peak_force"]
+    assert "74" in missing["leading_peak_force"]
     # the wave speed is fitted through the arrival times of the window's passed leading pulses only
     a, b = sc.window
     c = np.arange(a, b + 1)
@@ -98,7 +104,8 @@ def test_no_complete_peak_means_no_observables_and_reasons():
     summ = res.summary()
     obs, missing = summ["observables"], summ["observables_missing"]
     for name in ("leading_peak_force", "wave_speed", "max_peak_force"):
-        assert obs[name] is None and missing[name]
+        assert obs[name] is None
+        assert missing[name]
     assert summ["peaks"]["complete"] == 0
 
 
@@ -138,7 +145,8 @@ def test_complete_means_the_force_fell_and_observables_use_only_complete(scene, 
     c = sol.complete
     assert np.array_equal(c, complete_peaks(sol.peak_force, sol.force_min_after_peak, sol.time_of_peak, f0))
     # complete: reached, peaked before the end, and the force has fallen to the threshold since
-    assert np.all(np.isfinite(sol.time_of_peak[c])) and np.all(sol.time_of_peak[c] < sol.end_time)
+    assert np.all(np.isfinite(sol.time_of_peak[c]))
+    assert np.all(sol.time_of_peak[c] < sol.end_time)
     rise = sol.peak_force - f0
     assert np.all(sol.force_min_after_peak[c] - f0 <= PEAK_PASSED_FRACTION * rise[c])
     # the same answer from the recorded force histories (every step, every contact); RK4 also samples
@@ -165,9 +173,8 @@ def test_complete_means_the_force_fell_and_observables_use_only_complete(scene, 
     assert (obs["leading_peak_force"] is not None) == bool(np.isfinite(sol.leading_pulse_force[b - 1]))
     # a leading pulse has passed only at a reached contact, never after the largest peak
     lead = np.isfinite(sol.leading_pulse_force)
-    assert np.all(np.isfinite(sol.time_of_peak[lead])) and np.all(
-        sol.leading_pulse_time[lead] <= sol.time_of_peak[lead]
-    )
+    assert np.all(np.isfinite(sol.time_of_peak[lead]))
+    assert np.all(sol.leading_pulse_time[lead] <= sol.time_of_peak[lead])
     assert obs["max_peak_contact"] is None or c[obs["max_peak_contact"] - 1]
 
 
@@ -175,7 +182,7 @@ def test_complete_means_the_force_fell_and_observables_use_only_complete(scene, 
 
 
 @pytest.mark.parametrize(
-    "law,extra",
+    ("law", "extra"),
     [("hertz", ""), ("bilinear", ""), ("hertz", '[precompression]\nforce = 50.0\n[boundary]\nfar_end = "wall"\n')],
 )
 def test_lammps_and_reference_agree_on_complete(law, extra):
@@ -197,10 +204,13 @@ def test_lammps_and_reference_agree_on_complete(law, extra):
     scale = np.max(b.peak_force)
     assert np.max(np.abs(a.force_min_after_peak[ok] - b.force_min_after_peak[ok])) < 1e-9 * scale
     # the run ends with the wave inside the chain: some complete, some not yet, some not reached
-    assert b.complete.sum() >= 5 and (ok & ~b.complete).sum() >= 2 and (~ok).sum() >= 2
+    assert b.complete.sum() >= 5
+    assert (ok & ~b.complete).sum() >= 2
+    assert (~ok).sum() >= 2
     assert lam.summary()["peaks"] == ref.summary()["peaks"]
     oa, ob = lam.observables(), ref.observables()
-    assert oa.keys() == ob.keys() and (law == "bilinear" or ob["wave_speed"] is not None)
+    assert oa.keys() == ob.keys()
+    assert law == "bilinear" or ob["wave_speed"] is not None
     for key, value in ob.items():
         assert oa[key] == (value if value is None or isinstance(value, list) else pytest.approx(value, rel=1e-6)), key
 
@@ -223,7 +233,8 @@ def test_final_energies_are_the_end_of_run_state(law):
     for res in (lam, ref):
         s, summ = res.solution, res.summary()
         cons = summ["conservation"]
-        assert s.energy_time[-1] == s.end_time == summ["end_time"] and cons["time"] == s.end_time
+        assert s.energy_time[-1] == s.end_time == summ["end_time"]
+        assert cons["time"] == s.end_time
         assert cons["kinetic"] == pytest.approx(_kinetic(sc, s.velocity), rel=1e-12)
     la, ra = lam.summary()["conservation"], ref.summary()["conservation"]
     for key in ("kinetic", "potential", "dissipated", "work"):
@@ -245,4 +256,5 @@ def test_stopped_lammps_run_reports_the_state_it_stopped_in():
     assert a.kinetic[-1] == pytest.approx(_kinetic(sc, a.velocity), rel=1e-12)
     assert a.kinetic[-1] == pytest.approx(b.kinetic[-1], rel=1e-9)
     # the contact that stopped the run is complete in both (the same criterion)
-    assert a.complete[11] and b.complete[11]
+    assert a.complete[11]
+    assert b.complete[11]

@@ -155,7 +155,8 @@ def test_builtin_granular_yardstick_ignores_the_title():
     evil = replace(BASE, title=words, source=words)
     plain = replace(BASE, title="plain title", source="plain.toml")
     d, p = render_deck(evil, yardstick="builtin").deck, render_deck(plain, yardstick="builtin").deck
-    assert commands(d) == commands(p) and len(d.splitlines()) == len(p.splitlines())
+    assert commands(d) == commands(p)
+    assert len(d.splitlines()) == len(p.splitlines())
     assert "pair_style      granular" in commands(d)
 
 
@@ -172,7 +173,8 @@ def test_scene_file_title_and_name_are_inert(title, name):
     assume(not any(0xD800 <= ord(c) <= 0xDFFF for c in title))  # TOML holds no surrogates
     text = f"title = {toml_string(title)}\n" + BASE_TEXT.split("\n", 1)[1]
     scene = parse_scene(text, source=name)
-    assert scene.title == title and scene.source == name
+    assert scene.title == title
+    assert scene.source == name
     assert_same_commands(render_deck(scene))
 
 

@@ -92,14 +92,17 @@ def test_undeclared_effects_leave_no_trace():
         assert word not in deck, word
     assert set(atom_types(render_deck(plain).data)) == {1}
     p = ChainProblem.from_scene(plain)
-    assert p.wall_law is None and p.dashpot == 0.0
+    assert p.wall_law is None
+    assert p.dashpot == 0.0
     sol = run_reference(plain, "rk4").solution
-    assert sol.wall_peak_force is None and sol.dissipated[-1] == 0.0
+    assert sol.wall_peak_force is None
+    assert sol.dissipated[-1] == 0.0
     walled_scene = scene("hertz", "wall", end_time=4e-4, timestep=1e-8)
     walled = render_deck(walled_scene)
     # the wall is one atom of a type of its own, the last; the beads keep theirs
     types = atom_types(walled.data)
-    assert types[-1] == AtomLayout.of(walled_scene).types["wall"] != 1 and set(types[:-1]) == {1}
+    assert types[-1] == AtomLayout.of(walled_scene).types["wall"] != 1
+    assert set(types[:-1]) == {1}
     assert "dashpot" not in walled.deck
 
 
@@ -133,7 +136,8 @@ def test_striker_both_backends(law, striker):
         f"{law} {striker}: striker peak {lam.striker_peak_force:.6g} N, striker velocity after "
         f"{lam.striker_velocity:.4g} m/s; peaks {rel(lam.peak_force, ref.peak_force):.1e}"
     )
-    assert rel(lam.peak_force, ref.peak_force) < 1e-9 and rel(lam.velocity, ref.velocity) < 1e-8
+    assert rel(lam.peak_force, ref.peak_force) < 1e-9
+    assert rel(lam.velocity, ref.velocity) < 1e-8
     assert rel(lam.history_force, ref.history_force) < 1e-8
     assert lam.striker_peak_force == pytest.approx(ref.striker_peak_force, rel=1e-9)
     assert lam.striker_velocity == pytest.approx(ref.striker_velocity, rel=1e-8, abs=1e-9)
@@ -145,7 +149,8 @@ def test_striker_both_backends(law, striker):
 
 def test_no_striker_no_trace():
     deck = render_deck(make_scene())
-    assert "striker" not in deck.deck and set(atom_types(deck.data)) == {1}
+    assert "striker" not in deck.deck
+    assert set(atom_types(deck.data)) == {1}
     assert ChainProblem.from_scene(make_scene()).striker_mass is None
 
 
@@ -186,15 +191,17 @@ def _per_bead_scene(kind, law="hertz"):
     return parse_scene(text, source=f"{kind}.toml")
 
 
-@pytest.mark.parametrize("kind,law", [("taper", "hertz"), ("impurity", "hertz"), ("taper", "bilinear")])
+@pytest.mark.parametrize(("kind", "law"), [("taper", "hertz"), ("impurity", "hertz"), ("taper", "bilinear")])
 def test_per_bead_radius_both_backends(kind, law):
     sc = _per_bead_scene(kind, law)
     assert sc.per_bead
     p = ChainProblem.from_scene(sc)
-    assert np.ptp(p.mass) > 0 and np.ptp(np.asarray(p.law.k)) > 0  # masses and stiffnesses follow the beads
+    assert np.ptp(p.mass) > 0
+    assert np.ptp(np.asarray(p.law.k)) > 0
     lam = run_lammps(sc)[0].solution
     ref = run_reference(sc, "verlet").solution
-    assert rel(lam.peak_force, ref.peak_force) < 1e-9 and rel(lam.velocity, ref.velocity) < 1e-8
+    assert rel(lam.peak_force, ref.peak_force) < 1e-9
+    assert rel(lam.velocity, ref.velocity) < 1e-8
     assert rel(lam.history_force, ref.history_force) < 1e-8
     assert lam.momentum == pytest.approx(0.1, rel=1e-12)
     rk4 = run_reference(sc, "rk4").solution
@@ -212,7 +219,8 @@ def test_per_bead_material_list_and_uniform_lists():
     sc = parse_scene(base.replace('material = "brass"', 'material = ["brass", "brass", "brass", "brass"]'))
     assert not sc.per_bead  # a uniform list is the plain chain
     deck = render_deck(make_scene())
-    assert "taper" not in deck.deck and set(atom_types(deck.data)) == {1}
+    assert "taper" not in deck.deck
+    assert set(atom_types(deck.data)) == {1}
 
 
 # ---- the effect registry (granchain.physics.effects): properties every registered
@@ -239,7 +247,8 @@ def with_effects(effects, beads=12):
 
 
 def test_the_registry_is_the_only_list():
-    assert len({e.name for e in REGISTRY.values()}) == len(REGISTRY) and all(e.label for e in REGISTRY.values())
+    assert len({e.name for e in REGISTRY.values()}) == len(REGISTRY)
+    assert all(e.label for e in REGISTRY.values())
     assert [e.section for e in SECTIONED] == [s for s in SECTIONS if s in {e.section for e in SECTIONED}]
     assert set(SECTIONS) >= {e.section for e in SECTIONED}
     assert [f.name for f in dataclasses.fields(Effects)] == list(effect_fields())
@@ -247,14 +256,16 @@ def test_the_registry_is_the_only_list():
     for e in REGISTRY.values():
         assert e.declaration, e.name
         for slot, template in e.deck_blocks.items():
-            assert slot in DECK_SLOTS and (TEMPLATES / template).is_file(), (e.name, slot, template)
+            assert slot in DECK_SLOTS, (e.name, slot, template)
+            assert (TEMPLATES / template).is_file(), (e.name, slot, template)
 
 
 @PROPERTY
 @given(data=st.data())
 def test_every_declared_key_is_validated_with_a_message_naming_it(data):
     e = data.draw(st.sampled_from(SECTIONED), label="effect")
-    assert set(e.example) == set(e.scene_keys) and set(e.invalid) <= set(e.scene_keys)
+    assert set(e.example) == set(e.scene_keys)
+    assert set(e.invalid) <= set(e.scene_keys)
     key = data.draw(st.sampled_from(sorted(e.invalid)), label="key")
     bad = data.draw(st.sampled_from(e.invalid[key]), label="value")
     scene_data = base_data()
@@ -296,7 +307,8 @@ def test_any_combination_is_refused_or_gives_exactly_its_effects(chosen):
     sc = scene_from_dict(with_effects(effects), source="fx.toml")
     assert [e.name for e in active_effects(sc)] == [e.name for e in effects]
     again = scene_from_dict(tomllib.loads(sc.to_toml()), source="again.toml")
-    assert again.effects == sc.effects and [e.name for e in active_effects(again)] == [e.name for e in effects]
+    assert again.effects == sc.effects
+    assert [e.name for e in active_effects(again)] == [e.name for e in effects]
     # every active effect's deck blocks are in the deck, no inactive effect's
     deck = render_deck(sc).deck
     blocks = effect_blocks(sc)
@@ -306,7 +318,8 @@ def test_any_combination_is_refused_or_gives_exactly_its_effects(chosen):
             if e in effects:
                 assert block_heading(template) in deck, (e.name, template)
     omega, _ = highest_frequency(sc)
-    assert np.isfinite(omega) and omega > 0
+    assert np.isfinite(omega)
+    assert omega > 0
 
 
 def block_heading(template: str) -> str:

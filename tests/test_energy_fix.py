@@ -30,7 +30,8 @@ def test_the_options_differ_only_in_the_energy_pieces():
     assert re.search(r"^fix\s+energy all chain/energy \d+ energy.txt title .* dissipated dissipated$", fix, re.M)
     assert re.search(r"^fix_modify\s+energy watch \S+ v_watch_work watch_max$", fix, re.M)
     assert not re.search(r"^fix\s+(watch_energy|watch_rel)\s", fix, re.M)
-    assert re.search(r"^fix\s+energy all print ", old, re.M) and re.search(r"^fix\s+watch_energy all halt", old, re.M)
+    assert re.search(r"^fix\s+energy all print ", old, re.M)
+    assert re.search(r"^fix\s+watch_energy all halt", old, re.M)
     assert "chain/energy" not in old
     # precompression's extra column x[N] is read by the fix itself
     pre = render_deck(load_scene("effect-precompression"), options=FIX).deck
@@ -40,7 +41,8 @@ def test_the_options_differ_only_in_the_energy_pieces():
 def outputs_of(deck: str, data: str, work, np_: int = 1) -> dict[str, bytes]:
     _, work = run_deck(deck, data, np_=np_, work_dir=work)
     got = {f: (work / f).read_bytes() for f in OUTPUTS if (work / f).exists()}
-    assert "energy.txt" in got and "peaks.dump" in got
+    assert "energy.txt" in got
+    assert "peaks.dump" in got
     return got
 
 
@@ -53,7 +55,8 @@ def assert_same_bytes(scene, tmp_path, np_: int = 1) -> None:
     for name in got_a:
         assert got_a[name] == got_b[name], name
     rows = np.loadtxt(tmp_path / "fix" / "energy.txt", comments="#", ndmin=2)
-    assert rows.shape[0] > 3 and np.all(np.isfinite(rows))
+    assert rows.shape[0] > 3
+    assert np.all(np.isfinite(rows))
 
 
 @pytest.mark.parametrize(
@@ -132,14 +135,21 @@ def test_a_broken_balance_stops_both_on_the_same_step_and_value(tmp_path, name):
     first_run = int(re.search(r"^run\s+(\d+)", a.deck, re.M).group(1))
     (fix_id, step, value), text_a = _halt(_kicked(a.deck, 20.0), a.data, tmp_path / "fix")
     (old_id, old_step, old_value), text_b = _halt(_kicked(b.deck, 20.0), b.data, tmp_path / "print")
-    assert fix_id == old_id == "watch_energy" and step == old_step and int(step) > first_run
+    assert fix_id == old_id == "watch_energy"
+    assert step == old_step
+    assert int(step) > first_run
     v, w = float(value), float(old_value)
-    assert v > 0 and w > 0 and int(v) == int(w)  # created; the atom
+    assert v > 0
+    assert w > 0
+    assert int(v) == int(w)
     assert abs((v - int(v)) - (w - int(w))) < 1e-12
-    assert text_a == text_b and text_a.count(b"\n") > 2
+    assert text_a == text_b
+    assert text_a.count(b"\n") > 2
     err = LammpsError(f"Fix chain/energy condition watch_energy met on step {step} with value {value}")
     broken = invariant_from_lammps(err, sc)
-    assert broken is not None and broken.invariant == "energy balance" and broken.step == int(step)
+    assert broken is not None
+    assert broken.invariant == "energy balance"
+    assert broken.step == int(step)
 
 
 def test_samples_before_another_stop_are_written(tmp_path):
@@ -156,7 +166,8 @@ def test_samples_before_another_stop_are_written(tmp_path):
             run_deck(deck, d.data, work_dir=tmp_path / tag)
         got.append((tmp_path / tag / "energy.txt").read_bytes())
     rows = np.loadtxt(tmp_path / "fix" / "energy.txt", comments="#", ndmin=2)
-    assert got[0] == got[1] and rows.shape[0] > 10
+    assert got[0] == got[1]
+    assert rows.shape[0] > 10
 
 
 @pytest.mark.parametrize(

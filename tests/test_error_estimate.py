@@ -51,7 +51,8 @@ def test_granchain_run_gives_every_peak_an_error_by_default(tmp_path, backend, c
     assert e["order"] == (2 if backend == "lammps" else 4)
     assert len(e["companion_timesteps"]) == 2
     assert e["companion_timesteps"][0] == pytest.approx(2 * s["timestep"])
-    assert s["error_estimate"] is not None and 0 < s["error_estimate"] < 1e-2
+    assert s["error_estimate"] is not None
+    assert 0 < s["error_estimate"] < 1e-2
     # every complete peak has an estimate or a status that says why not; never a silent blank
     done = peaks["complete"]
     has = np.isfinite(peaks["peak_force_error"][done])
@@ -60,7 +61,8 @@ def test_granchain_run_gives_every_peak_an_error_by_default(tmp_path, backend, c
     assert all(st.startswith(("unreliable", "not measured", "order not checked")) for st in statuses[~has])
     assert s["errors"]["observables"]["leading_peak_force"]["status"]
     printed = capsys.readouterr().out
-    assert "largest peak-force error" in printed and "+-" in printed
+    assert "largest peak-force error" in printed
+    assert "+-" in printed
 
 
 BILINEAR_CHAIN = """
@@ -109,10 +111,12 @@ def test_a_plastic_verlet_run_is_measured_against_rk4_unless_rk4_cannot(tmp_path
     e = json.loads((out / "summary.json").read_text())["errors"]
     statuses = read_peaks(out)["error_status"]
     if dashpot:
-        assert e["companion_method"] is None and e["order"] == 1
+        assert e["companion_method"] is None
+        assert e["order"] == 1
         assert not any(st.startswith("against RK4") for st in statuses)
     else:
-        assert e["companion_method"] == "rk4" and "RK4" in e["method"]
+        assert e["companion_method"] == "rk4"
+        assert "RK4" in e["method"]
         assert e["error_estimate"] is not None
         assert sum(st.startswith("against RK4") for st in statuses) >= 0.5 * len(statuses)
 
@@ -124,15 +128,18 @@ def test_error_estimate_off_runs_no_companion(tmp_path):
     assert main(["run", str(p), "--backend", "lammps", "--out", str(out), "--quiet", "--error-estimate", "off"]) == 0
     assert "peak_force_error" not in read_peaks(out)
     s = json.loads((out / "summary.json").read_text())
-    assert s["errors"] is None and s["error_estimate"] is None
+    assert s["errors"] is None
+    assert s["error_estimate"] is None
 
 
 def test_companions_change_only_the_step_and_drop_unneeded_outputs():
     sc, _ = plan_for(parse_scene(WALL_CHAIN, source="wall.toml"), "lammps", None, 1e-3)
     c = companion_scene(sc, 4.0)
-    assert c.run.timestep == 4 * sc.run.timestep and c.run.end_time == sc.run.end_time
+    assert c.run.timestep == 4 * sc.run.timestep
+    assert c.run.end_time == sc.run.end_time
     assert c.run.stop_after_contact == sc.run.stop_after_contact
-    assert c.outputs.histories == () and c.outputs.snapshots == ()
+    assert c.outputs.histories == ()
+    assert c.outputs.snapshots == ()
     assert replace(c, run=sc.run, outputs=sc.outputs) == sc
 
 
@@ -145,7 +152,8 @@ def test_verlet_with_a_dashpot_is_estimated_at_first_order():
     ok = got.errors.peak_force.reliable & got.solution.complete & fine.complete
     true = np.abs(got.solution.peak_force[ok] - fine.peak_force[ok])
     ratio = got.errors.peak_force.error[ok] / true
-    assert ok.sum() > 50 and np.all((ratio > 1 / 3) & (ratio < 3))
+    assert ok.sum() > 50
+    assert np.all((ratio > 1 / 3) & (ratio < 3))
 
 
 CASES = (
@@ -181,7 +189,7 @@ CASES = (
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name,integ", CASES)
+@pytest.mark.parametrize(("name", "integ"), CASES)
 def test_estimated_error_is_within_a_factor_3_of_the_true_error(name, integ):
     """The validation: estimated / true error (true: a run at dt / 16) in [1/3, 3] wherever
     the true error is above round-off and an estimate is given, and an estimate for most peaks.
@@ -224,10 +232,12 @@ def test_rk4_with_a_dashpot_runs_no_companion_and_says_why(tmp_path, dashpot):
     assert main(["run", str(p), "--backend", "reference", "--method", "rk4", "--out", str(out), "--quiet"]) == 0
     s = json.loads((out / "summary.json").read_text())
     if dashpot:
-        assert s["error_estimate"] is None and "dashpot" in s["errors"]["why_none"]
+        assert s["error_estimate"] is None
+        assert "dashpot" in s["errors"]["why_none"]
         assert s["errors"]["companion_timesteps"] == []
     else:
-        assert s["error_estimate"] is not None and len(s["errors"]["companion_timesteps"]) == 2
+        assert s["error_estimate"] is not None
+        assert len(s["errors"]["companion_timesteps"]) == 2
 
 
 def test_a_companion_that_breaks_an_invariant_leaves_the_run_standing():
@@ -250,7 +260,8 @@ def test_a_companion_that_breaks_an_invariant_leaves_the_run_standing():
         return run_one
 
     none = estimate_errors(got, fails_at(2.0), "verlet", plan.stable_timestep)
-    assert none.peak_force is None and "2 dt companion run failed" in none.why_none
+    assert none.peak_force is None
+    assert "2 dt companion run failed" in none.why_none
     calls.clear()
     no_order = estimate_errors(got, fails_at(4.0), "verlet", plan.stable_timestep)
     assert "4 dt companion run failed" in no_order.why_none_4dt
@@ -274,7 +285,8 @@ def test_a_measured_error_above_rtol_is_said_after_the_run():
         got = run_scene(coarse, method="verlet", error_estimate=True)
     assert got.errors.error_estimate > 1e-3
     said = [str(w.message) for w in caught if issubclass(w.category, AccuracyWarning) and "measured" in str(w.message)]
-    assert len(said) == 1 and f"contact {got.errors.error_estimate_contact}" in said[0]
+    assert len(said) == 1
+    assert f"contact {got.errors.error_estimate_contact}" in said[0]
 
 
 def test_compare_counts_a_difference_only_beyond_rtol_plus_both_errors():
@@ -294,11 +306,13 @@ def test_granchain_compare_shows_both_error_bars(tmp_path, capsys):
     p.write_text(WALL_CHAIN)
     assert main(["compare", str(p), "--out", str(tmp_path / "c"), "--quiet"]) == 0
     out = capsys.readouterr().out
-    assert "lammps_error" in out and "reference_error" in out
+    assert "lammps_error" in out
+    assert "reference_error" in out
     header = (tmp_path / "c" / "compare.csv").read_text().splitlines()[0].split(",")
     rows = [line.split(",") for line in (tmp_path / "c" / "compare.csv").read_text().splitlines()[1:]]
     lead = next(r for r in rows if r[0] == "leading_peak_force")
-    assert float(lead[header.index("lammps_error")]) > 0 and float(lead[header.index("reference_error")]) > 0
+    assert float(lead[header.index("lammps_error")]) > 0
+    assert float(lead[header.index("reference_error")]) > 0
 
 
 @pytest.mark.slow

@@ -34,7 +34,8 @@ def test_the_deck_lays_the_ladder_the_fronts_module_reads():
     sc, _ = plan_for(parse_scene(PRECOMPRESSED.format(beads=30, material="brass", radius=4.76e-3, f0=100.0, amp=0.1)))
     deck = render_deck(sc).deck
     m = re.search(r"^pair_style\s+chain/\S+ .*\bladder (\d+) (\d+)", deck, re.M)
-    assert m and (int(m.group(1)), int(m.group(2))) == (LADDER_PER_OCTAVE, LADDER_SLOTS)
+    assert m
+    assert (int(m.group(1)), int(m.group(2))) == (LADDER_PER_OCTAVE, LADDER_SLOTS)
     yardstick = render_deck(sc, yardstick="builtin").deck  # (its ladder stays empty: pair_style granular)
     for d in (deck, yardstick):
         assert re.search(rf"^fix\s+\S+ all property/atom d2_ladder {LADDER_SLOTS + 1}$", d, re.M)
@@ -133,7 +134,8 @@ def test_lammps_and_reference_verlet_climb_the_same_ladder(scene):
     for c, (a, b) in enumerate(zip(lam.front_ladder, ref.front_ladder, strict=True)):
         if a[0] != b[0]:  # a leading pulse within df of a rung: one run crossed it, the other not
             top = f0 + ladder_level(int(min(a[0], b[0])), floor)
-            assert abs(a[0] - b[0]) == 1 and abs(ref.leading_pulse_force[c] - top) <= df
+            assert abs(a[0] - b[0]) == 1
+            assert abs(ref.leading_pulse_force[c] - top) <= df
             tol[c] = np.inf
             continue
         force, t_ref = kept(b, f0, floor)

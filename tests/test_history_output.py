@@ -36,10 +36,13 @@ def _same(work, times=None):
     t, f, v = read_histories(work, times)
     dd = read_dump(work / "histories.dump", times)
     steps, ids, _, _ = read_history_table(work / "histories.npy")
-    assert np.array_equal(steps, dd.step) and np.array_equal(ids, dd.ids)
+    assert np.array_equal(steps, dd.step)
+    assert np.array_equal(ids, dd.ids)
     assert np.array_equal(t, dd.time)
-    assert np.array_equal(f, dd.columns["d_fc"]) and np.array_equal(v, dd.columns["v_vel"])
-    assert f.shape == (len(dd.step), len(dd.ids)) and np.any(f > 0)
+    assert np.array_equal(f, dd.columns["d_fc"])
+    assert np.array_equal(v, dd.columns["v_vel"])
+    assert f.shape == (len(dd.step), len(dd.ids))
+    assert np.any(f > 0)
     return steps
 
 
@@ -50,7 +53,8 @@ def test_npy_equals_the_text_dump(tmp_path, name):
     d = render_deck(sc, options=NPY)
     _, work = run_deck(both(d.deck), d.data, work_dir=tmp_path)
     steps = _same(work, step_times_of(sc))
-    assert steps[0] == 0 and len(steps) > 10
+    assert steps[0] == 0
+    assert len(steps) > 10
     assert not list(work.glob("*.part"))
 
 
@@ -76,18 +80,24 @@ def test_a_halted_run_leaves_a_whole_file(tmp_path):
     steps, ids, f, v = read_history_table(tmp_path / "histories.npy")
     dd = read_dump(tmp_path / "histories.dump")
     k = len(steps)
-    assert 0 < k <= len(dd.step) and np.array_equal(steps, dd.step[:k]) and np.array_equal(ids, dd.ids)
-    assert np.array_equal(f, dd.columns["d_fc"][:k]) and np.array_equal(v, dd.columns["v_vel"][:k])
-    assert not list(tmp_path.glob("*.part")) and not (tmp_path / "peaks.dump").exists()
+    assert 0 < k <= len(dd.step)
+    assert np.array_equal(steps, dd.step[:k])
+    assert np.array_equal(ids, dd.ids)
+    assert np.array_equal(f, dd.columns["d_fc"][:k])
+    assert np.array_equal(v, dd.columns["v_vel"][:k])
+    assert not list(tmp_path.glob("*.part"))
+    assert not (tmp_path / "peaks.dump").exists()
 
 
 def test_the_text_dump_is_read_without_a_table(tmp_path):
     sc = make_scene(beads=10, end_time=2e-6, timestep=2e-8, outputs="histories = [1, 5]")
     d = render_deck(sc, options=DeckOptions(history_file="dump"))
-    assert "chain/history" not in d.deck and "histories.dump" in d.deck
+    assert "chain/history" not in d.deck
+    assert "histories.dump" in d.deck
     _, work = run_deck(d.deck, d.data, work_dir=tmp_path)
     t, f, v = read_histories(work)
-    assert f.shape == v.shape == (101, 2) and np.array_equal(t, np.arange(101.0))
+    assert f.shape == v.shape == (101, 2)
+    assert np.array_equal(t, np.arange(101.0))
 
 
 def test_a_foreign_table_is_refused(tmp_path):

@@ -126,7 +126,8 @@ def test_job_files_that_are_links_are_not_read(ws, tmp_path, capsys, name):
     plant(job / name, secret)
     assert main(["campaign", "table", str(ws), "--csv"]) == 0
     out = capsys.readouterr().out
-    assert "12345.678" not in out and "FROM-THE-LINK" not in out
+    assert "12345.678" not in out
+    assert "FROM-THE-LINK" not in out
     if name in ("run/summary.json", "run"):  # its point is not complete: its run directory is not its own
         assert "missing" in out
 
@@ -140,7 +141,8 @@ def test_a_job_directory_that_is_a_link_is_set_aside_and_run_again(made, ws, tmp
     assert main(["campaign", "run", str(made[0]), "--out", str(ws), "--workers", "1"]) == 0
     assert "moved to" in capsys.readouterr().err
     assert sorted(p.name for p in elsewhere.rglob("*")) == before  # nothing written there
-    assert (ws / wsp.DAMAGED / job.name).is_symlink() and (job / "run" / "summary.json").is_file()
+    assert (ws / wsp.DAMAGED / job.name).is_symlink()
+    assert (job / "run" / "summary.json").is_file()
 
 
 # --------------------------------------------------------------- damaged files: incomplete or one line
@@ -173,7 +175,8 @@ def _scene_damaged(job, other):
 def test_a_point_with_a_damaged_or_mismatched_run_is_incomplete(ws, capsys, damage):
     job, other = jobs(ws)
     damage(job, other)
-    assert wsp.job_state(job) == "missing" and wsp.job_state(other) == "done"
+    assert wsp.job_state(job) == "missing"
+    assert wsp.job_state(other) == "done"
     assert main(["campaign", "table", str(ws), "--csv"]) == 0
     assert "missing" in capsys.readouterr().out
 
@@ -194,11 +197,12 @@ def test_a_corrupt_statepoint_is_set_aside_and_its_point_runs_again(made, ws, ca
     assert "missing" in capsys.readouterr().out
     assert main(["campaign", "run", str(made[0]), "--out", str(ws), "--workers", "1"]) == 0
     assert "damaged state point" in capsys.readouterr().err
-    assert (ws / wsp.DAMAGED / job.name).is_dir() and wsp.job_state(job) == "done"
+    assert (ws / wsp.DAMAGED / job.name).is_dir()
+    assert wsp.job_state(job) == "done"
 
 
 @pytest.mark.parametrize(
-    "record, said",
+    ("record", "said"),
     [
         ("[" * 100_000 + "]" * 100_000, "no readable campaign.json"),
         ('{"points": [{"params": {}, "job": "../../../etc"}], "code": {}}', "is not a signac job id"),
@@ -272,7 +276,8 @@ def test_campaign_table_of_any_damaged_workspace_is_a_table_or_one_error_line(ma
 def test_campaign_table_escapes_control_characters(ws, capsys):
     assert main(["campaign", "table", str(ws)]) == 0
     out = capsys.readouterr().out
-    assert "\x1b" not in out and "\x07" not in out
+    assert "\x1b" not in out
+    assert "\x07" not in out
     assert "a\\x1b]0;pwned\\x07\\x1b[2J" in out
 
 
@@ -319,9 +324,11 @@ def test_a_full_disk_in_campaign_run_is_one_error_line_and_leaves_no_temporary_f
         out, err = capsys.readouterr()
         assert "Traceback (most recent call last)" not in err
         if rc == 2:  # the workspace's own files could not be written
-            assert err.strip().splitlines()[-1].startswith("granchain: error: ") and "No space left" in err
+            assert err.strip().splitlines()[-1].startswith("granchain: error: ")
+            assert "No space left" in err
         else:  # the points that found the disk full failed, each with its message, in the table
-            assert rc == 1 and "failed" in out
+            assert rc == 1
+            assert "failed" in out
         left = [p for p in d.rglob("*") if ".tmp" in p.name or ".partial-" in p.name]
         assert not left, left
     finally:

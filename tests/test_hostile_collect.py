@@ -139,7 +139,8 @@ def test_a_damaged_directory_is_one_error_line(ran, tmp_path, capsys, damage, wh
     assert main(args) == 2
     err = one_error_line(capsys)
     assert said in err or said in err.replace(str(tmp_path), ""), err
-    assert sorted(p.name for p in d.iterdir()) == before and not out.exists()  # nothing written
+    assert sorted(p.name for p in d.iterdir()) == before
+    assert not out.exists()
 
 
 LINKED = ["energy.txt", "log.lammps", "scene.toml", "deck.lmp", "chain.data", "peaks.dump", "plan.json",
@@ -183,7 +184,8 @@ def test_collect_in_place_never_writes_through_a_link(ran, tmp_path, capsys, nam
     assert main(["collect", str(d)]) == 0
     capsys.readouterr()
     assert victim.read_text() == "VICTIM"
-    assert not (d / name).is_symlink() and (d / name).stat().st_size > 0
+    assert not (d / name).is_symlink()
+    assert (d / name).stat().st_size > 0
     assert read_summary(d)["backend"] == "lammps"
 
 
@@ -195,7 +197,8 @@ def test_collect_out_overwrite_replaces_only_a_granchain_directory(ran, tmp_path
     (out / "sub").mkdir()
     assert main(["collect", str(d), "--out", str(out), "--overwrite"]) == 2
     err = one_error_line(capsys)
-    assert str(out) in err and "not written by granchain" in err
+    assert str(out) in err
+    assert "not written by granchain" in err
     assert (out / "precious.txt").read_text() == "keep me"
     shutil.rmtree(out)
     assert main(["collect", str(d), "--out", str(out)]) == 0
@@ -245,7 +248,8 @@ def test_collect_of_any_damaged_directory_runs_or_is_one_error_line(ran, tmp_pat
     err = capsys.readouterr().err
     assert rc in (0, 2), (damages, err)
     if rc == 2:
-        assert err.startswith("granchain: error: ") and "Traceback" not in err, err
+        assert err.startswith("granchain: error: "), err
+        assert "Traceback" not in err, err
     else:
         assert read_summary(tmp / "out")["backend"] == "lammps"
     shutil.rmtree(tmp)

@@ -37,7 +37,9 @@ def scene_file(tmp_path) -> Path:
 
 def one_error_line(capsys) -> str:
     err = capsys.readouterr().err
-    assert "Traceback" not in err and err.startswith("granchain: error: ") and err.count("granchain: error:") == 1, err
+    assert "Traceback" not in err, err
+    assert err.startswith("granchain: error: "), err
+    assert err.count("granchain: error:") == 1, err
     return err
 
 
@@ -50,8 +52,11 @@ def test_overwrite_refuses_a_directory_granchain_did_not_write(scene_file, tmp_p
     (d / "precious.txt").write_text("keep")
     assert main(["run", str(scene_file), "--out", str(d), "--overwrite"]) == 2
     err = one_error_line(capsys)
-    assert str(d) in err and "not written by granchain" in err and "choose another --out" in err
-    assert (d / "precious.txt").read_text() == "keep" and (d / "sub").is_dir()
+    assert str(d) in err
+    assert "not written by granchain" in err
+    assert "choose another --out" in err
+    assert (d / "precious.txt").read_text() == "keep"
+    assert (d / "sub").is_dir()
 
 
 def test_overwrite_replaces_a_run_directory_and_one_written_before_the_marker(scene_file, tmp_path, capsys):
@@ -86,7 +91,8 @@ def test_out_that_is_a_link_is_refused(result, tmp_path):
     os.symlink(target, tmp_path / "link")
     with pytest.raises(RunDirError, match="symbolic link"):
         rundir.write_run_dir(result, tmp_path / "link", overwrite=True)
-    assert target.is_dir() and (target / "summary.json").is_file()
+    assert target.is_dir()
+    assert (target / "summary.json").is_file()
 
 
 # ------------------------------------------------------------------------- planted links
@@ -109,7 +115,8 @@ def test_extra_files_are_copied_only_when_regular(result, tmp_path):
     os.symlink(secret, tmp_path / "leak.dump")
     with pytest.raises(RunDirError, match="symbolic link"):
         rundir.write_run_dir(result, tmp_path / "r", extra_files={"leak.dump": tmp_path / "leak.dump"})
-    assert not (tmp_path / "r").exists() and [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+    assert not (tmp_path / "r").exists()
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
 
 
 @pytest.mark.parametrize("name", RUN_FILES + [MARKER])
@@ -182,7 +189,8 @@ def test_accuracy_refuses_a_non_empty_directory_without_overwrite(study, tmp_pat
     empty = tmp_path / "empty"
     empty.mkdir()
     files = write_study(study, empty)  # an empty directory is taken
-    assert all(f.stat().st_size > 0 for f in files) and (empty / MARKER).is_file()
+    assert all(f.stat().st_size > 0 for f in files)
+    assert (empty / MARKER).is_file()
     assert write_study(study, empty, overwrite=True) == files
 
 
@@ -242,7 +250,8 @@ def test_write_helpers_leave_nothing_on_a_full_disk(tmp_path, monkeypatch):
 
     with pytest.raises(Full):
         interrupted_write()
-    assert json.loads(p.read_text()) == {"old": 1} and sorted(x.name for x in tmp_path.iterdir()) == ["f.json"]
+    assert json.loads(p.read_text()) == {"old": 1}
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["f.json"]
 
 
 def test_directories_written_before_the_marker_count_as_granchains_only_with_granchains_files(tmp_path):
@@ -263,4 +272,5 @@ def test_directories_written_before_the_marker_count_as_granchains_only_with_gra
     (d / "other").mkdir()
     assert not rundir.owned_by_granchain(d)
     (d / "other").rmdir()
-    assert rundir.owned_by_granchain(d) and not rundir.owned_by_granchain(tmp_path / "nothing")
+    assert rundir.owned_by_granchain(d)
+    assert not rundir.owned_by_granchain(tmp_path / "nothing")

@@ -69,7 +69,8 @@ def test_reads_stop_at_their_limit_and_copies_at_theirs(tmp_path):
     with pytest.raises(sf.UnsafeFileError, match="more than"):
         sf.copy_file(big, tmp_path / "copy", limit=1000)
     assert not (tmp_path / "copy").exists()
-    assert sf.read_head(big, 4) == b"\0" * 4 and sf.read_tail(big, 4) == b"\0" * 4
+    assert sf.read_head(big, 4) == b"\0" * 4
+    assert sf.read_tail(big, 4) == b"\0" * 4
     (tmp_path / "bad").write_bytes(b"\xff\xfe")
     with pytest.raises(sf.UnsafeFileError, match="not utf-8 text"):
         sf.read_text(tmp_path / "bad")
@@ -86,7 +87,8 @@ def test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary_one(tmp_path)
 
     with pytest.raises(OSError, match="No space left"):
         full_disk_write()
-    assert p.read_text() == "old" and [x.name for x in tmp_path.iterdir()] == ["f"]
+    assert p.read_text() == "old"
+    assert [x.name for x in tmp_path.iterdir()] == ["f"]
 
 
 def test_atomic_directory_replaces_only_what_granchain_owns(tmp_path):

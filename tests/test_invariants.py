@@ -24,7 +24,9 @@ def test_blow_up_stops_with_the_invariant_and_the_fix(tmp_path, capsys):
         run_scene(sc, force=True)
     err = e.value
     assert err.invariant in ("finite state", "overlap far below the radius", "energy balance")
-    assert err.step > 0 and err.time > 0 and 1 <= err.contact <= 99
+    assert err.step > 0
+    assert err.time > 0
+    assert 1 <= err.contact <= 99
     assert "would choose" in str(err)
     p = tmp_path / "s.toml"
     p.write_text(sc.source_text)
@@ -56,8 +58,10 @@ def test_energy_created_by_a_coarse_verlet_step_stops_the_run(backend):
     with pytest.raises(InvariantError) as e:
         run_scene(sc, backend=backend, method="verlet", force=True)
     assert e.value.invariant == "energy balance"
-    assert e.value.time == pytest.approx(7e-6) and e.value.step == 2
-    assert "created by the integrator" in str(e.value) and "would choose" in str(e.value)
+    assert e.value.time == pytest.approx(7e-6)
+    assert e.value.step == 2
+    assert "created by the integrator" in str(e.value)
+    assert "would choose" in str(e.value)
 
 
 @pytest.mark.parametrize("backend", ["reference", "lammps"])
@@ -103,5 +107,6 @@ def test_lammps_in_run_momentum_and_energy_watch_can_fire(tmp_path):
         with pytest.raises(LammpsError) as e:
             run_deck(deck.deck.replace(key, wrong, 1), deck.data, work_dir=tmp_path / invariant.replace(" ", "_"))
         broken = invariant_from_lammps(e.value, sc)
-        assert broken is not None and broken.invariant == invariant
+        assert broken is not None
+        assert broken.invariant == invariant
         assert broken.step == 50  # the first energy sample (every 10000 / 200 steps)

@@ -204,9 +204,11 @@ def test_kernel_equals_numpy_twin(name):
         lmp.close()
 
     # the pairs of compute pair/local, matched to contacts through property/local's atom IDs
-    assert pl.shape == (n, 3) and pp.shape == (n, 2)
+    assert pl.shape == (n, 3)
+    assert pp.shape == (n, 2)
     left = np.minimum(pp[:, 0], pp[:, 1]).astype(int) - 1
-    assert np.array_equal(np.abs(pp[:, 0] - pp[:, 1]), np.ones(n)) and np.array_equal(np.sort(left), np.arange(n))
+    assert np.array_equal(np.abs(pp[:, 0] - pp[:, 1]), np.ones(n))
+    assert np.array_equal(np.sort(left), np.arange(n))
     contact_of_row = np.empty(n, dtype=int)
     contact_of_row[left] = np.arange(n)
     dist_s, eng_s, force_s = (pl[contact_of_row, c] for c in range(3))
@@ -220,7 +222,8 @@ def test_kernel_equals_numpy_twin(name):
     w_scale = e_scale + law.dissipated(am)  # the work done on the contact to reach am
 
     # the grid covers what it should
-    assert np.all(alpha > 0.0) and np.all(f_twin >= 0.0)
+    assert np.all(alpha > 0.0)
+    assert np.all(f_twin >= 0.0)
     if cls.history:
         assert np.any((alpha < amax_before) & (f_twin > 0.0)), "unloading"
         assert np.any((alpha > amax_before) & (amax_before > 0.0)), "loading past the history"
@@ -357,7 +360,8 @@ def test_mpi_two_ranks_equals_serial(name, tmp_path):
     assert report["ranks"] == 2
     own0 = read_columns(tmp_path / "np2" / "owner_start.dump")["proc"]
     own1 = read_columns(tmp_path / "np2" / "owner_end.dump")["proc"]
-    assert set(own0) == {0, 1} and np.any(own0 != own1), "beads must cross the sub-domain boundary"
+    assert set(own0) == {0, 1}, "beads must cross the sub-domain boundary"
+    assert np.any(own0 != own1), "beads must cross the sub-domain boundary"
     a, b = read_columns(tmp_path / "np1" / "result.dump"), read_columns(tmp_path / "np2" / "result.dump")
     assert np.max(a["d_fpeak"]) > 0.0
     if cls.history:
@@ -381,9 +385,12 @@ def test_plugin_key_follows_the_sources(tmp_path, monkeypatch):
     real = build._source_text
     monkeypatch.setattr(build, "_source_text", lambda: hashed.append(1) or real())
     first = build.plugin_key()
-    assert build.plugin_key() == first and len(hashed) == 1
+    assert build.plugin_key() == first
+    assert len(hashed) == 1
     with open(tmp_path / "pair_chain.cpp", "a") as f:
         f.write("\n// an edit\n")
     edited = build.plugin_key()
-    assert edited != first and len(hashed) == 2
-    assert build.plugin_key() == edited and len(hashed) == 2
+    assert edited != first
+    assert len(hashed) == 2
+    assert build.plugin_key() == edited
+    assert len(hashed) == 2

@@ -97,6 +97,8 @@ def test_lammps_companions_share_one_kept_lammps_instance():
         return result
 
     report = errors.estimate_errors(got, run_one, "verlet", stable_timestep=1.0)
-    assert report.why_none is None and len(report.wall_times) == 2
+    assert report.why_none is None
+    assert len(report.wall_times) == 2
     assert runs == [1, 2]
-    assert not server.enabled() and server.children() == []
+    assert not server.enabled()
+    assert server.children() == []

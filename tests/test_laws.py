@@ -50,12 +50,15 @@ def law_and_state(draw, name):
 @pytest.mark.parametrize("name", LAW_NAMES)
 def test_registry_entry_is_complete(name):
     cls = LAWS[name]
-    assert cls.name == name and cls.pair_style == f"chain/{name}"
+    assert cls.name == name
+    assert cls.pair_style == f"chain/{name}"
     assert dataclasses.fields(cls)[0].name == "k"
     # the [contact] values: a frozen dataclass whose fields are the scene keys, each with its range
-    assert issubclass(cls.Coefficients, LawCoefficients) and cls.Coefficients.__dataclass_params__.frozen
+    assert issubclass(cls.Coefficients, LawCoefficients)
+    assert cls.Coefficients.__dataclass_params__.frozen
     assert cls.scene_keys == tuple(f.name for f in dataclasses.fields(cls.Coefficients))
-    assert set(cls.scene_key_ranges) == set(cls.scene_keys) and set(cls.example_contact) <= set(cls.scene_keys)
+    assert set(cls.scene_key_ranges) == set(cls.scene_keys)
+    assert set(cls.example_contact) <= set(cls.scene_keys)
 
 
 @pytest.mark.parametrize("name", LAW_NAMES)
@@ -74,7 +77,8 @@ def test_a_scene_holds_its_laws_coefficients(name):
     with pytest.raises(AttributeError):
         sc.contact.no_such_key  # noqa: B018
     back = scene_from_dict(scene_to_dict(sc), source="t.toml")
-    assert back.contact == sc.contact and pickle.loads(pickle.dumps(sc.contact)) == sc.contact
+    assert back.contact == sc.contact
+    assert pickle.loads(pickle.dumps(sc.contact)) == sc.contact
 
 
 @pytest.mark.parametrize("name", LAW_NAMES)
@@ -84,7 +88,8 @@ def test_force_never_negative_and_zero_when_apart(name, data):
     law, amax, frac = data.draw(law_and_state(name))
     a = np.array([-1e-3, -1e-12, 0.0, frac * amax, amax, 1.5 * amax + 1e-9])
     f = law.force(a, amax)
-    assert np.all(f >= 0.0) and np.all(np.isfinite(f))
+    assert np.all(f >= 0.0)
+    assert np.all(np.isfinite(f))
     assert f[0] == f[1] == f[2] == 0.0
     assert np.all(law.energy(a[:3], amax) == 0.0)
 
@@ -158,7 +163,8 @@ def test_tangent_stiffness_bounds_every_slope(name, data):
     x = np.linspace(0.0, amax, 401)
     slopes = np.diff(law.force(x, amax)) / np.diff(x)
     virgin = np.diff(law.loading_force(x)) / np.diff(x)
-    assert np.all(slopes <= kt * (1 + 1e-6)) and np.all(virgin <= kt * (1 + 1e-6))
+    assert np.all(slopes <= kt * (1 + 1e-6))
+    assert np.all(virgin <= kt * (1 + 1e-6))
 
 
 @pytest.mark.parametrize("name", LAW_NAMES)
@@ -182,7 +188,8 @@ def test_join_keeps_each_group(name):
     j = cls.join([(a, 2), (b, 3)])
     alpha = np.full(5, overlap_scale(a))
     f = j.force(alpha, np.zeros(5))
-    assert np.allclose(f[:2], a.force(alpha[:2], 0.0)) and np.allclose(f[2:], b.force(alpha[2:], 0.0))
+    assert np.allclose(f[:2], a.force(alpha[:2], 0.0))
+    assert np.allclose(f[2:], b.force(alpha[2:], 0.0))
 
 
 # ---- the law's models (rule 8): declared in model_domains, and every model it gives or draws is declared
@@ -226,7 +233,8 @@ def test_model_tables_name_declared_models(name):
     for quantity, candidates in cls.compare_models.items():
         assert candidates, quantity
         for model, label in candidates:
-            assert model in cls.model_domains and label, (quantity, model)
+            assert model in cls.model_domains, (quantity, model)
+            assert label, (quantity, model)
     # a model name is one law's: the predictions' table of domains (name -> law) keeps one owner
     for other, c in LAWS.items():
         if other != name:
@@ -244,7 +252,8 @@ def test_every_model_a_law_gives_or_draws_is_declared(name):
     for kind, sc in scenes.items():
         fields = cls.predictions(sc)
         names = [f["name"] for f in fields]
-        assert len(names) == len(set(names)) and set(names) <= set(cls.model_domains), (kind, names)
+        assert len(names) == len(set(names)), (kind, names)
+        assert set(names) <= set(cls.model_domains), (kind, names)
         values = {f["name"]: f["value"] for f in fields}
         for obs in ({}, {"leading_peak_force": 100.0}):
             measured = cls.measured_models(sc, values, obs)
@@ -260,7 +269,8 @@ def test_every_model_a_law_gives_or_draws_is_declared(name):
         contacts = np.arange(1.0, max(sc.chain.beads, 2))
         curves = cls.model_curves(sc, contacts, applies)
         assert set(asked) <= set(cls.model_domains), (kind, asked)
-        assert len(curves) <= len(asked) and all(np.shape(y) == contacts.shape for y in curves.values())
+        assert len(curves) <= len(asked)
+        assert all(np.shape(y) == contacts.shape for y in curves.values())
     # every declared model is given on some scene it is for
     assert given == set(cls.model_domains), sorted(set(cls.model_domains) - given)
 
@@ -320,8 +330,10 @@ def test_forces_nonnegative(a, amax, k, b):
 
 @given(st.floats(-1e-3, 0.0), st.floats(0, 1e-3), stiffness, beta)
 def test_no_force_without_overlap(a, amax, k, b):
-    assert hertz_force(a, k) == 0 and bilinear_force(a, amax, k, b) == 0
-    assert hertz_energy(a, k) == 0 and bilinear_energy(a, amax, k, b) == 0
+    assert hertz_force(a, k) == 0
+    assert bilinear_force(a, amax, k, b) == 0
+    assert hertz_energy(a, k) == 0
+    assert bilinear_energy(a, amax, k, b) == 0
 
 
 @given(positive_overlap, stiffness, beta, st.floats(0.0, 1.0))

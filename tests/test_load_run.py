@@ -99,7 +99,8 @@ def test_round_trip_equals_the_in_memory_result(backend, scene, tmp_path):
     loaded = granchain.load_run(tmp_path / "run")
     assert_same_result(mem, loaded)
     assert isinstance(loaded, LammpsRunResult if backend == "lammps" else RunResult)
-    assert loaded.path == tmp_path / "run" and mem.path == tmp_path / "run"
+    assert loaded.path == tmp_path / "run"
+    assert mem.path == tmp_path / "run"
     assert "peak_force_error" in loaded.peaks.columns  # the error columns come back too
     # the summary reads as a dict and, as before, as a call
     assert loaded.summary["observables"] == loaded.summary()["observables"]
@@ -146,44 +147,58 @@ def test_a_campaign_point_loads_from_its_job_directory(scene, tmp_path):
     impulses = sorted(granchain.load_run(j).scene.loading.impulse for j in jobs)
     assert impulses == [0.05, 0.1]
     r = granchain.load_run(jobs[0])
-    assert r.path == jobs[0] / "run" and isinstance(r.peaks, pd.DataFrame)
+    assert r.path == jobs[0] / "run"
+    assert isinstance(r.peaks, pd.DataFrame)
 
 
 def test_types_and_units(scene):
     r = granchain.run(scene)
     pk = r.peaks
-    assert isinstance(pk, pd.DataFrame) and pk.index.name == "contact"
+    assert isinstance(pk, pd.DataFrame)
+    assert pk.index.name == "contact"
     assert list(pk.index) == list(range(1, 24))
-    assert pk["complete"].dtype == bool and pk["peak_force"].dtype == np.float64
+    assert pk["complete"].dtype == bool
+    assert pk["peak_force"].dtype == np.float64
     assert pk.attrs["units"] == {c: PEAK_UNITS[c] for c in pk.columns}
-    assert pk.attrs["units"]["peak_force"] == "N" and pk.attrs["units"]["time_of_peak"] == "s"
+    assert pk.attrs["units"]["peak_force"] == "N"
+    assert pk.attrs["units"]["time_of_peak"] == "s"
     np.testing.assert_array_equal(pk["peak_force"].to_numpy(), r.peak_table["peak_force"])
 
     h = r.histories
-    assert isinstance(h, xr.Dataset) and h["force"].dims == ("time", "contact")
+    assert isinstance(h, xr.Dataset)
+    assert h["force"].dims == ("time", "contact")
     assert list(h["contact"].values) == [1, 5, 12]
-    assert h["force"].attrs["units"] == "N" and h["velocity"].attrs["units"] == "m/s"
+    assert h["force"].attrs["units"] == "N"
+    assert h["velocity"].attrs["units"] == "m/s"
     assert h["time"].attrs["units"] == "s"
     np.testing.assert_array_equal(h["force"].values, r.solution.history_force)
 
     s = r.snapshots
-    assert isinstance(s, xr.Dataset) and s["contact_force"].dims == ("contact", "time")
-    assert s["displacement"].dims == ("bead", "time") and s.sizes == {"contact": 23, "bead": 24, "time": 2}
-    assert s["contact_force"].attrs["units"] == "N" and s["displacement"].attrs["units"] == "m"
-    assert s["velocity"].attrs["units"] == "m/s" and s["time"].attrs["units"] == "s"
+    assert isinstance(s, xr.Dataset)
+    assert s["contact_force"].dims == ("contact", "time")
+    assert s["displacement"].dims == ("bead", "time")
+    assert s.sizes == {"contact": 23, "bead": 24, "time": 2}
+    assert s["contact_force"].attrs["units"] == "N"
+    assert s["displacement"].attrs["units"] == "m"
+    assert s["velocity"].attrs["units"] == "m/s"
+    assert s["time"].attrs["units"] == "s"
     np.testing.assert_array_equal(s["contact_force"].values, r.solution.snapshot_force.T)
 
     e = r.energy
-    assert e.index.name == "time" and set(e.attrs["units"].values()) == {"s", "J"}
-    assert isinstance(r.summary, dict) and r.summary["backend"] == "reference"
+    assert e.index.name == "time"
+    assert set(e.attrs["units"].values()) == {"s", "J"}
+    assert isinstance(r.summary, dict)
+    assert r.summary["backend"] == "reference"
 
 
 def test_no_histories_or_snapshots_is_none(tmp_path):
     text = SCENE.replace("histories = [1, 5, 12]\nsnapshots = [3e-5, 6e-5]\n", "")
     r = granchain.run(granchain.parse_scene(text), out=tmp_path / "r")
-    assert r.histories is None and r.snapshots is None
+    assert r.histories is None
+    assert r.snapshots is None
     loaded = granchain.load_run(tmp_path / "r")
-    assert loaded.histories is None and loaded.snapshots is None
+    assert loaded.histories is None
+    assert loaded.snapshots is None
     with pytest.raises(granchain.GranchainError, match=r"\[outputs\] histories"):
         loaded.plot("histories")
 
@@ -199,11 +214,14 @@ def test_the_display_is_short_and_says_what_matters(scene, tmp_path):
     )
     text = repr(r)
     assert len(text) < 2000
-    assert "\x1b" not in text and "\x07" not in text
+    assert "\x1b" not in text
+    assert "\x07" not in text
     for word in ("reference", "rk4", "dt =", "wave_speed", "m/s", "max_peak_force", " N"):
         assert word in text
     html = r._repr_html_()
-    assert html.startswith("<table") and "wave_speed" in html and "\x1b" not in html
+    assert html.startswith("<table")
+    assert "wave_speed" in html
+    assert "\x1b" not in html
     assert len(repr(granchain.run(scene, error_estimate=True))) < 2000
 
 
@@ -252,7 +270,8 @@ def test_every_valid_scene_round_trips(text, method, tmp_path):
         mem = granchain.run(sc, method=method, out=out)
     loaded = granchain.load_run(out)
     assert_same_result(mem, loaded)
-    assert len(repr(loaded)) < 2000 and len(repr(mem)) < 2000
+    assert len(repr(loaded)) < 2000
+    assert len(repr(mem)) < 2000
 
 
 def test_a_loaded_run_answers_from_what_its_directory_keeps(scene, tmp_path):

@@ -87,7 +87,8 @@ def test_sources_and_table_cover_exactly_the_materials():
     table = mat.material_table()
     assert [n for n, _, _ in table] == list(NAMES)
     for name, m, source in table:
-        assert m is mat.MATERIALS[name] and source == mat.SOURCES[name]
+        assert m is mat.MATERIALS[name]
+        assert source == mat.SOURCES[name]
 
 
 def test_the_table_source_comments_are_in_the_module():
@@ -107,7 +108,8 @@ def test_the_table_source_comments_are_in_the_module():
 def test_every_material_makes_a_hertz_scene_with_the_hand_computed_stiffness(name):
     sc = parse_scene(scene_text(f'"{name}"'), source=f"{name}.toml")
     m = mat.MATERIALS[name]
-    assert sc.chain.material == m and sc.chain.material_name == name
+    assert sc.chain.material == m
+    assert sc.chain.material_name == name
     e_star = m.youngs_modulus / (2.0 * (1.0 - m.poisson_ratio**2))  # two identical beads
     r_star = RADIUS / 2.0
     k = 4.0 / 3.0 * e_star * math.sqrt(r_star)
@@ -123,13 +125,15 @@ def test_every_material_in_a_per_bead_list(name):
     """A brass chain with one bead of the material: the two contacts at it use the pair's E*."""
     names = ["brass"] * 5 + [name] + ["brass"] * 4
     sc = parse_scene(scene_text(toml_list(names), beads=10), source="list.toml")
-    assert sc.per_bead and sc.chain.materials == tuple(names)
+    assert sc.per_bead
+    assert sc.chain.materials == tuple(names)
     assert sc.bead_materials[5] == mat.MATERIALS[name]
     b, m = mat.MATERIALS["brass"], mat.MATERIALS[name]
     e_pair = 1.0 / ((1 - b.poisson_ratio**2) / b.youngs_modulus + (1 - m.poisson_ratio**2) / m.youngs_modulus)
     k_pair = 4.0 / 3.0 * e_pair * math.sqrt(RADIUS / 2.0)
     k = sc.contact_stiffnesses
-    assert k[4] == pytest.approx(k_pair, rel=1e-14) and k[5] == pytest.approx(k_pair, rel=1e-14)
+    assert k[4] == pytest.approx(k_pair, rel=1e-14)
+    assert k[5] == pytest.approx(k_pair, rel=1e-14)
     assert k[0] == pytest.approx(mat.hertz_stiffness(b, RADIUS), rel=1e-14)
     masses = sc.bead_masses
     assert masses[5] == pytest.approx(m.density / b.density * masses[0], rel=1e-14)
@@ -197,13 +201,16 @@ def test_a_20_bead_steel_chain_runs_on_the_reference_backend():
 
     sc = parse_scene(scene_text('"chrome-steel-52100"', run='end_time = 2e-4\ntimestep = "auto"'), source="steel.toml")
     planned = plan_scene(sc, rtol=1e-2).scene
-    assert planned.run.timestep is not None and planned.run.timestep < sc.tau
+    assert planned.run.timestep is not None
+    assert planned.run.timestep < sc.tau
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no accuracy or overflow warning
         result = granchain.run(planned, rtol=1e-2)
     peaks = result.peak_table
-    assert len(peaks) == 19 and bool(np.all(peaks["complete"]))
-    assert bool(np.all(np.isfinite(peaks["peak_force"]))) and float(peaks["peak_force"].min()) > 0.0
+    assert len(peaks) == 19
+    assert bool(np.all(peaks["complete"]))
+    assert bool(np.all(np.isfinite(peaks["peak_force"])))
+    assert float(peaks["peak_force"].min()) > 0.0
     assert result.summary()["conservation"] is not None
 
 
@@ -245,4 +252,5 @@ def test_bilinear_scene_with_a_built_in_yield_strength_round_trips():
         scene_text('"aluminium-6061-t6"', law="bilinear", contact_extra="unloading_coeff = 0.8"), source="b.toml"
     )
     back = parse_scene(sc.to_toml(), source="back.toml")
-    assert back.contact == sc.contact and back.chain == sc.chain
+    assert back.contact == sc.contact
+    assert back.chain == sc.chain

@@ -91,4 +91,6 @@ def test_predictions_cover_the_scene():
         "omega",
     } <= names_b
     for p in predict(make_scene(law="bilinear", contact_extra=BILINEAR)):
-        assert math.isfinite(p.value) and p.valid and p.equation
+        assert math.isfinite(p.value)
+        assert p.valid
+        assert p.equation

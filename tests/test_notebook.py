@@ -19,7 +19,8 @@ def test_the_notebook_is_kept_without_outputs():
     nbformat.validate(nb)
     for cell in nb.cells:
         if cell.cell_type == "code":
-            assert cell.outputs == [] and cell.execution_count is None, cell.source[:60]
+            assert cell.outputs == [], cell.source[:60]
+            assert cell.execution_count is None, cell.source[:60]
 
 
 @pytest.mark.slow
@@ -40,7 +41,8 @@ def test_the_notebook_runs_in_a_jupyter_kernel(tmp_path, monkeypatch):
         if o.output_type in ("execute_result", "display_data") and "image/png" in o.data
     ]
     # granchain's own figures (histories, peaks, heat map) and the notebook's (comparison, campaign)
-    assert len(images) >= 5 and all(i.startswith(b"\x89PNG") and len(i) > 10_000 for i in images)
+    assert len(images) >= 5
+    assert all(i.startswith(b"\x89PNG") and len(i) > 10_000 for i in images)
     texts = "\n".join(
         o.data.get("text/plain", "")
         for c in nb.cells
@@ -48,7 +50,8 @@ def test_the_notebook_runs_in_a_jupyter_kernel(tmp_path, monkeypatch):
         for o in c.outputs
         if o.output_type == "execute_result"
     )
-    assert "<RunResult: Notebook tour" in texts and "<LammpsRunResult: Notebook tour" in texts
+    assert "<RunResult: Notebook tour" in texts
+    assert "<LammpsRunResult: Notebook tour" in texts
     html = [
         o.data["text/html"] for c in nb.cells for o in getattr(c, "outputs", []) if "text/html" in o.get("data", {})
     ]

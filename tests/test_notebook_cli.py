@@ -80,22 +80,30 @@ def test_json_for_scripts(command, scene_file, tmp_path, capfd):
     data = json.loads(out, parse_constant=lambda c: pytest.fail(f"not strict JSON: {c}"))
     no_control(out)  # JSON escapes the title's control characters itself
     if command == "run":
-        assert data["run_dir"] == str(tmp_path / "out") and data["backend"] == "reference"
+        assert data["run_dir"] == str(tmp_path / "out")
+        assert data["backend"] == "reference"
         assert data["title"] == "evil \x1b]0;owned\x07\x1b[2J end"
-        assert data["observables"]["wave_speed"] > 0 and "provenance" in data
+        assert data["observables"]["wave_speed"] > 0
+        assert "provenance" in data
         data.pop("run_dir")
         kept = json.loads(json.dumps(granchain.load_run(tmp_path / "out").summary), parse_constant=lambda c: None)
         assert data == kept  # summary.json, NaN as null
     elif command == "plan":
-        assert data["method"] == "rk4" and data["timestep"] > 0 and data["steps"] * 16 == data["bead_steps"]
-        assert "timestep" in {c["name"] for c in data["choices"]} and data["units"]["timestep"] == "s"
+        assert data["method"] == "rk4"
+        assert data["timestep"] > 0
+        assert data["steps"] * 16 == data["bead_steps"]
+        assert "timestep" in {c["name"] for c in data["choices"]}
+        assert data["units"]["timestep"] == "s"
     elif command == "compare":
-        assert data["ok"] is True and data["differ"] == []
+        assert data["ok"] is True
+        assert data["differ"] == []
         rows = {r["quantity"]: r for r in data["rows"]}
-        assert rows and all({"unit", "lammps", "reference", "ok"} <= set(r) for r in rows.values())
+        assert rows
+        assert all({"unit", "lammps", "reference", "ok"} <= set(r) for r in rows.values())
         assert data["compare_dir"] == str(tmp_path / "out")
     else:
-        assert isinstance(data, list) and {"name", "value", "unit"} <= set(data[0])
+        assert isinstance(data, list)
+        assert {"name", "value", "unit"} <= set(data[0])
 
 
 def test_errors_and_warnings_are_printed_escaped(tmp_path, capfd):
@@ -116,7 +124,9 @@ def test_printable_text_has_no_control_characters(text, limit):
 
     out = printable(text, limit)
     no_control(out.replace("\n", "").replace("\t", ""))
-    assert "\n" not in out and "\t" not in out and "\x1b" not in out
+    assert "\n" not in out
+    assert "\t" not in out
+    assert "\x1b" not in out
     if limit is not None:
         assert len(out) <= limit
     if text.isprintable() and (limit is None or len(text) <= limit):

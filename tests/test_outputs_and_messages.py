@@ -40,7 +40,8 @@ def test_a_typo_in_a_key_names_the_key_it_looks_like(section, data):
             break
     with pytest.raises(SceneError) as e:
         parse_scene("\n".join(lines), source="typo.toml")
-    assert repr(typo) in str(e.value) and repr(key) in str(e.value)
+    assert repr(typo) in str(e.value)
+    assert repr(key) in str(e.value)
 
 
 def test_history_interval_longer_than_the_run_is_refused():
@@ -90,7 +91,8 @@ def test_run_prints_units(tmp_path, capsys):
     out = capsys.readouterr().out
     for line in out.splitlines():
         if line.startswith("  "):
-            assert "(" in line and ")" in line, line  # every quantity says its unit
+            assert "(" in line, line
+            assert ")" in line, line  # every quantity says its unit
 
 
 def test_materials_command_lists_every_built_in_material(capsys):
@@ -111,7 +113,8 @@ def test_a_run_that_ends_before_measuring_says_so(tmp_path, capsys):
     p.write_text(text)
     assert main(["run", str(p), "--out", str(tmp_path / "r"), "-q", "--error-estimate", "off"]) == 0
     err = capsys.readouterr().err
-    assert "granchain: not measured: leading_peak_force:" in err and "wave_speed" in err
+    assert "granchain: not measured: leading_peak_force:" in err
+    assert "wave_speed" in err
 
 
 def test_an_auto_end_time_that_misses_the_window_exits_1(tmp_path, capsys, monkeypatch):

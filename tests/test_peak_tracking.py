@@ -85,7 +85,8 @@ def shuffled_atoms(data: str, seed: int) -> str:
     rows, sep, tail = rest.partition("\n\n")
     lines = rows.strip("\n").split("\n")
     shuffled = random.Random(seed).sample(lines, len(lines))
-    assert shuffled != lines and sorted(shuffled) == sorted(lines)
+    assert shuffled != lines
+    assert sorted(shuffled) == sorted(lines)
     return head + "Atoms # sphere\n\n" + "\n".join(shuffled) + "\n" + sep + tail
 
 

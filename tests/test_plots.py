@@ -147,7 +147,8 @@ def test_default_format_is_png_alone(compare_dir, tmp_path):
     r = copy(compare_dir / "reference", tmp_path)
     made = plot_run(r)
     assert {p.suffix for p in made} == {".png"}
-    assert not list(r.glob("*.pdf")) and not list(r.glob("*.svg"))
+    assert not list(r.glob("*.pdf"))
+    assert not list(r.glob("*.svg"))
 
 
 def test_compare_in_every_format(compare_dir, tmp_path):
@@ -172,7 +173,8 @@ def test_unknown_or_no_format_is_a_usage_error_before_anything_is_written(format
     before = sorted(p.name for p in d.rglob("*"))
     with pytest.raises(UsageError, match="png, pdf, svg") as e:
         plot_run(d / "reference", formats=formats)
-    assert isinstance(e.value, GranchainError) and isinstance(e.value, ValueError)
+    assert isinstance(e.value, GranchainError)
+    assert isinstance(e.value, ValueError)
     if formats and formats != ():
         assert "unknown figure format" in str(e.value)
     with pytest.raises(UsageError):
@@ -202,7 +204,8 @@ def test_heatmap_skipped_with_a_reason_without_whole_chain_time_data(compare_dir
 
 def test_heatmap_from_snapshots_is_the_snapshot_forces(snaps_run):
     st, why = spacetime_force(snaps_run)
-    assert why == "" and "snapshots.csv" in st.source
+    assert why == ""
+    assert "snapshots.csv" in st.source
     assert np.allclose(st.time, SNAPSHOTS, rtol=1e-12)
     assert np.array_equal(st.contacts, np.arange(1, BEADS))
     data = np.genfromtxt(snaps_run / "snapshots.csv", delimiter=",", names=True)
@@ -218,7 +221,8 @@ def test_heatmap_from_snapshots_is_the_snapshot_forces(snaps_run):
 def test_heatmap_from_histories_at_every_contact(all_histories_run, tmp_path):
     r = copy(all_histories_run, tmp_path)
     st, why = spacetime_force(r)
-    assert why == "" and "histories.csv" in st.source
+    assert why == ""
+    assert "histories.csv" in st.source
     assert np.array_equal(st.contacts, np.arange(1, BEADS))
     made = plot_run(r, formats=("png",))
     assert r / "heatmap.png" in made
@@ -249,8 +253,10 @@ def test_heatmap_from_a_whole_chain_dump(all_histories_run, tmp_path):
     force = hist[:, 1:BEADS]
     write_dump(r / "chain.dump", steps, force)
     st, why = spacetime_force(r)
-    assert why == "" and "chain.dump" in st.source
-    assert np.array_equal(st.time, times[steps]) and st.time.size >= 20
+    assert why == ""
+    assert "chain.dump" in st.source
+    assert np.array_equal(st.time, times[steps])
+    assert st.time.size >= 20
     assert np.array_equal(st.force, force)
     made = plot_run(r, formats=("png", "svg"))
     assert {r / "heatmap.png", r / "heatmap.svg"} <= set(made)
@@ -262,7 +268,8 @@ def test_heatmap_reduction_keeps_the_peaks():
     force[1234, 17] = 99.0
     st = heatmap_data(SpaceTime(np.arange(force.shape[0]) * 1e-6, np.arange(1, 41), force, "test"))
     assert st.force.shape == (HEATMAP_MAX_CELLS, 40) or st.force.shape[0] <= HEATMAP_MAX_CELLS
-    assert st.force.max() == 99.0 and st.time.size == st.force.shape[0]
+    assert st.force.max() == 99.0
+    assert st.time.size == st.force.shape[0]
     assert "maximum over blocks of 4 frames" in st.source
 
 
@@ -274,7 +281,8 @@ def test_overlay_difference_is_the_difference_of_the_two_runs(compare_dir, tmp_p
     for sub in ("lammps", "reference"):
         set_complete(d / sub, front_incomplete(d / sub))
     overlays, why = compare_histories(d)
-    assert why == "" and [o.contact for o in overlays] == [1, 5, 10]
+    assert why == ""
+    assert [o.contact for o in overlays] == [1, 5, 10]
     lam = np.genfromtxt(d / "lammps" / "histories.csv", delimiter=",", names=True)
     ref = np.genfromtxt(d / "reference" / "histories.csv", delimiter=",", names=True)
     for o in overlays:
@@ -286,12 +294,15 @@ def test_overlay_difference_is_the_difference_of_the_two_runs(compare_dir, tmp_p
         assert 0 < np.max(np.abs(o.difference)) < 1e-2 * np.max(o.reference)  # Verlet vs RK4: small, not zero
     p = compare_peaks(d)
     a, b = load_peaks(d / "lammps"), load_peaks(d / "reference")
-    assert np.array_equal(p.contact, a.contact) and np.array_equal(p.lammps, a.peak_force)
+    assert np.array_equal(p.contact, a.contact)
+    assert np.array_equal(p.lammps, a.peak_force)
     ok = a.reached & b.reached
     assert np.array_equal(p.reached, ok)
     assert np.array_equal(p.relative_difference[ok], (a.peak_force[ok] - b.peak_force[ok]) / b.peak_force[ok])
     assert np.all(np.isnan(p.relative_difference[~ok]))
-    assert p.has_complete and p.complete.any() and not p.complete.all()
+    assert p.has_complete
+    assert p.complete.any()
+    assert not p.complete.all()
     # the figures' CSVs hold what was plotted
     plot_compare(d)
     h = np.genfromtxt(d / "compare_histories_plot.csv", delimiter=",", names=True)
@@ -335,13 +346,15 @@ def test_incomplete_peaks_get_open_markers(compare_dir, tmp_path):
     r = copy(compare_dir / "reference", tmp_path)
     set_complete(r, front_incomplete(r))
     pk = load_peaks(r)
-    assert pk.has_complete and (pk.reached & ~pk.complete).any()
+    assert pk.has_complete
+    assert (pk.reached & ~pk.complete).any()
     fig, ax = plt.subplots()
     canvas._peak_markers(ax, pk.contact, pk.peak_force, pk.reached, pk.complete, pk.has_complete, "run")
     filled, hollow = ax.lines
     assert np.array_equal(filled.get_xdata(), pk.contact[pk.reached & pk.complete])
     assert np.array_equal(hollow.get_xdata(), pk.contact[pk.reached & ~pk.complete])
-    assert hollow.get_markerfacecolor() == "none" and filled.get_markerfacecolor() != "none"
+    assert hollow.get_markerfacecolor() == "none"
+    assert filled.get_markerfacecolor() != "none"
     plt.close(fig)
 
 
@@ -351,7 +364,8 @@ def test_peaks_csv_without_the_complete_column(compare_dir, tmp_path):
         set_complete(d / sub, None)
         assert (d / sub / "peaks.csv").read_text().startswith("contact,peak_force,time_of_peak,peak_force_nondim\n")
     pk = load_peaks(d / "reference")
-    assert not pk.has_complete and pk.complete.all()
+    assert not pk.has_complete
+    assert pk.complete.all()
     made = plot_run(d / "reference") + plot_compare(d)
     assert all(p.exists() for p in made)
     assert "complete" not in (d / "reference" / "peaks_plot.csv").read_text().splitlines()[0]
@@ -451,7 +465,8 @@ def test_figures_are_returned_and_nothing_is_written(snaps_run, tmp_path):
     result = granchain.load_run(r)
     for kind in ("peaks", "histories", "snapshots", "heatmap"):
         fig = result.plot(kind)
-        assert isinstance(fig, Figure) and fig.axes
+        assert isinstance(fig, Figure)
+        assert fig.axes
     assert isinstance(plots.figure(r, "peaks", log=False), Figure)
     assert sorted(p.name for p in r.iterdir()) == before  # save only when asked
     assert plt.get_fignums() == figs_before  # pyplot's figure list untouched
@@ -488,7 +503,9 @@ def test_plot_never_writes_through_a_link_planted_in_the_run_directory(snaps_run
     (r / name).symlink_to(victim)
     assert main(["plot", str(r)]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("granchain: error: ") and name in err and "symbolic link" in err
+    assert err.startswith("granchain: error: ")
+    assert name in err
+    assert "symbolic link" in err
     assert victim.read_text() == "precious\n"
     assert (r / name).is_symlink()
 
@@ -514,7 +531,9 @@ def test_control_characters_of_a_title_are_escaped_in_figures(compare_dir, tmp_p
     (r / "scene.toml").write_text('title = "bell \\u0007 esc \\u001b[2J"\n' + toml)
     fig = granchain.load_run(r).plot("peaks")
     title = fig.axes[0].get_title()
-    assert "\x07" not in title and "\x1b" not in title and "\\x1b[2J" in title
+    assert "\x07" not in title
+    assert "\x1b" not in title
+    assert "\\x1b[2J" in title
 
 
 @pytest.mark.parametrize("kind", ["peaks", "histories", "snapshots", "heatmap"])
@@ -532,7 +551,8 @@ def test_plot_functions_return_figures_and_save_only_when_asked(snaps_run, tmp_p
     assert sorted(p.name for p in elsewhere.iterdir()) == sorted([f"{kind}.png", f"{kind}.svg", f"{kind}_plot.csv"])
     assert_valid(elsewhere / f"{kind}.png", "png")
     plot(r, save=True)
-    assert (r / f"{kind}.png").exists() and (r / f"{kind}_plot.csv").exists()
+    assert (r / f"{kind}.png").exists()
+    assert (r / f"{kind}_plot.csv").exists()
 
 
 def test_a_long_title_is_wrapped_inside_the_figure(tmp_path):

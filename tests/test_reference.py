@@ -41,7 +41,7 @@ def test_step_load_ends_exactly_at_T():
     assert s2.momentum == pytest.approx(10.0 * 1.05e-6, rel=1e-13)
 
 
-@pytest.mark.parametrize("method,bound", [("rk4", 1e-9), ("verlet", 2e-6)])
+@pytest.mark.parametrize(("method", "bound"), [("rk4", 1e-9), ("verlet", 2e-6)])
 def test_elastic_energy_conserved_after_loading(method, bound):
     """Stated drift bounds at dt = 2.5e-8 s (tau/31) on the 30-bead Hertz scene over 200 us."""
     sol = solve_chain(ChainProblem.from_scene(HERTZ), 2e-4, 2.5e-8, method)
@@ -87,9 +87,11 @@ def test_convergence_orders(scene):
         {m: tuple(round(x, 2) if i < 2 else float(f"{x:.2e}") for i, x in enumerate(v)) for m, v in report.items()},
     )
     pk_v, u_v, _ = report["verlet"]
-    assert 1.8 < pk_v < 2.6 and 1.8 < u_v < 2.6
+    assert 1.8 < pk_v < 2.6
+    assert 1.8 < u_v < 2.6
     pk_r, u_r, finest = report["rk4"]
-    assert pk_r > 3.5 and u_r > 3.0
+    assert pk_r > 3.5
+    assert u_r > 3.0
     assert finest < 1e-9
 
 
@@ -116,10 +118,13 @@ def test_snapshots_at_exact_times_and_history_stride():
     p = ChainProblem.from_scene(HERTZ)
     s = solve_chain(p, 1e-4, 3e-8, "rk4", snapshots=(1.7e-5, 5.00001e-5), histories=(0, 3), history_stride=10)
     assert list(s.snapshot_time) == [1.7e-5, 5.00001e-5]
-    assert s.snapshot_velocity.shape == (2, 30) and s.snapshot_force.shape == (2, 29)
+    assert s.snapshot_velocity.shape == (2, 30)
+    assert s.snapshot_force.shape == (2, 29)
     # every 10th step from t = 0, as LAMMPS's dump: the last row is the last such step, not the end
-    assert s.history_time[0] == 0.0 and 1e-4 - 10 * 3e-8 < s.history_time[-1] <= 1e-4
-    assert np.all(np.diff(s.history_time) > 0) and s.history_force.shape[1] == 2
+    assert s.history_time[0] == 0.0
+    assert 1e-4 - 10 * 3e-8 < s.history_time[-1] <= 1e-4
+    assert np.all(np.diff(s.history_time) > 0)
+    assert s.history_force.shape[1] == 2
     # the snapshot is the same state a run ending there reaches
     s2 = solve_chain(p, 1.7e-5, 3e-8, "rk4")
     assert np.array_equal(s2.velocity, s.snapshot_velocity[0])

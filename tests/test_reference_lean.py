@@ -49,12 +49,14 @@ def solve(scene, end_time: float, timestep: float):
 
 
 def assert_same_bits(lean, plain_sol):
-    assert lean.steps == plain_sol.steps and lean.extra_steps == plain_sol.extra_steps
+    assert lean.steps == plain_sol.steps
+    assert lean.extra_steps == plain_sol.extra_steps
     fields = {k: v for k, v in vars(plain_sol).items() if isinstance(v, np.ndarray)}
     assert len(fields) > 15
     for name, value in fields.items():
         got = getattr(lean, name)
-        assert got.dtype == value.dtype and got.shape == value.shape, name
+        assert got.dtype == value.dtype, name
+        assert got.shape == value.shape, name
         assert got.tobytes() == value.tobytes(), name  # (the bits: signed zeros and nans too)
 
 
@@ -136,7 +138,8 @@ def test_a_laws_kink_screens_are_the_generic_ones(law_name):
         for (k1, l1, i1), (k2, l2, i2) in zip(own, generic, strict=True):
             assert (k1.kind, k1.from_below) == (k2.kind, k2.from_below)
             assert np.asarray(k1.level).tobytes() == np.asarray(k2.level).tobytes()
-            assert l1.tobytes() == l2.tobytes() and np.array_equal(i1, i2)
+            assert l1.tobytes() == l2.tobytes()
+            assert np.array_equal(i1, i2)
             assert (k1.where is None) == (k2.where is None)
             if k1.where is not None:
                 assert np.array_equal(k1.where, k2.where)

@@ -54,7 +54,8 @@ def test_functions_are_short_and_public_ones_annotated(name):
             continue
         args = [a for a in fn.args.args + fn.args.kwonlyargs if a.arg not in ("self", "cls")]
         missing = [a.arg for a in args if a.annotation is None]
-        assert not missing and fn.returns is not None, f"{file}: {fn.name} lacks type hints ({missing or 'return'})"
+        assert not missing, f"{file}: {fn.name} lacks type hints ({missing or 'return'})"
+        assert fn.returns is not None, f"{file}: {fn.name} lacks type hints ({missing or 'return'})"
 
 
 def test_modules_are_at_most_600_lines():

@@ -109,7 +109,8 @@ def test_every_campaign_is_valid_in_both_modes():
 def test_a_missing_section_is_marked_not_yet_reproduced(tmp_path):
     ctx = Context(tmp_path, quick=True)
     res = run_section(ctx, "no_such_section", "Fig. 99")
-    assert not res.reproduced and "Not yet reproduced" in res.notes[0]
+    assert not res.reproduced
+    assert "Not yet reproduced" in res.notes[0]
 
 
 def test_report_has_every_section_and_embeds_its_figures(tmp_path):
@@ -132,9 +133,12 @@ def test_report_has_every_section_and_embeds_its_figures(tmp_path):
     md = write_markdown(tmp_path, secs, meta).read_text()
     page = write_html(tmp_path, secs, meta).read_text()
     for text in (md, page):
-        assert "Section A" in text and "Section B" in text and "Not yet reproduced" in text
+        assert "Section A" in text
+        assert "Section B" in text
+        assert "Not yet reproduced" in text
     assert "| a.x | x | N | 1.0 | 1.02 |" in md
-    assert page.count("data:image/png;base64,") == 1 and "src='figures/" not in page
+    assert page.count("data:image/png;base64,") == 1
+    assert "src='figures/" not in page
 
 
 def test_command_line_user_errors_exit_2(tmp_path, capsys):
@@ -164,11 +168,13 @@ def test_quick_report_has_every_section_and_no_failure(quick):
     out, meta = quick
     assert [s.key for s in meta["sections"]] == [n for n, _ in SECTIONS]
     for s in meta["sections"]:
-        assert s.reproduced and not s.failed, (s.key, s.notes)
+        assert s.reproduced, (s.key, s.notes)
+        assert not s.failed, (s.key, s.notes)
     assert meta["failed_points"] == 0
     md, page = (out / "report.md").read_text(), (out / "report.html").read_text()
     for _, title in SECTIONS:
-        assert title in md and html.escape(title) in page
+        assert title in md
+        assert html.escape(title) in page
     assert "## Cost" in md
 
 
@@ -190,7 +196,8 @@ def test_quick_rows_match_the_documented_numbers(quick):
             redo = Row(r["key"], "", "", r["paper"], r["paper_text"], ours=d["ours"], tol=r["tol"]).judge()
             assert redo.verdict == r["verdict"], (d, r)
     for key in ("elastic.c_l", "elastic.c_u", "elastic.c", "table1.v_2", "table1.x_t"):
-        assert rows[key]["verdict"] == DISAGREES and rows[key]["reason"], key  # each with its reason
+        assert rows[key]["verdict"] == DISAGREES, key
+        assert rows[key]["reason"], key  # each with its reason
     assert rows["fig1.exponent"]["verdict"] == AGREES
     assert not [k for k, r in rows.items() if r["verdict"] == NOT_YET]
 
@@ -217,9 +224,11 @@ def test_a_second_call_runs_nothing(quick):
     out, _ = quick
     before = (out / "report.md").stat().st_mtime
     again = reproduce(out, quick=True, workers=2)
-    assert again["ran"] == 0 and again["cached"] > 0
+    assert again["ran"] == 0
+    assert again["cached"] > 0
     assert (out / "report.md").stat().st_mtime >= before
-    assert _rows(out).keys() and all(math.isfinite(s.cost.get("wall_time", 0.0)) for s in again["sections"])
+    assert _rows(out).keys()
+    assert all(math.isfinite(s.cost.get("wall_time", 0.0)) for s in again["sections"])
 
 
 def test_granchain_reproduce_is_a_subcommand_with_its_own_options(tmp_path, capsys):
@@ -230,5 +239,7 @@ def test_granchain_reproduce_is_a_subcommand_with_its_own_options(tmp_path, caps
     out = tmp_path / "r"
     assert granchain_main(["reproduce", "--quick", "--out", str(out), "--section", "fig4"]) == 2
     err = capsys.readouterr().err
-    assert "--section" in err and "fig4" in err and len(err.strip().splitlines()) == 1
+    assert "--section" in err
+    assert "fig4" in err
+    assert len(err.strip().splitlines()) == 1
     assert not (out / "report.md").exists()

@@ -46,7 +46,8 @@ def cli(tmp_path, text: str, *args: str, env=None, timeout: float = 60.0):
 
 
 def refused(rc: int, err: str, tmp_path, *words: str) -> None:
-    assert rc == 2 and "Traceback" not in err, err
+    assert rc == 2, err
+    assert "Traceback" not in err, err
     lines = [line for line in err.splitlines() if line.startswith("granchain: error:")]
     assert len(lines) == 1, err
     for word in words:
@@ -118,7 +119,8 @@ def test_a_long_run_is_announced(monkeypatch):
     sc = parse_scene(scene_text(beads=10_000, end_time=0.5, timestep=5e-8))  # 1e7 steps of 1e4 beads
     with pytest.warns(LongRunWarning, match="steps on 10000 beads: about .* (hours|days)"):
         est = check_run(sc)
-    assert est.steps == pytest.approx(1e7) and est.beads == 10_000
+    assert est.steps == pytest.approx(1e7)
+    assert est.beads == 10_000
 
 
 def test_estimates_grow_with_what_the_scene_asks_for():
@@ -126,9 +128,13 @@ def test_estimates_grow_with_what_the_scene_asks_for():
     long = estimate(parse_scene(scene_text(end_time=7e-3)))
     wide = estimate(parse_scene(scene_text(beads=10_000)))
     kept = estimate(parse_scene(scene_text(outputs="histories = [1, 2, 3]\nhistory_interval = 5e-8\n")))
-    assert long.steps == pytest.approx(10 * small.steps) and long.seconds > small.seconds
-    assert wide.memory > 50 * small.memory and wide.disk > small.disk
-    assert kept.memory > small.memory and kept.disk > small.disk and "histories.csv" in kept.files
+    assert long.steps == pytest.approx(10 * small.steps)
+    assert long.seconds > small.seconds
+    assert wide.memory > 50 * small.memory
+    assert wide.disk > small.disk
+    assert kept.memory > small.memory
+    assert kept.disk > small.disk
+    assert "histories.csv" in kept.files
     dumped = parse_scene(scene_text(outputs="dump_interval = 5e-7\n"))
     assert "chain.dump" in estimate(dumped, "lammps").files  # LAMMPS's own file, not the reference's
     assert "chain.dump" not in estimate(dumped, "reference").files

@@ -28,7 +28,8 @@ def test_run_writes_documented_files(tmp_path):
     s = read_summary(out)
     for key in ("backend", "timestep", "steps", "wall_time", "observables"):
         assert key in s
-    assert s["backend"] == "reference" and s["steps"] == res.solution.steps
+    assert s["backend"] == "reference"
+    assert s["steps"] == res.solution.steps
     with open(out / "peaks.csv") as fh:
         rows = list(csv.reader(fh))
     assert rows[0] == [
@@ -48,13 +49,15 @@ def test_run_writes_documented_files(tmp_path):
         assert next(csv.reader(fh)) == ["time", "force_1", "force_5", "velocity_1", "velocity_5"]
     with open(out / "snapshots.csv") as fh:
         rows = list(csv.reader(fh))
-    assert rows[0] == ["time", "bead", "displacement", "velocity", "contact_force"] and len(rows) == 1 + 30
+    assert rows[0] == ["time", "bead", "displacement", "velocity", "contact_force"]
+    assert len(rows) == 1 + 30
     assert (out / "scene.toml").read_text() == sc.source_text
 
 
 def test_no_dump_files_without_histories_or_snapshots(tmp_path):
     run_scene(make_scene(end_time=5e-5, timestep=5e-8), out=tmp_path / "r")
-    assert not (tmp_path / "r" / "histories.csv").exists() and not (tmp_path / "r" / "snapshots.csv").exists()
+    assert not (tmp_path / "r" / "histories.csv").exists()
+    assert not (tmp_path / "r" / "snapshots.csv").exists()
 
 
 def test_existing_directory_refused_before_running(tmp_path, monkeypatch):
@@ -101,7 +104,10 @@ def test_cli_bad_scene_is_a_clear_error(tmp_path, capsys):
     p.write_text(make_scene_text().replace("radius = 4.76e-3", "radius = -1.0"))
     assert main(["run", str(p), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
-    assert "bad.toml" in err and "radius" in err and "-1.0" in err and "Traceback" not in err
+    assert "bad.toml" in err
+    assert "radius" in err
+    assert "-1.0" in err
+    assert "Traceback" not in err
     assert not (tmp_path / "o").exists()
 
 
@@ -114,7 +120,8 @@ def test_cli_run_predict_scenes(tmp_path, capsys):
     assert main(["predict", str(p), "--json"]) == 0
     preds = json.loads(capsys.readouterr().out)
     assert any(x["name"] == "short_load_peak_force" for x in preds)
-    assert main(["scenes"]) == 0 and "default" in capsys.readouterr().out
+    assert main(["scenes"]) == 0
+    assert "default" in capsys.readouterr().out
 
 
 def test_console_script_default_scene(tmp_path):
@@ -127,4 +134,5 @@ def test_console_script_default_scene(tmp_path):
     )
     assert r.returncode == 0, r.stderr
     s = read_summary(tmp_path / "d")
-    assert s["observables"]["leading_peak_force"] > 0 and s["observables"]["wave_speed"] > 0
+    assert s["observables"]["leading_peak_force"] > 0
+    assert s["observables"]["wave_speed"] > 0

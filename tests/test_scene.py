@@ -17,28 +17,36 @@ from .conftest import ISSUE_SCENE
 
 def test_issue_scene_shape_parses():
     sc = parse_scene(ISSUE_SCENE, source="issue.toml")
-    assert sc.chain.beads == 200 and sc.chain.radius == 4.76e-3
+    assert sc.chain.beads == 200
+    assert sc.chain.radius == 4.76e-3
     assert sc.chain.material == mat.MATERIALS["brass"]
-    assert sc.loading.amplitude == 40.0 and sc.loading.duration == 1e-2
-    assert sc.outputs.histories == (1, 2, 3) and sc.outputs.snapshots == (2e-3,)
+    assert sc.loading.amplitude == 40.0
+    assert sc.loading.duration == 1e-2
+    assert sc.outputs.histories == (1, 2, 3)
+    assert sc.outputs.snapshots == (2e-3,)
     assert sc.peak_contacts == tuple(range(1, 200))
 
 
 def test_bundled_scenes_parse_and_roundtrip():
     scenes = bundled_scenes()
-    assert "default" in scenes and len(scenes) >= 6
+    assert "default" in scenes
+    assert len(scenes) >= 6
     for name, text in scenes.items():
         sc = parse_scene(text, source=name)
         back = parse_scene(sc.to_toml(), source=name)
-        assert back.chain == sc.chain and back.contact == sc.contact and back.loading == sc.loading
-        assert back.run == sc.run and back.outputs == sc.outputs
+        assert back.chain == sc.chain
+        assert back.contact == sc.contact
+        assert back.loading == sc.loading
+        assert back.run == sc.run
+        assert back.outputs == sc.outputs
 
 
 def test_impulse_kind_is_a_step_with_amplitude_impulse_over_duration():
     data = tomllib.loads(ISSUE_SCENE)
     data["loading"] = {"kind": "impulse", "impulse": 0.4, "duration": 1e-3}
     sc = scene_from_dict(data, source="x")
-    assert sc.loading.amplitude == pytest.approx(0.4 / 1e-3) and sc.loading.impulse == pytest.approx(0.4)
+    assert sc.loading.amplitude == pytest.approx(0.4 / 1e-3)
+    assert sc.loading.impulse == pytest.approx(0.4)
 
 
 @pytest.mark.parametrize("kind", ["step", "impulse"])
@@ -129,7 +137,7 @@ RULES = [
 ]
 
 
-@pytest.mark.parametrize("what,path,value,key,fix", RULES, ids=[r[0] for r in RULES])
+@pytest.mark.parametrize(("what", "path", "value", "key", "fix"), RULES, ids=[r[0] for r in RULES])
 def test_invalid_scene_rule(what, path, value, key, fix):
     with pytest.raises(SceneError) as e:
         scene_from_dict(mutate(path, value), source="bad.toml")
@@ -148,13 +156,14 @@ def test_invalid_scene_rule(what, path, value, key, fix):
 BETA_CASES = [(-0.1, ">= 0"), (1.0, "< 1"), (1.5, "< 1")]
 
 
-@pytest.mark.parametrize("beta,fix", BETA_CASES)
+@pytest.mark.parametrize(("beta", "fix"), BETA_CASES)
 def test_beta_outside_unit_interval(beta, fix):
     data = mutate(("contact", "law"), "bilinear")
     data["contact"].update(unloading_coeff=beta, plastic_stiffness=2.43e7)
     with pytest.raises(SceneError, match=re.escape("unloading_coeff")) as e:
         scene_from_dict(data, source="b.toml")
-    assert fix in str(e.value) and repr(float(beta)) in str(e.value)
+    assert fix in str(e.value)
+    assert repr(float(beta)) in str(e.value)
 
 
 def test_bilinear_without_stiffness():
@@ -251,11 +260,13 @@ def test_mutated_scenes_are_valid_or_refused_clearly(mutations):
         assert refused.startswith("gen.toml:")
         return
     # a scene accepted is physically sensible
-    assert (sc.chain.beads is None or sc.chain.beads >= 2) and sc.chain.radius > 0  # None: "auto"
+    assert sc.chain.beads is None or sc.chain.beads >= 2
+    assert sc.chain.radius > 0
     if sc.run.timestep is not None and sc.run.end_time is not None:
         assert 0 < sc.run.timestep <= sc.run.end_time
     if sc.contact.law == "bilinear":
-        assert 0 <= sc.contact.unloading_coeff < 1 and sc.stiffness > 0
+        assert 0 <= sc.contact.unloading_coeff < 1
+        assert sc.stiffness > 0
 
 
 def test_bundled_scene_files_exist_on_disk():
@@ -371,7 +382,9 @@ def test_generated_scene_files_run_or_are_refused_clearly(tmp_path_factory, muta
     if rc == 0:
         assert (d / "out" / "summary.json").exists()
         return
-    assert rc == 2 and message.startswith("granchain: error: ") and message.count("\n") <= 3, message
+    assert rc == 2, message
+    assert message.startswith("granchain: error: "), message
+    assert message.count("\n") <= 3, message
     assert not (d / "out").exists()
     if "invariant" not in message and "stability limit" not in message:
         assert str(path) in message or "gen.toml" in message  # a scene error names the file

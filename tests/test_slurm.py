@@ -121,7 +121,7 @@ def write(tmp_path: Path, name: str, text: str) -> Path:
 
 
 @pytest.mark.parametrize(
-    "table, message",
+    ("table", "message"),
     [
         ('kind = "slurmm"', r"\[cluster\] kind = 'slurmm' is invalid: one of local, slurm, pbs"),
         ('queue = "debug\\n#SBATCH --wrap=x"', r"\[cluster\] queue = .* is invalid: a queue name"),
@@ -219,7 +219,8 @@ def test_without_memory_the_job_asks_for_none_and_takes_the_queues_default():
     finally:
         client.close()
         jc.cluster.close()
-    assert "#SBATCH --mem" not in script and "--memory-limit" in script
+    assert "#SBATCH --mem" not in script
+    assert "--memory-limit" in script
 
 
 def test_ranks_auto_follows_the_np_auto_rule_within_a_workers_cores():
@@ -232,7 +233,8 @@ def test_ranks_auto_follows_the_np_auto_rule_within_a_workers_cores():
     for p in c.points():
         for cores in (1, 2, 4, 16):
             n = point_ranks(c, p.scene, cores)
-            assert n == auto_ranks(p.scene.chain.beads, cores) and 1 <= n <= cores
+            assert n == auto_ranks(p.scene.chain.beads, cores)
+            assert 1 <= n <= cores
     assert [point_ranks(c, p.scene, 16) for p in c.points()] == [1, 2, 8]
 
 
@@ -251,12 +253,15 @@ def test_a_task_run_again_finds_its_own_finished_point_and_does_not_run_it(tmp_p
     summary = (job / "run" / "summary.json").stat().st_mtime_ns
     payload = {"job_dir": str(job), "token": task["token"], "rerun": True, "scene": {}, "backend": "reference"}
     r = run_point(payload)
-    assert r["status"] == "done" and r["repeated"] and r["wall_time"] == task["wall_time"]
+    assert r["status"] == "done"
+    assert r["repeated"]
+    assert r["wall_time"] == task["wall_time"]
     assert (job / "run" / "summary.json").stat().st_mtime_ns == summary  # not run again
     # another campaign run's token with rerun: it runs (and this payload's empty scene fails, recorded)
     other = {"token": "other", "source": "x", "method": None, "rtol": None, "error_estimate": False}
     r2 = run_point({**payload, **other, "code": wsp.code_version("reference")})
-    assert r2["status"] == "failed" and (job / "failure.json").is_file()
+    assert r2["status"] == "failed"
+    assert (job / "failure.json").is_file()
 
 
 # -------------------------------------------------------------------------- on a real SLURM
@@ -276,7 +281,8 @@ def test_a_12_point_campaign_through_slurm_gives_the_local_table(tmp_path, no_jo
     ws = tmp_path / "slurm"
     assert main(["campaign", "run", str(path), "--out", str(ws), "--jobs", "2", *SLURM_ARGS, "-q"]) == 0
     remote = granchain.load_campaign(ws)
-    assert len(remote) == 12 and set(remote["status"]) == {"done"}
+    assert len(remote) == 12
+    assert set(remote["status"]) == {"done"}
     tasks = [json.loads((ws / "workspace" / j / "task.json").read_text()) for j in remote["job"]]
     assert len({t["pid"] for t in tasks}) == 2, "both worker jobs ran points"
     assert any(p.name.endswith(".err") for p in (ws / "jobs").iterdir()), "the jobs' output is in WS/jobs"
@@ -332,8 +338,10 @@ def test_submit_ranks_2_wait_gives_the_run_directory_of_granchain_run_np_2(tmp_p
     assert main(["submit", str(scene), "--out", str(out), "--ranks", "2", "--wait", "--walltime", "00:10:00"]) == 0
     printed = capsys.readouterr().out
     job_id = json.loads((out / "job.json").read_text())["job_id"]
-    assert f"submitted job {job_id}" in printed and "run directory:" in printed
-    assert "mpirun -np 2" in (out / "job.sh").read_text() and "python" not in (out / "job.sh").read_text()
+    assert f"submitted job {job_id}" in printed
+    assert "run directory:" in printed
+    assert "mpirun -np 2" in (out / "job.sh").read_text()
+    assert "python" not in (out / "job.sh").read_text()
     ref = tmp_path / "run"
     argv = ["run", str(scene), "--backend", "lammps", "--np", "2", "--error-estimate", "off", "--out", str(ref), "-q"]
     assert main(argv) == 0
@@ -424,7 +432,8 @@ def test_past_the_replacement_limit_the_campaign_stops_clearly_and_a_rerun_finis
             os.killpg(p.pid, signal.SIGINT)
             p.wait(timeout=60)
     assert p.returncode == 2, err[-3000:]
-    assert f"every worker job ended ({jobs[0]} CANCELLED" in err and "replacements 0" in err, err[-2000:]
+    assert f"every worker job ended ({jobs[0]} CANCELLED" in err, err[-2000:]
+    assert "replacements 0" in err, err[-2000:]
     done = complete_jobs(ws)
     assert 2 <= len(done) < 16
     _, report = run_campaign(path, ws, cluster={"kind": "slurm", "interface": "lo", "walltime": "00:20:00"})
@@ -449,7 +458,8 @@ def test_ctrl_c_cancels_the_campaigns_jobs_and_only_those(tmp_path, no_job_left)
         p = _campaign_process(path, ws, "--jobs", "2")
         _wait_for(lambda: (ws / "workspace").is_dir() and len(complete_jobs(ws)) >= 2, what="2 points")
         mine = _worker_jobs()
-        assert mine and foreign not in mine
+        assert mine
+        assert foreign not in mine
         os.killpg(p.pid, signal.SIGINT)
         out, err = p.communicate(timeout=120)
         assert p.returncode == 130, err[-2000:]

@@ -50,7 +50,8 @@ def test_yardstick_overrides_only_its_blocks(name):
     energy balance; its results dump writes the result columns it declares; the data file is the same."""
     sc = YARDSTICK_SCENES[name]()
     ours, yard = render_deck(sc), render_deck(sc, yardstick="builtin")
-    assert yard.data == ours.data and yard.total_steps == ours.total_steps
+    assert yard.data == ours.data
+    assert yard.total_steps == ours.total_steps
     a, b = without_blocks(ours.deck), without_blocks(yard.deck)
     assert len(a) == len(b)
     differ = [(x, y) for x, y in zip(a, b, strict=True) if x != y]
@@ -58,7 +59,8 @@ def test_yardstick_overrides_only_its_blocks(name):
         "write_dump      all custom peaks.dump id x vx d_fpeak d_tpeak modify format float %.17g sort id"
     ]
     assert BUILTIN_LINES <= set(yard.deck.splitlines())
-    assert not re.search(r"^pair_style\s+chain/", yard.deck, re.M) and "watch_energy" not in yard.deck
+    assert not re.search(r"^pair_style\s+chain/", yard.deck, re.M)
+    assert "watch_energy" not in yard.deck
     assert "fix             contact all property/atom d_fc d_fprev d_fprev2 d_fpeak d_tpeak ghost yes" in yard.deck
 
 
@@ -124,4 +126,5 @@ def test_decks_reuse_the_compiled_templates(monkeypatch):
     monkeypatch.setattr(jinja2.Environment, "compile", counting)
     for sc in scenes:
         render_deck(sc)
-    assert compiled == [] and _env() is _env()
+    assert compiled == []
+    assert _env() is _env()

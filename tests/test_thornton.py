@@ -45,7 +45,7 @@ def restitution(sol, v0):
 MATERIALS = [("brass", 4.76e-3, 1e9), ("chrome-steel-52100", 2e-3, 3e9), ("aluminium-6061-t6", 1e-2, 5e8)]
 
 
-@pytest.mark.parametrize("material,radius,p_y", MATERIALS)
+@pytest.mark.parametrize(("material", "radius", "p_y"), MATERIALS)
 @pytest.mark.parametrize("ratio", [0.3, 0.95, 1.05, 2.0, 10.0, 300.0])
 def test_two_bead_restitution_rk4(material, radius, p_y, ratio):
     """Below v_y the impact is elastic (e = 1 to the integrator's accuracy); above it e follows
@@ -61,7 +61,8 @@ def test_two_bead_restitution_rk4(material, radius, p_y, ratio):
     # at tc/400 meet it to ~1e-8: 1e-6 leaves room for the step, not for a wrong law
     assert e == pytest.approx(restitution_coefficient(v0, vy), abs=1e-6)
     if ratio < 1:
-        assert e == pytest.approx(1.0, abs=1e-6) and sol.dissipated[-1] == 0.0
+        assert e == pytest.approx(1.0, abs=1e-6)
+        assert sol.dissipated[-1] == 0.0
     else:
         assert sol.dissipated[-1] > 0.0
     e0 = 0.5 * sc.mass * v0**2
@@ -102,7 +103,8 @@ def test_rk4_is_fourth_order_through_the_kinks():
     p = ChainProblem.from_scene(sc)
     assert float(p.law.yield_force) < 20.0
     runs = [solve_chain(p, 3e-4, 4e-7 / 2**j, "rk4") for j in range(4)]
-    assert all(r.extra_steps > 0 for r in runs) and runs[-1].dissipated[-1] > 0.0  # kinks were located
+    assert all(r.extra_steps > 0 for r in runs)
+    assert runs[-1].dissipated[-1] > 0.0
     for name, values in (
         ("peak force of contact 1", [r.peak_force[0] for r in runs]),
         ("final velocity of bead 1", [r.velocity[0] for r in runs]),

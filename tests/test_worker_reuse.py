@@ -184,7 +184,8 @@ def test_a_failing_deck_fails_alone_and_the_next_runs_on_a_new_child(kind, tmp_p
         ] in str(e.value)
         assert server.children() == []  # that child is gone
         info, work = run_deck(d.deck, d.data)
-        assert info["instance_runs"] == 1 and server.children() != first
+        assert info["instance_runs"] == 1
+        assert server.children() != first
         served = outputs(work)
     assert not list(tmp_path.glob("granchain-lammps-*"))[1:]  # the failed run's work directory is gone
     _, fresh = run_deck(d.deck, d.data, work_dir=tmp_path / "fresh")
@@ -219,10 +220,12 @@ def test_a_child_killed_mid_run_fails_that_run_only(tmp_path, monkeypatch):
         os.kill(child, signal.SIGKILL)
         t.join(60)
         assert not t.is_alive()
-        assert isinstance(failure[0], LammpsError) and "LAMMPS failed (exit -9)" in str(failure[0])
+        assert isinstance(failure[0], LammpsError)
+        assert "LAMMPS failed (exit -9)" in str(failure[0])
         assert not list(tmp_path.glob("granchain-lammps-*"))  # its work directory is gone
         info, work = run_deck(d.deck, d.data)
-        assert info["instance_runs"] == 1 and server.children() not in ([], [child])
+        assert info["instance_runs"] == 1
+        assert server.children() not in ([], [child])
         served = outputs(work)
     _, fresh = run_deck(d.deck, d.data, work_dir=tmp_path / "fresh")
     assert served == outputs(fresh)
@@ -236,7 +239,8 @@ def test_a_child_killed_while_idle_is_replaced_without_failing_the_run(tmp_path)
         os.kill(child, signal.SIGKILL)
         time.sleep(0.2)  # not a timing assertion: the run below must not fail whenever it notices
         info, _ = run_deck(d.deck, d.data, work_dir=tmp_path / "b")
-        assert info["instance_runs"] == 1 and server.children() != [child]
+        assert info["instance_runs"] == 1
+        assert server.children() != [child]
     assert server.children() == []  # persistent() ended it
 
 
@@ -285,7 +289,8 @@ def test_the_parent_never_imports_lammps(tmp_path):
     out, err = p.communicate(timeout=300)
     assert p.returncode == 0, err
     seen = json.loads(out)
-    assert seen["runs"] == [1, 2, 3] and len(seen["children"]) == 1
+    assert seen["runs"] == [1, 2, 3]
+    assert len(seen["children"]) == 1
     assert seen["lammps"] is False
 
 
