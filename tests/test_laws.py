@@ -181,10 +181,12 @@ def test_zero_force_kink_is_where_the_force_vanishes(name, data):
 
 
 @pytest.mark.parametrize("name", LAW_NAMES)
-def test_join_keeps_each_group(name):
+@settings(max_examples=10, deadline=None)
+@given(data=st.data())
+def test_join_keeps_each_group(name, data):
     cls = LAWS[name]
-    a = law_strategy(name).example()
-    b = law_strategy(name).example()
+    a = data.draw(law_strategy(name), label="a")
+    b = data.draw(law_strategy(name), label="b")
     j = cls.join([(a, 2), (b, 3)])
     alpha = np.full(5, overlap_scale(a))
     f = j.force(alpha, np.zeros(5))

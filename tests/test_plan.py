@@ -80,7 +80,8 @@ def test_stop_early_in_both_backends():
     assert sc.run.stop_after_contact == 100
     lam = run_lammps(sc)[0].solution
     ref = run_scene(sc, method="verlet").solution
-    assert lam.steps == ref.steps and lam.end_time == pytest.approx(ref.end_time, rel=1e-12)
+    assert lam.steps == ref.steps
+    assert lam.end_time == pytest.approx(ref.end_time, rel=1e-12)
     assert ref.end_time < 0.6 * sc.run.end_time  # the planned end time was a bound, not the cost
     assert np.max(np.abs(lam.peak_force - ref.peak_force)) / ref.peak_force.max() < 1e-9
 
@@ -136,7 +137,7 @@ def test_planner_on_paper_cases_reaches_converged_peaks(name):
     assert err <= 1e-3
 
 
-@pytest.mark.parametrize("method, rtol", [("rk4", 1e-3), ("verlet", 1e-2), ("verlet", 1e-3)])
+@pytest.mark.parametrize(("method", "rtol"), [("rk4", 1e-3), ("verlet", 1e-2), ("verlet", 1e-3)])
 def test_auto_history_interval_keeps_dump_derived_peaks_within_rtol(method, rtol):
     from granchain.postprocess.dumps import peaks_from_samples
 
@@ -147,7 +148,8 @@ def test_auto_history_interval_keeps_dump_derived_peaks_within_rtol(method, rtol
     plan = plan_scene(parse_scene(text, source="auto.toml"), rtol=rtol, method=method)
     sc = plan.scene
     stride = round(sc.outputs.history_interval / sc.run.timestep)
-    assert stride >= 1 and sc.outputs.history_interval == pytest.approx(stride * sc.run.timestep)
+    assert stride >= 1
+    assert sc.outputs.history_interval == pytest.approx(stride * sc.run.timestep)
     assert any(c.name == "history_interval" for c in plan.choices)
     sol = run_scene(sc, method=method).solution
     got, _ = peaks_from_samples(sol.history_time, sol.history_force, refine=True)

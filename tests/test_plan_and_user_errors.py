@@ -54,7 +54,8 @@ def test_each_backend_runs_the_step_planned_for_its_own_integrator():
     sc = parse_scene(STEEL.format(beads=60), source="steel.toml")
     lam, lam_plan = plan_for(sc, "lammps")
     ref, ref_plan = plan_for(sc, "reference", "rk4")
-    assert lam_plan.method == "verlet" and ref_plan.method == "rk4"
+    assert lam_plan.method == "verlet"
+    assert ref_plan.method == "rk4"
     # Verlet's error grows as (omega dt)^2, RK4's as (omega dt)^4: the same rtol needs a finer Verlet step
     assert lam.run.timestep < ref.run.timestep
     assert lam.run.timestep == plan_scene(sc, method="verlet").scene.run.timestep
@@ -218,7 +219,9 @@ def test_cli_prints_the_accuracy_warning_on_one_line(tmp_path, capsys):
     p.write_text(text)
     assert main(["run", str(p), "--method", "verlet", "--out", str(tmp_path / "r")]) == 0
     lines = [line for line in capsys.readouterr().err.splitlines() if not line.startswith("plan (")]
-    assert len(lines) == 1 and lines[0].startswith("granchain: warning: ") and "too coarse for rtol 0.001" in lines[0]
+    assert len(lines) == 1
+    assert lines[0].startswith("granchain: warning: ")
+    assert "too coarse for rtol 0.001" in lines[0]
 
 
 # ---------------------------------------------------------------- 8. resources
@@ -282,7 +285,8 @@ def test_api_loads_bundled_names_and_runs_an_auto_scene():
     assert result.solution.timestep == plan.scene.run.timestep
     table = result.peak_table
     assert table.dtype.names == ("contact", "peak_force", "time_of_peak", "complete")
-    assert len(table) == auto.n_contacts and table["contact"][0] == 1
+    assert len(table) == auto.n_contacts
+    assert table["contact"][0] == 1
     assert "observables" in result.summary()
 
 
@@ -349,7 +353,8 @@ def test_verlet_plans_a_dashpot_chain_finer_than_its_frequency_alone():
 
     sc = resolve_scene("effect-dashpot")
     rate = damping_rate(sc)
-    assert rate > 0 and damping_rate(resolve_scene("default")) == 0.0
+    assert rate > 0
+    assert damping_rate(resolve_scene("default")) == 0.0
     verlet = plan_scene(replace(sc, effects=replace(sc.effects, dashpot=1e3)), rtol=1e-3, method="verlet")
     assert "first-order error" in verlet.choices[0].reason
     plain = plan_scene(replace(sc, effects=replace(sc.effects, dashpot=0.0)), rtol=1e-3, method="verlet")
