@@ -6,12 +6,13 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, example, given, settings
+from hypothesis import HealthCheck, example, given, reject, settings
 from hypothesis import strategies as st
 
 from granchain.invariants import InvariantError
 from granchain.physics import materials as mat
 from granchain.physics import models
+from granchain.postprocess.observables import front_arrivals
 from granchain.scene import parse_scene
 from granchain.workflows.run import run_reference
 
@@ -101,13 +102,24 @@ def real_contact_positions(sc) -> np.ndarray:
 @SETTINGS
 @given(sc=varied_chains())
 def test_wave_speed_follows_the_contacts_real_positions(sc):
-    result = run_reference(_planned(sc), "verlet")
+    try:
+        result = run_reference(_planned(sc), "verlet")
+    except InvariantError as e:
+        # a steep taper under a fast kick is stopped by the run watch, which holds every contact to
+        # half the smallest bead's radius: the open defect test_a_steep_taper_is_watched_against_each_
+        # contacts_own_radii pins (strict xfail); such a draw measures no wave speed to check here
+        if "overlap far below the radius" not in str(e):
+            raise
+        reject()
     obs = result.observables()
     if obs["wave_speed"] is None:
         pytest.fail(f"no wave speed measured: {result.observables_missing().get('wave_speed')}")
     a, b = result.scene.window
     contacts = np.arange(a, b + 1)
-    t = result.solution.leading_pulse_time[contacts - 1]
+    # the front's arrival as granchain defines it (the first maximum; on a precompressed chain the
+    # half-amplitude arrival, postprocess.observables.front_arrivals), against the distances
+    # computed here from the radii alone
+    t = front_arrivals(result.solution, result.scene.effects.precompression)[contacts - 1]
     ok = np.isfinite(t)
     x = real_contact_positions(result.scene)[contacts - 1][ok]
     # the same estimator as granchain's (times against distance: its slope is 1 / speed)
