@@ -55,6 +55,10 @@ class Observer:
         """A step ended at t1 (its last piece began at t0). True: stop the run after this step."""
         return False
 
+    def after_setup(self, state: ChainState) -> None:
+        """The integrator recomputed the forces of the state at state.t, as a LAMMPS run's setup does
+        (Integrator.start_segment): the same time's sample again, not a new one."""
+
     def end_segment(self, state: ChainState) -> None:
         """The steps of a segment are done, or the run stopped."""
 
@@ -192,6 +196,27 @@ class ForceSamplePeaks(PeakTracker):
         self.alpha = np.empty(n - 1)  # work arrays of after_step
         self.u_left, self.u_right = state.u[:-1], state.u[1:]  # (u changes in place)
         self.rising = np.empty(n - 1, dtype=bool)
+
+    @override
+    def start(self, state: ChainState) -> None:
+        # the t = 0 sample climbs the ladder as the pair styles' first evaluation does: a rung it is
+        # above already (a dashpot's force on a kicked bead) was crossed at t = 0
+        if self.ladder is not None:
+            self.ladder.climb_samples(self.f_now, self.f_now, -math.inf, 0.0)
+
+    @override
+    def after_setup(self, state: ChainState) -> None:
+        # the pair styles' setup evaluation: it overwrites the current sample (fc) and tracks it without
+        # refining a maximum (no new sample: the middle sample's neighbours are unchanged)
+        f_now = self.f_now
+        if self.ladder is not None:
+            self.ladder.climb_samples(self.f_prev, state.fc, self.t_prev, self.t_now)
+        np.copyto(f_now, state.fc)
+        np.minimum(self.fmin, f_now, out=self.fmin)
+        rising = np.greater(f_now, self.fpk, out=self.rising)
+        np.copyto(self.fpk, f_now, where=rising)
+        np.copyto(self.tpk, self.t_now, where=rising)
+        np.copyto(self.fmin, f_now, where=rising)
 
     @override
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:

@@ -221,6 +221,13 @@ def _solve(
     )
 
 
+def _start_run(integrator: Integrator, state: ChainState, t: float, observers: list[Observer]) -> None:
+    """A LAMMPS run of the deck starts at t: its setup, and the observers see the forces it recomputed."""
+    if integrator.start_segment(state, t):
+        for observer in observers:
+            observer.after_setup(state)
+
+
 def _drive(
     state: ChainState,
     integrator: Integrator,
@@ -247,10 +254,15 @@ def _drive(
     step, t = 0, 0.0
     for g in plan:
         a_ext = ((amplitude if g.loaded else 0.0) + push) * inv_m1
-        integrator.start_segment(state, g.start)
+        _start_run(integrator, state, g.start, observers)
         state.seg_end = g.end
         stopped = False
+        # a shorter last step is a LAMMPS run of its own in the deck (templates/chain.lmp.j2): its setup
+        # recomputes the forces before it, as at a segment's start
+        split_last = g.steps - 1 if g.steps > 1 and g.last != timestep else -1
         for j in range(g.steps):
+            if j == split_last:
+                _start_run(integrator, state, t, observers)
             h = timestep if j < g.steps - 1 else g.last
             t_new = g.start + (j + 1) * timestep if j < g.steps - 1 else g.end
             t0 = integrator.step(state, t, t_new, h, a_ext, on_split)

@@ -36,8 +36,11 @@ class Integrator:
     def start(self, state: ChainState) -> None:
         """The run begins at state (t = 0)."""
 
-    def start_segment(self, state: ChainState, seg_start: float) -> None:
-        """A segment of the step plan begins at seg_start (a new LAMMPS run in the deck)."""
+    def start_segment(self, state: ChainState, seg_start: float) -> bool:
+        """A new LAMMPS run in the deck begins at seg_start: a segment of the step plan, or a segment's
+        shorter last step (the deck's ``timestep``; ``run 1``). True if the integrator recomputed the
+        contact forces there, as LAMMPS's setup does (the observers then see them: after_setup)."""
+        return False
 
     def step(
         self, state: ChainState, t0: float, t1: float, h: float, a_ext: float, on_split: Sequence[SplitHook]

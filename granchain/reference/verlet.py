@@ -23,12 +23,14 @@ class VerletIntegrator(Integrator):
         self.u_left, self.u_right = state.u[:-1], state.u[1:]
         self.consts: dict[float, tuple[np.ndarray, np.ndarray]] = {}
 
-    def start_segment(self, state: ChainState, seg_start: float) -> None:
-        """Start a segment at seg_start (the dashpot's forces again at full-step velocities, as LAMMPS)."""
+    def start_segment(self, state: ChainState, seg_start: float) -> bool:
+        """Start a LAMMPS run at seg_start (the dashpot's forces again at full-step velocities, as LAMMPS)."""
         if state.gamma and seg_start > 0.0:
             # LAMMPS starts each run by recomputing forces with the full-step velocities; the dashpot
             # is the only force that notices, and the reference does the same to stay step for step
             state.accel(state.u, state.a_int, state.v)
+            return True
+        return False
 
     def step(
         self, state: ChainState, t0: float, t1: float, h: float, a_ext: float, on_split: Sequence[SplitHook]
