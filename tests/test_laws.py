@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from granchain.physics.laws import LAWS, LawCoefficients, ThorntonLaw, contact_keys
+from granchain.physics.laws.base import ContactLaw
 from granchain.physics.laws.bilinear import bilinear_dissipated, bilinear_energy, bilinear_force, unloading_stiffness
 from granchain.physics.laws.hertz import hertz_energy, hertz_force
 from granchain.physics.models import dissipation_per_cycle
@@ -295,6 +296,51 @@ def test_thornton_is_hertz_below_yield_and_its_enlarged_radius(law, x, m):
     assert math.isclose(float(fmax[0]), float(law.yield_force) + float(law.plastic_slope) * (dmax - dy), rel_tol=1e-12)
     assert math.isclose(float(kp[0]), float(law.k) * math.sqrt(float(law.k) * dmax**1.5 / float(fmax[0])), rel_tol=1e-9)
     assert 0.0 <= float(dp[0]) < dmax
+
+
+@st.composite
+def thornton_history(draw):
+    """A Thornton law over n contacts (two drawn laws joined: per-contact k and d_y), and overlaps in units of d_y."""
+    n = draw(st.integers(1, 40))
+    first, second = draw(law_strategy("thornton")), draw(law_strategy("thornton"))
+    m = draw(st.integers(0, n))
+    law = ThorntonLaw.join([(first, m), (second, n - m)]) if 0 < m < n else first
+    scale = np.broadcast_to(np.asarray(law.yield_overlap, dtype=float), (n,))
+    levels = st.one_of(st.just(0.0), st.just(1.0), st.floats(0.0, 6.0))  # at rest, at yield, anywhere
+    rounds = [draw(st.lists(levels, min_size=n, max_size=n)) for _ in range(5)]
+    return law, scale, [scale * np.array(r) for r in rounds]
+
+
+@settings(max_examples=60, deadline=None)
+@given(case=thornton_history())
+def test_thornton_kept_history_constants_give_force_and_kinks_to_the_bit(case):
+    """force_into and kink_screens from the kept per-history constants (history_constants) give what
+    force and the base's kink_screens over kinks give, bit for bit, while the history array grows in
+    place (a few contacts or all, as the solver's steps raise it), and the law still pickles."""
+    law, scale, rounds = case
+    n = scale.size
+    amax = rounds[0].copy()
+    out, tmp = np.empty(n), np.empty(n)
+    for i, alpha in enumerate(rounds[1:]):
+        a = alpha.copy()
+        a[::3] = amax[::3]  # some overlaps exactly at alpha_max
+        law.force_into(a, amax, out, tmp)
+        want = law.force(a, amax)
+        assert out.tobytes() == want.tobytes(), np.flatnonzero(out != want)
+        a1 = rounds[(i + 2) % len(rounds)]
+        got = law.kink_screens(amax, a, a1)
+        ref = ContactLaw.kink_screens(law, amax, a, a1)
+        assert [(k.kind, k.from_below, idx.tolist()) for k, _, idx in got] == [
+            (k.kind, k.from_below, idx.tolist()) for k, _, idx in ref
+        ]
+        for (k, level, _), (kr, level_r, _) in zip(got, ref, strict=True):
+            assert np.array_equal(np.broadcast_to(level, (n,)), np.broadcast_to(level_r, (n,)))
+            assert (k.where is None) == (kr.where is None)
+            assert k.where is None or np.array_equal(k.where, kr.where)
+        np.maximum(amax, a if i % 2 else np.where(np.arange(n) % 5 == 0, a, 0.0), out=amax)  # in place
+    restored = pickle.loads(pickle.dumps(law))  # (the kept constants stay behind)
+    assert "_histories" not in vars(restored)
+    assert restored.force(rounds[1], amax).tobytes() == law.force(rounds[1], amax).tobytes()
 
 
 def test_thornton_scene_needs_the_limiting_pressure():

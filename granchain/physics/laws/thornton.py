@@ -24,7 +24,9 @@ twin is granchain/lammps/law_thornton.h.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
+from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
@@ -53,6 +55,116 @@ def restitution_coefficient(v0: float, vy: float) -> float:
         * math.sqrt(1.0 - r * r / 6.0)
         * (r / (r + 2.0 * math.sqrt(6.0 / 5.0 - r * r / 5.0))) ** 0.25
     )
+
+
+#: the kinks' kinds (ThorntonLaw.kinks, kink_screens)
+_ZERO_FORCE, _RELOADING, _YIELD = "zero force at d_p", "reloading meets d_max", "yield at d_y"
+_ZERO = np.array(0.0)
+_maximum, _greater, _less, _not_equal = np.maximum, np.greater, np.less, np.not_equal
+_subtract, _multiply, _sqrt, _cbrt = np.subtract, np.multiply, np.sqrt, np.cbrt
+#: up to this many contacts, the unloading constants are computed on Python floats (_unloading1):
+#: numpy calls on a few elements cost more than the arithmetic
+_SCALAR_CONTACTS = 16
+
+
+def _unloading(am: np.ndarray, k: np.ndarray, dy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """ThorntonLaw.unloading with k and d_y given per contact (arrays of am's shape)."""
+    plastic = am > dy
+    fy = k * dy * np.sqrt(dy)
+    ap = np.maximum(am, dy)  # the plastic formulas at d_y where the contact is still elastic
+    fmax_p = fy + 1.5 * k * np.sqrt(dy) * (ap - dy)
+    # x^(3/2) as x sqrt(x) and y^(2/3) as cbrt(y^2), as the C++ kernel (law_thornton.h)
+    x = (2.0 * fmax_p + fy) / (3.0 * fy)
+    kp = k * np.sqrt((fy / fmax_p) * (x * np.sqrt(x)))
+    y = fmax_p / kp
+    dp = np.maximum(ap - np.cbrt(y * y), 0.0)  # >= 0 (round-off just above d_y)
+    amc = np.maximum(am, 0.0)
+    fmax = np.where(plastic, fmax_p, k * amc * np.sqrt(amc))
+    return plastic, fmax, np.where(plastic, kp, k), np.where(plastic, dp, 0.0)
+
+
+def _unloading1(am: float, k: float, dy: float) -> tuple[float, float]:
+    """(k_p, d_p) of one contact: _unloading's operations in the same order on Python floats (the
+    same numbers to the bit: IEEE arithmetic and a correctly rounded sqrt either way, and numpy's own
+    cbrt)."""
+    if not am > dy:  # elastic (nan too, as np.where(plastic, ...))
+        return k, 0.0
+    fy = k * dy * math.sqrt(dy)
+    fmax_p = fy + 1.5 * k * math.sqrt(dy) * (am - dy)  # (ap = max(am, dy) = am)
+    x = (2.0 * fmax_p + fy) / (3.0 * fy)
+    kp = k * math.sqrt((fy / fmax_p) * (x * math.sqrt(x)))
+    y = fmax_p / kp
+    d = am - float(_cbrt(y * y))
+    return kp, (d if d > 0.0 or d != d else 0.0)  # np.maximum(d, 0.0): nan stays, -0.0 becomes 0.0
+
+
+class _HistoryConstants:
+    """A Thornton law's unloading constants of one history array alpha_max (ThorntonLaw.history_constants).
+
+    Attributes
+    ----------
+    source : weakref.ref
+        The history array they belong to.
+    am : ndarray
+        The alpha_max they were computed for (a copy).
+    kp, dp : ndarray
+        k_p and d_p of unloading(am).
+    level : ndarray
+        max(am, d_y): a contact whose overlap is above it loads on the plastic line.
+    plastic, elastic : ndarray of bool
+        am > d_y and am < d_y (where the reloading and the yield kinks apply).
+    k, dy : ndarray
+        The law's k and d_y, one per contact.
+    mask, buf : ndarray
+        Work arrays of force_into.
+    """
+
+    def __init__(self, law: ThorntonLaw, alpha_max: np.ndarray) -> None:
+        shape = alpha_max.shape
+        self.source = weakref.ref(alpha_max)
+        self.k = np.array(np.broadcast_to(np.asarray(law.k, dtype=float), shape))
+        self.dy = np.array(np.broadcast_to(np.asarray(law.yield_overlap, dtype=float), shape))
+        self.am = np.array(alpha_max, dtype=float)
+        self.mask = np.empty(shape, dtype=bool)
+        self.buf = np.empty(shape)
+        _, _, self.kp, self.dp = (np.array(x) for x in _unloading(self.am, self.k, self.dy))
+        self.level = np.maximum(self.am, self.dy)
+        self.plastic = self.am > self.dy
+        self.elastic = self.am < self.dy
+
+    def refresh(self, alpha_max: np.ndarray) -> None:
+        """Recompute the constants of the contacts whose alpha_max changed since."""
+        changed = _not_equal(alpha_max, self.am, self.mask).nonzero()[0]
+        if not changed.size:
+            return
+        am, dy = alpha_max[changed], self.dy[changed]
+        self.am[changed] = am
+        if changed.size <= _SCALAR_CONTACTS:
+            k = self.k
+            for i, x, d in zip(changed.tolist(), am.tolist(), dy.tolist(), strict=True):
+                self.kp[i], self.dp[i] = _unloading1(x, k.item(i), d)
+        else:
+            _, _, self.kp[changed], self.dp[changed] = _unloading(am, self.k[changed], dy)
+        self.level[changed] = np.maximum(am, dy)
+        self.plastic[changed] = am > dy
+        self.elastic[changed] = am < dy
+
+    def loading_forces(self, a: np.ndarray, idx: np.ndarray, out: np.ndarray) -> None:
+        """The forces of contacts idx, loading on the plastic line (a above max(am, d_y)), into out:
+        force's operations with the unloading constants at a itself."""
+        if idx.size <= _SCALAR_CONTACTS:
+            k, dy = self.k, self.dy
+            for i in idx.tolist():
+                x = a.item(i)
+                kp, dp = _unloading1(x, k.item(i), dy.item(i))
+                s = x - dp
+                s = s if s > 0.0 or s != s else 0.0  # np.maximum(s, 0.0)
+                out[i] = kp * s * math.sqrt(s)
+            return
+        x = a[idx]
+        _, _, kp, dp = _unloading(x, self.k[idx], self.dy[idx])
+        s = np.maximum(x - dp, 0.0)
+        out[idx] = kp * s * np.sqrt(s)
 
 
 @dataclass(frozen=True)
@@ -102,18 +214,7 @@ class ThorntonLaw(ContactLaw):
         am = np.asarray(alpha_max, dtype=float)
         k = np.broadcast_to(np.asarray(self.k, dtype=float), am.shape)
         dy = np.broadcast_to(np.asarray(self.yield_overlap, dtype=float), am.shape)
-        plastic = am > dy
-        fy = k * dy * np.sqrt(dy)
-        ap = np.maximum(am, dy)  # the plastic formulas at d_y where the contact is still elastic
-        fmax_p = fy + 1.5 * k * np.sqrt(dy) * (ap - dy)
-        # x^(3/2) as x sqrt(x) and y^(2/3) as cbrt(y^2), as the C++ kernel (law_thornton.h)
-        x = (2.0 * fmax_p + fy) / (3.0 * fy)
-        kp = k * np.sqrt((fy / fmax_p) * (x * np.sqrt(x)))
-        y = fmax_p / kp
-        dp = np.maximum(ap - np.cbrt(y * y), 0.0)  # >= 0 (round-off just above d_y)
-        amc = np.maximum(am, 0.0)
-        fmax = np.where(plastic, fmax_p, k * amc * np.sqrt(amc))
-        return plastic, fmax, np.where(plastic, kp, k), np.where(plastic, dp, 0.0)
+        return _unloading(am, k, dy)
 
     # ---- the law
     @override
@@ -124,9 +225,53 @@ class ThorntonLaw(ContactLaw):
         s = np.maximum(a - dp, 0.0)
         return kp * s * np.sqrt(s)
 
+    @cached_property
+    def _histories(self) -> dict[int, _HistoryConstants]:
+        """id(alpha_max) -> the unloading constants of that history array (force_into, kink_screens)."""
+        return {}
+
+    def __getstate__(self) -> dict:
+        """The fields only: the per-history constants hold weak references to arrays of a run."""
+        return {k: v for k, v in self.__dict__.items() if k != "_histories"}
+
+    def history_constants(self, alpha_max: np.ndarray) -> _HistoryConstants:
+        """The unloading constants (k_p, d_p, ...) of the history array alpha_max, as they are now.
+
+        They depend on alpha_max alone, which changes once a step and in a few contacts (those that
+        loaded further or turned), while the solver evaluates the forces four times a step (RK4) and
+        screens the kinks once a piece: kept per history array (weakly: they go with the array) and
+        recomputed only for the contacts whose alpha_max differs from the one they were made for.
+        The same element-wise operations as unloading, so the same numbers to the bit.
+        """
+        cache = self._histories
+        entry = cache.get(id(alpha_max))
+        if entry is None or entry.source() is not alpha_max:
+            for key in [key for key, e in cache.items() if e.source() is None]:
+                del cache[key]
+            entry = cache[id(alpha_max)] = _HistoryConstants(self, alpha_max)
+        else:
+            entry.refresh(alpha_max)
+        return entry
+
     @override
     def force_into(self, alpha, alpha_max, out, tmp):
-        out[:] = self.force(alpha, alpha_max)
+        # force(alpha, alpha_max) with the unloading constants of alpha_max kept (history_constants):
+        # where alpha <= max(alpha_max, d_y) max(alpha_max, alpha) has the constants of alpha_max (on
+        # the Hertz curve below d_y they are k and 0 whichever it is); beyond, the contact loads on the
+        # plastic line, whose constants at alpha itself are computed for those few contacts
+        if not (isinstance(alpha_max, np.ndarray) and alpha_max.shape == np.shape(alpha) == out.shape):
+            out[:] = self.force(alpha, alpha_max)
+            return
+        c = self.history_constants(alpha_max)
+        a = _maximum(alpha, _ZERO, out=tmp)
+        loading = _greater(a, c.level, c.mask).nonzero()[0]
+        _subtract(a, c.dp, out)
+        _maximum(out, _ZERO, out=out)
+        _sqrt(out, c.buf)
+        _multiply(c.kp, out, out)  # (k_p s) sqrt(s), as force
+        _multiply(out, c.buf, out)
+        if loading.size:
+            c.loading_forces(a, loading, out)
 
     @override
     def energy(self, alpha, alpha_max=None):
@@ -176,12 +321,30 @@ class ThorntonLaw(ContactLaw):
         _, _, _, dp = self.unloading(am)
         return [
             # the force reaches zero at d_p (0 for an elastic contact): F'' is infinite there
-            Kink(dp, "zero force at d_p"),
+            Kink(dp, _ZERO_FORCE),
             # reloading meets the plastic line again at d_max (slope of the unloading curve -> S)
-            Kink(am, "reloading meets d_max", where=am > dy, from_below=True),
+            Kink(am, _RELOADING, where=am > dy, from_below=True),
             # first yield: Hertz -> the plastic line (F' continuous, F'' jumps)
-            Kink(np.array(dy), "yield at d_y", where=am < dy, from_below=True),
+            Kink(np.array(dy), _YIELD, where=am < dy, from_below=True),
         ]
+
+    @override
+    def kink_screens(self, alpha_max, a0, a1):
+        # ContactLaw.kink_screens over kinks(alpha_max), the same levels and where, from the kept
+        # unloading constants (history_constants) instead of unloading at every piece
+        if not (isinstance(alpha_max, np.ndarray) and alpha_max.shape == a0.shape):
+            return super().kink_screens(alpha_max, a0, a1)
+        c = self.history_constants(alpha_max)
+        out = []
+        for level, kind, where, from_below in (
+            (c.dp, _ZERO_FORCE, None, False),
+            (alpha_max, _RELOADING, c.plastic, True),
+            (c.dy, _YIELD, c.elastic, True),
+        ):
+            idx = (_less(a0, level) ^ _less(a1, level)).nonzero()[0]
+            if idx.size:
+                out.append((Kink(level, kind, where=where, from_below=from_below), level, idx))
+        return out
 
     @override
     def turn_level(self, alpha_max):
