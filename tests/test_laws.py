@@ -306,7 +306,7 @@ def thornton_history(draw):
     m = draw(st.integers(0, n))
     law = ThorntonLaw.join([(first, m), (second, n - m)]) if 0 < m < n else first
     scale = np.broadcast_to(np.asarray(law.yield_overlap, dtype=float), (n,))
-    levels = st.one_of(st.just(0.0), st.just(1.0), st.floats(0.0, 6.0))  # at rest, at yield, anywhere
+    levels = st.one_of(st.just(0.0), st.just(1.0), st.floats(-1.0, 6.0))  # at rest, at yield, anywhere
     rounds = [draw(st.lists(levels, min_size=n, max_size=n)) for _ in range(5)]
     return law, scale, [scale * np.array(r) for r in rounds]
 

@@ -107,6 +107,8 @@ class _HistoryConstants:
         The history array they belong to.
     am : ndarray
         The alpha_max they were computed for (a copy).
+    raw : bytes
+        The history array's bytes when last compared: unchanged bytes, unchanged constants.
     kp, dp : ndarray
         k_p and d_p of unloading(am).
     level : ndarray
@@ -125,6 +127,7 @@ class _HistoryConstants:
         self.k = np.array(np.broadcast_to(np.asarray(law.k, dtype=float), shape))
         self.dy = np.array(np.broadcast_to(np.asarray(law.yield_overlap, dtype=float), shape))
         self.am = np.array(alpha_max, dtype=float)
+        self.raw = alpha_max.tobytes()  # alpha_max's bytes when last compared (refresh)
         self.mask = np.empty(shape, dtype=bool)
         self.buf = np.empty(shape)
         _, _, self.kp, self.dp = (np.array(x) for x in _unloading(self.am, self.k, self.dy))
@@ -134,6 +137,10 @@ class _HistoryConstants:
 
     def refresh(self, alpha_max: np.ndarray) -> None:
         """Recompute the constants of the contacts whose alpha_max changed since."""
+        raw = alpha_max.tobytes()  # (one call, where a comparison and its nonzero are two)
+        if raw == self.raw:
+            return
+        self.raw = raw
         changed = _not_equal(alpha_max, self.am, self.mask).nonzero()[0]
         if not changed.size:
             return
@@ -258,12 +265,19 @@ class ThorntonLaw(ContactLaw):
         # force(alpha, alpha_max) with the unloading constants of alpha_max kept (history_constants):
         # where alpha <= max(alpha_max, d_y) max(alpha_max, alpha) has the constants of alpha_max (on
         # the Hertz curve below d_y they are k and 0 whichever it is); beyond, the contact loads on the
-        # plastic line, whose constants at alpha itself are computed for those few contacts
-        if not (isinstance(alpha_max, np.ndarray) and alpha_max.shape == np.shape(alpha) == out.shape):
+        # plastic line, whose constants at alpha itself are computed for those few contacts. alpha is
+        # not clipped at 0 again: a negative one gives max(alpha - d_p, 0) = +0.0 as 0 does (d_p >= 0)
+        shape = out.shape
+        if not (
+            isinstance(alpha_max, np.ndarray)
+            and alpha_max.shape == shape
+            and isinstance(alpha, np.ndarray)
+            and alpha.shape == shape
+        ):
             out[:] = self.force(alpha, alpha_max)
             return
         c = self.history_constants(alpha_max)
-        a = _maximum(alpha, _ZERO, out=tmp)
+        a = alpha
         loading = _greater(a, c.level, c.mask).nonzero()[0]
         _subtract(a, c.dp, out)
         _maximum(out, _ZERO, out=out)
