@@ -11,8 +11,9 @@ median ratio over the repetitions and its range, and what the companions were (R
 4 dt, or RK4 at multiples of the run's dt for Verlet on a kinked law).
 
 On a loaded machine wall times swing with the other processes; the CPU column is the same ratio in
-CPU time (this process and its LAMMPS children, os.times): the companions' (inside estimate_errors)
-over everything else of the run (planning and writing included, so slightly more than the run's own).
+CPU time (this process and its LAMMPS children, ended or alive: the kept LAMMPS child outlives the
+run): the companions' (inside estimate_errors) over everything else of the run (planning and writing
+included, so slightly more than the run's own).
 
 --long adds the long loads (elastic-step-40N, plastic-long-load-table1 on LAMMPS) and two spheres
 (classic-two-spheres: LAMMPS's start-up is all of the run).
@@ -25,6 +26,8 @@ import os
 import statistics
 import warnings
 from contextlib import contextmanager
+
+import psutil
 
 os.environ.setdefault("GRANCHAIN_QUIET", "1")
 
@@ -48,9 +51,17 @@ LONG = (
 
 
 def cpu() -> float:
-    """CPU seconds of this process and its reaped children (LAMMPS runs) so far."""
+    """CPU seconds of this process and its children (LAMMPS runs) so far: the reaped ones (os.times) and
+    the live ones (psutil: the kept LAMMPS child a run and its companions share lives on)."""
     t = os.times()
-    return t.user + t.system + t.children_user + t.children_system
+    live = 0.0
+    for child in psutil.Process().children(recursive=True):
+        try:
+            c = child.cpu_times()
+        except psutil.Error:  # (ended in between: reaped, in os.times next time)
+            continue
+        live += c.user + c.system
+    return t.user + t.system + t.children_user + t.children_system + live
 
 
 @contextmanager

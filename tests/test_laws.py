@@ -314,9 +314,10 @@ def thornton_history(draw):
 @settings(max_examples=60, deadline=None)
 @given(case=thornton_history())
 def test_thornton_kept_history_constants_give_force_and_kinks_to_the_bit(case):
-    """force_into and kink_screens from the kept per-history constants (history_constants) give what
-    force and the base's kink_screens over kinks give, bit for bit, while the history array grows in
-    place (a few contacts or all, as the solver's steps raise it), and the law still pickles."""
+    """force_into, force, energy and kink_screens from the kept per-history constants
+    (history_constants) give what unloading and the base's kink_screens over kinks give, bit for bit,
+    while the history array grows in place (a few contacts or all, as the solver's steps raise it),
+    and the law still pickles."""
     law, scale, rounds = case
     n = scale.size
     amax = rounds[0].copy()
@@ -325,8 +326,11 @@ def test_thornton_kept_history_constants_give_force_and_kinks_to_the_bit(case):
         a = alpha.copy()
         a[::3] = amax[::3]  # some overlaps exactly at alpha_max
         law.force_into(a, amax, out, tmp)
-        want = law.force(a, amax)
+        plain = dataclasses.replace(law)  # (a new instance: no kept constants, unloading every call)
+        want = plain.force(a, amax)
         assert out.tobytes() == want.tobytes(), np.flatnonzero(out != want)
+        assert law.force(a, amax).tobytes() == want.tobytes()  # (from the kept constants too)
+        assert law.energy(a, amax).tobytes() == plain.energy(a, amax).tobytes()
         a1 = rounds[(i + 2) % len(rounds)]
         got = law.kink_screens(amax, a, a1)
         ref = ContactLaw.kink_screens(law, amax, a, a1)

@@ -156,9 +156,35 @@ class _HistoryConstants:
         self.plastic[changed] = am > dy
         self.elastic[changed] = am < dy
 
-    def loading_forces(self, a: np.ndarray, idx: np.ndarray, out: np.ndarray) -> None:
-        """The forces of contacts idx, loading on the plastic line (a above max(am, d_y)), into out:
-        force's operations with the unloading constants at a itself."""
+    def forces(self, a: np.ndarray, out: np.ndarray) -> None:
+        """ThorntonLaw.force(a, am) into out, from these constants.
+
+        Where a <= max(am, d_y), max(am, a) has the constants of am (on the Hertz curve below d_y they
+        are k and 0 whichever it is); beyond, the contact loads on the plastic line, with the
+        constants at a itself (loading). a is not clipped at 0: a negative one gives
+        max(a - d_p, 0) = +0.0 as 0 does (d_p >= 0).
+        """
+        loading = _greater(a, self.level, self.mask).nonzero()[0]
+        _subtract(a, self.dp, out)
+        _maximum(out, _ZERO, out=out)
+        _sqrt(out, self.buf)
+        _multiply(self.kp, out, out)  # (k_p s) sqrt(s), as force
+        _multiply(out, self.buf, out)
+        if loading.size:
+            self.loading(a, loading, out, False)
+
+    def energies(self, a: np.ndarray) -> np.ndarray:
+        """ThorntonLaw.energy(a, am) from these constants (as forces)."""
+        loading = (a > self.level).nonzero()[0]
+        s = np.maximum(a - self.dp, 0.0)
+        out = 0.4 * self.kp * s * s * np.sqrt(s)
+        if loading.size:
+            self.loading(a, loading, out, True)
+        return out
+
+    def loading(self, a: np.ndarray, idx: np.ndarray, out: np.ndarray, energy: bool) -> None:
+        """The forces (energy: the stored energies) of contacts idx, loading on the plastic line (a
+        above max(am, d_y)), into out: force's (energy's) operations with the constants at a itself."""
         if idx.size <= _SCALAR_CONTACTS:
             k, dy = self.k, self.dy
             for i in idx.tolist():
@@ -166,12 +192,12 @@ class _HistoryConstants:
                 kp, dp = _unloading1(x, k.item(i), dy.item(i))
                 s = x - dp
                 s = s if s > 0.0 or s != s else 0.0  # np.maximum(s, 0.0)
-                out[i] = kp * s * math.sqrt(s)
+                out[i] = 0.4 * kp * s * s * math.sqrt(s) if energy else kp * s * math.sqrt(s)
             return
         x = a[idx]
         _, _, kp, dp = _unloading(x, self.k[idx], self.dy[idx])
         s = np.maximum(x - dp, 0.0)
-        out[idx] = kp * s * np.sqrt(s)
+        out[idx] = 0.4 * kp * s * s * np.sqrt(s) if energy else kp * s * np.sqrt(s)
 
 
 @dataclass(frozen=True)
@@ -226,6 +252,11 @@ class ThorntonLaw(ContactLaw):
     # ---- the law
     @override
     def force(self, alpha, alpha_max=None):
+        c = self._kept(alpha, alpha_max)
+        if c is not None:  # the solver's history (its peak tracking, stop check, force samples)
+            out = np.empty(alpha.shape)
+            c.forces(alpha, out)
+            return out
         a = np.maximum(np.asarray(alpha, dtype=float), 0.0)
         am = a if alpha_max is None else np.maximum(alpha_max, a)
         _, _, kp, dp = self.unloading(am)
@@ -260,6 +291,23 @@ class ThorntonLaw(ContactLaw):
             entry.refresh(alpha_max)
         return entry
 
+    def _kept(self, alpha, alpha_max) -> _HistoryConstants | None:
+        """The kept constants of alpha_max where force_into or kink_screens made them (the solver's
+        history array) and alpha is a float array of its shape, else None: a history seen once is
+        not worth keeping (unloading, as ever)."""
+        if not (
+            isinstance(alpha_max, np.ndarray)
+            and isinstance(alpha, np.ndarray)
+            and alpha.dtype == np.float64
+            and alpha.shape == alpha_max.shape
+        ):
+            return None
+        entry = self._histories.get(id(alpha_max))
+        if entry is None or entry.source() is not alpha_max:
+            return None
+        entry.refresh(alpha_max)
+        return entry
+
     @override
     def force_into(self, alpha, alpha_max, out, tmp):
         # force(alpha, alpha_max) with the unloading constants of alpha_max kept (history_constants):
@@ -276,19 +324,13 @@ class ThorntonLaw(ContactLaw):
         ):
             out[:] = self.force(alpha, alpha_max)
             return
-        c = self.history_constants(alpha_max)
-        a = alpha
-        loading = _greater(a, c.level, c.mask).nonzero()[0]
-        _subtract(a, c.dp, out)
-        _maximum(out, _ZERO, out=out)
-        _sqrt(out, c.buf)
-        _multiply(c.kp, out, out)  # (k_p s) sqrt(s), as force
-        _multiply(out, c.buf, out)
-        if loading.size:
-            c.loading_forces(a, loading, out)
+        self.history_constants(alpha_max).forces(alpha, out)
 
     @override
     def energy(self, alpha, alpha_max=None):
+        c = self._kept(alpha, alpha_max)
+        if c is not None:  # the solver's history (the energy ledger's rows)
+            return c.energies(alpha)
         a = np.maximum(np.asarray(alpha, dtype=float), 0.0)
         am = a if alpha_max is None else np.maximum(alpha_max, a)
         _, _, kp, dp = self.unloading(am)
