@@ -6,8 +6,19 @@ bounds (elastic drift, bilinear balance to 1e-6 of the work, momentum = impulse 
 tested on planned runs in tests/test_hard_cases.py and listed in docs/hard-cases.md.
 
 finite state      no NaN or inf in displacements and velocities
-overlap           every overlap below OVERLAP_WATCH x the smallest radius (the paper's own
-                  I = 0.4 N s pulse reaches 11% of R; beads passing through each other go far beyond)
+overlap           every contact's overlap below OVERLAP_WATCH x the smaller radius of its own two
+                  bodies (contact_overlap_bounds: beads, a striker; a wall's flat has no radius, so
+                  bead N's); LAMMPS holds each contact's force to its law's virgin-curve force at
+                  that overlap (templates.run_control.contact_force_bounds). Why each contact's own
+                  radii: Hertz's theory (the paper's Eqs. 1-3) needs the overlap small against the
+                  radii of curvature of the two bodies that touch (its R* = R_a R_b / (R_a + R_b) lies
+                  between half the smaller radius and the smaller radius); no other bead's radius
+                  enters. The smaller one fails first: the smaller sphere's cap inside the overlap is
+                  up to alpha deep, so at alpha = R_small it reaches about its centre, and beads passing
+                  through each other go far beyond. The paper's own I = 0.4 N s pulse reaches 11% of
+                  R. A taper's big beads may overlap more than half its smallest bead's radius and be
+                  fine: a bound on the whole chain's smallest radius stopped them. On a uniform chain
+                  this is the same bound, OVERLAP_WATCH x R, on every contact.
 energy balance    |kinetic + stored + dissipated - work| <= ENERGY_WATCH x the largest energy put in
                   so far. Numbers behind the bound (default scene, dt as a fraction of the
                   predicted stability limit): Verlet 0.4% / 1.9% / 9% at 0.25 / 0.5 / 0.9 of it and
@@ -30,6 +41,33 @@ from granchain.schedule import step_plan, step_times
 ENERGY_WATCH = 0.05
 MOMENTUM_WATCH = 1e-6
 OVERLAP_WATCH = 0.5
+
+
+def contact_overlap_bounds(scene) -> np.ndarray:
+    """The run watch's overlap bound of every contact, m: OVERLAP_WATCH x the smaller radius of its two
+    bodies (the module's docstring says why).
+
+    Parameters
+    ----------
+    scene : granchain.scene.Scene
+        The scene.
+
+    Returns
+    -------
+    ndarray
+        One bound per contact of the chain the solvers integrate (ChainProblem.with_ends): a
+        striker's contact with bead 1 first (the smaller of the striker's and bead 1's radii), then
+        contacts 1 .. N-1 (beads i and i+1), then a wall's contact with bead N (a flat: bead N's
+        radius). LAMMPS's atoms are in the same order (templates.atoms.AtomLayout), each contact on
+        its left body's atom.
+    """
+    r = np.asarray(scene.bead_radii, dtype=float)
+    smaller = [np.minimum(r[:-1], r[1:])]
+    if scene.loading.kind == "striker":
+        smaller.insert(0, np.array([min(float(scene.loading.striker_radius), float(r[0]))]))
+    if scene.effects.far_end == "wall":
+        smaller.append(r[-1:])
+    return OVERLAP_WATCH * np.concatenate(smaller)
 
 
 class InvariantError(GranchainError, RuntimeError):

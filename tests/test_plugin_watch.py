@@ -27,6 +27,13 @@ WATCH_OLD = (
     "variable        watch_id atom id\n"
     "compute         watch_max all reduce max v_watch_fc v_watch_id replace 2 1\n"
 )
+#: the same with each contact against its own bound (a chain whose contacts' bounds differ: d_fwatch)
+WATCH_NEW_BOUND = "compute         watch_max all chain/fmax fwatch\n"
+WATCH_OLD_BOUND = (
+    "variable        watch_fc atom d_fc/d_fwatch\n"
+    "variable        watch_id atom id\n"
+    "compute         watch_max all reduce max v_watch_fc v_watch_id replace 2 1\n"
+)
 MOMENTUM_NEW = "compute         watch_p all chain/momentum\n"
 MOMENTUM_OLD = "variable        watch_mv atom mass*vx\ncompute         watch_p all reduce sum v_watch_mv\n"
 PLUGIN = DeckOptions(watch_computes=True)
@@ -41,9 +48,10 @@ def _sub(pattern: str, repl: str, deck: str) -> str:
 
 def legacy(deck: str) -> str:
     """The deck with LAMMPS's built-ins in place of the plugin's pieces and a neighbour check every step."""
-    assert deck.count(WATCH_NEW) == 1
+    assert deck.count(WATCH_NEW) + deck.count(WATCH_NEW_BOUND) == 1
     assert deck.count(MOMENTUM_NEW) <= 1
-    deck = deck.replace(WATCH_NEW, WATCH_OLD).replace(MOMENTUM_NEW, MOMENTUM_OLD)
+    deck = deck.replace(WATCH_NEW, WATCH_OLD).replace(WATCH_NEW_BOUND, WATCH_OLD_BOUND)
+    deck = deck.replace(MOMENTUM_NEW, MOMENTUM_OLD)
     deck = _sub(r"^neigh_modify\s+every \d+ delay 0 check yes", "neigh_modify    every 1 delay 0 check yes", deck)
     if "chain/nve" in deck:
         deck = _sub(r"^(fix\s+integrate\s+\S+\s+)chain/nve$", r"\1nve", deck)

@@ -12,9 +12,12 @@
 
 using namespace LAMMPS_NS;
 
-ComputeChainFmax::ComputeChainFmax(LAMMPS *lmp, int narg, char **arg) : Compute(lmp, narg, arg), index(-1)
+ComputeChainFmax::ComputeChainFmax(LAMMPS *lmp, int narg, char **arg) :
+    Compute(lmp, narg, arg), index(-1), bound_index(-1)
 {
-  if (narg != 3) error->all(FLERR, "Illegal compute chain/fmax command: compute ID group chain/fmax");
+  if (narg != 3 && narg != 4)
+    error->all(FLERR, "Illegal compute chain/fmax command: compute ID group chain/fmax [bound-vector]");
+  if (narg == 4) bound_name = arg[3];
   vector_flag = 1;
   size_vector = 2;
   extvector = 0;
@@ -32,6 +35,12 @@ void ComputeChainFmax::init()
   index = atom->find_custom("fc", flag, cols);
   if (index < 0 || flag != 1 || cols != 0)
     error->all(FLERR, "compute chain/fmax needs the per-atom vector d_fc (fix property/atom d_fc ...)");
+  if (!bound_name.empty()) {
+    bound_index = atom->find_custom(bound_name.c_str(), flag, cols);
+    if (bound_index < 0 || flag != 1 || cols != 0)
+      error->all(FLERR, "compute chain/fmax {} needs the per-atom vector d_{} (fix property/atom d_{})", bound_name,
+                 bound_name, bound_name);
+  }
 }
 
 void ComputeChainFmax::compute_vector()
@@ -47,11 +56,24 @@ void ComputeChainFmax::compute_vector()
     int proc;
   } in{-DBL_MAX, comm->me}, out;
   int imax = -1;
-  for (int i = 0; i < nlocal; i++)
-    if ((mask[i] & groupbit) && fc[i] > in.value) {
-      in.value = fc[i];
-      imax = i;
-    }
+  if (bound_index < 0) {
+    for (int i = 0; i < nlocal; i++)
+      if ((mask[i] & groupbit) && fc[i] > in.value) {
+        in.value = fc[i];
+        imax = i;
+      }
+  } else {
+    // each contact against its own bound: the same division as the atom-style variable d_fc/d_bound
+    const double *bound = atom->dvector[bound_index];
+    for (int i = 0; i < nlocal; i++)
+      if (mask[i] & groupbit) {
+        const double ratio = fc[i] / bound[i];
+        if (ratio > in.value) {
+          in.value = ratio;
+          imax = i;
+        }
+      }
+  }
   MPI_Allreduce(&in, &out, 1, MPI_DOUBLE_INT, MPI_MAXLOC, world);
   double id = (comm->me == out.proc && imax >= 0) ? (double) atom->tag[imax] : 0.0;
   MPI_Bcast(&id, 1, MPI_DOUBLE, out.proc, world);

@@ -7,6 +7,10 @@
  *                                       compute ID group reduce max v_fc v_id replace 2 1
  *                                     in one pass over the atoms, without the atom-style variables'
  *                                     per-atom expression evaluation
+ *   compute ID group chain/fmax name  the same with d_fc / d_name, each contact's force over its own
+ *                                     bound (a per-atom vector of fix property/atom): the numbers of
+ *                                       variable fc atom d_fc/d_name
+ *                                     and the rest as above
  *   compute ID group chain/momentum   global scalar: sum of mass * vx over the group (as compute reduce
  *                                     sum of 'variable mv atom mass*vx')
  */
@@ -15,6 +19,8 @@
 #define GRANCHAIN_COMPUTE_CHAIN_H
 
 #include "compute.h"
+
+#include <string>
 
 namespace LAMMPS_NS {
 
@@ -26,7 +32,9 @@ class ComputeChainFmax : public Compute {
   void compute_vector() override;
 
  private:
-  int index;    // d_fc in atom->dvector
+  int index;                 // d_fc in atom->dvector
+  int bound_index;           // the bounds' vector in atom->dvector, -1: none
+  std::string bound_name;    // its name (d_<name>), empty: none
 };
 
 class ComputeChainMomentum : public Compute {

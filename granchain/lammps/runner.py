@@ -405,7 +405,8 @@ def invariant_from_lammps(err: LammpsError, scene) -> InvariantError | None:
         elif fix == "watch_momentum":
             invariant, detail = "momentum", "total momentum differs from the initial momentum plus the impulse (LAMMPS)"
         else:
-            invariant, detail = "overlap far below the radius", "a contact force beyond the force at half the radius"
+            invariant = "overlap far below the radius"
+            detail = "the contact's force is beyond its law's force at half the smaller radius of its two beads"
         return InvariantError(invariant, step_times_of(scene)[step], step, atom - atom_layout(scene)["offset"], detail)
     m = re.search(r"beads (\d+) and (\d+) overlap but are not neighbours", msg)
     if m:

@@ -485,7 +485,10 @@ class RunWatch(Observer):
     A finite state and overlaps below max_overlap every watch_every steps and at the end of every
     segment (so a short run is watched too); the energy balance (against the largest energy put in
     so far) and the momentum of a free chain without precompression at every energy row.
-    None switches a check off.
+    None switches a check off. max_overlap is one bound for every contact or one per contact of the
+    state's chain (a striker's first, a wall's last: invariants.contact_overlap_bounds), and a
+    broken bound names the contact with the largest overlap relative to its own bound, numbered as
+    the scene's (a striker's contact is 0).
     """
 
     def __init__(
@@ -493,12 +496,17 @@ class RunWatch(Observer):
         state: ChainState,
         ledger: EnergyLedger,
         watch_every: int,
-        max_overlap: float | None,
+        max_overlap: float | np.ndarray | None,
         energy_watch: float | None,
         momentum_watch: float | None,
     ) -> None:
         self.every = watch_every
-        self.max_overlap = max_overlap
+        self.max_overlap: float | np.ndarray | None = None
+        if max_overlap is not None:
+            bounds = np.broadcast_to(np.asarray(max_overlap, dtype=float), (state.n - 1,))
+            # one bound for all (a uniform chain): the overlaps' largest against it, no division
+            self.max_overlap = float(bounds[0]) if bool((bounds == bounds[0]).all()) else bounds.copy()
+        self.front = state.problem.front  # bodies in front of bead 1 (a striker): contact i + 1 - front
         self.energy_watch = energy_watch
         self.momentum_watch = momentum_watch if momentum_kept(state.problem) else None
         self.p_initial = float(np.dot(state.mass_ke, state.v))  # (a striker's or bead 1's initial momentum)
@@ -527,16 +535,22 @@ class RunWatch(Observer):
                 min(bad, state.n - 2) + 1,
                 f"displacement or velocity of bead {bad + 1} is not finite",
             )
-        if self.max_overlap is not None:
+        bound = self.max_overlap
+        if bound is not None:
             a = state.overlap()
-            i = int(np.argmax(a))
-            if a[i] > self.max_overlap:
+            if isinstance(bound, float):
+                i, b = int(np.argmax(a)), bound
+            else:  # each contact against its own bound: the largest overlap relative to it
+                i = int(np.argmax(a / bound))
+                b = float(bound[i])
+            if a[i] > b:
                 raise InvariantError(
                     "overlap far below the radius",
                     t,
                     state.step,
-                    i + 1,
-                    f"overlap {a[i]:.3g} m exceeds {self.max_overlap:.3g} m (half the radius)",
+                    i + 1 - self.front,
+                    f"overlap {a[i]:.3g} m exceeds the contact's bound {b:.3g} m (half the smaller radius of "
+                    "its two beads)",
                 )
 
     def check_energy(self, state: ChainState, row: EnergyRow) -> None:

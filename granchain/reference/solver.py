@@ -156,7 +156,7 @@ def _solve(
     stop_after: int | None = None,
     stop_floor: float = 0.0,
     lead_floor: float = 0.0,
-    max_overlap: float | None = None,
+    max_overlap: float | np.ndarray | None = None,
     energy_watch: float | None = None,
     momentum_watch: float | None = None,
     watch_every: int = 20,
@@ -172,6 +172,8 @@ def _solve(
     peak above stop_floor counts (round-off forces ahead of the wave must not stop the run).
     lead_floor: the smallest rise above F0 that can be a leading pulse (peaks.leading_pulse).
     max_overlap, energy_watch, momentum_watch: the run watch (granchain.invariants); None = off.
+    max_overlap: one bound in m for every contact, or one per contact of the problem's chain with its
+    ends (ChainProblem.with_ends: a striker's contact first, a wall's last; contact_overlap_bounds).
     Overlaps and a finite state are checked every watch_every steps and at breakpoints, the energy
     balance and the momentum of a free chain at every energy sample (~200 per run, as LAMMPS).
     progress: told the step count every ~0.1 s of steps (its update() names the next step to call it at).

@@ -7,12 +7,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, OVERLAP_WATCH
+from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, contact_overlap_bounds
 from granchain.peaks import PEAK_PASSED_FRACTION
 from granchain.physics.effects import active_effects, external_forces
 from granchain.problem import ChainProblem, initial_energy, precompressed_displacements
 from granchain.schedule import STOP_CHECK_EVERY, dump_stride, history_stride, scene_step_plan
-from granchain.templates.atoms import AtomLayout
+from granchain.templates.atoms import AtomLayout, bead_kinds
 
 #: steps between two checks of the LAMMPS run watch (the reference checks every 20 steps as well)
 WATCH_EVERY = 20
@@ -24,11 +24,20 @@ class Watch:
     and momentum balances start from: the energy at t = 0 (problem.initial_energy, where the
     reference's bookkeeping starts), bead 1's and bead N's x at t = 0, the initial momentum.
 
+    The overlap watch is a force bound per contact: the force its law's virgin curve gives at its own
+    overlap bound (invariants.contact_overlap_bounds; on the virgin curve a force above it means an
+    overlap above it). Where every contact has the same bound (a uniform chain), the deck compares the
+    largest contact force with that one number; otherwise each contact's bound is a per-atom value,
+    d_fwatch, on the atom it lives on, and the deck compares the largest d_fc / d_fwatch with 1.
+
     Attributes
     ----------
     force : float
-        The overlap watch as a force, N: the largest force any contact's virgin curve gives at
-        OVERLAP_WATCH x the smallest bead radius; a contact force above it is a blow-up.
+        The largest contact force bound, N (the one bound of a uniform chain).
+    bounds : tuple of (int, int, float)
+        Each contact's force bound where they differ: (first atom ID, last atom ID, bound in N) of each
+        run of consecutive atoms with the same bound (an atom without a contact on its right, bead N of a
+        free chain or the wall, takes its neighbour's: its d_fc stays 0); empty where one bound holds.
     e0 : float
         The energy at t = 0, J (problem.initial_energy: a precompression's stored energy, the
         kinetic energy of a velocity load or a striker).
@@ -47,7 +56,8 @@ class Watch:
         ENERGY_WATCH and MOMENTUM_WATCH, the relative bounds of the two balances.
     """
 
-    force: float  # the largest force any contact can have at OVERLAP_WATCH x the smallest radius
+    force: float  # the largest contact force bound (a uniform chain's only one)
+    bounds: tuple[tuple[int, int, float], ...]  # (first ID, last ID, N) runs of atoms; () where one holds
     e0: float
     x1_0: float
     xn_0: float
@@ -64,13 +74,13 @@ class Watch:
         e0 = initial_energy(ChainProblem.from_scene(scene))
         u0 = precompressed_displacements(scene)[0] if scene.effects.precompression else np.zeros(scene.chain.beads)
         x0 = scene.bead_positions  # as render_data writes them
-        # on each contact's virgin curve: Hertz k a^1.5, bilinear k a, ...
-        a_watch = OVERLAP_WATCH * float(min(scene.bead_radii))
         problem, layout = ChainProblem.from_scene(scene), AtomLayout.of(scene)
+        force, bounds = contact_force_bounds(scene, pairs, layout)
         x1_0, xn_0 = float(x0[0] + u0[0]), float(x0[-1] + u0[-1])
         x_first, x_last = f"x[{layout.first_id}] - {x1_0!r}", f"x[{layout.last_id}] - {xn_0!r}"
         return cls(
-            force=max(float(p.law.loading_force(a_watch)) for p in pairs),
+            force=force,
+            bounds=bounds,
             e0=e0,
             x1_0=x1_0,
             xn_0=xn_0,
@@ -78,6 +88,63 @@ class Watch:
             momentum=not external_forces(scene),
             effects_work="".join(e.watch_work(problem, x_first, x_last) for e in active_effects(scene)),
         )
+
+
+#: contact force bounds this close (relative) are one bound: a uniform chain's contacts, whose laws a
+#: striker or the per-contact law may give in other round-off
+SAME_BOUND = 1e-12
+
+
+def contact_force_bounds(scene, pairs, layout: AtomLayout) -> tuple[float, tuple]:
+    """The overlap watch's force bound of every contact: its law's virgin curve (Hertz k a^1.5,
+    bilinear k a, ...) at its own overlap bound (invariants.contact_overlap_bounds).
+
+    Parameters
+    ----------
+    scene : granchain.scene.Scene
+        The planned scene.
+    pairs : list of PairCoeff
+        The deck's pair coefficients: a contact's law is its two atoms' types' (the law LAMMPS runs).
+    layout : AtomLayout
+        The deck's atoms: contact k of the chain with its ends (a striker's contact first, a wall's
+        last) lives on atom k + 1, its left body's.
+
+    Returns
+    -------
+    force : float
+        The largest bound, N.
+    bounds : tuple of (int, int, float)
+        (first atom ID, last atom ID, bound) of each run of atoms with the same bound, in ID order; empty
+        when every contact's bound is the largest to SAME_BOUND (a uniform chain: the deck's one number).
+    """
+    alpha = contact_overlap_bounds(scene)
+    types = atom_types(scene, layout)
+    left, right = types[:-1][: alpha.size], types[1:][: alpha.size]
+    law_of = {(min(p.i, p.j), max(p.i, p.j)): p.law for p in pairs}
+    # one virgin-curve evaluation per (type pair, bound), a scalar one (a uniform chain: the one bound)
+    keys = np.column_stack((np.minimum(left, right), np.maximum(left, right), alpha))
+    unique, which = np.unique(keys, axis=0, return_inverse=True)
+    values = [float(law_of[int(i), int(j)].loading_force(float(a))) for i, j, a in unique]
+    f = np.asarray(values)[np.ravel(which)]
+    force = float(f.max())
+    if bool((f >= force * (1.0 - SAME_BOUND)).all()):
+        return force, ()
+    # atoms with no contact on their right (bead N of a free chain, the wall) take the last contact's
+    per_atom = np.concatenate((f, np.full(types.size - f.size, f[-1])))
+    starts = np.flatnonzero(np.concatenate(([True], per_atom[1:] != per_atom[:-1])))
+    ends = np.concatenate((starts[1:], [per_atom.size])) - 1
+    return force, tuple((int(a) + 1, int(b) + 1, float(per_atom[a])) for a, b in zip(starts, ends, strict=True))
+
+
+def atom_types(scene, layout: AtomLayout) -> np.ndarray:
+    """Every atom's type, in ID order as chain.data lists them (templates.atoms.render_data): the
+    effects' atoms in front of bead 1 (a striker), the beads (bead kind k: type k + 1), the others (a
+    wall)."""
+    effects = [e for e in active_effects(scene) if e.atom_type]
+    front = [layout.types[e.atom_type] for e in effects if e.beads_in_front]
+    back = [layout.types[e.atom_type] for e in effects if not e.beads_in_front]
+    beads = np.asarray(bead_kinds(scene)[1]) + 1 if scene.per_bead else np.ones(scene.chain.beads, dtype=int)
+    return np.concatenate((np.asarray(front, dtype=int), beads, np.asarray(back, dtype=int)))
 
 
 @dataclass(frozen=True)
