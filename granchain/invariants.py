@@ -70,6 +70,16 @@ def contact_overlap_bounds(scene) -> np.ndarray:
     return OVERLAP_WATCH * np.concatenate(smaller)
 
 
+def contact_bodies(contact: int, beads: int, striker: bool, wall: bool) -> str:
+    """What contact number `contact` joins, as the scene numbers contacts: "beads i and i+1", "the
+    striker and bead 1" (contact 0 behind a striker), "bead N and the wall" (contact N with a wall)."""
+    if striker and contact == 0:
+        return "the striker and bead 1"
+    if wall and contact == beads:
+        return f"bead {beads} and the wall"
+    return f"beads {contact} and {contact + 1}"
+
+
 class InvariantError(GranchainError, RuntimeError):
     """A run broke an invariant; says which, when, where, and (from the workflow) the fix."""
 

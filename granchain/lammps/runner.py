@@ -27,7 +27,7 @@ from pathlib import Path
 
 from granchain import safe_files
 from granchain.exceptions import GranchainError
-from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution
+from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution, contact_bodies
 from granchain.lammps import server, worker
 from granchain.lammps.build import PLUGIN_NAME, build_plugin, mpich_file, plugin_dir, plugin_env, plugin_key
 from granchain.lammps.readback import (
@@ -405,8 +405,10 @@ def invariant_from_lammps(err: LammpsError, scene) -> InvariantError | None:
         elif fix == "watch_momentum":
             invariant, detail = "momentum", "total momentum differs from the initial momentum plus the impulse (LAMMPS)"
         else:
+            lay = atom_layout(scene)
+            bodies = contact_bodies(atom - lay["offset"], scene.chain.beads, lay["striker"], lay["wall"])
             invariant = "overlap far below the radius"
-            detail = "the contact's force is beyond its law's force at half the smaller radius of its two beads"
+            detail = f"the force of {bodies} is beyond its law's force at half the smaller radius of the two"
         return InvariantError(invariant, step_times_of(scene)[step], step, atom - atom_layout(scene)["offset"], detail)
     m = re.search(r"beads (\d+) and (\d+) overlap but are not neighbours", msg)
     if m:

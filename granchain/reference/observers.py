@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from typing_extensions import override
 
-from granchain.invariants import InvariantError, energy_violation, momentum_violation
+from granchain.invariants import InvariantError, contact_bodies, energy_violation, momentum_violation
 from granchain.peaks import PEAK_PASSED_FRACTION, complete_peaks, unreached_as_nan
 from granchain.physics.effects import EFFECTS, momentum_kept
 from granchain.postprocess.fronts import front_times
@@ -544,13 +544,15 @@ class RunWatch(Observer):
                 i = int(np.argmax(a / bound))
                 b = float(bound[i])
             if a[i] > b:
+                contact, wall = i + 1 - self.front, not state.free_end
+                bodies = contact_bodies(contact, state.n - self.front - wall, self.front > 0, wall)
                 raise InvariantError(
                     "overlap far below the radius",
                     t,
                     state.step,
-                    i + 1 - self.front,
-                    f"overlap {a[i]:.3g} m exceeds the contact's bound {b:.3g} m (half the smaller radius of "
-                    "its two beads)",
+                    contact,
+                    f"the overlap of {bodies}, {a[i]:.3g} m, exceeds its bound {b:.3g} m (half the smaller "
+                    "radius of its two bodies)",
                 )
 
     def check_energy(self, state: ChainState, row: EnergyRow) -> None:
