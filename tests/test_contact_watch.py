@@ -67,17 +67,18 @@ def test_a_blow_up_is_stopped_on_the_same_step_and_contact_in_both_backends(name
     assert float(m.group(1)) > float(m.group(2))
 
 
-def test_the_built_in_watch_and_compute_chain_fmax_stop_alike_on_per_contact_bounds(tmp_path):
+@pytest.mark.parametrize("np_", [1, 2])
+def test_the_built_in_watch_and_compute_chain_fmax_stop_alike_on_per_contact_bounds(tmp_path, np_):
     """On a deck with a bound per contact (d_fwatch), compute chain/fmax fwatch and the built-ins'
     d_fc/d_fwatch with compute reduce stop on the same step and atom once the bounds are lowered below
-    the forces a sound run reaches."""
+    the forces a sound run reaches, on one rank and on two (the bounds move with their atoms)."""
     sc = plan_scene(STEEP_TAPER, method="verlet").scene
     d = render_deck(sc, options=PLUGIN_DECK_OPTIONS)
     assert "chain/fmax fwatch" in d.deck
     low = d.deck.replace('"(c_watch_max[1] > 1.0)', '"(c_watch_max[1] > 0.01)')
     assert low != d.deck
-    new = _halt(low, d.data, tmp_path / "new")
-    assert new == _halt(legacy(low), d.data, tmp_path / "old")
+    new = _halt(low, d.data, tmp_path / "new", np_)
+    assert new == _halt(legacy(low), d.data, tmp_path / "old", np_)
     assert new[0] == "watch"
 
 
