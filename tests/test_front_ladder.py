@@ -292,3 +292,74 @@ def test_a_precompressed_chains_wave_speed_is_its_half_amplitude_arrivals():
     assert measure_observables(sc, sol)["wave_speed"] == pytest.approx(half, rel=1e-12)
     bare = replace(sc, effects=replace(sc.effects, precompression=0.0))  # (its contacts one diameter apart)
     assert measure_observables(bare, sol)["wave_speed"] == pytest.approx(speeds(bare, sol, c)[1], rel=1e-12)
+
+
+def leading_pulses_of_both(material: str, radius: float, beads: int, f0: float, ratio: float):
+    """LAMMPS's and the reference Verlet's runs of a precompressed chain (a step of ratio x F0) at
+    LAMMPS's planned step, every contact's history at every step: (scene, plan, lammps, reference,
+    LAMMPS's force resolution: the largest difference of the two runs' forces; the reference integrates
+    displacements and resolves about 1e5 times finer)."""
+    text = PRECOMPRESSED.format(beads=beads, material=material, radius=radius, f0=f0, amp=ratio * f0)
+    sc, plan = plan_for(parse_scene(text, source="precompressed.toml"), "lammps")
+    every = tuple(range(1, beads))
+    sc = replace(sc, outputs=replace(sc.outputs, histories=every, history_interval=sc.run.timestep))
+    lam = run_scene(sc, backend="lammps").solution
+    ref = run_scene(sc, method="verlet").solution
+    n = min(lam.history_force.shape[0], ref.history_force.shape[0])
+    resolution = float(np.max(np.abs(lam.history_force[:n] - ref.history_force[:n])))
+    return sc, plan, lam, ref, resolution
+
+
+@pytest.mark.slow
+@settings(max_examples=5, deadline=None, derandomize=True)
+@given(
+    material=st.sampled_from(sorted(MATERIALS)),
+    radius=st.floats(2e-3, 8e-3),
+    beads=st.integers(80, 200),
+    f0=st.floats(-2.0, 3.0).map(lambda e: 10.0**e),
+    ratio=st.floats(-6.0, -2.0).map(lambda e: 10.0**e),
+)
+# the 300-bead brass chain of docs/observables.md: LAMMPS's round-off made leading pulses at 12 contacts
+@example(material="brass", radius=4.76e-3, beads=300, f0=100.0, ratio=1e-3)
+def test_lammps_round_off_is_never_a_leading_pulse(material, radius, beads, f0, ratio):
+    """Generated precompressed chains, a step of ratio x F0: every leading pulse LAMMPS reports rises
+    above its force resolution, and the two backends find a leading pulse at the same contacts, but
+    where the reference's first maximum (its largest rise, where it has no leading pulse) lies within
+    that resolution of the floor: there LAMMPS's round-off decides."""
+    sc, _, lam, ref, resolution = leading_pulses_of_both(material, radius, beads, f0, ratio)
+    rise = lam.leading_pulse_force - f0
+    has_lam, has_ref = np.isfinite(rise), np.isfinite(ref.leading_pulse_force)
+    assert np.all(rise[has_lam] > resolution), (
+        f"leading pulses {np.sort(rise[has_lam])[:3]} N at or below LAMMPS's resolution {resolution:.3g} N "
+        f"(contacts {np.flatnonzero(has_lam & (rise <= resolution))[:10] + 1})"
+    )
+    first = np.where(has_ref, ref.leading_pulse_force, ref.peak_force) - f0
+    near = np.abs(first - lead_floor(sc)) <= resolution
+    apart = (has_lam != has_ref) & ~near
+    assert not apart.any(), f"a leading pulse in one backend only at contacts {np.flatnonzero(apart)[:10] + 1}"
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="LAMMPS's first maximum is not resolved where the step is a few resolutions")
+@pytest.mark.parametrize(
+    ("material", "radius", "beads", "f0", "ratio"),
+    [
+        # the largest first maximum 1.4e-7 N, the floor 1.2e-7 N, LAMMPS's resolution 4.9e-8 N
+        ("brass", 7.81e-3, 172, 0.014, 7.7e-6),
+        # the first maximum 1.27e-6 N, LAMMPS's resolution 2.9e-7 N: at contact 121 a round-off maximum
+        # 53 us before the reference's; at contact 142 one on a rise the run ends in
+        ("tungsten-carbide", 4.76e-3, 149, 1.0, 1e-6),
+    ],
+)
+def test_lammps_first_maximum_within_a_few_resolutions(material, radius, beads, f0, ratio):
+    """The open defect: where the step's first maximum is only a few times LAMMPS's force resolution,
+    round-off on the rise above the floor makes maxima of its own, and LAMMPS's leading pulse comes
+    earlier than the reference's by more than half the chain's shortest period (or on a rise the run
+    ends in, where the reference has none). A maximum would have to fall by the resolution before it
+    counts to remove it (not done: it changes the leading pulse's definition in both backends)."""
+    sc, plan, lam, ref, _ = leading_pulses_of_both(material, radius, beads, f0, ratio)
+    has_lam, has_ref = np.isfinite(lam.leading_pulse_force), np.isfinite(ref.leading_pulse_force)
+    assert np.array_equal(has_lam, has_ref)
+    both = has_lam & has_ref
+    late = np.abs(lam.leading_pulse_time - ref.leading_pulse_time)[both]
+    assert np.all(late <= math.pi / plan.omega_max), f"arrivals apart by up to {late.max():.3g} s"

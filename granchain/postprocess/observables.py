@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from granchain.peaks import LEAD_FRACTION, PEAK_PASSED_FRACTION
+from granchain.peaks import LEAD_FRACTION, PEAK_PASSED_FRACTION, lead_floor, position_resolution
 from granchain.problem import contact_positions
 
 
@@ -90,17 +90,24 @@ def _why_not_complete(solution, contact: int) -> str:
     )
 
 
-def _why_no_leading_pulse(solution, contact: int) -> str:
+def _why_no_leading_pulse(scene, solution, contact: int) -> str:
     """Why a 1-based contact has no leading pulse."""
     t = float(solution.time_of_peak[contact - 1])
     if not np.isfinite(t):
         return f"contact {contact} was not reached by the wave before the end of the run (t = {solution.end_time:g} s)"
     return (
-        f"contact {contact} has no leading pulse yet: its force has not had a maximum rising above "
-        f"{LEAD_FRACTION:g} of the largest expected force (peak so far "
+        f"contact {contact} has no leading pulse yet: its force has not had a maximum rising more than "
+        f"{lead_floor(scene):.3g} N above the static force ({_floor_reason(scene)}; peak so far "
         f"{float(solution.peak_force[contact - 1]):.6g} N at t = {t:g} s, run ends at t = {solution.end_time:g} s); "
         "run longer"
     )
+
+
+def _floor_reason(scene) -> str:
+    """What sets the leading pulse's floor (peaks.lead_floor)."""
+    if scene.effects.precompression and position_resolution(scene) >= lead_floor(scene):
+        return "the force LAMMPS resolves under precompression, peaks.position_resolution"
+    return f"{LEAD_FRACTION:g} of the largest expected force"
 
 
 def measure_observables(scene, solution, missing: dict | None = None) -> dict:
@@ -136,7 +143,7 @@ def measure_observables(scene, solution, missing: dict | None = None) -> dict:
         out["leading_peak_force_nondim"] = float(lead_f[last] / scene.force_scale)
     else:
         out["leading_peak_force"] = out["leading_peak_force_nondim"] = None
-        why["leading_peak_force"] = why["leading_peak_force_nondim"] = _why_no_leading_pulse(solution, b)
+        why["leading_peak_force"] = why["leading_peak_force_nondim"] = _why_no_leading_pulse(scene, solution, b)
     arrival = front_arrivals(solution, f0)
     ok = np.isfinite(arrival[contacts - 1])
     fit = fit_wave_speed(contacts[ok], arrival[contacts - 1][ok], scene.diameter, contact_positions(scene))
