@@ -284,8 +284,9 @@ class ThorntonLaw(ContactLaw):
         cache = self._histories
         entry = cache.get(id(alpha_max))
         if entry is None or entry.source() is not alpha_max:
-            for key in [key for key, e in cache.items() if e.source() is None]:
-                del cache[key]
+            for key, e in list(cache.items()):  # (a copy and pop: another thread may change it)
+                if e.source() is None:
+                    cache.pop(key, None)
             entry = cache[id(alpha_max)] = _HistoryConstants(self, alpha_max)
         else:
             entry.refresh(alpha_max)
