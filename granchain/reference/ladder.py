@@ -79,14 +79,26 @@ class CrossingLadder:
         ix = np.greater_equal(f_now, self.next_force, out=self.screen).nonzero()[0]
         line_ok = math.isfinite(t_prev)
         if ix.size <= _SCALAR_CONTACTS:  # (mostly: a contact or two cross a rung in a step)
+            # advance1 inlined on Python numbers: a contact's next rung is level_list[crossed] (the ladder
+            # of a contact in ix is not frozen), so the rung count and the next force are written once
+            # per contact, not once per rung
+            levels, times, crossed, nxt = self.level_list, self.times, self.crossed, self.next_force
             for i in ix.tolist():
-                fc, fp, level = f_now.item(i), f_prev.item(i), self.next_force.item(i)
+                fc, fp = f_now.item(i), f_prev.item(i)
+                k = crossed.item(i)
+                level = levels[k]
                 while fc >= level:
                     tc = t_now
                     if line_ok and fc > fp and fp < level:
                         tc = t_prev + (level - fp) / (fc - fp) * (t_now - t_prev)
-                    self.times[i, self.advance1(i)] = tc
-                    level = self.next_force.item(i)
+                    times[i, k % LADDER_SLOTS] = tc
+                    k += 1
+                    if k >= len(levels):
+                        self.grow(k)
+                        levels = self.level_list
+                    level = levels[k]
+                crossed[i] = k
+                nxt[i] = level
             return
         while ix.size:
             level, fc, fp = self.next_force[ix], f_now[ix], f_prev[ix]
