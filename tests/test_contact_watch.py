@@ -86,13 +86,16 @@ def test_a_uniform_chain_keeps_one_bound_and_a_taper_gets_one_per_contact():
     """Uniform chains keep the deck's one force number; a taper's contacts each get the force their
     law gives at half the smaller radius of their own beads, so contact 1's bound is far above the one
     the smallest bead's radius gives."""
-    uniform = render_deck(parse_scene(make_scene_text(), "u.toml")).deck
-    assert "d_fwatch" not in uniform
-    taper = render_deck(_taper('kind = "velocity"\nvelocity = 1.0', taper=0.8)).deck
-    sets = re.findall(r"^set\s+atom (\d+)(?:\*(\d+))? d_fwatch (\S+)$", taper, re.M)
-    assert [int(a) for a, _, _ in sets] == list(range(1, 20))  # one bound per contact (19), bead 20 with 19's
-    f = np.array([float(v) for _, _, v in sets])
-    assert np.all(np.diff(f) < 0)  # smaller beads, smaller bounds
+    uniform = render_deck(parse_scene(make_scene_text(), "u.toml"))
+    assert "d_fwatch" not in uniform.deck
+    assert "Watch" not in uniform.data
+    taper = render_deck(_taper('kind = "velocity"\nvelocity = 1.0', taper=0.8))
+    assert "read_data       chain.data fix watch_bound NULL Watch\n" in taper.deck
+    rows = [r.split() for r in taper.data.split("\nWatch\n\n", 1)[1].splitlines()]
+    assert [int(r[0]) for r in rows] == list(range(1, 21))  # every atom: contacts 1-19, bead 20 with 19's
+    f = np.array([float(r[1]) for r in rows])
+    assert f[-1] == f[-2]
+    assert np.all(np.diff(f[:-1]) < 0)  # smaller beads, smaller bounds
     assert f[0] / f[-1] > 0.8**-18  # contact 1's bound is not the smallest beads'
 
 

@@ -108,7 +108,7 @@ def test_undeclared_effects_leave_no_trace():
 
 def atom_types(data: str) -> list[int]:
     """The type of each atom of a LAMMPS data file (atom_style sphere: id type diameter density x y z), by ID."""
-    lines = data.split("Atoms", 1)[1].splitlines()[1:]
+    lines = data.split("Atoms # sphere\n\n", 1)[1].split("\n\n", 1)[0].splitlines()  # (a Watch section may follow)
     rows = [line.split() for line in lines if line.strip()]
     return [int(r[1]) for r in sorted(rows, key=lambda r: int(r[0]))]
 

@@ -20,7 +20,7 @@ from .conftest import make_scene, make_scene_text
 
 def data_atoms(data: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Type, diameter and x of every atom by ID, parsed from the data file's text as LAMMPS reads it."""
-    rows = data.split("Atoms # sphere\n\n", 1)[1].split("\n")
+    rows = data.split("Atoms # sphere\n\n", 1)[1].split("\n\n", 1)[0].split("\n")  # (a Watch section may follow)
     cols = [r.split() for r in rows if r.strip()]
     assert [int(c[0]) for c in cols] == list(range(1, len(cols) + 1))
     return (

@@ -180,6 +180,7 @@ def render_deck(scene, yardstick: str | None = None, options: DeckOptions = DECK
     schedule, layout = Schedule.of(scene), AtomLayout.of(scene)
     pairs = pair_coeffs(scene, layout)
     stop = scene.run.stop_after_contact
+    watch = Watch.of(scene, pairs)
     deck = (
         _env()
         .get_template(template)
@@ -195,11 +196,11 @@ def render_deck(scene, yardstick: str | None = None, options: DeckOptions = DECK
             lead_floor=lead_floor(scene),
             per_atom=per_atom,
             static_overlaps=precompression_overlaps(scene),
-            watch=Watch.of(scene, pairs),
+            watch=watch,
             effect_blocks=effect_blocks(scene),
             pair_style_args="".join(e.pair_style_args(scene) for e in active_effects(scene)),
             energy_columns=energy_columns(scene, layout),
             stop=StopCheck(stop, stop + layout.offset, stop_force_floor(scene)) if stop else None,
         )
     )
-    return Deck(deck=deck, data=render_data(scene), total_steps=schedule.total)
+    return Deck(deck=deck, data=render_data(scene) + watch.data_section, total_steps=schedule.total)

@@ -13,6 +13,7 @@ from granchain.physics.effects import active_effects, external_forces
 from granchain.problem import ChainProblem, initial_energy, precompressed_displacements
 from granchain.schedule import STOP_CHECK_EVERY, dump_stride, history_stride, scene_step_plan
 from granchain.templates.atoms import AtomLayout, bead_kinds
+from granchain.templates.filters import float_repr
 
 #: steps between two checks of the LAMMPS run watch (the reference checks every 20 steps as well)
 WATCH_EVERY = 20
@@ -28,16 +29,17 @@ class Watch:
     overlap bound (invariants.contact_overlap_bounds; on the virgin curve a force above it means an
     overlap above it). Where every contact has the same bound (a uniform chain), the deck compares the
     largest contact force with that one number; otherwise each contact's bound is a per-atom value,
-    d_fwatch, on the atom it lives on, and the deck compares the largest d_fc / d_fwatch with 1.
+    d_fwatch, on the atom it lives on (chain.data's Watch section, read_data's fix keyword: one pass,
+    where a set command per atom took N^2 time), and the deck compares the largest d_fc / d_fwatch with 1.
 
     Attributes
     ----------
     force : float
         The largest contact force bound, N (the one bound of a uniform chain).
-    bounds : tuple of (int, int, float)
-        Each contact's force bound where they differ: (first atom ID, last atom ID, bound in N) of each
-        run of consecutive atoms with the same bound (an atom without a contact on its right, bead N of a
-        free chain or the wall, takes its neighbour's: its d_fc stays 0); empty where one bound holds.
+    bounds : tuple of float
+        Each atom's contact force bound in N, in ID order, where the contacts' bounds differ (an atom
+        without a contact on its right, bead N of a free chain or the wall, has its neighbour's: its
+        d_fc stays 0); empty where one bound holds.
     e0 : float
         The energy at t = 0, J (problem.initial_energy: a precompression's stored energy, the
         kinetic energy of a velocity load or a striker).
@@ -57,7 +59,7 @@ class Watch:
     """
 
     force: float  # the largest contact force bound (a uniform chain's only one)
-    bounds: tuple[tuple[int, int, float], ...]  # (first ID, last ID, N) runs of atoms; () where one holds
+    bounds: tuple[float, ...]  # each atom's contact force bound, N, in ID order; () where one holds
     e0: float
     x1_0: float
     xn_0: float
@@ -67,6 +69,14 @@ class Watch:
     every: int = WATCH_EVERY
     energy_bound: float = ENERGY_WATCH
     momentum_bound: float = MOMENTUM_WATCH
+
+    @property
+    def data_section(self) -> str:
+        """chain.data's Watch section (read_data ... fix watch_bound NULL Watch): "ID bound" per atom;
+        empty where one bound holds."""
+        if not self.bounds:
+            return ""
+        return "\nWatch\n\n" + "".join(f"{i} {float_repr(f)}\n" for i, f in enumerate(self.bounds, start=1))
 
     @classmethod
     def of(cls, scene, pairs) -> Watch:
@@ -113,8 +123,8 @@ def contact_force_bounds(scene, pairs, layout: AtomLayout) -> tuple[float, tuple
     -------
     force : float
         The largest bound, N.
-    bounds : tuple of (int, int, float)
-        (first atom ID, last atom ID, bound) of each run of atoms with the same bound, in ID order; empty
+    bounds : tuple of float
+        Each atom's bound in ID order (an atom without a contact on its right has its neighbour's); empty
         when every contact's bound is the largest to SAME_BOUND (a uniform chain: the deck's one number).
     """
     alpha = contact_overlap_bounds(scene)
@@ -130,10 +140,7 @@ def contact_force_bounds(scene, pairs, layout: AtomLayout) -> tuple[float, tuple
     if bool((f >= force * (1.0 - SAME_BOUND)).all()):
         return force, ()
     # atoms with no contact on their right (bead N of a free chain, the wall) take the last contact's
-    per_atom = np.concatenate((f, np.full(types.size - f.size, f[-1])))
-    starts = np.flatnonzero(np.concatenate(([True], per_atom[1:] != per_atom[:-1])))
-    ends = np.concatenate((starts[1:], [per_atom.size])) - 1
-    return force, tuple((int(a) + 1, int(b) + 1, float(per_atom[a])) for a, b in zip(starts, ends, strict=True))
+    return force, tuple(np.concatenate((f, np.full(types.size - f.size, f[-1]))).tolist())
 
 
 def atom_types(scene, layout: AtomLayout) -> np.ndarray:
