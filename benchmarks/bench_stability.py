@@ -23,7 +23,7 @@ from dataclasses import replace
 import numpy as np
 
 from granchain.cli import resolve_scene
-from granchain.invariants import ENERGY_WATCH, OVERLAP_WATCH, InvariantError
+from granchain.invariants import ENERGY_WATCH, InvariantError, contact_overlap_bounds
 from granchain.lammps.runner import LammpsError, cleanup, invariant_from_lammps, run_deck
 from granchain.reference.solver import ChainProblem, solve_chain
 from granchain.scene import parse_scene
@@ -87,7 +87,7 @@ def outcome(sc, integrator: str, energy: bool) -> str:
                 sc.run.end_time,
                 sc.run.timestep,
                 integrator,
-                max_overlap=OVERLAP_WATCH * float(min(sc.bead_radii)),
+                max_overlap=contact_overlap_bounds(sc),  # the run watch's: each contact's own radii
                 # the run watch's own criterion: the running maximum of the energy put in
                 energy_watch=ENERGY_WATCH if energy else None,
             )
