@@ -3,6 +3,8 @@ before anything runs: the step load a loading acts like, the largest contact for
 stiffest tangent of a contact and the highest frequency (and dashpot decay rate) of the chain.
 
 Every function reads a scene (granchain.scene.Scene) for its numbers; none imports the scene.
+linearised_first_maximum solves the precompressed chain's small-amplitude equations exactly (its modes)
+for the time a front's first maximum reaches a contact.
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.linalg import eigh_tridiagonal
 
 from granchain.physics import models
 from granchain.physics.effects import Bounds, active_effects
@@ -120,3 +123,77 @@ def one_bead_impacts(scene) -> list[tuple[str, dict[str, float]]]:
     if scene.effects.far_end == "wall" and v > 0.0:
         out.append(("wall", models.two_body_impact(scene.wall_law, m1, v)))
     return out
+
+
+#: the longest chain whose linearised response linearised_first_maximum solves exactly (its modes: an
+#: n x n eigenvector matrix, and a time grid of a few thousand samples per mode); a longer one is left
+#: to the planner's asymptotic estimate
+LINEAR_EXACT_BEADS = 600
+#: samples of the modal sum per period of the chain's highest linear frequency: a maximum is located to
+#: within 1 / LINEAR_SAMPLES_PER_PERIOD of that period
+LINEAR_SAMPLES_PER_PERIOD = 32
+
+
+def linearised_stiffnesses(scene) -> tuple[np.ndarray, float]:
+    """Each bead-bead contact's stiffness about the precompression F0 and the wall contact's (0 without
+    a wall), N/m: the Hertz tangent 3/2 k^(2/3) F0^(1/3), or a linear loading line's own k."""
+    f0 = float(scene.effects.precompression)
+    k = np.asarray(scene.contact_stiffnesses, dtype=float)
+    kw = float(scene.wall_stiffness) if scene.effects.far_end == "wall" else 0.0
+    if scene.contact.law_class.loading_is_linear():
+        return k, kw
+    return 1.5 * k ** (2.0 / 3.0) * f0 ** (1.0 / 3.0), 1.5 * kw ** (2.0 / 3.0) * f0 ** (1.0 / 3.0)
+
+
+def linearised_first_maximum(scene, contact: int, horizon: float, step: bool = False, floor: float = 0.0):
+    """The time (s) of the first maximum of contact `contact`'s force in the precompressed chain
+    linearised about F0, or None.
+
+    The chain as it is (every bead's mass, every contact's stiffness linearised_stiffnesses, the wall's
+    contact or the free far end, which precompression holds by a constant force): M x'' = -K x, bead 1
+    given a unit impulse at t = 0 (step = False: a kick) or a unit force from t = 0 on (step = True), is
+    a sum over the modes (K v = w^2 M v): the force of contact c is sum_j k_c (v_j[c] - v_j[c+1]) v_j[1]
+    g_j(t), g_j = sin(w_j t) / w_j for the impulse, (1 - cos(w_j t)) / w_j^2 for the force. Its first
+    local maximum rising above `floor` (per unit load) within `horizon` is the front's first maximum, with
+    what the actual chain does to it: scattering at each change of mass or stiffness, a dimer's optical
+    branch, the wall's reflection when the front rises monotonically until it comes back. None when the
+    chain is longer than LINEAR_EXACT_BEADS, its length is not given, or no maximum comes within horizon.
+    The chain's stiffening with the wave's force only makes a front faster than this.
+    """
+    n = scene.chain.beads
+    if n is None or n < 2 or n > LINEAR_EXACT_BEADS or not 1 <= contact <= n - 1:
+        return None
+    m = np.asarray(scene.bead_masses, dtype=float)
+    k, kw = linearised_stiffnesses(scene)
+    # symmetric form M^-1/2 K M^-1/2 (tridiagonal): its eigenvectors u_j = M^1/2 v_j
+    diag = (np.concatenate((k, [kw])) + np.concatenate(([0.0], k))) / m
+    off = -k / np.sqrt(m[:-1] * m[1:])
+    w2, u = eigh_tridiagonal(diag, off)
+    v = u / np.sqrt(m)[:, None]
+    c = contact - 1
+    amp = k[c] * (v[c] - v[c + 1]) * v[0]  # compression of contact c per unit load, mode by mode
+    w2 = np.clip(w2, 0.0, None)
+    w = np.sqrt(w2)
+    moving = w > 1e-9 * w[-1]  # a free chain's rigid mode compresses no contact
+    amp, w, w2 = amp[moving], w[moving], w2[moving]
+    dt = 2.0 * np.pi / w[-1] / LINEAR_SAMPLES_PER_PERIOD
+    # the modal sum in chunks of times (memory), the first local maximum above floor
+    chunk = max(64, 2_000_000 // max(1, amp.size))
+    start = 0
+    total = int(math.ceil(horizon / dt)) + 2
+    while start < total:
+        t = dt * np.arange(start, min(total, start + chunk + 2))
+        phase = np.outer(t, w)
+        g = np.sin(phase) / w if not step else (1.0 - np.cos(phase)) / w2
+        f = g @ amp
+        inner = (f[1:-1] > f[:-2]) & (f[1:-1] >= f[2:]) & (f[1:-1] > floor)
+        hit = np.flatnonzero(inner)
+        if hit.size:
+            i = hit[0] + 1
+            # the vertex of the parabola through the maximum's sample and its neighbours (as the peak
+            # tracker refines a run's maxima)
+            curvature = f[i - 1] - 2.0 * f[i] + f[i + 1]
+            shift = 0.5 * (f[i - 1] - f[i + 1]) / curvature if curvature < 0.0 else 0.0
+            return float(t[i] + shift * dt)
+        start += chunk
+    return None

@@ -17,7 +17,10 @@ beads       just enough that nothing reflected from the far end reaches the last
             speed D sqrt(k/m), the largest group velocity of a linear chain; the faster unloading
             speed D sqrt(k_u/m) only exists behind the front).
 end time    long enough for the leading wave to pass the last measured contact L, at the slowest
-            leading speed expected, plus the load duration (long loads).
+            leading speed expected, plus the load duration (long loads); under precompression no
+            later than the first maximum of the chain linearised about F0 at L, solved exactly on
+            the actual chain (its masses, contacts and wall: scattering, a dimer's light beads, a
+            front that rises until the wall's reflection comes back) where it is short enough.
 
 The estimates it plans with (step equivalent, expected peak force, stiffest tangents, highest
 frequency, dashpot rate) are granchain.physics.estimates; the output strides granchain.schedule.
@@ -31,10 +34,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from granchain.exceptions import UsageError
+from granchain.peaks import lead_floor
 from granchain.physics.estimates import (
     damping_rate,
     expected_peak_force,
     highest_frequency,
+    linearised_first_maximum,
     max_stiffness,
     one_bead_impacts,
     step_equivalent,
@@ -270,14 +275,37 @@ def sonic_travel_times(scene, last: int, step: bool = False) -> np.ndarray:
     return np.cumsum(tau) * (1.0 + PRECOMPRESSED_LAG * n ** (-2.0 / 3.0))
 
 
+#: how far past the whole chain's sonic crossing (sonic_travel_times at its last contact) the linearised
+#: chain's response is searched for a contact's first maximum: a front that rises monotonically at a
+#: contact meets its maximum when a reflection comes back (the wall's adds to it, a free end's takes
+#: away), within a round trip through the chain and back
+LINEAR_HORIZON = 3.0
+
+
+def precompressed_front_time(scene, last: int, step: bool = False) -> float:
+    """The time (s) the first maximum of a precompressed chain's front takes from bead 1 to contact `last`,
+    a kick's or (step = True) a lasting force's: the linearised chain solved exactly
+    (estimates.linearised_first_maximum: each bead's mass and contact's stiffness, the wall), with the
+    leading pulse's floor (peaks.lead_floor) per unit load; on a chain too long to solve exactly (or one
+    of "auto" length, which is uniform), the asymptotic sonic_travel_times."""
+    asymptotic = float(sonic_travel_times(scene, last, step)[-1])
+    n = scene.chain.beads
+    if n is None or not scene.n_contacts:
+        return asymptotic
+    load = step_equivalent(scene)[0] if step else scene.input_impulse
+    horizon = LINEAR_HORIZON * float(sonic_travel_times(scene, scene.n_contacts, step)[-1])
+    exact = linearised_first_maximum(scene, last, horizon, step=step, floor=lead_floor(scene) / load)
+    return asymptotic if exact is None else max(asymptotic, exact)
+
+
 def front_travel_time(scene, last: int, slow: float) -> float:
     """The time the slowest expected leading front takes from bead 1 to contact `last`: per contact,
     the nominal chain's time per diameter (D / slow) scaled by the contact's own stiffness and the
     heavier of its beads (speed ~ k^(2/5) / sqrt(m) for a Hertzian front, whose force also scales as
     k^(2/5) at a given momentum (the Hertz impact) and whose speed as k^(1/3) F^(1/6); k^(1/2) / sqrt(m)
     for a linear one; times the spacing: the time per contact does not depend on the spacing); under
-    precompression at most the time of the linearised chain's first maximum (sonic_travel_times): a
-    front moves at least at the sound speed c0 = a sqrt(k_lin / m), faster as its force grows."""
+    precompression at most the time of the linearised chain's first maximum (precompressed_front_time):
+    a front moves at least at the sound speed c0 = a sqrt(k_lin / m), faster as its force grows."""
     d0 = scene.diameter
     per_contact = np.full(last, d0 / slow)
     if scene.per_bead and scene.n_contacts:
@@ -288,7 +316,7 @@ def front_travel_time(scene, last: int, slow: float) -> float:
         per_contact = per_contact * (float(scene.stiffness) / k) ** e * np.sqrt(heavier / scene.mass)
     travel = float(np.sum(per_contact))
     if scene.effects.precompression and scene.n_contacts:
-        travel = min(travel, float(sonic_travel_times(scene, last)[-1]))
+        travel = min(travel, precompressed_front_time(scene, last))
     return travel
 
 
@@ -346,9 +374,16 @@ def _one_bead_end_time(scene, impacts) -> PlanChoice:
     )
 
 
-def _front_end_time(scene, last: int | None, slow: float) -> PlanChoice:
+#: a maximum is seen once the force has fallen after it: within two time steps of it (the sample past the
+#: maximum's own, which may fall a step after the maximum)
+PEAK_DETECTION_STEPS = 2
+
+
+def _front_end_time(scene, last: int | None, slow: float, dt: float) -> PlanChoice:
     """The end time of a chain: the slowest leading front passes the last measured contact
-    (front_travel_time), after a long load; at least the pulse of an impulse and the last snapshot."""
+    (front_travel_time), after a long load; at least the pulse of an impulse and the last snapshot. A
+    precompressed chain's front time is its linearised chain's first maximum (precompressed_front_time),
+    which the run sees PEAK_DETECTION_STEPS time steps (dt) later."""
     if last is None:
         raise SceneError(
             f'{scene.source}: end_time = "auto" needs the contacts you measure: give [outputs] '
@@ -362,11 +397,13 @@ def _front_end_time(scene, last: int | None, slow: float) -> PlanChoice:
     # peak forms within a few periods of it (dispersion): at most PRECOMPRESSED_TAIL of the travel
     end = travel + min(load, PRECOMPRESSED_TAIL * travel if scene.effects.precompression else travel)
     if step is not None and scene.effects.precompression and scene.n_contacts:
-        sonic = sonic_travel_times(scene, last)[-1], sonic_travel_times(scene, last, step=True)[-1]
+        sonic = precompressed_front_time(scene, last), precompressed_front_time(scene, last, step=True)
         if sonic[0] <= travel:  # the travel is the linearised chain's (the load is small against F0)
             # a lasting force's first maximum trails a kick's by more than that tail near the loaded end
             # (STEP_LAG); a pulse's comes no later than a step's, nor than the load's end after the front
             end = max(end, min(float(sonic[1]), travel + step[1]))
+    if scene.effects.precompression:
+        end += PEAK_DETECTION_STEPS * dt
     if ld.kind == "impulse" and end < ld.duration:
         end = ld.duration  # an impulse is measured whole: the run lasts at least the pulse
     if scene.outputs.snapshots and end < max(scene.outputs.snapshots):
@@ -376,8 +413,9 @@ def _front_end_time(scene, last: int | None, slow: float) -> PlanChoice:
         end,
         f"the leading wave (no slower than {slow:.4g} m/s on the nominal chain"
         + (", each contact's own stiffness and masses" if scene.per_bead else "")
-        + (", and the precompressed chain's sound speed" if scene.effects.precompression else "")
+        + (", and the first maximum of the chain linearised about F0" if scene.effects.precompression else "")
         + f") passes contact {last} by {travel:.3g} s, after a load of {load:.3g} s"
+        + (f", seen {PEAK_DETECTION_STEPS} time steps later" if scene.effects.precompression else "")
         + (", and the last snapshot is taken" if scene.outputs.snapshots else ""),
     )
 
@@ -468,7 +506,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     end = scene.run.end_time
     if end is None:
         impacts = one_bead_impacts(scene)
-        choices.append(_one_bead_end_time(scene, impacts) if impacts else _front_end_time(scene, last, slow))
+        choices.append(_one_bead_end_time(scene, impacts) if impacts else _front_end_time(scene, last, slow, dt))
         end = choices[-1].value
     beads = scene.chain.beads
     if beads is None:
