@@ -34,7 +34,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from granchain.exceptions import UsageError
-from granchain.peaks import lead_floor
+from granchain.peaks import LEAD_FRACTION
 from granchain.physics.estimates import (
     damping_rate,
     expected_peak_force,
@@ -286,7 +286,7 @@ def precompressed_front_time(scene, last: int, step: bool = False) -> float:
     """The time (s) the first maximum of a precompressed chain's front takes from bead 1 to contact `last`,
     a kick's or (step = True) a lasting force's: the linearised chain solved exactly
     (estimates.linearised_first_maximum: each bead's mass and contact's stiffness, the wall), with the
-    leading pulse's floor (peaks.lead_floor) per unit load; on a chain too long to solve exactly (or one
+    leading pulse's floor per unit load; on a chain too long to solve exactly (or one
     of "auto" length, which is uniform), the asymptotic sonic_travel_times."""
     asymptotic = float(sonic_travel_times(scene, last, step)[-1])
     n = scene.chain.beads
@@ -294,7 +294,10 @@ def precompressed_front_time(scene, last: int, step: bool = False) -> float:
         return asymptotic
     load = step_equivalent(scene)[0] if step else scene.input_impulse
     horizon = LINEAR_HORIZON * float(sonic_travel_times(scene, scene.n_contacts, step)[-1])
-    exact = linearised_first_maximum(scene, last, horizon, step=step, floor=lead_floor(scene) / load)
+    # the leading pulse's floor (peaks.lead_floor) without its part for LAMMPS's round-off, which needs
+    # the planned end and time step and lies far below a front's rise
+    floor = LEAD_FRACTION * expected_peak_force(scene)
+    exact = linearised_first_maximum(scene, last, horizon, step=step, floor=floor / load)
     return asymptotic if exact is None else max(asymptotic, exact)
 
 
