@@ -19,7 +19,7 @@ from collections import Counter
 from dataclasses import replace
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, given, reject, settings
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[1]))
 from granchain.workflows.error_estimates import roundoff_floor
@@ -41,8 +41,22 @@ FINER = 16
 @settings(max_examples=n, deadline=None, suppress_health_check=list(HealthCheck), database=None)
 @given(sc=chains)
 def study(sc):
+    n0 = len(rows)
+    try:
+        measure(sc)
+    finally:  # each scene's rows as it ends (a long sample shows its progress, a crash keeps them)
+        print("\n".join(rows[n0:]), flush=True)
+
+
+def measure(sc):
     planned, _ = plan_for(sc, backend, method, 1e-3)
-    got = run_scene(planned, backend=backend, method=method, error_estimate=True)
+    try:
+        got = run_scene(planned, backend=backend, method=method, error_estimate=True)
+    except Exception as e:  # a steep taper the run watch stops (its open defect: test_varied_chains)
+        if "overlap far below the radius" not in str(e):
+            raise
+        print(f"{sc.chain.beads} beads: stopped by the run watch (overlap far below the radius), not counted", flush=True)
+        reject()
     if got.errors.against == "rk4":  # Verlet on a kinked law: RK4 at dt is the truth
         fine = run_scene(planned, method="rk4")
     else:
@@ -82,8 +96,6 @@ def study(sc):
 
 study()
 r = np.asarray(ratios)
-for row in rows:
-    print(row)
 inside = int(np.sum((r >= 1 / 3) & (r <= 3)))
 print(f"{backend} {method or 'verlet'}: {inside}/{r.size} estimates within [1/3, 3] of the true error "
       f"(min {r.min():.2g}, median {np.median(r):.2g}, max {r.max():.2g}); without an estimate: {dict(statuses)}")
