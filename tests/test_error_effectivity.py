@@ -9,8 +9,9 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, Phase, example, given, settings
+from hypothesis import HealthCheck, Phase, example, given, reject, settings
 
+from granchain.invariants import InvariantError
 from granchain.richardson import checked, richardson
 from granchain.scene import parse_scene
 from granchain.workflows.error_estimates import roundoff_floor
@@ -121,7 +122,14 @@ force = 0.4405448307179362
 def _true_and_estimated(sc):
     """(the run, its distance to dt / 16, that run's round-off, which peaks the distance is known for)
     of a scene run with reference RK4 and its error bars."""
-    got = run_scene(sc, backend="reference", method="rk4", error_estimate=True)
+    try:
+        got = run_scene(sc, backend="reference", method="rk4", error_estimate=True)
+    except InvariantError as e:
+        # a steep taper under a fast kick is stopped by the run watch (its open defect, pinned by a
+        # strict xfail in test_varied_chains): no bars to check on such a draw
+        if "overlap far below the radius" not in str(e):
+            raise
+        reject()
     finer = replace(sc, run=replace(sc.run, timestep=sc.run.timestep / 16))
     fine = run_scene(finer, backend="reference", method="rk4")
     a, b = got.solution, fine.solution
