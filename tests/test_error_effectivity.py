@@ -125,8 +125,8 @@ def _true_and_estimated(sc):
     try:
         got = run_scene(sc, backend="reference", method="rk4", error_estimate=True)
     except InvariantError as e:
-        # a steep taper under a fast kick is stopped by the run watch (its open defect, pinned by a
-        # strict xfail in test_varied_chains): no bars to check on such a draw
+        # a draw the run watch stops has no bars to check (a steep taper under a fast kick was, before
+        # the watch held each contact to its own radii: test_varied_chains)
         if "overlap far below the radius" not in str(e):
             raise
         reject()
