@@ -148,7 +148,7 @@ def run(
     method: str | None = None,
     rtol: float | None = None,
     out=None,
-    error_estimate: bool = False,
+    error_estimate: bool | str = False,
     **kw,
 ):
     """Run a scene and return its result.
@@ -168,10 +168,11 @@ def run(
         1e-3 and an ``AccuracyWarning`` says when the planner's error model predicts it misses).
     out : str or pathlib.Path, optional
         Write a run directory there (refused before the run if it exists; ``overwrite=True``).
-    error_estimate : bool, default False
+    error_estimate : bool or "checked", default False
         Also run the scene at 2 dt and 4 dt and give every peak and observable a measured error
         estimate (``result.errors``; the ``*_error`` columns of peaks.csv). ``granchain run``
-        does this by default.
+        does this by default. "checked": with RK4, also a run at dt / 2 that withholds an estimate
+        it contradicts (twice the run's cost more; docs/error-bars.md).
     **kw
         ``overwrite``, ``np_`` (LAMMPS MPI ranks), ``oversubscribe``, ``force`` (run above the
         predicted stability limit).
@@ -254,7 +255,7 @@ def compare(
     rtol: float = 1e-3,
     method: str = "rk4",
     out=None,
-    error_estimate: bool = False,
+    error_estimate: bool | str = False,
     overwrite: bool = False,
     np_: int = 1,
 ):
@@ -271,8 +272,9 @@ def compare(
         The reference's integrator.
     out : str or pathlib.Path, optional
         Write the compare directory (lammps/, reference/, compare.csv, compare.md).
-    error_estimate : bool
-        Give both runs measured error bars (companion runs at 2 dt and 4 dt).
+    error_estimate : bool or "checked"
+        Give both runs measured error bars (companion runs at 2 dt and 4 dt; "checked": RK4's also
+        checked by a run at dt / 2).
 
     Returns
     -------

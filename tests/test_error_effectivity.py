@@ -123,7 +123,7 @@ def _true_and_estimated(sc):
     """(the run, its distance to dt / 16, that run's round-off, which peaks the distance is known for)
     of a scene run with reference RK4 and its error bars."""
     try:
-        got = run_scene(sc, backend="reference", method="rk4", error_estimate=True)
+        got = run_scene(sc, backend="reference", method="rk4", error_estimate="checked")
     except InvariantError as e:
         # a draw the run watch stops has no bars to check (a steep taper under a fast kick was, before
         # the watch held each contact to its own radii: test_varied_chains)
@@ -222,3 +222,38 @@ def test_a_check_at_half_the_step_marks_a_sign_change_below_dt():
     out = checked(bars, h, f, c, 4, orders=(2.5, 4.0))
     assert not out.reliable[0]
     assert "dt / 2" in out.status[0]
+
+
+SMALL_CHAIN = """
+[chain]
+beads = 8
+radius = 4.76e-3
+material = "brass"
+[contact]
+law = "hertz"
+[loading]
+kind = "impulse"
+impulse = 0.05
+duration = 2e-6
+[run]
+end_time = 4e-5
+timestep = "auto"
+[outputs]
+peak_force = true
+"""
+
+
+def test_the_check_at_half_the_step_is_run_only_when_asked_for():
+    """By default RK4's bars cost their two companions (2 dt, 4 dt: 3/4 of the run); "checked" adds
+    the run at dt / 2; any other value is refused before a run."""
+    from granchain.exceptions import GranchainError
+    from granchain.scene import parse_scene
+
+    sc = parse_scene(SMALL_CHAIN, source="small.toml")
+    plain = run_scene(sc, backend="reference", method="rk4", error_estimate=True).errors
+    assert plain.check_timestep is None
+    assert len(plain.timesteps) == 2
+    got = run_scene(sc, backend="reference", method="rk4", error_estimate="checked")
+    assert got.errors.check_timestep == pytest.approx(0.5 * got.scene.run.timestep, rel=1e-12)
+    with pytest.raises(GranchainError, match="error_estimate"):
+        run_scene(sc, backend="reference", method="rk4", error_estimate="yes")

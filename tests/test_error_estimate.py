@@ -168,10 +168,18 @@ CASES = (
     # RK4 locates the kinks: 33 of 59 estimated, 0.79-3.0 of the true error (the order-range rule)
     + [("plastic-short-impulse", "rk4")]
     + [("thornton-short-impulse", "lammps"), ("thornton-short-impulse", "verlet")]
-    # one estimate was 6.3x the true error here (contact 6, 'nominal order 4': the onset's order 2.5 mixing
-    # with 4 so that the three runs look like one order); RK4's check at dt / 2 withholds it
-    # (error_estimates.check_because)
-    + [("thornton-short-impulse", "rk4")]
+    + [
+        pytest.param(
+            "thornton-short-impulse",
+            "rk4",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="measured: 1 of 34 estimates 6.3x the true error (contact 6, 'nominal order 4', a true "
+                "error 4e-9 of the peak; the onset's order 2.5 mixing with 4 so that the three runs look like one "
+                "order: docs/error-bars.md); error_estimate='checked' withholds it (the case below)",
+            ),
+        )
+    ]
     + [
         # effect-dashpot with RK4: no estimate by design (test_rk4_with_a_dashpot_runs_no_companion...)
         ("effect-dashpot", "verlet"),
@@ -180,9 +188,16 @@ CASES = (
 )
 
 
+#: (scene, integrator, error_estimate): every case by default, and RK4's check at dt / 2 where the default
+#: misses (error_estimates.check_because)
+ESTIMATES = [pytest.param(*p.values, True, marks=p.marks) if hasattr(p, "marks") else (*p, True) for p in CASES] + [
+    ("thornton-short-impulse", "rk4", "checked")
+]
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize(("name", "integ"), CASES)
-def test_estimated_error_is_within_a_factor_3_of_the_true_error(name, integ):
+@pytest.mark.parametrize(("name", "integ", "mode"), ESTIMATES)
+def test_estimated_error_is_within_a_factor_3_of_the_true_error(name, integ, mode):
     """The validation: estimated / true error (true: a run at dt / 16) in [1/3, 3] wherever
     the true error is above round-off and an estimate is given, and an estimate for most peaks.
 
@@ -196,7 +211,7 @@ def test_estimated_error_is_within_a_factor_3_of_the_true_error(name, integ):
     backend, method = ("lammps", None) if integ == "lammps" else ("reference", integ)
     sc, _ = plan_for(resolve_scene(name), backend, method, 1e-3)
     sc = replace(sc, outputs=replace(sc.outputs, histories=(), snapshots=(), history_interval=None))
-    got = run_scene(sc, backend=backend, method=method, error_estimate=True)
+    got = run_scene(sc, backend=backend, method=method, error_estimate=mode)
     if integ != "rk4" and law_class(sc.contact.law).slope_kinks and not sc.effects.dashpot:
         fine = run_scene(replace(sc, run=replace(sc.run, timestep=sc.run.timestep / 4)), method="rk4")
     else:
@@ -361,16 +376,13 @@ def test_compare_makes_each_rk4_companion_once(tmp_path, monkeypatch):
     monkeypatch.setattr(run_module, "available_cores", lambda: 1)  # no worker: every run made here
     assert main(["compare", str(p), "--out", str(tmp_path / "c"), "--quiet"]) == 0
     dt = sc.run.timestep
-    # (and the reference's own check of its bars at dt / 2: error_estimates.check_because)
-    assert sorted(made) == [(dt / 2, "rk4"), (dt, "rk4"), (2 * dt, "rk4"), (4 * dt, "rk4")]
+    assert sorted(made) == [(dt, "rk4"), (2 * dt, "rk4"), (4 * dt, "rk4")]  # (no check at dt / 2 unless asked)
     errors = [json.loads((tmp_path / "c" / b / "summary.json").read_text())["errors"] for b in ("lammps", "reference")]
     assert errors[0]["companion_method"] == "rk4"
     assert errors[0]["companion_timesteps"] == errors[1]["companion_timesteps"] == [2 * dt, 4 * dt]
     # the shared runs' price is shown on both: LAMMPS's companions cost what the reference's did
     # (the same runs), though LAMMPS's report got them at once
-    # (the reference's include its check at dt / 2, which LAMMPS's do not share)
-    shared = errors[1]["companion_wall_time"] - errors[1]["check_wall_time"]
-    assert errors[0]["companion_wall_time"] >= 0.5 * shared > 0
+    assert errors[0]["companion_wall_time"] >= 0.5 * errors[1]["companion_wall_time"] > 0
 
     made.clear()
     monkeypatch.setattr(run_module, "available_cores", lambda: 2)  # the companions made by a worker
@@ -379,6 +391,4 @@ def test_compare_makes_each_rk4_companion_once(tmp_path, monkeypatch):
     for name in ("compare.csv", "reference/peaks.csv", "lammps/peaks.csv"):
         assert (tmp_path / "w" / name).read_bytes() == (tmp_path / "c" / name).read_bytes()
     errors = [json.loads((tmp_path / "w" / b / "summary.json").read_text())["errors"] for b in ("lammps", "reference")]
-    # (the reference's include its check at dt / 2, which LAMMPS's do not share)
-    shared = errors[1]["companion_wall_time"] - errors[1]["check_wall_time"]
-    assert errors[0]["companion_wall_time"] >= 0.5 * shared > 0
+    assert errors[0]["companion_wall_time"] >= 0.5 * errors[1]["companion_wall_time"] > 0

@@ -23,7 +23,7 @@ def compare_scene(
     method: str = "rk4",
     np_: int = 1,
     reference_scene=None,
-    error_estimate: bool = False,
+    error_estimate: bool | str = False,
 ):
     """Run LAMMPS and the reference on a scene; returns (rows, lammps result, reference result).
 
@@ -31,7 +31,8 @@ def compare_scene(
     Verlet; the reference: method), the time step for rtol / 2 each; lam.scene and ref.scene are
     the scenes each one ran.
 
-    error_estimate: give each run its measured error bars (companions at 2 dt and 4 dt); a
+    error_estimate: give each run its measured error bars (companions at 2 dt and 4 dt; "checked": RK4's
+    also checked by a run at dt / 2); a
     difference then fails only beyond rtol plus both runs' errors, and the table shows them.
     reference_scene: give the reference a different scene (only to show that a physics mismatch is
     caught; `granchain compare` never does this). out: a directory with lammps/, reference/,
@@ -58,7 +59,7 @@ def compare_scene(
     prefetch = []
     if error_estimate:
         for sc, m in ((ref_scene, method), (lam_scene, "verlet")):
-            prefetch += [(c, "rk4") for c in rk4_companions(sc, m)]
+            prefetch += [(c, "rk4") for c in rk4_companions(sc, m, error_estimate == "checked")]
     ref_kw = dict(backend=REFERENCE, method=method, rtol=plan_rtol, error_estimate=error_estimate)
     lam_kw = dict(backend=LAMMPS, np_=np_, rtol=plan_rtol, error_estimate=error_estimate)
     with shared_reference_runs(prefetch) as shared:

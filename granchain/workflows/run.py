@@ -205,8 +205,9 @@ def _refined(given, plan, result):
     return refined_plan(given, plan, result.solution)
 
 
-def _estimate_errors(result, plan, backend: Backend, method: str, np_: int):
-    """The run's companions at 2 dt and 4 dt and its ErrorReport (granchain.workflows.error_estimates)."""
+def _estimate_errors(result, plan, backend: Backend, method: str, np_: int, checked: bool = False):
+    """The run's companions at 2 dt and 4 dt (and with ``checked`` RK4's check at dt / 2) and its
+    ErrorReport (granchain.workflows.error_estimates)."""
     from granchain.workflows.error_estimates import estimate_errors
     from granchain.workflows.plan import plan_scene
 
@@ -220,7 +221,7 @@ def _estimate_errors(result, plan, backend: Backend, method: str, np_: int):
     def run_rk4(scene):  # the independent reference with event location (errors.against_rk4_because)
         return _execute(scene, REFERENCE, "rk4", 1).result
 
-    return estimate_errors(result, run_one, method, stable, run_rk4=run_rk4)
+    return estimate_errors(result, run_one, method, stable, run_rk4=run_rk4, checked=checked)
 
 
 class OutputSizeWarning(UserWarning):
@@ -298,7 +299,8 @@ def _finish(calc, given, scene, plan, backend, method: str, np_: int, rtol, erro
         if after_run is not None:
             after_run()
         if error_estimate:
-            result.errors = _estimate_errors(result, plan, backend, method, np_)
+            checked = error_estimate == "checked"
+            result.errors = _estimate_errors(result, plan, backend, method, np_, checked)
             worst, target = result.errors.error_estimate, (plan.rtol if plan is not None else rtol or 1e-3)
             if worst is not None and worst > target:  # measured, not predicted: say so after the run
                 warnings.warn(
@@ -324,7 +326,7 @@ def run_scene(
     force: bool = False,
     rtol: float | None = None,
     oversubscribe: bool = False,
-    error_estimate: bool = False,
+    error_estimate: bool | str = False,
     before_run=None,
     after_run=None,
 ) -> RunResult:
@@ -355,7 +357,7 @@ def calculate_scene(
     force: bool = False,
     rtol: float | None = None,
     oversubscribe: bool = False,
-    error_estimate: bool = False,
+    error_estimate: bool | str = False,
     before_run=None,
     after_run=None,
 ) -> Calculation:
@@ -367,7 +369,8 @@ def calculate_scene(
     says misses rtol (default 1e-3) gives an AccuracyWarning before the run. out: the run directory
     the caller will write, checked before the run (its disk too).
     error_estimate: also run the scene at 2 dt and 4 dt and estimate every number's error
-    (granchain.workflows.error_estimates; result.errors, peaks.csv's *_error columns, summary.json).
+    (granchain.workflows.error_estimates; result.errors, peaks.csv's *_error columns, summary.json);
+    "checked": RK4's estimates also checked by a run at dt / 2 (error_estimates.check_because).
     before_run: called once after the scene's checks and warnings, before its first run; after_run:
     called once the run is made (and made again finer if refined), before its error estimate
     (granchain compare starts LAMMPS alongside the reference at one of them); what they raise stops
@@ -383,6 +386,8 @@ def _calculate(
 ):
     """calculate_scene's work (its warnings name the caller of run_scene or calculate_scene)."""
     started = datetime.now(UTC)
+    if error_estimate not in (True, False, "checked"):
+        raise UsageError(f'error_estimate = {error_estimate!r} is invalid: True, False or "checked"')
     backend = backend_named(backend)
     method = integrator(backend, method)
     given = scene
