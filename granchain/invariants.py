@@ -17,7 +17,7 @@ overlap           every contact's overlap below OVERLAP_WATCH x the smaller radi
                   up to alpha deep, so at alpha = R_small it reaches about its centre, and beads passing
                   through each other go far beyond. The paper's own I = 0.4 N s pulse reaches 11% of
                   R. A taper's big beads may overlap more than half its smallest bead's radius and be
-                  fine: a bound on the whole chain's smallest radius stopped them. On a uniform chain
+                  fine: a bound on the whole chain's smallest radius would stop them. On a uniform chain
                   this is the same bound, OVERLAP_WATCH x R, on every contact.
 energy balance    |kinetic + stored + dissipated - work| <= ENERGY_WATCH x the largest energy put in
                   so far. Numbers behind the bound (default scene, dt as a fraction of the

@@ -146,14 +146,15 @@ def position_resolution(scene) -> float:
     made behind a front travel with it, so the wave's precursors carry them too, and there a maximum of
     the round-off on the slowly rising force counts as a leading pulse. The reference integrates
     displacements from the static state and resolves far finer (3e-13 N where LAMMPS resolves 1e-7 N);
-    both backends use this floor, so both report the same leading pulses.
+    both backends use this floor, so runs at the same step report the same leading pulses (a run at
+    another step, a companion or RK4 beside LAMMPS in a compare, has the floor of its own step count).
 
     Measured (a 300-bead brass chain at F0 = 100 N, a 0.1 N step, the planned step 2.3e-7 s; LAMMPS
     against the reference's Verlet at the same step, every contact at every step): k_lin ulp(L) =
     7.9e-9 N, sqrt(n / 6) = 56 of them (n = 18 730); the largest difference before a contact's leading
     pulse 67 of them (1.2 sigma), 185 at a quarter of the step (1.65 sigma), and at 1.5 sigma on a
-    100-bead chain; noise counted as leading pulses at 12 contacts, 4.1e-7 - 7e-7 N above F0, while the
-    floor was 4e-7 N. The floor is RESOLUTION_SIGMAS of this standard deviation: 2.7e-6 N there.
+    100-bead chain; noise counts as leading pulses at 12 contacts, 4.1e-7 - 7e-7 N above F0, under
+    LEAD_FRACTION's floor alone (4e-7 N). The floor is RESOLUTION_SIGMAS of this standard deviation: 2.7e-6 N there.
 
     Parameters
     ----------

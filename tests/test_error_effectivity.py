@@ -257,3 +257,16 @@ def test_the_check_at_half_the_step_is_run_only_when_asked_for():
     assert got.errors.check_timestep == pytest.approx(0.5 * got.scene.run.timestep, rel=1e-12)
     with pytest.raises(GranchainError, match="error_estimate"):
         run_scene(sc, backend="reference", method="rk4", error_estimate="yes")
+
+
+def test_compare_refuses_a_bad_error_estimate_before_any_run(monkeypatch):
+    """compare checks error_estimate before it plans, builds or runs anything."""
+    from granchain.exceptions import GranchainError
+    from granchain.workflows import compare_backends
+
+    def no_run(*a, **k):
+        raise AssertionError("a run started")
+
+    monkeypatch.setattr(compare_backends, "plan_for", no_run)
+    with pytest.raises(GranchainError, match="error_estimate"):
+        compare_backends.compare_scene(parse_scene(SMALL_CHAIN, source="small.toml"), error_estimate="on")

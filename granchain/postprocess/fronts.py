@@ -43,10 +43,9 @@ LADDER_SLOTS = 16
 FRONT_FRACTION = 0.5
 #: the smallest amplitude, as a fraction of the static force F0, whose arrival is read: LAMMPS integrates
 #: absolute positions and resolves a precompressed contact's total force only to about 1.5e-9 F0 (a
-#: 300-bead brass chain at F0 = 100 N); ahead of a small front its round-off made maxima of up to 1.8e-8
-#: F0 above F0 that counted as leading pulses, 0.25-0.4 ms early, until the leading pulse's floor rose
-#: above that round-off (peaks.position_resolution, 2.7e-6 N = 2.7e-8 F0 on that chain); amplitudes are still read only
-#: above this fraction of F0
+#: 300-bead brass chain at F0 = 100 N); ahead of a small front its round-off makes maxima of up to 1.8e-8
+#: F0 above F0, which the leading pulse's floor stays above (peaks.position_resolution, 2.7e-6 N = 2.7e-8
+#: F0 on that chain); amplitudes are read only above this fraction of F0
 FRONT_RESOLUTION = 1e-6
 
 

@@ -38,6 +38,7 @@ def compare_scene(
     caught; `granchain compare` never does this). out: a directory with lammps/, reference/,
     compare.csv and compare.md, written atomically.
     """
+    run_module.check_error_estimate(error_estimate)
     if out is not None:
         check_output_dir(out, overwrite)
     # each backend runs the step planned for its own integrator; with timestep = "auto" each is

@@ -378,15 +378,18 @@ def _one_bead_end_time(scene, impacts) -> PlanChoice:
 
 
 #: a maximum is seen once the force has fallen after it: within two time steps of it (the sample past the
-#: maximum's own, which may fall a step after the maximum)
+#: maximum's own, which may fall a step after the maximum). The end time allows two of the largest stable
+#: step of either integrator (STABILITY / omega_max), so that it does not depend on the integrator: both
+#: backends of a compare end together
 PEAK_DETECTION_STEPS = 2
 
 
-def _front_end_time(scene, last: int | None, slow: float, dt: float) -> PlanChoice:
+def _front_end_time(scene, last: int | None, slow: float, omega_max: float) -> PlanChoice:
     """The end time of a chain: the slowest leading front passes the last measured contact
     (front_travel_time), after a long load; at least the pulse of an impulse and the last snapshot. A
     precompressed chain's front time is its linearised chain's first maximum (precompressed_front_time),
-    which the run sees PEAK_DETECTION_STEPS time steps (dt) later."""
+    which the run sees PEAK_DETECTION_STEPS time steps later (steps of either integrator up to its
+    stability limit at omega_max)."""
     if last is None:
         raise SceneError(
             f'{scene.source}: end_time = "auto" needs the contacts you measure: give [outputs] '
@@ -406,7 +409,7 @@ def _front_end_time(scene, last: int | None, slow: float, dt: float) -> PlanChoi
             # (STEP_LAG); a pulse's comes no later than a step's, nor than the load's end after the front
             end = max(end, min(float(sonic[1]), travel + step[1]))
     if scene.effects.precompression:
-        end += PEAK_DETECTION_STEPS * dt
+        end += PEAK_DETECTION_STEPS * max(STABILITY.values()) / omega_max
     if ld.kind == "impulse" and end < ld.duration:
         end = ld.duration  # an impulse is measured whole: the run lasts at least the pulse
     if scene.outputs.snapshots and end < max(scene.outputs.snapshots):
@@ -509,7 +512,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     end = scene.run.end_time
     if end is None:
         impacts = one_bead_impacts(scene)
-        choices.append(_one_bead_end_time(scene, impacts) if impacts else _front_end_time(scene, last, slow, dt))
+        choices.append(_one_bead_end_time(scene, impacts) if impacts else _front_end_time(scene, last, slow, omega))
         end = choices[-1].value
     beads = scene.chain.beads
     if beads is None:

@@ -381,13 +381,18 @@ def calculate_scene(
     )
 
 
+def check_error_estimate(error_estimate) -> None:
+    """Refuse an error_estimate that is not True, False or "checked" (before any run)."""
+    if error_estimate not in (True, False, "checked"):
+        raise UsageError(f'error_estimate = {error_estimate!r} is invalid: True, False or "checked"')
+
+
 def _calculate(
     scene, backend, method, out, overwrite, np_, force, rtol, oversubscribe, error_estimate, before_run, after_run
 ):
     """calculate_scene's work (its warnings name the caller of run_scene or calculate_scene)."""
     started = datetime.now(UTC)
-    if error_estimate not in (True, False, "checked"):
-        raise UsageError(f'error_estimate = {error_estimate!r} is invalid: True, False or "checked"')
+    check_error_estimate(error_estimate)
     backend = backend_named(backend)
     method = integrator(backend, method)
     given = scene
