@@ -259,6 +259,28 @@ def test_the_check_at_half_the_step_is_run_only_when_asked_for():
         run_scene(sc, backend="reference", method="rk4", error_estimate="yes")
 
 
+@pytest.mark.parametrize("law", ["hertz", "bilinear"])
+def test_a_check_asked_of_verlet_says_why_it_is_not_made(law):
+    """The check at dt / 2 is RK4's: asked of a Verlet run (Richardson on a Hertz chain, RK4 companions on
+    a kinked law) it makes no run at dt / 2, and the report says why rather than passing for checked."""
+    from granchain.scene import parse_scene
+
+    text = (
+        SMALL_CHAIN
+        if law == "hertz"
+        else SMALL_CHAIN.replace('law = "hertz"', 'law = "bilinear"\nunloading_coeff = 0.8\nplastic_stiffness = 2.43e7')
+    )
+    sc = parse_scene(text, source=f"small-{law}.toml")
+    assert sc.contact.law == law
+    plain = run_scene(sc, backend="reference", method="verlet", error_estimate=True).errors
+    got = run_scene(sc, backend="reference", method="verlet", error_estimate="checked").errors
+    assert plain.why_unchecked is None
+    assert got.check_timestep is None
+    assert got.timesteps == plain.timesteps
+    assert "RK4" in got.why_unchecked
+    assert got.summary(1.0)["why_unchecked"] == got.why_unchecked
+
+
 def test_compare_refuses_a_bad_error_estimate_before_any_run(monkeypatch):
     """compare checks error_estimate before it plans, builds or runs anything."""
     from granchain.exceptions import GranchainError

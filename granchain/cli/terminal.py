@@ -193,4 +193,6 @@ def print_result(result, out) -> None:
             )
             if n_bad:
                 print(f"  {'peaks without an estimate':38s} {n_bad}   (peaks.csv error_status says why)")
+            if e.get("why_unchecked"):
+                print(f"  {'not checked at dt / 2':38s} {shown(e['why_unchecked'])}")
     print(f"run directory: {shown(out)}")
