@@ -172,13 +172,19 @@ def position_resolution(scene) -> float:
     if scene.run.end_time is None or scene.run.timestep is None:
         raise ValueError("position_resolution needs a planned scene (its end time and time step)")
     steps = math.ceil(scene.run.end_time / scene.run.timestep)
+    k_lin = max(float(np.max(law.tangent_stiffness(f0))) for law in chain_laws(scene))
+    return RESOLUTION_SIGMAS * k_lin * scene.contact_quantum * math.sqrt(steps / 6.0)
+
+
+def chain_laws(scene) -> list:
+    """The contact laws of every distinct pair of bead kinds the chain joins (the nominal law alone on
+    a uniform chain)."""
     laws = [scene.law]
-    if scene.per_bead:  # every distinct pair of bead kinds the chain joins
+    if scene.per_bead:
         kinds, kind_of = scene.bead_kinds
         pairs = sorted(set(zip(kind_of[:-1], kind_of[1:], strict=True)))
         laws = [scene.bead_pair_law(*kinds[i], *kinds[j]) for i, j in pairs] or laws
-    k_lin = max(float(np.max(law.tangent_stiffness(f0))) for law in laws)
-    return RESOLUTION_SIGMAS * k_lin * scene.contact_quantum * math.sqrt(steps / 6.0)
+    return laws
 
 
 def reached_floor(scene) -> float:

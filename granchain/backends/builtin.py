@@ -61,6 +61,7 @@ class LammpsBackend(FileIOBackend):
     methods = ("verlet",)
     method_text = "velocity Verlet"
     mpi = True
+    absolute_positions = True  # x up to the chain's length (peaks.position_resolution)
     work_files = ("histories.npy", "chain.dump")
 
     #: the input files :meth:`write_input` writes

@@ -106,6 +106,11 @@ class Backend:
     work_in_tmp : bool
         Whether it writes its files in a work directory in the temporary directory first (its free
         disk is checked there too).
+    absolute_positions : bool
+        Whether it integrates the beads' absolute positions (each rounded to its ulp every step, up to
+        the chain's length) rather than displacements from the undeformed chain: its round-off, and so
+        the error bars' round-off floor (workflows.error_estimates.roundoff_floor), scales with the
+        chain's length.
     """
 
     name: ClassVar[str]
@@ -116,6 +121,7 @@ class Backend:
     mpi: ClassVar[bool] = False
     work_files: ClassVar[tuple[str, ...]] = ()
     work_in_tmp: ClassVar[bool] = False
+    absolute_positions: ClassVar[bool] = False
 
     def integrator(self, method: str | None) -> str:
         """The integrator a run with ``method`` (None: the default) uses on this backend.

@@ -278,14 +278,21 @@ def against_rk4_factors(scene) -> tuple[float, float]:
 
 
 def estimate_errors(
-    result, run_one, method: str, stable_timestep: float, run_rk4=None, checked: bool = False
+    result,
+    run_one,
+    method: str,
+    stable_timestep: float,
+    run_rk4=None,
+    checked: bool = False,
+    absolute_positions: bool = False,
 ) -> ErrorReport:
     """Run a result's companions with run_one(scene) -> RunResult and estimate every error.
 
     result: the finished run (its scene is concrete, its solution at dt); method: the integrator
     (rk4 or verlet); stable_timestep: the planner's stability limit for this scene and integrator;
     run_rk4(scene) -> RunResult: the reference RK4 run of a scene, for a Verlet run whose law needs it
-    (against_rk4_because; None: Richardson always).
+    (against_rk4_because; None: Richardson always); absolute_positions: the backend integrates
+    absolute positions (Backend.absolute_positions; its round-off floor, roundoff_floor).
     """
     scene = result.scene
     if run_rk4 is not None and against_rk4_because(method, scene):
@@ -303,7 +310,7 @@ def estimate_errors(
         finer = _check_run(report, scene, run_one) if check_because(method, scene, checked) else None
     if checked and not check_because(method, scene, checked):
         report.why_unchecked = unchecked_because(method, scene)
-    _richardson_bars(report, result, runs, method, finer)
+    _richardson_bars(report, result, runs, method, finer, absolute_positions)
     return report
 
 
@@ -368,9 +375,12 @@ def _check_run(report: ErrorReport, scene, run_one):
     return sol
 
 
-def _richardson_bars(report: ErrorReport, result, runs: list, method: str, finer=None) -> None:
+def _richardson_bars(
+    report: ErrorReport, result, runs: list, method: str, finer=None, absolute_positions: bool = False
+) -> None:
     """Richardson's error bars of every number of the run from its companions (richardson.richardson),
-    checked against the run at dt / 2 where there is one (richardson.checked)."""
+    checked against the run at dt / 2 where there is one (richardson.checked); absolute_positions:
+    the backend's (roundoff_floor)."""
     scene, sol = result.scene, result.solution
     p = report.order
     coarse = runs[0]
@@ -394,10 +404,12 @@ def _richardson_bars(report: ErrorReport, result, runs: list, method: str, finer
 
     pf, tp = values("peak_force", True), values("time_of_peak", True)
     lf, lt = values("leading_pulse_force"), values("leading_pulse_time")
-    floor = roundoff_floor(scene, sol)
+    floor = roundoff_floor(scene, sol, absolute_positions)
     report.peak_force = bars(pf, tp, floor=floor)
     report.time_of_peak = bars(tp, tp)
-    report.leading_pulse_force = bars(lf, lt)
+    # a leading pulse rises no higher than its contact's peak, and a contact's slope grows with its
+    # force (Hertz; constant on a loading line): the peak's floor bounds the leading pulse's round-off
+    report.leading_pulse_force = bars(lf, lt, floor=floor)
     report.arrival_time = bars(lt, lt)
 
     _largest(report, scene, sol)
@@ -431,8 +443,9 @@ def _richardson_bars(report: ErrorReport, result, runs: list, method: str, finer
             times = tuple(None if s is None else float(s.leading_pulse_time[b]) for s in (sol, coarse, coarser))
         # max_peak_force: the largest over contacts is continuous in the runs even where its contact
         # changes (a steady wave peaks alike everywhere), so no pulse check; wave_speed: a fit
+        fl = _observable_floor(name, obs[0], floor, b)
         bars = richardson(
-            [v[0]], [v[1]], None if v[2] is None else [v[2]], p, times=times, jump_time=jump, orders=orders
+            [v[0]], [v[1]], None if v[2] is None else [v[2]], p, times=times, jump_time=jump, orders=orders, floor=fl
         )
         if obs_h is not None:
             h = obs_h.get(name)
@@ -441,13 +454,39 @@ def _richardson_bars(report: ErrorReport, result, runs: list, method: str, finer
                 th = float(finer.leading_pulse_time[b])
                 times = ([th], [times[0]], [times[1]])
             bars = checked(
-                bars, [np.nan if h is None else float(h)], [v[0]], [v[1]], p, times=times, jump_time=jump, orders=orders
+                bars,
+                [np.nan if h is None else float(h)],
+                [v[0]],
+                [v[1]],
+                p,
+                times=times,
+                jump_time=jump,
+                orders=orders,
+                floor=fl,
             )
         report.observables[name] = _observable_error(name, vals[0], bars, obs[0])
 
 
-def roundoff_floor(scene, sol) -> np.ndarray | None:
-    """Each contact's peak force's round-off in a run (N), or None where the run gives no overlaps.
+def _observable_floor(name: str, measured: dict, floor: np.ndarray | None, b: int) -> float | None:
+    """The round-off floor of a scalar observable (N, or its nondimensional form): the leading peak's
+    is its contact's (b, 0-based), the largest peak's its contact's; a wave speed, a fit of arrival
+    times, has none."""
+    if floor is None:
+        return None
+    if name.startswith("leading_peak_force") and b < floor.size:
+        fl = float(floor[b])
+        if name.endswith("_nondim"):  # the nondimensional form scales the force
+            force, nondim = measured.get("leading_peak_force"), measured.get(name)
+            fl = fl * float(nondim) / float(force) if force and nondim is not None else np.nan
+    elif name == "max_peak_force" and measured.get("max_peak_contact") is not None:
+        fl = float(floor[int(measured["max_peak_contact"]) - 1])
+    else:
+        return None
+    return fl if np.isfinite(fl) else None
+
+
+def roundoff_floor(scene, sol, absolute_positions: bool = False) -> np.ndarray | None:
+    """Each contact's peak force's round-off in a run (N), or None where the run gives no displacements.
 
     The reference integrates displacements u (from the undeformed chain) and takes overlaps as
     u_i - u_(i+1): every step rounds u at eps |u|, and over the run's n steps those roundings add as a
@@ -459,16 +498,35 @@ def roundoff_floor(scene, sol) -> np.ndarray | None:
     three runs' differences are round-off that can look like any order: measured there 0.013-0.62 of
     the distance to a run at dt / 16, itself round-off (the runs at dt / 2 to dt / 16 scattered by
     1e-13 - 1e-12 N about one another, 20-150x eps U dF/dalpha).
+
+    A backend that integrates absolute positions (LAMMPS, Backend.absolute_positions) rounds each at
+    eps |x|, up to the chain's length: there U is the largest |x|, and, without overlaps in its
+    output, the slope is the stiffest of the chain's laws at the contact's peak force
+    (ContactLaw.tangent_stiffness). The same random walk as peaks.position_resolution, which bounds
+    it at 6 standard deviations for the leading pulse's floor.
     """
-    overlap = getattr(sol, "peak_overlap", None)
     u = np.asarray(getattr(sol, "displacement", ()), dtype=float)
-    if overlap is None or u.size == 0 or not sol.steps:
+    if u.size == 0 or not sol.steps:
         return None
     f = np.asarray(sol.peak_force, dtype=float)
-    a = np.asarray(overlap, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        slope = np.where(a > 0, 1.5 * np.abs(f) / a, np.nan)
-    return np.sqrt(float(sol.steps)) * np.finfo(float).eps * float(np.max(np.abs(u))) * slope
+    if absolute_positions:
+        from granchain.peaks import chain_laws
+
+        size = float(np.max(np.abs(scene.bead_positions[: u.size] + u)))
+        force = np.nan_to_num(np.abs(f))
+        slope = np.max(
+            [np.broadcast_to(law.tangent_stiffness(force), force.shape) for law in chain_laws(scene)], axis=0
+        )
+        slope = np.where(np.isfinite(f), slope, np.nan)
+    else:
+        overlap = getattr(sol, "peak_overlap", None)
+        if overlap is None:
+            return None
+        size = float(np.max(np.abs(u)))
+        a = np.asarray(overlap, dtype=float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slope = np.where(a > 0, 1.5 * np.abs(f) / a, np.nan)
+    return np.sqrt(float(sol.steps)) * np.finfo(float).eps * size * slope
 
 
 def _against_rk4(result, run_rk4) -> ErrorReport:

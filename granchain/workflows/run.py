@@ -221,7 +221,9 @@ def _estimate_errors(result, plan, backend: Backend, method: str, np_: int, chec
     def run_rk4(scene):  # the independent reference with event location (errors.against_rk4_because)
         return _execute(scene, REFERENCE, "rk4", 1).result
 
-    return estimate_errors(result, run_one, method, stable, run_rk4=run_rk4, checked=checked)
+    return estimate_errors(
+        result, run_one, method, stable, run_rk4=run_rk4, checked=checked, absolute_positions=backend.absolute_positions
+    )
 
 
 class OutputSizeWarning(UserWarning):
