@@ -151,3 +151,29 @@ def test_the_watch_stops_no_run_whose_contacts_stay_below_their_own_bounds(sc):
             stops[backend] = str(e)
     if stops:
         assert _largest_relative_overlap(sc) > 1.0, f"a sound run stopped: {stops}"
+
+
+@pytest.mark.parametrize("busiest", [0, 1, 3])
+def test_the_reference_watch_numbers_every_contact_as_the_scene_does(busiest):
+    """Behind a striker the scene numbers the striker's contact 0 and the chain's 1 .. N - 1: the
+    energy and finite-state watches name contacts and bodies that way, like the overlap watch."""
+    from types import SimpleNamespace
+
+    from granchain.invariants import InvariantError
+    from granchain.problem import ChainProblem
+    from granchain.reference.observers import RunWatch
+    from granchain.reference.state import ChainState
+
+    state = ChainState(ChainProblem.from_scene(BLOW_UPS["striker"]).with_ends())
+    assert state.problem.front == 1
+    state.u[:] = 0.0
+    state.u[busiest] = 1e-6  # the striker's or a bead's: its contact ahead is the most compressed
+    watch = RunWatch(state, SimpleNamespace(listeners=[]), 1, None, 1e-12, None)
+    with pytest.raises(InvariantError) as got:
+        watch.check_energy(state, (1e-6, 1.0, 0.0, 0.0, 0.0))  # 1 J from nothing
+    assert got.value.contact == busiest
+    state.v[busiest] = np.nan
+    with pytest.raises(InvariantError) as got:
+        watch.check_state(state, 1e-6)
+    assert got.value.contact == busiest
+    assert ("the striker" if busiest == 0 else f"bead {busiest}") in str(got.value)

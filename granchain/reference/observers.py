@@ -523,17 +523,23 @@ class RunWatch(Observer):
     def end_segment(self, state: ChainState) -> None:
         self.check_state(state, state.t)
 
+    def scene_contact(self, i: int) -> int:
+        """The scene's number of the state's contact i (0-based over the state's chain): a striker's
+        contact is 0, the chain's 1 .. N - 1, a wall's N."""
+        return i + 1 - self.front
+
     def check_state(self, state: ChainState, t: float) -> None:
         """A finite state, overlaps below max_overlap."""
         u, v = state.u, state.v
         if not np.isfinite(u.sum() + v.sum()):
             bad = int(np.flatnonzero(~(np.isfinite(u) & np.isfinite(v)))[0])
+            body = "the striker" if bad < self.front else f"bead {bad + 1 - self.front}"
             raise InvariantError(
                 "finite state",
                 t,
                 state.step,
-                min(bad, state.n - 2) + 1,
-                f"displacement or velocity of bead {bad + 1} is not finite",
+                self.scene_contact(min(bad, state.n - 2)),
+                f"displacement or velocity of {body} is not finite",
             )
         bound = self.max_overlap
         if bound is not None:
@@ -544,7 +550,7 @@ class RunWatch(Observer):
                 i = int(np.argmax(a / bound))
                 b = float(bound[i])
             if a[i] > b:
-                contact, wall = i + 1 - self.front, not state.free_end
+                contact, wall = self.scene_contact(i), not state.free_end
                 bodies = contact_bodies(contact, state.n - self.front - wall, self.front > 0, wall)
                 raise InvariantError(
                     "overlap far below the radius",
@@ -562,14 +568,16 @@ class RunWatch(Observer):
             self.put_in = max(self.put_in, abs(w), ke + pe)
             detail = energy_violation(ke + pe + de - w, self.put_in, self.energy_watch)
             if detail:
-                raise InvariantError("energy balance", t, state.step, int(np.argmax(state.overlap())) + 1, detail)
+                busiest = self.scene_contact(int(np.argmax(state.overlap())))
+                raise InvariantError("energy balance", t, state.step, busiest, detail)
         if self.momentum_watch is not None:
             p = state.problem
             delivered = p.amplitude * min(p.duration, t)
             momentum = float(np.dot(state.mass_ke, state.v))
             detail = momentum_violation(momentum, self.p_initial + delivered, self.momentum_watch)
             if detail:
-                raise InvariantError("momentum", t, state.step, int(np.argmax(state.overlap())) + 1, detail)
+                busiest = self.scene_contact(int(np.argmax(state.overlap())))
+                raise InvariantError("momentum", t, state.step, busiest, detail)
 
 
 class EarlyStop(Observer):
