@@ -113,6 +113,10 @@ class HermitePeaks(PeakTracker):
     """RK4: the running maximum of each overlap at piece ends, refined inside a piece where the overlap
     turns by the maximum of the Hermite interpolant (the integrator's dense output). Every law is
     monotone in alpha on its loading path, so the peak force is the virgin curve at the peak overlap.
+    With a dashpot that is the elastic force where the overlap turns, not the largest total force (the
+    dashpot adds gamma alpha' > 0 before the turn): on effect-dashpot 4.4e-5 of the peak below
+    Verlet's converged total (docs/error-bars.md); RK4 gives such runs no error bars
+    (workflows.error_estimates.withheld_because).
     """
 
     def __init__(self, state: ChainState) -> None:

@@ -110,7 +110,8 @@ def withheld_because(method: str, scene) -> str | None:
     if method == "rk4" and scene.effects.dashpot:
         return (
             "RK4 does not locate where the clipped dashpot force reaches zero, so its error follows no "
-            "order: no companion runs, no estimate (--method verlet gives error bars)"
+            "order, and its peaks are the elastic force where the overlap turns, not the total force's "
+            "maximum: no companion runs, no estimate (--method verlet gives error bars)"
         )
     return None
 
