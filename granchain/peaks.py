@@ -64,15 +64,18 @@ def leading_pulse(
     """The leading pulse of each contact, read back from a backend's frozen values (0: none yet).
 
     Definition (docs/observables.md): the first maximum of a contact's force whose rise above the
-    static force F0 exceeds LEAD_FRACTION of the largest expected force, frozen from then on: the
-    first sample above both neighbours, refined by the vertex of the parabola through the three (as
-    the running peak), in both backends at every step (RK4: the first maximum of the overlap inside a
-    step, on its Hermite interpolant, and the force there). Its time is the front's arrival at the
-    contact. In a forming wave train this is the first pulse, whatever larger pulses follow; on a
-    front that rises to a plateau it is the plateau's first overshoot, not the largest of the
-    oscillations that follow (those do not converge with the time step: docs/observables.md).
-    Measured limit: a shoulder on the rise whose slope only just turns negative is a maximum at one
-    time step and not at another.
+    static force F0 exceeds LEAD_FRACTION of the largest expected force (lead_floor) and below which
+    the force then falls by lead_fall before it rises above it, frozen from then on: the first sample
+    above both neighbours, refined by the vertex of the parabola through the three (as the running
+    peak), in both backends at every step (RK4: the first maximum of the overlap inside a step, on its
+    Hermite interpolant, and the force there); a rise above it before the fall moves it on to the
+    running peak. Its time is the front's arrival at the contact. In a forming wave train this is
+    the first pulse, whatever larger pulses follow; on a front that rises to a plateau it is the
+    plateau's first overshoot, not the largest of the oscillations that follow (those do not converge
+    with the time step: docs/observables.md). Measured limit: a shoulder on the rise whose slope only
+    just turns negative is a maximum at one time step and not at another.
+    A backend writes 0 where no maximum rose above the floor and -1 where one still waits for its
+    fall at the end of the run: neither is a leading pulse.
     """
     flead = np.asarray(flead, dtype=float)
     done = flead > 0.0
@@ -126,6 +129,24 @@ def lead_floor(scene) -> float:
     if scene.effects.precompression:
         floor = max(floor, position_resolution(scene))
     return floor
+
+
+def lead_fall(scene) -> float:
+    """How far the force must fall below a maximum before it counts as the leading pulse (N; both
+    backends: the deck passes it to the pair styles, the reference solver gets it from its backend).
+
+    Parameters
+    ----------
+    scene : Scene
+        A planned scene (a precompressed one needs its end time and time step).
+
+    Returns
+    -------
+    float
+        position_resolution(scene): on a precompressed chain LAMMPS's round-off on a slow rise makes
+        local maxima of its own, smaller than this; 0 without precompression (a maximum counts at once).
+    """
+    return position_resolution(scene)
 
 
 #: the leading pulse's floor on a precompressed chain in standard deviations of LAMMPS's force round-off

@@ -9,7 +9,7 @@ from typing_extensions import override
 
 from granchain.backends.protocol import PROPERTIES, Backend, Calculation, FileIOBackend, WorkFiles
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, contact_overlap_bounds
-from granchain.peaks import lead_floor, stop_force_floor
+from granchain.peaks import lead_fall, lead_floor, stop_force_floor
 from granchain.problem import ChainProblem
 from granchain.results import RunResult
 from granchain.schedule import history_stride
@@ -42,6 +42,7 @@ class ReferenceBackend(Backend):
                 stop_after=None if scene.run.stop_after_contact is None else scene.run.stop_after_contact - 1,
                 stop_floor=stop_force_floor(scene),
                 lead_floor=lead_floor(scene),
+                lead_fall=lead_fall(scene),
                 # blow-up and garbage detectors (granchain.invariants), not accuracy targets; each
                 # contact's overlap against its own bodies' radii
                 max_overlap=contact_overlap_bounds(scene),

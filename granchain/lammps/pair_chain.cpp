@@ -59,6 +59,7 @@ void PairChainBase::settings(int narg, char **arg)
 {
   gamma = 0.0;
   lead = false;
+  lead_fall = 0.0;
   peaks_all = false;
   ladder_per_octave = 0;
   int i = 0;
@@ -73,6 +74,11 @@ void PairChainBase::settings(int narg, char **arg)
       lead_f0 = utils::numeric(FLERR, arg[i + 2], false, lmp);
       if (lead_floor <= 0.0) error->all(FLERR, "pair_style {} lead needs floor > 0", force->pair_style);
       i += 3;
+    } else if (strcmp(arg[i], "fall") == 0 && i + 1 < narg) {
+      lead_fall = utils::numeric(FLERR, arg[i + 1], false, lmp);
+      if (!(lead_fall >= 0.0))
+        error->all(FLERR, "pair_style {} fall needs R >= 0, got {}", force->pair_style, lead_fall);
+      i += 2;
     } else if (strcmp(arg[i], "ladder") == 0 && i + 2 < narg) {
       ladder_per_octave = utils::inumeric(FLERR, arg[i + 1], false, lmp);
       ladder_slots = utils::inumeric(FLERR, arg[i + 2], false, lmp);
@@ -84,12 +90,13 @@ void PairChainBase::settings(int narg, char **arg)
       i += 2;
     } else {
       error->all(FLERR,
-                 "Illegal pair_style {} command: expected [dashpot gamma] [lead floor F0] [ladder per_octave slots] "
-                 "[peaks all]",
+                 "Illegal pair_style {} command: expected [dashpot gamma] [lead floor F0] [fall R] "
+                 "[ladder per_octave slots] [peaks all]",
                  force->pair_style);
     }
   }
   if (ladder_per_octave && !lead) error->all(FLERR, "pair_style {} ladder needs lead floor F0", force->pair_style);
+  if (lead_fall > 0.0 && !lead) error->all(FLERR, "pair_style {} fall needs lead floor F0", force->pair_style);
 }
 
 int PairChainBase::index_of(const char *name)
@@ -200,9 +207,10 @@ void PairChainBase::track_peaks(const PeakStep &ps, const double *fc, const doub
 
 // the crossing-time ladder of owned contact i (granchain.postprocess.fronts): while its leading pulse is
 // not frozen, the time its force rose through each rung F0 + floor * 2^(k / per_octave), k = 0, 1, ...,
-// on the line between the previous sample and this one (the first sample: its own time). A rung above
-// the floor is crossed upwards at most once before the leading pulse (crossing it again needs a maximum
-// above it first, and that maximum is the leading pulse). Row: [rungs crossed, then a ring of the last
+// on the line between the previous sample and this one (the first sample: its own time). Each rung is
+// counted once, when the force first rises through it: a rung not counted lies above the running peak.
+// Before the leading pulse freezes the force can fall back below a counted rung only by less than the
+// fall R (a larger fall below a maximum above the floor freezes it). Row: [rungs crossed, then a ring of the last
 // `slots` crossing times, rung k in column 1 + k % slots]; pow() as Python's float ** (the same libm)
 void PairChainBase::climb(const PeakStep &ps, int i, const double *fc, const double *fprev) const
 {
@@ -235,7 +243,7 @@ void PairChainBase::start_active(bool new_sample)
 // previous one. Any other contact has fc = fprev = 0 now and track_one would change nothing: its fmin
 // is <= 0 since the last sample it was tracked at with fc = 0 (the sample after its last written one,
 // or a full pass); its fpeak >= 0 (0 at the start, it only grows), so no new peak; no refinement
-// (fprev > 0 fails); and the leading pulse's test sees the fpeak it saw then. track_one is idempotent
+// (fprev > 0 fails); and the leading pulse's tests see the fc and fpeak they saw then. track_one is idempotent
 // (a second call on the same samples changes nothing), so a contact in both lists is tracked twice,
 // harmlessly. Results are bit for bit those of track_peaks; a chain at rest ahead of the front costs
 // nothing here (track_peaks over every bead: 22% of a 10 000-bead run's time, perf)

@@ -10,7 +10,8 @@
  *   pair_style chain/<law> dashpot gamma   adds gamma * d(alpha)/dt while beads overlap (the total
  *                                never pulls); needs 'comm_modify vel yes' and the vector d_edash,
  *                                the dashpot energy of each contact so far
- *   pair_style chain/<law> lead floor F0   tracks the leading pulse (d_flead, d_tlead)
+ *   pair_style chain/<law> lead floor F0 [fall R]   tracks the leading pulse (d_flead, d_tlead); fall R: a
+ *                                maximum counts once the force has fallen R below it (default 0)
  *   pair_style chain/<law> lead floor F0 ladder P S   also records each contact's crossing-time ladder
  *                                (d2_ladder: P rungs per octave above F0 + floor, the last S kept)
  *   pair_style chain/<law> peaks all   runs every contact's peak bookkeeping every step instead of only the
@@ -44,9 +45,11 @@
  *   d_fmin   smallest force sample since the peak (restarted by every new peak): the peak is complete
  *            once it has fallen far enough (granchain.results.complete_peaks)
  *   d_amax   largest overlap so far, d_edis  energy dissipated so far (laws with history)
- *   d_flead, d_tlead   (with 'lead floor F0') the leading pulse: the first maximum of the contact's
- *            force (a sample above both neighbours, refined like the peak) that rises more than
- *            floor above F0, and its time, frozen from then on; 0 until then
+ *   d_flead, d_tlead   (with 'lead floor F0 [fall R]') the leading pulse: the first maximum of the
+ *            contact's force (a sample above both neighbours, refined like the peak) that rises more
+ *            than floor above F0 and that the force then falls R below before it rises above it (a
+ *            higher maximum takes its place), and its time, frozen from then on; 0 until then (-1
+ *            while a maximum waits for the fall)
  *   d2_ladder (with 'ladder P S', fix ID all property/atom d2_ladder S+1) the crossing-time ladder:
  *            [rungs crossed, the last S rungs' crossing times], rungs F0 + floor * 2^(k/P) (climb)
  * The neighbour list may be checked every N > 1 steps (neigh_modify every N delay 0 check yes): a run
@@ -90,6 +93,7 @@ class PairChainBase : public Pair {
   bool lead;              // track the leading pulse (d_flead, d_tlead): pair_style ... lead floor F0
   bool peaks_all;         // 'peaks all': every contact's peak bookkeeping every step (a check of track_active)
   double lead_floor = 0.0, lead_f0 = 0.0;
+  double lead_fall = 0.0;    // the fall below a maximum that makes it the leading pulse: pair_style ... fall R
   int ladder_per_octave = 0, ladder_slots = 0;    // the crossing-time ladder: pair_style ... ladder P S
   int ladder_idx = -1;                            // d2_ladder in atom->darray
   double **d0;
@@ -143,33 +147,39 @@ __attribute__((always_inline)) inline void PairChainBase::track_one(const PeakSt
   fmin[i] = MIN(fmin[i], fc[i]);
   // a rung not crossed yet lies above every sample and every refined maximum so far (climb), so only a
   // sample at or above the running peak can cross one: the ladder costs one comparison otherwise
-  if (ps.ladder && fc[i] >= fpeak[i] && ps.flead[i] == 0.0) climb(ps, i, fc, fprev);
+  if (ps.ladder && fc[i] >= fpeak[i] && ps.flead[i] <= 0.0) climb(ps, i, fc, fprev);
   if (fc[i] > fpeak[i]) {
     fpeak[i] = fc[i];
     tpeak[i] = ps.t;
     fmin[i] = fc[i];
   }
-  if (!ps.refine || !(fprev[i] > fc[i]) || !(fprev[i] >= fprev2[i]) || !(fprev[i] > 0.0)) return;
-  // the middle sample is a local maximum: its value is the vertex of the parabola through the
-  // three samples where that opens downwards, else the sample itself
-  const double a = ps.a, b = ps.b;
-  const double fa = fprev2[i] - fprev[i], fb = fc[i] - fprev[i];
-  const double c1 = (fa * b * b - fb * a * a) / ps.det;
-  const double c2 = (a * fb - b * fa) / ps.det;
-  if (c2 < 0.0) {
-    const double s = MIN(MAX(-c1 / (2.0 * c2), a), b);
-    const double val = fprev[i] + (c1 + c2 * s) * s;
-    if (val > fpeak[i]) {
-      fpeak[i] = val;
-      tpeak[i] = t_fprev + s;
-      fmin[i] = fc[i];    // the refined peak lies before this sample
+  if (ps.refine && fprev[i] > fc[i] && fprev[i] >= fprev2[i] && fprev[i] > 0.0) {
+    // the middle sample is a local maximum: its value is the vertex of the parabola through the
+    // three samples where that opens downwards, else the sample itself
+    const double a = ps.a, b = ps.b;
+    const double fa = fprev2[i] - fprev[i], fb = fc[i] - fprev[i];
+    const double c1 = (fa * b * b - fb * a * a) / ps.det;
+    const double c2 = (a * fb - b * fa) / ps.det;
+    if (c2 < 0.0) {
+      const double s = MIN(MAX(-c1 / (2.0 * c2), a), b);
+      const double val = fprev[i] + (c1 + c2 * s) * s;
+      if (val > fpeak[i]) {
+        fpeak[i] = val;
+        tpeak[i] = t_fprev + s;
+        fmin[i] = fc[i];    // the refined peak lies before this sample
+      }
     }
+    // a maximum that rises more than lead_floor above F0 is the leading pulse's candidate
+    // (flead = -1: waiting for the fall). At the first one the running peak is that maximum (before
+    // it the force only rose), refined as above
+    if (lead && ps.flead[i] == 0.0 && fpeak[i] - lead_f0 > lead_floor) ps.flead[i] = -1.0;
   }
-  // the leading pulse (granchain.results.leading_pulse): the first maximum of the contact's
-  // force rising more than lead_floor above F0, frozen; flead = 0 until then (a frozen value
-  // exceeds F0 + floor > 0). At the first maximum the running peak is that maximum (before it
-  // the force only rose), refined as above
-  if (lead && ps.flead[i] == 0.0 && fpeak[i] - lead_f0 > lead_floor) {
+  // the leading pulse (granchain.peaks.leading_pulse): the candidate is the running peak (a later
+  // rise above it moves it on), frozen once the force has fallen lead_fall below it (the force
+  // resolution: round-off on a slow rise makes no maximum that counts); flead = 0 until a candidate,
+  // -1 while it waits, then the frozen value (> F0 + floor > 0). lead_fall = 0: frozen at the maximum
+  // itself (fc <= fpeak always)
+  if (lead && ps.flead[i] < 0.0 && fc[i] <= fpeak[i] - lead_fall) {
     ps.flead[i] = fpeak[i];
     ps.tlead[i] = tpeak[i];
   }

@@ -156,6 +156,7 @@ def _solve(
     stop_after: int | None = None,
     stop_floor: float = 0.0,
     lead_floor: float = 0.0,
+    lead_fall: float = 0.0,
     max_overlap: float | np.ndarray | None = None,
     energy_watch: float | None = None,
     momentum_watch: float | None = None,
@@ -171,6 +172,8 @@ def _solve(
     does) once its force has fallen below half its peak: the leading wave has passed it. Only a
     peak above stop_floor counts (round-off forces ahead of the wave must not stop the run).
     lead_floor: the smallest rise above F0 that can be a leading pulse (peaks.leading_pulse).
+    lead_fall: how far the force must fall below a maximum before it counts as the leading pulse
+    (peaks.lead_fall; 0: at the maximum).
     max_overlap, energy_watch, momentum_watch: the run watch (granchain.invariants); None = off.
     max_overlap: one bound in m for every contact, or one per contact of the problem's chain with its
     ends (ChainProblem.with_ends: a striker's contact first, a wall's last; contact_overlap_bounds).
@@ -196,13 +199,13 @@ def _solve(
     ledger = EnergyLedger(state, max(1, total_steps // max(1, energy_samples)))
     observers: list[Observer] = [
         peaks,
-        LeadingPulse(state, peaks, lead_floor),
+        LeadingPulse(state, peaks, lead_floor, lead_fall),
         Recorder(state, integrator.contact_forces, histories, history_stride, snapshots, total_steps),
         ledger,
         RunWatch(state, ledger, watch_every, max_overlap, energy_watch, momentum_watch),
     ]
     if stop_after is not None:
-        observers.append(EarlyStop(state, peaks, stop_after, STOP_CHECK_EVERY, stop_floor))
+        observers.append(EarlyStop(state, peaks, stop_after, STOP_CHECK_EVERY, stop_floor, lead_fall))
     _drive(state, integrator, plan, observers, timestep, progress)
     fields = {}
     for observer in observers:  # in list order: the leading pulse reads the peak tracker's result

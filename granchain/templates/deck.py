@@ -12,7 +12,7 @@ import jinja2
 
 from granchain._version import __version__
 from granchain.exceptions import UsageError
-from granchain.peaks import lead_floor, stop_force_floor
+from granchain.peaks import lead_fall, lead_floor, stop_force_floor
 from granchain.physics.effects import active_effects
 from granchain.results import scene_hash
 from granchain.scene import SceneError
@@ -194,13 +194,17 @@ def render_deck(scene, yardstick: str | None = None, options: DeckOptions = DECK
             pair_coeffs=pairs,
             # the leading pulse (peaks.leading_pulse): above the static force plus the reached floor
             lead_floor=lead_floor(scene),
+            # ... counted once the force has fallen by LAMMPS's force resolution below it (0: at once)
+            lead_fall=lead_fall(scene),
             per_atom=per_atom,
             static_overlaps=precompression_overlaps(scene),
             watch=watch,
             effect_blocks=effect_blocks(scene),
             pair_style_args="".join(e.pair_style_args(scene) for e in active_effects(scene)),
             energy_columns=energy_columns(scene, layout),
-            stop=StopCheck(stop, stop + layout.offset, stop_force_floor(scene)) if stop else None,
+            stop=(
+                StopCheck(stop, stop + layout.offset, stop_force_floor(scene), fall=lead_fall(scene)) if stop else None
+            ),
         )
     )
     return Deck(deck=deck, data=render_data(scene) + watch.data_section, total_steps=schedule.total)

@@ -211,6 +211,9 @@ class StopCheck:
         Steps between two checks.
     fraction : float
         The force, as a fraction of the peak's rise above F0, below which the wave has passed.
+    fall : float
+        How far the force must also have fallen below the peak (peaks.lead_fall): then the leading
+        pulse, which waits for that fall, has frozen. 0: no further condition.
     """
 
     contact: int
@@ -218,3 +221,4 @@ class StopCheck:
     floor: float
     every: int = STOP_CHECK_EVERY
     fraction: float = PEAK_PASSED_FRACTION
+    fall: float = 0.0
