@@ -5,8 +5,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from granchain.cli import resolve_scene
+from granchain.peaks import lead_floor
+from granchain.problem import ChainProblem
+from granchain.reference.solver import solve_chain
 from granchain.scene import parse_scene
 from granchain.workflows.run import plan_for, run_scene
 from tests.scenegen import scenes
@@ -55,48 +59,57 @@ def test_a_plastic_front_leads_with_its_first_pulse_not_its_largest():
     assert np.max(np.abs(sol.leading_pulse_time[c] / fine.leading_pulse_time[c] - 1)) < 1e-3
 
 
-def first_maximum(t, f, f0, floor):
-    """The first maximum of sampled forces rising more than floor above f0: the first sample above
-    its left neighbour (or equal) and strictly above its right one, its value the running peak there
-    refined by the parabola through the three samples (what the backends track); (nan, nan) if none."""
-    peak, tpeak = f[0], t[0]
+def first_maximum(t, f, f0, floor, fall=0.0):
+    """The leading pulse of sampled forces: the first maximum rising more than floor above f0 (the
+    first sample above its left neighbour (or equal) and strictly above its right one, its value the
+    running peak there refined by the parabola through the three samples: what the backends track),
+    frozen at the first sample from there on at most `fall` below the running peak (a rise above it
+    first moves it on); (nan, nan) if none. fall = 0: the first maximum itself."""
+    peak, tpeak, waiting = f[0], t[0], False
     for i in range(1, len(f)):
         if f[i] > peak:
             peak, tpeak = f[i], t[i]
-        if i < 2 or not (f[i - 1] > f[i] and f[i - 1] >= f[i - 2] and f[i - 1] > 0):
-            continue
-        a, b = t[i - 2] - t[i - 1], t[i] - t[i - 1]
-        fa, fb = f[i - 2] - f[i - 1], f[i] - f[i - 1]
-        det = a * b * (b - a)
-        c1, c2 = (fa * b * b - fb * a * a) / det, (a * fb - b * fa) / det
-        if c2 < 0:
-            s = min(max(-c1 / (2 * c2), a), b)
-            v = f[i - 1] + (c1 + c2 * s) * s
-            if v > peak:
-                peak, tpeak = v, t[i - 1] + s
-        if peak - f0 > floor:
+        if i >= 2 and f[i - 1] > f[i] and f[i - 1] >= f[i - 2] and f[i - 1] > 0:
+            a, b = t[i - 2] - t[i - 1], t[i] - t[i - 1]
+            fa, fb = f[i - 2] - f[i - 1], f[i] - f[i - 1]
+            det = a * b * (b - a)
+            c1, c2 = (fa * b * b - fb * a * a) / det, (a * fb - b * fa) / det
+            if c2 < 0:
+                s = min(max(-c1 / (2 * c2), a), b)
+                v = f[i - 1] + (c1 + c2 * s) * s
+                if v > peak:
+                    peak, tpeak = v, t[i - 1] + s
+            waiting = waiting or peak - f0 > floor
+        if waiting and f[i] <= peak - fall:
             return peak, tpeak
     return np.nan, np.nan
+
+
+def sampled_histories(sol, f0: float) -> tuple[np.ndarray, np.ndarray]:
+    """(times, forces) of every step's sample, with t = 0's static force where the run records none."""
+    t, f = sol.history_time, sol.history_force
+    if t[0] > 0:
+        t = np.concatenate([[0.0], t])
+        f = np.concatenate([np.full((1, f.shape[1]), f0), f])
+    return t, f
 
 
 @settings(max_examples=12, deadline=None)
 @given(scene=scenes(max_beads=25))
 def test_leading_pulse_is_the_first_maximum_of_the_force_history(scene):
     """On any scene (Verlet, every step sampled at every contact): the tracked leading pulse is the
-    first maximum of the contact's sampled force above the floor, not a later or larger one."""
-    from granchain.peaks import lead_floor
+    first maximum of the contact's sampled force above the floor that it then falls lead_fall below
+    (LAMMPS's force resolution on a precompressed chain, else 0), not a later or larger one."""
+    from granchain.peaks import lead_fall, lead_floor
 
     sc, _ = plan_for(scene, "reference", "verlet", 1e-2)
     n = sc.chain.beads
     sc = replace(sc, outputs=replace(sc.outputs, histories=tuple(range(1, n)), history_interval=None))
     sol = run_scene(sc, method="verlet").solution
     f0 = float(sc.effects.precompression)
-    t = np.concatenate([[0.0], sol.history_time]) if sol.history_time[0] > 0 else sol.history_time
+    t, forces = sampled_histories(sol, f0)
     for j, c in enumerate(range(1, n)):
-        f = sol.history_force[:, j]
-        if t.size == f.size + 1:
-            f = np.concatenate([[f0 if f0 else 0.0], f])
-        want, when = first_maximum(t, f, f0, lead_floor(sc))
+        want, when = first_maximum(t, forces[:, j], f0, lead_floor(sc), lead_fall(sc))
         got, got_t = sol.leading_pulse_force[c - 1], sol.leading_pulse_time[c - 1]
         if np.isnan(got):
             assert np.isnan(want) or not np.isfinite(sol.time_of_peak[c - 1]), c
@@ -121,3 +134,48 @@ def test_a_plateau_front_leads_with_its_first_overshoot():
         assert sol.leading_pulse_force[c - 1] == pytest.approx(want, rel=1e-9)
         assert sol.leading_pulse_time[c - 1] == pytest.approx(when, rel=1e-9)
     assert np.any(sol.leading_pulse_force < sol.peak_force * (1 - 1e-3))  # later, larger pulses exist
+
+
+@settings(max_examples=8, deadline=None)
+@given(scene=scenes(max_beads=20, precompressed=True), share=st.one_of(st.just(0.0), st.floats(0.0, 1.0)))
+def test_a_leading_pulse_waits_for_the_force_to_fall_below_it(scene, share):
+    """The reference's Verlet with a fall R (a share of the largest rise above F0, so that it bites on
+    the oscillations behind a front): a leading pulse is never a maximum that a later sample rises
+    above before the force fell R below it, and the force did fall that far; it is what the
+    definition makes of the sampled history (first_maximum); R = 0 gives the plain first maximum
+    above the floor, as the backends count it at once."""
+    sc, _ = plan_for(scene, "reference", "verlet", 1e-2)
+    f0, floor, n = float(sc.effects.precompression), lead_floor(sc), sc.chain.beads
+
+    def run(fall):
+        return solve_chain(
+            ChainProblem.from_scene(sc),
+            sc.run.end_time,
+            sc.run.timestep,
+            "verlet",
+            histories=tuple(range(n - 1)),
+            lead_floor=floor,
+            lead_fall=fall,
+            progress=None,
+        )
+
+    plain = run(0.0)
+    t, forces = sampled_histories(plain, f0)
+    fall = share * float(np.max(forces - f0, initial=0.0))
+    sol = run(fall) if fall else plain
+    for c in range(n - 1):
+        f = forces[:, c]
+        for s, r in ((plain, 0.0), (sol, fall)):
+            want, when = first_maximum(t, f, f0, floor, r)
+            got, got_t = s.leading_pulse_force[c], s.leading_pulse_time[c]
+            if np.isnan(got):
+                assert np.isnan(want) or not np.isfinite(s.time_of_peak[c]), c
+            else:
+                assert (got, got_t) == pytest.approx((want, when), rel=1e-12), c
+        got, got_t = sol.leading_pulse_force[c], sol.leading_pulse_time[c]
+        if np.isnan(got):
+            continue
+        after = f[t > got_t]
+        fell = np.flatnonzero(after <= got - fall)
+        assert fell.size, f"contact {c + 1}: frozen before the force fell {fall:.3g} N below {got:.6g} N"
+        assert np.all(after[: fell[0]] <= got), f"contact {c + 1}: a rise above {got:.6g} N before the fall"

@@ -6,8 +6,9 @@ observers.CrossingLadder): rung k is the force level F0 + lead_floor * 2^(k / LA
 the static force; each contact records the time its force rose through each rung, interpolated
 inside the step (Verlet and LAMMPS: on the line between the two force samples; RK4: on the step's
 Hermite interpolant of the overlap), until its leading pulse (peaks.leading_pulse) is frozen, and
-keeps the last LADDER_SLOTS of them. A rung above the floor is crossed upwards at most once before
-the leading pulse, so the ladder is the rise that led to it. front_times reads the half-amplitude
+keeps the last LADDER_SLOTS of them. Each rung is counted once, when the force first rises through it;
+before the leading pulse freezes the force falls back below a counted rung by less than lead_fall
+only (peaks.lead_fall), so the ladder is the rise that led to it. front_times reads the half-amplitude
 arrival off it: the time the dynamic force F - F0 rose through FRONT_FRACTION of the leading pulse's
 rise (the amplitude), interpolated between rungs (docs/observables.md).
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from granchain.peaks import LEAD_FRACTION, PEAK_PASSED_FRACTION, lead_floor, position_resolution
+from granchain.peaks import LEAD_FRACTION, PEAK_PASSED_FRACTION, lead_fall, lead_floor, position_resolution
 from granchain.problem import contact_positions
 
 
@@ -95,9 +95,11 @@ def _why_no_leading_pulse(scene, solution, contact: int) -> str:
     t = float(solution.time_of_peak[contact - 1])
     if not np.isfinite(t):
         return f"contact {contact} was not reached by the wave before the end of the run (t = {solution.end_time:g} s)"
+    fall = lead_fall(scene)
+    then = f" that it then fell {fall:.3g} N below (the same resolution, peaks.lead_fall)" if fall else ""
     return (
         f"contact {contact} has no leading pulse yet: its force has not had a maximum rising more than "
-        f"{lead_floor(scene):.3g} N above the static force ({_floor_reason(scene)}; peak so far "
+        f"{lead_floor(scene):.3g} N above the static force{then} ({_floor_reason(scene)}; peak so far "
         f"{float(solution.peak_force[contact - 1]):.6g} N at t = {t:g} s, run ends at t = {solution.end_time:g} s); "
         "run longer"
     )
