@@ -56,12 +56,12 @@ from granchain.reference.integrators import (
     RK4Integrator,
     VerletIntegrator,
 )
+from granchain.reference.leading import LeadingPulse
 from granchain.reference.observers import (
     EarlyStop,
     EnergyLedger,
     ForceSamplePeaks,
     HermitePeaks,
-    LeadingPulse,
     Observer,
     Recorder,
     RunWatch,
@@ -171,9 +171,7 @@ def _solve(
     stop_after: 0-based contact; stop (checked every STOP_CHECK_EVERY steps, as LAMMPS's fix halt
     does) once its force has fallen below half its peak: the leading wave has passed it. Only a
     peak above stop_floor counts (round-off forces ahead of the wave must not stop the run).
-    lead_floor: the smallest rise above F0 that can be a leading pulse (peaks.leading_pulse).
-    lead_fall: how far the force must fall below a maximum before it counts as the leading pulse
-    (peaks.lead_fall; 0: at the maximum).
+    lead_floor, lead_fall: a leading pulse's least rise above F0, and its fall that makes it one (peaks).
     max_overlap, energy_watch, momentum_watch: the run watch (granchain.invariants); None = off.
     max_overlap: one bound in m for every contact, or one per contact of the problem's chain with its
     ends (ChainProblem.with_ends: a striker's contact first, a wall's last; contact_overlap_bounds).
