@@ -41,6 +41,24 @@ def test_the_deck_lays_the_ladder_the_fronts_module_reads():
         assert re.search(rf"^fix\s+\S+ all property/atom d2_ladder {LADDER_SLOTS + 1}$", d, re.M)
 
 
+def test_the_deck_passes_the_leading_pulses_fall_under_precompression_only():
+    """pair_style ... fall R with R = lead_fall (LAMMPS's force resolution) on a precompressed chain, and
+    the stop check waits for the same fall; without precompression neither (a maximum counts at once)."""
+    text = PRECOMPRESSED.format(beads=30, material="brass", radius=4.76e-3, f0=100.0, amp=0.1)
+    sc, _ = plan_for(parse_scene(text))
+    sc = replace(sc, run=replace(sc.run, stop_after_contact=20))
+    deck = render_deck(sc).deck
+    m = re.search(r"^pair_style\s+chain/\S+ lead \S+ \S+ fall (\S+) ", deck, re.M)
+    assert m
+    assert float(m.group(1)) == lead_fall(sc) > 0
+    assert re.search(rf'^variable\s+wave_passed equal ".* <= d_fpeak\[\d+\] - {re.escape(m.group(1))}"$', deck, re.M)
+    bare = replace(sc, effects=replace(sc.effects, precompression=0.0))
+    deck = render_deck(bare).deck
+    assert lead_fall(bare) == 0.0
+    assert re.search(r"^pair_style\s+chain/\S+ lead ", deck, re.M)
+    assert not re.search(r"^(pair_style|variable)\s.*(\bfall\b| <= d_fpeak)", deck, re.M)
+
+
 def ladder_of(rise, t_grid: np.ndarray, f0: float, floor: float, peak: float) -> np.ndarray:
     """The ladder row of a force rising as rise(t) (exact crossing times by bisection on t_grid)."""
     crossed, ring = 0, np.zeros(LADDER_SLOTS)
