@@ -21,6 +21,9 @@ end time    long enough for the leading wave to pass the last measured contact L
             later than the first maximum of the chain linearised about F0 at L, solved exactly on
             the actual chain (its masses, contacts and wall: scattering, a dimer's light beads, a
             front that rises until the wall's reflection comes back) where it is short enough.
+            A run of a chain of given length that still ends before its window's last contact
+            has a first maximum says so and is run again, once, longer (extended_plan), its stop
+            check ending it.
 
 The estimates it plans with (step equivalent, expected peak force, stiffest tangents, highest
 frequency, dashpot rate) are granchain.physics.estimates; the output strides granchain.schedule.
@@ -194,6 +197,42 @@ def refined_plan(scene: Scene, plan: Plan, solution) -> Plan | None:
     return replace(new, choices=choices)
 
 
+def extended_plan(scene: Scene, plan: Plan, solution) -> Plan | None:
+    """The plan to run again, longer, when a run of the planner's end time ended before measuring what
+    the scene asked for (postprocess.observables.unmeasured_outputs: the window's last contact without
+    a leading pulse).
+
+    The end time is an estimate; where the actual chain is slower than every estimate (a nonlinear front
+    scattered by soft, light beads among stiff ones rises at a contact without a maximum until a
+    reflection comes back) the run says so and runs again, once, to LINEAR_HORIZON x the slowest front's
+    crossing of the whole chain (front_travel_time to its last contact), its stop check ending it as soon
+    as the wave has passed the stop contact. scene: the scene as given; plan: the plan the run used;
+    solution: that run's ChainSolution. None when the end time was not the planner's, the number of beads
+    was (chosen for that end), there is no stop check, the stop check ended the run, everything asked for
+    was measured, or the budget is no longer than the end that ran.
+    """
+    from granchain.postprocess.observables import unmeasured_outputs
+
+    run = plan.scene.run
+    chosen = {c.name for c in plan.choices}
+    # a chain of "auto" length is as long as the planned end keeps its far end's reflection out
+    if "end_time" not in chosen or "beads" in chosen or run.stop_after_contact is None or not plan.scene.n_contacts:
+        return None
+    if solution.end_time < run.end_time * (1.0 - 1e-9) or not unmeasured_outputs(plan.scene, solution):
+        return None
+    budget = LINEAR_HORIZON * front_travel_time(plan.scene, plan.scene.n_contacts, wave_speeds(scene)[0])
+    if budget <= run.end_time * (1.0 + 1e-9):
+        return None
+    note = (
+        f"extended after a first run to {run.end_time:.4g} s ended before the window's last contact was measured: "
+        f"at most {LINEAR_HORIZON:g} x the slowest front's crossing of the whole chain ({budget:.4g} s), the "
+        f"stop check ending it once the wave has passed contact {run.stop_after_contact}"
+    )
+    longer = replace(plan.scene, run=replace(run, end_time=budget))
+    choices = [PlanChoice(c.name, budget, f"{c.reason}; {note}") if c.name == "end_time" else c for c in plan.choices]
+    return replace(plan, scene=longer, choices=choices)
+
+
 def accurate_timestep(method: str, omega_max: float, rate: float, rtol: float) -> float:
     """The largest dt whose predicted_error is at most rtol (each term gets half of rtol when a
     dashpot's first-order term enters)."""
@@ -278,7 +317,9 @@ def sonic_travel_times(scene, last: int, step: bool = False) -> np.ndarray:
 #: how far past the whole chain's sonic crossing (sonic_travel_times at its last contact) the linearised
 #: chain's response is searched for a contact's first maximum: a front that rises monotonically at a
 #: contact meets its maximum when a reflection comes back (the wall's adds to it, a free end's takes
-#: away), within a round trip through the chain and back
+#: away), within a round trip through the chain and back. A run that ended before measuring its window
+#: is extended to as many crossings of the whole chain by the slowest front (extended_plan), for the same
+#: reason
 LINEAR_HORIZON = 3.0
 
 

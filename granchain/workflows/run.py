@@ -151,6 +151,11 @@ class PlanRefinedWarning(UserWarning):
     (granchain.workflows.plan.refined_plan says why)."""
 
 
+class PlanExtendedWarning(UserWarning):
+    """A planned run is run again, longer: it ended before measuring its window
+    (granchain.workflows.plan.extended_plan says why)."""
+
+
 @contextmanager
 def shared_reference_runs(prefetch=()):
     """Inside this block a reference run of a scene and integrator made once is not made again.
@@ -194,6 +199,16 @@ def _execute(scene, backend: Backend, method: str, np_: int) -> Calculation:
         raise Abandoned("not started: the block is being left")
     with _with_fix(scene, method):
         return backend.calculate(scene, method, np_)
+
+
+def _extended(given, plan, result):
+    """The extended plan when a run of the planner's end time ended before measuring its window (else
+    None)."""
+    if plan is None:
+        return None
+    from granchain.workflows.plan import extended_plan
+
+    return extended_plan(given, plan, result.solution)
 
 
 def _refined(given, plan, result):
@@ -295,6 +310,20 @@ def _finish(calc, given, scene, plan, backend, method: str, np_: int, rtol, erro
             if msg:
                 warnings.warn(msg, OutputSizeWarning, stacklevel=4)
             check_run(scene, backend, stacklevel=5, planned_step=True)  # finer: more steps, larger files
+            calc = _execute(scene, backend, method, np_)
+        extended = _extended(given, plan, calc.result)
+        if extended is not None:  # the run ended before measuring its window: once more, longer
+            calc.discard()
+            plan = extended
+            scene = extended.scene
+            warnings.warn(
+                f"{scene.source}: running again to end_time = {scene.run.end_time:.4g} s: "
+                + "extended "
+                + next(c.reason for c in plan.choices if c.name == "end_time").split("; extended ", 1)[-1],
+                PlanExtendedWarning,
+                stacklevel=4,
+            )
+            check_run(scene, backend, stacklevel=5, planned_step=True)  # longer: more steps, larger files
             calc = _execute(scene, backend, method, np_)
         result = calc.result
         result.plan = plan
