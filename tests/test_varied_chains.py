@@ -134,10 +134,62 @@ LINEAR_RADII = parse_scene(
 )
 
 
+def ptfe_chain(materials: list[str], velocity: float, f0: float):
+    """A walled chain of the given materials (4.76 mm beads), bead 1 kicked at `velocity`, precompressed."""
+    chain = f"radius = 4.76e-3\nmaterial = {materials!r}\n"
+    return parse_scene(chain_text(chain, len(materials), velocity, f0, wall=True), source="ptfe.toml")
+
+
+#: PTFE among metals, F0 = 11.3 N, 0.05x the kick's force scale (a nonlinear front: 236 N at contact 1,
+#: opening contacts 1 to 4 behind it), walled: the front is faster than the chain linearised about F0 at
+#: every contact up to 25 (1.04 ms against 1.08 ms there: a force above F0 stiffens a Hertz contact), but
+#: at contact 26, the window's end (chrome steel on PTFE: a heavy bead on a contact ~400x softer), its
+#: force rises without a maximum until the wall's reflection comes back, at 1.47 ms, where the linearised
+#: chain has its first maximum at 1.26 ms, and the plan (its asymptotic sonic time) ends at 1.39 ms. No
+#: front estimate sees a ramp that the linearised chain does not have: the first maxima of contacts 35
+#: back to 27 come with the reflection (1.30 to 1.45 ms), those of the linearised chain with the forward
+#: front (1.44 to 1.31 ms)
+NONLINEAR_WALLED_RAMP = ptfe_chain(
+    ["stainless-steel-316", "brass", "soda-lime-glass", "ptfe", "tungsten-carbide", "chrome-steel-52100", "ptfe"]
+    + ["soda-lime-glass", "brass", "stainless-steel-316", "ptfe", "ptfe", "chrome-steel-52100", "ptfe"]
+    + ["chrome-steel-52100", "tungsten-carbide", "soda-lime-glass", "aluminium-6061-t6", "soda-lime-glass", "ptfe"]
+    + ["soda-lime-glass", "tungsten-carbide", "chrome-steel-52100", "tungsten-carbide", "aluminium-6061-t6"]
+    + ["chrome-steel-52100", "ptfe", "brass", "ptfe", "stainless-steel-316", "brass", "soda-lime-glass"]
+    + ["aluminium-6061-t6", "stainless-steel-316", "aluminium-6061-t6", "aluminium-6061-t6"],
+    1.113928513602539,
+    11.299451675410072,
+)
+
+
+#: hypothesis's draw: PTFE among metals, free, F0 = 2.56 N, 0.01x the kick's force scale: at the window's
+#: end (contact 20) a train of pulses, 21.6 N above F0 at 508 us, then 18.4 N and 21.3 N at 646 and 761 us,
+#: the force falling below half the first only at 836 us, where the stop check ends the run (1.65x the
+#: first maximum, 1.10x the train's last)
+PULSE_TRAIN = parse_scene(
+    chain_text(
+        "radius = 4.76e-3\nmaterial = "
+        + repr(
+            ["stainless-steel-316", "stainless-steel-316", "chrome-steel-52100", "chrome-steel-52100", "brass"]
+            + ["aluminium-6061-t6", "chrome-steel-52100", "brass", "brass", "tungsten-carbide", "tungsten-carbide"]
+            + ["brass", "ptfe", "brass", "brass", "aluminium-6061-t6", "stainless-steel-316", "ptfe"]
+            + ["soda-lime-glass", "ptfe", "brass", "brass", "stainless-steel-316", "aluminium-6061-t6"]
+            + ["soda-lime-glass", "aluminium-6061-t6", "brass", "ptfe"]
+        )
+        + "\n",
+        28,
+        1.2851777771147097,
+        2.5573735646043874,
+    ),
+    source="pulse-train.toml",
+)
+
+
 @pytest.mark.slow
 @SETTINGS
 @example(sc=LINEAR_UNIFORM)
 @example(sc=LINEAR_RADII)
+@example(sc=NONLINEAR_WALLED_RAMP)
+@example(sc=PULSE_TRAIN)
 @given(sc=varied_chains())
 def test_auto_end_time_covers_the_window_and_ends_soon_after(sc):
     """end_time = "auto" lasts until the slowest leading front has passed the window's last contact,
@@ -296,12 +348,6 @@ def test_a_scattered_front_can_peak_beyond_one_and_a_half_times_its_precursors_a
     assert s.peak_force[b - 1] > 3.0 * s.leading_pulse_force[b - 1]
 
 
-def ptfe_chain(materials: list[str], velocity: float, f0: float):
-    """A walled chain of the given materials (4.76 mm beads), bead 1 kicked at `velocity`, precompressed."""
-    chain = f"radius = 4.76e-3\nmaterial = {materials!r}\n"
-    return parse_scene(chain_text(chain, len(materials), velocity, f0, wall=True), source="ptfe.toml")
-
-
 #: a random material sequence with PTFE (hypothesis's draw), F0 = 38.6 N, 0.58x the kick's force scale,
 #: walled: at the window's end (contact 25, brass on glass) the front rises without a maximum until the
 #: wall's reflection comes back (its first maximum at 709 us, 569 us without the wall); the end planned
@@ -329,27 +375,6 @@ def test_a_front_that_ramps_until_the_walls_reflection_is_covered():
     arrival = result.solution.leading_pulse_time[b - 1]
     assert np.isfinite(arrival), result.observables_missing().get("leading_peak_force")
     assert planned.run.end_time <= 1.5 * arrival
-
-
-#: PTFE among metals, F0 = 11.3 N, 0.05x the kick's force scale (a nonlinear front: 236 N at contact 1,
-#: opening contacts 1 to 4 behind it), walled: the front is faster than the chain linearised about F0 at
-#: every contact up to 25 (1.04 ms against 1.08 ms there: a force above F0 stiffens a Hertz contact), but
-#: at contact 26, the window's end (chrome steel on PTFE: a heavy bead on a contact ~400x softer), its
-#: force rises without a maximum until the wall's reflection comes back, at 1.47 ms, where the linearised
-#: chain has its first maximum at 1.26 ms, and the plan (its asymptotic sonic time) ends at 1.39 ms. No
-#: front estimate sees a ramp that the linearised chain does not have: the first maxima of contacts 35
-#: back to 27 come with the reflection (1.30 to 1.45 ms), those of the linearised chain with the forward
-#: front (1.44 to 1.31 ms)
-NONLINEAR_WALLED_RAMP = ptfe_chain(
-    ["stainless-steel-316", "brass", "soda-lime-glass", "ptfe", "tungsten-carbide", "chrome-steel-52100", "ptfe"]
-    + ["soda-lime-glass", "brass", "stainless-steel-316", "ptfe", "ptfe", "chrome-steel-52100", "ptfe"]
-    + ["chrome-steel-52100", "tungsten-carbide", "soda-lime-glass", "aluminium-6061-t6", "soda-lime-glass", "ptfe"]
-    + ["soda-lime-glass", "tungsten-carbide", "chrome-steel-52100", "tungsten-carbide", "aluminium-6061-t6"]
-    + ["chrome-steel-52100", "ptfe", "brass", "ptfe", "stainless-steel-316", "brass", "soda-lime-glass"]
-    + ["aluminium-6061-t6", "stainless-steel-316", "aluminium-6061-t6", "aluminium-6061-t6"],
-    1.113928513602539,
-    11.299451675410072,
-)
 
 
 @pytest.mark.slow
