@@ -253,8 +253,10 @@ def test_the_check_at_half_the_step_is_run_only_when_asked_for():
     plain = run_scene(sc, backend="reference", method="rk4", error_estimate=True).errors
     assert plain.check_timestep is None
     assert len(plain.timesteps) == 2
+    assert "--error-estimate checked" in plain.why_unchecked  # unchecked bars say so, and how to check them
     got = run_scene(sc, backend="reference", method="rk4", error_estimate="checked")
     assert got.errors.check_timestep == pytest.approx(0.5 * got.scene.run.timestep, rel=1e-12)
+    assert got.errors.why_unchecked is None
     with pytest.raises(GranchainError, match="error_estimate"):
         run_scene(sc, backend="reference", method="rk4", error_estimate="yes")
 
