@@ -134,10 +134,11 @@ LINEAR_RADII = parse_scene(
 )
 
 
-def ptfe_chain(materials: list[str], velocity: float, f0: float):
-    """A walled chain of the given materials (4.76 mm beads), bead 1 kicked at `velocity`, precompressed."""
+def material_chain(materials: list[str], velocity: float, f0: float = 0.0, wall: bool = True, source="ptfe.toml"):
+    """A chain of the given materials (4.76 mm beads), bead 1 kicked at `velocity`, precompressed by f0,
+    walled or free."""
     chain = f"radius = 4.76e-3\nmaterial = {materials!r}\n"
-    return parse_scene(chain_text(chain, len(materials), velocity, f0, wall=True), source="ptfe.toml")
+    return parse_scene(chain_text(chain, len(materials), velocity, f0, wall=wall), source=source)
 
 
 #: PTFE among metals, F0 = 11.3 N, 0.05x the kick's force scale (a nonlinear front: 236 N at contact 1,
@@ -149,7 +150,7 @@ def ptfe_chain(materials: list[str], velocity: float, f0: float):
 #: front estimate sees a ramp that the linearised chain does not have: the first maxima of contacts 35
 #: back to 27 come with the reflection (1.30 to 1.45 ms), those of the linearised chain with the forward
 #: front (1.44 to 1.31 ms)
-NONLINEAR_WALLED_RAMP = ptfe_chain(
+NONLINEAR_WALLED_RAMP = material_chain(
     ["stainless-steel-316", "brass", "soda-lime-glass", "ptfe", "tungsten-carbide", "chrome-steel-52100", "ptfe"]
     + ["soda-lime-glass", "brass", "stainless-steel-316", "ptfe", "ptfe", "chrome-steel-52100", "ptfe"]
     + ["chrome-steel-52100", "tungsten-carbide", "soda-lime-glass", "aluminium-6061-t6", "soda-lime-glass", "ptfe"]
@@ -165,21 +166,15 @@ NONLINEAR_WALLED_RAMP = ptfe_chain(
 #: end (contact 20) a train of pulses, 21.6 N above F0 at 508 us, then 18.4 N and 21.3 N at 646 and 761 us,
 #: the force falling below half the first only at 836 us, where the stop check ends the run (1.65x the
 #: first maximum, 1.10x the train's last)
-PULSE_TRAIN = parse_scene(
-    chain_text(
-        "radius = 4.76e-3\nmaterial = "
-        + repr(
-            ["stainless-steel-316", "stainless-steel-316", "chrome-steel-52100", "chrome-steel-52100", "brass"]
-            + ["aluminium-6061-t6", "chrome-steel-52100", "brass", "brass", "tungsten-carbide", "tungsten-carbide"]
-            + ["brass", "ptfe", "brass", "brass", "aluminium-6061-t6", "stainless-steel-316", "ptfe"]
-            + ["soda-lime-glass", "ptfe", "brass", "brass", "stainless-steel-316", "aluminium-6061-t6"]
-            + ["soda-lime-glass", "aluminium-6061-t6", "brass", "ptfe"]
-        )
-        + "\n",
-        28,
-        1.2851777771147097,
-        2.5573735646043874,
-    ),
+PULSE_TRAIN = material_chain(
+    ["stainless-steel-316", "stainless-steel-316", "chrome-steel-52100", "chrome-steel-52100", "brass"]
+    + ["aluminium-6061-t6", "chrome-steel-52100", "brass", "brass", "tungsten-carbide", "tungsten-carbide"]
+    + ["brass", "ptfe", "brass", "brass", "aluminium-6061-t6", "stainless-steel-316", "ptfe"]
+    + ["soda-lime-glass", "ptfe", "brass", "brass", "stainless-steel-316", "aluminium-6061-t6"]
+    + ["soda-lime-glass", "aluminium-6061-t6", "brass", "ptfe"],
+    1.2851777771147097,
+    2.5573735646043874,
+    wall=False,
     source="pulse-train.toml",
 )
 
@@ -312,21 +307,13 @@ def test_a_precompressed_step_loads_first_maximum_comes_before_the_auto_end(sc):
 #: a random material sequence, PTFE among tungsten carbide and steels (contact stiffnesses 400x apart),
 #: walled, bead 1 kicked at 1/3 m/s: at the window's end (contact 18) the first maximum is a 0.84 N
 #: precursor and the main wave (4.7 N) peaks 1.72x later
-SCATTERED = parse_scene(
-    chain_text(
-        "radius = 4.76e-3\nmaterial = "
-        + repr(
-            ["soda-lime-glass", "tungsten-carbide", "stainless-steel-316", "ptfe", "tungsten-carbide"]
-            + ["stainless-steel-316", "soda-lime-glass", "ptfe", "stainless-steel-316", "ptfe", "soda-lime-glass"]
-            + ["stainless-steel-316", "chrome-steel-52100", "tungsten-carbide", "chrome-steel-52100"]
-            + ["stainless-steel-316", "aluminium-6061-t6", "aluminium-6061-t6", "soda-lime-glass"]
-            + ["stainless-steel-316", "brass", "tungsten-carbide", "tungsten-carbide", "aluminium-6061-t6", "brass"]
-        )
-        + "\n",
-        25,
-        1.0 / 3.0,
-        wall=True,
-    ),
+SCATTERED = material_chain(
+    ["soda-lime-glass", "tungsten-carbide", "stainless-steel-316", "ptfe", "tungsten-carbide"]
+    + ["stainless-steel-316", "soda-lime-glass", "ptfe", "stainless-steel-316", "ptfe", "soda-lime-glass"]
+    + ["stainless-steel-316", "chrome-steel-52100", "tungsten-carbide", "chrome-steel-52100"]
+    + ["stainless-steel-316", "aluminium-6061-t6", "aluminium-6061-t6", "soda-lime-glass"]
+    + ["stainless-steel-316", "brass", "tungsten-carbide", "tungsten-carbide", "aluminium-6061-t6", "brass"],
+    1.0 / 3.0,
     source="scattered.toml",
 )
 
@@ -352,7 +339,7 @@ def test_a_scattered_front_can_peak_beyond_one_and_a_half_times_its_precursors_a
 #: walled: at the window's end (contact 25, brass on glass) the front rises without a maximum until the
 #: wall's reflection comes back (its first maximum at 709 us, 569 us without the wall); the end planned
 #: from a homogenised sound speed was 632 us
-WALLED_RAMP = ptfe_chain(
+WALLED_RAMP = material_chain(
     ["stainless-steel-316", "stainless-steel-316", "ptfe", "stainless-steel-316", "stainless-steel-316", "brass"]
     + ["stainless-steel-316", "brass", "soda-lime-glass", "aluminium-6061-t6", "ptfe", "soda-lime-glass"]
     + ["soda-lime-glass", "aluminium-6061-t6", "chrome-steel-52100", "soda-lime-glass", "aluminium-6061-t6"]
