@@ -289,6 +289,24 @@ def check_timestep(scene, method: str) -> None:
         )
 
 
+def _run_again(calc, plan, backend, method: str, np_: int, choice: str, how: str, category) -> Calculation:
+    """Discard calc and run plan's scene instead, announced by a `category` warning that gives the plan's
+    reason for its new `choice` (its part after "; <how> "), and warned and checked as a first run is
+    (more steps, larger files); the warnings name run_scene's caller."""
+    calc.discard()
+    scene = plan.scene
+    value = getattr(scene.run, choice)
+    reason = next(c.reason for c in plan.choices if c.name == choice).split(f"; {how} ", 1)[-1]
+    warnings.warn(
+        f"{scene.source}: running again with {choice} = {value:.4g} s: {how} {reason}", category, stacklevel=5
+    )
+    msg = output_size_warning(scene)
+    if msg:
+        warnings.warn(msg, OutputSizeWarning, stacklevel=5)
+    check_run(scene, backend, stacklevel=6, planned_step=True)
+    return _execute(scene, backend, method, np_)
+
+
 def _finish(calc, given, scene, plan, backend, method: str, np_: int, rtol, error_estimate, after_run) -> Calculation:
     """The Calculation of run_scene's run of the planned scene made again finer if its plan is
     refined (_refined), then after_run() (if given), then its error estimate if asked for; on any
@@ -296,35 +314,12 @@ def _finish(calc, given, scene, plan, backend, method: str, np_: int, rtol, erro
     try:
         refined = _refined(given, plan, calc.result)
         if refined is not None:  # the measured peaks were far below the force scale: run again, finer
-            calc.discard()
             plan = refined
-            scene = refined.scene
-            warnings.warn(
-                f"{scene.source}: running again at timestep = {scene.run.timestep:.4g} s: "
-                + "refined "
-                + next(c.reason for c in plan.choices if c.name == "timestep").split("; refined ", 1)[-1],
-                PlanRefinedWarning,
-                stacklevel=4,
-            )
-            msg = output_size_warning(scene)
-            if msg:
-                warnings.warn(msg, OutputSizeWarning, stacklevel=4)
-            check_run(scene, backend, stacklevel=5, planned_step=True)  # finer: more steps, larger files
-            calc = _execute(scene, backend, method, np_)
+            calc = _run_again(calc, plan, backend, method, np_, "timestep", "refined", PlanRefinedWarning)
         extended = _extended(given, plan, calc.result)
         if extended is not None:  # the run ended before measuring its window: once more, longer
-            calc.discard()
             plan = extended
-            scene = extended.scene
-            warnings.warn(
-                f"{scene.source}: running again to end_time = {scene.run.end_time:.4g} s: "
-                + "extended "
-                + next(c.reason for c in plan.choices if c.name == "end_time").split("; extended ", 1)[-1],
-                PlanExtendedWarning,
-                stacklevel=4,
-            )
-            check_run(scene, backend, stacklevel=5, planned_step=True)  # longer: more steps, larger files
-            calc = _execute(scene, backend, method, np_)
+            calc = _run_again(calc, plan, backend, method, np_, "end_time", "extended", PlanExtendedWarning)
         result = calc.result
         result.plan = plan
         if after_run is not None:
