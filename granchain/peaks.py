@@ -98,6 +98,20 @@ def complete_peaks(
     return np.isfinite(time_of_peak) & fell
 
 
+def every_contact_complete(
+    peak_force: np.ndarray, force_min_after_peak: np.ndarray, time_of_peak: np.ndarray, static_force: np.ndarray
+) -> np.ndarray:
+    """complete_peaks over a whole chain with its effects' contacts (a striker's first, a wall's last),
+    each with its own static force (a striker touches bead 1 unloaded; a wall carries F0 as every
+    bead-bead contact does): reached above REACHED_FRACTION of the largest rise of any of them.
+
+    The effects' contacts (Effect.end_fields) take theirs from here: a wall the wave has not passed
+    by the end of the run, or has not reached, holds a running maximum that is not a peak.
+    """
+    static = np.asarray(static_force, dtype=float)
+    return complete_peaks(peak_force, force_min_after_peak, unreached_as_nan(peak_force, time_of_peak, static), static)
+
+
 def stop_force_floor(scene) -> float:
     """The smallest peak that counts as the leading wave for [run] stop_after_contact (both backends):
     the static force plus REACHED_FRACTION of the largest expected force. Round-off forces ahead of

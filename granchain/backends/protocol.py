@@ -29,8 +29,10 @@ PROPERTIES: dict[str, tuple[str, ...]] = {
     "end_peaks": (
         "wall_peak_force",
         "wall_time_of_peak",
+        "wall_peak_complete",
         "striker_peak_force",
         "striker_time_of_peak",
+        "striker_peak_complete",
         "striker_velocity",
     ),
     "peak_overlap": ("peak_overlap",),

@@ -161,7 +161,11 @@ def print_result(result, out) -> None:
             if e is None
             else (f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})")
         )
-        print(f"  {name + ' (N)':38s} {fmt(value)}{bar}   (the {label} peak)")
+        what = f"the {label} peak"
+        if s.get(name.replace("_force", "_complete")) is False:  # a running maximum (ChainSolution)
+            what = f"the {label} largest force so far, not a peak"
+            what += ": it had not fallen to half of it when the run ended" if e is None else ""
+        print(f"  {name + ' (N)':38s} {fmt(value)}{bar}   ({what})")
     c = s["conservation"]
     ld = scene.loading
     if ld.is_force:

@@ -17,7 +17,7 @@ import numpy as np
 
 from granchain import safe_files
 from granchain.exceptions import GranchainError
-from granchain.peaks import complete_peaks, lead_floor, leading_pulse, unreached_as_nan
+from granchain.peaks import complete_peaks, every_contact_complete, lead_floor, leading_pulse, unreached_as_nan
 from granchain.physics.effects import active_effects
 from granchain.physics.effects import work as effects_work
 from granchain.postprocess.dumps import read_dump
@@ -160,11 +160,16 @@ def read_solution(
     v = res["vx"][o : o + n]
     masses = scene.bead_masses if scene.per_bead else scene.mass
     times = step_times_of(scene)
-    # the extra atoms' results (Effect.end_fields: the wall's contact lives on bead N's atom)
+    # the extra atoms' results (Effect.end_fields: the wall's contact lives on bead N's atom; a striker
+    # touches bead 1 unloaded, every other contact starts at F0)
+    static = np.full(res["fpeak"].shape, float(scene.effects.precompression))
+    static[:o] = 0.0
+    fmin = res["fmin"] if "fmin" in res else res["fpeak"]  # a deck without d_fmin: nothing is complete
+    every = every_contact_complete(res["fpeak"], fmin, res["tpeak"], static)
     ends = {
         k: x
         for effect in active_effects(scene)
-        for k, x in effect.end_fields(res["fpeak"], res["tpeak"], res["vx"], o + n - 1).items()
+        for k, x in effect.end_fields(res["fpeak"], res["tpeak"], res["vx"], o + n - 1, every).items()
     }
     return ChainSolution(
         method="verlet",

@@ -113,7 +113,8 @@ def _not_measured(sol, obs: dict) -> dict[str, str]:
         f"arrival_time_contact_{w1}": f"the leading pulse did not pass contact {w1} {ended}",
         f"peak_force_contact_{w0}": f"the peak at contact {w0} is not complete {ended}",
         "peak_force_contact_1": f"the peak at contact 1 is not complete {ended}",
-        "wall_peak_force": f"the wave did not reach the wall {ended}",
+        "wall_peak_force": f"the wave did not reach or pass the wall (its force falling to half its peak) {ended}",
+        "striker_peak_force": f"the striker's contact force did not fall to half its peak {ended}",
     }
     out["leading_peak_force_nondim"] = out["leading_peak_force"]
     out["wave_speed"] = (
@@ -123,6 +124,18 @@ def _not_measured(sol, obs: dict) -> dict[str, str]:
         "or decreasing)"
     )
     return out
+
+
+def _end_peak(scene, sol, who: str) -> float | None:
+    """A striker's or a wall's contact peak (who: "striker", "wall") where it is complete, else None:
+    a contact the wave has not reached holds round-off (1e-218 N), one it has not passed its running
+    maximum; neither is a peak."""
+    value, done = getattr(sol, f"{who}_peak_force"), getattr(sol, f"{who}_peak_complete")
+    if done is None and value is not None:  # a run directory without the flag: reached, at least
+        floor = REACHED_FRACTION * float(np.max(sol.peak_force, initial=0.0))
+        static = scene.effects.precompression if who == "wall" else 0.0
+        done = value - static > floor
+    return float(value) if done else None
 
 
 def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
@@ -157,7 +170,7 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
             ),
         ]
     if scene.loading.kind == "striker":
-        rows.append(("striker_peak_force", "N", sa.striker_peak_force, sb.striker_peak_force))
+        rows.append(("striker_peak_force", "N", _end_peak(scene, sa, "striker"), _end_peak(scene, sb, "striker")))
     rows += [
         ("final_kinetic_energy", "J", float(sa.kinetic[-1]), float(sb.kinetic[-1])),
         ("momentum", "N s", sa.momentum, sb.momentum),
@@ -165,14 +178,7 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
     if scene.contact.law_class.history or scene.effects.dashpot:
         rows.append(("dissipated_energy", "J", float(sa.dissipated[-1]), float(sb.dissipated[-1])))
     if scene.effects.far_end == "wall":
-        # a wall the wave has not reached holds round-off (1e-218 N), not a peak: unreached as for
-        # any contact (peaks.REACHED_FRACTION of the largest peak)
-        def wall(sol) -> float | None:
-            w = sol.wall_peak_force
-            floor = REACHED_FRACTION * float(np.max(sol.peak_force, initial=0.0))
-            return None if w is None or w - scene.effects.precompression <= floor else float(w)
-
-        rows.append(("wall_peak_force", "N", wall(sa), wall(sb)))
+        rows.append(("wall_peak_force", "N", _end_peak(scene, sa, "wall"), _end_peak(scene, sb, "wall")))
     why = _not_measured(sb, ob)
     if hasattr(b, "observables_missing"):  # the observables' own reasons, where the run result gives them
         why.update(b.observables_missing())

@@ -139,9 +139,17 @@ class RunResult:
                 "energy_balance_error_relative": (float(np.max(np.abs(eb))) / work_scale) if work_scale else 0.0,
             },
             "scales": {"force_scale": sc.force_scale, "impulse_scale": sc.impulse_scale, "tau": sc.tau},
-            **({"wall_peak_force": s.wall_peak_force} if s.wall_peak_force is not None else {}),
             **(
-                {"striker_peak_force": s.striker_peak_force, "striker_velocity": s.striker_velocity}
+                {"wall_peak_force": s.wall_peak_force, "wall_peak_complete": s.wall_peak_complete}
+                if s.wall_peak_force is not None
+                else {}
+            ),
+            **(
+                {
+                    "striker_peak_force": s.striker_peak_force,
+                    "striker_peak_complete": s.striker_peak_complete,
+                    "striker_velocity": s.striker_velocity,
+                }
                 if s.striker_peak_force is not None
                 else {}
             ),

@@ -39,8 +39,12 @@ class ChainSolution:
     extra_steps: int = 0  # steps beyond the grid's (RK4 event location: rejected and split steps)
     wall_peak_force: float | None = None  # far-end wall contact (only with a wall)
     wall_time_of_peak: float | None = None
+    # the wave passed the wall's contact: its force fell to half its peak before the run ended
+    # (peaks.every_contact_complete); otherwise wall_peak_force is the running maximum, not a peak
+    wall_peak_complete: bool | None = None
     striker_peak_force: float | None = None  # striker-bead 1 contact (only with a striker)
     striker_time_of_peak: float | None = None
+    striker_peak_complete: bool | None = None  # as wall_peak_complete, for the striker's contact
     striker_velocity: float | None = None  # at the end
     # smallest force sample of each contact since its peak (N-1,), N; and which peaks are complete
     # (peaks.complete_peaks). A backend that does not track them leaves them empty: no peak is complete.

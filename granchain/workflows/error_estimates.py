@@ -623,6 +623,9 @@ def _observable_error(name: str, value, bars, measured: dict) -> dict:
 
 #: the effects' own contacts that get error bars: peak force -> its time (ChainSolution fields)
 END_PEAKS = {"striker_peak_force": "striker_time_of_peak", "wall_peak_force": "wall_time_of_peak"}
+#: why an end peak has no bar: the run's own peak, or a companion's, had not passed when it ended
+END_PEAK_INCOMPLETE = "incomplete: its force had not fallen to half its peak when the run ended"
+END_PEAK_COMPANION_INCOMPLETE = "not measured: incomplete in a companion run"
 
 
 def _end_peaks(solutions, bars_of) -> dict[str, dict]:
@@ -634,6 +637,13 @@ def _end_peaks(solutions, bars_of) -> dict[str, dict]:
         if vals[0] is None or any(v is None for v in vals):
             continue
         times = [getattr(s, when) for s in solutions]
+        # a running maximum is not a peak (ChainSolution.wall_peak_complete); None: not tracked
+        done = [getattr(s, force.replace("_peak_force", "_peak_complete")) is not False for s in solutions]
+        if not all(done):
+            why = END_PEAK_INCOMPLETE if not done[0] else END_PEAK_COMPANION_INCOMPLETE
+            for name, values in ((force, vals), (when, times)):
+                out[name] = {"value": float(values[0]), "error": None, "status": why}
+            continue
         for name, values, at in ((force, vals, times), (when, times, None)):
             bars = bars_of(values, at)
             err = float(bars.error[0])

@@ -182,7 +182,9 @@ def _solution(d: Path, scene, summary: dict, peaks: dict) -> ChainSolution:
         momentum=float(c.get("momentum", 0.0)),
         extra_steps=max(int(price.get("steps", steps)) - steps, 0),
         wall_peak_force=summary.get("wall_peak_force"),
+        wall_peak_complete=summary.get("wall_peak_complete"),
         striker_peak_force=summary.get("striker_peak_force"),
+        striker_peak_complete=summary.get("striker_peak_complete"),
         striker_velocity=summary.get("striker_velocity"),
         **kw,
     )

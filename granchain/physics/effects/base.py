@@ -140,10 +140,13 @@ class Effect:
         return mass
 
     @classmethod
-    def end_fields(cls, force: np.ndarray, time: np.ndarray, velocity: np.ndarray, last: int) -> dict[str, float]:
-        """ChainSolution fields of its extra beads, from the whole chain's contact peak forces and
-        their times (index 0: a striker's contact; `last`: a wall's) and bead velocities (0: a
-        striker's): the reference (inner chain) and the LAMMPS read-back (by atom) alike."""
+    def end_fields(
+        cls, force: np.ndarray, time: np.ndarray, velocity: np.ndarray, last: int, complete: np.ndarray
+    ) -> dict[str, Any]:
+        """ChainSolution fields of its extra beads, from the whole chain's contact peak forces, their
+        times and which are complete (peaks.every_contact_complete; index 0: a striker's contact;
+        `last`: a wall's) and bead velocities (0: a striker's): the reference (inner chain) and the
+        LAMMPS read-back (by atom) alike."""
         return {}
 
     @classmethod

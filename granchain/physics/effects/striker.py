@@ -68,10 +68,13 @@ class StrikerEffect(Effect):
 
     @classmethod
     @override
-    def end_fields(cls, force: np.ndarray, time: np.ndarray, velocity: np.ndarray, last: int) -> dict[str, float]:
+    def end_fields(
+        cls, force: np.ndarray, time: np.ndarray, velocity: np.ndarray, last: int, complete: np.ndarray
+    ) -> dict[str, Any]:
         return {
             "striker_peak_force": float(force[0]),
             "striker_time_of_peak": float(time[0]),
+            "striker_peak_complete": bool(complete[0]),
             "striker_velocity": float(velocity[0]),
         }
 

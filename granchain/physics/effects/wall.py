@@ -83,8 +83,14 @@ class WallEffect(Effect):
 
     @classmethod
     @override
-    def end_fields(cls, force: np.ndarray, time: np.ndarray, velocity: np.ndarray, last: int) -> dict[str, float]:
-        return {"wall_peak_force": float(force[last]), "wall_time_of_peak": float(time[last])}
+    def end_fields(
+        cls, force: np.ndarray, time: np.ndarray, velocity: np.ndarray, last: int, complete: np.ndarray
+    ) -> dict[str, Any]:
+        return {
+            "wall_peak_force": float(force[last]),
+            "wall_time_of_peak": float(time[last]),
+            "wall_peak_complete": bool(complete[last]),
+        }
 
     @classmethod
     @override

@@ -1,0 +1,60 @@
+"""The effects' own contacts (a striker's, a wall's) report a peak only once it has passed: a run that
+ends while the wall's force still rises, or before the wave reaches it, reports its largest force so
+far marked as no peak (ChainSolution.wall_peak_complete), with no error bar and no compared value."""
+
+import pytest
+
+from granchain.postprocess.comparison_table import compare_runs
+from granchain.scene import parse_scene
+from granchain.workflows.error_estimates import END_PEAK_INCOMPLETE
+from granchain.workflows.run import run_scene
+
+from .conftest import make_scene_text
+
+BACKENDS = {"reference": ("reference", "verlet"), "lammps": ("lammps", None)}
+
+
+def walled(end_time: float, f0: float, striker: bool) -> object:
+    """A 10-bead brass chain on a wall, bead 1 kicked at 1 m/s (or struck by a bead at 1 m/s), with a
+    precompression f0 (0: none), run to end_time at 1e-8 s."""
+    loading = f'kind = "{"striker" if striker else "velocity"}"\nvelocity = 1.0'
+    text = make_scene_text(beads=10, loading=loading, end_time=end_time, outputs="peak_force = true")
+    text += '[boundary]\nfar_end = "wall"\n' + (f"[precompression]\nforce = {f0!r}\n" if f0 else "")
+    return parse_scene(text, source="walled.toml")
+
+
+def run(sc, backend):
+    name, method = BACKENDS[backend]
+    return run_scene(sc, backend=name, method=method, error_estimate=True)
+
+
+@pytest.mark.parametrize("backend", list(BACKENDS))
+@pytest.mark.parametrize(("f0", "striker"), [(0.0, False), (1.0, True)])
+def test_a_wall_the_wave_has_not_passed_reports_no_peak(backend, f0, striker):
+    long = run(walled(4e-4, f0, striker), backend)
+    s = long.solution
+    assert s.wall_peak_complete is True, "the wave passed the wall well before 0.4 ms"
+    assert long.errors.end_peaks["wall_peak_force"]["error"] is not None
+    t_wall = s.wall_time_of_peak
+    # ended on the rise (9/10 of the way to the peak), and before the wave reached the wall
+    for end in (0.9 * t_wall, 0.3 * t_wall):
+        short = run(walled(end, f0, striker), backend)
+        assert short.solution.wall_peak_complete is False, end
+        assert short.solution.wall_peak_force < s.wall_peak_force
+        bar = short.errors.end_peaks["wall_peak_force"]
+        assert bar["error"] is None and bar["status"] == END_PEAK_INCOMPLETE
+    if striker:  # the striker's contact, ended on its rise
+        short = run(walled(0.5 * s.striker_time_of_peak, f0, striker), backend)
+        assert short.solution.striker_peak_complete is False
+        assert s.striker_peak_complete is True
+
+
+def test_compare_shows_no_wall_peak_where_the_wave_has_not_passed_it():
+    sc = walled(4e-4, 1.0, True)
+    t_wall = run(sc, "reference").solution.wall_time_of_peak
+    short = walled(0.9 * t_wall, 1.0, True)
+    rows = {r.quantity: r for r in compare_runs(run(short, "lammps"), run(short, "reference"))}
+    assert rows["wall_peak_force"].a is None and rows["wall_peak_force"].b is None
+    assert "did not reach or pass the wall" in rows["wall_peak_force"].verdict
+    rows = {r.quantity: r for r in compare_runs(run(sc, "lammps"), run(sc, "reference"))}
+    assert rows["wall_peak_force"].ok and rows["wall_peak_force"].a is not None
