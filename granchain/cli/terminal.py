@@ -164,7 +164,11 @@ def print_result(result, out) -> None:
         what = f"the {label} peak"
         if s.get(name.replace("_force", "_complete")) is False:  # a running maximum (ChainSolution)
             what = f"the {label} largest force so far, not a peak"
-            what += ": it had not fallen to half of it when the run ended" if e is None else ""
+            what += (
+                ": the wave had not reached it, or its force had not fallen to half of it, when the run ended"
+                if e is None
+                else ""
+            )
         print(f"  {name + ' (N)':38s} {fmt(value)}{bar}   ({what})")
     c = s["conservation"]
     ld = scene.loading

@@ -624,7 +624,9 @@ def _observable_error(name: str, value, bars, measured: dict) -> dict:
 #: the effects' own contacts that get error bars: peak force -> its time (ChainSolution fields)
 END_PEAKS = {"striker_peak_force": "striker_time_of_peak", "wall_peak_force": "wall_time_of_peak"}
 #: why an end peak has no bar: the run's own peak, or a companion's, had not passed when it ended
-END_PEAK_INCOMPLETE = "incomplete: its force had not fallen to half its peak when the run ended"
+END_PEAK_INCOMPLETE = (
+    "incomplete: the wave had not reached it, or its force had not fallen to half its peak, when the run ended"
+)
 END_PEAK_COMPANION_INCOMPLETE = "not measured: incomplete in a companion run"
 
 
