@@ -50,8 +50,9 @@ from tests.scenegen import scenes
 warnings.simplefilter("ignore")
 SUMMARY = sys.argv[1:2] == ["summary"]
 VARIANTS = sys.argv[1:2] == ["variants"]
-N = int(sys.argv[1]) if len(sys.argv) > 1 and not (SUMMARY or VARIANTS) else 6
-SEED = int(sys.argv[2]) if len(sys.argv) > 2 and not (SUMMARY or VARIANTS) else 1
+OTHER = SUMMARY or VARIANTS or sys.argv[1:2] == ["bounds"]
+N = int(sys.argv[1]) if len(sys.argv) > 1 and not OTHER else 6
+SEED = int(sys.argv[2]) if len(sys.argv) > 2 and not OTHER else 1
 READINGS = ("force", "overlap parabola", "overlap Hermite")
 
 
@@ -224,6 +225,14 @@ def study(sc):
             "nominal": (np.abs(d1[above]) / 3.0 / true[above]).tolist(),
             "sign_changes": int(np.sum(above & (d1 * d2 < 0))),
             "rel_true": (true[above] / truth.peak_force[above]).tolist(),
+            # per peak (above): Q at dt, 2 dt, 4 dt, the truth, and Richardson's verdict and estimate
+            "q": np.stack([q[0][above], q[1][above], q[2][above], truth.peak_force[above]], 1).tolist(),
+            "reliable": est.reliable[above].tolist(),
+            "richardson": est.error[above].tolist(),
+            "status": [str(x) for x in est.status[above]],
+            # the peaks' times at dt, 2 dt, 4 dt and half the shortest period (another pulse: richardson)
+            "times": np.stack([t[above] for t in times], 1).tolist(),
+            "jump": jump,
         }
     # the trajectory at the end time: each bead's displacement error against RK4 at dt / 2
     e1 = np.abs(sols[0].displacement - truth.displacement)
@@ -293,7 +302,71 @@ def summary(rows):
     return "\n".join(lines)
 
 
-if __name__ == "__main__" and VARIANTS:  # variants [history]
+def bound_estimates(r: dict, reading: str = "force") -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Cheap estimators from the runs at dt, 2 dt, 4 dt alone, per peak of one scene's row: name ->
+    (estimate, true error), nan where an estimator gives no bar (another pulse in a companion).
+
+    d1 = Q(dt) - Q(2 dt), d2 = Q(2 dt) - Q(4 dt). Richardson: its bar where its checks pass.
+    bound p=1: max(|d1|, |d2| / 2); bound p=2: max(|d1|, |d2| / 4); |d1|: the first difference alone.
+    Richardson + bound: Richardson's bar where its checks pass, else the bound.
+    """
+    x = r[reading]
+    if not x.get("q"):
+        return {}
+    q = np.asarray(x["q"], dtype=float)
+    t = np.asarray(x["times"], dtype=float)
+    true = np.abs(q[:, 0] - q[:, 3])
+    d1, d2 = np.abs(q[:, 0] - q[:, 1]), np.abs(q[:, 1] - q[:, 2])
+    same = (np.abs(t[:, 0] - t[:, 1]) <= x["jump"]) & (np.abs(t[:, 1] - t[:, 2]) <= x["jump"])
+    rich = np.where(np.asarray(x["reliable"]), np.asarray(x["richardson"], dtype=float), np.nan)
+    b1 = np.where(same, np.maximum(d1, d2 / 2.0), np.nan)
+    b2 = np.where(same, np.maximum(d1, d2 / 4.0), np.nan)
+    return {
+        "Richardson (checks pass)": (rich, true),
+        "|d1|": (np.where(same, d1, np.nan), true),
+        "bound p=2: max(|d1|, |d2|/4)": (b2, true),
+        "bound p=1: max(|d1|, |d2|/2)": (b1, true),
+        "Richardson, else bound p=2": (np.where(np.isfinite(rich), rich, b2), true),
+        "Richardson, else bound p=1": (np.where(np.isfinite(rich), rich, b1), true),
+    }
+
+
+def bounds_table(rows, reading: str = "force"):
+    """The estimators' distributions per law (bound_estimates; a scene drawn twice counts once)."""
+    seen, unique = set(), []
+    for r in rows:
+        key = (r["law"], r["beads"], r["kind"], r["pre"], r["wall"], r["steps"], r["rk4_own"])
+        if key not in seen:
+            seen.add(key)
+            unique.append(r)
+    lines = [
+        f"reading: {reading}",
+        "| law | estimator | peaks | with a bar | below 1/3 | above 3 | est/true 5-50-95% (min-max) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for law in ("bilinear", "thornton"):
+        sub = [bound_estimates(r, reading) for r in unique if r["law"] == law]
+        sub = [s for s in sub if s]
+        for name in sub[0] if sub else ():
+            est = np.concatenate([s[name][0] for s in sub])
+            true = np.concatenate([s[name][1] for s in sub])
+            ok = np.isfinite(est)
+            ratio = est[ok] / true[ok]
+            p = np.percentile(ratio, [5, 50, 95]) if ratio.size else [np.nan] * 3
+            lines.append(
+                f"| {law} ({len(sub)} scenes) | {name} | {est.size} | {ok.sum()} ({ok.mean():.0%}) | "
+                f"{int(np.sum(ratio < 1 / 3))} | {int(np.sum(ratio > 3))} | {p[0]:.2f} - {p[1]:.2f} - {p[2]:.2f} "
+                f"({ratio.min():.2f} - {ratio.max():.3g}) |"
+            )
+    return "\n".join(lines)
+
+
+BOUNDS = sys.argv[1:2] == ["bounds"]
+
+if __name__ == "__main__" and BOUNDS:  # bounds FILE.json ...: the cheap estimators' table
+    rows_ = [r for f in sys.argv[2:] for r in json.load(open(f))]
+    print(bounds_table(rows_, "force"))
+elif __name__ == "__main__" and VARIANTS:  # variants [history]
     variants(sys.argv[2:3] == ["history"])
 elif __name__ == "__main__" and SUMMARY:  # summary FILE.json ...: the table of several samples
     print(summary([r for f in sys.argv[2:] for r in json.load(open(f))]))
