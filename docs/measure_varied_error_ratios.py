@@ -57,7 +57,7 @@ def measure(sc):
             raise
         print(f"{sc.chain.beads} beads: stopped by the run watch (overlap far below the radius), not counted", flush=True)
         reject()
-    if got.errors.against == "rk4":  # Verlet on a kinked law: RK4 at dt is the truth
+    if got.errors.against == "rk4" or got.errors.bound:  # Verlet on a kinked law: RK4 at dt is the truth
         fine = run_scene(planned, method="rk4")
     else:
         finer = replace(planned, run=replace(planned.run, timestep=planned.run.timestep / FINER))

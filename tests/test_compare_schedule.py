@@ -35,8 +35,8 @@ VARYING_ERRORS = {"companion_wall_time", "overhead"}
 
 
 def scene_file(tmp_path: Path, factor: float = 1.0) -> tuple[Path, float]:
-    """The bilinear chain with a fixed step (factor times LAMMPS's planned one): LAMMPS's RK4
-    companions are then the reference's own (errors.against_rk4_because), shared."""
+    """The bilinear chain with a fixed step (factor times LAMMPS's planned one): with checked bars
+    LAMMPS's RK4 companions are then the reference's own (errors.against_rk4_because), shared."""
     sc, _ = plan_for(parse_scene(BILINEAR_CHAIN, source="b.toml"), "lammps", None, 1e-3)
     dt = sc.run.timestep * factor
     p = tmp_path / "b.toml"
@@ -135,7 +135,9 @@ def test_two_cores_write_what_one_core_writes(serial, tmp_path, monkeypatch, est
     assert compare(p, tmp_path / "c", estimate) == 0
     assert sorted(threads) == [("lammps", False), ("reference", True)]
     if estimate == "on":  # the companions were made by the worker (its runs are counted there)
-        assert events == ["reference", "reference at 1 dt done", "lammps"]  # (its companions: RK4's)
+        # (the reference's RK4 companions made by the worker; LAMMPS's own run, then its companions at 2 dt
+        # and 4 dt: bounds on this bilinear chain, errors.bounded_because)
+        assert events == ["reference", "reference at 1 dt done", "lammps", "lammps", "lammps"]
     else:
         assert events.index("lammps") < events.index("reference at 1 dt done")
     got = contents(tmp_path / "c")
@@ -175,8 +177,9 @@ def _worker_dies(scene, method):
 
 @pytest.mark.parametrize("worker", [_fails_in_worker, _worker_dies])
 def test_companions_the_worker_did_not_make_are_made_here_once(serial, tmp_path, monkeypatch, worker):
-    """A companion that failed in the worker, or whose worker died, is made in this process, once
-    (LAMMPS's thread and the reference both ask for it), with the same numbers."""
+    """A companion that failed in the worker, or whose worker died, is made in this process, once, with
+    the same numbers. (With checked bars LAMMPS's thread asks for the reference's RK4 companions too:
+    test_error_estimate.test_compare_makes_each_rk4_companion_once.)"""
     p, dt, serial = serial
     made = []
     real = run_mod.run_reference
@@ -189,8 +192,8 @@ def test_companions_the_worker_did_not_make_are_made_here_once(serial, tmp_path,
     monkeypatch.setattr(run_mod, "_prefetched_run", worker)
     monkeypatch.setattr(run_mod, "available_cores", lambda: 2)
     assert compare(p, tmp_path / "c") == 0
-    # the reference's run and its companions at 2 dt and 4 dt, and LAMMPS's RK4 companions at RK4's
-    # own step (errors.against_rk4_because), each made once
+    # the reference's run and its companions at 2 dt and 4 dt (LAMMPS's: its own runs, bounds on this
+    # bilinear chain, errors.bounded_because), each made once
     assert {1.0, 2.0, 4.0} <= set(made)
     assert len(made) == len(set(made)), sorted(made)
     assert contents(tmp_path / "c") == serial["on"]

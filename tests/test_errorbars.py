@@ -163,3 +163,38 @@ def test_differences_within_the_runs_round_off_floor_give_its_bound():
     assert ROUNDOFF_MARGIN * floor < abs(fine[3] - coarse[3])
     # without a floor the first is Richardson's tiny number (the failure the floor fixes)
     assert richardson(fine[:1], coarse[:1], coarser[:1], 4, orders=(2.5, 4.0)).error[0] < floor
+
+
+@given(
+    q_true=values,
+    scale=rel_errors,
+    coef=st.lists(st.floats(min_value=-1.0, max_value=1.0), min_size=3, max_size=3),
+)
+def test_an_erratic_error_is_bounded_unless_it_did_not_halve_from_4dt_to_dt(q_true, scale, coef):
+    """erratic_bounds: every measured item gets max(|d1|, |d2| / 2), status a bound; it is below 1/3
+    of the error at dt only where the error did not halve from 4 dt to dt (|E(4 dt)| < 2 |E(dt)|)."""
+    from granchain.richardson import BOUND_STATUS, erratic_bounds
+
+    errs = [c * scale * q_true * k**2 for c, k in zip(coef, (1, 2, 4), strict=True)]  # E(h), erratic in sign
+    runs = [q_true + e for e in errs]
+    bars = erratic_bounds([runs[0]], [runs[1]], [runs[2]], 2)
+    bound = max(abs(runs[0] - runs[1]), abs(runs[1] - runs[2]) / 2)
+    if bars.status[0] == "round-off":
+        return
+    assert bars.status[0] == BOUND_STATUS
+    assert bars.error[0] == pytest.approx(bound, rel=1e-12)
+    if bars.error[0] < abs(errs[0]) / 3:
+        assert abs(errs[2]) < 2 * abs(errs[0])
+
+
+def test_an_erratic_bound_needs_the_same_pulse_and_says_a_missing_4dt_run():
+    from granchain.richardson import erratic_bounds
+
+    moved = erratic_bounds([1.0], [1.1], [1.3], 2, times=([0.0], [0.0], [5.0]), jump_time=1.0)
+    assert not moved.reliable[0]
+    assert "another pulse" in moved.status[0]
+    alone = erratic_bounds([1.0], [1.1], None, 2)
+    assert alone.error[0] == pytest.approx(0.1)
+    assert "no 4 dt run" in alone.status[0]
+    missing = erratic_bounds([1.0], [np.nan], [1.3], 2)
+    assert not missing.reliable[0]

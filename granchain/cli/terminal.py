@@ -193,7 +193,8 @@ def print_result(result, out) -> None:
             where = f" at contact {e['error_estimate_contact']}" if worst is not None else ""
             n_bad = len(e["unreliable_contacts"])
             print(
-                f"  {'largest peak-force error (1)':38s} {fmt(worst)}{where}   (measured: "
+                f"  {'largest peak-force error (1)':38s} {fmt(worst)}{where}   ("
+                + ("bounds from " if e.get("bound") else "measured: ")
                 + ("reference RK4 " if e.get("companion_method") == "rk4" else "")
                 + "runs at "
                 + ", ".join(f"{t:g}" for t in e["companion_timesteps"])
@@ -202,5 +203,6 @@ def print_result(result, out) -> None:
             if n_bad:
                 print(f"  {'peaks without an estimate':38s} {n_bad}   (peaks.csv error_status says why)")
             if e.get("why_unchecked"):
-                print(f"  {'not checked at dt / 2':38s} {shown(e['why_unchecked'])}")
+                label = "bounds, not measured" if e.get("bound") else "not checked at dt / 2"
+                print(f"  {label:38s} {shown(e['why_unchecked'])}")
     print(f"run directory: {shown(out)}")

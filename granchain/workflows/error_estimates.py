@@ -6,6 +6,11 @@ returns an ErrorReport: for every contact its peak force, time of peak and leadi
 error estimate and a status (granchain.richardson), the same for every scalar observable, the
 largest relative error over the measured contacts, and what the companions cost.
 
+Verlet on a law with slope kinks (bilinear, Thornton) without a dashpot: its error is erratic in sign,
+and its bars are bounds from the same companions (bounded_because, richardson.erratic_bounds), which
+may overstate it; on request (error_estimate="checked") it is measured against RK4 runs instead
+(against_rk4_because), at several times a LAMMPS run's price.
+
 On request (error_estimate="checked"), RK4's bars are checked against one more run, at dt / 2
 (check_because, richardson.checked): its error mixes orders (2.5 at Hertzian onsets, 4 and beyond),
 and the order the runs at dt, 2 dt and 4 dt show need not hold below dt; an estimate the run at dt / 2
@@ -33,7 +38,16 @@ import numpy as np
 from granchain.exceptions import GranchainError
 from granchain.postprocess.observables import measure_observables
 from granchain.progress import labelled
-from granchain.richardson import CHECK_FACTOR, ORDER, ErrorBars, against_reference, checked, richardson
+from granchain.richardson import (
+    BOUND_ORDER,
+    CHECK_FACTOR,
+    ORDER,
+    ErrorBars,
+    against_reference,
+    checked,
+    erratic_bounds,
+    richardson,
+)
 
 #: scalar observables that get an error estimate, and the time each is measured at (for the check
 #: that a companion measured the same pulse)
@@ -58,6 +72,8 @@ class ErrorReport:
     why_none_4dt: str | None = None  # why the order was not checked (the 4 dt run failed)
     unreliable_contacts: list[int] = field(default_factory=list)  # measured contacts without an estimate
     against: str | None = None  # "rk4": measured against RK4 runs at 2 dt and 4 dt (or dt, 2 dt), not by Richardson
+    #: why the bars are bounds from the runs at 2 dt and 4 dt, not Richardson's estimates (bounded_because)
+    bound: str | None = None
     #: the effects' own contacts (a striker's, a wall's): name -> value, error, status
     end_peaks: dict[str, dict] = field(default_factory=dict)
     check_timestep: float | None = None  # the step of the run that checks the bars (check_because), s
@@ -73,12 +89,22 @@ class ErrorReport:
             for s in self.peak_force.status:
                 key = s.split(":")[0].split(" (")[0]  # the kind, without its numbers
                 counts[key] = counts.get(key, 0) + 1
+        if self.against is not None:
+            method = (
+                "the distance to RK4 (reference, event location) at 2 dt, plus its own error from RK4 at 4 dt "
+                "(granchain.richardson.against_reference)"
+            )
+        elif self.bound is not None:
+            method = (
+                f"bounds from runs at dt, 2 dt and 4 dt, max(|Q(dt) - Q(2 dt)|, |Q(2 dt) - Q(4 dt)| / {2**BOUND_ORDER})"
+                f", which may overstate the error many times (granchain.richardson.erratic_bounds): {self.bound}"
+            )
+        else:
+            method = "Richardson extrapolation over runs at dt, 2 dt and 4 dt (granchain.richardson)"
         return {
-            "method": "Richardson extrapolation over runs at dt, 2 dt and 4 dt (granchain.richardson)"
-            if self.against is None
-            else "the distance to RK4 (reference, event location) at 2 dt, plus its own error from RK4 at 4 dt "
-            "(granchain.richardson.against_reference)",
+            "method": method,
             "companion_method": self.against,
+            "bound": self.bound,
             "order": self.order,
             "companion_timesteps": self.timesteps,
             "companion_wall_time": sum(self.wall_times),
@@ -164,9 +190,9 @@ def unchecked_because(method: str, scene) -> str:
 
     The check is RK4's (check_because): Verlet's error on a chain is of one order (2; 1 with a
     dashpot, expected_orders), which the runs at dt, 2 dt and 4 dt check already; a Verlet run whose
-    law has kinks is measured against RK4 runs, not extrapolated, so no order is assumed.
+    law has kinks is then measured against RK4 runs, not extrapolated, so no order is assumed.
     """
-    if against_rk4_because(method, scene):
+    if against_rk4_because(method, scene, checked=True):
         return "its error is measured against RK4 runs (event location), not extrapolated: no check at dt / 2 needed"
     return (
         f"the check at dt / 2 is RK4's: {method}'s error is of one order, which the runs at dt, 2 dt and 4 dt "
@@ -215,20 +241,54 @@ def per_contact(solutions, name: str, n: int, complete_only: bool = False) -> li
     return out
 
 
-def against_rk4_because(method: str, scene) -> str | None:
-    """Why this Verlet run's error is measured against RK4 runs rather than by Richardson, or None.
+def kinked_law(method: str, scene) -> bool:
+    """Whether this is a Verlet run on a law whose slope jumps at kinks the contacts cross
+    (ContactLaw.slope_kinks: bilinear, Thornton), without a dashpot: its error in dt is erratic in sign."""
+    from granchain.physics.laws import law_class
+
+    return method == "verlet" and not scene.effects.dashpot and bool(law_class(scene.contact.law).slope_kinks)
+
+
+def bounded_because(method: str, scene) -> str | None:
+    """Why this run's bars are bounds (richardson.erratic_bounds), not Richardson's estimates, or None.
+
+    A law whose slope jumps at kinks a moving contact crosses gives fixed-step Verlet an error that
+    depends on where in a step each contact crosses them: erratic in sign in dt (generated bilinear
+    and Thornton chains without a dashpot, reference Verlet: the runs at dt, 2 dt, 4 dt changed sign
+    on 14-22% of the peaks, Richardson's checks failed on 26-36%, and where they passed its estimate
+    was below 1/3 of the true error on 6 of 1781, down to 0.07; docs/error-bars.md, "Verlet on the
+    kinked laws" and "Bounds from dt, 2 dt, 4 dt"). The default bars are bounds from the same
+    companions at 2 dt and 4 dt (3/4 of the run's steps), which may overstate the error many times and
+    say so. With a dashpot Verlet is first order and Richardson stays (expected_orders).
+    """
+    if not kinked_law(method, scene):
+        return None
+    law = scene.contact.law
+    return f"the {law} law's slope jumps at kinks the contacts cross, so Verlet's error is erratic in sign"
+
+
+#: what a kinked law's default Verlet bars (bounded_because) say of themselves: what they leave and what
+#: measures them instead
+BOUNDED_BY_DEFAULT = (
+    "Verlet's bars on a kinked law are bounds from the runs at 2 dt and 4 dt, about 6 times the error (at times "
+    "30 times or more; docs/error-bars.md); --error-estimate checked "
+    '(error_estimate="checked") measures it against RK4 runs (event location) instead, at several times a '
+    "LAMMPS run's price"
+)
+
+
+def against_rk4_because(method: str, scene, checked: bool = False) -> str | None:
+    """Why this Verlet run's error is measured against RK4 runs rather than by Richardson, or None
+    (always None unless checked bars were asked for: ``checked``, error_estimate="checked").
 
     A law whose slope jumps at kinks a moving contact crosses (ContactLaw.slope_kinks: bilinear,
     Thornton) gives fixed-step Verlet an error that depends on where in a step each contact crosses
     them and follows no order in dt (plastic-short-impulse, reference Verlet: Richardson's three runs
     changed sign on 47 of 59 peaks; docs/error-bars.md). RK4 locates those kinks; it cannot with a dashpot
-    (withheld_because), where Richardson stays.
+    (withheld_because), where Richardson stays. By default (bounded_because) the bars come from the
+    run's own companions instead: RK4 runs in numpy cost some ten times a LAMMPS run.
     """
-    from granchain.physics.laws import law_class
-
-    if method != "verlet" or scene.effects.dashpot:
-        return None
-    if not law_class(scene.contact.law).slope_kinks:
+    if not checked or not kinked_law(method, scene):
         return None
     return (
         f"the {scene.contact.law} law's slope jumps at kinks the contacts cross, so Verlet's error follows no order "
@@ -244,7 +304,7 @@ def rk4_companions(scene, method: str, checked: bool = False) -> list:
     asks for others)."""
     from granchain.workflows.plan import plan_scene
 
-    if withheld_because("rk4", scene) or (method != "rk4" and not against_rk4_because("verlet", scene)):
+    if withheld_because("rk4", scene) or (method != "rk4" and not against_rk4_because("verlet", scene, checked)):
         return []
     if method != "rk4":
         return [companion_scene(scene, f) for f in against_rk4_factors(scene)]
@@ -305,11 +365,12 @@ def estimate_errors(
     absolute positions (Backend.absolute_positions; its round-off floor, roundoff_floor).
     """
     scene = result.scene
-    if run_rk4 is not None and against_rk4_because(method, scene):
+    if run_rk4 is not None and against_rk4_because(method, scene, checked):
         report = _against_rk4(result, run_rk4)
-        report.why_unchecked = unchecked_because(method, scene) if checked else None
+        report.why_unchecked = unchecked_because(method, scene)
         return report
     report = ErrorReport(order=integrator_order(method, scene), timesteps=[], wall_times=[])
+    report.bound = bounded_because(method, scene)
     report.why_none = withheld_because(method, scene)
     if report.why_none:
         return report
@@ -318,10 +379,14 @@ def estimate_errors(
         if runs is None:
             return report
         finer = _check_run(report, scene, run_one) if check_because(method, scene, checked) else None
-    if checked and not check_because(method, scene, checked):
+    if checked and report.bound is not None:  # (asked for, but no RK4 run to measure against: run_rk4 None)
+        report.why_unchecked = f"no RK4 runs to measure it against here. {BOUNDED_BY_DEFAULT}"
+    elif checked and not check_because(method, scene, checked):
         report.why_unchecked = unchecked_because(method, scene)
     elif not checked and check_because(method, scene, True):
         report.why_unchecked = UNCHECKED_BY_DEFAULT
+    elif not checked and report.bound is not None:
+        report.why_unchecked = BOUNDED_BY_DEFAULT
     _richardson_bars(report, result, runs, method, finer, absolute_positions)
     return report
 
@@ -406,10 +471,12 @@ def _richardson_bars(
         return per_contact((sol, coarse, coarser, finer), name, n, complete_only)
 
     orders = expected_orders(method, scene)
+    # a kinked law's Verlet bars are bounds (bounded_because)
+    extrapolate = erratic_bounds if report.bound is not None else richardson
 
     def bars(v, t, order=p, floor=None) -> ErrorBars:
         # Richardson over dt, 2 dt, 4 dt; checked against dt / 2 where that run was made
-        b = richardson(*v[:3], order, times=tuple(t[:3]), jump_time=jump, orders=orders, floor=floor)
+        b = extrapolate(*v[:3], order, times=tuple(t[:3]), jump_time=jump, orders=orders, floor=floor)
         if finer is None:
             return b
         return checked(b, v[3], v[0], v[1], order, times=(t[3], t[0], t[1]), jump_time=jump, orders=orders, floor=floor)
@@ -437,7 +504,7 @@ def _richardson_bars(
         v = [float(x) for x in values] + ([None] if coarser is None else [])
         t = None if times is None else tuple([float(x)] for x in times) + ((None,) if coarser is None else ())
         c = None if v[2] is None else [v[2]]
-        b = richardson([v[0]], [v[1]], c, p_end, times=t, jump_time=jump, orders=orders)
+        b = extrapolate([v[0]], [v[1]], c, p_end, times=t, jump_time=jump, orders=orders)
         if finer is None:
             return b
         t = None if times is None else ([th], [float(times[0])], [float(times[1])])
@@ -456,7 +523,7 @@ def _richardson_bars(
         # max_peak_force: the largest over contacts is continuous in the runs even where its contact
         # changes (a steady wave peaks alike everywhere), so no pulse check; wave_speed: a fit
         fl = _observable_floor(name, obs[0], floor, b)
-        bars = richardson(
+        bars = extrapolate(
             [v[0]], [v[1]], None if v[2] is None else [v[2]], p, times=times, jump_time=jump, orders=orders, floor=fl
         )
         if obs_h is not None:
