@@ -401,3 +401,23 @@ def test_regime_thresholds_hold_on_the_reference_solver(where):
         assert not p["short_load_peak_force"].applies
         lo = models.solitary_wave_peak_force(models.front_speed_lower(sc.loading.amplitude, k, m, d), k, m, d)
         assert 0.9 * lo < peak < p["long_load_peak_force_upper"].value
+
+
+@pytest.mark.parametrize("law", LAW_NAMES)
+@pytest.mark.parametrize("beads", [1, 2, 3, 12])
+def test_two_body_models_apply_to_two_free_beads_and_contact_closed_forms_to_any_length(law, beads):
+    """A chain too short for the paper's wave models is a two-body impact: the collision models (Hertz's
+    pair impact, Thornton's restitution) apply to two free beads, bead 1 given a velocity, and to no
+    other length; a closed form of the nominal contact (Thornton's yield force) to any length."""
+    loading = 'kind = "velocity"\nvelocity = 1.0' if beads > 1 else 'kind = "striker"\nvelocity = 1.0'
+    sc = parse_scene(make_scene_text(beads=beads, law=law, loading=loading), source="short.toml")
+    by = verdicts(sc)
+    for name, (model_law, needs) in MODEL_DOMAINS.items():
+        if model_law != law or name not in by:
+            continue
+        if needs in ("collision", "pair_impact"):
+            assert by[name].applies == (beads == 2), (name, by[name].applies_reason)
+        if needs == "contact":
+            assert by[name].applies, (name, by[name].applies_reason)
+        if needs in ("short", "long", "any") and beads < 10:
+            assert not by[name].applies, name

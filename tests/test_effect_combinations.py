@@ -13,6 +13,7 @@ from granchain.lammps.runner import run_lammps
 from granchain.physics import materials as mat
 from granchain.physics.effects import EFFECTS, active_effects, external_forces
 from granchain.physics.models import hertz_impact
+from granchain.physics.predictions import applicability, predict
 from granchain.scene import SceneError, parse_scene, scene_from_dict
 from granchain.workflows.run import run_reference, run_scene
 
@@ -173,3 +174,37 @@ def test_two_body_hertz_impacts_match_the_closed_form(backend, material, radius,
     step = result.scene.run.timestep
     slack = RTOL + (0.0 if backend == "reference" else step / when)  # LAMMPS's peak time is a step's
     assert 2.0 * when == pytest.approx(exact["duration"], rel=2 * slack)
+
+
+def two_bead_scene(materials: list[str], radii: list[float], velocity: float):
+    """Two free beads of their own materials and radii, bead 1 given a velocity towards bead 2; end time
+    and step planned."""
+    text = make_scene_text(beads=2, loading=f'kind = "velocity"\nvelocity = {velocity!r}', end_time=1e-3, timestep=1e-9)
+    text = text.replace('material = "brass"', f"material = {materials!r}".replace("'", '"'))
+    text = text.replace("radius = 4.76e-3", f"radius = {radii!r}")
+    text = text.replace("end_time = 0.001\ntimestep = 1e-09", 'end_time = "auto"\ntimestep = "auto"')
+    return parse_scene(text, source="pair.toml")
+
+
+@pytest.mark.parametrize("backend", ["reference", "lammps"])
+@settings(max_examples=6, deadline=None, suppress_health_check=list(HealthCheck))
+@given(
+    materials=st.lists(st.sampled_from(sorted(mat.MATERIALS)), min_size=2, max_size=2),
+    radii=st.lists(st.floats(1e-3, 1e-2), min_size=2, max_size=2),
+    velocity=st.floats(0.05, 5.0),
+)
+def test_two_free_beads_are_the_two_body_hertz_impact(backend, materials, radii, velocity):
+    """Bead 1 of two free beads (any two materials and radii) hits bead 2: the peak is the Hertz impact's
+    K^(2/5) (5/4 m* v^2)^(3/5) with m* = m1 m2 / (m1 + m2) and the pair's E* and R*, computed here from the
+    materials' E and nu, to within the plan's rtol; compare's model for the leading peak is this one."""
+    sc = two_bead_scene(materials, radii, velocity)
+    m1, m2 = (float(m) for m in sc.bead_masses)
+    a, b = (mat.MATERIALS[name] for name in materials)
+    e_star = 1.0 / ((1 - a.poisson_ratio**2) / a.youngs_modulus + (1 - b.poisson_ratio**2) / b.youngs_modulus)
+    k = 4.0 / 3.0 * e_star * np.sqrt(radii[0] * radii[1] / (radii[0] + radii[1]))
+    exact = hertz_impact(k, m1 * m2 / (m1 + m2), velocity)
+    result = run_scene(sc, backend=backend, rtol=RTOL)
+    assert result.observables()["leading_peak_force"] == pytest.approx(exact["peak_force"], rel=RTOL)
+    model = {p.name: p for p in predict(sc)}["pair_impact_peak_force"]
+    assert model.value == pytest.approx(exact["peak_force"], rel=1e-12)
+    assert applicability("pair_impact_peak_force", sc, quantity="leading_peak_force").applies

@@ -108,10 +108,17 @@ def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
 def one_bead_impacts(scene) -> list[tuple[str, dict[str, float]]]:
     """A one-bead scene's contacts as two-body impacts (models.two_body_impact), in the order they
     happen: the striker on the bead (reduced mass, the striker's speed), then the bead on the wall (the
-    bead's mass, at the speed it was given or the striker's). Empty for longer chains."""
+    bead's mass, at the speed it was given or the striker's). Two free beads, bead 1 given a velocity and
+    nothing pressing them together: bead 1 on bead 2 (their reduced mass). Empty for longer chains."""
+    ld = scene.loading
+    if scene.chain.beads == 2 and ld.kind == "velocity" and scene.effects.far_end == "free":
+        if scene.effects.precompression:  # a contact loaded from the start: not an impact
+            return []
+        m1, m2 = (float(m) for m in scene.bead_masses)
+        return [("pair", models.two_body_impact(scene.contact_laws[0], m1 * m2 / (m1 + m2), ld.velocity))]
     if scene.chain.beads != 1:
         return []
-    m1, ld = float(scene.bead_masses[0]), scene.loading
+    m1 = float(scene.bead_masses[0])
     v = 0.0 if ld.is_force else ld.velocity
     out = []
     if ld.kind == "striker":

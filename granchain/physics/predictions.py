@@ -103,7 +103,10 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
     why_not: list[str] = []
     if scene.contact.law != law:
         why_not.append(f"a {law} model; this chain's contact law is {scene.contact.law}")
-    why_not += _outside_the_papers_chain(scene)
+    outside = _outside_the_papers_chain(scene)
+    if needs == "collision":  # two beads by definition: not the paper's long chain, and need not be
+        outside = [w for w in outside if not w.startswith(SHORT_CHAIN)]
+    why_not += outside
     ld = scene.loading
     if needs == "collision":
         if ld.kind != "velocity" or scene.chain.beads != 2 or scene.effects.far_end != "free":
@@ -130,8 +133,28 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
     return Applicability(True, f"{regime.text}; {chain}{wall}")
 
 
+def _contact_model_applies(law: str, scene) -> Applicability:
+    """Applicability of a closed form of the nominal bead pair's contact (a yield force): the scene's
+    law, every contact the nominal one (uniform beads), and nothing else on it (no dashpot's force, no
+    static load from the start); the chain's length and loading aside."""
+    why_not = []
+    if scene.contact.law != law:
+        why_not.append(f"a {law} model; this chain's contact law is {scene.contact.law}")
+    if scene.per_bead:
+        why_not.append("the beads differ: a closed form of the nominal bead pair (bead 1's radius and material)")
+    if scene.effects.dashpot:
+        why_not.append(f"viscous dashpot (gamma = {scene.effects.dashpot:g} N s/m)")
+    if scene.effects.precompression:
+        why_not.append(f"static precompression F0 = {scene.effects.precompression:g} N")
+    if why_not:
+        return Applicability(False, "; ".join(why_not))
+    return Applicability(True, "the nominal bead pair's contact")
+
+
 def _effect_model_applies(law: str, needs: str, scene) -> Applicability:
     """Applicability of the effects' models (EFFECT_DOMAINS), which hold where the paper's do not."""
+    if needs == "contact":  # the nominal pair's own closed form: nothing of the chain's dynamics
+        return _contact_model_applies(law, scene)
     why_not = []
     if scene.contact.law != law:
         why_not.append(f"a {law} model; this chain's contact law is {scene.contact.law}")
@@ -145,9 +168,15 @@ def _effect_model_applies(law: str, needs: str, scene) -> Applicability:
     else:
         if scene.effects.precompression:
             why_not.append(f"static precompression F0 = {scene.effects.precompression:g} N")
-        if scene.chain.beads != 1:
-            why_not.append(f"{scene.chain.beads} beads: a two-body impact needs one bead (its neighbours push back)")
         ld, wall = scene.loading, scene.effects.far_end == "wall"
+        if needs == "pair_impact":
+            if scene.chain.beads != 2 or ld.kind != "velocity" or wall:
+                why_not.append(
+                    f"{scene.chain.beads} beads, a {ld.kind} load, far end {scene.effects.far_end}: needs two beads, "
+                    "bead 1 given a velocity, the far end free"
+                )
+        elif scene.chain.beads != 1:
+            why_not.append(f"{scene.chain.beads} beads: a two-body impact needs one bead (its neighbours push back)")
         if needs == "striker_impact" and (ld.kind != "striker" or wall):
             why_not.append(f"a {ld.kind} load, far end {scene.effects.far_end}: needs a striker and a free bead")
         if needs == "wall_impact" and (ld.kind != "velocity" or not wall):
@@ -161,6 +190,8 @@ def _effect_model_applies(law: str, needs: str, scene) -> Applicability:
 #: measured over the middle half of the chain; below this many beads they do not apply (a two-bead
 #: chain is a two-body impact: Eq. 8 gives 159.6 N where the exact impact gives 187.8 N)
 MIN_CHAIN_BEADS = 10
+#: how the reason a chain is shorter than that begins (a two-body model drops it)
+SHORT_CHAIN = "a chain of "
 
 
 def _outside_the_papers_chain(scene) -> list[str]:
@@ -169,7 +200,7 @@ def _outside_the_papers_chain(scene) -> list[str]:
     why_not: list[str] = []
     if scene.chain.beads is not None and scene.chain.beads < MIN_CHAIN_BEADS:
         why_not.append(
-            f"a chain of {scene.chain.beads} bead{'s' if scene.chain.beads > 1 else ''}: the paper's models are "
+            f"{SHORT_CHAIN}{scene.chain.beads} bead{'s' if scene.chain.beads > 1 else ''}: the paper's models are "
             f"for a long chain, where the wave forms over the first beads (at least {MIN_CHAIN_BEADS})"
         )
     if scene.per_bead:

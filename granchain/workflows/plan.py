@@ -406,13 +406,13 @@ def _timestep_choice(scene, method: str, rtol_plan: float, omega: float, stiffes
 
 
 def _one_bead_end_time(scene, impacts) -> PlanChoice:
-    """A one-bead scene's end time: 1.5 x its impacts' contact times, after the load."""
+    """A one-bead (or two free beads') scene's end time: 1.5 x its impacts' contact times, after the load."""
     load = scene.loading.duration if scene.loading.is_force else 0.0
     end = load + 1.5 * sum(i["duration"] for _, i in impacts)
     return PlanChoice(
         "end_time",
         end,
-        "one bead: 1.5 x the contact time of "
+        f"{'one bead' if scene.chain.beads == 1 else 'two free beads'}: 1.5 x the contact time of "
         + " then ".join(f"the {name}'s impact ({i['duration']:.3g} s)" for name, i in impacts)
         + (f", after a load of {load:.3g} s" if load else ""),
     )

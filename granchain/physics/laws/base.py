@@ -356,6 +356,9 @@ EFFECT_DOMAINS = {
     "precompressed": "a uniform Hertz chain under static precompression, no dashpot",
     "striker_impact": "a striker on one free bead, Hertz contact, no dashpot or precompression (two bodies)",
     "wall_impact": "one bead given a velocity against the wall, Hertz contact, no dashpot or precompression",
+    "pair_impact": "two free beads, bead 1 given a velocity, Hertz contact, no dashpot or precompression (two bodies)",
+    # a closed form of the nominal bead pair's contact itself (a yield force): any chain of uniform beads
+    "contact": "the nominal bead pair's contact: uniform beads with this law",
 }
 
 #: every value a law's model_domains may hold

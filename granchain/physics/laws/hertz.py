@@ -71,10 +71,12 @@ class HertzLaw(ContactLaw):
         **dict.fromkeys(("precompressed_sound_speed", "precompressed_solitary_wave_speed"), "precompressed"),
         **dict.fromkeys(("striker_impact_peak_force", "striker_impact_duration"), "striker_impact"),
         **dict.fromkeys(("wall_impact_peak_force", "wall_impact_duration"), "wall_impact"),
+        **dict.fromkeys(("pair_impact_peak_force", "pair_impact_duration"), "pair_impact"),
     }
     compare_models: ClassVar[dict[str, tuple[tuple[str, str], ...]]] = {
         "leading_peak_force": (
             ("short_load_peak_force", "Eq. 8"),
+            ("pair_impact_peak_force", "Hertz impact (two beads)"),
             ("long_load_peak_force_upper", "Eq. 15 + Nesterenko (upper bound)"),
         ),
         "wave_speed": (
@@ -306,10 +308,14 @@ def _effect_predictions(scene) -> list[dict]:
                 valid=EFFECT_DOMAINS["precompressed"] + "; the speed of a small perturbation's front",
             )
         )
-    if scene.chain.beads != 1:
-        return out
     ld, m1 = scene.loading, float(scene.bead_masses[0])
-    if ld.kind == "striker":
+    if scene.chain.beads == 2 and ld.kind == "velocity" and scene.effects.far_end == "free":
+        m2 = float(scene.bead_masses[1])
+        hit = models.hertz_impact(float(scene.contact_laws[0].k), m1 * m2 / (m1 + m2), ld.velocity)
+        name, law_text = "pair_impact", "bead 1 on bead 2, m* = m1 m2 / (m1 + m2), their E* and R*"
+    elif scene.chain.beads != 1:
+        return out
+    elif ld.kind == "striker":
         ms = scene.striker_mass
         hit = models.hertz_impact(float(scene.striker_law.k), ms * m1 / (ms + m1), ld.velocity)
         name, law_text = "striker_impact", "striker on bead 1, m* = M m / (M + m)"

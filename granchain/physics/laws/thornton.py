@@ -409,12 +409,12 @@ class ThorntonLaw(ContactLaw):
         return np.maximum(alpha_max, self.yield_overlap)
 
     # ---- analytic predictions (granchain.physics.predictions asks every law for its own)
-    #: model name -> what it needs: "any" (every Thornton chain) or "collision" (two beads, bead 1 given
-    #: a velocity, the far end free: a two-body impact)
+    #: model name -> what it needs: "contact" (the nominal bead pair's closed forms: any chain of uniform
+    #: beads) or "collision" (two beads, bead 1 given a velocity, the far end free: a two-body impact)
     model_domains: ClassVar[dict[str, str]] = {
-        "yield_force": "any",
-        "yield_overlap": "any",
-        "yield_velocity": "any",
+        "yield_force": "contact",
+        "yield_overlap": "contact",
+        "yield_velocity": "contact",
         "restitution_coefficient": "collision",
     }
 
