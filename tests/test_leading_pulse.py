@@ -1,16 +1,18 @@
 """The leading pulse (peaks.leading_pulse): tracked in the run by both backends, the same way."""
 
 from dataclasses import replace
+from unittest import mock
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from granchain.cli import resolve_scene
 from granchain.peaks import lead_floor
 from granchain.problem import ChainProblem
 from granchain.reference.solver import solve_chain
+from granchain.reference.verlet import VerletIntegrator
 from granchain.scene import parse_scene
 from granchain.workflows.run import plan_for, run_scene
 from tests.scenegen import scenes
@@ -59,12 +61,20 @@ def test_a_plastic_front_leads_with_its_first_pulse_not_its_largest():
     assert np.max(np.abs(sol.leading_pulse_time[c] / fine.leading_pulse_time[c] - 1)) < 1e-3
 
 
-def first_maximum(t, f, f0, floor, fall=0.0):
+def first_maximum(t, f, f0, floor, fall=0.0, setups=None):
     """The leading pulse of sampled forces: the first maximum rising more than floor above f0 (the
     first sample above its left neighbour (or equal) and strictly above its right one, its value the
     running peak there refined by the parabola through the three samples: what the backends track),
     frozen at the first sample from there on at most `fall` below the running peak (a rise above it
-    first moves it on); (nan, nan) if none. fall = 0: the first maximum itself."""
+    first moves it on); (nan, nan) if none. fall = 0: the first maximum itself.
+
+    setups: {sample index: force} where a LAMMPS run's setup recomputed the force of that sample's
+    state (a breakpoint: the load's end, the start of a segment's shorter last step; the dashpot reads
+    the full-step velocities there): the sample is first taken as the step left it (its right neighbour's
+    maximum test), then replaced by the recomputed force, which joins the running peak and the fall
+    test but refines no maximum of its own (it is no new sample)."""
+    setups = setups or {}
+    f = np.array(f, dtype=float)  # the samples as the run continues from them (setups replace theirs)
     peak, tpeak, waiting = f[0], t[0], False
     for i in range(1, len(f)):
         if f[i] > peak:
@@ -82,7 +92,28 @@ def first_maximum(t, f, f0, floor, fall=0.0):
             waiting = waiting or peak - f0 > floor
         if waiting and f[i] <= peak - fall:
             return peak, tpeak
+        if i in setups:
+            f[i] = setups[i]
+            if f[i] > peak:
+                peak, tpeak = f[i], t[i]
+            if waiting and f[i] <= peak - fall:
+                return peak, tpeak
     return np.nan, np.nan
+
+
+def recording_setups(setups: list, contacts: int):
+    """A patch of the reference's Verlet that appends (t, the forces of the chain's `contacts` contacts)
+    to `setups` at every LAMMPS run setup that recomputes the forces (a dashpot's, at a breakpoint)."""
+    start_segment = VerletIntegrator.start_segment
+
+    def recorded(self, state, seg_start):
+        recomputed = start_segment(self, state, seg_start)
+        if recomputed:
+            front = state.problem.front
+            setups.append((state.t, state.fc[front : front + contacts].copy()))
+        return recomputed
+
+    return mock.patch.object(VerletIntegrator, "start_segment", recorded)
 
 
 def sampled_histories(sol, f0: float) -> tuple[np.ndarray, np.ndarray]:
@@ -94,22 +125,72 @@ def sampled_histories(sol, f0: float) -> tuple[np.ndarray, np.ndarray]:
     return t, f
 
 
+def damped_step_chain(duration: float) -> str:
+    """A 12-bead aluminium bilinear chain (2 mm, k = 1e6 N/m, no elastic unloading) with a dashpot
+    (1 N s/m) under a 1 N step of the given duration: the planned step is 1.131e-7 s."""
+    return f"""
+[chain]
+beads = 12
+radius = 2e-3
+material = "aluminium-6061-t6"
+[contact]
+law = "bilinear"
+unloading_coeff = 0.0
+plastic_stiffness = 1e6
+[loading]
+kind = "step"
+amplitude = 1.0
+duration = {duration!r}
+[run]
+end_time = "auto"
+timestep = "auto"
+[outputs]
+peak_force = true
+histories = [1, 2]
+[damping]
+dashpot = 1.0
+"""
+
+
+#: the load ends 0.03 steps into a step, 1.2 steps before contact 1's first maximum under a long step:
+#: the force of contact 1 peaks at the short step, 1.07422 N (1.07628 N on the samples without the
+#: setups' forces)
+DAMPED_PEAK_AT_THE_LOAD_END = parse_scene(damped_step_chain(2.4997530397364922e-05), source="damped-end.toml")
+#: the load ends 0.02 steps into a step while contact 4's force rises (0.8848 N): the dashpot's
+#: reading at the short step's end (half of 0.02 steps behind) is below the one before it (half a step
+#: behind) although the force rises; the setup's forces (full-step velocities) rise, and the leading
+#: pulse is the front's, 1.0826 N at 59.3 us (0.8850 N at 48.4 us on the samples without them)
+DAMPED_RISE_AT_THE_LOAD_END = parse_scene(damped_step_chain(4.840820666842339e-05), source="damped-rise.toml")
+
+
 @settings(max_examples=12, deadline=None)
+@example(scene=DAMPED_PEAK_AT_THE_LOAD_END)
+@example(scene=DAMPED_RISE_AT_THE_LOAD_END)
 @given(scene=scenes(max_beads=25))
 def test_leading_pulse_is_the_first_maximum_of_the_force_history(scene):
     """On any scene (Verlet, every step sampled at every contact): the tracked leading pulse is the
     first maximum of the contact's sampled force above the floor that it then falls lead_fall below
-    (LAMMPS's force resolution on a precompressed chain, else 0), not a later or larger one."""
+    (LAMMPS's force resolution on a precompressed chain, else 0), not a later or larger one.
+
+    The samples are the history's, and at a breakpoint where a LAMMPS run's setup recomputes the
+    forces the recomputed one (first_maximum's setups): with a dashpot it differs, the history keeps
+    the step's. On the history alone a dashpot makes false maxima at a short step: its force reads the
+    velocities half of that step behind, and half a full step behind before it (DAMPED_RISE_AT_THE_LOAD_END)."""
     from granchain.peaks import lead_fall, lead_floor
 
     sc, _ = plan_for(scene, "reference", "verlet", 1e-2)
     n = sc.chain.beads
     sc = replace(sc, outputs=replace(sc.outputs, histories=tuple(range(1, n)), history_interval=None))
-    sol = run_scene(sc, method="verlet").solution
+    setups: list = []
+    with recording_setups(setups, n - 1):
+        sol = run_scene(sc, method="verlet").solution
     f0 = float(sc.effects.precompression)
     t, forces = sampled_histories(sol, f0)
+    row = {float(ti): i for i, ti in enumerate(t)}
+    assert not setups or sc.effects.dashpot  # (only a dashpot's force changes at a setup)
     for j, c in enumerate(range(1, n)):
-        want, when = first_maximum(t, forces[:, j], f0, lead_floor(sc), lead_fall(sc))
+        at_setups = {row[ts]: float(fs[c - 1]) for ts, fs in setups}
+        want, when = first_maximum(t, forces[:, j], f0, lead_floor(sc), lead_fall(sc), at_setups)
         got, got_t = sol.leading_pulse_force[c - 1], sol.leading_pulse_time[c - 1]
         if np.isnan(got):
             assert np.isnan(want) or not np.isfinite(sol.time_of_peak[c - 1]), c
