@@ -18,7 +18,9 @@ overlap           every contact's overlap below OVERLAP_WATCH x the smaller radi
                   through each other go far beyond. The paper's own I = 0.4 N s pulse reaches 11% of
                   R. A taper's big beads may overlap more than half its smallest bead's radius and be
                   fine: a bound on the whole chain's smallest radius would stop them. On a uniform chain
-                  this is the same bound, OVERLAP_WATCH x R, on every contact.
+                  this is the same bound, OVERLAP_WATCH x R, on every contact. (OVERLAP_WATCH lives in
+                  granchain.physics.effects: the planner's frequency bound holds each contact's force
+                  to its law's force there, physics.effects.watched_force.)
 energy balance    |kinetic + stored + dissipated - work| <= ENERGY_WATCH x the largest energy put in
                   so far. Numbers behind the bound (default scene, dt as a fraction of the
                   predicted stability limit): Verlet 0.4% / 1.9% / 9% at 0.25 / 0.5 / 0.9 of it and
@@ -35,12 +37,11 @@ from __future__ import annotations
 import numpy as np
 
 from granchain.exceptions import GranchainError
-from granchain.physics.effects import external_forces
+from granchain.physics.effects import OVERLAP_WATCH, external_forces
 from granchain.schedule import step_plan, step_times
 
 ENERGY_WATCH = 0.05
 MOMENTUM_WATCH = 1e-6
-OVERLAP_WATCH = 0.5
 
 
 def contact_overlap_bounds(scene) -> np.ndarray:

@@ -239,6 +239,60 @@ def _last_maximum_above_half(solution, f0: float) -> float:
     return float(max(times, default=0.0))
 
 
+#: hypothesis's draw (seed 11 of the end-time test): a brass taper 0.806 over 39 beads, its last 1.33 um,
+#: walled, F0 = 1.1e-4 N, bead 1 kicked at 1.32 m/s. The nominal chain's expected force (334 N, 667 N
+#: on the wall) would be an overlap of 171 radii of bead 39; the reference's Verlet at 2e-10, 1e-10
+#: and 5e-11 s (to its stop, 6.32e-5 s) peaks at 0.027 N on the wall and 0.019-0.028 N on contacts
+#: 32-38, where the run watch (half of bead 39's radius) allows 0.105 N on the wall
+MICRON_TAPER = parse_scene(
+    chain_text(
+        'radius = 4.76e-3\ntaper = 0.8062461492694982\nmaterial = "brass"\n',
+        39,
+        1.3189938771275271,
+        0.00011064512558197442,
+        wall=True,
+    ),
+    source="micron-taper.toml",
+)
+
+
+def watched_frequency_bound(sc) -> float:
+    """The Gershgorin bound of a Hertz chain's highest frequency with every contact at the largest force
+    the run watch lets it carry (an overlap of half the smaller radius of its two bodies, a wall's flat:
+    bead N's): the tangent 3/2 k sqrt(alpha) there."""
+    r, m = np.asarray(sc.bead_radii, dtype=float), np.asarray(sc.bead_masses, dtype=float)
+    kt = 1.5 * np.asarray(sc.contact_stiffnesses) * np.sqrt(0.5 * np.minimum(r[:-1], r[1:]))
+    kw = 1.5 * float(sc.wall_law.k) * np.sqrt(0.5 * r[-1]) if sc.effects.far_end == "wall" else 0.0
+    kl, kr = np.concatenate(([0.0], kt)), np.concatenate((kt, [kw]))
+    ml, mr = np.concatenate(([np.inf], m[:-1])), np.concatenate((m[1:], [np.inf]))
+    return float(np.sqrt(np.max((kl + kr) / m + kl / np.sqrt(m * ml) + kr / np.sqrt(m * mr))))
+
+
+def test_a_micron_taper_is_planned_for_the_forces_its_run_can_carry():
+    """MICRON_TAPER's step (Verlet, rtol 1e-3) is set by bead 39 on the wall at the force the run watch
+    lets its contacts carry (0.105 N on the wall), not at twice the nominal chain's 334 N: 3.3e-12 s and
+    32 million steps to the planned end for those, 1.46e-11 s and 7.4 million with the watch's forces;
+    the reason says so."""
+    from granchain.workflows.plan import plan_scene
+
+    plan = plan_scene(MICRON_TAPER, method="verlet")
+    assert plan.omega_max <= watched_frequency_bound(MICRON_TAPER) * (1 + 1e-12)
+    step = plan.choices[0]
+    assert step.name == "timestep"
+    assert "bead 39 (on the wall), its contacts' forces held" in step.reason
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck))
+@given(sc=varied_chains())
+def test_no_contact_is_planned_for_more_force_than_its_run_can_carry(sc):
+    """On any varied Hertz chain (taper to a micron bead, radii, materials, dimers, F0, a wall), the
+    planner's highest frequency is no more than every contact's at the largest force the run watch lets
+    it carry: a contact that carried more would stop the run."""
+    from granchain.workflows.plan import plan_scene
+
+    assert plan_scene(sc, method="verlet").omega_max <= watched_frequency_bound(sc) * (1 + 1e-12)
+
+
 @pytest.mark.slow
 @SETTINGS
 @example(sc=LINEAR_UNIFORM)

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.linalg import eigh_tridiagonal
 
 from granchain.physics import models
-from granchain.physics.effects import Bounds, active_effects
+from granchain.physics.effects import OVERLAP_WATCH, Bounds, active_effects, watched_force
 
 
 def step_equivalent(scene) -> tuple[float, float] | None:
@@ -71,16 +71,29 @@ def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
     stiffness on bead 1), precompression (every contact carries F0 on top of the wave), a dashpot (the
     overdamped modes decay at up to the Gershgorin bound of M^-1/2 C M^-1/2, and an explicit integrator
     must resolve that rate like a frequency). Each effect says what it changes
-    (granchain.physics.effects: chain_bounds along the chain, end_bounds at its ends).
+    (granchain.physics.effects: chain_bounds along the chain, end_bounds at its ends). No contact's
+    force is taken above what the run watch lets it carry (physics.effects.watched_force: its law at
+    an overlap of OVERLAP_WATCH x the smaller radius of its bodies): a run that reached more is
+    stopped, and on a taper's micron beads the nominal chain's force would be an overlap of many
+    radii (a 0.806 taper's 1.3 um last bead: 667 N on the wall, 171 radii; the watch holds it to 0.1 N).
     """
     # beads = "auto" (a uniform chain: no per-bead lists): three beads hold every kind of node
     n = scene.chain.beads or 3
-    b = Bounds(force=expected_peak_force(scene), mass=np.full(n, scene.mass), law=scene.law.per_contact(n - 1))
+    b = Bounds(
+        force=expected_peak_force(scene),
+        mass=np.full(n, scene.mass),
+        radius=np.full(n, float(scene.chain.radius)),
+        law=scene.law.per_contact(n - 1),
+    )
     active = active_effects(scene)
-    for effect in active:  # along the chain: masses, laws, the force level, the dashpot
+    for effect in active:  # along the chain: masses, radii, laws, the force level, the dashpot
         effect.chain_bounds(scene, b)
     m = b.mass
-    kt = np.broadcast_to(_tangent(b.law, b.force), (n - 1,))
+    # no contact carries more than the run watch lets it (watched_force): on a taper's micron beads the
+    # nominal chain's expected force is an overlap of many radii, far outside the law's domain
+    held = watched_force(b.law, np.minimum(b.radius[:-1], b.radius[1:]))
+    force = np.minimum(b.force, held)
+    kt = np.broadcast_to(_tangent(b.law, force), (n - 1,))
     # neighbours as (stiffness, neighbour mass) on each side; a missing neighbour adds nothing
     b.kl, b.ml = np.concatenate(([0.0], kt)), np.concatenate(([np.inf], m[:-1]))
     b.kr, b.mr = np.concatenate((kt, [0.0])), np.concatenate((m[1:], [np.inf]))
@@ -96,12 +109,19 @@ def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
     i = int(np.argmax(np.maximum(np.sqrt(rows), damp)))
     omega = float(max(np.sqrt(rows[i]), damp[i]))
     where = f"bead {i + 1}"
+    beside = [c for c in (i - 1, i) if 0 <= c < n - 1]
+    held_here = bool(np.any(force[beside] < b.force)) or (i == n - 1 and "wall_held" in extra)
     if "striker" in extra and max(math.sqrt(extra["striker"]), 0.0) > omega:
-        omega, where = math.sqrt(extra["striker"]), "the striker"
+        omega, where, held_here = math.sqrt(extra["striker"]), "the striker", False
     if damp[i] > np.sqrt(rows[i]):
         where += f" (the dashpot's decay rate {damp[i]:.3g} 1/s)"
     elif "wall" in extra and i == n - 1:
         where += " (on the wall)"
+    if held_here:
+        where += (
+            f", its contacts' forces held to the run watch's overlap bound ({OVERLAP_WATCH:g} x the smaller "
+            "radius): the expected force would crush them"
+        )
     return omega, where
 
 

@@ -6,7 +6,7 @@ See granchain.physics.effects.base for what an effect supplies and the rules for
 
 from __future__ import annotations
 
-from granchain.physics.effects.base import REGISTRY, Bounds, Effect
+from granchain.physics.effects.base import OVERLAP_WATCH, REGISTRY, Bounds, Effect, watched_force
 from granchain.physics.effects.dashpot import DashpotEffect
 from granchain.physics.effects.per_bead import PerBeadEffect
 from granchain.physics.effects.precompression import PrecompressionEffect
@@ -22,6 +22,7 @@ EFFECTS.update(
 __all__ = [
     "EFFECTS",
     "FAR_ENDS",
+    "OVERLAP_WATCH",
     "Bounds",
     "Effect",
     "active_effects",
@@ -29,6 +30,7 @@ __all__ = [
     "momentum_kept",
     "refusal",
     "sections",
+    "watched_force",
     "work",
 ]
 

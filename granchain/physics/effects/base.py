@@ -63,6 +63,31 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+#: The run watch stops a run once a contact's overlap exceeds this fraction of the smaller radius of its
+#: two bodies (granchain.invariants says why). The planner's bounds hold each contact's force to its
+#: law's virgin curve there (watched_force): a run whose contact carried more would not go on.
+OVERLAP_WATCH = 0.5
+
+
+def watched_force(law, smaller_radius) -> np.ndarray:
+    """The largest force a contact carries in a run the run watch lets go on, N.
+
+    Parameters
+    ----------
+    law : ContactLaw
+        The contact's law (or one over several contacts).
+    smaller_radius : array_like
+        The smaller radius of its two bodies (a wall's flat: the bead's), m.
+
+    Returns
+    -------
+    ndarray
+        The law's virgin-curve force at OVERLAP_WATCH x smaller_radius (elementwise); a force on the
+        unloading or reloading branches of a history law stays below the virgin curve at its largest
+        overlap.
+    """
+    return np.asarray(law.loading_force(OVERLAP_WATCH * np.asarray(smaller_radius, dtype=float)), dtype=float)
+
 
 @dataclass
 class Bounds:
@@ -75,6 +100,7 @@ class Bounds:
 
     force: float  # the largest force a bead-bead contact is expected to carry (N)
     mass: np.ndarray  # (n,) kg
+    radius: np.ndarray  # (n,) m: each contact's force is held to watched_force of its smaller bead
     law: Any  # ContactLaw over the n-1 contacts
     static_force: float = 0.0  # F0 on every contact (precompression)
     gamma: float = 0.0  # the dashpot's N s/m

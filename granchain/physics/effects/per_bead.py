@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 from typing_extensions import override
 
 from granchain.physics.effects.base import Bounds, Effect
@@ -44,4 +45,5 @@ class PerBeadEffect(Effect):
     @override
     def chain_bounds(cls, scene, b: Bounds) -> None:
         b.mass = scene.bead_masses
+        b.radius = np.asarray(scene.bead_radii, dtype=float)
         b.law = type(scene.law).join([(c, 1) for c in scene.contact_laws])

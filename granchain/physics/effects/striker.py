@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from typing_extensions import override
 
-from granchain.physics.effects.base import Bounds, Effect
+from granchain.physics.effects.base import Bounds, Effect, watched_force
 
 
 class StrikerEffect(Effect):
@@ -82,7 +82,9 @@ class StrikerEffect(Effect):
     @override
     def end_bounds(cls, scene, b: Bounds) -> None:
         ms = scene.striker_mass
-        ks = float(np.asarray(scene.striker_law.tangent_stiffness(b.force), dtype=float))
+        smaller = min(float(scene.loading.striker_radius), float(b.radius[0]))
+        f = min(b.force, float(watched_force(scene.striker_law, smaller)))  # (the run watch's bound)
+        ks = float(np.asarray(scene.striker_law.tangent_stiffness(f), dtype=float))
         b.kl[0], b.ml[0], b.gl[0] = ks, ms, b.gamma
         m0, gamma = b.mass[0], b.gamma
         b.extra["striker"] = ks / ms + ks / math.sqrt(ms * m0)

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from typing_extensions import override
 
-from granchain.physics.effects.base import Bounds, Effect
+from granchain.physics.effects.base import Bounds, Effect, watched_force
 
 FAR_ENDS = ("free", "wall")
 
@@ -96,8 +96,12 @@ class WallEffect(Effect):
     @override
     def end_bounds(cls, scene, b: Bounds) -> None:
         # a neighbour of infinite mass: only the diagonal term; its contact sees the reflected wave,
-        # up to twice the force
-        kw = float(np.asarray(scene.wall_law.tangent_stiffness(b.static_force + 2.0 * b.force), dtype=float))
+        # up to twice the force, and no more than the run watch lets bead N's flat contact carry
+        held = float(watched_force(scene.wall_law, b.radius[-1]))
+        f = min(b.static_force + 2.0 * b.force, held)
+        kw = float(np.asarray(scene.wall_law.tangent_stiffness(f), dtype=float))
+        if f == held:
+            b.extra["wall_held"] = held
         b.kr[-1], b.mr[-1], b.gr[-1] = kw, np.inf, b.gamma
         b.extra["wall"] = kw
 
