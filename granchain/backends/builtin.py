@@ -24,6 +24,7 @@ class ReferenceBackend(Backend):
     implemented_properties = tuple(PROPERTIES)
     methods = ("rk4", "verlet")
     method_text = "RK4 or velocity Verlet"
+    numpy_speed = True
 
     @override
     def calculate(self, scene, method: str, ranks: int = 1) -> Calculation:

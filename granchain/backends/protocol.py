@@ -113,6 +113,10 @@ class Backend:
         the chain's length) rather than displacements from the undeformed chain: its round-off, and so
         the error bars' round-off floor (workflows.error_estimates.roundoff_floor), scales with the
         chain's length.
+    numpy_speed : bool
+        Whether its integrators cost what the reference's numpy RK4 does per step: then a kinked law's
+        Verlet run is measured against RK4 runs by default (RK4's step is several times Verlet's, so they
+        cost less than its own companions and give a truer bar; workflows.error_estimates.against_rk4_because).
     """
 
     name: ClassVar[str]
@@ -124,6 +128,7 @@ class Backend:
     work_files: ClassVar[tuple[str, ...]] = ()
     work_in_tmp: ClassVar[bool] = False
     absolute_positions: ClassVar[bool] = False
+    numpy_speed: ClassVar[bool] = False
 
     def integrator(self, method: str | None) -> str:
         """The integrator a run with ``method`` (None: the default) uses on this backend.

@@ -59,8 +59,8 @@ def compare_scene(
     # runs the reference and LAMMPS
     prefetch = []
     if error_estimate:
-        for sc, m in ((ref_scene, method), (lam_scene, "verlet")):
-            prefetch += [(c, "rk4") for c in rk4_companions(sc, m, error_estimate == "checked")]
+        for sc, m, backend in ((ref_scene, method, REFERENCE), (lam_scene, "verlet", LAMMPS)):
+            prefetch += [(c, "rk4") for c in rk4_companions(sc, m, error_estimate == "checked", backend.numpy_speed)]
     ref_kw = dict(backend=REFERENCE, method=method, rtol=plan_rtol, error_estimate=error_estimate)
     lam_kw = dict(backend=LAMMPS, np_=np_, rtol=plan_rtol, error_estimate=error_estimate)
     with shared_reference_runs(prefetch) as shared:

@@ -277,18 +277,21 @@ BOUNDED_BY_DEFAULT = (
 )
 
 
-def against_rk4_because(method: str, scene, checked: bool = False) -> str | None:
+def against_rk4_because(method: str, scene, checked: bool = False, numpy_speed: bool = False) -> str | None:
     """Why this Verlet run's error is measured against RK4 runs rather than by Richardson, or None
-    (always None unless checked bars were asked for: ``checked``, error_estimate="checked").
+    (always None unless checked bars were asked for, ``checked``: error_estimate="checked", or the run's
+    backend integrates at numpy's speed, ``numpy_speed``: Backend.numpy_speed).
 
     A law whose slope jumps at kinks a moving contact crosses (ContactLaw.slope_kinks: bilinear,
     Thornton) gives fixed-step Verlet an error that depends on where in a step each contact crosses
     them and follows no order in dt (plastic-short-impulse, reference Verlet: Richardson's three runs
     changed sign on 47 of 59 peaks; docs/error-bars.md). RK4 locates those kinks; it cannot with a dashpot
-    (withheld_because), where Richardson stays. By default (bounded_because) the bars come from the
-    run's own companions instead: RK4 runs in numpy cost some ten times a LAMMPS run.
+    (withheld_because), where Richardson stays. By default (bounded_because) a LAMMPS run's bars come
+    from its own companions instead: RK4 runs in numpy cost some ten times a LAMMPS run. A reference
+    Verlet run's RK4 companions cost less than its own at 2 dt and 4 dt (bench_errorbar_price.py: 0.5-0.6
+    against 0.9-1.1 of the run) and give truthful bars, not bounds: they are its default.
     """
-    if not checked or not kinked_law(method, scene):
+    if not (checked or numpy_speed) or not kinked_law(method, scene):
         return None
     return (
         f"the {scene.contact.law} law's slope jumps at kinks the contacts cross, so Verlet's error follows no order "
@@ -297,14 +300,16 @@ def against_rk4_because(method: str, scene, checked: bool = False) -> str | None
     )
 
 
-def rk4_companions(scene, method: str, checked: bool = False) -> list:
+def rk4_companions(scene, method: str, checked: bool = False, numpy_speed: bool = False) -> list:
     """The RK4 companion scenes the error estimate of a run of this concrete scene with `method` will
     ask for (the reference's own at 2 dt and 4 dt, or those a Verlet run is measured against), as far
     as they are known before the run: compare starts them early (a run the planner refines after it
     asks for others)."""
     from granchain.workflows.plan import plan_scene
 
-    if withheld_because("rk4", scene) or (method != "rk4" and not against_rk4_because("verlet", scene, checked)):
+    if withheld_because("rk4", scene) or (
+        method != "rk4" and not against_rk4_because("verlet", scene, checked, numpy_speed)
+    ):
         return []
     if method != "rk4":
         return [companion_scene(scene, f) for f in against_rk4_factors(scene)]
@@ -355,6 +360,7 @@ def estimate_errors(
     run_rk4=None,
     checked: bool = False,
     absolute_positions: bool = False,
+    numpy_speed: bool = False,
 ) -> ErrorReport:
     """Run a result's companions with run_one(scene) -> RunResult and estimate every error.
 
@@ -362,10 +368,11 @@ def estimate_errors(
     (rk4 or verlet); stable_timestep: the planner's stability limit for this scene and integrator;
     run_rk4(scene) -> RunResult: the reference RK4 run of a scene, for a Verlet run whose law needs it
     (against_rk4_because; None: Richardson always); absolute_positions: the backend integrates
-    absolute positions (Backend.absolute_positions; its round-off floor, roundoff_floor).
+    absolute positions (Backend.absolute_positions; its round-off floor, roundoff_floor); numpy_speed:
+    the backend integrates at numpy's speed (Backend.numpy_speed; against_rk4_because).
     """
     scene = result.scene
-    if run_rk4 is not None and against_rk4_because(method, scene, checked):
+    if run_rk4 is not None and against_rk4_because(method, scene, checked, numpy_speed):
         report = _against_rk4(result, run_rk4)
         report.why_unchecked = unchecked_because(method, scene)
         return report

@@ -237,7 +237,14 @@ def _estimate_errors(result, plan, backend: Backend, method: str, np_: int, chec
         return _execute(scene, REFERENCE, "rk4", 1).result
 
     return estimate_errors(
-        result, run_one, method, stable, run_rk4=run_rk4, checked=checked, absolute_positions=backend.absolute_positions
+        result,
+        run_one,
+        method,
+        stable,
+        run_rk4=run_rk4,
+        checked=checked,
+        absolute_positions=backend.absolute_positions,
+        numpy_speed=backend.numpy_speed,
     )
 
 
