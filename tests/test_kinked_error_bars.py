@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 
 from granchain.lammps import server
 from granchain.workflows import error_estimates as errors
+from granchain.workflows.error_estimates import rk4_companions_cost
 from granchain.workflows.plan import STABILITY, highest_frequency, predicted_error
 from granchain.workflows.run import plan_for, run_scene
 
@@ -90,7 +91,8 @@ def test_kinked_verlet_bars_come_from_its_own_companions_by_default():
     of the run's steps, no RK4 run: RK4 in numpy costs some ten LAMMPS runs), each status and the
     method line saying so; with error_estimate="checked" it is measured against RK4 runs, and the
     default's why_unchecked says what it leaves and how to ask for that. A reference Verlet run (numpy
-    itself: RK4's companions cost it less than its own) is measured against RK4 runs by default."""
+    itself) is measured against RK4 runs by default where they cost at most the run: at a step a tenth
+    of the planned one, not at the planned step (RK4 at about 3 dt there)."""
     from granchain.scene import parse_scene
 
     from .test_error_estimate import BILINEAR_CHAIN
@@ -110,9 +112,13 @@ def test_kinked_verlet_bars_come_from_its_own_companions_by_default():
     assert got.against == "rk4"
     assert got.bound is None
     assert "RK4" in got.why_unchecked
-    ref = run_scene(sc, backend="reference", method="verlet", error_estimate=True).errors
-    assert ref.against == "rk4"
-    assert ref.bound is None
+    planned = plan_for(sc, "reference", "verlet", None)[0]
+    fine = replace(planned, run=replace(planned.run, timestep=planned.run.timestep / 10))
+    for scene, rk4 in ((planned, False), (fine, True)):
+        assert (rk4_companions_cost(scene) <= 1.0) == rk4
+        ref = run_scene(scene, backend="reference", method="verlet", error_estimate=True).errors
+        assert (ref.against == "rk4") == rk4
+        assert (ref.bound is None) == rk4
 
 
 @settings(max_examples=30, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)

@@ -288,10 +288,13 @@ def against_rk4_because(method: str, scene, checked: bool = False, numpy_speed: 
     changed sign on 47 of 59 peaks; docs/error-bars.md). RK4 locates those kinks; it cannot with a dashpot
     (withheld_because), where Richardson stays. By default (bounded_because) a LAMMPS run's bars come
     from its own companions instead: RK4 runs in numpy cost some ten times a LAMMPS run. A reference
-    Verlet run's RK4 companions cost less than its own at 2 dt and 4 dt (bench_errorbar_price.py: 0.5-0.6
-    against 0.9-1.1 of the run) and give truthful bars, not bounds: they are its default.
+    Verlet run's RK4 companions give truthful bars, not bounds, and are its default where they cost at
+    most the run (rk4_companions_cost; on the bundled plastic scenes 0.6-0.7 of it, against 0.9-1.1 for
+    its own companions at 2 dt and 4 dt: bench_errorbar_price.py).
     """
-    if not (checked or numpy_speed) or not kinked_law(method, scene):
+    if not kinked_law(method, scene):
+        return None
+    if not checked and not (numpy_speed and rk4_companions_cost(scene) <= 1.0):
         return None
     return (
         f"the {scene.contact.law} law's slope jumps at kinks the contacts cross, so Verlet's error follows no order "
@@ -333,6 +336,19 @@ RK4_COMPANION_SHARE = 0.1
 #: below this many dt the RK4 companions stay at 2 dt and 4 dt: the reference's own companions there
 #: (granchain compare makes each run once for both backends) cost less than slightly coarser new ones
 SHARED_BELOW = 3.0
+
+
+#: what an RK4 step of the reference costs in numpy, in steps of its Verlet (four force evaluations to
+#: one, but both pay the same per-step bookkeeping, and a kink crossing costs RK4 two more tries):
+#: measured 3.3 on plastic-short-impulse and 2.5 on thornton-short-impulse (bench_errorbar_price.py,
+#: 2026-11-27: the RK4 companions' time over the Verlet run's, times their steps' share)
+RK4_STEP_COST = 3.3
+
+
+def rk4_companions_cost(scene) -> float:
+    """What the RK4 runs a numpy Verlet run of this scene is measured against cost, as a share of that
+    run: their two steps' shares of its steps (against_rk4_factors) times RK4_STEP_COST."""
+    return RK4_STEP_COST * sum(1.0 / f for f in against_rk4_factors(scene))
 
 
 def against_rk4_factors(scene) -> tuple[float, float]:
