@@ -112,6 +112,25 @@ def every_contact_complete(
     return complete_peaks(peak_force, force_min_after_peak, unreached_as_nan(peak_force, time_of_peak, static), static)
 
 
+def still_rising(complete: np.ndarray, time_of_peak: np.ndarray, velocity: np.ndarray) -> np.ndarray:
+    """Which contacts the wave is still arriving at when the run ends: the one definition, used for
+    every backend (from the recorded end state, not in-run).
+
+    complete: complete_peaks; time_of_peak: nan for contacts not reached; velocity: every bead's
+    velocity at the end of the run (N,), m/s, along the chain. Still rising: reached, its peak not
+    complete (its force has stayed above PEAK_PASSED_FRACTION of its peak since: the stop check's
+    "not passed"), and its overlap still closing at the end (the bead behind the contact moving
+    faster than the one ahead): the force grows towards a peak the run has not seen, which may exceed
+    the peak so far (a main wave rising behind a smaller precursor). A peak not complete whose force
+    falls at the end is a maximum the run has seen.
+    """
+    complete = np.asarray(complete, dtype=bool)
+    v = np.asarray(velocity, dtype=float)
+    if v.size != complete.size + 1:  # a backend without the end state: nothing is known to rise
+        return np.zeros(complete.shape, dtype=bool)
+    return np.isfinite(np.asarray(time_of_peak, dtype=float)) & ~complete & (v[:-1] > v[1:])
+
+
 def stop_force_floor(scene) -> float:
     """The smallest peak that counts as the leading wave for [run] stop_after_contact (both backends):
     the static force plus REACHED_FRACTION of the largest expected force. Round-off forces ahead of

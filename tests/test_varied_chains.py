@@ -441,6 +441,71 @@ def test_a_walled_ptfe_chain_that_ramps_past_every_front_estimate_is_run_again_l
     assert planned.run.end_time < arrival < s.end_time <= 1.5 * arrival
 
 
+#: numpy's draw (benchmarks/bench_ptfe_end_time.py 100 --seed 2 --precompressed mixed, its chain 10): PTFE
+#: among metals, walled, F0 = 0.304 N: at the window's end (contact 18) a precursor peaks 11.4 N above F0
+#: at 524 us and the main wave behind it still rises at the planned end, 909 us (55.7 N so far)
+MAIN_WAVE_BEHIND_A_PRECURSOR = material_chain(
+    ["brass", "tungsten-carbide", "tungsten-carbide", "brass", "tungsten-carbide", "ptfe", "ptfe"]
+    + ["chrome-steel-52100", "tungsten-carbide", "brass", "brass", "ptfe", "ptfe", "brass", "tungsten-carbide"]
+    + ["stainless-steel-316", "soda-lime-glass", "soda-lime-glass", "tungsten-carbide", "brass", "brass"]
+    + ["tungsten-carbide", "aluminium-6061-t6", "chrome-steel-52100", "aluminium-6061-t6"],
+    1.4931250803200828,
+    0.3036617822947965,
+    source="main-wave.toml",
+)
+
+
+def test_a_main_wave_still_rising_at_the_planned_end_is_said_and_run_again_longer():
+    """The planned end comes while the window's last contact's force still rises behind a smaller
+    precursor: its peak so far is not complete (peaks.csv) and the run says why (peaks.still_rising in
+    unmeasured_outputs: the command line exits 1 on it); the plan is run again, longer
+    (plan.extended_plan, as run_scene does), its stop check ending it once the main wave has passed, and
+    the peak it reports there is the main wave's maximum, complete; the leading pulse (the precursor,
+    the first maximum) stands."""
+    from granchain.postprocess.observables import unmeasured_outputs
+    from granchain.workflows.plan import extended_plan, plan_scene
+
+    plan = plan_scene(MAIN_WAVE_BEHIND_A_PRECURSOR, method="verlet")
+    first = run_reference(plan.scene, "verlet").solution
+    b = plan.scene.window[1]
+    assert first.end_time == plan.scene.run.end_time  # the stop check did not end it
+    assert not first.complete[b - 1]
+    assert first.peak_force[b - 1] > 2 * first.leading_pulse_force[b - 1]  # the main wave, above the precursor
+    said = [line for line in unmeasured_outputs(plan.scene, first) if line.startswith(f"peak_force_contact_{b}:")]
+    assert said
+    assert f"the force at contact {b} still rises at the end of the run" in said[0]
+    longer = extended_plan(MAIN_WAVE_BEHIND_A_PRECURSOR, plan, first)
+    assert longer is not None
+    s = run_reference(longer.scene, "verlet").solution
+    assert s.end_time < longer.scene.run.end_time  # the stop check ended it
+    assert s.complete[b - 1]
+    assert not unmeasured_outputs(longer.scene, s)
+    assert s.peak_force[b - 1] > first.peak_force[b - 1]
+    assert s.time_of_peak[b - 1] > first.end_time
+    assert s.leading_pulse_force[b - 1] == first.leading_pulse_force[b - 1]  # the same run up to the first end
+
+
+@pytest.mark.slow
+def test_run_scene_runs_a_main_wave_still_rising_at_the_planned_end_again_on_lammps():
+    """run_scene's own path on LAMMPS (its time step refined, then its end extended): the window's last
+    contact's force still rises at the planned end there as on the reference (the end state's
+    velocities: peaks.still_rising), and the run made again ends with its peak complete."""
+    from granchain.postprocess.observables import unmeasured_outputs
+    from granchain.workflows.run import PlanExtendedWarning
+
+    with pytest.warns(
+        PlanExtendedWarning, match=r"window's last contact was measured \(not measured: peak_force_contact_18\)"
+    ):
+        result = run_scene(MAIN_WAVE_BEHIND_A_PRECURSOR, backend="lammps", method="verlet")
+    s, planned = result.solution, _planned(MAIN_WAVE_BEHIND_A_PRECURSOR)
+    b = planned.window[1]
+    assert result.plan.scene.run.end_time > planned.run.end_time
+    assert s.end_time < result.plan.scene.run.end_time  # the stop check ended it
+    assert s.complete[b - 1]
+    assert not unmeasured_outputs(result.scene, s)
+    assert s.time_of_peak[b - 1] > planned.run.end_time
+
+
 #: CI's draw: a taper 0.8125 over 25 beads (bead 25 of radius 33 um) kicked at 2 m/s: contact 1 (beads of
 #: 4.8 and 3.9 mm) overlaps by 16 um, 0.4% of its radii
 STEEP_TAPER = parse_scene(

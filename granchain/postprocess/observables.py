@@ -25,7 +25,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from granchain.peaks import LEAD_FRACTION, PEAK_PASSED_FRACTION, lead_fall, lead_floor, position_resolution
+from granchain.peaks import (
+    LEAD_FRACTION,
+    PEAK_PASSED_FRACTION,
+    lead_fall,
+    lead_floor,
+    position_resolution,
+    still_rising,
+)
 from granchain.problem import contact_positions
 
 
@@ -170,12 +177,35 @@ def measure_observables(scene, solution, missing: dict | None = None) -> dict:
     return out
 
 
+def _why_still_rising(scene, solution, contact: int) -> str:
+    """Why a 1-based contact's peak so far is not its peak: the wave is still arriving there."""
+    i, f0 = contact - 1, float(scene.effects.precompression)
+    lead = float(solution.leading_pulse_force[i]) - f0
+    first = (
+        f"; its leading pulse (its first maximum, {lead:.6g} N above the static force at "
+        f"t = {float(solution.leading_pulse_time[i]):g} s) stands"
+        if np.isfinite(lead)
+        else ""
+    )
+    return (
+        f"the force at contact {contact} still rises at the end of the run (t = {solution.end_time:g} s): the wave "
+        f"has not passed it, and its peak so far ({float(solution.peak_force[i]) - f0:.6g} N above the static force "
+        f"at t = {float(solution.time_of_peak[i]):g} s) is not complete and may not be its peak{first}; run longer"
+    )
+
+
 def unmeasured_outputs(scene, solution) -> list[str]:
     """What the scene asked for that the run ended before measuring: its window's leading peak and
-    wave speed (a peak-force table), each with the reason; [] when everything asked for is there.
-    A run that ends too soon says so (the command line exits 1), not only in summary.json."""
+    wave speed (a peak-force table), each with the reason, and the window's last contact's peak while
+    the force there still rises at the end (peaks.still_rising: a main wave behind a smaller
+    precursor); [] when everything asked for is there. A run that ends too soon says so (the command
+    line exits 1), not only in summary.json."""
     if not scene.outputs.peak_force or scene.n_contacts == 0:
         return []
     missing: dict[str, str] = {}
     out = measure_observables(scene, solution, missing)
-    return [f"{name}: {missing[name]}" for name in ("leading_peak_force", "wave_speed") if out.get(name) is None]
+    lines = [f"{name}: {missing[name]}" for name in ("leading_peak_force", "wave_speed") if out.get(name) is None]
+    b = scene.window[1]
+    if still_rising(solution.complete, solution.time_of_peak, solution.velocity)[b - 1]:
+        lines.append(f"peak_force_contact_{b}: {_why_still_rising(scene, solution, b)}")
+    return lines

@@ -22,7 +22,8 @@ end time    long enough for the leading wave to pass the last measured contact L
             the actual chain (its masses, contacts and wall: scattering, a dimer's light beads, a
             front that rises until the wall's reflection comes back) where it is short enough.
             A run of a chain of given length that still ends before its window's last contact
-            has a first maximum says so and is run again, once, longer (extended_plan), its stop
+            has a first maximum, or while the force there still rises (a main wave behind a
+            smaller precursor), says so and is run again, once, longer (extended_plan), its stop
             check ending it.
 
 The estimates it plans with (step equivalent, expected peak force, stiffest tangents, highest
@@ -200,7 +201,7 @@ def refined_plan(scene: Scene, plan: Plan, solution) -> Plan | None:
 def extended_plan(scene: Scene, plan: Plan, solution) -> Plan | None:
     """The plan to run again, longer, when a run of the planner's end time ended before measuring what
     the scene asked for (postprocess.observables.unmeasured_outputs: the window's last contact without
-    a leading pulse).
+    a leading pulse, or with its force still rising at the end, peaks.still_rising).
 
     The end time is an estimate; where the actual chain is slower than every estimate (a nonlinear front
     scattered by soft, light beads among stiff ones rises at a contact without a maximum until a
@@ -218,15 +219,17 @@ def extended_plan(scene: Scene, plan: Plan, solution) -> Plan | None:
     # a chain of "auto" length is as long as the planned end keeps its far end's reflection out
     if "end_time" not in chosen or "beads" in chosen or run.stop_after_contact is None or not plan.scene.n_contacts:
         return None
-    if solution.end_time < run.end_time * (1.0 - 1e-9) or not unmeasured_outputs(plan.scene, solution):
+    unmeasured = unmeasured_outputs(plan.scene, solution)
+    if solution.end_time < run.end_time * (1.0 - 1e-9) or not unmeasured:
         return None
     budget = LINEAR_HORIZON * front_travel_time(plan.scene, plan.scene.n_contacts, wave_speeds(scene)[0])
     if budget <= run.end_time * (1.0 + 1e-9):
         return None
+    names = ", ".join(line.split(":", 1)[0] for line in unmeasured)
     note = (
-        f"extended after a first run to {run.end_time:.4g} s ended before the window's last contact was measured: "
-        f"at most {LINEAR_HORIZON:g} x the slowest front's crossing of the whole chain ({budget:.4g} s), the "
-        f"stop check ending it once the wave has passed contact {run.stop_after_contact}"
+        f"extended after a first run to {run.end_time:.4g} s ended before the window's last contact was measured "
+        f"(not measured: {names}): at most {LINEAR_HORIZON:g} x the slowest front's crossing of the whole chain "
+        f"({budget:.4g} s), the stop check ending it once the wave has passed contact {run.stop_after_contact}"
     )
     longer = replace(plan.scene, run=replace(run, end_time=budget))
     choices = [PlanChoice(c.name, budget, f"{c.reason}; {note}") if c.name == "end_time" else c for c in plan.choices]
