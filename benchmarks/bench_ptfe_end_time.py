@@ -26,6 +26,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from granchain.peaks import still_rising  # noqa: E402
+from granchain.postprocess.observables import unmeasured_outputs  # noqa: E402
 from granchain.scene import parse_scene  # noqa: E402
 from granchain.workflows.plan import plan_scene  # noqa: E402
 from granchain.workflows.run import run_reference  # noqa: E402
@@ -74,9 +76,13 @@ def measure(sc):
     crossing_old = max(arrival, float(s.time_of_peak[b - 1])) if stopped else arrival
     crossing = max(arrival, _last_maximum_above_half(s, planned.effects.precompression))
     covered = bool(np.isfinite(arrival)) and res.observables()["leading_peak_force"] is not None
+    f = s.history_force[:, 0] - planned.effects.precompression
+    rising = bool(f.size > 1 and f[-1] > f[-2] and f[-1] > 0.5 * np.max(f))
+    first_end = plan_scene(sc, method="verlet").scene.run.end_time
     return {
         "planned_end": planned.run.end_time,
-        "extended": bool(EXTEND and planned.run.end_time > plan_scene(sc, method="verlet").scene.run.end_time),
+        "first_planned_end": first_end,
+        "extended": bool(EXTEND and planned.run.end_time > first_end),
         "end": float(s.end_time),
         "stopped": bool(stopped),
         "arrival": arrival,
@@ -86,6 +92,9 @@ def measure(sc):
         "ratio_old": float(s.end_time / crossing_old) if covered else None,
         "ratio": float(s.end_time / crossing) if covered else None,
         "window_end": b,
+        "rising": rising,
+        "flagged": bool(still_rising(s.complete, s.time_of_peak, s.velocity)[b - 1]),
+        "unmeasured": unmeasured_outputs(planned, s),
     }
 
 
@@ -115,12 +124,24 @@ def main():
             f"{i:3d} {row['verdict_old']:8s} {row['verdict']:8s} beads {len(names)} wall {wall:d} F0/kick {fr:8.3g} "
             f"end/crossing {row['ratio_old'] if row['ratio_old'] is None else round(row['ratio_old'], 3)} "
             f"{row['ratio'] if row['ratio'] is None else round(row['ratio'], 3)} extended {row['extended']:d} "
-            f"stopped {row['stopped']:d}",
+            f"stopped {row['stopped']:d} rising {row['rising']:d} flagged {row['flagged']:d}",
             flush=True,
         )
     for key in ("verdict_old", "verdict"):
         counts = {v: sum(r[key] == v for r in rows) for v in ("ok", "miss", "too long")}
         print(f"{len(rows)} PTFE chains, {key}: {counts} ({time.time() - t0:.0f} s)")
+    count = {k: sum(r[k] for r in rows) for k in ("extended", "stopped", "rising", "flagged")}
+    print(
+        f"extended {count['extended']}, stopped {count['stopped']}, ending with the window's last contact rising "
+        f"{count['rising']}, of them flagged {sum(r['rising'] and r['flagged'] for r in rows)}; flagged "
+        f"{count['flagged']}; still not measured {sum(bool(r['unmeasured']) for r in rows)}"
+    )
+    longer = [r["end"] / r["first_planned_end"] for r in rows if r["extended"]]
+    if longer:
+        print(f"extended runs end at {min(longer):.3g}-{max(longer):.3g}x the first run's planned end")
+    print(
+        "rising at the end:", [r["i"] for r in rows if r["rising"]], "flagged:", [r["i"] for r in rows if r["flagged"]]
+    )
     if a.out:
         Path(a.out).write_text(json.dumps(rows, indent=1))
 
