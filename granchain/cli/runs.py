@@ -231,8 +231,9 @@ def cmd_compare_laws(args) -> int:
         f"{'law':10} {'contact':44} {'F_1 (N)':>10} {'F_last (N)':>10} {'transition':>10} "
         f"{'lambda (1/contact)':>18} {'p':>14}"
     )
-    for row in cmp.table():
-        contact = ", ".join(f"{k}={v:.4g}" for k, v in row["contact"].items() if k != "law")
+    rows = cmp.table()
+    for row in rows:
+        contact = ", ".join(f"{k}={c['value']:.4g}" for k, c in row["coefficients"].items())
         if row["transition_contact"]:
             lo, hi = row["transition_contact_range"]
             trans = f"{row['transition_contact']} ({lo}-{hi})"
@@ -244,6 +245,16 @@ def cmd_compare_laws(args) -> int:
         first = row["first_peak_force"] or float("nan")
         last = row["last_peak_force"] or float("nan")
         print(f"{row['law']:10} {contact:44} {first:>10.4g} {last:>10.4g} {fit}")
+    print("coefficients (nominal bead-bead contact):")
+    for row in rows:
+        for k, c in row["coefficients"].items():
+            print(f"  {row['law']:10} {k:18} {c['value']:<10.4g} from {shown(c['source'])}")
+    for row in rows:
+        if row["contacts_not_complete"]:
+            print(
+                f"  {row['law']}: {len(row['contacts_not_complete'])} contacts' peaks not complete by the end "
+                "of the run: not fitted (drawn open, as lower bounds, only where no peak is complete)"
+            )
     print(f"laws directory: {shown(out)}")
     return 0
 

@@ -9,8 +9,13 @@ Comparable laws. A law the scene does not give is set up from the scene's own la
 alike in the plastic range: the plastic slopes are equal, pi p_y R* = k (Thornton's S and the
 bilinear loading stiffness), so a Thornton scene gets the bilinear k = pi p_y R* and a bilinear scene
 the Thornton p_y = k / (pi R*). The bilinear unloading coefficient, which Thornton's law does not
-have, is the paper's beta = 0.8 unless the caller gives one (contacts=). Any other law gets its
-registry example (laws.base: example_contact).
+have, is the paper's beta = 0.8 unless the caller gives one (contacts=). A plastic law that neither
+the scene nor the other law sets (a Hertz scene) takes its coefficient from the chain's materials by
+the scene reader's own rules, as `granchain run` would (p_y = 1.61 sigma_y, k = 18.5 sigma_y R*, of the
+softer bead of each contact); on a chain without a yield strength only the paper's brass beads
+(R = 4.76 mm) take the paper's values (k = 2.43e7 N/m, and p_y = k / (pi R*)), any other chain is
+refused before any run (MissingCoefficientError). Each coefficient's source is reported
+(LawRun.coefficients).
 """
 
 from __future__ import annotations
@@ -25,8 +30,8 @@ import numpy as np
 
 from granchain.backends import LAMMPS, Backend
 from granchain.exceptions import UsageError
+from granchain.physics import materials as mat
 from granchain.physics.laws import LAWS
-from granchain.physics.materials import YIELD_PRESSURE_FACTOR
 from granchain.postprocess.response_regimes import DecayFit, fit_decay
 from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain
 from granchain.safe_files import UnsafeFileError, atomic_directory
@@ -36,26 +41,142 @@ from granchain.workflows.run import run_scene
 #: the bilinear unloading coefficient given to a scene that has none (the paper's Figs. 5-8)
 DEFAULT_BETA = 0.8
 
+#: the paper's beads (Sec. II A: brass, R = 4.76 mm), the only chain the laws' example coefficients
+#: (the paper's k = 2.43e7 N/m and its equal-slope p_y) are for
+PAPER_MATERIAL, PAPER_RADIUS = "brass", 4.76e-3
+
+#: what each plastic coefficient is, for the messages
+_COEFFICIENT = {
+    "yield_pressure": "Thornton's limiting contact pressure p_y (Pa)",
+    "plastic_stiffness": "the bilinear plastic loading stiffness k (N/m)",
+}
+
+
+class MissingCoefficientError(UsageError):
+    """A plastic law compare-laws cannot set up: the chain's material has no yield strength to derive
+    its coefficient from, and the chain is not the paper's brass."""
+
 
 def equivalent_contact(scene, law: str, given: dict | None = None) -> dict:
     """The [contact] table of `scene` under `law` (see the module docstring for the rule)."""
+    return contact_and_sources(scene, law, given)[0]
+
+
+def contact_and_sources(scene, law: str, given: dict | None = None) -> tuple[dict, dict[str, tuple[float, str]]]:
+    """The [contact] table of `scene` under `law` and where each of its coefficients comes from.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene as read.
+    law : str
+        A contact law's name (granchain.physics.laws.LAWS).
+    given : dict, optional
+        The caller's [contact] values for `law` (compare_laws' contacts=); they win.
+
+    Returns
+    -------
+    contact : dict
+        The [contact] table (a coefficient the scene reader derives from the materials is left out).
+    sources : dict
+        coefficient name -> (value of the nominal bead-bead contact, where it comes from).
+
+    Raises
+    ------
+    UsageError
+        `law` is not a contact law.
+    MissingCoefficientError
+        A plastic coefficient has no source (see the module docstring).
+    """
     if law not in LAWS:
         raise UsageError(f"--laws: {law!r} is not a contact law; choose from {', '.join(LAWS)}")
     if given:
-        return {"law": law, **given}
+        return {"law": law, **given}, {k: (float(v), "given (contacts=)") for k, v in given.items()}
     c = scene.contact
-    if c.law == law:
-        return LAWS[law].contact_to_dict(c)
     r_star = scene.r_star
+    if c.law == law:
+        contact = LAWS[law].contact_to_dict(c)
+        sources = {k: (float(v), "the scene's [contact]") for k, v in contact.items() if k != "law"}
+        if law == "thornton" and "yield_pressure" not in contact:
+            sources["yield_pressure"] = (p_y(scene), _from_yield(scene, "p_y = 1.61 sigma_y"))
+        if law == "bilinear" and _is_from_yield(scene, contact.get("plastic_stiffness")):
+            sources["plastic_stiffness"] = (float(scene.law.k), _from_yield(scene, "k = 18.5 sigma_y R*"))
+        return contact, sources
     if law == "thornton" and c.law == "bilinear":
-        return {"law": law, "yield_pressure": float(scene.law.k) / (math.pi * r_star)}
-    if law == "bilinear" and c.law == "thornton":
-        return {
-            "law": law,
-            "unloading_coeff": DEFAULT_BETA,
-            "plastic_stiffness": math.pi * p_y(scene) * r_star,
+        k = float(scene.law.k)
+        v = k / (math.pi * r_star)
+        return {"law": law, "yield_pressure": v}, {
+            "yield_pressure": (v, f"k / (pi R*): the plastic slope of the scene's bilinear law, k = {k:.4g} N/m")
         }
-    return {"law": law, **LAWS[law].example_contact}
+    if law == "bilinear" and c.law == "thornton":
+        py = p_y(scene)
+        v = math.pi * py * r_star
+        return {"law": law, "unloading_coeff": DEFAULT_BETA, "plastic_stiffness": v}, {
+            "unloading_coeff": (DEFAULT_BETA, "the paper's beta (default)"),
+            "plastic_stiffness": (v, f"pi p_y R*: the plastic slope of the scene's Thornton law, p_y = {py:.4g} Pa"),
+        }
+    if law not in ("thornton", "bilinear"):
+        example = LAWS[law].example_contact
+        return {"law": law, **example}, {k: (float(v), f"the {law} law's example") for k, v in example.items()}
+    sources: dict[str, tuple[float, str]] = {}
+    contact: dict = {"law": law}
+    if law == "bilinear":
+        contact["unloading_coeff"] = DEFAULT_BETA
+        sources["unloading_coeff"] = (DEFAULT_BETA, "the paper's beta (default)")
+    key = "yield_pressure" if law == "thornton" else "plastic_stiffness"
+    if not mat.lacking_yield_strength(scene.chain):  # the scene reader derives it, pair by pair
+        ys = float(scene.chain.material.yield_strength)
+        if law == "thornton":
+            sources[key] = (mat.YIELD_PRESSURE_FACTOR * ys, _from_yield(scene, "p_y = 1.61 sigma_y"))
+        else:
+            sources[key] = (
+                mat.plastic_stiffness_from_yield(ys, scene.chain.radius),
+                _from_yield(scene, "k = 18.5 sigma_y R*"),
+            )
+        return contact, sources
+    if _is_paper_chain(scene):
+        v = float(LAWS[law].example_contact[key])
+        contact[key] = v
+        sources[key] = (
+            v,
+            "the paper's brass k = 2.43e7 N/m (Sec. III)"
+            if law == "bilinear"
+            else "the paper's brass k = 2.43e7 N/m by equal plastic slopes, p_y = k / (pi R*)",
+        )
+        return contact, sources
+    name = scene.chain.material_name or "[chain.material]"
+    raise MissingCoefficientError(
+        f"--laws {law}: the {law} law needs {key}, {_COEFFICIENT[key]}, and the chain's material {name!r} "
+        "has no yield_strength to derive it from (p_y = 1.61 sigma_y, k = 18.5 sigma_y R*); the paper's "
+        f"values are for its {PAPER_MATERIAL} beads of radius {PAPER_RADIUS} m only. Give it in the scene: "
+        "yield_strength (Pa) in a [chain.material] table, or [contact] law = 'thornton' with yield_pressure "
+        "(or law = 'bilinear' with plastic_stiffness), from which the other law gets the equal plastic slope"
+    )
+
+
+def _from_yield(scene, rule: str) -> str:
+    """The source of a coefficient the scene reader derives from the materials' yield strength."""
+    ch = scene.chain
+    if ch.materials is not None:
+        return f"{rule} of the softer bead of each contact (shown: beads 1-2)"
+    name = ch.material_name or "[chain.material]"
+    return f"{rule}, {name}'s sigma_y = {float(ch.material.yield_strength):.4g} Pa"
+
+
+def _is_from_yield(scene, k) -> bool:
+    """The scene's bilinear k is 18.5 sigma_y R* of its material (the scene reader's default)."""
+    ys = scene.chain.material.yield_strength
+    if k is None:  # several materials: each contact's k from the softer bead's yield strength
+        return True
+    return ys is not None and math.isclose(
+        float(k), mat.plastic_stiffness_from_yield(float(ys), scene.chain.radius), rel_tol=1e-12
+    )
+
+
+def _is_paper_chain(scene) -> bool:
+    """The chain is the paper's: brass beads of R = 4.76 mm (bead 1's radius is the nominal)."""
+    ch = scene.chain
+    return ch.materials is None and ch.material_name == PAPER_MATERIAL and ch.radius == PAPER_RADIUS
 
 
 def p_y(scene) -> float:
@@ -64,7 +185,7 @@ def p_y(scene) -> float:
     return (
         float(c.yield_pressure)
         if c.yield_pressure is not None
-        else YIELD_PRESSURE_FACTOR * float(scene.chain.material.yield_strength)
+        else mat.YIELD_PRESSURE_FACTOR * float(scene.chain.material.yield_strength)
     )
 
 
@@ -72,7 +193,7 @@ def scene_with_law(scene, contact: dict):
     """The scene with its [contact] table replaced by `contact` (a law's equivalent contact)."""
     d = scene_to_dict(scene)
     d["contact"] = contact
-    if contact["law"] == "bilinear" and isinstance(d["chain"].get("material"), dict):
+    if "plastic_stiffness" in contact and isinstance(d["chain"].get("material"), dict):
         d["chain"]["material"].pop("yield_strength", None)  # the given plastic_stiffness sets k
     return scene_from_dict(d, source=f"{scene.source or '<scene>'} [{contact['law']}]")
 
@@ -89,6 +210,11 @@ class LawRun:
     peak_force_error: np.ndarray  # nan where not estimated
     fit: DecayFit | None
     why_no_fit: str = ""
+    #: coefficient name -> (value of the nominal bead-bead contact, where it comes from)
+    coefficients: dict = field(default_factory=dict)
+    #: peaks the decay curve leaves out: (contact, force) of the peaks from the first one not complete
+    #: on (a lower bound of the peak: the force had not fallen back by the end of the run)
+    not_complete: tuple[np.ndarray, np.ndarray] = (np.zeros(0), np.zeros(0))
 
 
 @dataclass
@@ -106,6 +232,7 @@ class LawComparison:
                 {
                     "law": r.law,
                     "contact": r.contact,
+                    "coefficients": {k: {"value": v, "source": src} for k, (v, src) in r.coefficients.items()},
                     "first_peak_force": float(r.peak_force[0]) if r.peak_force.size else None,
                     "last_peak_force": float(r.peak_force[-1]) if r.peak_force.size else None,
                     "transition_contact": r.fit.transition_contact if r.fit else None,
@@ -116,6 +243,8 @@ class LawComparison:
                     "inverse_power_stderr": r.fit.power_stderr if r.fit else None,
                     "fit_rms_log_residual": r.fit.rms_log_residual if r.fit else None,
                     "why_no_fit": r.why_no_fit or None,
+                    "contacts_not_complete": [int(i) for i in r.not_complete[0]],
+                    "peak_force_not_complete": [float(x) for x in r.not_complete[1]],
                     "wall_time": r.result.solution.wall_time,
                     "timestep": r.result.solution.timestep,
                 }
@@ -123,8 +252,9 @@ class LawComparison:
         return rows
 
 
-def _measured(result) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Complete peaks from contact 1 up to the first incomplete one (a decay curve has no holes)."""
+def _measured(result) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """Complete peaks from contact 1 up to the first incomplete one (a decay curve has no holes), and
+    the positive peaks from there on that are not on it (not complete: lower bounds)."""
     sol = result.solution
     f = np.asarray(sol.peak_force, dtype=float)
     ok = np.asarray(sol.complete, dtype=bool) & np.isfinite(f) & (f > 0)
@@ -132,7 +262,17 @@ def _measured(result) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     err = np.full(n, np.nan)
     if getattr(result, "errors", None) is not None and result.errors.peak_force is not None:
         err = np.asarray(result.errors.peak_force.error, dtype=float)[:n]
-    return np.arange(1, n + 1), f[:n], err
+    rest = np.arange(n + 1, f.size + 1)
+    shown = np.isfinite(f[n:]) & (f[n:] > 0)
+    return np.arange(1, n + 1), f[:n], err, (rest[shown], f[n:][shown])
+
+
+def _why_no_curve(n_complete: int, n_contacts: int) -> str:
+    """Why a law's decay curve is short: its first contacts' peaks are not complete."""
+    return (
+        f"{n_complete} of {n_contacts} peaks complete from contact 1 on (the next had not fallen back to 3% "
+        "of its peak by the end of the run: a step or long load keeps the contacts loaded)"
+    )
 
 
 def compare_laws(
@@ -144,20 +284,27 @@ def compare_laws(
     error_estimate: bool = True,
     contacts: dict[str, dict] | None = None,
 ) -> LawComparison:
-    """Run `scene` under each law (equivalent_contact) and fit each one's peak-force decay."""
+    """Run `scene` under each law (contact_and_sources) and fit each one's peak-force decay.
+
+    Every law's scene is set up, and a missing coefficient refused (MissingCoefficientError), before
+    any run.
+    """
     if len(set(laws)) < 2:
         raise UsageError("--laws: give at least two different contact laws, e.g. thornton,bilinear")
-    scenes = [scene_with_law(scene, equivalent_contact(scene, law, (contacts or {}).get(law))) for law in laws]
+    setups = [contact_and_sources(scene, law, (contacts or {}).get(law)) for law in laws]
+    scenes = [scene_with_law(scene, contact) for contact, _ in setups]
     out = LawComparison(scene=scene)
-    for law, sc in zip(laws, scenes, strict=True):  # every scene is valid before anything runs
+    for law, sc, (contact, sources) in zip(laws, scenes, setups, strict=True):  # all valid before any run
         res = run_scene(sc, backend=backend, method=method, rtol=rtol, error_estimate=error_estimate)
-        c, f, e = _measured(res)
+        c, f, e, rest = _measured(res)
         fit, why = None, ""
         try:
             fit = fit_decay(f)
         except ValueError as exc:
             why = str(exc)
-        out.runs.append(LawRun(law, equivalent_contact(scene, law, (contacts or {}).get(law)), res, c, f, e, fit, why))
+            if rest[0].size:
+                why += "; " + _why_no_curve(c.size, c.size + rest[0].size)
+        out.runs.append(LawRun(law, contact, res, c, f, e, fit, why, sources, rest))
     return out
 
 
@@ -212,9 +359,25 @@ def _write_laws(cmp, tmp: Path, formats) -> None:
     )
     fig = Figure(figsize=(6.4, 4.4))
     ax = fig.subplots()
+    notes, drawn = [], False
     for r, color in zip(cmp.runs, ("C0", "C3", "C2", "C4"), strict=False):
-        err = np.where(np.isfinite(r.peak_force_error), r.peak_force_error, 0.0)
-        ax.errorbar(r.contacts, r.peak_force, yerr=err, fmt="o", ms=3, color=color, label=f"{r.law} peak force")
+        if r.contacts.size:
+            err = np.where(np.isfinite(r.peak_force_error), r.peak_force_error, 0.0)
+            ax.errorbar(r.contacts, r.peak_force, yerr=err, fmt="o", ms=3, color=color, label=f"{r.law} peak force")
+            drawn = True
+        rest, force = r.not_complete
+        if rest.size and not r.contacts.size:  # no decay curve: its lower bounds, drawn open, not fitted
+            ax.plot(rest, force, "o", ms=3, mfc="none", color=color, label=f"{r.law} peak not complete")
+            drawn = True
+            notes.append(
+                f"{r.law}: contacts {_ranges(rest)} drawn open: not complete by the end of the run (force not back "
+                "to 3% of its peak), lower bounds"
+            )
+        elif rest.size:  # past the decay curve (its end, the contacts the wave had not passed): left out
+            notes.append(
+                f"{r.law}: contacts {_ranges(rest)} not drawn: not complete by the end of the run (force not back "
+                "to 3% of its peak)"
+            )
         if r.fit is not None:
             i, expo, inv = fit_curves(r)
             ax.plot(i, expo, "-", color=color, lw=1, label=f"{r.law}: exp(-{r.fit.decay_per_contact:.3g} i)")
@@ -226,11 +389,35 @@ def _write_laws(cmp, tmp: Path, formats) -> None:
                 lw=1,
                 label=f"{r.law}: i^-{r.fit.power:.3g} from {r.fit.transition_contact}",
             )
-    ax.set_xscale("log")
-    ax.set_yscale("log")
+        else:
+            notes.append(f"{r.law}: no decay fit ({r.why_no_fit.split(';')[0]})")
+    if drawn:  # log axes only over positive data
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.legend(fontsize=7)
+    else:
+        ax.text(0.5, 0.5, "no positive peak force measured", ha="center", va="center", transform=ax.transAxes)
+        notes.append("no law has a positive peak force on any contact: nothing drawn")
     ax.set_xlabel("contact i")
     ax.set_ylabel("peak force (N)")
     ax.set_title("\n".join(textwrap.wrap(cmp.scene.title or "", 80)), fontsize=8, parse_math=False)
-    ax.legend(fontsize=7)
+    if notes:
+        lines = [line for note in notes for line in textwrap.wrap(note, 110)]
+        fig.subplots_adjust(bottom=0.12 + 0.03 * len(lines))
+        fig.text(0.01, 0.01, "\n".join(lines), fontsize=6, va="bottom", parse_math=False)
     for fmt in formats:
         fig.savefig(tmp / f"laws.{fmt}", dpi=120)
+
+
+def _ranges(contacts: np.ndarray) -> str:
+    """Contacts 1-based as runs: "3-7, 9"."""
+    out, c = [], [int(x) for x in contacts]
+    start = prev = c[0]
+    for x in [*c[1:], None]:
+        if x is not None and x == prev + 1:
+            prev = x
+            continue
+        out.append(f"{start}" if start == prev else f"{start}-{prev}")
+        if x is not None:
+            start = prev = x
+    return ", ".join(out)
