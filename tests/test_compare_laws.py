@@ -10,9 +10,17 @@ from granchain.cli import main, resolve_scene
 from granchain.exceptions import UsageError
 from granchain.physics.laws import LAWS
 from granchain.safe_files import MARKER
-from granchain.workflows.law_comparison import compare_laws, equivalent_contact, scene_with_law, write_law_comparison
+from granchain.scene import parse_scene
+from granchain.workflows.law_comparison import (
+    MissingCoefficientError,
+    compare_laws,
+    contact_and_sources,
+    equivalent_contact,
+    scene_with_law,
+    write_law_comparison,
+)
 
-from .conftest import make_scene
+from .conftest import make_scene, make_scene_text
 
 
 @pytest.mark.parametrize("start", ["thornton", "bilinear"])
@@ -96,3 +104,95 @@ def test_decay_fit_uncertainties_cover_the_truth(decay, power, transition, noise
     assert np.mean([abs(f.power - power) <= 2 * f.power_stderr for f in fits]) >= 0.85
     assert np.mean([f.transition_range[0] <= transition <= f.transition_range[1] for f in fits]) >= 0.8
     assert all(f.transition_range[0] <= f.transition_contact <= f.transition_range[1] for f in fits)
+
+
+def _hertz_scene(material="stainless-steel-316", radius=4.76e-3, beads=12, loading=None):
+    text = make_scene_text(beads=beads, law="hertz", loading=loading, end_time=5e-5, timestep=5e-8)
+    text = text.replace('material = "brass"', f"material = {material!r}").replace(
+        "radius = 4.76e-3", f"radius = {radius!r}"
+    )
+    return parse_scene(text, source="test.toml")
+
+
+@pytest.mark.parametrize("law", ["thornton", "bilinear"])
+def test_a_plastic_law_on_a_hertz_scene_takes_the_chain_materials_coefficient(law):
+    """A Hertz scene of stainless steel (sigma_y = 290 MPa) under compare-laws gets the coefficients
+    `granchain run` derives from the material, p_y = 1.61 sigma_y and k = 18.5 sigma_y R* (the paper's
+    brass values, p_y = 3.25e9 Pa and k = 2.43e7 N/m, are 7x and 1.9x off), and says so."""
+    sc = _hertz_scene()
+    contact, sources = contact_and_sources(sc, law)
+    twin = scene_with_law(sc, contact)
+    # the scene `granchain run` reads with the law and no coefficient of its own
+    text = make_scene_text(beads=12, law=law, contact_extra="unloading_coeff = 0.8\n" if law == "bilinear" else "")
+    run_scene_ = parse_scene(text.replace('material = "brass"', 'material = "stainless-steel-316"'), source="t.toml")
+    ys, r_star = 290e6, 4.76e-3 / 2
+    if law == "thornton":
+        assert math.isclose(sources["yield_pressure"][0], 1.61 * ys, rel_tol=1e-12)
+        assert "1.61 sigma_y" in sources["yield_pressure"][1]
+        assert math.isclose(float(twin.law.yield_overlap), float(run_scene_.law.yield_overlap), rel_tol=1e-12)
+    else:
+        assert math.isclose(sources["plastic_stiffness"][0], 18.5 * ys * r_star, rel_tol=1e-12)
+        assert "18.5 sigma_y R*" in sources["plastic_stiffness"][1]
+        assert math.isclose(float(twin.law.k), float(run_scene_.law.k), rel_tol=1e-12)
+        assert math.isclose(float(twin.law.k), 18.5 * ys * r_star, rel_tol=1e-12)
+
+
+def test_the_papers_brass_values_only_on_the_papers_brass_chain(tmp_path, capsys, monkeypatch):
+    """Brass has no yield strength: its 4.76 mm chain takes the paper's k = 2.43e7 N/m (and p_y by equal
+    slopes); a brass chain of other beads, or glass, is refused before any run, naming the coefficient."""
+    import granchain.workflows.law_comparison as lc
+
+    contact, sources = contact_and_sources(_hertz_scene("brass"), "bilinear")
+    assert contact["plastic_stiffness"] == 2.43e7
+    assert "paper" in sources["plastic_stiffness"][1]
+    for material, radius in [("brass", 3e-3), ("soda-lime-glass", 4.76e-3)]:
+        for law, key in [("thornton", "yield_pressure"), ("bilinear", "plastic_stiffness")]:
+            with pytest.raises(MissingCoefficientError, match=f"needs {key}.*yield_strength"):
+                contact_and_sources(_hertz_scene(material, radius), law)
+
+    def no_run(*a, **k):
+        raise AssertionError("ran")
+
+    monkeypatch.setattr(lc, "run_scene", no_run)
+    p = tmp_path / "glass.toml"
+    p.write_text(_hertz_scene("soda-lime-glass").to_toml())
+    assert main(["compare-laws", str(p), "--backend", "reference", "--out", str(tmp_path / "o")]) == 2
+    assert "needs yield_pressure" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_compare_laws_under_a_step_load_writes_its_figure(tmp_path, capsys):
+    """Under a step load no contact unloads, so no peak is complete and there is no decay curve: the
+    figure (log axes) draws the positive not-complete peaks open and says so, and fits nothing (it
+    raised in savefig on an empty log axis). 12 beads, reference backend."""
+    step = 'kind = "step"\namplitude = 2000.0\nduration = 1e-3'
+    p = tmp_path / "step.toml"
+    p.write_text(
+        _hertz_scene(loading=step).to_toml().replace('law = "hertz"', 'law = "bilinear"\nunloading_coeff = 0.8')
+    )
+    out = tmp_path / "o"
+    assert main(["compare-laws", str(p), "--backend", "reference", "--error-estimate", "off", "--out", str(out)]) == 0
+    table = json.loads((out / "laws.json").read_text())["laws"]
+    for row in table:
+        assert row["first_peak_force"] is None
+        assert row["transition_contact"] is None
+        assert row["contacts_not_complete"]
+        assert all(f > 0 for f in row["peak_force_not_complete"])
+        assert "peaks complete" in row["why_no_fit"]
+    assert (out / "laws.png").stat().st_size > 0
+    assert "not complete" in capsys.readouterr().out
+
+
+def test_a_failed_figure_leaves_no_directory(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    sc = make_scene(beads=12, law="thornton", end_time=5e-5, timestep=5e-8)
+    cmp = compare_laws(sc, ("thornton", "bilinear"), backend="reference", error_estimate=False)
+
+    def fail(*a, **k):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(Figure, "savefig", fail)
+    with pytest.raises(OSError, match="disk full"):
+        write_law_comparison(cmp, tmp_path / "laws")
+    assert list(tmp_path.iterdir()) == []

@@ -144,13 +144,12 @@ def contact_and_sources(scene, law: str, given: dict | None = None) -> tuple[dic
             else "the paper's brass k = 2.43e7 N/m by equal plastic slopes, p_y = k / (pi R*)",
         )
         return contact, sources
-    name = scene.chain.material_name or "[chain.material]"
     raise MissingCoefficientError(
-        f"--laws {law}: the {law} law needs {key}, {_COEFFICIENT[key]}, and the chain's material {name!r} "
-        "has no yield_strength to derive it from (p_y = 1.61 sigma_y, k = 18.5 sigma_y R*); the paper's "
-        f"values are for its {PAPER_MATERIAL} beads of radius {PAPER_RADIUS} m only. Give it in the scene: "
-        "yield_strength (Pa) in a [chain.material] table, or [contact] law = 'thornton' with yield_pressure "
-        "(or law = 'bilinear' with plastic_stiffness), from which the other law gets the equal plastic slope"
+        f"--laws {law}: the {law} law needs {key}, {_COEFFICIENT[key]}, and the chain has no yield strength "
+        "to derive it from (p_y = 1.61 sigma_y, k = 18.5 sigma_y R*); the paper's values are for its "
+        f"{PAPER_MATERIAL} beads of radius {PAPER_RADIUS} m only. Give it in the scene: "
+        f"{mat.lacking_yield_strength(scene.chain)}; or [contact] law = 'thornton' with yield_pressure (or "
+        "law = 'bilinear' with plastic_stiffness), from which the other law gets the equal plastic slope"
     )
 
 
