@@ -136,3 +136,37 @@ def test_quiet_silences_the_plan_and_the_striker_peak_is_printed_with_its_error(
     assert "plan (" not in err
     line = next(x for x in out.splitlines() if x.strip().startswith("striker_peak_force"))
     assert " +- " in line
+
+
+@pytest.mark.parametrize("beads", [2, 4])
+def test_a_wave_speed_the_scene_can_never_measure_is_not_a_missed_output(tmp_path, capsys, beads):
+    """2 beads (one contact) and 4 (window 1-2: two contacts) can never give the wave-speed fit its 3
+    arrivals: the run of an "auto" end time exits 0 (it missed nothing it could measure) and still says
+    why the wave speed is not measured, from the scene; a leading peak it could measure still counts."""
+    from granchain.postprocess.observables import unmeasured_outputs, wave_speed_unmeasurable
+
+    text = make_scene_text(
+        beads=beads,
+        loading='kind = "velocity"\nvelocity = 1.0',
+        end_time="auto",
+        timestep="auto",
+        outputs="peak_force = true",
+    )
+    p = tmp_path / f"b{beads}.toml"
+    p.write_text(text)
+    scene = parse_scene(text, source=str(p))
+    assert "can never give" in wave_speed_unmeasurable(scene)
+    assert wave_speed_unmeasurable(parse_scene(text.replace(f"beads = {beads}", "beads = 5"), source="b5.toml")) is None
+    assert main(["run", str(p), "--out", str(tmp_path / "r"), "--error-estimate", "off"]) == 0
+    out, err = capsys.readouterr()
+    assert "not measured: wave_speed" not in err
+    assert "wave_speed (m/s)" in out
+    assert "the wave-speed fit needs 3, which this scene can never give" in out
+    # the leading peak still counts: a run that ends before it is a missed output
+    short = run_scene(
+        replace(scene, run=replace(scene.run, end_time=1e-7, timestep=1e-9, stop_after_contact=None)),
+        error_estimate=False,
+    )
+    names = [line.split(":")[0] for line in unmeasured_outputs(short.scene, short.solution)]
+    assert "leading_peak_force" in names
+    assert "wave_speed" not in names

@@ -85,6 +85,27 @@ def front_arrivals(solution, static_force: float) -> np.ndarray:
     return np.where(np.isfinite(lead_t), front, np.nan)
 
 
+#: the least number of contacts with an arrival that the wave-speed fit takes (fit_wave_speed: a line
+#: and its standard error, which needs a residual)
+FIT_CONTACTS = 3
+
+
+def wave_speed_unmeasurable(scene) -> str | None:
+    """Why the scene can never measure the wave speed, whatever the run, or None.
+
+    The fit takes one arrival per contact of the measurement window and needs FIT_CONTACTS of them:
+    a window of fewer contacts (a chain of 2 or 4 beads, a short ``[outputs] window``) never has them.
+    """
+    a, b = scene.window if scene.n_contacts else (1, 0)
+    if b - a + 1 >= FIT_CONTACTS:
+        return None
+    where = f"contacts {a}-{b}" if scene.n_contacts else "no bead-bead contact"
+    return (
+        f"the scene's measurement window has {max(b - a + 1, 0)} contact(s) ({where}); the wave-speed fit needs "
+        f"{FIT_CONTACTS}, which this scene can never give"
+    )
+
+
 def _why_not_complete(solution, contact: int) -> str:
     """Why a 1-based contact's peak cannot be used."""
     t = float(solution.time_of_peak[contact - 1])
@@ -161,8 +182,12 @@ def measure_observables(scene, solution, missing: dict | None = None) -> dict:
     out["wave_speed_contacts"] = int(np.sum(ok))
     if fit is None:
         why["wave_speed"] = why["wave_speed_stderr"] = (
-            f"{int(np.sum(ok))} of the window's contacts {a}-{b} have {_ARRIVAL[bool(f0)]}; the fit needs 3"
-            if np.sum(ok) < 3
+            wave_speed_unmeasurable(scene)
+            or (
+                f"{int(np.sum(ok))} of the window's contacts {a}-{b} have {_ARRIVAL[bool(f0)]}; the fit needs "
+                f"{FIT_CONTACTS}"
+            )
+            if np.sum(ok) < FIT_CONTACTS
             else f"the arrival times of the window's complete leading pulses (contacts {a}-{b}) do not increase"
         )
     if complete.any():
@@ -199,12 +224,15 @@ def unmeasured_outputs(scene, solution) -> list[str]:
     wave speed (a peak-force table), each with the reason, and the window's last contact's peak while
     the force there still rises at the end (peaks.still_rising: a main wave behind a smaller
     precursor); [] when everything asked for is there. A run that ends too soon says so (the command
-    line exits 1), not only in summary.json."""
+    line exits 1), not only in summary.json. The wave speed of a scene that can never measure it
+    (wave_speed_unmeasurable: a window of fewer than FIT_CONTACTS contacts) is not missed by the run:
+    it is left out here, and the run's observables say why it is None."""
     if not scene.outputs.peak_force or scene.n_contacts == 0:
         return []
     missing: dict[str, str] = {}
     out = measure_observables(scene, solution, missing)
-    lines = [f"{name}: {missing[name]}" for name in ("leading_peak_force", "wave_speed") if out.get(name) is None]
+    asked = ("leading_peak_force",) + (("wave_speed",) if wave_speed_unmeasurable(scene) is None else ())
+    lines = [f"{name}: {missing[name]}" for name in asked if out.get(name) is None]
     b = scene.window[1]
     if still_rising(solution.complete, solution.time_of_peak, solution.velocity)[b - 1]:
         lines.append(f"peak_force_contact_{b}: {_why_still_rising(scene, solution, b)}")
