@@ -253,7 +253,7 @@ def figure(run, kind: str = "peaks", **kw):
 def compare(
     scene,
     rtol: float = 1e-3,
-    method: str = "rk4",
+    method: str | None = None,
     out=None,
     error_estimate: bool | str = False,
     overwrite: bool = False,
@@ -268,8 +268,10 @@ def compare(
         backend's integrator, the time step for rtol / 2 each.
     rtol : float
         Tolerance between the two runs (a difference fails beyond rtol plus both measured errors).
-    method : {"rk4", "verlet"}
-        The reference's integrator.
+    method : {"rk4", "verlet"} or None
+        The reference's integrator; None: RK4, or Verlet on a scene with a dashpot, where RK4's peak is
+        the elastic force where the overlap turns and LAMMPS's the total force's maximum (explicit
+        "rk4" there: the peak rows are marked not comparable).
     out : str or pathlib.Path, optional
         Write the compare directory (lammps/, reference/, compare.csv, compare.md).
     error_estimate : bool or "checked"

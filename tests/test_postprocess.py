@@ -1,5 +1,7 @@
 """Postprocess on real runs: MDAnalysis dumps vs in-run peaks, wave speed, regimes, compare, plots."""
 
+import csv
+
 import numpy as np
 import pytest
 
@@ -210,3 +212,60 @@ def test_plots_for_a_run(tmp_path):
     for p in made:
         assert p.stat().st_size > 10_000
         assert p.with_name(p.stem + "_plot.csv").exists()
+
+
+def _two_bead_dashpot(rtol: float, factor: float) -> str:
+    """Two beads kicked at 1 m/s with a dashpot strong enough that RK4's peak (the elastic force where
+    the overlap turns) and Verlet's (the total force's maximum) differ by about `factor` x rtol.
+
+    Near the turn at t0 the overlap is alpha0 - a tau^2 / 2 (tau = t - t0, a = -alpha'' = 2 F / m on two
+    beads of mass m: the pair's reduced mass is m / 2), so the total force F(alpha) + gamma alpha' is
+    largest at tau = -gamma / F', by gamma^2 a / (2 F') above F(alpha0): a relative difference
+    gamma^2 / (m F'), with F' = 1.5 F / alpha0 (Hertz). gamma is chosen for factor x rtol from an
+    undamped run's F and alpha0.
+    """
+    text = make_scene_text(beads=2, loading='kind = "velocity"\nvelocity = 1.0', end_time="auto", timestep="auto")
+    text = text.replace("[outputs]", "[outputs]\npeak_force = true")
+    sc = parse_scene(text, source="two.toml")
+    free = run_scene(sc, method="rk4", error_estimate=False).solution
+    stiffness = 1.5 * float(free.peak_force[0]) / float(free.peak_overlap[0])
+    gamma = float(np.sqrt(factor * rtol * sc.mass * stiffness))
+    return text + f"[damping]\ndashpot = {gamma!r}\n"
+
+
+def test_compare_on_a_dashpot_compares_peaks_of_one_definition(tmp_path, capsys):
+    """On a scene with a dashpot RK4's peak and LAMMPS's (Verlet's) are different quantities: compare
+    runs the reference with Verlet unless told otherwise, and says so; with --method rk4 the peak rows
+    are marked not comparable, not failed. Before, the default compare ran RK4 and failed its peak rows."""
+    rtol, factor = 1e-3, 10.0
+    text = _two_bead_dashpot(rtol, factor)
+    # the two definitions at a fine fixed step (each within 2e-4 of its converged value there; at the
+    # planned steps RK4, which no error model plans on a dashpot, is off by more)
+    sc = parse_scene(text.replace("timestep = 'auto'", "timestep = 3e-8"), source="dash.toml")
+    rk4, verlet = (run_scene(sc, method=m, error_estimate=False) for m in ("rk4", "verlet"))
+    f_rk4, f_verlet = rk4.observables()["leading_peak_force"], verlet.observables()["leading_peak_force"]
+    rel = (f_verlet - f_rk4) / f_verlet
+    print(f"gamma {sc.effects.dashpot:.4g} N s/m: verlet {f_verlet:.6g} N, rk4 {f_rk4:.6g} N, rel {rel:.3g}")
+    assert factor * rtol / 1.2 < rel < factor * rtol * 1.2  # the derivation's 10 rtol
+    unlike = {r.quantity: r for r in compare_runs(verlet, rk4, rtol)}
+    for q in ("leading_peak_force", "max_peak_force", "peak_force_contact_1", "arrival_time_contact_1"):
+        assert unlike[q].ok
+        assert unlike[q].verdict.startswith("not measured: not comparable: the runs' peaks are different quantities")
+    assert unlike["momentum"].verdict == "yes"
+
+    p = tmp_path / "dash.toml"
+    p.write_text(text)
+    assert main(["compare", str(p), "--out", str(tmp_path / "c"), "--rtol", str(rtol)]) == 0
+    out, err = capsys.readouterr()
+    assert "reference  verlet," in out
+    assert "the reference runs verlet, not rk4, on a scene with a dashpot" in err
+    with open(tmp_path / "c" / "compare.csv", newline="") as fh:
+        rows = {r["quantity"]: r for r in csv.DictReader(fh)}
+    for q in ("leading_peak_force", "max_peak_force", "peak_force_contact_1", "arrival_time_contact_1"):
+        assert rows[q]["within_rtol"] == "yes", rows[q]
+
+    assert main(["compare", str(p), "--out", str(tmp_path / "r"), "--rtol", str(rtol), "--method", "rk4"]) == 0
+    out, _ = capsys.readouterr()
+    assert "reference  rk4," in out
+    assert "not comparable: the runs' peaks are different quantities" in out
+    assert "FAIL" not in out

@@ -108,7 +108,11 @@ def add_compare_parser(sub) -> None:
     c.add_argument("scene", nargs="?", help=SCENE_HELP)
     c.add_argument("--rtol", type=float, default=1e-3, help="tolerance between the two solvers (default 1e-3)")
     c.add_argument(
-        "--method", default=REFERENCE.methods[0], choices=list(REFERENCE.methods), help="reference integrator"
+        "--method",
+        default=None,
+        choices=list(REFERENCE.methods),
+        help="reference integrator (default rk4; verlet on a scene with a dashpot, where rk4's peak is the elastic "
+        "force where the overlap turns, not the total force's maximum that LAMMPS reports)",
     )
     c.add_argument("--np", type=np_arg, default=1, help="MPI ranks for LAMMPS (default 1; auto: as many as pay)")
     c.add_argument("--out", help="output directory (default runs/<scene>-compare-<method>)")
@@ -131,32 +135,39 @@ def add_compare_parser(sub) -> None:
 def cmd_compare(args) -> int:
     """LAMMPS and the reference on one scene, one table; exit 1 when they differ beyond their errors."""
     from granchain.postprocess.comparison_table import format_table
-    from granchain.workflows.compare_backends import compare_scene
+    from granchain.workflows.compare_backends import compare_scene, reference_method
 
     scene = resolve_scene(args.scene)
+    from granchain.progress import is_quiet
+
+    ref_method, why_method = reference_method(scene, args.method)  # (a dashpot: verlet, like LAMMPS)
+    if why_method and not is_quiet():  # (with the plan's lines; the header says it too)
+        print(f"granchain: the reference runs {why_method}", file=sys.stderr)
     plan_rtol = args.rtol / 2 if scene.run.timestep is None else None  # as compare_scene plans
     np_ = args.np
-    for backend, method in ((LAMMPS, None), (REFERENCE, args.method)):
+    for backend, method in ((LAMMPS, None), (REFERENCE, ref_method)):
         concrete, _ = planned(scene, plan_rtol, backend, method)  # print each backend's plan (stderr)
         if backend.mpi and np_ == "auto":
             np_ = auto_np(concrete, backend)
-    out = args.out or f"runs/{scene_stem(args)}-compare-{args.method}"
+    out = args.out or f"runs/{scene_stem(args)}-compare-{ref_method}"
     rows, lam, ref = compare_scene(
         scene,
         rtol=args.rtol,
         out=out,
         overwrite=args.overwrite,
-        method=args.method,
+        method=ref_method,
         np_=np_,
         error_estimate=ERROR_ESTIMATE[args.error_estimate],
     )
     bad = [r.quantity for r in rows if not r.ok]
     if args.json:
-        _print_compare_json(args, scene, rows, lam, ref, out, bad)
+        _print_compare_json(args, scene, rows, lam, ref, out, bad, ref_method, why_method)
         return 1 if bad else 0
     print(f"scene      {scene_name(scene)}")
     print(f"lammps     verlet, dt = {lam.solution.timestep:g} s, {lam.solution.wall_time:.3g} s wall")
-    print(f"reference  {args.method}, dt = {ref.solution.timestep:g} s, {ref.solution.wall_time:.3g} s wall")
+    print(f"reference  {ref_method}, dt = {ref.solution.timestep:g} s, {ref.solution.wall_time:.3g} s wall")
+    if why_method:
+        print(f"           ({why_method})")
     print(f"rtol       {args.rtol:g}")
     print(shown(format_table(rows)))
     unmeasured = [r.quantity for r in rows if not r.measured]
@@ -172,7 +183,7 @@ def cmd_compare(args) -> int:
     return 0
 
 
-def _print_compare_json(args, scene, rows, lam, ref, out, bad) -> None:
+def _print_compare_json(args, scene, rows, lam, ref, out, bad, method, why_method) -> None:
     from granchain.workflows.comparison_frame import compare_frame
 
     table = compare_frame(rows).reset_index()
@@ -188,7 +199,8 @@ def _print_compare_json(args, scene, rows, lam, ref, out, bad) -> None:
                 "wall_time": lam.solution.wall_time,
             },
             REFERENCE.name: {
-                "method": args.method,
+                "method": method,
+                "method_reason": why_method,
                 "timestep": ref.solution.timestep,
                 "wall_time": ref.solution.wall_time,
             },

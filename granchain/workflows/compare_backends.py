@@ -6,7 +6,7 @@ import threading
 from pathlib import Path
 
 from granchain.backends import LAMMPS, REFERENCE
-from granchain.postprocess.comparison_table import compare_runs, write_compare
+from granchain.postprocess.comparison_table import compare_runs, peak_definition, write_compare
 from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain, write_run_dir
 from granchain.safe_files import UnsafeFileError, atomic_directory
 from granchain.workflows import run as run_module
@@ -15,12 +15,44 @@ from granchain.workflows.run import calculate_scene, check_resources, plan_for, 
 from granchain.workflows.shared_runs import Abandoned
 
 
+def reference_method(scene, method: str | None = None) -> tuple[str, str | None]:
+    """The reference's integrator in a compare of this scene, and why where it is not RK4 by default.
+
+    method: the user's choice, kept; None: RK4, but Verlet on a scene with a dashpot, whose peaks RK4
+    reads as a different quantity from LAMMPS's Verlet (comparison_table.peak_definition): the
+    reference's Verlet is still the independent numpy solver, and defines a peak as LAMMPS does.
+
+    Parameters
+    ----------
+    scene : granchain.scene.Scene
+        The scene compared.
+    method : str or None
+        The reference's integrator the user asked for (None: not asked).
+
+    Returns
+    -------
+    (str, str or None)
+        The integrator, and the reason it was chosen for this scene (None where the user chose it or
+        it is the default RK4).
+    """
+    if method is not None:
+        return REFERENCE.integrator(method), None
+    lammps_peak = peak_definition(LAMMPS.integrator(None), scene)
+    if peak_definition(REFERENCE.integrator(None), scene) == lammps_peak:
+        return REFERENCE.integrator(None), None
+    why = (
+        f"verlet, not rk4, on a scene with a dashpot: rk4's peak is {peak_definition('rk4', scene)}, LAMMPS's "
+        f"{lammps_peak}, as the reference's Verlet's (--method rk4 runs RK4; its peak rows are then not comparable)"
+    )
+    return "verlet", why
+
+
 def compare_scene(
     scene,
     rtol: float = 1e-3,
     out: str | Path | None = None,
     overwrite: bool = False,
-    method: str = "rk4",
+    method: str | None = None,
     np_: int = 1,
     reference_scene=None,
     error_estimate: bool | str = False,
@@ -31,6 +63,9 @@ def compare_scene(
     Verlet; the reference: method), the time step for rtol / 2 each; lam.scene and ref.scene are
     the scenes each one ran.
 
+    method: the reference's integrator; None: RK4, or Verlet on a scene with a dashpot
+    (reference_method: the same definition of a peak as LAMMPS's).
+
     error_estimate: give each run its measured error bars (companions at 2 dt and 4 dt; "checked": RK4's
     also checked by a run at dt / 2); a
     difference then fails only beyond rtol plus both runs' errors, and the table shows them.
@@ -39,6 +74,7 @@ def compare_scene(
     compare.csv and compare.md, written atomically.
     """
     run_module.check_error_estimate(error_estimate)
+    method, _ = reference_method(scene, method)
     if out is not None:
         check_output_dir(out, overwrite)
     # each backend runs the step planned for its own integrator; with timestep = "auto" each is
