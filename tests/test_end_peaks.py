@@ -2,6 +2,8 @@
 ends while the wall's force still rises, or before the wave reaches it, reports its largest force so
 far marked as no peak (ChainSolution.wall_peak_complete), with no error bar and no compared value."""
 
+import json
+
 import pytest
 
 from granchain.postprocess.comparison_table import compare_runs
@@ -61,3 +63,31 @@ def test_compare_shows_no_wall_peak_where_the_wave_has_not_passed_it():
     rows = {r.quantity: r for r in compare_runs(run(sc, "lammps"), run(sc, "reference"))}
     assert rows["wall_peak_force"].ok
     assert rows["wall_peak_force"].a is not None
+
+
+@pytest.mark.parametrize("backend", list(BACKENDS))
+@pytest.mark.parametrize("wall", [False, True])
+def test_a_free_precompressed_chain_keeps_its_momentum_and_says_so(backend, wall, tmp_path, capsys):
+    """Precompression pushes bead 1 and, on a free chain, pulls bead N as hard: no net force, so the
+    momentum at the end is what was put in, and granchain run says why; a wall takes some."""
+    from granchain.cli import main
+    from granchain.physics.effects import unbalanced_forces
+
+    text = make_scene_text(
+        beads=10, loading='kind = "velocity"\nvelocity = 1.0', end_time=1e-4, outputs="peak_force = true"
+    )
+    text += "[precompression]\nforce = 2.0\n" + ('[boundary]\nfar_end = "wall"\n' if wall else "")
+    (tmp_path / "p.toml").write_text(text)
+    sc = parse_scene(text, source="p.toml")
+    assert [e.name for e in unbalanced_forces(sc)] == (["wall", "precompression"] if wall else [])
+    name, method = BACKENDS[backend]
+    args = ["run", str(tmp_path / "p.toml"), "--backend", name, "--out", str(tmp_path / "r"), "--error-estimate", "off"]
+    assert main(args + (["--method", method] if method else [])) == 0
+    out = capsys.readouterr().out
+    line = next(s for s in out.splitlines() if "momentum at the end" in s)
+    if wall:
+        assert "the wall takes some" in line
+        return
+    assert "balance" in line
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["conservation"]["momentum"] == pytest.approx(sc.initial_momentum, rel=1e-9)

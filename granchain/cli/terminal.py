@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from granchain.backends import Backend, backend_named
+from granchain.physics.effects import unbalanced_forces
 from granchain.results import OBSERVABLE_UNITS, printable
 from granchain.scene import Scene, load_scene
 
@@ -177,10 +178,15 @@ def print_result(result, out) -> None:
     else:
         who = "the striker's M V" if ld.kind == "striker" else "bead 1's m v0"
         print(f"  {'momentum put in at t = 0 (N s)':38s} {fmt(scene.initial_momentum)}   ({who}; no force load)")
-    free = scene.effects.far_end == "free" and not scene.effects.precompression
+    free = not unbalanced_forces(scene)
     print(
         f"  {'momentum at the end (N s)':38s} {fmt(c['momentum'])}"
-        + ("   (a free chain keeps what was put in)" if free else "   (the wall or the static load takes some)")
+        + (
+            "   (a free chain keeps what was put in"
+            + (": the static push on bead 1 and pull on bead N balance)" if scene.effects.precompression else ")")
+            if free
+            else "   (the wall takes some)"
+        )
     )
     err = fmt(c["energy_balance_error_relative"])
     print(f"  {'energy balance error (1)':38s} {err}   (relative to the energy put in)")

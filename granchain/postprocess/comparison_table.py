@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from granchain.peaks import REACHED_FRACTION
-from granchain.physics.effects import external_forces
+from granchain.physics.effects import unbalanced_forces
 from granchain.physics.predictions import applicability, predict
 
 
@@ -234,7 +234,7 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
             why[q] = f"not comparable: {ended}"
         # the momentum too while it still changes: an effect's external force (a wall, precompression's
         # static forces) or a load still acting at the earlier end; a free chain's is the impulse, kept
-        pushed = [e.name for e in external_forces(scene)]
+        pushed = [e.name for e in unbalanced_forces(scene)]
         if scene.loading.is_force and min(sa.end_time, sb.end_time) < scene.loading.duration:
             pushed.append("the load")
         if pushed:

@@ -40,6 +40,14 @@ def active_effects(scene) -> list[type[Effect]]:
     return [e for e in EFFECTS.values() if e.active(scene)]
 
 
+def unbalanced_forces(scene) -> list[type[Effect]]:
+    """external_forces whose sum is not zero, so that the chain's momentum changes: not the static
+    precompression of a free chain, whose push on bead 1 and pull on bead N are equal and opposite.
+    (The run watches keep external_forces: they check no momentum where any external force acts.)"""
+    balanced = scene.effects.far_end == "free"
+    return [e for e in external_forces(scene) if not (e.name == "precompression" and balanced)]
+
+
 def external_forces(scene) -> list[type[Effect]]:
     """The scene's effects whose forces come from outside the chain (Effect.conserves_momentum False):
     with any of them the chain's momentum is not the initial momentum plus the impulse delivered."""
