@@ -169,7 +169,9 @@ def test_compare_runs_is_backend_agnostic():
     [
         ("", None, True),  # a free chain after its pulse: the momentum is the impulse at any time
         ('[boundary]\nfar_end = "wall"\n', None, False),
-        ("[precompression]\nforce = 5.0\n", None, False),
+        # precompression's push on bead 1 and pull on bead N balance on a free chain (unbalanced_forces)
+        ("[precompression]\nforce = 5.0\n", None, True),
+        ('[precompression]\nforce = 5.0\n[boundary]\nfar_end = "wall"\n', None, False),
         ("", 'kind = "step"\namplitude = 20.0\nduration = 1.0', False),  # the load still acts at the end
     ],
 )
