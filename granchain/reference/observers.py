@@ -27,7 +27,7 @@ import numpy as np
 from typing_extensions import override
 
 from granchain.invariants import InvariantError, contact_bodies, energy_violation, momentum_violation
-from granchain.peaks import PEAK_PASSED_FRACTION, complete_peaks, unreached_as_nan
+from granchain.peaks import PEAK_PASSED_FRACTION, every_contact_complete, unreached_as_nan
 from granchain.physics.effects import EFFECTS, momentum_kept
 from granchain.problem import state_energy
 from granchain.reference.ladder import CrossingLadder
@@ -83,6 +83,8 @@ class PeakTracker(Observer):
 
     def __init__(self, state: ChainState) -> None:
         self.f0 = state.f0
+        # the chain's own contacts, between a striker's in front (which starts unloaded) and a wall's
+        self.chain = slice(state.problem.front, state.n - 1 - (0 if state.free_end else 1))
         self.amax = state.overlap()  # the running peak overlap: the static overlap at t = 0
         self.listeners: list[Callable[[ChainState, np.ndarray], None]] = []
         self.ladder: CrossingLadder | None = None  # the leading pulse's, climbed at every step before the maxima
@@ -101,14 +103,22 @@ class PeakTracker(Observer):
         raise NotImplementedError
 
     def peak_fields(self, peak_force: np.ndarray, tmax: np.ndarray, force_min: np.ndarray) -> dict[str, Any]:
-        """The peak fields of ChainSolution from the running peaks (nan where a contact was not reached)."""
-        self.time_of_peak = unreached_as_nan(peak_force, tmax, self.f0)
+        """The peak fields of ChainSolution from the running peaks: the chain's own contacts with nan
+        where one was not reached (above F0, among the chain's contacts: unreached_as_nan), the effects'
+        contacts (a striker's, a wall's) with their running peak's time as it is, for
+        peaks.every_contact_complete to judge with each one's own static force, as the LAMMPS read-back
+        does with the pair styles' times; complete: every_contact_complete of every contact."""
+        chain = self.chain
+        self.time_of_peak = np.array(tmax, dtype=float)
+        self.time_of_peak[chain] = unreached_as_nan(peak_force[chain], tmax[chain], self.f0)
+        static = np.full(peak_force.shape, self.f0)
+        static[: chain.start] = 0.0  # a striker touches bead 1 unloaded; a wall carries F0
         return {
             "peak_overlap": self.amax,
             "peak_force": peak_force,
             "time_of_peak": self.time_of_peak,
             "force_min_after_peak": force_min,
-            "complete": complete_peaks(peak_force, force_min, self.time_of_peak, self.f0),
+            "complete": every_contact_complete(peak_force, force_min, self.time_of_peak, static),
         }
 
 

@@ -43,7 +43,7 @@ import time
 import numpy as np
 
 from granchain.invariants import InvariantError
-from granchain.peaks import complete_peaks, every_contact_complete, unreached_as_nan
+from granchain.peaks import complete_peaks, unreached_as_nan
 from granchain.physics.effects import EFFECTS
 from granchain.problem import ChainProblem
 from granchain.progress import Progress
@@ -117,9 +117,7 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
     if kw.get("stop_after") is not None:
         kw["stop_after"] += s0  # contact numbers inside count the striker's contact first
     sol = _solve(inner, end_time, timestep, method, **kw)
-    static = np.full(sol.peak_force.shape, float(problem.precompression))
-    static[:s0] = 0.0  # a striker touches bead 1 unloaded
-    every = every_contact_complete(sol.peak_force, sol.force_min_after_peak, sol.time_of_peak, static)
+    every = sol.complete  # every contact's, each with its own static force (peaks.every_contact_complete)
     for effect in carried:  # what the results report of the extra beads (Effect.end_fields)
         for name, value in effect.end_fields(sol.peak_force, sol.time_of_peak, sol.velocity, -1, every).items():
             setattr(sol, name, value)
