@@ -541,3 +541,31 @@ def test_a_taper_reports_its_own_speed_not_bead_one_diameters():
     nominal = 1.0 / np.polyfit(contacts * sc.diameter, t, 1)[0]
     assert nominal > 1.3 * real  # the bug this guards against is large
     assert result.observables()["wave_speed"] == pytest.approx(real, rel=1e-9)
+
+
+def test_a_dimers_nondimensional_forces_use_each_contacts_own_pair():
+    """F / (E* R*^2) (Eq. 5) of the measured contact's own two beads, not bead 1's pair: a steel/PTFE
+    dimer of two radii (E* 1.8 GPa against steel-steel's 111 GPa), E* and R* computed here from the
+    materials (Johnson's two spheres); leading_peak_force_nondim and peaks.csv's peak_force_nondim."""
+    from granchain.results import peak_columns
+
+    n, radii, names = 8, (2.38e-3, 3.0e-3), ("chrome-steel-52100", "ptfe")
+    chain = f"radius = {[radii[i % 2] for i in range(n)]!r}\nmaterial = {[names[i % 2] for i in range(n)]!r}\n"
+    text = chain_text(chain, n, 0.5).replace(
+        'end_time = "auto"\ntimestep = "auto"', "end_time = 2.5e-4\ntimestep = 2e-7"
+    )
+    r = run_reference(parse_scene(text, source="dimer.toml"), "verlet")
+
+    def scale(c: int) -> float:  # E* R*^2 of 1-based contact c (beads c and c + 1)
+        a, b = mat.MATERIALS[names[(c - 1) % 2]], mat.MATERIALS[names[c % 2]]
+        e_star = 1.0 / ((1 - a.poisson_ratio**2) / a.youngs_modulus + (1 - b.poisson_ratio**2) / b.youngs_modulus)
+        r_star = radii[0] * radii[1] / (radii[0] + radii[1])
+        return e_star * r_star**2
+
+    obs = r.observables()
+    c = obs["leading_peak_contact"]
+    assert obs["leading_peak_force"] > 0.0
+    assert obs["leading_peak_force_nondim"] == pytest.approx(obs["leading_peak_force"] / scale(c), rel=1e-12)
+    cols = peak_columns(r)
+    want = np.array([float(f) / scale(int(k)) for k, f in zip(cols["contact"], cols["peak_force"], strict=True)])
+    np.testing.assert_allclose(cols["peak_force_nondim"], want, rtol=1e-12)

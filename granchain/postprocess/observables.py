@@ -170,7 +170,8 @@ def measure_observables(scene, solution, missing: dict | None = None) -> dict:
     lead_f = np.asarray(solution.leading_pulse_force, dtype=float) - f0
     if np.isfinite(lead_f[last]):
         out["leading_peak_force"] = float(lead_f[last])
-        out["leading_peak_force_nondim"] = float(lead_f[last] / scene.force_scale)
+        # F / (E* R*^2) of that contact's own pair (Eq. 5): on a chain whose beads differ, not bead 1's
+        out["leading_peak_force_nondim"] = float(lead_f[last] / scene.contact_force_scales[last])
     else:
         out["leading_peak_force"] = out["leading_peak_force_nondim"] = None
         why["leading_peak_force"] = why["leading_peak_force_nondim"] = _why_no_leading_pulse(scene, solution, b)

@@ -170,7 +170,7 @@ class RunResult:
         """peaks.csv as a pandas DataFrame indexed by contact (contact i joins beads i and i+1).
 
         Columns (units in ``df.attrs["units"]``; :data:`PEAK_UNITS`): peak_force (N), time_of_peak
-        (s; nan where the wave never reached the contact), peak_force_nondim (F / (E* R*^2)),
+        (s; nan where the wave never reached the contact), peak_force_nondim (F / (E* R*^2) of the contact's own pair),
         complete (bool: the peak is over, granchain.peaks.complete_peaks), leading_pulse_force (N)
         and arrival_time (s) of the leading pulse (nan until it completed), and with error
         estimates peak_force_error (N), time_of_peak_error (s) and error_status (text; why an

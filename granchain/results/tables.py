@@ -9,7 +9,7 @@ PEAK_UNITS = {
     "contact": "1",
     "peak_force": "N",
     "time_of_peak": "s",
-    "peak_force_nondim": "1",  # F / (E* R*^2), Eq. 5
+    "peak_force_nondim": "1",  # F / (E* R*^2) of the contact's own pair (Scene.contact_force_scales), Eq. 5
     "complete": "bool",
     "leading_pulse_force": "N",
     "arrival_time": "s",
@@ -83,7 +83,7 @@ def peak_columns(result) -> dict[str, np.ndarray]:
         "contact": contacts,
         "peak_force": s.peak_force[idx],
         "time_of_peak": s.time_of_peak[idx],
-        "peak_force_nondim": s.peak_force[idx] / sc.force_scale,
+        "peak_force_nondim": s.peak_force[idx] / sc.contact_force_scales[idx],  # each contact's E* R*^2
         "complete": s.complete[idx],
         "leading_pulse_force": s.leading_pulse_force[idx],
         "arrival_time": s.leading_pulse_time[idx],

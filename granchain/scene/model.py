@@ -285,6 +285,22 @@ class Scene:
         return mat.force_scale(self.chain.material, self.chain.radius)
 
     @property
+    def contact_force_scales(self) -> np.ndarray:
+        """E* R*^2 of every bead-bead contact, in chain order (N): Eq. 5's force scale of the contact's
+        own two beads (pair_effective_modulus, pair_effective_radius: Johnson's E* and R* of two
+        spheres) on a chain whose beads differ (per_bead); force_scale at every contact of a uniform
+        chain."""
+        if not self.per_bead:
+            return np.full(self.n_contacts, self.force_scale)
+        r, m = self.bead_radii, self.bead_materials
+        return np.array(
+            [
+                mat.pair_effective_modulus(m[i], m[i + 1]) * mat.pair_effective_radius(r[i], r[i + 1]) ** 2
+                for i in range(len(r) - 1)
+            ]
+        )
+
+    @property
     def impulse_scale(self) -> float:
         """E* R*^2 tau, the impulse scale of the nondimensional impulse I~ (Eq. 6), N s."""
         return mat.impulse_scale(self.chain.material, self.chain.radius)

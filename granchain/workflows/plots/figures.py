@@ -155,10 +155,17 @@ def _draw_peaks(r: RunResult, log: bool = True):
         ax.set_ylim(floor, 1.3 * max(tops))
     ax.set_xlabel(r"contact $i$ (between bead $i$ and $i+1$)")
     ax.set_ylabel(r"peak contact force $F_p$ (N)")
-    sec = ax.secondary_yaxis("right", functions=(lambda f: f / scene.force_scale, lambda g: g * scene.force_scale))
-    sec.set_ylabel(r"$F_p \,/\, (E^* R^{*2})$")
+    # the nondimensional force F / (E* R*^2) as a right axis where one scale holds for every contact: on a
+    # chain whose beads differ each contact has its own pair's E* R*^2 (peaks.csv's peak_force_nondim), and
+    # one axis in bead 1's would read the others' wrong, so there is none
+    axes = [ax]
+    if not scene.per_bead:
+        fs = scene.force_scale
+        sec = ax.secondary_yaxis("right", functions=(lambda f: f / fs, lambda g: g * fs))
+        sec.set_ylabel(r"$F_p \,/\, (E^* R^{*2})$")
+        axes.append(sec)
     if log:
-        _plain_log_ticks(ax, sec)
+        _plain_log_ticks(*axes)
     ax.set_title(_plain(scene.title or "peak force along the chain"), fontsize=9)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
