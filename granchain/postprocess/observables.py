@@ -27,7 +27,6 @@ import numpy as np
 
 from granchain.peaks import (
     LEAD_FRACTION,
-    PEAK_PASSED_FRACTION,
     lead_fall,
     lead_floor,
     position_resolution,
@@ -103,18 +102,6 @@ def wave_speed_unmeasurable(scene) -> str | None:
     return (
         f"the scene's measurement window has {max(b - a + 1, 0)} contact(s) ({where}); the wave-speed fit needs "
         f"{FIT_CONTACTS}, which this scene can never give"
-    )
-
-
-def _why_not_complete(solution, contact: int) -> str:
-    """Why a 1-based contact's peak cannot be used."""
-    t = float(solution.time_of_peak[contact - 1])
-    if not np.isfinite(t):
-        return f"contact {contact} was not reached by the wave before the end of the run (t = {solution.end_time:g} s)"
-    return (
-        f"the peak at contact {contact} is not complete: its force has not fallen to {PEAK_PASSED_FRACTION:g} of "
-        f"its peak since (peak {float(solution.peak_force[contact - 1]):.6g} N at t = {t:g} s, run ends at "
-        f"t = {solution.end_time:g} s); run longer"
     )
 
 
