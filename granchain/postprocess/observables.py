@@ -211,7 +211,8 @@ def unmeasured_outputs(scene, solution) -> list[str]:
     """What the scene asked for that the run ended before measuring: its window's leading peak and
     wave speed (a peak-force table), each with the reason, and the window's last contact's peak while
     the force there still rises at the end (peaks.still_rising: a main wave behind a smaller
-    precursor); [] when everything asked for is there. A run that ends too soon says so (the command
+    precursor; not while a force load still acts, whose plateau the force rises to); [] when everything
+    asked for is there. A run that ends too soon says so (the command
     line exits 1), not only in summary.json. The wave speed of a scene that can never measure it
     (wave_speed_unmeasurable: a window of fewer than FIT_CONTACTS contacts) is not missed by the run:
     it is left out here, and the run's observables say why it is None."""
@@ -222,6 +223,10 @@ def unmeasured_outputs(scene, solution) -> list[str]:
     asked = ("leading_peak_force",) + (("wave_speed",) if wave_speed_unmeasurable(scene) is None else ())
     lines = [f"{name}: {missing[name]}" for name in asked if out.get(name) is None]
     b = scene.window[1]
-    if still_rising(solution.complete, solution.time_of_peak, solution.velocity)[b - 1]:
+    # behind a load still acting at the end the force rises toward the load's level: a running maximum
+    # that no longer run completes while the load acts, not a main wave still to come
+    ld = scene.loading
+    lasting = ld.is_force and ld.duration > solution.end_time
+    if not lasting and still_rising(solution.complete, solution.time_of_peak, solution.velocity)[b - 1]:
         lines.append(f"peak_force_contact_{b}: {_why_still_rising(scene, solution, b)}")
     return lines
