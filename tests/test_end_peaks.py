@@ -136,3 +136,17 @@ def test_a_lasting_load_is_not_run_again_for_its_plateau():
         result = run_scene(sc, backend="lammps", rtol=1e-4)
     assert result.solution.end_time <= result.plan.scene.run.end_time
     assert result.observables()["leading_peak_force"] is not None
+
+
+def test_a_damaged_wall_flag_in_a_run_directory_is_one_clear_error(tmp_path):
+    """summary.json's wall_peak_complete must be true or false: a damaged one is a LoadRunError naming
+    it, not a truthy string that compare would take for a passed peak."""
+    from granchain.workflows.load import LoadRunError, load_run
+
+    out = tmp_path / "r"
+    run_scene(walled(1e-4, 0.0, False), method="verlet", out=out, error_estimate=False)
+    summary = json.loads((out / "summary.json").read_text())
+    summary["wall_peak_complete"] = "garbage"
+    (out / "summary.json").write_text(json.dumps(summary))
+    with pytest.raises(LoadRunError, match="wall_peak_complete = 'garbage'"):
+        load_run(out)

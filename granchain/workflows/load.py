@@ -126,6 +126,14 @@ def _time(text: str | None) -> datetime | None:
     return None if text is None else datetime.fromisoformat(text)
 
 
+def _flag(summary: dict, name: str) -> bool | None:
+    """A true/false field of summary.json (None where absent): anything else is a damaged summary."""
+    value = summary.get(name)
+    if value is not None and not isinstance(value, bool):
+        raise ValueError(f"{name} = {value!r} is not true or false")
+    return value
+
+
 def _solution(d: Path, scene, summary: dict, peaks: dict) -> ChainSolution:
     n = int(scene.chain.beads)
     idx = np.asarray(peaks["contact"], dtype=np.int64) - 1
@@ -182,9 +190,9 @@ def _solution(d: Path, scene, summary: dict, peaks: dict) -> ChainSolution:
         momentum=float(c.get("momentum", 0.0)),
         extra_steps=max(int(price.get("steps", steps)) - steps, 0),
         wall_peak_force=summary.get("wall_peak_force"),
-        wall_peak_complete=summary.get("wall_peak_complete"),
+        wall_peak_complete=_flag(summary, "wall_peak_complete"),
         striker_peak_force=summary.get("striker_peak_force"),
-        striker_peak_complete=summary.get("striker_peak_complete"),
+        striker_peak_complete=_flag(summary, "striker_peak_complete"),
         striker_velocity=summary.get("striker_velocity"),
         **kw,
     )
