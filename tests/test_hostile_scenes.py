@@ -328,8 +328,8 @@ KNOWN = {
         _data(
             {
                 ("chain", "material"): {
-                    "density": 1.0,
-                    "youngs_modulus": 1e13,
+                    "density": 1000.0,
+                    "youngs_modulus": 1e12,
                     "poisson_ratio": -0.9999999999999999,
                 },
                 ("chain", "radius"): 1e-6,

@@ -1,5 +1,6 @@
 """Scene files: the documented shape parses; every invalid input gets one clear error."""
 
+import math
 import re
 import tomllib
 from pathlib import Path
@@ -108,14 +109,14 @@ RULES = [
     (
         "bad poisson",
         ("chain", "material"),
-        {"density": 1.0, "youngs_modulus": 1e9, "poisson_ratio": 0.5},
+        {"density": 1000.0, "youngs_modulus": 1e9, "poisson_ratio": 0.5},
         "poisson_ratio",
         "< 0.5",
     ),
     (
         "material unknown key",
         ("chain", "material"),
-        {"density": 1.0, "youngs_modulus": 1e9, "poisson_ratio": 0.3, "colour": "gold"},
+        {"density": 1000.0, "youngs_modulus": 1e9, "poisson_ratio": 0.3, "colour": "gold"},
         "colour",
         "allowed keys",
     ),
@@ -388,3 +389,86 @@ def test_generated_scene_files_run_or_are_refused_clearly(tmp_path_factory, muta
     assert not (d / "out").exists()
     if "invariant" not in message and "stability limit" not in message:
         assert str(path) in message or "gen.toml" in message  # a scene error names the file
+
+
+# ---- material values outside any real solid's range: the unit slip is named with its fix
+
+
+def _material_scene(material: dict, contact: dict | None = None) -> dict:
+    data = tomllib.loads(ISSUE_SCENE)
+    data["chain"]["material"] = {"density": 8500.0, "youngs_modulus": 115e9, "poisson_ratio": 0.3, **material}
+    if contact is not None:
+        data["contact"] = contact
+    return data
+
+
+@pytest.mark.parametrize(
+    ("key", "slips"),
+    [
+        ("density", ((1e3, "g/cm^3"),)),
+        ("youngs_modulus", ((1e9, "GPa"),)),
+        ("yield_strength", ((1e6, "MPa"), (1e9, "GPa"))),
+    ],
+)
+@settings(max_examples=60, deadline=None)
+@given(where=st.floats(0.0, 1.0))
+def test_a_material_value_in_another_unit_is_refused_naming_the_slip(key, slips, where):
+    """Any real solid's value (within the range, log-uniform) typed in g/cm^3, GPa or MPa is refused
+    naming the key, the value and the SI number to write; the SI value itself is accepted."""
+    rng = {"density": mat.DENSITY_RANGE, "youngs_modulus": mat.YOUNGS_MODULUS_RANGE}.get(key, mat.YIELD_STRENGTH_RANGE)
+    for factor, unit in slips:
+        high = rng.high if key != "yield_strength" else 0.1 * 115e9  # a yield strain of at most 10 %
+        si = float(f"{10 ** (math.log10(rng.low) + where * math.log10(high / rng.low)):.4g}")
+        typed = si / factor
+        with pytest.raises(SceneError) as err:
+            scene_from_dict(_material_scene({key: typed}), source="x.toml")
+        msg = str(err.value)
+        assert f"[chain.material] {key} = {typed:g}" in msg, msg
+        assert f"in {unit}? write {si:.6g}" in msg, msg
+        assert getattr(scene_from_dict(_material_scene({key: si}), source="x.toml").chain.material, key) == si
+
+
+@example(325.0)
+@settings(max_examples=40, deadline=None)
+@given(mpa=st.floats(0.2, 5e4))
+def test_a_thornton_yield_pressure_in_mpa_is_refused(mpa):
+    data = tomllib.loads(ISSUE_SCENE)
+    data["contact"] = {"law": "thornton", "yield_pressure": mpa}
+    with pytest.raises(SceneError, match=rf"\[contact\] yield_pressure = {mpa:g} Pa is below .* in MPa\? write"):
+        scene_from_dict(data, source="x.toml")
+    data["contact"]["yield_pressure"] = mpa * 1e6
+    if mpa * 1e6 <= mat.YIELD_PRESSURE_RANGE.high:
+        assert scene_from_dict(data, source="x.toml").contact.coefficients.yield_pressure == mpa * 1e6
+
+
+def test_soft_and_dense_real_solids_are_accepted():
+    """PTFE (E 1.46 GPa), a PDMS elastomer (E 1 MPa), a hydrogel (E 20 kPa, 1000 kg/m^3), cork
+    (200 kg/m^3), osmium (22,590 kg/m^3), lead (yield 5 MPa) are all real beads."""
+    for material in (
+        {"density": 2200.0, "youngs_modulus": 1.46e9, "poisson_ratio": 0.46},
+        {"density": 965.0, "youngs_modulus": 1e6, "poisson_ratio": 0.49},
+        {"density": 1000.0, "youngs_modulus": 2e4, "poisson_ratio": 0.45},
+        {"density": 200.0, "youngs_modulus": 2e7, "poisson_ratio": 0.0},
+        {"density": 22590.0, "youngs_modulus": 5.6e11, "poisson_ratio": 0.25},
+        {"density": 11340.0, "youngs_modulus": 1.6e10, "poisson_ratio": 0.44, "yield_strength": 5e6},
+    ):
+        scene_from_dict(_material_scene(material), source="x.toml")
+
+
+def test_a_metals_modulus_in_mpa_is_refused_by_its_yield_strain():
+    """Steel's E typed in MPa (2e5) is a hydrogel's modulus in Pa; with a yield strength of 290 MPa it
+    makes a yield strain of 1450, which no solid has."""
+    data = _material_scene({"youngs_modulus": 2e5, "yield_strength": 2.9e8})
+    with pytest.raises(SceneError, match=r"yield strain .* youngs_modulus in MPa\? write 2e\+11"):
+        scene_from_dict(data, source="x.toml")
+
+
+@pytest.mark.parametrize("name", list(mat.MATERIALS))
+def test_the_built_in_materials_are_inside_the_plausible_ranges(name):
+    m = mat.MATERIALS[name]
+    assert mat.DENSITY_RANGE.refusal(m.density) is None
+    assert mat.YOUNGS_MODULUS_RANGE.refusal(m.youngs_modulus) is None
+    if m.yield_strength is not None:
+        assert mat.YIELD_STRENGTH_RANGE.refusal(m.yield_strength) is None
+        assert mat.YIELD_PRESSURE_RANGE.refusal(mat.YIELD_PRESSURE_FACTOR * m.yield_strength) is None
+    assert mat.yield_strain_refusal(m) is None

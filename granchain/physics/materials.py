@@ -59,6 +59,93 @@ MATERIALS: dict[str, Material] = {
     "ptfe": Material(density=2200.0, youngs_modulus=1.46e9, poisson_ratio=0.46),
 }
 
+
+@dataclass(frozen=True)
+class PlausibleRange:
+    """The values a material property of real solid beads takes, in SI, and the unit slips that
+    land outside them: a value outside is refused with the slip that would explain it."""
+
+    low: float
+    high: float
+    unit: str
+    #: which solids set the ends (the message quotes it)
+    ends: str
+    #: (factor, unit) of the slips to suggest: a value v typed in that unit is v * factor in SI
+    slips: tuple[tuple[float, str], ...] = ()
+
+    def refusal(self, value: float) -> str | None:
+        """None when low <= value <= high; else why the value is refused, with each slip that
+        brings it into the range (e.g. "in g/cm^3? write 7800")."""
+        if self.low <= value <= self.high:
+            return None
+        side = "below" if value < self.low else "above"
+        span = f"{self.low:g} to {self.high:g} {self.unit}"
+        text = f"{value:g} {self.unit} is {side} any solid bead's ({span}: {self.ends})"
+        fixes = [f"in {unit}? write {value * f:.6g}" for f, unit in self.slips if self.low <= value * f <= self.high]
+        return text + ("; " + "; ".join(fixes) if fixes else f"; give it in {self.unit} and check its digits")
+
+
+#: Density of a solid bead: the lightest beads of granular-chain experiments are of cork or balsa
+#: (about 150-250 kg/m^3), the densest solid is osmium (22,590 kg/m^3, CRC Handbook). Every solid's
+#: density in g/cm^3 is below 23, so a value below 100 is one written in g/cm^3.
+DENSITY_RANGE = PlausibleRange(
+    100.0, 2.5e4, "kg/m^3", "cork and balsa about 200, osmium 22,600", slips=((1e3, "g/cm^3"),)
+)
+#: Young's modulus: from soft hydrogel beads (about 10 kPa) and silicone elastomers (0.1-3 MPa) to
+#: diamond (1,220 GPa). A modulus in GPa (every solid's is below 1,300) or a polymer's in MPa (PTFE
+#: 1,460, nylon 3,000) lands below 1e4 Pa. A metal's in MPa (steel 200,000) is inside: the
+#: yield-strain check (MAX_YIELD_STRAIN) catches it when a yield strength is given.
+YOUNGS_MODULUS_RANGE = PlausibleRange(
+    1e4,
+    1.5e12,
+    "Pa",
+    "hydrogels about 1e4, rubber about 1e6, steel 2e11, diamond 1.2e12",
+    slips=((1e9, "GPa"), (1e6, "MPa")),
+)
+#: Tensile yield strength: from the softest metals (indium and lead, about 1-10 MPa) to hardened
+#: steels (about 2-5 GPa) and beyond (diamond's compressive yield, about 100 GPa). A yield strength in
+#: MPa (every solid's is below 1e5 MPa) or GPa lands below 1e5 Pa.
+YIELD_STRENGTH_RANGE = PlausibleRange(
+    1e5,
+    1.5e11,
+    "Pa",
+    "lead about 5e6, annealed steel 3e8, hardened steel 2e9",
+    slips=((1e6, "MPa"), (1e9, "GPa")),
+)
+#: Thornton's limiting contact pressure p_y: about 1.6 to 3 times the yield strength (Johnson,
+#: Contact Mechanics, Sec. 6.2), so the yield strength's range times 1.6 to 3.
+YIELD_PRESSURE_RANGE = PlausibleRange(
+    1.6e5,
+    4.5e11,
+    "Pa",
+    "1.6 to 3 times the yield strength: lead about 1e7, brass about 3e9",
+    slips=((1e6, "MPa"), (1e9, "GPa")),
+)
+#: The largest yield strain sigma_y / E a material may give: the ideal strength of a crystal is about
+#: E/10 (Kelly & Macmillan, Strong Solids), real solids yield at 0.1-5 % (hardened steel 1 %,
+#: polyethylene 5 %), so a larger ratio means one of the two values is in another unit.
+MAX_YIELD_STRAIN = 0.1
+
+
+def yield_strain_refusal(m: Material) -> str | None:
+    """None when m has no yield strength or sigma_y / E <= MAX_YIELD_STRAIN; else why not, with the
+    unit slip of youngs_modulus that would explain it."""
+    if m.yield_strength is None or m.yield_strength <= MAX_YIELD_STRAIN * m.youngs_modulus:
+        return None
+    fixes = [
+        f"youngs_modulus in {unit}? write {m.youngs_modulus * f:.6g}"
+        for f, unit in YOUNGS_MODULUS_RANGE.slips
+        if YOUNGS_MODULUS_RANGE.refusal(m.youngs_modulus * f) is None
+        and m.yield_strength <= MAX_YIELD_STRAIN * m.youngs_modulus * f
+    ]
+    return (
+        f"yield_strength = {m.yield_strength:g} Pa and youngs_modulus = {m.youngs_modulus:g} Pa give a yield "
+        f"strain sigma_y / E = {m.yield_strength / m.youngs_modulus:.3g}, above {MAX_YIELD_STRAIN:g}, the ideal "
+        "strength of any solid (real ones yield at 0.1 to 5 %): one of them is in another unit; "
+        + ("; ".join(fixes) if fixes else "give both in Pa")
+    )
+
+
 #: A short citation per built-in material (the comments above give the detail).
 SOURCES: dict[str, str] = {
     "brass": "Pal & Geubelle, Sec. II A (the paper)",

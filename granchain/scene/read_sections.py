@@ -46,24 +46,17 @@ def _read_material(s: _Section, source: str, required: bool = True) -> tuple[mat
         return mat.MATERIALS[m], m
     if isinstance(m, dict):
         ms = _Section(source, f"{s.name}.material", m)
-        # the ranges hold every solid from aerogel and soft gels to beyond diamond; outside them the
-        # derived scales (tau, E* R*^2, the contact stiffness) leave double precision
+        # each value within the range of real solid beads (materials.*_RANGE): outside it, a unit slip
+        # (g/cm^3, GPa, MPa) is the likely cause, and the message says which
         material = mat.Material(
-            density=ms.number("density", low=1.0, low_open=False, high=1e5, high_open=False, what="kg/m^3, 1 to 1e5"),
-            youngs_modulus=ms.number(
-                "youngs_modulus", low=1e3, low_open=False, high=1e13, high_open=False, what="Pa, 1e3 to 1e13"
-            ),
+            density=ms.quantity("density", mat.DENSITY_RANGE, what="kg/m^3"),
+            youngs_modulus=ms.quantity("youngs_modulus", mat.YOUNGS_MODULUS_RANGE, what="Pa"),
             poisson_ratio=ms.number("poisson_ratio", low=-1.0, high=0.5, what="-1 < nu < 0.5"),
-            yield_strength=ms.number(
-                "yield_strength",
-                required=False,
-                low=1.0,
-                low_open=False,
-                high=1e13,
-                high_open=False,
-                what="Pa, 1 to 1e13",
-            ),
+            yield_strength=ms.quantity("yield_strength", mat.YIELD_STRENGTH_RANGE, required=False, what="Pa"),
         )
+        why = mat.yield_strain_refusal(material)
+        if why:
+            raise ms.error(f"[{ms.name}] {why}")
         ms.finish(("density", "youngs_modulus", "poisson_ratio", "yield_strength"))
         return material, None
     raise s.fail("material", m, allowed)

@@ -4,9 +4,12 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from granchain.exceptions import GranchainError
+
+if TYPE_CHECKING:
+    from granchain.physics.materials import PlausibleRange
 
 
 class SceneError(GranchainError, ValueError):
@@ -87,6 +90,17 @@ class _Section:
             raise self.fail(key, v, allowed)
         if high is not None and (v >= high if high_open else v > high):
             raise self.fail(key, v, allowed)
+        return v
+
+    def quantity(self, key: str, plausible: PlausibleRange, *, required: bool = True, what: str = "") -> float | None:
+        """A material property in SI: a finite number inside ``plausible``; outside it, a message that
+        names the value, the range of real solids and the unit slip that would explain it."""
+        v = self.number(key, required=required, what=what)
+        if v is None:
+            return None
+        why = plausible.refusal(v)
+        if why:
+            raise SceneError(f"{self.file}: [{self.name}] {key} = {why}")
         return v
 
     def integer(self, key: str, *, low: int, high: int | None = None, what: str = "") -> int:

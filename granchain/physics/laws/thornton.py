@@ -482,13 +482,10 @@ class ThorntonLaw(ContactLaw):
                 )
             s.finish(("law", *cls.scene_keys))
             return ThorntonCoefficients(yield_pressure=None)
-        p_y = s.number(
+        p_y = s.quantity(
             "yield_pressure",
-            low=1e3,
-            low_open=False,
-            high=1e13,
-            high_open=False,
-            what="Thornton's limiting contact pressure p_y in Pa, 1e3 to 1e13 (not the yield strength)",
+            mat.YIELD_PRESSURE_RANGE,
+            what="Thornton's limiting contact pressure p_y in Pa (not the yield strength)",
         )
         s.finish(("law", *cls.scene_keys))
         return ThorntonCoefficients(yield_pressure=p_y)
