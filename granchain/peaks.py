@@ -31,6 +31,30 @@ def unreached_as_nan(peak_force: np.ndarray, time_of_peak: np.ndarray, static_fo
     return np.where(rise > floor, time_of_peak, np.nan)
 
 
+def end_contact_reached(force: float, static_force: float, rises) -> bool:
+    """Whether a striker's or a wall's contact was reached by the wave, by unreached_as_nan's rule.
+
+    Parameters
+    ----------
+    force : float
+        The contact's largest force (N).
+    static_force : float
+        The force it carries at rest (a wall: the precompression F0; a striker: 0).
+    rises : array_like
+        Every other contact's largest rise above its static force (N).
+
+    Returns
+    -------
+    bool
+        Its rise exceeds REACHED_FRACTION of the largest rise of any contact. Below that its force is
+        round-off ahead of the wave (a Hertz chain's precursor touches a wall the wave has not reached
+        with forces of 1e-18 N and less), not a force the run measured.
+    """
+    rise = float(force) - float(static_force)
+    largest = max(float(np.max(np.asarray(rises, dtype=float), initial=0.0)), rise)
+    return rise > REACHED_FRACTION * largest
+
+
 #: A contact's peak is complete once the contact's force has fallen to at most this fraction of its
 #: peak (both counted above the static force F0) at some sample after the peak. It is the fraction
 #: by which [run] stop_after_contact decides that the leading wave has passed a contact (the

@@ -150,3 +150,35 @@ def test_a_damaged_wall_flag_in_a_run_directory_is_one_clear_error(tmp_path):
     (out / "summary.json").write_text(json.dumps(summary))
     with pytest.raises(LoadRunError, match="wall_peak_complete = 'garbage'"):
         load_run(out)
+
+
+@pytest.mark.parametrize("end", [0.4, 0.9, 0.99])
+def test_a_wall_the_wave_has_not_reached_prints_not_reached_not_a_round_off_force(tmp_path, capsys, end):
+    """A 60-bead brass chain on a wall, kicked with 0.4 N s: its Hertz precursor touches the wall
+    ahead of the wave (6.8e-36 N at 0.9 of the time of its peak, 0.44 ms), a force below
+    REACHED_FRACTION of the chain's largest peak that is round-off, printed as "not reached" with
+    no number; a run ended on the rise (0.99 of the way to the peak) prints its largest force so far."""
+    from granchain.cli import main
+    from granchain.peaks import REACHED_FRACTION
+
+    def text(end_time):
+        loading = 'kind = "impulse"\nimpulse = 0.4\nduration = 1e-6'
+        scene = make_scene_text(
+            beads=60, loading=loading, end_time=end_time, timestep=5e-8, outputs="peak_force = true"
+        )
+        return scene + '[boundary]\nfar_end = "wall"\n'
+
+    full = run_scene(parse_scene(text(8e-4), source="wall.toml"), backend="reference", method="verlet")
+    (tmp_path / "w.toml").write_text(text(end * full.solution.wall_time_of_peak))
+    args = ["run", str(tmp_path / "w.toml"), "--backend", "reference", "--method", "verlet", "--out"]
+    assert main([*args, str(tmp_path / "r"), "--error-estimate", "off", "-q"]) == 0
+    line = next(s for s in capsys.readouterr().out.splitlines() if "wall_peak_force" in s)
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["wall_peak_complete"] is False
+    reached = summary["wall_peak_force"] > REACHED_FRACTION * summary["observables"]["max_peak_force"]
+    assert reached == (end == 0.99), summary["wall_peak_force"]
+    if reached:
+        assert "largest force so far, not a peak" in line, line
+    else:
+        assert "-   not reached: the wave had not reached the wall's contact" in line, line
+        assert f"{summary['wall_peak_force']:g}" not in line.split("not reached")[0], line

@@ -9,7 +9,10 @@ import math
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from granchain.backends import Backend, backend_named
+from granchain.peaks import REACHED_FRACTION, end_contact_reached
 from granchain.physics.effects import unbalanced_forces
 from granchain.results import OBSERVABLE_UNITS, printable
 from granchain.scene import Scene, load_scene
@@ -152,9 +155,25 @@ def print_result(result, out) -> None:
             bar = f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})"
         print(f"  {label:38s} {fmt(v)}{bar}{why}")
     end_errors = (s.get("errors") or {}).get("end_peaks", {})
-    for name, label in (("striker_peak_force", "striker's contact"), ("wall_peak_force", "wall's contact")):
+    f0 = float(scene.effects.precompression)
+    ends = (("striker_peak_force", "striker's contact", 0.0), ("wall_peak_force", "wall's contact", f0))
+    rises = [*(np.asarray(result.solution.peak_force, dtype=float) - f0)]
+    rises += [s[name] - static for name, _, static in ends if s.get(name) is not None]
+    for name, label, static in ends:
         value = s.get(name)
         if value is None:
+            continue
+        if s.get(name.replace("_force", "_complete")) is False and not end_contact_reached(value, static, rises):
+            print(
+                f"  {name + ' (N)':38s} -   not reached: the wave had not reached the {label} when the run "
+                f"ended (t = {result.solution.end_time:g} s)"
+                + (
+                    f"; its largest force{f' above F0 = {static:g} N' if static else ''}, {value - static:.2g} N, "
+                    f"is round-off ahead of the wave, under {REACHED_FRACTION:g} of the largest contact's"
+                    if value != static
+                    else ""
+                )
+            )
             continue
         e = end_errors.get(name)
         bar = (
