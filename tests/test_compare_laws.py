@@ -5,6 +5,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, example, given, settings
+from hypothesis import strategies as st
 
 from granchain.cli import main, resolve_scene
 from granchain.exceptions import UsageError
@@ -196,3 +198,29 @@ def test_a_failed_figure_leaves_no_directory(tmp_path, monkeypatch):
     with pytest.raises(OSError, match="disk full"):
         write_law_comparison(cmp, tmp_path / "laws")
     assert list(tmp_path.iterdir()) == []
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(velocity=st.floats(1e-3, 3.0))
+@example(velocity=0.05)
+@example(velocity=3.0)
+def test_the_decay_law_is_fitted_only_where_a_contact_yielded(velocity):
+    """A 12-bead brass Thornton chain (p_y = 3.25e9 Pa: F_y = 251 N) kicked at `velocity`: its decay
+    fit is refused, naming why, exactly when no contact's peak passed F_y (below about 1.3 m/s), and the
+    Hertz law's always (it never yields); the fit was printed with uncertainties before."""
+    loading = f'kind = "velocity"\nvelocity = {velocity!r}'
+    sc = make_scene(beads=12, law="thornton", loading=loading, end_time=1e-4, timestep=2e-8)
+    cmp = compare_laws(sc, ("thornton", "hertz"), backend="reference", error_estimate=False)
+    thornton, hertz = cmp.runs
+    f_y = float(thornton.result.scene.law.yield_force)
+    yielded = float(np.max(thornton.result.solution.peak_force)) > f_y
+    assert (thornton.fit is not None or "no contact yielded" not in thornton.why_no_fit) == yielded
+    if not yielded:
+        assert thornton.fit is None
+        assert thornton.why_no_fit.startswith("no contact yielded: the plastic decay model does not apply")
+        assert f"yield force {f_y:.4g} N" in thornton.why_no_fit
+    assert hertz.fit is None
+    assert hertz.why_no_fit == "no contact yielded: the hertz law is elastic, so the plastic decay model does not apply"
+    row = cmp.table()[1]
+    assert row["decay_per_contact"] is None
+    assert row["decay_per_contact_stderr"] is None

@@ -16,6 +16,10 @@ softer bead of each contact); on a chain without a yield strength only the paper
 (R = 4.76 mm) take the paper's values (k = 2.43e7 N/m, and p_y = k / (pi R*)), any other chain is
 refused before any run (MissingCoefficientError). Each coefficient's source is reported
 (LawRun.coefficients).
+
+The decay fit is the model of a plastic chain: a law's run in which no contact's peak passed the force
+at which it deforms plastically (ContactLaw.plastic_onset_force: Thornton's F_y; never, for Hertz) gets
+no fit, and why_no_fit says "no contact yielded".
 """
 
 from __future__ import annotations
@@ -274,6 +278,27 @@ def _why_no_curve(n_complete: int, n_contacts: int) -> str:
     )
 
 
+def _why_elastic(scene, solution) -> str:
+    """Why the plastic decay model does not apply: no contact's peak force passed the force at which
+    its law deforms plastically (ContactLaw.plastic_onset_force); "" when one did. The exponential
+    then inverse decay is the paper's model of a chain whose contacts dissipate in plastic flow
+    (Sec. IV); on a chain that stayed elastic its coefficients would describe nothing."""
+    f = np.asarray(solution.peak_force, dtype=float)
+    laws = scene.contact_laws if scene.per_bead else [scene.law]
+    onset = np.concatenate([np.ravel(law.plastic_onset_force()) for law in laws])
+    onset = np.broadcast_to(onset, f.shape) if onset.size == 1 else onset
+    reached = np.isfinite(f) & (f > 0)
+    if np.any(reached & (f > onset)):
+        return ""
+    if np.all(np.isinf(onset)):
+        return f"no contact yielded: the {scene.contact.law} law is elastic, so the plastic decay model does not apply"
+    largest = int(np.argmax(np.where(reached, f, -np.inf))) if reached.any() else 0
+    return (
+        "no contact yielded: the plastic decay model does not apply (the largest peak, "
+        f"{f[largest]:.4g} N at contact {largest + 1}, is under its yield force {onset[largest]:.4g} N)"
+    )
+
+
 def compare_laws(
     scene,
     laws: tuple[str, ...] = ("thornton", "bilinear"),
@@ -296,13 +321,14 @@ def compare_laws(
     for law, sc, (contact, sources) in zip(laws, scenes, setups, strict=True):  # all valid before any run
         res = run_scene(sc, backend=backend, method=method, rtol=rtol, error_estimate=error_estimate)
         c, f, e, rest = _measured(res)
-        fit, why = None, ""
-        try:
-            fit = fit_decay(f)
-        except ValueError as exc:
-            why = str(exc)
-            if rest[0].size:
-                why += "; " + _why_no_curve(c.size, c.size + rest[0].size)
+        fit, why = None, _why_elastic(sc, res.solution)
+        if not why:
+            try:
+                fit = fit_decay(f)
+            except ValueError as exc:
+                why = str(exc)
+                if rest[0].size:
+                    why += "; " + _why_no_curve(c.size, c.size + rest[0].size)
         out.runs.append(LawRun(law, contact, res, c, f, e, fit, why, sources, rest))
     return out
 

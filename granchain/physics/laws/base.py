@@ -173,6 +173,11 @@ class ContactLaw:
         says otherwise."""
         return self.tangent_stiffness(force)
 
+    def plastic_onset_force(self) -> np.ndarray:
+        """The force above which a contact deforms plastically, per contact (N): infinite for a law
+        that never yields (Hertz)."""
+        return np.full(np.shape(self.k), np.inf)
+
     def kinks(self, alpha_max: np.ndarray) -> list[Kink]:
         """Where the force or one of its derivatives jumps, for RK4's event location (rule 4).
 

@@ -211,6 +211,12 @@ class BilinearLaw(ContactLaw):
         return out
 
     @override
+    def plastic_onset_force(self) -> np.ndarray:
+        """0: the loading line leaves a residual overlap beta alpha_max at any load (Walton-Braun has
+        no elastic range)."""
+        return np.zeros(np.shape(self.k))
+
+    @override
     def turn_level(self, alpha_max):
         # a turn from loading to unloading at a new alpha_max (slope k -> k_u)
         return alpha_max

@@ -236,6 +236,11 @@ class ThorntonLaw(ContactLaw):
         dy = np.asarray(self.yield_overlap, dtype=float)
         return np.asarray(self.k) * dy * np.sqrt(dy)
 
+    @override
+    def plastic_onset_force(self) -> np.ndarray:
+        """F_y: the virgin curve leaves Hertz for the plastic line there."""
+        return np.asarray(self.yield_force, dtype=float)
+
     @property
     def plastic_slope(self) -> np.ndarray:
         """S = 3/2 k d_y^(1/2) = pi p_y R*."""
