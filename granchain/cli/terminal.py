@@ -190,6 +190,9 @@ def print_result(result, out) -> None:
                 else ""
             )
         print(f"  {name + ' (N)':38s} {fmt(value)}{bar}   ({what})")
+    outside = "outside the law's domain"
+    for line in s.get("outside_domain") or ():  # an elastic law beyond yield (postprocess.domains)
+        print(f"  {outside:38s} {shown(line)}")
     c = s["conservation"]
     ld = scene.loading
     if ld.is_force:

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from granchain.postprocess.domains import beyond_yield
 from granchain.postprocess.observables import measure_observables
 from granchain.results.provenance import _PROVENANCE_EXTRA, provenance
 from granchain.results.solution import ChainSolution
@@ -111,6 +112,7 @@ class RunResult:
         missing: dict[str, str] = {}
         observables = measure_observables(sc, s, missing)
         extra = {k: v for k, v in self.extra.items() if k not in _PROVENANCE_EXTRA}  # the rest: provenance
+        outside = beyond_yield(sc, s)
         return {
             "title": sc.title,
             "scene_source": sc.source,
@@ -126,6 +128,8 @@ class RunResult:
             "observables": observables,
             "observables_missing": missing,
             "peaks": self.peak_status(),
+            # an elastic law's peaks beyond the force at which the beads yield (postprocess.domains)
+            **({"outside_domain": outside} if outside else {}),
             # the state at the end of the run: both backends' energy series end with it
             "conservation": {
                 "time": float(s.energy_time[-1]) if s.energy_time.size else 0.0,
