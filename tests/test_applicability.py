@@ -18,6 +18,7 @@ from granchain.physics.predictions import EFFECT_DOMAINS, MODEL_DOMAINS, SCENE_Q
 from granchain.postprocess.comparison_table import CompareRow, compare_runs, format_table
 from granchain.results import ChainSolution, RunResult
 from granchain.scene import SceneError, parse_scene, scene_from_dict
+from granchain.workflows.comparison_frame import compare_frame
 from granchain.workflows.plan import plan_scene
 from granchain.workflows.plots import model_curves
 from granchain.workflows.run import run_scene
@@ -184,6 +185,10 @@ def test_compare_keeps_eq8_beside_a_short_pulse_that_reached_the_window():
     assert lead.verdict == "yes"
     assert lead.rel_model is not None
     assert lead.rel_model < 0.1
+    frame = compare_frame(list(rows.values()))  # Comparison.table and compare --json
+    measured = [q for q, r in rows.items() if r.a is not None and r.b is not None]
+    assert "leading_peak_force" in measured
+    assert frame.loc[measured, "not_measured"].eq("").all(), frame.loc[measured, "not_measured"].to_dict()
 
 
 # ------------------------------------------------------------------ properties over every scene
@@ -358,6 +363,11 @@ def test_compare_rows_na_or_unmeasured_are_never_yes_or_failures_of_the_model(d,
             assert r.ok
         else:
             assert r.verdict in ("yes", "FAIL")
+        if r.a is not None and r.b is not None:  # a reason only where a run lacks the value
+            assert r.not_measured is None, (r.quantity, r.not_measured)
+    frame = compare_frame(rows)
+    both = [r.quantity for r in rows if r.a is not None and r.b is not None]
+    assert (frame.loc[both, "not_measured"] == "").all()
     # identical runs never fail
     assert all(r.ok for r in compare_runs(b, b))
     cells = format_table(rows).splitlines()[1:]

@@ -26,7 +26,7 @@ class CompareRow:
     model_source: str  # the model's equation; "n/a: <model>: <reason>" where it does not apply
     rtol: float
     model_applies: bool | None = None  # None: no model for this quantity
-    not_measured: str | None = None  # neither run measured the quantity: why
+    not_measured: str | None = None  # why a run lacks the quantity; None where both measured it
     error_a: float | None = None  # each run's measured error of the value (absolute; None: none)
     error_b: float | None = None
 
@@ -102,7 +102,8 @@ def _model_rows(scene, ref_obs: dict) -> dict[str, tuple[float | None, str, bool
 
 
 def _not_measured(sol, obs: dict) -> dict[str, str]:
-    """Why a quantity can be missing from both runs (keyed like the rows)."""
+    """Why a quantity can be missing from a run (keyed like the rows): the reason for every row the run
+    could lack, whether or not it lacks it (compare_runs reads it only for a row without a value)."""
     if not obs["window"]:  # one bead: no bead-bead contact (the observables say why)
         ended = f"before the run ended at t = {sol.end_time:g} s"
         return {"striker_peak_force": f"the striker did not touch bead 1 {ended}"}
@@ -222,16 +223,15 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
         rows.append(("dissipated_energy", "J", float(sa.dissipated[-1]), float(sb.dissipated[-1])))
     if scene.effects.far_end == "wall":
         rows.append(("wall_peak_force", "N", _end_peak(scene, sa, "wall"), _end_peak(scene, sb, "wall")))
-    why = _not_measured(sb, ob)
-    if hasattr(b, "observables_missing"):  # the observables' own reasons, where the run result gives them
-        why.update(b.observables_missing())
+    why = _missing_reasons(b, sb, ob)
+    why_a = _missing_reasons(a, sa, oa)  # a row only the first run lacks says why the first lacks it
     if not np.isclose(sa.end_time, sb.end_time, rtol=1e-9, atol=0.0):
         # each backend ran its own step and stopped on its own check (stop_after_contact, every
         # STOP_CHECK_EVERY steps): the end states are at different times and not the same quantity
         ended = f"the runs ended at different times ({sa.end_time:.6g} s and {sb.end_time:.6g} s)"
         apart = ["final_kinetic_energy", "dissipated_energy"]
         for q in apart:
-            why[q] = f"not comparable: {ended}"
+            why[q] = why_a[q] = f"not comparable: {ended}"
         # the momentum too while it still changes: an effect's external force (a wall, precompression's
         # static forces) or a load still acting at the earlier end; a free chain's is the impulse, kept
         pushed = [e.name for e in unbalanced_forces(scene)]
@@ -240,6 +240,7 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
         if pushed:
             apart.append("momentum")
             why["momentum"] = f"not comparable: {ended}, and the momentum changes then ({', '.join(pushed)})"
+            why_a["momentum"] = why["momentum"]
         rows = [(q, u, None, None) if q in apart else (q, u, va, vb) for q, u, va, vb in rows]
     ea, eb = _errors(a, w0, w1), _errors(b, w0, w1)
     da, db = peak_definition(sa.method, scene), peak_definition(sb.method, scene)
@@ -250,6 +251,7 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
         )
         peaks = {q for q, *_ in rows if q.startswith(PEAK_ROWS)}
         why.update(dict.fromkeys(peaks, unlike))
+        why_a.update(dict.fromkeys(peaks, unlike))
         rows = [(q, u, None, None) if q in peaks else (q, u, va, vb) for q, u, va, vb in rows]
         ea = {q: e for q, e in ea.items() if q not in peaks}
         eb = {q: e for q, e in eb.items() if q not in peaks}
@@ -260,8 +262,19 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
             continue
         seen.add(q)
         mv, msrc, applies = modl.get(q, (None, "", None))
-        out.append(CompareRow(q, unit, va, vb, mv, msrc, rtol, applies, why.get(q), ea.get(q), eb.get(q)))
+        # a reason only where a value is missing: the second run's where it lacks it, else the first's
+        reason = why.get(q) if vb is None else why_a.get(q) if va is None else None
+        out.append(CompareRow(q, unit, va, vb, mv, msrc, rtol, applies, reason, ea.get(q), eb.get(q)))
     return out
+
+
+def _missing_reasons(result, sol, obs: dict) -> dict[str, str]:
+    """Why each compared quantity could be missing from a run (_not_measured), with the observables'
+    own reasons where the run result gives them; a reason is only read for a row that lacks a value."""
+    why = _not_measured(sol, obs)
+    if hasattr(result, "observables_missing"):
+        why.update(result.observables_missing())
+    return why
 
 
 def _errors(result, w0: int, w1: int) -> dict[str, float]:
