@@ -46,8 +46,8 @@ def _chain_yield_forces(scene) -> np.ndarray:
     return out
 
 
-def _ranges(contacts) -> str:
-    """1-based contacts as runs: "1-57, 59"."""
+def contact_runs(contacts) -> str:
+    """1-based contacts as runs of consecutive numbers: "1-57, 59"."""
     out, c = [], [int(x) for x in contacts]
     start = prev = c[0]
     for x in [*c[1:], None]:
@@ -82,7 +82,7 @@ def beyond_yield(scene, solution) -> list[str]:
         beads = scene.bead_materials[worst : worst + 2]
         p_y = mat.YIELD_PRESSURE_FACTOR * min(m.yield_strength for m in beads)
         lines.append(
-            f"{law} law beyond yield at {over.size} of {f.size} contacts ({_ranges(over + 1)}): at contact "
+            f"{law} law beyond yield at {over.size} of {f.size} contacts ({contact_runs(over + 1)}): at contact "
             f"{worst + 1} the peak {_kn(f[worst])} is {ratio:.3g}x F_y = {_kn(fy[worst])}, the force at which "
             f"it starts to yield (its peak pressure {p_y * ratio ** (1 / 3) / 1e9:.3g} GPa against p_y = "
             f"{mat.YIELD_PRESSURE_FACTOR} sigma_y = {p_y / 1e9:.3g} GPa); the elastic law is outside its domain "

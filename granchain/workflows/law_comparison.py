@@ -36,6 +36,7 @@ from granchain.backends import LAMMPS, Backend
 from granchain.exceptions import UsageError
 from granchain.physics import materials as mat
 from granchain.physics.laws import LAWS
+from granchain.postprocess.domains import contact_runs
 from granchain.postprocess.response_regimes import DecayFit, fit_decay
 from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain
 from granchain.safe_files import UnsafeFileError, atomic_directory
@@ -395,12 +396,12 @@ def _write_laws(cmp, tmp: Path, formats) -> None:
             ax.plot(rest, force, "o", ms=3, mfc="none", color=color, label=f"{r.law} peak not complete")
             drawn = True
             notes.append(
-                f"{r.law}: contacts {_ranges(rest)} drawn open: not complete by the end of the run (force not back "
-                "to 3% of its peak), lower bounds"
+                f"{r.law}: contacts {contact_runs(rest)} drawn open: not complete by the end of the run (force not "
+                "back to 3% of its peak), lower bounds"
             )
         elif rest.size:  # past the decay curve (its end, the contacts the wave had not passed): left out
             notes.append(
-                f"{r.law}: contacts {_ranges(rest)} not drawn: not complete by the end of the run (force not back "
+                f"{r.law}: contacts {contact_runs(rest)} not drawn: not complete by the end of the run (force not back "
                 "to 3% of its peak)"
             )
         if r.fit is not None:
@@ -432,17 +433,3 @@ def _write_laws(cmp, tmp: Path, formats) -> None:
         fig.text(0.01, 0.01, "\n".join(lines), fontsize=6, va="bottom", parse_math=False)
     for fmt in formats:
         fig.savefig(tmp / f"laws.{fmt}", dpi=120)
-
-
-def _ranges(contacts: np.ndarray) -> str:
-    """Contacts 1-based as runs: "3-7, 9"."""
-    out, c = [], [int(x) for x in contacts]
-    start = prev = c[0]
-    for x in [*c[1:], None]:
-        if x is not None and x == prev + 1:
-            prev = x
-            continue
-        out.append(f"{start}" if start == prev else f"{start}-{prev}")
-        if x is not None:
-            start = prev = x
-    return ", ".join(out)
