@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 from granchain.cli import bundled_scenes, main
 from granchain.physics import models
+from granchain.physics.estimates import expected_peak_force
 from granchain.physics.laws import LAWS
 from granchain.physics.loading_regime import HERTZ_LONG_ABOVE, HERTZ_SHORT_BELOW, loading_regime
 from granchain.physics.predictions import EFFECT_DOMAINS, MODEL_DOMAINS, SCENE_QUANTITIES, applicability, predict
@@ -309,12 +310,46 @@ def test_tapered_or_precompressed_chains_get_no_model(d, taper):
     assert bool(sc.effects.precompression) != taper
     for name, (law, needs) in MODEL_DOMAINS.items():
         a = applicability(name, sc)
-        if needs in EFFECT_DOMAINS:  # the effects' own models: the precompressed chain's c0 is for it
-            inside = needs == "precompressed" and not taper and sc.contact.law == law and not sc.effects.dashpot
+        if needs in EFFECT_DOMAINS:  # the effects' own models: the precompressed chain's are for it
+            inside = needs in ("precompressed", "weakly_nonlinear") and not taper
+            inside = inside and sc.contact.law == law and not sc.effects.dashpot
+            if needs == "weakly_nonlinear" and inside:  # c0: only a wave small against F0
+                inside = expected_peak_force(sc) <= models.weakly_nonlinear_ratio() * sc.effects.precompression
             assert a.applies == inside, (name, a)
             continue
         assert not a.applies, name
         assert ("monodisperse" if taper else "precompression") in a.reason, name
+
+
+def test_the_weakly_nonlinear_limit_is_where_v_s_leaves_c0_by_rtol():
+    """c0 stands for the wave speed while Nesterenko's V_s(1 + F/F0) is within rtol of it: V_s/c0 - 1
+    grows as (F/F0)/18 for small F/F0, so the limit is near 18 rtol, and V_s is (1 + rtol) c0 there."""
+    for rtol in (1e-3, 1e-2):
+        x = models.weakly_nonlinear_ratio(rtol)
+        # V_s's closed form cancels to (f_r - 1)^2 under its root: ~4 digits lost at f_r - 1 = 0.018
+        assert models.precompressed_solitary_wave_speed(1.0, 1.0 + x) == pytest.approx(1.0 + rtol, rel=1e-9)
+        assert models.precompressed_solitary_wave_speed(1.0, 1.0 + 0.99 * x) < 1.0 + rtol
+    assert models.weakly_nonlinear_ratio(1e-3) == pytest.approx(18e-3, rel=0.02)
+
+
+@pytest.mark.parametrize(("f0", "applies"), [(0.002, False), (2.0, False), (200.0, True), (2000.0, True)])
+def test_c0_applies_only_to_a_wave_small_against_f0(f0, applies):
+    """A 60-bead brass chain given 1e-4 N s (a 2-3 N wave) under F0: at 0.002 N the wave moved at
+    252 m/s (/tmp/explore3 s7, LAMMPS), Nesterenko's V_s(f_r) 249 m/s, not c0 = 107 m/s; at 2000 N
+    at 1067.7 m/s, c0 = 1062.9 m/s. V_s(f_r), valid at any f_r, applies throughout."""
+    text = make_scene_text(beads=60, loading='kind = "impulse"\nimpulse = 1e-4\nduration = 1e-6')
+    sc = parse_scene(text + f"[precompression]\nforce = {f0}\n", source="pre.toml")
+    by = verdicts(sc)
+    c0 = by["precompressed_sound_speed"]
+    assert c0.applies == applies, c0.applies_reason
+    assert ("weakly nonlinear" if applies else "not small against F0") in c0.applies_reason
+    assert "F0 = " in c0.applies_reason
+    ratio = expected_peak_force(sc) / f0
+    if applies:  # the wave it expects moves within SOUND_SPEED_RTOL of c0
+        assert models.precompressed_solitary_wave_speed(1.0, 1.0 + ratio) - 1.0 <= models.SOUND_SPEED_RTOL
+    else:
+        assert models.precompressed_solitary_wave_speed(1.0, 1.0 + ratio) - 1.0 > models.SOUND_SPEED_RTOL
+    assert applicability("precompressed_solitary_wave_speed", sc).applies
 
 
 def _synthetic_run(scene, reach: float, scale: float) -> RunResult:

@@ -11,6 +11,7 @@ T load duration, I = A T impulse.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -223,6 +224,41 @@ def precompressed_solitary_wave_speed(c0: float, force_ratio: float) -> float:
     if force_ratio <= 1.0 + 1e-9:
         return c0
     return c0 / (fr23 - 1.0) * math.sqrt(4.0 / 15.0 * (3.0 + 2.0 * force_ratio ** (5.0 / 3.0) - 5.0 * fr23))
+
+
+#: The relative tolerance within which the sound speed c0 stands for a precompressed chain's wave
+#: speed: granchain's default tolerance (the planner's and `granchain compare`'s rtol).
+SOUND_SPEED_RTOL = 1e-3
+
+
+@functools.cache
+def weakly_nonlinear_ratio(rtol: float = SOUND_SPEED_RTOL) -> float:
+    """The largest dynamic force over the static force, F / F0 = f_r - 1, at which Nesterenko's
+    solitary wave V_s(f_r) (precompressed_solitary_wave_speed) moves within `rtol` of the sound speed
+    c0: below it a wave is a perturbation small against F0 (weakly nonlinear) and c0 is its speed.
+
+    V_s / c0 - 1 grows as (f_r - 1) / 18 for small f_r - 1, and monotonically: the ratio is the root
+    of V_s(1 + x) / c0 - 1 = rtol (0.0181 at rtol = 1e-3, 0.189 at 1e-2).
+
+    Parameters
+    ----------
+    rtol : float
+        The relative difference from c0 allowed.
+
+    Returns
+    -------
+    float
+        F / F0 at which V_s(1 + F / F0) = (1 + rtol) c0.
+    """
+    lo, hi = 0.0, 1.0
+    while precompressed_solitary_wave_speed(1.0, 1.0 + hi) - 1.0 < rtol:
+        hi *= 2.0
+    for _ in range(200):  # bisection to the last digit
+        mid = 0.5 * (lo + hi)
+        if mid in (lo, hi):
+            break
+        lo, hi = (mid, hi) if precompressed_solitary_wave_speed(1.0, 1.0 + mid) - 1.0 < rtol else (lo, mid)
+    return hi
 
 
 def linear_sound_speed(k: float, mass: float, diameter: float) -> float:

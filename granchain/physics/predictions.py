@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, replace
 from typing import NamedTuple
 
+from granchain.physics import models
 from granchain.physics.laws import LAWS
 from granchain.physics.laws.base import EFFECT_DOMAINS
 from granchain.physics.loading_regime import loading_regime
@@ -160,11 +161,10 @@ def _effect_model_applies(law: str, needs: str, scene) -> Applicability:
         why_not.append(f"a {law} model; this chain's contact law is {scene.contact.law}")
     if scene.effects.dashpot:
         why_not.append(f"viscous dashpot (gamma = {scene.effects.dashpot:g} N s/m)")
-    if needs == "precompressed":
-        if not scene.effects.precompression:
-            why_not.append("no static precompression")
-        if scene.per_bead:
-            why_not.append("the beads differ: c0 is for a uniform chain")
+    if needs in ("precompressed", "weakly_nonlinear"):
+        inside = _precompressed_chain(law, needs, scene, why_not)
+        if inside and not why_not:
+            return Applicability(True, inside)
     else:
         if scene.effects.precompression:
             why_not.append(f"static precompression F0 = {scene.effects.precompression:g} N")
@@ -184,6 +184,48 @@ def _effect_model_applies(law: str, needs: str, scene) -> Applicability:
     if why_not:
         return Applicability(False, "; ".join(why_not))
     return Applicability(True, "the scene is inside the model's domain")
+
+
+def _precompressed_chain(law: str, needs: str, scene, why_not: list[str]) -> str:
+    """Add to `why_not` why the scene is not a uniform precompressed chain (needs "precompressed") or
+    does not carry a wave small against F0 (needs "weakly_nonlinear", c0's domain); return why it
+    does where that has numbers to say (else "")."""
+    if not scene.effects.precompression:
+        why_not.append("no static precompression")
+    if scene.per_bead:
+        why_not.append("the beads differ: c0 is for a uniform chain")
+    if needs != "weakly_nonlinear" or not scene.effects.precompression or scene.contact.law != law:
+        return ""
+    small, text = _small_against_static_force(scene)
+    if not small:
+        why_not.append(text)
+    return text if small else ""
+
+
+def _small_against_static_force(scene) -> tuple[bool, str]:
+    """Whether the wave a precompressed chain is expected to carry is small against F0, the sound
+    speed c0's domain, and why with the numbers.
+
+    The dynamic force expected is the planner's largest (physics.estimates.expected_peak_force, from
+    the paper's models of the uncompressed chain): at f_r = 1 + F / F0 a wave moves at Nesterenko's
+    V_s(f_r), within SOUND_SPEED_RTOL of c0 only below F / F0 = models.weakly_nonlinear_ratio (0.0181).
+    """
+    from granchain.physics.estimates import expected_peak_force
+
+    f0 = float(scene.effects.precompression)
+    force = expected_peak_force(scene)
+    limit = models.weakly_nonlinear_ratio()
+    ratio = force / f0
+    above = models.precompressed_solitary_wave_speed(1.0, 1.0 + ratio)
+    numbers = f"the expected dynamic force {force:.3g} N is {ratio:.3g} F0 (F0 = {f0:g} N)"
+    speed = f"Nesterenko's V_s(f_r = 1 + F/F0) = {above:.4f} c0"
+    rule = f"within {models.SOUND_SPEED_RTOL:g} of c0 below F = {limit:.3g} F0"
+    if ratio <= limit:
+        return True, f"{numbers}: a weakly nonlinear wave, at {speed} ({rule})"
+    return False, (
+        f"{numbers}, not small against F0: a wave there moves at {speed}, {rule} only (c0 is the speed of "
+        "a perturbation small against F0; V_s(f_r) at the measured leading peak is this chain's)"
+    )
 
 
 #: The paper's models are for a long chain: the solitary wave forms over the first few beads and is

@@ -359,6 +359,9 @@ CHAIN_NEEDS = ("short", "long", "any", "collision")
 #: ... or an effect's regime, where the paper's models do not hold: what the scene must be, in words
 EFFECT_DOMAINS = {
     "precompressed": "a uniform Hertz chain under static precompression, no dashpot",
+    # the sound speed c0: the limit of a wave small against F0 (physics.models.weakly_nonlinear_ratio)
+    "weakly_nonlinear": "a uniform Hertz chain under static precompression, no dashpot, its wave's dynamic "
+    "force small against F0 (weakly nonlinear)",
     "striker_impact": "a striker on one free bead, Hertz contact, no dashpot or precompression (two bodies)",
     "wall_impact": "one bead given a velocity against the wall, Hertz contact, no dashpot or precompression",
     "pair_impact": "two free beads, bead 1 given a velocity, Hertz contact, no dashpot or precompression (two bodies)",

@@ -67,8 +67,10 @@ class HertzLaw(ContactLaw):
         # nesterenko_wave_speed: a solitary wave's speed from its measured peak force (ref. 9)
         **dict.fromkeys(("peak_force_envelope", "nesterenko_wave_speed"), "any"),
         # the effects' own regimes: a precompressed chain (Nesterenko's V_s(f_r) at a measured leading
-        # peak too), two-body impacts of a striker or on the wall
-        **dict.fromkeys(("precompressed_sound_speed", "precompressed_solitary_wave_speed"), "precompressed"),
+        # peak at any f_r; the sound speed c0 only for a wave small against F0), two-body impacts of a
+        # striker or on the wall
+        "precompressed_solitary_wave_speed": "precompressed",
+        "precompressed_sound_speed": "weakly_nonlinear",
         **dict.fromkeys(("striker_impact_peak_force", "striker_impact_duration"), "striker_impact"),
         **dict.fromkeys(("wall_impact_peak_force", "wall_impact_duration"), "wall_impact"),
         **dict.fromkeys(("pair_impact_peak_force", "pair_impact_duration"), "pair_impact"),
