@@ -220,6 +220,46 @@ REFERENCE_GRID = """
 """
 
 
+PRECOMPRESSED = """
+[vary]
+"precompression.force" = [2000.0, 20.0]
+"""
+
+
+def test_the_table_counts_pulses_on_the_dynamic_force(tmp_path):
+    """A 2-4 N pulse on a 24-bead brass chain under F0 = 2000 N never rises a tenth of the total force:
+    counted on F - F0 it is one pulse, small against F0 (a weakly nonlinear wave, at c0 = 1063 m/s);
+    under F0 = 20 N a solitary wave (both read 'pulses 0, no wave' at 2000 N when counted on F)."""
+    from granchain.campaigns.run import run_campaign
+    from granchain.physics.models import weakly_nonlinear_ratio
+
+    scene = """
+[chain]
+beads = 24
+radius = 4.76e-3
+material = "brass"
+[contact]
+law = "hertz"
+[loading]
+kind = "impulse"
+impulse = 1e-4
+duration = 1e-6
+[run]
+end_time = "auto"
+timestep = "auto"
+[outputs]
+histories = [18]
+"""
+    campaign = 'backend = "reference"\nmethod = "verlet"\nerror_estimate = false'
+    c = parse_campaign(campaign_text(PRECOMPRESSED, scene=scene, campaign=campaign))
+    df = run_campaign(c, tmp_path / "ws", workers=1)[0]["table"].set_index("precompression.force")
+    print(df[["pulses", "regime", "leading_peak_force", "wave_speed"]])
+    assert df["pulses"].tolist() == [1, 1]
+    assert df.loc[2000.0, "regime"] == "weakly nonlinear wave"
+    assert df.loc[2000.0, "leading_peak_force"] < weakly_nonlinear_ratio() * 2000.0
+    assert df.loc[20.0, "regime"] == "single solitary wave"
+
+
 def test_reference_grid_equals_run_scene_bit_for_bit(tmp_path):
     """12 points on the reference solver (with error estimates): each run directory's peaks.csv is
     the one run_scene writes for the same scene, to the bit; the table has every row; a second run

@@ -70,6 +70,31 @@ def test_count_pulses_on_synthetic_signals():
     assert count_pulses(np.zeros(10)) == 0
 
 
+@pytest.mark.parametrize(
+    ("f0", "amplitude", "regime"),
+    [
+        (0.0, 2.0, "single solitary wave"),
+        (2000.0, 2.0, "weakly nonlinear wave"),  # 1e-3 F0: V_s(f_r) within 1e-4 of c0
+        (200.0, 2.0, "weakly nonlinear wave"),
+        (20.0, 2.0, "single solitary wave"),  # 0.1 F0: V_s(f_r) 0.55% above c0
+        (0.002, 2.0, "single solitary wave"),
+    ],
+)
+def test_pulses_are_counted_on_the_dynamic_force(f0, amplitude, regime):
+    """A precompressed contact's history is F0 plus the wave: a 2 N pulse on 2000 N never rises a
+    tenth of the total force, but is one pulse of the dynamic force F - F0; a train on F0 three."""
+    t = np.linspace(0, 1, 2001)
+    one = f0 + amplitude * np.exp(-(((t - 0.3) / 0.02) ** 2))
+    assert count_pulses(one, static_force=f0) == 1
+    assert classify_wave(one, static_force=f0) == regime
+    train = f0 + sum(a * np.exp(-(((t - c) / 0.02) ** 2)) for a, c in ((2.0, 0.2), (1.4, 0.4), (1.0, 0.6)))
+    assert count_pulses(train, static_force=f0) == 3
+    assert classify_wave(train, static_force=f0) == regime.replace("single solitary wave", "wave train").replace(
+        "weakly nonlinear wave", "weakly nonlinear wave train"
+    )
+    assert classify_wave(np.full(10, f0), static_force=f0) == "no wave"
+
+
 def test_regime_single_wave_vs_wave_train():
     short = make_scene(
         beads=80,

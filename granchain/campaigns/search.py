@@ -42,13 +42,23 @@ def predicate_quantity(job_dir: str | Path, predicate: Predicate) -> tuple[float
         force = read_history(run, predicate.contact)
         if force is None:
             return None, f"no force history of contact {predicate.contact} (add it to the scene's [outputs] histories)"
-        return float(count_pulses(force)), None
+        return float(count_pulses(force, static_force=static_force(wsp.read_json(run / "summary.json")))), None
     summary = wsp.read_json(run / "summary.json") or {}
     value = summary.get("observables", {}).get(predicate.quantity)
     if value is None:
         why = summary.get("observables_missing", {}).get(predicate.quantity, "not measured")
         return None, f"{predicate.quantity} was not measured: {why}"
     return float(value), None
+
+
+def static_force(summary) -> float:
+    """A run's precompression F0 from its summary.json as read (observables.static_force; 0 without
+    one, or where the file does not give a positive number): pulses are counted on the dynamic force
+    F - F0."""
+    obs = summary.get("observables") if isinstance(summary, dict) else None
+    f0 = obs.get("static_force") if isinstance(obs, dict) else None
+    ok = isinstance(f0, (int, float)) and not isinstance(f0, bool) and math.isfinite(f0) and f0 > 0
+    return float(f0) if ok else 0.0
 
 
 #: the largest histories.csv a search reads (a point's history of one chain: far below)

@@ -39,7 +39,8 @@ search), bisect one key until a predicate of the run flips, to a tolerance::
     predicate = { quantity = "pulses", contact = 20, op = ">", value = 1 }
 
 ``quantity`` is ``pulses`` (distinct pulses in the force history of ``contact``, which must be one of
-the scene's [outputs] histories; granchain.postprocess.response_regimes.count_pulses) or an observable of
+the scene's [outputs] histories, on the dynamic force F - F0 of a precompressed chain;
+granchain.postprocess.response_regimes.count_pulses) or an observable of
 summary.json (``leading_peak_force``, ``wave_speed``, ...).
 
 Every problem is a :class:`CampaignError` naming the file, the table, the key and the fix; every

@@ -5,9 +5,11 @@ Columns, in order:
 * the point's parameters: every [vary], [zip], searched and [derive] key (dotted scene keys as written);
 * ``status``: done, failed (the message is in ``message``), missing (not run yet, or lost), stale
   (not computed by this code; a result of another granchain or plugin version exists);
-* ``pulses`` and ``regime``: distinct pulses in the force history of the regime contact
-  (``regime_contact``, default the last of the scene's [outputs] histories) and 'single solitary wave'
-  / 'wave train' / 'no wave' (granchain.postprocess.response_regimes); blank without histories;
+* ``pulses`` and ``regime``: distinct pulses in the dynamic force (F - F0 on a precompressed chain)
+  history of the regime contact (``regime_contact``, default the last of the scene's [outputs]
+  histories) and 'single solitary wave' / 'wave train' / 'no wave', or on a precompressed chain whose
+  pulse stays small against F0 'weakly nonlinear wave' (granchain.postprocess.response_regimes);
+  blank without histories;
 * every observable of summary.json with its estimated error (``<name>_error``, from the run's 2 dt and
   4 dt companions; blank where no estimate could be stood behind: summary.json ``errors`` says why),
   and ``error_estimate``, the largest relative peak-force error over the measured contacts;
@@ -32,7 +34,7 @@ from pathlib import Path
 
 from granchain import safe_files
 from granchain.campaigns import workspace as wsp
-from granchain.campaigns.search import read_history
+from granchain.campaigns.search import read_history, static_force
 from granchain.campaigns.spec import OBSERVABLES, CampaignError
 
 TIMING_COLUMNS = ("wall_time",)  # differ between two runs of the same point; everything else is reproducible
@@ -99,8 +101,9 @@ def point_row(ws: Path, record: dict, entry: dict, stale: dict) -> dict:
     row["pulses"], row["regime"] = None, None
     if summary is not None and isinstance(contact, int) and not isinstance(contact, bool):
         force = _history(job_dir / wsp.RUN_DIR, contact)
-        if force is not None:
-            row["pulses"], row["regime"] = count_pulses(force), classify_wave(force)
+        if force is not None:  # counted on the dynamic force F - F0 (F0: summary.json's static_force)
+            f0 = static_force(summary)
+            row["pulses"], row["regime"] = count_pulses(force, static_force=f0), classify_wave(force, static_force=f0)
     summary = _dict(summary)
     obs = _dict(summary.get("observables"))
     errs = _dict(_dict(summary.get("errors")).get("observables"))

@@ -1,7 +1,7 @@
-"""Response regimes: single solitary wave vs wave train (Sec. II B), and the two force-decay regimes
-of elastoplastic chains (exponential, then inverse power law; Sec. III A), measured from a run's
-force histories and peaks. The regime expected from the scene alone is
-granchain.physics.loading_regime.loading_regime."""
+"""Response regimes: single solitary wave vs wave train (Sec. II B), a weakly nonlinear wave on a
+precompressed chain, and the two force-decay regimes of elastoplastic chains (exponential, then
+inverse power law; Sec. III A), measured from a run's force histories and peaks. The regime expected
+from the scene alone is granchain.physics.loading_regime.loading_regime."""
 
 from __future__ import annotations
 
@@ -9,19 +9,36 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from granchain.physics.models import weakly_nonlinear_ratio
+
 #: A pulse counts when it rises at least this fraction of the leading pulse above the dip before it.
 PULSE_FRACTION = 0.1
 
 
-def count_pulses(force: np.ndarray, fraction: float = PULSE_FRACTION) -> int:
+def count_pulses(force: np.ndarray, fraction: float = PULSE_FRACTION, static_force: float = 0.0) -> int:
     """Distinct pulses in a contact-force history.
 
-    A pulse rises at least `fraction` of the largest force above the lowest value since the previous
-    pulse, and then falls at least as much below its own top (or the record ends on it). A wave
-    train shows several; a single solitary wave one. The constant-force plateau behind the front of
-    a long load is not a pulse: it neither rises nor falls.
+    A pulse rises at least `fraction` of the largest dynamic force above the lowest value since the
+    previous pulse, and then falls at least as much below its own top (or the record ends on it). A
+    wave train shows several; a single solitary wave one. The constant-force plateau behind the front
+    of a long load is not a pulse: it neither rises nor falls.
+
+    Parameters
+    ----------
+    force : numpy.ndarray
+        The contact's force history (N), as recorded: the total force.
+    fraction : float
+        The rise and fall a pulse needs, as a fraction of the largest dynamic force.
+    static_force : float
+        The precompression F0 every contact carries at rest: pulses are counted on the dynamic force
+        F - F0 (a 2 N pulse on F0 = 2000 N is a pulse; a tenth of the total force it never rises).
+
+    Returns
+    -------
+    int
+        The number of pulses.
     """
-    f = np.asarray(force, dtype=float)
+    f = np.asarray(force, dtype=float) - float(static_force)
     if f.size == 0 or f.max() <= 0:
         return 0
     threshold = fraction * f.max()
@@ -39,10 +56,38 @@ def count_pulses(force: np.ndarray, fraction: float = PULSE_FRACTION) -> int:
     return pulses + int(rising)
 
 
-def classify_wave(force: np.ndarray, fraction: float = PULSE_FRACTION) -> str:
-    """'single solitary wave' or 'wave train' from a contact's force history (0: 'no wave')."""
-    n = count_pulses(force, fraction)
-    return "no wave" if n == 0 else "single solitary wave" if n == 1 else "wave train"
+def classify_wave(force: np.ndarray, fraction: float = PULSE_FRACTION, static_force: float = 0.0) -> str:
+    """The wave a contact's force history shows, from its pulses (count_pulses) on the dynamic force.
+
+    'single solitary wave' (one pulse) or 'wave train' (several), the paper's short- and long-load
+    responses (Sec. II B); 'no wave' without a pulse. On a precompressed chain whose dynamic force
+    stays small against F0 (below physics.models.weakly_nonlinear_ratio F0: Nesterenko's V_s within
+    1e-3 of the sound speed c0), 'weakly nonlinear wave' (or 'weakly nonlinear wave train'): a
+    perturbation of the linearised chain moving at c0, which disperses, not the paper's strongly
+    nonlinear solitary wave.
+
+    Parameters
+    ----------
+    force : numpy.ndarray
+        The contact's force history (N), the total force.
+    fraction : float
+        As count_pulses.
+    static_force : float
+        The precompression F0 (0: none).
+
+    Returns
+    -------
+    str
+        The regime's name.
+    """
+    n = count_pulses(force, fraction, static_force)
+    if n == 0:
+        return "no wave"
+    if static_force > 0:
+        amplitude = float(np.max(np.asarray(force, dtype=float))) - float(static_force)
+        if amplitude <= weakly_nonlinear_ratio() * static_force:
+            return "weakly nonlinear wave" if n == 1 else "weakly nonlinear wave train"
+    return "single solitary wave" if n == 1 else "wave train"
 
 
 #: the transition range: splits whose summed squared residuals exceed the least by at most this many
