@@ -151,6 +151,81 @@ def read_text(path: str | Path, limit: int = DEFAULT_LIMIT, encoding: str = "utf
         ) from None
 
 
+def escapes(name: str) -> str | None:
+    """Why the relative ``name`` written in a shared file could point outside the directory it is
+    read in (an absolute path, a ``..`` part, an empty name), or None: it stays below it by its
+    letters (a symbolic link among its parts is :func:`read_text_inside`'s to refuse)."""
+    if not name or not name.strip():
+        return "is empty"
+    if "\x00" in name:
+        return "holds a NUL character"
+    if os.path.isabs(name):
+        return "is an absolute path"
+    if ".." in Path(name).parts:
+        return "has a '..' part"
+    return None
+
+
+def read_text_inside(directory: str | Path, name: str, limit: int = DEFAULT_LIMIT, encoding: str = "utf-8") -> str:
+    """The text of the regular file ``name`` (relative) inside ``directory``, read only there.
+
+    Refused (:class:`UnsafeFileError`) when ``name`` :func:`escapes` the directory, or when any of
+    its parts is a symbolic link, wherever the link points: each part is opened with ``O_NOFOLLOW``
+    relative to the descriptor of the one above it, so a link swapped in meanwhile is not followed
+    either. ``directory`` itself is the caller's (a link there is followed). The file is read as
+    :func:`read_text` reads one (a regular file, at most ``limit`` bytes).
+    """
+    where = Path(directory) / name
+    why = escapes(name)
+    if why is not None:
+        raise _refuse(where, errno.EPERM, f"{why}; only a file inside {directory} is read")
+    parts = [p for p in Path(name).parts if p != "."]
+    if not parts:
+        raise _refuse(where, errno.EISDIR, "is a directory; name a file")
+    dfd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY | _O_CLOEXEC)
+    try:
+        here = Path(directory)
+        for part in parts[:-1]:
+            here = here / part
+            try:
+                nfd = os.open(part, os.O_RDONLY | os.O_DIRECTORY | _O_NOFOLLOW | _O_CLOEXEC, dir_fd=dfd)
+            except OSError as e:
+                if os.path.islink(here) or e.errno == errno.ELOOP:
+                    raise _link_message(here) from None
+                raise
+            os.close(dfd)
+            dfd = nfd
+        try:
+            fd = os.open(parts[-1], os.O_RDONLY | _O_NOFOLLOW | _O_CLOEXEC | _O_NONBLOCK, dir_fd=dfd)
+        except OSError as e:
+            if e.errno in (errno.ELOOP, errno.EMLINK) or os.path.islink(where):
+                raise _link_message(where) from None
+            raise
+    finally:
+        os.close(dfd)
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            what = "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file"
+            raise _refuse(where, errno.EINVAL, f"is {what}; granchain reads only regular files here")
+        if st.st_size > limit:
+            raise _too_large(where, st.st_size, limit)
+        if _O_NONBLOCK:
+            os.set_blocking(fd, True)
+        with os.fdopen(fd, "rb") as fh:
+            fd = -1
+            data = fh.read(min(st.st_size, limit) + 1)
+    finally:
+        if fd >= 0:
+            os.close(fd)
+    if len(data) > limit:
+        raise _too_large(where, len(data), limit)
+    try:
+        return data.decode(encoding)
+    except UnicodeDecodeError as e:
+        raise _refuse(where, errno.EILSEQ, f"is not {encoding} text (byte {e.start})") from None
+
+
 def read_head(path: str | Path, size: int) -> bytes:
     """The first ``size`` bytes of a regular file (its whole content if shorter)."""
     fd, _ = _open_read_fd(path)

@@ -352,3 +352,99 @@ def test_a_read_only_workspace_is_one_error_line(made, tmp_path, capsys):
             assert "Read-only" in line or "not writable" in line, line
     finally:
         subprocess.run(["umount", str(d)], check=False)
+
+
+# ------------------------------------------------- a campaign file's base: read only inside its folder
+
+SECRET = "SECRET-LINE-OF-AN-OUTSIDE-FILE"
+_PARTS = ["..", ".", "sub", "linkdir", "sublink", "inside.toml", "inner.toml", "valid.toml", "secret.toml"]
+_PARTS += ["link_out.toml", "link_in.toml", "link_dev", "outside", "camp", "default"]
+
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory) -> tuple[Path, Path]:
+    """(the campaign's folder, a folder beside it): scenes and links inside and out."""
+    root = tmp_path_factory.mktemp("basepaths")
+    camp, out = root / "camp", root / "outside"
+    (camp / "sub").mkdir(parents=True)
+    out.mkdir()
+    (camp / "inside.toml").write_text(SCENE)
+    (camp / "sub" / "inner.toml").write_text(SCENE)
+    (out / "valid.toml").write_text(SCENE)
+    (out / "secret.toml").write_text(f"{SECRET} = = 1\n")
+    os.symlink(out / "valid.toml", camp / "link_out.toml")
+    os.symlink("inside.toml", camp / "link_in.toml")
+    os.symlink("/dev/zero", camp / "link_dev")
+    os.symlink(out, camp / "linkdir")
+    os.symlink("sub", camp / "sublink")
+    return camp, out
+
+
+def _base_campaign(base: str) -> str:
+    return f'[campaign]\nbase = {json.dumps(base)}\nbackend = "reference"\n[vary]\n"loading.amplitude" = [10.0]\n'
+
+
+def _stays_inside(camp: Path, base: str) -> bool:
+    """Whether the name reaches a file inside camp by its letters and with no link among its parts."""
+    if os.path.isabs(base) or ".." in Path(base).parts:
+        return False
+    here = camp
+    for part in Path(base).parts:
+        here = here / part
+        if here.is_symlink():
+            return False
+    return True
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    parts=st.lists(st.sampled_from(_PARTS), min_size=1, max_size=4),
+    anchor=st.sampled_from(["", "camp", "outside", "/"]),
+)
+def test_a_campaign_files_base_is_read_only_inside_its_folder(folders, parts, anchor):
+    """Any base name (relative with '..', absolute, through links in or out of the folder) is read
+    only when it names a file inside the campaign's folder with no '..' and no link among its parts;
+    otherwise it is refused naming base and the fix, and no outside file's content is shown."""
+    camp, out = folders
+    rel = "/".join(parts)
+    base = {"": rel, "camp": f"{camp}/{rel}", "outside": f"{out}/{rel}", "/": f"/{rel}"}[anchor]
+    try:
+        c = parse_campaign(_base_campaign(base), source="c.toml", base_dir=camp)
+    except CampaignError as e:
+        msg = str(e)
+        assert msg.startswith(f"c.toml: [campaign] base = {base!r}"), msg
+        assert SECRET not in msg
+        if not _stays_inside(camp, base) and base != "default":
+            assert "inside its folder" in msg, msg
+        return
+    if base == "default":  # a bundled scene's name
+        assert c.base_source == "default"
+        return
+    assert _stays_inside(camp, base), base
+    assert Path(os.path.realpath(c.base_source)).is_relative_to(os.path.realpath(camp))
+
+
+@pytest.mark.parametrize("base", ["../outside/valid.toml", "OUT/valid.toml", "link_out.toml", "linkdir/valid.toml"])
+def test_campaign_run_refuses_a_base_outside_its_folder_before_anything_runs(folders, tmp_path, capsys, base):
+    camp, out = folders
+    f = camp / f"c-{tmp_path.name}.toml"
+    f.write_text(_base_campaign(base.replace("OUT", str(out))))
+    try:
+        assert main(["campaign", "run", str(f), "--out", str(tmp_path / "ws"), "--workers", "1"]) == 2
+    finally:
+        f.unlink()
+    line = one_error_line(capsys)
+    assert "[campaign] base = " in line, line
+    assert "put the scene file beside the campaign file" in line, line
+    assert not (tmp_path / "ws").exists()
+
+
+def test_a_campaign_files_base_beside_or_below_it_and_a_bundled_name_are_read(folders):
+    camp, _ = folders
+    for base, source in [
+        ("inside.toml", camp / "inside.toml"),
+        ("sub/inner.toml", camp / "sub" / "inner.toml"),
+        ("./sub/inner.toml", camp / "sub" / "inner.toml"),
+    ]:
+        assert parse_campaign(_base_campaign(base), source="c.toml", base_dir=camp).base_source == str(source)
+    assert parse_campaign(_base_campaign("default"), source="c.toml", base_dir=camp).base_source == "default"

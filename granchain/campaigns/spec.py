@@ -3,7 +3,7 @@
 A campaign file is TOML::
 
     [campaign]
-    base = "elastic-short-pulse"       # a bundled scene, a path (relative to this file), or an inline [scene]
+    base = "elastic-short-pulse"       # a bundled scene, a scene file inside this file's folder, or an inline [scene]
     backend = "lammps"                 # or "reference" (with method = "rk4" | "verlet")
     rtol = 1e-3                        # optional: plan every point for this tolerance
     error_estimate = true              # default: every observable gets its measured error (2 dt, 4 dt runs)
@@ -49,11 +49,14 @@ point is made and validated as a scene (and planned, and its time step checked) 
 
 from __future__ import annotations
 
+import errno
 import math
+import os
 import tomllib
 from pathlib import Path
 from typing import Any
 
+from granchain import safe_files
 from granchain.backends import BACKENDS, METHODS
 from granchain.campaigns import expr
 from granchain.campaigns.model import (
@@ -67,7 +70,17 @@ from granchain.campaigns.model import (
     params_text,
     scene_numbers,
 )
-from granchain.scene import SECTIONS, SceneError, _did_you_mean, load_scene, scene_from_dict, scene_to_dict
+from granchain.scene import (
+    MAX_SCENE_BYTES,
+    SECTIONS,
+    SceneError,
+    _did_you_mean,
+    bundled_scenes,
+    load_scene,
+    parse_scene,
+    scene_from_dict,
+    scene_to_dict,
+)
 
 KINDS = ("grid", "search")
 CAMPAIGN_KEYS = ("base", "backend", "method", "rtol", "error_estimate", "regime_contact", "title", "kind", "ranks")
@@ -97,7 +110,8 @@ MAX_RANKS = 4096
 
 
 def load_campaign_file(path: str | Path) -> Campaign:
-    """Read and validate a campaign file (a base scene path is relative to the file)."""
+    """Read and validate a campaign file (its base scene: a bundled scene's name or a scene file inside
+    the campaign file's folder, named relative to it)."""
     p = Path(path)
     if not p.is_file():
         raise CampaignError(f"{p}: no such campaign file; give the path of a .toml campaign (docs/campaigns.md)")
@@ -118,7 +132,8 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: str | Path |
     source : str
         What messages name as the file.
     base_dir : str or Path, optional
-        The directory a base scene's path is relative to.
+        The campaign file's folder: a base scene file is named relative to it and read only inside it.
+        None: the text is the caller's own (not a shared file), and a base path is read as given.
 
     Returns
     -------
@@ -351,14 +366,54 @@ def _read_base(c: dict, inline: dict | None, source: str, base_dir) -> tuple[dic
         )
     if not isinstance(base, str):
         raise CampaignError(f"{source}: [campaign] base = {base!r} is invalid: a scene name or a path (a string)")
-    path = Path(base)
-    if base_dir is not None and not path.is_absolute() and (Path(base_dir) / path).exists():
-        path = Path(base_dir) / path
+    if base_dir is None:  # a dict of the caller's own code: a path is theirs to name, as on a command line
+        try:
+            scene = load_scene(base)
+        except SceneError as e:
+            raise CampaignError(f"{source}: [campaign] base = {base!r}: {e}") from None
+        return scene_to_dict(scene), base
+    return _read_base_file(base, source, Path(base_dir))
+
+
+def _read_base_file(base: str, source: str, folder: Path) -> tuple[dict, str]:
+    """A campaign file's base scene: a bundled scene's name, or a scene file inside the campaign file's
+    folder, named relative to it. A campaign file is shared: its base is never read outside that
+    folder (no absolute path, no '..', no symbolic link at any part of it, wherever it points), and
+    is refused before anything is read, so no outside file's content reaches a message."""
+    fix = (
+        f"a campaign file's base is a bundled scene's name or a scene file inside its folder ({folder}): put the "
+        "scene file beside the campaign file (or in a folder below it) and name it relative to it, with no '..' "
+        "and no symbolic link"
+    )
+    where = f"{source}: [campaign] base = {base!r}"
+    plain_name = "/" not in base and "\\" not in base and not base.endswith(".toml") and base not in ("", ".")
+    if plain_name and not os.path.lexists(folder / base):
+        scenes = bundled_scenes()
+        if base not in scenes:
+            raise CampaignError(
+                f"{where}: is neither a bundled scene nor a file beside the campaign file; bundled: "
+                f"{', '.join(scenes)} (or give a .toml file beside the campaign file)"
+            )
+        return scene_to_dict(parse_scene(scenes[base], source=f"<bundled scene {base}>")), base
+    why = safe_files.escapes(base)
+    if why is not None:
+        raise CampaignError(f"{where}: {why}; {fix}")
+    path = folder / base
     try:
-        scene = load_scene(path if path.exists() else base)
+        text = safe_files.read_text_inside(folder, base, limit=MAX_SCENE_BYTES)
+    except FileNotFoundError:
+        raise CampaignError(f"{where}: {path}: no such scene file; {fix}") from None
+    except safe_files.UnsafeFileError as e:
+        if e.errno == errno.ELOOP:
+            raise CampaignError(f"{where}: {e.filename}: is a symbolic link; {fix}") from None
+        raise CampaignError(f"{where}: {e}") from None
+    except OSError as e:
+        raise CampaignError(f"{where}: {path}: cannot be read ({e.strerror or e})") from None
+    try:
+        scene = parse_scene(text, source=str(path))
     except SceneError as e:
-        raise CampaignError(f"{source}: [campaign] base = {base!r}: {e}") from None
-    return scene_to_dict(scene), str(path if path.exists() else base)
+        raise CampaignError(f"{where}: {e}") from None
+    return scene_to_dict(scene), str(path)
 
 
 def _check_key(key: str, table: str, source: str) -> None:
