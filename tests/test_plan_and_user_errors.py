@@ -394,3 +394,33 @@ def test_verlet_plans_a_dashpot_chain_finer_than_its_frequency_alone():
     assert "first-order error" in verlet.choices[0].reason
     plain = plan_scene(replace(sc, effects=replace(sc.effects, dashpot=0.0)), rtol=1e-3, method="verlet")
     assert verlet.scene.run.timestep < plain.scene.run.timestep
+
+
+@pytest.mark.parametrize("f0", [None, 2000.0])
+def test_the_timestep_reason_names_the_stiffness_omega_max_comes_from(f0):
+    """A uniform free chain's omega_max is 2 sqrt(k_t / m) exactly: the reason's stiffness is that k_t,
+    the tangent at F0 plus the expected force under precompression (2000 N: 4.85e7 N/m, named as the
+    nominal 5.55e6 N/m at 3 N before)."""
+    text = """
+[chain]
+beads = 60
+radius = 4.76e-3
+material = "brass"
+[contact]
+law = "hertz"
+[loading]
+kind = "impulse"
+impulse = 1e-4
+duration = 1e-6
+[run]
+end_time = "auto"
+timestep = "auto"
+"""
+    if f0:
+        text += f"[precompression]\nforce = {f0}\n"
+    plan = plan_scene(parse_scene(text, source="pre.toml"), rtol=1e-3)
+    why = next(c.reason for c in plan.choices if c.name == "timestep")
+    named = float(why.split("tangent stiffness ")[1].split(" N/m")[0])
+    k_t = (plan.omega_max / 2.0) ** 2 * plan.scene.mass
+    assert named == pytest.approx(k_t, rel=1e-3), why
+    assert ("F0 + the expected peak force = 2000 + " in why) == bool(f0), why

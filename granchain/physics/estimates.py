@@ -41,9 +41,17 @@ def expected_peak_force(scene) -> float:
     return scene.contact.law_class.expected_peak_force(scene, scene.input_impulse, step_equivalent(scene))
 
 
+def contact_force_bound(scene) -> float:
+    """The largest force (N) the nominal contact is expected to carry: the expected peak force, on top
+    of a precompression's F0 (every contact carries F0 at rest: PrecompressionEffect.chain_bounds)."""
+    return expected_peak_force(scene) + float(scene.effects.precompression)
+
+
 def max_stiffness(scene) -> float:
-    """The nominal contact's stiffest tangent (N/m) at the expected peak force (Hertz), k_u (bilinear)."""
-    return float(scene.law.tangent_stiffness(expected_peak_force(scene)))
+    """The nominal contact's stiffest tangent (N/m) at the largest force it is expected to carry
+    (contact_force_bound; Hertz: 3/2 k^(2/3) F^(1/3), under precompression about k_lin at F0), k_u
+    (bilinear): the stiffness highest_frequency bounds a uniform chain's omega_max with."""
+    return float(scene.law.tangent_stiffness(contact_force_bound(scene)))
 
 
 def _tangent(law, force: float) -> np.ndarray:

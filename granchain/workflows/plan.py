@@ -389,10 +389,16 @@ def _timestep_choice(scene, method: str, rtol_plan: float, omega: float, stiffes
     rate = damping_rate(scene)
     dt_acc = accurate_timestep(method, omega, rate, rtol_plan)
     dt_new = min(dt_acc, 0.5 * stable)
+    if scene.contact.law_class.loading_is_linear():  # k_u: the same at any force
+        at = ""
+    elif scene.effects.precompression:
+        f0 = scene.effects.precompression
+        at = f" at F0 + the expected peak force = {f0:g} + {expected_peak_force(scene):.4g} N"
+    else:
+        at = f" at the expected peak force {expected_peak_force(scene):.4g} N"
     why = (
         f"{method}: error model {c:g} (omega_max dt)^{p} <= rtol {rtol_plan:g} with omega_max = "
-        f"{omega:.4g} rad/s at {stiffest} (nominal contact {k_t:.4g} N/m at the expected peak force"
-        f"{'' if scene.contact.law_class.loading_is_linear() else f' {expected_peak_force(scene):.4g} N'}); "
+        f"{omega:.4g} rad/s at {stiffest} (nominal contact's tangent stiffness {k_t:.4g} N/m{at}); "
         f"stability limit {stable:.3g} s"
     )
     if method == "verlet" and rate > 0:
