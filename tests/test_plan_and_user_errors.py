@@ -1,6 +1,7 @@
 """The planner per integrator and per effect, end_time covering every requested output,
 accuracy warnings for fixed steps, resource checks, and a rendered deck that stands alone."""
 
+import re
 import subprocess
 import sys
 import warnings
@@ -424,3 +425,37 @@ timestep = "auto"
     k_t = (plan.omega_max / 2.0) ** 2 * plan.scene.mass
     assert named == pytest.approx(k_t, rel=1e-3), why
     assert ("F0 + the expected peak force = 2000 + " in why) == bool(f0), why
+
+
+def _end_time_reason_total(why: str) -> float:
+    """The end time the reason's arithmetic gives: its sum, or the 'at least' bound that replaced it."""
+    arithmetic = why.split("t_end = ")[1].rsplit(" = ", 1)[0]
+    terms, *floors = arithmetic.split("; at least ")
+    total = sum(float(t.split(" s")[0]) for t in terms.split(" + "))
+    return max([total, *(float(re.search(r"\(([0-9.e+-]+) s\)", f).group(1)) for f in floors)])
+
+
+@pytest.mark.parametrize(
+    ("loading", "extra"),
+    [
+        ('kind = "step"\namplitude = 100.0\nduration = 1e-2', ""),  # the travel twice: 0.00264 s
+        ('kind = "impulse"\nimpulse = 1e-4\nduration = 1e-6', ""),
+        ('kind = "impulse"\nimpulse = 1e-4\nduration = 1e-6', "[precompression]\nforce = 2000.0\n"),
+        ('kind = "impulse"\nimpulse = 1.0\nduration = 0.1', ""),  # the pulse outlasts the travel
+        # the linearised chain's first maximum under a lasting small load sets the end
+        ('kind = "step"\namplitude = 0.1\nduration = 1e-2', "[precompression]\nforce = 100.0\n"),
+    ],
+)
+def test_the_end_time_reason_states_the_arithmetic_that_gives_it(loading, extra):
+    """s6_step (60 brass beads, a 100 N step for 0.01 s) read 'passes contact 50 by 0.00132 s, after a
+    load of 0.01 s' beside an end of 0.00264 s: the reason's terms now add up to the end it gives."""
+    beads, hist = ("120", "[2]\npeak_force = false") if "amplitude = 0.1" in loading else ("60", "[1, 30, 50]")
+    text = (
+        f'[chain]\nbeads = {beads}\nradius = 4.76e-3\nmaterial = "brass"\n[contact]\nlaw = "hertz"\n'
+        f'[loading]\n{loading}\n[run]\nend_time = "auto"\ntimestep = "auto"\n[outputs]\nhistories = {hist}\n' + extra
+    )
+    plan = plan_scene(parse_scene(text, source="end.toml"), rtol=1e-3)
+    end = next(c for c in plan.choices if c.name == "end_time")
+    print(end.reason)
+    assert _end_time_reason_total(end.reason) == pytest.approx(end.value, rel=5e-3), end.reason
+    assert end.reason.endswith(f"= {end.value:.3g} s")

@@ -451,28 +451,51 @@ def _front_end_time(scene, last: int | None, slow: float, omega_max: float) -> P
     travel = front_travel_time(scene, last, slow)
     # a long load's leading peak trails its front; a precompressed chain's front is sonic, its
     # peak forms within a few periods of it (dispersion): at most PRECOMPRESSED_TAIL of the travel
-    end = travel + min(load, PRECOMPRESSED_TAIL * travel if scene.effects.precompression else travel)
+    cap, cap_text = (
+        (PRECOMPRESSED_TAIL * travel, f"{PRECOMPRESSED_TAIL:g} x the travel under precompression")
+        if scene.effects.precompression
+        else (travel, "the travel")
+    )
+    tail = min(load, cap)
+    end = travel + tail
+    # the reason states the arithmetic that gives the end, one term at a time
+    sums = [f"{travel:.3g} s to pass contact {last}"]
+    if tail:
+        sums.append(
+            f"{tail:.3g} s for the leading peak, which trails the front under a load (the load's {load:.3g} s, "
+            f"at most {cap_text})"
+        )
+    notes = []
     if step is not None and scene.effects.precompression and scene.n_contacts:
         sonic = precompressed_front_time(scene, last), precompressed_front_time(scene, last, step=True)
         if sonic[0] <= travel:  # the travel is the linearised chain's (the load is small against F0)
             # a lasting force's first maximum trails a kick's by more than that tail near the loaded end
             # (STEP_LAG); a pulse's comes no later than a step's, nor than the load's end after the front
-            end = max(end, min(float(sonic[1]), travel + step[1]))
+            later = min(float(sonic[1]), travel + step[1])
+            if later > end:
+                end = later
+                sums = [
+                    f"{later:.3g} s for the first maximum under the load to pass contact {last} (the chain "
+                    "linearised about F0; later than the front and its peak's tail)"
+                ]
     if scene.effects.precompression:
-        end += PEAK_DETECTION_STEPS * max(STABILITY.values()) / omega_max
+        seen = PEAK_DETECTION_STEPS * max(STABILITY.values()) / omega_max
+        end += seen
+        sums.append(f"{seen:.3g} s to see it ({PEAK_DETECTION_STEPS} of the largest stable steps)")
     if ld.kind == "impulse" and end < ld.duration:
         end = ld.duration  # an impulse is measured whole: the run lasts at least the pulse
+        notes.append(f"at least the pulse ({ld.duration:.3g} s)")
     if scene.outputs.snapshots and end < max(scene.outputs.snapshots):
         end = max(scene.outputs.snapshots)  # every requested snapshot is taken
+        notes.append(f"at least the last snapshot ({end:.3g} s)")
+    arithmetic = " + ".join(sums) + "".join(f"; {n}" for n in notes)
     return PlanChoice(
         "end_time",
         end,
         f"the leading wave (no slower than {slow:.4g} m/s on the nominal chain"
         + (", each contact's own stiffness and masses" if scene.per_bead else "")
         + (", and the first maximum of the chain linearised about F0" if scene.effects.precompression else "")
-        + f") passes contact {last} by {travel:.3g} s, after a load of {load:.3g} s"
-        + (f", seen {PEAK_DETECTION_STEPS} time steps later" if scene.effects.precompression else "")
-        + (", and the last snapshot is taken" if scene.outputs.snapshots else ""),
+        + f") passes contact {last} by {travel:.3g} s: t_end = {arithmetic} = {end:.3g} s",
     )
 
 
