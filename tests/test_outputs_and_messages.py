@@ -170,3 +170,20 @@ def test_a_wave_speed_the_scene_can_never_measure_is_not_a_missed_output(tmp_pat
     names = [line.split(":")[0] for line in unmeasured_outputs(short.scene, short.solution)]
     assert "leading_peak_force" in names
     assert "wave_speed" not in names
+
+
+@pytest.mark.parametrize(("duration", "whole"), [(1.0, False), (1e-6, True)])
+def test_the_load_impulse_line_says_up_to_the_end_when_the_load_outlasts_the_run(duration, whole, tmp_path, capsys):
+    """A step of 100 N for 0.01 s on a run planned to 0.00264 s delivered A t_end = 0.0916 N s, labelled
+    'A T delivered by the force' (A T = 1 N s): the line says what it is."""
+    from granchain.cli.terminal import print_result
+
+    loading = f'kind = "step"\namplitude = 10.0\nduration = {duration!r}'
+    sc = parse_scene(make_scene_text(beads=12, loading=loading, end_time=2e-5, timestep=1e-8), source="s.toml")
+    result = run_scene(sc, backend="reference", out=tmp_path / "r")
+    print_result(result, tmp_path / "r")
+    line = next(x for x in capsys.readouterr().out.splitlines() if "impulse of the load" in x)
+    assert ("A T delivered by the force" in line) == whole, line
+    if not whole:
+        assert "A t_end: delivered up to the end, t_end = 2e-05 s; the load lasts T = 1 s" in line, line
+        assert line.split()[6] == f"{10.0 * result.solution.end_time:.6g}", line

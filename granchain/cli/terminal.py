@@ -195,8 +195,14 @@ def print_result(result, out) -> None:
         print(f"  {outside:38s} {shown(line)}")
     c = s["conservation"]
     ld = scene.loading
-    if ld.is_force:
-        print(f"  {'impulse of the load (N s)':38s} {fmt(c['impulse_delivered'])}   (A T delivered by the force)")
+    if ld.is_force:  # A min(T, t_end): the load delivers A T only if it ended before the run
+        end = float(c.get("time", s["end_time"]))
+        how = (
+            "A T delivered by the force"
+            if end >= ld.duration
+            else f"A t_end: delivered up to the end, t_end = {end:.4g} s; the load lasts T = {ld.duration:.4g} s"
+        )
+        print(f"  {'impulse of the load (N s)':38s} {fmt(c['impulse_delivered'])}   ({how})")
     else:
         who = "the striker's M V" if ld.kind == "striker" else "bead 1's m v0"
         print(f"  {'momentum put in at t = 0 (N s)':38s} {fmt(scene.initial_momentum)}   ({who}; no force load)")
