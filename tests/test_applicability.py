@@ -466,3 +466,30 @@ def test_two_body_models_apply_to_two_free_beads_and_contact_closed_forms_to_any
             assert by[name].applies, (name, by[name].applies_reason)
         if needs in ("short", "long", "any") and beads < 10:
             assert not by[name].applies, name
+
+
+@pytest.mark.parametrize("beads", [1, 2, 5])
+@pytest.mark.parametrize("kind", ["velocity", "striker"])
+@pytest.mark.parametrize("wall", [False, True])
+def test_a_two_body_model_names_only_what_the_scene_lacks(beads, kind, wall):
+    """A struck bead on the wall read 'a striker load, far end wall: needs a striker and a free bead':
+    each reason names what the scene has that the model's setup does not, and nothing it has right."""
+    from granchain.physics.predictions import TWO_BODY_SETUPS
+
+    text = make_scene_text(beads=beads, loading=f'kind = "{kind}"\nvelocity = 1.0')
+    if wall:
+        text += '[boundary]\nfar_end = "wall"\n'
+    try:
+        sc = parse_scene(text, source="two.toml")
+    except SceneError:  # a combination not available
+        pytest.skip("not a scene")
+    for name, (law, needs) in MODEL_DOMAINS.items():
+        if needs not in TWO_BODY_SETUPS or law != "hertz":
+            continue
+        n, k, w, _ = TWO_BODY_SETUPS[needs]
+        a = applicability(name, sc)
+        assert a.applies == (beads == n and kind == k and wall == w), (name, a)
+        assert (f"{beads} beads, not {n}" in a.reason) == (beads != n), (name, a.reason)
+        assert (f"a {kind} load, not a {k}" in a.reason) == (kind != k), (name, a.reason)
+        assert ("a far-end wall, not" in a.reason) == (wall and not w), (name, a.reason)
+        assert ("a free far end, not the wall" in a.reason) == (w and not wall), (name, a.reason)

@@ -168,22 +168,33 @@ def _effect_model_applies(law: str, needs: str, scene) -> Applicability:
     else:
         if scene.effects.precompression:
             why_not.append(f"static precompression F0 = {scene.effects.precompression:g} N")
-        ld, wall = scene.loading, scene.effects.far_end == "wall"
-        if needs == "pair_impact":
-            if scene.chain.beads != 2 or ld.kind != "velocity" or wall:
-                why_not.append(
-                    f"{scene.chain.beads} beads, a {ld.kind} load, far end {scene.effects.far_end}: needs two beads, "
-                    "bead 1 given a velocity, the far end free"
-                )
-        elif scene.chain.beads != 1:
-            why_not.append(f"{scene.chain.beads} beads: a two-body impact needs one bead (its neighbours push back)")
-        if needs == "striker_impact" and (ld.kind != "striker" or wall):
-            why_not.append(f"a {ld.kind} load, far end {scene.effects.far_end}: needs a striker and a free bead")
-        if needs == "wall_impact" and (ld.kind != "velocity" or not wall):
-            why_not.append(f"a {ld.kind} load, far end {scene.effects.far_end}: needs a velocity load and the wall")
+        why_not += _two_body_setup(needs, scene)
     if why_not:
         return Applicability(False, "; ".join(why_not))
     return Applicability(True, "the scene is inside the model's domain")
+
+
+#: what each two-body impact needs of the scene: (beads, loading kind, a far-end wall), and in words
+TWO_BODY_SETUPS = {
+    "pair_impact": (2, "velocity", False, "two beads, bead 1 given a velocity, the far end free"),
+    "striker_impact": (1, "striker", False, "a striker on one free bead"),
+    "wall_impact": (1, "velocity", True, "one bead given a velocity against the wall"),
+}
+
+
+def _two_body_setup(needs: str, scene) -> list[str]:
+    """What of a two-body impact's setup (TWO_BODY_SETUPS) the scene lacks, each with what it has."""
+    beads, kind, wall, words = TWO_BODY_SETUPS[needs]
+    ld, has_wall = scene.loading, scene.effects.far_end == "wall"
+    lacks = []
+    if scene.chain.beads != beads:
+        push = " (its neighbours push back)" if beads == 1 else ""
+        lacks.append(f"{scene.chain.beads} beads, not {beads}{push}")
+    if ld.kind != kind:
+        lacks.append(f"a {ld.kind} load, not a {kind}")
+    if has_wall != wall:
+        lacks.append("a far-end wall, not a free far end" if has_wall else "a free far end, not the wall")
+    return [f"{'; '.join(lacks)}: the model is a two-body impact of {words}"] if lacks else []
 
 
 def _precompressed_chain(law: str, needs: str, scene, why_not: list[str]) -> str:
