@@ -400,6 +400,13 @@ def test_compare_rows_na_or_unmeasured_are_never_yes_or_failures_of_the_model(d,
             assert r.verdict in ("yes", "FAIL")
         if r.a is not None and r.b is not None:  # a reason only where a run lacks the value
             assert r.not_measured is None, (r.quantity, r.not_measured)
+    # under precompression every force row is dynamic, F - F0, and a total-force row is named so
+    f0 = sc.effects.precompression
+    for r in rows:
+        assert not (f0 and r.quantity.startswith(("peak_force_contact_", "wall_peak_force"))), r.quantity
+        if r.quantity.startswith("dynamic_peak_force_contact_") and r.b is not None:
+            c = int(r.quantity.rsplit("_", 1)[1])
+            assert r.b == b.solution.peak_force[c - 1] - f0
     frame = compare_frame(rows)
     both = [r.quantity for r in rows if r.a is not None and r.b is not None]
     assert (frame.loc[both, "not_measured"] == "").all()
