@@ -326,10 +326,23 @@ def test_the_weakly_nonlinear_limit_is_where_v_s_leaves_c0_by_rtol():
     grows as (F/F0)/18 for small F/F0, so the limit is near 18 rtol, and V_s is (1 + rtol) c0 there."""
     for rtol in (1e-3, 1e-2):
         x = models.weakly_nonlinear_ratio(rtol)
-        # V_s's closed form cancels to (f_r - 1)^2 under its root: ~4 digits lost at f_r - 1 = 0.018
-        assert models.precompressed_solitary_wave_speed(1.0, 1.0 + x) == pytest.approx(1.0 + rtol, rel=1e-9)
+        assert models.precompressed_solitary_wave_speed(1.0, 1.0 + x) == pytest.approx(1.0 + rtol, rel=1e-14)
         assert models.precompressed_solitary_wave_speed(1.0, 1.0 + 0.99 * x) < 1.0 + rtol
     assert models.weakly_nonlinear_ratio(1e-3) == pytest.approx(18e-3, rel=0.02)
+
+
+@pytest.mark.parametrize("excess", [1e-12, 1e-9, 1e-7, 1e-5, 1e-3])
+def test_v_s_tends_to_c0_without_cancellation(excess):
+    """Nesterenko's V_s(f_r) = c0 (1 + (f_r - 1)/18 + O((f_r - 1)^2)) (d/du of the cancellation-free form
+    at u = f_r^(1/3) = 1 is 1/6, du/df_r = 1/3): the printed form read 1.03 c0 at f_r - 1 = 1e-7 (a 1e-7
+    F0 step under precompression, compare's model of its wave speed)."""
+    v = models.precompressed_solitary_wave_speed(1.0, 1.0 + excess)
+    # the next term is 0.18 (f_r - 1)^2; the value itself is good to a few ulps of 1 (not of v - 1)
+    assert abs(v - (1.0 + excess / 18.0)) <= 8 * np.finfo(float).eps + 0.5 * excess**2, v
+    assert models.precompressed_solitary_wave_speed(1.0, 1.0) == 1.0
+    for fr in (1.01, 2.0, 10.0, 1001.0):  # the printed form where it keeps its digits
+        printed = math.sqrt(4 / 15 * (3 + 2 * fr ** (5 / 3) - 5 * fr ** (2 / 3))) / (fr ** (2 / 3) - 1)
+        assert models.precompressed_solitary_wave_speed(2.0, fr) == pytest.approx(2 * printed, rel=1e-10)
 
 
 @pytest.mark.parametrize(("f0", "applies"), [(0.002, False), (2.0, False), (200.0, True), (2000.0, True)])
