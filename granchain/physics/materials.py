@@ -200,21 +200,62 @@ def flat_effective_modulus(m: Material) -> float:
 YIELD_PRESSURE_FACTOR = 1.61
 
 
+def bead_material(entry: str | Material) -> Material:
+    """The Material of one entry of a per-bead ``[chain] material`` list: a built-in name's, or the
+    entry itself (an inline table, read into a Material)."""
+    return MATERIALS[entry] if isinstance(entry, str) else entry
+
+
+def material_label(entry: str | Material) -> str:
+    """How messages and tables name a material: a built-in's name, or an inline table's values."""
+    if isinstance(entry, str):
+        return entry
+    ys = "" if entry.yield_strength is None else f", yield_strength = {entry.yield_strength:g}"
+    return (
+        f"{{density = {entry.density:g}, youngs_modulus = {entry.youngs_modulus:g}, "
+        f"poisson_ratio = {entry.poisson_ratio:g}{ys}}}"
+    )
+
+
+def _beads_text(beads: list[int]) -> str:
+    """'bead 2', 'beads 2, 5 and 9', 'beads 2, 5, 9, 11, 14 and 30 more' (1-based bead numbers)."""
+    if len(beads) == 1:
+        return f"bead {beads[0]}"
+    shown = ", ".join(str(b) for b in beads[:5])
+    rest = len(beads) - 5
+    if rest > 0:
+        return f"beads {shown} and {rest} more"
+    return f"beads {', '.join(str(b) for b in beads[:-1])} and {beads[-1]}"
+
+
 def lacking_yield_strength(chain) -> str:
     """What the chain's materials lack for a plastic law: "" when every bead material has a
-    yield_strength, else what to add, naming the materials without one (the plastic laws' mixing
-    rules read it)."""
-    names = chain.materials if chain.materials is not None else (chain.material_name,)
+    yield_strength, else what to add, naming the materials without one and where to give it (the
+    plastic laws' mixing rules read it)."""
     if chain.materials is None:
-        missing = [] if chain.material.yield_strength is not None else [chain.material_name or "[chain.material]"]
-    else:
-        missing = sorted({n for n in names if MATERIALS[n].yield_strength is None})
-    if not missing:
+        if chain.material.yield_strength is not None:
+            return ""
+        return (
+            f"a yield_strength (Pa) for {chain.material_name or '[chain.material]'!r}: add yield_strength to a "
+            "[chain.material] table, or choose materials that have one (granchain materials)"
+        )
+    names = sorted({e for e in chain.materials if isinstance(e, str) and MATERIALS[e].yield_strength is None})
+    tables = [i for i, e in enumerate(chain.materials, 1) if not isinstance(e, str) and e.yield_strength is None]
+    if not names and not tables:
         return ""
-    return (
-        f"a yield_strength (Pa) for {', '.join(repr(n) for n in missing)}: add yield_strength to a "
-        "[chain.material] table, or choose materials that have one (granchain materials)"
-    )
+    fixes = []
+    if names:
+        m = MATERIALS[names[0]]
+        fixes.append(
+            f"in the [chain] material list write each {' and each '.join(repr(n) for n in names)} as an inline "
+            f"table of its values with a yield_strength (e.g. {{density = {m.density:g}, youngs_modulus = "
+            f"{m.youngs_modulus:g}, poisson_ratio = {m.poisson_ratio:g}, yield_strength = ...}} for "
+            f"{names[0]!r}), or choose materials that have one (granchain materials)"
+        )
+    if tables:
+        fixes.append(f"add yield_strength = ... to the inline table of {_beads_text(tables)}")
+    what = [repr(n) for n in names] + ([f"the inline table of {_beads_text(tables)}"] if tables else [])
+    return f"a yield_strength (Pa) for {', '.join(what)}: {'; '.join(fixes)}"
 
 
 def plastic_stiffness_from_yield(yield_strength: float, radius: float) -> float:

@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, replace
 from typing import NamedTuple
 
+from granchain.physics import materials as mat
 from granchain.physics import models
 from granchain.physics.laws import LAWS
 from granchain.physics.laws.base import EFFECT_DOMAINS
@@ -260,7 +261,8 @@ def _outside_the_papers_chain(scene) -> list[str]:
         r = scene.chain.radii or (scene.chain.radius,)
         differ = [f"radii {min(r) * 1e3:.3g} to {max(r) * 1e3:.3g} mm: tapered or decorated"] if len(set(r)) > 1 else []
         if scene.chain.materials is not None and len(set(scene.chain.materials)) > 1:
-            differ.append(f"materials {', '.join(sorted(set(scene.chain.materials)))}")
+            labels = dict.fromkeys(mat.material_label(e) for e in scene.chain.materials)
+            differ.append(f"materials {', '.join(sorted(labels))}")
         why_not.append(f"the beads differ ({'; '.join(differ)}): the paper's models are for a monodisperse chain")
     if scene.effects.dashpot:
         why_not.append(

@@ -37,8 +37,9 @@ class Chain:
         The material's built-in name, or None for an inline ``[chain.material]`` table.
     radii : tuple of float or None
         Every bead's radius in m (a list or the taper rule), or None when all are ``radius``.
-    materials : tuple of str or None
-        Every bead's built-in material name, or None when all are ``material``.
+    materials : tuple of (str or Material), or None
+        Every bead's material, as the ``[chain] material`` list gives it: a built-in name, or the
+        Material of an inline table; None when all are ``material``.
     """
 
     beads: int | None  # None: "auto"
@@ -46,7 +47,7 @@ class Chain:
     material: mat.Material  # with per-bead materials, bead 1's
     material_name: str | None = None  # built-in name, or None for an inline [chain.material]
     radii: tuple[float, ...] | None = None  # per-bead radii (a list or the taper rule), or None
-    materials: tuple[str, ...] | None = None  # per-bead built-in material names, or None
+    materials: tuple[str | mat.Material, ...] | None = None  # per bead: a built-in name or an inline table
 
 
 @dataclass(frozen=True)
@@ -336,7 +337,7 @@ class Scene:
         """Every bead's Material, bead 1 first."""
         n = self.chain.beads
         if self.chain.materials:
-            return [mat.MATERIALS[name] for name in self.chain.materials]
+            return [mat.bead_material(entry) for entry in self.chain.materials]
         return [self.chain.material] * n
 
     @property

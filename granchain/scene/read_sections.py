@@ -22,7 +22,7 @@ from granchain.scene.limits import (
     TIME_TEXT,
 )
 from granchain.scene.model import Chain, Contact, Effects, Loading, Outputs, Run
-from granchain.scene.section import SceneError, _Section
+from granchain.scene.section import SceneError, _did_you_mean, _Section
 
 
 def _read_effects(source: str, data: dict) -> Effects:
@@ -32,6 +32,28 @@ def _read_effects(source: str, data: dict) -> Effects:
         if name in data:
             fields.update(effect.read(_Section(source, name, data[name])))
     return Effects(**fields)
+
+
+def _read_material_table(ms: _Section) -> mat.Material:
+    """A material given by its values: a [chain.material] or [loading.material] table, or an inline
+    table in a per-bead [chain] material list."""
+    # each value within the range of real solid beads (materials.*_RANGE): outside it, a unit slip
+    # (g/cm^3, GPa, MPa) is the likely cause, and the message says which
+    material = mat.Material(
+        density=ms.quantity("density", mat.DENSITY_RANGE, what="kg/m^3"),
+        youngs_modulus=ms.quantity("youngs_modulus", mat.YOUNGS_MODULUS_RANGE, what="Pa"),
+        poisson_ratio=ms.number("poisson_ratio", low=-1.0, high=0.5, what="-1 < nu < 0.5"),
+        yield_strength=ms.quantity("yield_strength", mat.YIELD_STRENGTH_RANGE, required=False, what="Pa"),
+    )
+    why = mat.yield_strain_refusal(material)
+    if why:
+        raise ms.error(f"[{ms.name}] {why}")
+    ms.finish(MATERIAL_KEYS)
+    return material
+
+
+#: The keys of a material table, in the order the scene writer gives them.
+MATERIAL_KEYS = ("density", "youngs_modulus", "poisson_ratio", "yield_strength")
 
 
 def _read_material(s: _Section, source: str, required: bool = True) -> tuple[mat.Material | None, str | None]:
@@ -45,21 +67,34 @@ def _read_material(s: _Section, source: str, required: bool = True) -> tuple[mat
             raise s.fail("material", m, allowed)
         return mat.MATERIALS[m], m
     if isinstance(m, dict):
-        ms = _Section(source, f"{s.name}.material", m)
-        # each value within the range of real solid beads (materials.*_RANGE): outside it, a unit slip
-        # (g/cm^3, GPa, MPa) is the likely cause, and the message says which
-        material = mat.Material(
-            density=ms.quantity("density", mat.DENSITY_RANGE, what="kg/m^3"),
-            youngs_modulus=ms.quantity("youngs_modulus", mat.YOUNGS_MODULUS_RANGE, what="Pa"),
-            poisson_ratio=ms.number("poisson_ratio", low=-1.0, high=0.5, what="-1 < nu < 0.5"),
-            yield_strength=ms.quantity("yield_strength", mat.YIELD_STRENGTH_RANGE, required=False, what="Pa"),
-        )
-        why = mat.yield_strain_refusal(material)
-        if why:
-            raise ms.error(f"[{ms.name}] {why}")
-        ms.finish(("density", "youngs_modulus", "poisson_ratio", "yield_strength"))
-        return material, None
+        return _read_material_table(_Section(source, f"{s.name}.material", m)), None
     raise s.fail("material", m, allowed)
+
+
+def _read_material_list(s: _Section, source: str, beads: int | None) -> tuple[str | mat.Material, ...]:
+    """A per-bead [chain] material list: per bead, what `material` takes (a built-in name, or a
+    table of values written inline, read as a [chain.material] table is)."""
+    v = s.raw("material")
+    entry = (
+        f"a built-in material name ({', '.join(mat.MATERIALS)}) or an inline table of the values a "
+        "[chain.material] table takes, {density = ..., youngs_modulus = ..., poisson_ratio = ...} "
+        "(SI; yield_strength optional)"
+    )
+    if beads is None or len(v) != beads:
+        count = 'a number of beads (not "auto")' if beads is None else f"{beads}"
+        raise s.fail("material", v, f"a list of {count} materials, one per bead, each {entry}")
+    out: list[str | mat.Material] = []
+    for i, x in enumerate(v, 1):
+        where = f"material[{i}]"  # numbered as beads are, from 1
+        if isinstance(x, str):
+            if x not in mat.MATERIALS:
+                raise s.fail(where, x, f"bead {i}'s material: {_did_you_mean(x, mat.MATERIALS)}{entry}")
+            out.append(x)
+        elif isinstance(x, dict):
+            out.append(_read_material_table(_Section(source, f"chain.{where}", x)))
+        else:
+            raise s.fail(where, x, f"bead {i}'s material: {entry}")
+    return tuple(out)
 
 
 def _read_chain(s: _Section, source: str) -> Chain:
@@ -116,12 +151,9 @@ def _read_chain(s: _Section, source: str) -> Chain:
     if taper is not None:
         radii = tuple(radius * taper**i for i in range(beads))
     if isinstance(s.table.get("material"), list):
-        v = s.raw("material")
-        allowed = f"a list of {beads} built-in material names ({', '.join(mat.MATERIALS)}), one per bead"
-        if beads is None or len(v) != beads or any(x not in mat.MATERIALS for x in v):
-            raise s.fail("material", v, allowed)
-        materials = tuple(v)
-        material, name = mat.MATERIALS[v[0]], v[0]
+        materials = _read_material_list(s, source, beads)
+        first = materials[0]
+        material, name = mat.bead_material(first), first if isinstance(first, str) else None
     else:
         material, name = _read_material(s, source)
     s.finish(("beads", "radius", "material", "taper"))

@@ -204,8 +204,7 @@ def _check_scales(scene: Scene, source: str) -> None:
     MAX_FORCE. Each message names the keys the scene set that make it so, and the fix."""
     chain = scene.chain
     radii = (min(chain.radii), max(chain.radii)) if chain.radii else (chain.radius,)
-    names = sorted(set(chain.materials)) if chain.materials else [None]
-    materials = [mat.MATERIALS[n] for n in names] if chain.materials else [chain.material]
+    materials = list(dict.fromkeys(map(mat.bead_material, chain.materials))) if chain.materials else [chain.material]
     keys = f"[chain] radius and {_material_keys(chain)}"
     for r in radii:
         for m in materials:

@@ -19,11 +19,8 @@ def _loading_to_dict(ld) -> dict[str, Any]:
     if ld.kind == "velocity":
         return {"kind": "velocity", "velocity": ld.velocity}
     st: dict[str, Any] = {"kind": "striker", "velocity": ld.velocity, "radius": ld.striker_radius}
-    st["material"] = ld.striker_material_name or {
-        "density": ld.striker_material.density,
-        "youngs_modulus": ld.striker_material.youngs_modulus,
-        "poisson_ratio": ld.striker_material.poisson_ratio,
-    }
+    # its yield_strength too: a plastic law's mixing rule for the striker's contact reads it
+    st["material"] = ld.striker_material_name or _material_values(ld.striker_material)
     if ld.striker_mass is not None:
         st["mass"] = ld.striker_mass
     return st
@@ -36,6 +33,14 @@ def _outputs_to_dict(o) -> dict[str, Any]:
     out.update({k: list(v) for k, v in lists if v})
     scalars = (("history_interval", o.history_interval), ("dump_interval", o.dump_interval))
     out.update({k: v for k, v in scalars if v is not None})
+    return out
+
+
+def _material_values(m) -> dict[str, Any]:
+    """A material's table: density, youngs_modulus, poisson_ratio, and yield_strength where it has one."""
+    out: dict[str, Any] = {"density": m.density, "youngs_modulus": m.youngs_modulus, "poisson_ratio": m.poisson_ratio}
+    if m.yield_strength is not None:
+        out["yield_strength"] = m.yield_strength
     return out
 
 
@@ -56,24 +61,25 @@ def scene_to_dict(scene) -> dict:
         to an equal scene, and campaigns use it as a point's canonical state.
     """
     c = scene.chain
-    material: Any = c.material_name
-    if material is None:
-        material = {
-            "density": c.material.density,
-            "youngs_modulus": c.material.youngs_modulus,
-            "poisson_ratio": c.material.poisson_ratio,
-        }
-        if c.material.yield_strength is not None and not scene.contact.law_class.yield_strength_in_contact:
-            material["yield_strength"] = c.material.yield_strength
+    contact = scene.contact.law_class.contact_to_dict(scene.contact)
+    material: Any
+    if c.materials:  # per bead, a built-in name or an inline table (each contact's law reads its yield_strength)
+        material = [e if isinstance(e, str) else _material_values(e) for e in c.materials]
+    elif c.material_name is not None:
+        material = c.material_name
+    else:
+        material = _material_values(c.material)
+        if c.material.yield_strength is not None:  # the law's value derived from it is read back from it
+            contact.pop(scene.contact.law_class.yield_strength_key, None)
     d: dict[str, Any] = {}
     if scene.title:
         d["title"] = scene.title
     d["chain"] = {
         "beads": AUTO if c.beads is None else c.beads,
         "radius": list(c.radii) if c.radii else c.radius,
-        "material": list(c.materials) if c.materials else material,
+        "material": material,
     }
-    d["contact"] = scene.contact.law_class.contact_to_dict(scene.contact)
+    d["contact"] = contact
     d["loading"] = _loading_to_dict(scene.loading)
     d["run"] = {
         k: AUTO if v is None else v for k, v in (("end_time", scene.run.end_time), ("timestep", scene.run.timestep))
@@ -99,6 +105,8 @@ def _toml_value(v: Any) -> str:
         return '"' + "".join(_toml_char(c) for c in v) + '"'
     if isinstance(v, list):
         return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):  # an inline table (an entry of a per-bead material list)
+        return "{" + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()) + "}"
     raise TypeError(f"cannot write {v!r} as TOML")
 
 

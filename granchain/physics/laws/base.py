@@ -90,9 +90,11 @@ class ContactLaw:
     Coefficients: ClassVar[type[LawCoefficients]] = LawCoefficients
     #: the [contact] keys the law reads besides law: its Coefficients' fields, in their order
     scene_keys: ClassVar[tuple[str, ...]] = ()
-    #: read_contact turns [chain.material] yield_strength into one of its [contact] values (the bilinear
-    #: k = 18.5 sigma_y R*): a scene written back leaves the yield strength out of the material
-    yield_strength_in_contact: ClassVar[bool] = False
+    #: the [contact] key read_contact derives from a [chain.material] table's yield_strength when the
+    #: scene gives none (the bilinear plastic_stiffness = 18.5 sigma_y R*), or None: a scene written
+    #: back keeps the yield strength in the table and leaves the key to it (a table's yield strength
+    #: and the key together are refused)
+    yield_strength_key: ClassVar[str | None] = None
     #: dF/dalpha jumps at a kink that a contact's overlap crosses while it moves (bilinear: closing at
     #: alpha = 0 and reaching zero force; Thornton: reloading past d_max): fixed-step Verlet's error
     #: then depends on where in a step that happens and follows no order in dt, so its error bars come

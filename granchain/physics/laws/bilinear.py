@@ -103,7 +103,7 @@ class BilinearLaw(ContactLaw):
     # a negative overlap: alpha - beta max(alpha_max, alpha) < 0 as for alpha = 0 (alpha_max >= 0), so +0.0
     force_into_any_sign: ClassVar[bool] = True
     Coefficients: ClassVar[type[LawCoefficients]] = BilinearCoefficients
-    yield_strength_in_contact: ClassVar[bool] = True
+    yield_strength_key: ClassVar[str | None] = "plastic_stiffness"
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "beta": (0.0, 0.99)}
     example_contact: ClassVar[dict[str, float]] = {"unloading_coeff": 0.8, "plastic_stiffness": 2.43e7}
     scene_key_ranges: ClassVar[dict[str, tuple[float, float]]] = {
