@@ -25,8 +25,9 @@ class Material:
 #: Built-in materials: the bead materials of granular-chain experiments, by name (``material = "<name>"``
 #: in a scene; ``granchain materials`` lists them). Values are typical room-temperature ones; a real
 #: batch of beads can differ by a few per cent in E (and far more in yield strength, which depends on
-#: temper): give an inline [chain.material] table for measured values. yield_strength is None where
-#: it is not meaningful (brittle glass and carbide, viscoelastic PTFE) or, for brass, not in the paper.
+#: temper): give a [chain.material] table (or an inline table in a per-bead list) for measured
+#: values. yield_strength is None where it is not meaningful (brittle glass and carbide, viscoelastic
+#: PTFE) or, for brass, not in the paper.
 #: A built-in yield_strength sets the bilinear law's k = 18.5 sigma_y R* when the scene gives none.
 MATERIALS: dict[str, Material] = {
     # Pal & Geubelle, Sec. II A (the paper's brass; no yield strength given there). Do not change:
