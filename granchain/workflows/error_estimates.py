@@ -15,7 +15,12 @@ On request (error_estimate="checked"), RK4's bars are checked against one more r
 (check_because, richardson.checked): its error mixes orders (2.5 at Hertzian onsets, 4 and beyond),
 and the order the runs at dt, 2 dt and 4 dt show need not hold below dt; an estimate the run at dt / 2
 contradicts is not given. Not by default: that run costs twice the run, and the bars' price is held
-to at most the run's (the companions at 2 dt and 4 dt: 3/4 of it).
+to at most the run's (the companions at 2 dt and 4 dt: 3/4 of its steps).
+
+RK4 on a law with slope kinks (bilinear, Thornton): every kink crossing costs RK4 two more tries in
+every run, so companions at 2 dt and 4 dt cost more than the run (1.4-1.6x); by default its bars come
+from the companion at 2 dt alone with an order assumed (one_companion_because,
+richardson.one_companion), and error_estimate="checked" gives the checked estimate (2 dt, 4 dt, dt / 2).
 
 Orders: RK4 4, velocity Verlet (reference and LAMMPS) 2, but 1 for Verlet with a dashpot: the
 dashpot sees half-step velocities and is first order (workflows.plan.DASHPOT_VERLET). Measured on
@@ -41,11 +46,13 @@ from granchain.progress import labelled
 from granchain.richardson import (
     BOUND_ORDER,
     CHECK_FACTOR,
+    ONE_COMPANION_ORDER,
     ORDER,
     ErrorBars,
     against_reference,
     checked,
     erratic_bounds,
+    one_companion,
     richardson,
 )
 
@@ -81,6 +88,8 @@ class ErrorReport:
     #: why the bars are not checked at dt / 2: asked for, its run failed or the check is not this
     #: integrator's (unchecked_because); not asked for, RK4's bars say what that leaves (UNCHECKED_BY_DEFAULT)
     why_unchecked: str | None = None
+    #: why the bars come from one companion at 2 dt with an assumed order (one_companion_because)
+    one_companion: str | None = None
 
     def summary(self, main_wall_time: float) -> dict:
         """The summary.json entry."""
@@ -99,12 +108,18 @@ class ErrorReport:
                 f"bounds from runs at dt, 2 dt and 4 dt, max(|Q(dt) - Q(2 dt)|, |Q(2 dt) - Q(4 dt)| / {2**BOUND_ORDER})"
                 f", which may overstate the error many times (granchain.richardson.erratic_bounds): {self.bound}"
             )
+        elif self.one_companion is not None:
+            method = (
+                f"one companion at 2 dt, |Q(dt) - Q(2 dt)| / (2^{self.order} - 1), order {self.order} assumed, not "
+                f"checked (granchain.richardson.one_companion): {self.one_companion}"
+            )
         else:
             method = "Richardson extrapolation over runs at dt, 2 dt and 4 dt (granchain.richardson)"
         return {
             "method": method,
             "companion_method": self.against,
             "bound": self.bound,
+            "one_companion": self.one_companion,
             "order": self.order,
             "companion_timesteps": self.timesteps,
             "companion_wall_time": sum(self.wall_times),
@@ -267,6 +282,38 @@ def bounded_because(method: str, scene) -> str | None:
     return f"the {law} law's slope jumps at kinks the contacts cross, so Verlet's error is erratic in sign"
 
 
+def one_companion_because(method: str, scene, checked: bool = False) -> str | None:
+    """Why this run's bars come from one companion at 2 dt with an assumed order
+    (richardson.one_companion), or None (always None when checked bars were asked for, ``checked``).
+
+    RK4 (event location) on a law whose slope jumps at kinks the contacts cross (ContactLaw.slope_kinks:
+    bilinear, Thornton): each crossing costs a rejected try and the split piece in every run, so
+    companions at 2 dt and 4 dt, 3/4 of the run's steps but its crossings twice, cost 1.4-1.6 times the
+    run (bench_errorbar_price.py). The companion at 2 dt alone costs less than the run; the order it
+    cannot check is assumed (richardson.ONE_COMPANION_ORDER), in the middle of the 2.5-4 RK4 shows
+    there. Measured on generated bilinear and Thornton chains (docs/error-bars.md, "RK4 on the kinked
+    laws: one companion"; docs/measure_kinked_rk4_companion.py).
+    """
+    if checked or method != "rk4" or scene.effects.dashpot:
+        return None
+    from granchain.physics.laws import law_class
+
+    if not law_class(scene.contact.law).slope_kinks:
+        return None
+    return (
+        f"the {scene.contact.law} law's kinks cost RK4 two more tries at every crossing, so the runs at 2 dt "
+        "and 4 dt would cost more than the run: the one at 2 dt alone, its order assumed"
+    )
+
+
+#: what RK4's default bars on a kinked law (one_companion_because) say of themselves
+ONE_COMPANION_BY_DEFAULT = (
+    "RK4's bars on a kinked law come from one companion at 2 dt with order 3 assumed, not checked: any order "
+    "2-4 puts them within 0.43-2.14 of the error (docs/error-bars.md); --error-estimate checked "
+    '(error_estimate="checked") checks the order with runs at 4 dt and dt / 2, at about three times the run'
+)
+
+
 #: what a kinked law's default Verlet bars (bounded_because) say of themselves: what they leave and what
 #: measures them instead
 BOUNDED_BY_DEFAULT = (
@@ -321,7 +368,8 @@ def rk4_companions(scene, method: str, checked: bool = False, numpy_speed: bool 
     check = []
     if 2.0 * dt <= stable and check_because("rk4", scene, checked):
         check = [companion_scene(scene, CHECK_FACTOR)]
-    return [companion_scene(scene, f) for f in (2.0, 4.0) if f * dt <= stable] + check
+    factors = (2.0,) if one_companion_because(method, scene, checked) else (2.0, 4.0)
+    return [companion_scene(scene, f) for f in factors if f * dt <= stable] + check
 
 
 #: the RK4 companions a Verlet run is measured against aim at this fraction of the Verlet run's
@@ -397,8 +445,12 @@ def estimate_errors(
     report.why_none = withheld_because(method, scene)
     if report.why_none:
         return report
+    report.one_companion = one_companion_because(method, scene, checked)
+    if report.one_companion is not None:
+        report.order = ONE_COMPANION_ORDER
     with kept_lammps():
-        runs = _richardson_runs(report, scene, run_one, stable_timestep)
+        factors = (2.0,) if report.one_companion is not None else (2.0, 4.0)
+        runs = _richardson_runs(report, scene, run_one, stable_timestep, factors)
         if runs is None:
             return report
         finer = _check_run(report, scene, run_one) if check_because(method, scene, checked) else None
@@ -406,6 +458,8 @@ def estimate_errors(
         report.why_unchecked = f"no RK4 runs to measure it against here. {BOUNDED_BY_DEFAULT}"
     elif checked and not check_because(method, scene, checked):
         report.why_unchecked = unchecked_because(method, scene)
+    elif report.one_companion is not None:
+        report.why_unchecked = ONE_COMPANION_BY_DEFAULT
     elif not checked and check_because(method, scene, True):
         report.why_unchecked = UNCHECKED_BY_DEFAULT
     elif not checked and report.bound is not None:
@@ -425,12 +479,14 @@ def kept_lammps():
         yield
 
 
-def _richardson_runs(report: ErrorReport, scene, run_one, stable_timestep: float) -> list | None:
-    """The companions at 2 dt and (where stable) 4 dt, their steps and wall times into the report;
-    None when there is no estimate (report.why_none says why)."""
+def _richardson_runs(
+    report: ErrorReport, scene, run_one, stable_timestep: float, factors: tuple[float, ...] = (2.0, 4.0)
+) -> list | None:
+    """The companions at 2 dt and (where stable, and in factors) 4 dt, their steps and wall times into
+    the report; None when there is no estimate (report.why_none says why)."""
     dt = scene.run.timestep
     runs = []
-    for factor in (2.0, 4.0):
+    for factor in factors:
         if factor * dt > stable_timestep:
             if factor == 2.0:
                 report.why_none = (
@@ -494,8 +550,15 @@ def _richardson_bars(
         return per_contact((sol, coarse, coarser, finer), name, n, complete_only)
 
     orders = expected_orders(method, scene)
-    # a kinked law's Verlet bars are bounds (bounded_because)
+    # a kinked law's Verlet bars are bounds (bounded_because); RK4's there come from one companion
+    # (one_companion_because)
     extrapolate = erratic_bounds if report.bound is not None else richardson
+    if report.one_companion is not None:
+
+        def extrapolate(fine, coarse, coarser, order, times=None, jump_time=None, orders=None, floor=None):
+            return one_companion(
+                fine, coarse, order, times=None if times is None else times[:2], jump_time=jump_time, floor=floor
+            )
 
     def bars(v, t, order=p, floor=None) -> ErrorBars:
         # Richardson over dt, 2 dt, 4 dt; checked against dt / 2 where that run was made
@@ -508,17 +571,21 @@ def _richardson_bars(
     lf, lt = values("leading_pulse_force"), values("leading_pulse_time")
     floor = roundoff_floor(scene, sol, absolute_positions)
     report.peak_force = bars(pf, tp, floor=floor)
-    report.time_of_peak = bars(tp, tp)
+    # a kinked law's times from one companion are bounds (one_companion_because)
+    p_time = BOUND_ORDER if report.one_companion is not None else p
+    report.time_of_peak = bars(tp, tp, order=p_time)
     # a leading pulse rises no higher than its contact's peak, and a contact's slope grows with its
     # force (Hertz; constant on a loading line): the peak's floor bounds the leading pulse's round-off
     report.leading_pulse_force = bars(lf, lt, floor=floor)
-    report.arrival_time = bars(lt, lt)
+    report.arrival_time = bars(lt, lt, order=p_time)
 
     _largest(report, scene, sol)
 
     # a striker's or a wall's contact is one impact from zero overlap: RK4's error there is its Hertzian
     # onset's, order 1 + 3/2 (two spheres, planned step: with order 4 the bar was 1/2.9 of the true error)
-    p_end = RK4_ONSET_ORDER if method == "rk4" and not scene.contact.law_class.loading_is_linear() else p
+    # (one companion: its assumed order, p, whose 0.43-2.14 holds down to order 2)
+    onset = method == "rk4" and report.one_companion is None and not scene.contact.law_class.loading_is_linear()
+    p_end = RK4_ONSET_ORDER if onset else p
 
     def bars_of(values, times):
         values, times = list(values), None if times is None else list(times)
@@ -527,7 +594,9 @@ def _richardson_bars(
         v = [float(x) for x in values] + ([None] if coarser is None else [])
         t = None if times is None else tuple([float(x)] for x in times) + ((None,) if coarser is None else ())
         c = None if v[2] is None else [v[2]]
-        b = extrapolate([v[0]], [v[1]], c, p_end, times=t, jump_time=jump, orders=orders)
+        # (times None: the peak's time itself, a bound with one companion as the contacts' times)
+        order = p_end if times is not None or report.one_companion is None else BOUND_ORDER
+        b = extrapolate([v[0]], [v[1]], c, order, times=t, jump_time=jump, orders=orders)
         if finer is None:
             return b
         t = None if times is None else ([th], [float(times[0])], [float(times[1])])
