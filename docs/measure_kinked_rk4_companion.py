@@ -21,7 +21,9 @@ true local one log2(|E(2 dt)| / |E(dt)|).
 
 Estimators (each on the same per-item values; another pulse in a companion run, and round-off, as
 richardson decides them, count as "no bar"):
-* one companion, order p assumed: |Q(dt) - Q(2 dt)| / (2^p - 1), p = 3 and p = 2.5
+* default: one companion, order 3 assumed for forces and the wave speed, |Q(dt) - Q(2 dt)| itself (a
+  bound, order 1) for times (workflows.error_estimates.one_companion_because);
+* one companion, order p assumed for every quantity: |Q(dt) - Q(2 dt)| / (2^p - 1), p = 3 and p = 2.5
   (richardson.one_companion);
 * Richardson over dt, 2 dt, 4 dt with its order checks (richardson.richardson, RK4's orders 2.5-4): the
   previous default.
@@ -40,7 +42,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from dataclasses import replace
 
 from granchain.postprocess.observables import measure_observables
-from granchain.richardson import one_companion, richardson
+from granchain.richardson import ONE_COMPANION_ORDER, one_companion, richardson
 from granchain.workflows.error_estimates import expected_orders, roundoff_floor
 from granchain.workflows.plan import highest_frequency
 from granchain.workflows.run import plan_for, run_scene
@@ -48,6 +50,7 @@ from tests.scenegen import scenes
 
 warnings.simplefilter("ignore")
 FACTORS = (1.0, 2.0, 4.0, 0.25)
+TIMES = ("time_of_peak", "arrival_time", "striker_time_of_peak", "wall_time_of_peak")
 rows: list[dict] = []
 
 
@@ -115,7 +118,7 @@ def study(sc):
 def estimators(row):
     """name -> (estimate, true error, observed order of the three runs, true local order) per counted
     item of one scene's row (estimate nan: no bar)."""
-    out = {k: [] for k in ("one p=3", "one p=2.5", "richardson 3 runs")}
+    out = {k: [] for k in ("default", "one p=3", "one p=2.5", "richardson 3 runs")}
     jump = row["jump"]
     orders = (2.5, 4.0)
     for name, v, t, fl in row["items"]:
@@ -134,6 +137,10 @@ def estimators(row):
         for key, p in (("one p=3", 3.0), ("one p=2.5", 2.5)):
             b = one_companion([f], [c], p, **kw)
             out[key].append((float(b.error[0]), true, q3, qt, name, str(b.status[0])))
+        # the default: order 3 for forces and the wave speed, a bound (order 1) for times
+        p = 1 if name in TIMES else ONE_COMPANION_ORDER
+        b = one_companion([f], [c], p, **kw)
+        out["default"].append((float(b.error[0]), true, q3, qt, name, str(b.status[0])))
         b = richardson([f], [c], [cc], 4, times=times, jump_time=jump, orders=orders, floor=[fl])
         out["richardson 3 runs"].append((float(b.error[0]), true, q3, qt, name, str(b.status[0])))
     return out
@@ -173,7 +180,7 @@ def summary(rows):
                 f"| {law} ({len(sub)} scenes) | {key} | {len(recs)} | {int(ok.sum())} | {pct(r)} | "
                 f"{int(np.sum(r < 1 / 3))} ({np.mean(r < 1 / 3):.1%}) | {int(np.sum(r > 3))} ({np.mean(r > 3):.1%}) |"
             )
-            if key == "one p=3":
+            if key in ("default", "one p=3"):
                 by = {}
                 for x in recs:
                     if np.isfinite(x[0]):
@@ -183,12 +190,16 @@ def summary(rows):
                     lines.append(
                         f"|  | ... {name} | | {rr.size} | {pct(rr)} | {int(np.sum(rr < 1 / 3))} | {int(np.sum(rr > 3))} |"
                     )
-                q3 = np.asarray([x[2] for x in recs])
-                qt = np.asarray([x[3] for x in recs])
+            if key != "default":
+                continue
+            for what, sel in (("forces", lambda x: x[4] not in TIMES), ("times", lambda x: x[4] in TIMES)):
+                q3 = np.asarray([x[2] for x in recs if sel(x)])
+                qt = np.asarray([x[3] for x in recs if sel(x)])
+                m = q3.size
                 q3, qt = q3[np.isfinite(q3)], qt[np.isfinite(qt)]
                 order_lines.append(
-                    f"{law}: observed order of the three runs 5-50-95% {pct(q3)} ({q3.size} items with same-sign "
-                    f"differences of {len(recs)}); true local order log2(E(2dt)/E(dt)) {pct(qt)}, within 2-4: "
+                    f"{law} {what}: observed order of the three runs 5-50-95% {pct(q3)} ({q3.size} of {m} items "
+                    f"with same-sign differences); true local order log2(E(2dt)/E(dt)) {pct(qt)}, within 2-4: "
                     f"{np.mean((qt >= 2) & (qt <= 4)):.0%}, below 2: {np.mean(qt < 2):.0%}, above 4: {np.mean(qt > 4):.0%}"
                 )
     return "\n".join(lines + [""] + order_lines)

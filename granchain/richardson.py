@@ -52,6 +52,9 @@ Statuses (the `*_error_status` columns and summary entries):
                                  (Verlet on a law with slope kinks, when checked bars are asked for)
     "bound: kinked law, ..."     erratic_bounds: a bound from dt, 2 dt, 4 dt (Verlet on a law with
                                  slope kinks, by default); may overstate the error many times
+    "estimate: one companion ..."   one_companion: |Q(dt) - Q(2 dt)| / (2^3 - 1), order 3 assumed, not
+                                 checked (RK4 on a kinked law with linear loading, by default: forces)
+    "bound: one companion ..."   one_companion: |Q(dt) - Q(2 dt)| (the same runs: times); may overstate it
 
 A law whose force slope jumps at kinks a moving contact crosses (ContactLaw.slope_kinks; bilinear:
 dF/dalpha = 0 -> k at alpha = 0 and k_u -> 0 at zero force; Thornton: reloading past d_max) makes
@@ -326,12 +329,14 @@ def one_companion(
     """Error estimates of `fine` (the values at dt) from the same quantities at 2 dt alone, with an
     assumed order: |Q(dt) - Q(2 dt)| / (2^order - 1), status ONE_COMPANION_STATUS.
 
-    For RK4 with event location on a kinked law (bilinear, Thornton), whose error mixes orders 2.5
-    (a Hertzian onset) to 4: a true order q in [2, 4] puts the estimate at (2^q - 1) / 7 of the error
-    with the order 3 assumed, 0.43 - 2.14, whatever q is, so no third run is needed to choose it; an
-    error that does not follow an order in dt between dt and 2 dt (changes sign, or stalls) is not
-    caught, which a check would (richardson with a 4 dt run, checked). Another pulse in the companion,
-    a missing value and round-off are as in richardson.
+    For RK4 with event location on a kinked law with linear loading (bilinear;
+    workflows.error_estimates.one_companion_because), whose error shows orders 2.5 to 4 and beyond: a
+    true order q in [2, 4] puts the estimate at (2^q - 1) / 7 of the error with the order 3 assumed,
+    0.43 - 2.14, whatever q is, so no third run is needed to choose it. An error that does not follow
+    an order in dt between dt and 2 dt (changes sign, or stalls) is not caught, which the checks of
+    three runs would catch (richardson, checked); order BOUND_ORDER gives |Q(dt) - Q(2 dt)| itself, a
+    bound (ONE_COMPANION_BOUND_STATUS), below E(dt) / 3 only where E(2 dt) is within 2/3 - 4/3 of E(dt)
+    with its sign. Another pulse in the companion, a missing value and round-off are as in richardson.
 
     Parameters
     ----------
