@@ -21,8 +21,9 @@ true local one log2(|E(2 dt)| / |E(dt)|).
 
 Estimators (each on the same per-item values; another pulse in a companion run, and round-off, as
 richardson decides them, count as "no bar"):
-* default: one companion, order 3 assumed for forces and the wave speed, |Q(dt) - Q(2 dt)| itself (a
-  bound, order 1) for times (workflows.error_estimates.one_companion_because);
+* default: one companion, order 3 assumed for the bilinear law's forces and wave speed,
+  |Q(dt) - Q(2 dt)| itself (a bound, order 1) for Thornton's and for every time
+  (workflows.error_estimates.one_companion_orders);
 * one companion, order p assumed for every quantity: |Q(dt) - Q(2 dt)| / (2^p - 1), p = 3 and p = 2.5
   (richardson.one_companion);
 * Richardson over dt, 2 dt, 4 dt with its order checks (richardson.richardson, RK4's orders 2.5-4): the
@@ -137,8 +138,9 @@ def estimators(row):
         for key, p in (("one p=3", 3.0), ("one p=2.5", 2.5)):
             b = one_companion([f], [c], p, **kw)
             out[key].append((float(b.error[0]), true, q3, qt, name, str(b.status[0])))
-        # the default: order 3 for forces and the wave speed, a bound (order 1) for times
-        p = 1 if name in TIMES else ONE_COMPANION_ORDER
+        # the default (error_estimates.one_companion_orders): order 3 for the bilinear law's forces and wave
+        # speed, a bound (order 1) for Thornton's and for times
+        p = 1 if name in TIMES or row["law"] != "bilinear" else ONE_COMPANION_ORDER
         b = one_companion([f], [c], p, **kw)
         out["default"].append((float(b.error[0]), true, q3, qt, name, str(b.status[0])))
         b = richardson([f], [c], [cc], 4, times=times, jump_time=jump, orders=orders, floor=[fl])

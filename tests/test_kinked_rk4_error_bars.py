@@ -1,10 +1,10 @@
 """RK4's default error bars on the kinked laws (bilinear, Thornton): one companion at 2 dt.
 
 Every kink crossing costs RK4 two more tries in every run, so companions at 2 dt and 4 dt cost more than
-the run (1.3-1.6x on the bundled short impulses); by default the run at 2 dt alone gives the bars
-(workflows.error_estimates.one_companion_because): forces and the wave speed with order 3 assumed
-(richardson.one_companion), times as the bound |Q(dt) - Q(2 dt)|. error_estimate="checked" keeps the
-runs at 2 dt, 4 dt and dt / 2 with their order checks.
+the run (1.0-1.6x on the bundled short impulses); by default the run at 2 dt alone gives the bars
+(workflows.error_estimates.one_companion_because): the bilinear law's forces and wave speed with order 3
+assumed (richardson.one_companion), Thornton's and every time as the bound |Q(dt) - Q(2 dt)|.
+error_estimate="checked" keeps the runs at 2 dt, 4 dt and dt / 2 with their order checks.
 
 The truth is RK4 at dt / 4 (its error 1/32 of the run's at order 2.5, 1/256 at 4).
 """
@@ -37,20 +37,23 @@ def given_bars(bars) -> set[str]:
     return {str(s) for s in bars.status[bars.reliable]}
 
 
-def test_rk4_bars_on_a_bilinear_chain_come_from_one_companion_unless_checked():
-    """By default one companion at 2 dt (forces: order 3 assumed; times: bounds), and the summary and
-    why_unchecked say so; asked for checked bars, the runs at 2 dt, 4 dt and dt / 2 as before."""
-    sc = parse_scene(chain("bilinear"), source="bilinear.toml")
+@pytest.mark.parametrize("law", ["bilinear", "thornton"])
+def test_rk4_bars_on_a_kinked_law_come_from_one_companion_unless_checked(law):
+    """By default one companion at 2 dt (bilinear forces: order 3 assumed; Thornton's forces and every
+    time: bounds), and the summary and why_unchecked say so; asked for checked bars, the runs at 2 dt,
+    4 dt and dt / 2 as before."""
+    sc = parse_scene(chain(law), source=f"{law}.toml")
     got = run_scene(sc, method="rk4", error_estimate=True)
     e, dt = got.errors, got.scene.run.timestep
     assert e.timesteps == pytest.approx([2 * dt])
     assert e.one_companion
-    assert e.order == 3
-    assert given_bars(e.peak_force) <= {ONE_COMPANION_STATUS, "round-off"}
-    assert ONE_COMPANION_STATUS in given_bars(e.peak_force)
+    forces = ONE_COMPANION_STATUS if law == "bilinear" else ONE_COMPANION_BOUND_STATUS
+    assert e.order == (3 if law == "bilinear" else 1)
+    assert given_bars(e.peak_force) <= {forces, "round-off"}
+    assert forces in given_bars(e.peak_force)
     assert given_bars(e.time_of_peak) | given_bars(e.arrival_time) <= {ONE_COMPANION_BOUND_STATUS, "round-off"}
     assert ONE_COMPANION_BOUND_STATUS in given_bars(e.arrival_time)
-    assert e.observables["wave_speed"]["status"].startswith(ONE_COMPANION_STATUS)
+    assert e.observables["wave_speed"]["status"].startswith(forces)
     assert "one companion at 2 dt" in e.summary(1.0)["method"]
     assert "--error-estimate checked" in e.why_unchecked
     assert [c.run.timestep for c in errors.rk4_companions(got.scene, "rk4")] == pytest.approx([2 * dt])
@@ -65,15 +68,11 @@ def test_rk4_bars_on_a_bilinear_chain_come_from_one_companion_unless_checked():
     assert steps == pytest.approx([2 * dt, 4 * dt, dt / 2])
 
 
-@pytest.mark.parametrize("law", ["thornton", "hertz"])
-def test_rk4_bars_keep_two_companions_where_loading_starts_hertzian(law):
-    """Thornton (a kinked law whose loading starts Hertzian: one companion's estimates fell below 1/3 of
-    the true error on 7% of the peaks of a check sample, errors.one_companion_because) and Hertz keep
-    their companions at 2 dt and 4 dt with Richardson's order checks."""
-    text = chain("thornton") if law == "thornton" else chain("bilinear")
-    if law == "hertz":
-        text = text[: text.index("[contact]")] + '[contact]\nlaw = "hertz"\n' + text[text.index("[loading]") :]
-    e = run_scene(parse_scene(text, source=f"{law}.toml"), method="rk4", error_estimate=True).errors
+def test_rk4_bars_on_hertz_keep_two_companions():
+    """A law without kinks: Richardson over 2 dt and 4 dt with its order checks, as before."""
+    text = chain("bilinear")
+    text = text[: text.index("[contact]")] + '[contact]\nlaw = "hertz"\n' + text[text.index("[loading]") :]
+    e = run_scene(parse_scene(text, source="hertz.toml"), method="rk4", error_estimate=True).errors
     assert e.one_companion is None
     assert len(e.timesteps) == 2
     assert not any(str(s).startswith(("estimate: one companion", "bound: one companion")) for s in e.peak_force.status)
@@ -84,17 +83,19 @@ TIMES = ("time_of_peak", "arrival_time")
 
 
 @pytest.mark.slow
-def test_default_rk4_bars_on_kinked_laws_against_the_true_error():
-    """On generated bilinear and Thornton chains (derandomized draws), the default bars against RK4 at
-    dt / 4, wherever the true error is above the truth's round-off: at most 5% of them below 1/3 of the
-    true error (RK4's default bars on Hertz claim about 5% outside 1/3-3, errors.UNCHECKED_BY_DEFAULT;
-    measured on 94 and 93 generated chains, docs/error-bars.md: 0.2-1.0% below 1/3, down to 0.01, the
-    errors there stalling or changing sign between 2 dt and dt), and the force estimates' median
-    within 1-3 (order 3 assumed: 0.43-2.14 for any order 2-4, 2.14 at RK4's 4)."""
+@pytest.mark.parametrize("law", ["bilinear", "thornton"])
+def test_default_rk4_bars_on_kinked_laws_against_the_true_error(law):
+    """On generated chains of the law (derandomized draws), the default bars against RK4 at dt / 4,
+    wherever the true error is above the truth's round-off: at most 5% of them below 1/3 of the true
+    error (RK4's default bars on Hertz claim about 5% outside 1/3-3, errors.UNCHECKED_BY_DEFAULT;
+    measured on 40-60 generated chains per law, docs/error-bars.md: 0.1-2% below 1/3, down to 0.002,
+    the errors there stalling or changing sign between 2 dt and dt), and the bilinear law's force
+    estimates' median within 1-3 (order 3 assumed: 0.43-2.14 for any order 2-4, 2.14 at RK4's 4);
+    Thornton's are bounds (at least the error's median)."""
     force, time_bars = [], []
 
-    @settings(max_examples=6, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
-    @given(sc=scenes(law="bilinear", max_beads=30).filter(lambda s: not s.effects.dashpot))
+    @settings(max_examples=5, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
+    @given(sc=scenes(law=law, max_beads=30).filter(lambda s: not s.effects.dashpot))
     def draw(sc):
         sc, _ = plan_for(sc, "reference", "rk4", 1e-3)
         sc = replace(sc, outputs=replace(sc.outputs, histories=(), snapshots=(), history_interval=None))
@@ -122,4 +123,4 @@ def test_default_rk4_bars_on_kinked_laws_against_the_true_error():
     assert time_bars.size > 50
     for r in (force, time_bars):
         assert np.mean(r < 1 / 3) <= 0.05, f"{np.sum(r < 1 / 3)} of {r.size} below 1/3: {np.sort(r)[:5]}"
-    assert 1.0 <= np.median(force) <= 3.0, np.median(force)
+    assert 1.0 <= np.median(force) <= (3.0 if law == "bilinear" else np.inf), np.median(force)

@@ -17,10 +17,10 @@ and the order the runs at dt, 2 dt and 4 dt show need not hold below dt; an esti
 contradicts is not given. Not by default: that run costs twice the run, and the bars' price is held
 to at most the run's (the companions at 2 dt and 4 dt: 3/4 of its steps).
 
-RK4 on a law with slope kinks and linear loading (bilinear): every kink crossing costs RK4 two more
-tries in every run, so companions at 2 dt and 4 dt cost more than the run (1.3-1.4x); by default its
-bars come from the companion at 2 dt alone with an order assumed (one_companion_because,
-richardson.one_companion), and error_estimate="checked" gives the checked estimate (2 dt, 4 dt, dt / 2).
+RK4 on a law with slope kinks (bilinear, Thornton): every kink crossing costs RK4 two more tries in
+every run, so companions at 2 dt and 4 dt cost more than the run (1.0-1.6x); by default its bars come
+from the companion at 2 dt alone (one_companion_because, richardson.one_companion): estimates with an
+order assumed, or bounds, and error_estimate="checked" gives the checked estimate (2 dt, 4 dt, dt / 2).
 
 Orders: RK4 4, velocity Verlet (reference and LAMMPS) 2, but 1 for Verlet with a dashpot: the
 dashpot sees half-step velocities and is first order (workflows.plan.DASHPOT_VERLET). Measured on
@@ -108,10 +108,16 @@ class ErrorReport:
                 f"bounds from runs at dt, 2 dt and 4 dt, max(|Q(dt) - Q(2 dt)|, |Q(2 dt) - Q(4 dt)| / {2**BOUND_ORDER})"
                 f", which may overstate the error many times (granchain.richardson.erratic_bounds): {self.bound}"
             )
+        elif self.one_companion is not None and self.order == BOUND_ORDER:
+            method = (
+                "bounds from one companion at 2 dt, |Q(dt) - Q(2 dt)|, which may overstate the error many times "
+                f"(granchain.richardson.one_companion): {self.one_companion}"
+            )
         elif self.one_companion is not None:
             method = (
                 f"one companion at 2 dt, |Q(dt) - Q(2 dt)| / (2^{self.order} - 1), order {self.order} assumed, not "
-                f"checked (granchain.richardson.one_companion): {self.one_companion}"
+                f"checked, for forces; |Q(dt) - Q(2 dt)|, a bound, for times (granchain.richardson.one_companion): "
+                f"{self.one_companion}"
             )
         else:
             method = "Richardson extrapolation over runs at dt, 2 dt and 4 dt (granchain.richardson)"
@@ -283,44 +289,51 @@ def bounded_because(method: str, scene) -> str | None:
 
 
 def one_companion_because(method: str, scene, checked: bool = False) -> str | None:
-    """Why this run's bars come from one companion at 2 dt with an assumed order
-    (richardson.one_companion), or None (always None when checked bars were asked for, ``checked``).
+    """Why this run's bars come from one companion at 2 dt (richardson.one_companion), or None (always
+    None when checked bars were asked for, ``checked``).
 
-    RK4 (event location) on a law whose slope jumps at kinks the contacts cross (ContactLaw.slope_kinks)
-    and whose loading is linear (ContactLaw.loading_is_linear: bilinear): each crossing costs a rejected
-    try and the split piece in every run, so companions at 2 dt and 4 dt, 3/4 of the run's steps but its
-    crossings twice, cost 1.3-1.4 times the run (plastic-short-impulse, bench_errorbar_price.py); the one
-    at 2 dt alone costs less than the run. Its forces (and the wave speed) get |Q(dt) - Q(2 dt)| / 7, the
-    order 3 assumed (0.43-2.14 of the error for any order 2-4), its times |Q(dt) - Q(2 dt)| itself, a
-    bound. Measured on generated bilinear chains against RK4 at dt / 4 (docs/error-bars.md, "RK4 on the
-    kinked laws: one companion"; docs/measure_kinked_rk4_companion.py): below 1/3 of the true error on 3
-    of 1 500 bars (seed 1, where the rule was chosen) and 12 of 1 254 (seed 2, the check), down to 0.002.
-
-    Not on Thornton, whose loading starts Hertzian: its error mixes the onset's order 2.5, whose
-    coefficient depends on where in a step a contact closes, with 4, and one companion's force estimates
-    fell below 1/3 of the true error on 14 of 946 (seed 1) but 41 of 606 (seed 2) peaks, against 7 of 841
-    and 13 of 524 for the three runs' checked Richardson (which withholds 11-14%): Thornton keeps its
-    companions at 2 dt and 4 dt, at about the run's price (0.9-1.0).
+    RK4 (event location) on a law whose slope jumps at kinks the contacts cross (ContactLaw.slope_kinks:
+    bilinear, Thornton): each crossing costs a rejected try and the split piece in every run, so
+    companions at 2 dt and 4 dt, 3/4 of the run's steps but its crossings twice, cost about 1.0-1.6 times
+    the run (bench_errorbar_price.py); the one at 2 dt alone costs less than the run. What it gives
+    (one_companion_orders): on a law with linear loading (bilinear) its forces and the wave speed get
+    |Q(dt) - Q(2 dt)| / 7, the order 3 assumed (0.43-2.14 of the error for any order 2-4), its times
+    |Q(dt) - Q(2 dt)| itself, a bound; on Thornton, whose loading starts Hertzian, every number gets the
+    bound. Measured on generated chains against RK4 at dt / 4 (docs/error-bars.md, "RK4 on the kinked
+    laws: one companion"; docs/measure_kinked_rk4_companion.py): bilinear below 1/3 of the true error on
+    3 of 1 500 bars (seed 1, where the rule was chosen) and 12 of 1 254 (seed 2, the check); Thornton's
+    force estimates with order 3 fell below 1/3 on 14 of 946 (seed 1) but 41 of 606 (seed 2) peaks
+    (the Hertzian onset's order 2.5, with a coefficient that depends on where in a step a contact
+    closes, mixing with 4), its bounds on 1 of 1 029 and 3 of 665 forces, 17 of 954 and 13 of 611 times
+    (seeds 1 and 2, where that was chosen; the check on seed 3: docs/error-bars.md).
     """
     if checked or method != "rk4" or scene.effects.dashpot:
         return None
     from granchain.physics.laws import law_class
 
-    law = law_class(scene.contact.law)
-    if not law.slope_kinks or not law.loading_is_linear():
+    if not law_class(scene.contact.law).slope_kinks:
         return None
     return (
         f"the {scene.contact.law} law's kinks cost RK4 two more tries at every crossing, so runs at 2 dt and 4 dt "
-        "would cost more than the run: the one at 2 dt alone, its order assumed"
+        "would cost more than the run: the one at 2 dt alone"
     )
+
+
+def one_companion_orders(scene) -> tuple[int, int]:
+    """The orders one companion's bars take (one_companion_because) for forces (and the wave speed) and
+    for times: ONE_COMPANION_ORDER for forces on a law with linear loading (bilinear), else BOUND_ORDER
+    (|Q(dt) - Q(2 dt)|, a bound)."""
+    forces = ONE_COMPANION_ORDER if scene.contact.law_class.loading_is_linear() else BOUND_ORDER
+    return forces, BOUND_ORDER
 
 
 #: what RK4's default bars on a kinked law (one_companion_because) say of themselves
 ONE_COMPANION_BY_DEFAULT = (
-    "RK4's bars on a kinked law with linear loading come from one companion at 2 dt, not checked: forces with "
-    "order 3 assumed (any order 2-4 puts them within 0.43-2.14 of the error), times as |Q(dt) - Q(2 dt)|, a "
-    "bound (docs/error-bars.md); --error-estimate checked "
-    '(error_estimate="checked") checks the order with runs at 4 dt and dt / 2, at about three times the run'
+    "RK4's bars on a kinked law come from one companion at 2 dt, not checked: on a law with linear loading "
+    "forces with order 3 assumed (any order 2-4 puts them within 0.43-2.14 of the error), else |Q(dt) - Q(2 dt)|, "
+    "a bound that may overstate the error some ten times, as for every time (docs/error-bars.md); "
+    '--error-estimate checked (error_estimate="checked") checks the order with runs at 4 dt and dt / 2, at '
+    "about three times the run"
 )
 
 
@@ -457,7 +470,7 @@ def estimate_errors(
         return report
     report.one_companion = one_companion_because(method, scene, checked)
     if report.one_companion is not None:
-        report.order = ONE_COMPANION_ORDER
+        report.order = one_companion_orders(scene)[0]
     with kept_lammps():
         factors = (2.0,) if report.one_companion is not None else (2.0, 4.0)
         runs = _richardson_runs(report, scene, run_one, stable_timestep, factors)
@@ -582,7 +595,7 @@ def _richardson_bars(
     floor = roundoff_floor(scene, sol, absolute_positions)
     report.peak_force = bars(pf, tp, floor=floor)
     # a kinked law's times from one companion are bounds (one_companion_because)
-    p_time = BOUND_ORDER if report.one_companion is not None else p
+    p_time = one_companion_orders(scene)[1] if report.one_companion is not None else p
     report.time_of_peak = bars(tp, tp, order=p_time)
     # a leading pulse rises no higher than its contact's peak, and a contact's slope grows with its
     # force (Hertz; constant on a loading line): the peak's floor bounds the leading pulse's round-off
