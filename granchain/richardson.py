@@ -52,9 +52,10 @@ Statuses (the `*_error_status` columns and summary entries):
                                  (Verlet on a law with slope kinks, when checked bars are asked for)
     "bound: kinked law, ..."     erratic_bounds: a bound from dt, 2 dt, 4 dt (Verlet on a law with
                                  slope kinks, by default); may overstate the error many times
-    "estimate: one companion ..."   one_companion: |Q(dt) - Q(2 dt)| / (2^3 - 1), order 3 assumed, not
-                                 checked (RK4 on a kinked law with linear loading, by default: forces)
-    "bound: one companion ..."   one_companion: |Q(dt) - Q(2 dt)| (the same runs: times); may overstate it
+    "bound: one companion ..."   one_companion with BOUND_ORDER: |Q(dt) - Q(2 dt)| (RK4 on a law with
+                                 slope kinks, by default); may overstate the error many times
+    "estimate: one companion ..."   one_companion with an order assumed: |Q(dt) - Q(2 dt)| / (2^p - 1),
+                                 not checked (measured in docs/error-bars.md; no default gives it)
 
 A law whose force slope jumps at kinks a moving contact crosses (ContactLaw.slope_kinks; bilinear:
 dF/dalpha = 0 -> k at alpha = 0 and k_u -> 0 at zero force; Thornton: reloading past d_max) makes
@@ -307,8 +308,8 @@ def erratic_bounds(
     return ErrorBars(err, status, used)
 
 
-#: the order one_companion assumes for RK4 (event location) on a law with slope kinks: the middle of the
-#: orders it shows there, 1 + 3/2 at a Hertzian onset to 4 (workflows.error_estimates.expected_orders)
+#: the order one_companion assumes unless told: the middle of the orders RK4 (event location) shows on a
+#: chain, 1 + 3/2 at a Hertzian onset to 4 (workflows.error_estimates.expected_orders)
 ONE_COMPANION_ORDER = 3
 #: the status of one_companion's estimates
 ONE_COMPANION_STATUS = "estimate: one companion at 2 dt, order 3 assumed, not checked"
@@ -329,14 +330,14 @@ def one_companion(
     """Error estimates of `fine` (the values at dt) from the same quantities at 2 dt alone, with an
     assumed order: |Q(dt) - Q(2 dt)| / (2^order - 1), status ONE_COMPANION_STATUS.
 
-    For RK4 with event location on a kinked law with linear loading (bilinear;
-    workflows.error_estimates.one_companion_because), whose error shows orders 2.5 to 4 and beyond: a
-    true order q in [2, 4] puts the estimate at (2^q - 1) / 7 of the error with the order 3 assumed,
-    0.43 - 2.14, whatever q is, so no third run is needed to choose it. An error that does not follow
-    an order in dt between dt and 2 dt (changes sign, or stalls) is not caught, which the checks of
-    three runs would catch (richardson, checked); order BOUND_ORDER gives |Q(dt) - Q(2 dt)| itself, a
-    bound (ONE_COMPANION_BOUND_STATUS), below E(dt) / 3 only where E(2 dt) is within 2/3 - 4/3 of E(dt)
-    with its sign. Another pulse in the companion, a missing value and round-off are as in richardson.
+    A true order q in [2, 4] puts the estimate at (2^q - 1) / 7 of the error with the order 3 assumed,
+    0.43 - 2.14, whatever q is; but an error that does not follow an order between dt and 2 dt (stalls,
+    or changes sign) is not caught, which the checks of three runs would catch (richardson, checked):
+    for RK4 on the kinked laws 2-10% of such estimates fell below 1/3 of the true error
+    (docs/error-bars.md). Order BOUND_ORDER gives |Q(dt) - Q(2 dt)| itself, a bound
+    (ONE_COMPANION_BOUND_STATUS; RK4's default on a kinked law, workflows.error_estimates
+    .one_companion_because), below E(dt) / 3 only where E(2 dt) is within 2/3 - 4/3 of E(dt) with its
+    sign. Another pulse in the companion, a missing value and round-off are as in richardson.
 
     Parameters
     ----------

@@ -18,9 +18,10 @@ contradicts is not given. Not by default: that run costs twice the run, and the 
 to at most the run's (the companions at 2 dt and 4 dt: 3/4 of its steps).
 
 RK4 on a law with slope kinks (bilinear, Thornton): every kink crossing costs RK4 two more tries in
-every run, so companions at 2 dt and 4 dt cost more than the run (1.0-1.6x); by default its bars come
-from the companion at 2 dt alone (one_companion_because, richardson.one_companion): estimates with an
-order assumed, or bounds, and error_estimate="checked" gives the checked estimate (2 dt, 4 dt, dt / 2).
+every run, so companions at 2 dt and 4 dt cost more than the run (1.0-1.6x); by default its bars are
+bounds from the companion at 2 dt alone (one_companion_because, richardson.one_companion), which may
+overstate the error many times, and error_estimate="checked" gives the checked estimate (2 dt, 4 dt,
+dt / 2).
 
 Orders: RK4 4, velocity Verlet (reference and LAMMPS) 2, but 1 for Verlet with a dashpot: the
 dashpot sees half-step velocities and is first order (workflows.plan.DASHPOT_VERLET). Measured on
@@ -46,7 +47,6 @@ from granchain.progress import labelled
 from granchain.richardson import (
     BOUND_ORDER,
     CHECK_FACTOR,
-    ONE_COMPANION_ORDER,
     ORDER,
     ErrorBars,
     against_reference,
@@ -91,6 +91,12 @@ class ErrorReport:
     #: why the bars come from one companion at 2 dt with an assumed order (one_companion_because)
     one_companion: str | None = None
 
+    @property
+    def peak_bounds(self) -> bool:
+        """Whether the peak forces' bars are bounds that may overstate the error (bounded_because,
+        one_companion_because), not estimates."""
+        return self.bound is not None or self.one_companion is not None
+
     def summary(self, main_wall_time: float) -> dict:
         """The summary.json entry."""
         counts: dict[str, int] = {}
@@ -108,16 +114,10 @@ class ErrorReport:
                 f"bounds from runs at dt, 2 dt and 4 dt, max(|Q(dt) - Q(2 dt)|, |Q(2 dt) - Q(4 dt)| / {2**BOUND_ORDER})"
                 f", which may overstate the error many times (granchain.richardson.erratic_bounds): {self.bound}"
             )
-        elif self.one_companion is not None and self.order == BOUND_ORDER:
+        elif self.one_companion is not None:
             method = (
                 "bounds from one companion at 2 dt, |Q(dt) - Q(2 dt)|, which may overstate the error many times "
                 f"(granchain.richardson.one_companion): {self.one_companion}"
-            )
-        elif self.one_companion is not None:
-            method = (
-                f"one companion at 2 dt, |Q(dt) - Q(2 dt)| / (2^{self.order} - 1), order {self.order} assumed, not "
-                f"checked, for forces; |Q(dt) - Q(2 dt)|, a bound, for times (granchain.richardson.one_companion): "
-                f"{self.one_companion}"
             )
         else:
             method = "Richardson extrapolation over runs at dt, 2 dt and 4 dt (granchain.richardson)"
@@ -289,23 +289,21 @@ def bounded_because(method: str, scene) -> str | None:
 
 
 def one_companion_because(method: str, scene, checked: bool = False) -> str | None:
-    """Why this run's bars come from one companion at 2 dt (richardson.one_companion), or None (always
-    None when checked bars were asked for, ``checked``).
+    """Why this run's bars are bounds from one companion at 2 dt (richardson.one_companion with
+    BOUND_ORDER: |Q(dt) - Q(2 dt)|), or None (always None when checked bars were asked for, ``checked``).
 
     RK4 (event location) on a law whose slope jumps at kinks the contacts cross (ContactLaw.slope_kinks:
     bilinear, Thornton): each crossing costs a rejected try and the split piece in every run, so
     companions at 2 dt and 4 dt, 3/4 of the run's steps but its crossings twice, cost about 1.0-1.6 times
-    the run (bench_errorbar_price.py); the one at 2 dt alone costs less than the run. What it gives
-    (one_companion_orders): on a law with linear loading (bilinear) its forces and the wave speed get
-    |Q(dt) - Q(2 dt)| / 7, the order 3 assumed (0.43-2.14 of the error for any order 2-4), its times
-    |Q(dt) - Q(2 dt)| itself, a bound; on Thornton, whose loading starts Hertzian, every number gets the
-    bound. Measured on generated chains against RK4 at dt / 4 (docs/error-bars.md, "RK4 on the kinked
-    laws: one companion"; docs/measure_kinked_rk4_companion.py): bilinear below 1/3 of the true error on
-    3 of 1 500 bars (seed 1, where the rule was chosen) and 12 of 1 254 (seed 2, the check); Thornton's
-    force estimates with order 3 fell below 1/3 on 14 of 946 (seed 1) but 41 of 606 (seed 2) peaks
-    (the Hertzian onset's order 2.5, with a coefficient that depends on where in a step a contact
-    closes, mixing with 4), its bounds on 1 of 1 029 and 3 of 665 forces, 17 of 954 and 13 of 611 times
-    (seeds 1 and 2, where that was chosen; the check on seed 3: docs/error-bars.md).
+    the run (bench_errorbar_price.py); the one at 2 dt alone costs less than the run. An estimate from it
+    needs an order assumed, and order 3 (0.43-2.14 of a clean order-2-4 error) did not hold: measured on
+    generated chains against RK4 at dt / 4 (docs/error-bars.md, "RK4 on the kinked laws: one companion";
+    docs/measure_kinked_rk4_companion.py), below 1/3 of the true error on 112 of 1 983 Thornton numbers
+    (mostly times, whose error stalls or changes sign between 2 dt and dt) and, for forces, on 41 of 606
+    Thornton peaks of a second sample and 3 of 59 on plastic-short-impulse. The bound |Q(dt) - Q(2 dt)|
+    (below E(dt) / 3 only where E(2 dt) is within 2/3 - 4/3 of E(dt) with its sign) was below 1/3 of the
+    true error on 0.2-1.3% of the numbers of each sample, and overstates the error about 10-15 times at
+    the median, as Verlet's kinked bounds (bounded_because) about 6 times.
     """
     if checked or method != "rk4" or scene.effects.dashpot:
         return None
@@ -315,25 +313,16 @@ def one_companion_because(method: str, scene, checked: bool = False) -> str | No
         return None
     return (
         f"the {scene.contact.law} law's kinks cost RK4 two more tries at every crossing, so runs at 2 dt and 4 dt "
-        "would cost more than the run: the one at 2 dt alone"
+        "would cost more than the run: bounds from the one at 2 dt alone"
     )
-
-
-def one_companion_orders(scene) -> tuple[int, int]:
-    """The orders one companion's bars take (one_companion_because) for forces (and the wave speed) and
-    for times: ONE_COMPANION_ORDER for forces on a law with linear loading (bilinear), else BOUND_ORDER
-    (|Q(dt) - Q(2 dt)|, a bound)."""
-    forces = ONE_COMPANION_ORDER if scene.contact.law_class.loading_is_linear() else BOUND_ORDER
-    return forces, BOUND_ORDER
 
 
 #: what RK4's default bars on a kinked law (one_companion_because) say of themselves
 ONE_COMPANION_BY_DEFAULT = (
-    "RK4's bars on a kinked law come from one companion at 2 dt, not checked: on a law with linear loading "
-    "forces with order 3 assumed (any order 2-4 puts them within 0.43-2.14 of the error), else |Q(dt) - Q(2 dt)|, "
-    "a bound that may overstate the error some ten times, as for every time (docs/error-bars.md); "
-    '--error-estimate checked (error_estimate="checked") checks the order with runs at 4 dt and dt / 2, at '
-    "about three times the run"
+    "RK4's bars on a kinked law are bounds from one companion at 2 dt, |Q(dt) - Q(2 dt)|, about 10-15 times the "
+    "error (at times 50 times or more; docs/error-bars.md); --error-estimate checked "
+    '(error_estimate="checked") estimates it from runs at 2 dt and 4 dt with their order checks and a run at '
+    "dt / 2, at about three times the run"
 )
 
 
@@ -470,7 +459,7 @@ def estimate_errors(
         return report
     report.one_companion = one_companion_because(method, scene, checked)
     if report.one_companion is not None:
-        report.order = one_companion_orders(scene)[0]
+        report.order = BOUND_ORDER
     with kept_lammps():
         factors = (2.0,) if report.one_companion is not None else (2.0, 4.0)
         runs = _richardson_runs(report, scene, run_one, stable_timestep, factors)
@@ -573,8 +562,8 @@ def _richardson_bars(
         return per_contact((sol, coarse, coarser, finer), name, n, complete_only)
 
     orders = expected_orders(method, scene)
-    # a kinked law's Verlet bars are bounds (bounded_because); RK4's there come from one companion
-    # (one_companion_because)
+    # a kinked law's Verlet bars are bounds (bounded_because); RK4's there are bounds from one companion
+    # (one_companion_because: order BOUND_ORDER, the report's)
     extrapolate = erratic_bounds if report.bound is not None else richardson
     if report.one_companion is not None:
 
@@ -594,19 +583,16 @@ def _richardson_bars(
     lf, lt = values("leading_pulse_force"), values("leading_pulse_time")
     floor = roundoff_floor(scene, sol, absolute_positions)
     report.peak_force = bars(pf, tp, floor=floor)
-    # a kinked law's times from one companion are bounds (one_companion_because)
-    p_time = one_companion_orders(scene)[1] if report.one_companion is not None else p
-    report.time_of_peak = bars(tp, tp, order=p_time)
+    report.time_of_peak = bars(tp, tp)
     # a leading pulse rises no higher than its contact's peak, and a contact's slope grows with its
     # force (Hertz; constant on a loading line): the peak's floor bounds the leading pulse's round-off
     report.leading_pulse_force = bars(lf, lt, floor=floor)
-    report.arrival_time = bars(lt, lt, order=p_time)
+    report.arrival_time = bars(lt, lt)
 
     _largest(report, scene, sol)
 
     # a striker's or a wall's contact is one impact from zero overlap: RK4's error there is its Hertzian
     # onset's, order 1 + 3/2 (two spheres, planned step: with order 4 the bar was 1/2.9 of the true error)
-    # (one companion: its assumed order, p, whose 0.43-2.14 holds down to order 2)
     onset = method == "rk4" and report.one_companion is None and not scene.contact.law_class.loading_is_linear()
     p_end = RK4_ONSET_ORDER if onset else p
 
@@ -617,9 +603,7 @@ def _richardson_bars(
         v = [float(x) for x in values] + ([None] if coarser is None else [])
         t = None if times is None else tuple([float(x)] for x in times) + ((None,) if coarser is None else ())
         c = None if v[2] is None else [v[2]]
-        # (times None: the peak's time itself, a bound with one companion as the contacts' times)
-        order = p_end if times is not None or report.one_companion is None else BOUND_ORDER
-        b = extrapolate([v[0]], [v[1]], c, order, times=t, jump_time=jump, orders=orders)
+        b = extrapolate([v[0]], [v[1]], c, p_end, times=t, jump_time=jump, orders=orders)
         if finer is None:
             return b
         t = None if times is None else ([th], [float(times[0])], [float(times[1])])

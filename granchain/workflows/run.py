@@ -336,7 +336,7 @@ def _finish(calc, given, scene, plan, backend, method: str, np_: int, rtol, erro
             result.errors = _estimate_errors(result, plan, backend, method, np_, checked)
             worst, target = result.errors.error_estimate, (plan.rtol if plan is not None else rtol or 1e-3)
             if worst is not None and worst > target:  # measured, not predicted: say so after the run
-                what = "bound on the error (it may overstate it)" if result.errors.bound else "measured error"
+                what = "bound on the error (it may overstate it)" if result.errors.peak_bounds else "measured error"
                 warnings.warn(
                     f"{scene.source}: the {what} of the peak force at contact "
                     f"{result.errors.error_estimate_contact} is {worst:.2g}, above rtol {target:g} (peaks.csv "
