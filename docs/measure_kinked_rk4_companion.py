@@ -21,9 +21,8 @@ true local one log2(|E(2 dt)| / |E(dt)|).
 
 Estimators (each on the same per-item values; another pulse in a companion run, and round-off, as
 richardson decides them, count as "no bar"):
-* default: one companion, order 3 assumed for the bilinear law's forces and wave speed,
-  |Q(dt) - Q(2 dt)| itself (a bound, order 1) for Thornton's and for every time
-  (workflows.error_estimates.one_companion_orders);
+* default: one companion, |Q(dt) - Q(2 dt)| itself, a bound (order 1; workflows.error_estimates
+  .one_companion_because);
 * one companion, order p assumed for every quantity: |Q(dt) - Q(2 dt)| / (2^p - 1), p = 3 and p = 2.5
   (richardson.one_companion);
 * Richardson over dt, 2 dt, 4 dt with its order checks (richardson.richardson, RK4's orders 2.5-4): the
@@ -43,7 +42,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from dataclasses import replace
 
 from granchain.postprocess.observables import measure_observables
-from granchain.richardson import ONE_COMPANION_ORDER, one_companion, richardson
+from granchain.richardson import BOUND_ORDER, one_companion, richardson
 from granchain.workflows.error_estimates import expected_orders, roundoff_floor
 from granchain.workflows.plan import highest_frequency
 from granchain.workflows.run import plan_for, run_scene
@@ -138,10 +137,8 @@ def estimators(row):
         for key, p in (("one p=3", 3.0), ("one p=2.5", 2.5)):
             b = one_companion([f], [c], p, **kw)
             out[key].append((float(b.error[0]), true, q3, qt, name, str(b.status[0])))
-        # the default (error_estimates.one_companion_orders): order 3 for the bilinear law's forces and wave
-        # speed, a bound (order 1) for Thornton's and for times
-        p = 1 if name in TIMES or row["law"] != "bilinear" else ONE_COMPANION_ORDER
-        b = one_companion([f], [c], p, **kw)
+        # the default (error_estimates.one_companion_because): the bound |Q(dt) - Q(2 dt)| (order 1)
+        b = one_companion([f], [c], BOUND_ORDER, **kw)
         out["default"].append((float(b.error[0]), true, q3, qt, name, str(b.status[0])))
         b = richardson([f], [c], [cc], 4, times=times, jump_time=jump, orders=orders, floor=[fl])
         out["richardson 3 runs"].append((float(b.error[0]), true, q3, qt, name, str(b.status[0])))
@@ -182,7 +179,7 @@ def summary(rows):
                 f"| {law} ({len(sub)} scenes) | {key} | {len(recs)} | {int(ok.sum())} | {pct(r)} | "
                 f"{int(np.sum(r < 1 / 3))} ({np.mean(r < 1 / 3):.1%}) | {int(np.sum(r > 3))} ({np.mean(r > 3):.1%}) |"
             )
-            if key in ("default", "one p=3"):
+            if key in ("default", "one p=3"):  # (by quantity)
                 by = {}
                 for x in recs:
                     if np.isfinite(x[0]):
