@@ -303,3 +303,55 @@ def test_search_finds_the_single_wave_to_train_transition_following_a_to_the_min
     again, report2 = run_campaign(c, tmp_path / "ws", workers=2)  # every bisection step from the cache
     assert report2.ran == 0
     assert again["search"].equals(s)
+
+
+@pytest.mark.slow
+def test_ctrl_c_while_the_local_workers_start_is_one_message_and_no_traceback(tmp_path):
+    """Ctrl-C (SIGINT to the foreground process group, as a terminal sends it) the moment a local
+    worker process exists, while it still imports: exit 130, one 'interrupted' line naming the
+    workspace, no traceback (a worker's KeyboardInterrupt, a nanny that 'failed to start'); the
+    workspace resumes."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    path = tmp_path / "c.toml"
+    path.write_text(campaign_text(REFERENCE_GRID))
+    ws = tmp_path / "ws"
+    cmd = [sys.executable, "-m", "granchain.cli", "campaign", "run", str(path), "--out", str(ws), "--workers", "1"]
+
+    def as_from_a_terminal():  # a test runner's worker (pytest-xdist) may ignore SIGINT, which a child inherits
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+    p = subprocess.Popen(
+        cmd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=as_from_a_terminal,
+    )
+    deadline = time.time() + 120
+    worker = False
+    while time.time() < deadline and p.poll() is None and not worker:
+        ps = subprocess.run(["ps", "-o", "args=", "-g", str(p.pid)], capture_output=True, text=True).stdout
+        worker = any("spawn_main" in line for line in ps.splitlines())
+        time.sleep(0.02)
+    assert worker, p.communicate()
+    os.killpg(p.pid, signal.SIGINT)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 130, err
+    assert "Traceback" not in err, err
+    assert "failed to start" not in err, err
+    said = [line for line in err.splitlines() if "interrupted" in line]
+    assert len(said) == 1, err
+    assert str(ws) in said[0], err
+    again = subprocess.run(cmd + ["-q"], capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0, again.stderr
+    import re
+
+    m = re.search(r"campaign +12 points: (\d+) complete before, (\d+) run now, 0 failed\n", again.stdout)
+    assert m, again.stdout
+    assert int(m[1]) + int(m[2]) == 12

@@ -22,10 +22,46 @@ def _ignore_sigint(signum, frame) -> None:
     """A worker's SIGINT handler: Ctrl-C belongs to the driver, which stops the cluster."""
 
 
+def _loop_blocking_sigint():
+    """A running Dask IO loop (distributed's LoopRunner, started) whose thread blocks SIGINT.
+
+    Ctrl-C on a terminal reaches every process of the foreground group, local Dask workers included;
+    one that gets it while it starts (importing granchain, before :class:`QuietInterrupt` is set up)
+    prints a KeyboardInterrupt traceback, and its nanny 'failed to start'. A LocalCluster on this
+    loop starts its worker processes from threads of this one, which inherit its signal mask, and
+    a process started keeps the mask across exec: a worker starts with SIGINT blocked (pending, never
+    raised) until QuietInterrupt ignores it and unblocks it. The driver's main thread is unblocked
+    again at once (the loop's thread is made while it is blocked): Ctrl-C stays the driver's.
+    """
+    import signal
+
+    from distributed.utils import LoopRunner
+
+    runner = LoopRunner()
+    if not hasattr(signal, "pthread_sigmask"):
+        runner.start()
+        return runner
+    # multiprocessing's resource tracker, started on a worker's first queue, unblocks SIGINT in the
+    # thread that starts it (after starting itself with it blocked): started here first, it is not
+    # started again from the loop's thread
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        runner.start()
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+    return runner
+
+
 class QuietInterrupt(WorkerPlugin):
     """Dask worker plugin: Ctrl-C on a terminal reaches every process of the foreground group; a local
     worker ignores it (no traceback; the driver stops the cluster) through a Python handler, which
-    exec resets, so the LAMMPS run a worker has started as a child process still stops at once."""
+    exec resets, so the LAMMPS run a worker has started as a child process still stops at once.
+
+    A local worker starts with SIGINT blocked (:func:`_loop_blocking_sigint`); it is unblocked here,
+    once ignored, so that the threads and LAMMPS children the worker starts from now on get it."""
 
     name = "granchain-quiet-interrupt"
 
@@ -36,6 +72,8 @@ class QuietInterrupt(WorkerPlugin):
 
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, _ignore_sigint)
+            if hasattr(signal, "pthread_sigmask"):
+                signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
     @override
     def teardown(self, worker) -> None:
@@ -96,6 +134,7 @@ class Executor:
         self.log_directory = log_directory
         self.client = None
         self.cluster = None
+        self._loop = None  # the local cluster's IO loop (_loop_blocking_sigint), stopped by close()
         self.jobs: JobCluster | None = None
         self.failure: BaseException | None = None  # what ended the batch jobs' upkeep (NoWorkerJobs)
         self._upkeep = None
@@ -170,19 +209,41 @@ class Executor:
                         f"({e}): it runs another granchain; install the same granchain on every worker"
                     ) from None
             return self.client
-        self.cluster = LocalCluster(
-            n_workers=self.workers or max(1, _cores() // self.ranks),
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            # no dashboard; the scheduler's HTTP routes on a free port (the default 8787 may be taken)
-            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-            silence_logs=logging.ERROR,
-        )
-        self.client = Client(self.cluster)
-        self.client.register_plugin(QuietInterrupt())
-        if self.reuse_lammps:
-            self.client.register_plugin(PersistentLammps())
+        self._loop = _loop_blocking_sigint()
+        made: dict = {}
+
+        def make() -> None:
+            try:
+                made["cluster"] = LocalCluster(
+                    loop=self._loop.loop,
+                    n_workers=self.workers or max(1, _cores() // self.ranks),
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    # no dashboard; the scheduler's HTTP routes on a free port (the default 8787 may be taken)
+                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                    silence_logs=logging.ERROR,
+                )
+                made["client"] = Client(made["cluster"])
+                made["client"].register_plugin(QuietInterrupt())
+                if self.reuse_lammps:
+                    made["client"].register_plugin(PersistentLammps())
+            except BaseException as e:  # noqa: BLE001 - raised again in the driver's thread
+                made["error"] = e
+
+        # made in a thread of its own: Ctrl-C meanwhile (in the driver's thread) lets the start-up end,
+        # then the cluster and client made are this executor's to close; interrupted half-way, a
+        # LocalCluster is not closed by anyone but distributed's exit handler, which fails loudly
+        maker = threading.Thread(target=make, name="granchain-local-cluster", daemon=True)
+        maker.start()
+        try:
+            while maker.is_alive():
+                maker.join(0.2)
+        finally:
+            maker.join()
+            self.cluster, self.client = made.get("cluster"), made.get("client")
+        if "error" in made:
+            raise made["error"]
         return self.client
 
     def _keep_jobs(self) -> None:
@@ -229,6 +290,12 @@ class Executor:
                     thing.close()
                 except Exception:  # noqa: BLE001 - closing after Ctrl-C may find it half gone
                     pass
+        if self._loop is not None:
+            loop, self._loop = self._loop, None
+            try:
+                loop.stop()
+            except Exception:  # noqa: BLE001 - closing after Ctrl-C may find it half gone
+                pass
         if self.jobs is not None:
             self.jobs.close()  # cancels every job this run submitted, and only those
 

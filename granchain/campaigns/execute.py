@@ -188,10 +188,12 @@ class Runner:
             prog.update(failed=1)
         return r
 
-    def say(self, text: str) -> None:
-        """'granchain: text' on the driver's stream, unless quiet."""
-        if not progress.is_quiet():
-            print(f"granchain: {text}", file=self.stream, flush=True)
+    def say(self, text: str) -> bool:
+        """'granchain: text' on the driver's stream, unless quiet; whether it was said."""
+        if progress.is_quiet():
+            return False
+        print(f"granchain: {text}", file=self.stream, flush=True)
+        return True
 
     def say_plan(self, todo: int) -> None:
         """Before the runs: the points, how many are complete, to run, failed before, and stale."""

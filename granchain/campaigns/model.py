@@ -17,6 +17,20 @@ class CampaignError(GranchainError, ValueError):
     """A campaign file or one of its points is invalid; the message names the key and the fix."""
 
 
+class CampaignInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped a campaign run: its workers are stopped and what is complete is kept.
+
+    Attributes
+    ----------
+    said : bool
+        The run has said so on its stream (not quiet); the command line then adds no line of its own.
+    """
+
+    def __init__(self, said: bool):
+        super().__init__()
+        self.said = said
+
+
 def _num_text(v: Any) -> str:
     return f"{v:.6g}" if isinstance(v, float) else repr(v) if isinstance(v, str) else str(v)
 

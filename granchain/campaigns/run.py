@@ -13,6 +13,7 @@ from granchain.campaigns import workspace as wsp
 from granchain.campaigns.cluster_settings import SUBMIT, ClusterError, ClusterSettings, describe, merge
 from granchain.campaigns.cluster_settings import check as check_cluster
 from granchain.campaigns.execute import Executor, Runner, preflight, run_grid
+from granchain.campaigns.model import CampaignInterrupted
 from granchain.campaigns.search import run_search
 from granchain.campaigns.spec import (
     Campaign,
@@ -137,7 +138,7 @@ def run_campaign(
     Nothing runs unless every point is valid. Points complete in the workspace are not run again
     (``rerun`` forces them; ``retry_failed`` runs the failed ones again). Ctrl-C stops the workers
     (on a batch cluster: cancels the jobs this run submitted, only those), writes the table of what
-    is complete, and re-raises KeyboardInterrupt.
+    is complete, says so, and raises KeyboardInterrupt (CampaignInterrupted).
 
     cluster: worker jobs on a batch queue: "slurm" or "pbs", or a dict of settings ({"kind": "slurm",
     "queue": ..., "jobs": 4, ...}; granchain.campaigns.cluster_settings.ClusterSettings), over the file's
@@ -169,8 +170,7 @@ def run_campaign(
         write_tables(ws)
         raise
     except KeyboardInterrupt:
-        _stop_interrupted(campaign, runner, ex, ws)
-        raise
+        raise CampaignInterrupted(_stop_interrupted(campaign, runner, ex, ws)) from None
     finally:
         ex.close()
     tables = write_tables(ws)
@@ -214,8 +214,9 @@ def _run_points(campaign: Campaign, runner: Runner, ws: Path, points: list) -> N
     write_record(ws, campaign, runner, search_entries(evaluated), search_rows)
 
 
-def _stop_interrupted(campaign: Campaign, runner: Runner, ex: Executor, ws: Path) -> None:
-    """After Ctrl-C: stop the workers (cancel this run's batch jobs), keep what is complete, say so."""
+def _stop_interrupted(campaign: Campaign, runner: Runner, ex: Executor, ws: Path) -> bool:
+    """After Ctrl-C: stop the workers (cancel this run's batch jobs), keep what is complete, say so
+    (unless quiet; returns whether it was said)."""
     interrupted = time.time()
     ex.close()
     runner.forget_interrupted(interrupted)
@@ -223,9 +224,9 @@ def _stop_interrupted(campaign: Campaign, runner: Runner, ex: Executor, ws: Path
         write_tables(ws)
     if ex.jobs is not None and ex.jobs.jobs:
         runner.say(f"campaign interrupted: cancelled its worker jobs {', '.join(ex.jobs.jobs)} (only those)")
-    runner.say(
-        "campaign interrupted: the points in flight are lost, the complete ones are kept; run the "
-        "same command again to complete only what is missing"
+    return runner.say(
+        f"campaign interrupted: the points in flight are lost, the complete ones are kept in {ws}; run the "
+        "same command again to complete only the missing ones"
     )
 
 

@@ -38,12 +38,15 @@ def cmd_campaign_run(args) -> int:
             cluster=cluster,
             ranks=args.ranks,
         )
-    except KeyboardInterrupt:
-        print(
-            f"granchain: interrupted; the complete points are kept in {out}: run the same command again to "
-            "complete only the missing ones",
-            file=sys.stderr,
-        )
+    except KeyboardInterrupt as e:
+        if not getattr(e, "said", False):  # CampaignInterrupted said so already (unless quiet)
+            print(
+                f"granchain: interrupted; the complete points are kept in {out}: run the same command again to "
+                "complete only the missing ones"
+                if Path(out).exists()
+                else "granchain: interrupted before the campaign's workspace was made; nothing was written",
+                file=sys.stderr,
+            )
         return 130
     main_table = tables.get("search", tables["table"])
     print(format_table(main_table))
