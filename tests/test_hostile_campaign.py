@@ -145,6 +145,52 @@ def test_a_job_directory_that_is_a_link_is_set_aside_and_run_again(made, ws, tmp
     assert (job / "run" / "summary.json").is_file()
 
 
+def _tree(d: Path) -> list:
+    """What is under d (names, sizes, modification times), links not followed."""
+    return sorted((str(p.relative_to(d)), p.lstat().st_size, p.lstat().st_mtime_ns) for p in d.rglob("*"))
+
+
+def _run_elsewhere(job: Path, tmp_path: Path) -> tuple[Path, list]:
+    """The job's run directory moved out of the workspace and a link to it left in its place."""
+    elsewhere = tmp_path / "elsewhere"
+    shutil.move(job / "run", elsewhere)
+    os.symlink(elsewhere, job / "run")
+    return elsewhere, _tree(elsewhere)
+
+
+def test_a_run_directory_that_is_a_link_is_set_aside_and_its_point_runs_again(made, ws, tmp_path, capsys):
+    job = jobs(ws)[0]
+    elsewhere, before = _run_elsewhere(job, tmp_path)
+    assert main(["campaign", "run", str(made[0]), "--out", str(ws), "--workers", "1"]) == 0
+    err = capsys.readouterr().err
+    assert "had a symbolic link as its run directory" in err, err
+    assert str(ws / wsp.DAMAGED) in err
+    assert _tree(elsewhere) == before  # nothing read, written or removed there
+    assert (ws / wsp.DAMAGED / f"{job.name}.run").is_symlink()
+    assert wsp.job_state(job) == "done"
+    assert not (job / "run").is_symlink()
+
+
+def test_a_point_failed_on_a_run_link_says_what_to_do_and_retry_failed_recovers_it(made, ws, tmp_path, capsys):
+    """A link planted after the driver looked: the worker refuses it, naming the point's directory and
+    --retry-failed (not '--out', a flag campaigns do not take); --retry-failed then runs the point."""
+    from granchain.campaigns.point_task import run_point
+
+    job = jobs(ws)[0]
+    elsewhere, before = _run_elsewhere(job, tmp_path)
+    sp = json.loads((job / wsp.STATEPOINT).read_text())
+    record = run_point({**sp, "job_dir": str(job), "source": "a point", "code": wsp.code_version(sp["backend"])})
+    assert record["status"] == "failed"
+    assert str(job / "run") in record["message"]
+    assert "--retry-failed" in record["message"]
+    assert "--out" not in record["message"]
+    assert wsp.job_state(job) == "failed"
+    assert main(["campaign", "run", str(made[0]), "--out", str(ws), "--workers", "1", "--retry-failed"]) == 0
+    assert "had a symbolic link as its run directory" in capsys.readouterr().err
+    assert wsp.job_state(job) == "done"
+    assert _tree(elsewhere) == before
+
+
 # --------------------------------------------------------------- damaged files: incomplete or one line
 
 

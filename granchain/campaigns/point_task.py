@@ -41,6 +41,15 @@ def run_point(payload: dict) -> dict:
         from granchain.scene import scene_from_dict
         from granchain.workflows.run import run_scene
 
+        run_dir = job / wsp.RUN_DIR
+        if os.path.islink(run_dir):  # planted after the driver set such links aside (set_aside_run_links)
+            raise CampaignError(
+                f"{run_dir}: this point's run directory is a symbolic link; granchain writes a point's run only "
+                "in its own job directory, never through a link: the next 'granchain campaign run "
+                f"--retry-failed' moves the link to {job.parent.parent / wsp.DAMAGED} (what it points to is not "
+                "touched) and runs the point again"
+            )
+
         with progress.quiet(), warnings.catch_warnings(record=True) as w:
             warnings.simplefilter("always")
             scene = scene_from_dict(payload["scene"], source=payload["source"])

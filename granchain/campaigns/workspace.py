@@ -51,7 +51,8 @@ FAILURE = "failure.json"
 TASK = "task.json"
 RECORD = "campaign.json"
 STATEPOINT = "signac_statepoint.json"
-#: where campaign run moves a damaged job directory (its state point unreadable, or a link)
+#: where campaign run moves a damaged job directory (its state point unreadable, or a link) and a
+#: point's run directory that is a link
 DAMAGED = "damaged"
 #: the names granchain reads or writes at the top of a workspace: none may be a symbolic link
 WORKSPACE_NAMES = (
@@ -209,13 +210,7 @@ def set_aside_damaged(ws: str | Path) -> list[str]:
         d = ws / "workspace" / job
         if not os.path.islink(d) and not os.path.lexists(d / STATEPOINT) and _mtime(d) > now - SETTLE:
             continue  # being made right now (signac makes the directory, then writes its state point)
-        dest_dir = ws / DAMAGED
-        dest_dir.mkdir(exist_ok=True)
-        dest = dest_dir / job
-        k = 1
-        while os.path.lexists(dest):
-            dest, k = dest_dir / f"{job}.{k}", k + 1
-        os.replace(ws / "workspace" / job, dest)  # a link is moved as a link, never followed
+        os.replace(ws / "workspace" / job, _damaged_place(ws, job))  # a link is moved as a link, never followed
         moved.append(job)
     if moved:
         warnings.warn(
@@ -227,9 +222,47 @@ def set_aside_damaged(ws: str | Path) -> list[str]:
     return moved
 
 
+def _damaged_place(ws: Path, name: str) -> Path:
+    """A free name in WS/damaged/ (made if needed) for something set aside: name, name.1, name.2, ..."""
+    dest_dir = ws / DAMAGED
+    dest_dir.mkdir(exist_ok=True)
+    dest, k = dest_dir / name, 1
+    while os.path.lexists(dest):
+        dest, k = dest_dir / f"{name}.{k}", k + 1
+    return dest
+
+
+def set_aside_run_links(ws: str | Path) -> list[str]:
+    """Move a point's run directory that is a symbolic link to WS/damaged/<job>.run: the link itself,
+    never followed (what it points to is not read, written or removed), with a warning naming it.
+    granchain writes a point's run only in its own job directory, so a point whose run is a link could
+    never complete; set aside, it runs again (one that failed for it before, with --retry-failed).
+    Returns the job ids whose run was moved."""
+    ws = Path(ws)
+    moved = []
+    for job, sp in sorted(job_dirs(ws).items()):
+        run = ws / "workspace" / job / RUN_DIR
+        if sp is None or not os.path.islink(run):
+            continue
+        os.replace(run, _damaged_place(ws, f"{job}.{RUN_DIR}"))
+        moved.append(job)
+    if moved:
+        n = len(moved)
+        warnings.warn(
+            f"{ws}: {n} point{'s' if n != 1 else ''} had a symbolic link as {'their' if n != 1 else 'its'} run "
+            f"directory (workspace/<job>/{RUN_DIR}, not followed): the link{'s' if n != 1 else ''} moved to "
+            f"{ws / DAMAGED}, what {'they point' if n != 1 else 'it points'} to untouched: "
+            f"{', '.join(moved[:5])}{' ...' if n > 5 else ''}; {'these points run' if n != 1 else 'the point runs'} "
+            "again (one that failed before, with --retry-failed)",
+            stacklevel=2,
+        )
+    return moved
+
+
 def create_workspace(ws: str | Path):
     """Open the workspace, making it if needed; refuse a directory that is something else, or one
-    with a symbolic link where granchain writes; set damaged job directories aside."""
+    with a symbolic link where granchain writes; set damaged job directories and run directories that
+    are links aside."""
     import signac
 
     ws = Path(ws)
@@ -248,6 +281,7 @@ def create_workspace(ws: str | Path):
             raise PermissionError(13, "not writable")
         project = _signac(signac.init_project, ws)
         set_aside_damaged(ws)
+        set_aside_run_links(ws)
         return project
     except OSError as e:
         raise CampaignError(
