@@ -136,7 +136,8 @@ class Run:
     timestep : float or None
         The time step dt in s; None: "auto".
     stop_after_contact : int or None
-        The stop check: stop once the leading wave has passed this contact (1-based), or None.
+        The stop check: stop once the leading wave has passed this contact (1-based; on a wall, contact N
+        is the wall's, bead N on the flat), or None.
     """
 
     end_time: float | None  # s; None: "auto"

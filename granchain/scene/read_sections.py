@@ -336,7 +336,9 @@ def _read_window(s: _Section, nc: int) -> tuple[int, int] | None:
     return (v[0], v[1])
 
 
-def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
+def _read_outputs(s: _Section, chain: Chain, run: Run, wall: bool = False) -> Outputs:
+    """The [outputs] section; wall: the chain ends on a wall, whose contact (bead N's with the flat,
+    contact N) a stop check may wait for."""
     nc = chain.beads - 1 if chain.beads is not None else 10**9  # beads = "auto": the planner checks
     contacts = f"contact i is between bead i and i+1; this chain has contacts 1..{nc}"
     peak: bool | tuple[int, ...] = True
@@ -377,10 +379,14 @@ def _read_outputs(s: _Section, chain: Chain, run: Run) -> Outputs:
         interval = AUTO
     dump = interval_or_auto("dump_interval", "s between whole-chain dump frames (LAMMPS), at least the time step")
     if run.stop_after_contact is not None:
-        if run.stop_after_contact > nc:
+        if run.stop_after_contact > nc + (1 if wall else 0):
             raise SceneError(
                 f"{s.file}: [run] stop_after_contact = {run.stop_after_contact} is invalid: "
-                f"a contact of this chain, 1..{nc}"
+                + (
+                    f"a contact of this chain, 1..{nc}, or {nc + 1}, the wall's (bead {nc + 1} on the flat)"
+                    if wall
+                    else f"a contact of this chain, 1..{nc}"
+                )
             )
         if snapshots:
             raise SceneError(

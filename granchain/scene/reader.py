@@ -166,8 +166,8 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
     contact = _read_contact(_Section(source, "contact", data["contact"]), chain)
     loading = _read_loading(_Section(source, "loading", data["loading"]), chain, source)
     run = _read_run(_Section(source, "run", data["run"]), loading)
-    outputs = _read_outputs(_Section(source, "outputs", data.get("outputs", {})), chain, run)
     effects = _read_effects(source, data)
+    outputs = _read_outputs(_Section(source, "outputs", data.get("outputs", {})), chain, run, effects.far_end == "wall")
     scene = Scene(
         effects=effects,
         chain=chain,

@@ -499,6 +499,48 @@ def _front_end_time(scene, last: int | None, slow: float, omega_max: float) -> P
     )
 
 
+#: The wall's contact (bead N on the flat) is measured once its force has fallen back to half its peak
+#: after the reflection: the front's hop from contact N-1 to it and the pulse's width there. A Hertz
+#: solitary wave spans about five diameters (Nesterenko), so its force at a contact rises and falls
+#: within about five contacts' travel; with the hop, WALL_PULSE_CONTACTS contacts' travel at the chain's
+#: far end. Measured (reference RK4, stop check on the wall's contact): a striker on a 20-bead stainless
+#: chain at F0 = 2e4 N (linear, dispersed: the slowest case) complete 2.1 of its last contact's times
+#: after the end planned for contact N-1; unprecompressed chains long before that end (its slowest front)
+WALL_PULSE_CONTACTS = 6
+
+
+def wall_peak_planned(scene) -> bool:
+    """Whether "auto" plans the run to measure the wall's peak: a chain of given length on a wall whose
+    peak forces are asked for ([outputs] peak_force), with a stop check (no snapshots), under a load that
+    ends (a lasting force keeps pressing the wall: its force need not fall back)."""
+    if scene.effects.far_end != "wall" or not scene.outputs.peak_force or scene.outputs.snapshots:
+        return False
+    if scene.chain.beads is None or scene.n_contacts < 1:
+        return False
+    step = step_equivalent(scene)
+    return step is None or step[1] < 1e3
+
+
+def _wall_end_time(scene, choice: PlanChoice, measured: int, slow: float, omega_max: float) -> PlanChoice:
+    """The end time that also measures the wall's peak (wall_peak_planned): the end planned for the
+    chain's last contact N-1 (_front_end_time), plus WALL_PULSE_CONTACTS x that contact's own time on
+    the slowest front; at least the end planned for the measured contacts (choice, up to contact
+    `measured`)."""
+    nc = scene.n_contacts
+    last = choice if measured == nc else _front_end_time(scene, nc, slow, omega_max)
+    hop = front_travel_time(scene, nc, slow) - (front_travel_time(scene, nc - 1, slow) if nc > 1 else 0.0)
+    wall = last.value + WALL_PULSE_CONTACTS * hop
+    if wall <= choice.value:
+        return choice
+    return PlanChoice(
+        "end_time",
+        wall,
+        f"{choice.reason}; the wall's contact {nc + 1} (bead {nc + 1} on the flat) measured: the end for contact "
+        f"{nc} ({last.value:.3g} s) and {WALL_PULSE_CONTACTS} x its time on that front ({hop:.3g} s), the hop to "
+        "the wall and the pulse's rise and fall there",
+    )
+
+
 def _beads_choice(scene, end: float, last: int, fast: float) -> PlanChoice:
     """The number of beads: no reflection from bead N reaches contact `last` before the end (see the
     module docstring)."""
@@ -515,7 +557,16 @@ def _beads_choice(scene, end: float, last: int, fast: float) -> PlanChoice:
 
 
 def _stop_choice(scene, last: int) -> PlanChoice:
-    """The stop check at the last measured contact."""
+    """The stop check at the last measured contact, or at the wall's contact (wall_peak_planned)."""
+    if wall_peak_planned(scene):
+        wall = scene.n_contacts + 1
+        return PlanChoice(
+            "stop_after_contact",
+            wall,
+            f"stop as soon as the wave has passed the wall's contact {wall} (its force below half its peak after "
+            f"the reflection), both backends: the wall's peak is asked for (peak_force), and the wave has "
+            f"passed contact {last} before",
+        )
     return PlanChoice(
         "stop_after_contact",
         last,
@@ -585,7 +636,12 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     end = scene.run.end_time
     if end is None:
         impacts = one_bead_impacts(scene)
-        choices.append(_one_bead_end_time(scene, impacts) if impacts else _front_end_time(scene, last, slow, omega))
+        if impacts:
+            choices.append(_one_bead_end_time(scene, impacts))
+        else:
+            choices.append(_front_end_time(scene, last, slow, omega))
+            if wall_peak_planned(scene):
+                choices[-1] = _wall_end_time(scene, choices[-1], last, slow, omega)
         end = choices[-1].value
     beads = scene.chain.beads
     if beads is None:
@@ -602,7 +658,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     stop = scene.run.stop_after_contact
     if scene.run.end_time is None and stop is None and last is not None and not scene.outputs.snapshots:
         choices.append(_stop_choice(scene, last))
-        stop = last
+        stop = choices[-1].value
     if stop is not None:
         d["run"]["stop_after_contact"] = stop
     choices += _output_interval_choices(scene, d, omega, end, rtol_plan)
