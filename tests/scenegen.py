@@ -17,15 +17,22 @@ from granchain.scene import parse_scene
 
 @st.composite
 def scene_texts(
-    draw, *, max_beads: int = 60, auto: bool = True, law: str | None = None, precompressed: bool = False
+    draw,
+    *,
+    max_beads: int = 60,
+    auto: bool = True,
+    law: str | None = None,
+    precompressed: bool = False,
+    wall: bool | None = None,
 ) -> str:
-    """law: a registered law's name (default: drawn); precompressed: always a precompression."""
+    """law: a registered law's name (default: drawn); precompressed: always a precompression; wall: a
+    wall at the far end or not (default: drawn)."""
     law = law or draw(st.sampled_from(sorted(LAWS)))
     radius = draw(st.floats(2e-3, 1e-2))
     beads = draw(st.integers(12, max_beads))
     kind = draw(st.sampled_from(["step", "impulse", "velocity", "striker"]))
     per_bead = draw(st.sampled_from([None, "taper", "materials"]))
-    wall = draw(st.booleans())
+    wall = draw(st.booleans()) if wall is None else wall
     pre = precompressed or draw(st.booleans())
     dashpot = draw(st.one_of(st.just(0.0), st.floats(0.1, 20.0)))
 

@@ -201,7 +201,8 @@ def refined_plan(scene: Scene, plan: Plan, solution) -> Plan | None:
 def extended_plan(scene: Scene, plan: Plan, solution) -> Plan | None:
     """The plan to run again, longer, when a run of the planner's end time ended before measuring what
     the scene asked for (postprocess.observables.unmeasured_outputs: the window's last contact without
-    a leading pulse, or with its force still rising at the end, peaks.still_rising).
+    a leading pulse, or with its force still rising at the end, peaks.still_rising; the wall's peak
+    its stop check waits for, not complete).
 
     The end time is an estimate; where the actual chain is slower than every estimate (a nonlinear front
     scattered by soft, light beads among stiff ones rises at a contact without a maximum until a
@@ -225,9 +226,11 @@ def extended_plan(scene: Scene, plan: Plan, solution) -> Plan | None:
     budget = LINEAR_HORIZON * front_travel_time(plan.scene, plan.scene.n_contacts, wave_speeds(scene)[0])
     if budget <= run.end_time * (1.0 + 1e-9):
         return None
-    names = ", ".join(line.split(":", 1)[0] for line in unmeasured)
+    names = [line.split(":", 1)[0] for line in unmeasured]
+    what = "the wall's contact" if names == ["wall_peak_force"] else "the window's last contact"
+    names = ", ".join(names)
     note = (
-        f"extended after a first run to {run.end_time:.4g} s ended before the window's last contact was measured "
+        f"extended after a first run to {run.end_time:.4g} s ended before {what} was measured "
         f"(not measured: {names}): at most {LINEAR_HORIZON:g} x the slowest front's crossing of the whole chain "
         f"({budget:.4g} s), the stop check ending it once the wave has passed contact {run.stop_after_contact}"
     )
@@ -523,21 +526,27 @@ def wall_peak_planned(scene) -> bool:
 
 def _wall_end_time(scene, choice: PlanChoice, measured: int, slow: float, omega_max: float) -> PlanChoice:
     """The end time that also measures the wall's peak (wall_peak_planned): the end planned for the
-    chain's last contact N-1 (_front_end_time), plus WALL_PULSE_CONTACTS x that contact's own time on
-    the slowest front; at least the end planned for the measured contacts (choice, up to contact
-    `measured`)."""
+    chain's last contact N-1 (_front_end_time), or the slowest front's crossing to it after the whole
+    load (a long load's end must cross the chain before the wall's force falls), plus
+    WALL_PULSE_CONTACTS x that contact's own time on the slowest front; at least the end planned for
+    the measured contacts (choice, up to contact `measured`)."""
     nc = scene.n_contacts
     last = choice if measured == nc else _front_end_time(scene, nc, slow, omega_max)
-    hop = front_travel_time(scene, nc, slow) - (front_travel_time(scene, nc - 1, slow) if nc > 1 else 0.0)
-    wall = last.value + WALL_PULSE_CONTACTS * hop
+    travel = front_travel_time(scene, nc, slow)
+    hop = travel - (front_travel_time(scene, nc - 1, slow) if nc > 1 else 0.0)
+    # a long load presses the wall until its end has crossed the chain too
+    step = step_equivalent(scene)
+    load = step[1] if step is not None else 0.0
+    wall = max(last.value, travel + load) + WALL_PULSE_CONTACTS * hop
     if wall <= choice.value:
         return choice
     return PlanChoice(
         "end_time",
         wall,
         f"{choice.reason}; the wall's contact {nc + 1} (bead {nc + 1} on the flat) measured: the end for contact "
-        f"{nc} ({last.value:.3g} s) and {WALL_PULSE_CONTACTS} x its time on that front ({hop:.3g} s), the hop to "
-        "the wall and the pulse's rise and fall there",
+        f"{nc} ({last.value:.3g} s), or the load's end crossing the chain ({travel + load:.3g} s), and "
+        f"{WALL_PULSE_CONTACTS} x contact {nc}'s time on that front ({hop:.3g} s), the hop to the wall and the "
+        "pulse's rise and fall there",
     )
 
 

@@ -1,0 +1,132 @@
+"""end_time = "auto" on a chain with a wall whose peak forces are asked for measures the wall's peak:
+the stop check waits for the wall's contact (contact N, bead N on the flat) and the planned end
+covers it (granchain.workflows.plan.wall_peak_planned). A chain without a wall, or without peak_force,
+is planned as before: its stop check at the last measured contact.
+"""
+
+import os
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import Phase, assume, given, settings
+
+from granchain.backends.builtin import ReferenceBackend
+from granchain.scene import SceneError, parse_scene
+from granchain.workflows.plan import extended_plan, plan_scene
+from tests.scenegen import scenes
+
+#: bead-steps one example may cost (the planned run and the longer one)
+MAX_BEAD_STEPS = 3e6
+#: how much longer than the planned run's own end the comparison run lasts, without a stop check: a
+#: second arrival at the wall needs a round trip through the chain, far later
+LONGER = 1.5
+
+WALLED = """
+[chain]
+beads = 20
+radius = 2.38e-3
+material = "stainless-steel-316"
+[contact]
+law = "hertz"
+[loading]
+kind = "striker"
+velocity = 0.44
+[precompression]
+force = 20000
+[boundary]
+far_end = "wall"
+[run]
+end_time = "auto"
+timestep = "auto"
+[outputs]
+peak_force = true
+histories = [1, 10, 19]
+"""
+
+
+def reference(scene, method="rk4"):
+    return ReferenceBackend().calculate(scene, method).result.solution
+
+
+@pytest.mark.slow
+@settings(max_examples=40, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.reuse, Phase.generate])
+@given(scene=scenes(max_beads=30, wall=True))
+def test_auto_end_measures_the_wall_peak(scene):
+    """On generated walled chains (laws, materials, radii, tapers, precompression, striker, velocity and
+    force loads, dashpots): the planned run ends with the wall's peak complete, and a run LONGER x as long
+    without a stop check finds the same wall peak, or a larger one after the run's end (a precompressed
+    chain's main wave behind its precursors: the run's is the wall's first complete maximum). Where the wall's force
+    stays up past the planned end (a plastic, damped chain that settles on the wall) the run is
+    extended once (extended_plan), as granchain run does. Fails before the wall's stop: the stop
+    check at contact N-1 ended the run before the wall's force fell back."""
+    plan = plan_scene(scene, method="rk4")
+    planned = plan.scene
+    cost = planned.run.end_time / planned.run.timestep * planned.chain.beads
+    assume(cost * (1 + LONGER) <= MAX_BEAD_STEPS)
+    sol = reference(planned)
+    longer_plan = extended_plan(scene, plan, sol)  # once, as granchain run does (workflows.run)
+    extended = longer_plan is not None
+    if extended:
+        planned = longer_plan.scene
+        sol = reference(planned)
+    log = os.environ.get("GRANCHAIN_WALL_LOG")
+    if log:
+        with open(log, "a") as f:
+            f.write(
+                f"{scene.contact.law} {scene.loading.kind} pre={float(scene.effects.precompression):g} "
+                f"planned/ran {planned.run.end_time / sol.end_time:.3f} complete {sol.wall_peak_complete} "
+                f"extended {extended} first {plan.scene.run.end_time:.4g} ran {sol.end_time:.4g}\n"
+            )
+    assert planned.run.stop_after_contact == planned.chain.beads, "the stop check waits for the wall's contact"
+    assert sol.wall_peak_complete, f"the wall's peak was not complete at {sol.end_time:.4g} s\n{scene.to_toml()}"
+    longer = replace(planned, run=replace(planned.run, end_time=LONGER * sol.end_time, stop_after_contact=None))
+    ref = reference(longer)
+    if ref.wall_time_of_peak > sol.end_time:
+        # a later, larger maximum (a precompressed chain's main wave behind its precursors): the run's
+        # peak is the wall's first complete one, not a running maximum cut short
+        assert ref.wall_peak_force > sol.wall_peak_force
+    else:
+        assert np.isclose(sol.wall_peak_force, ref.wall_peak_force, rtol=1e-9, atol=0.0), (
+            f"{sol.wall_peak_force!r} vs {ref.wall_peak_force!r} to {longer.run.end_time:.4g} s\n{scene.to_toml()}"
+        )
+
+
+def test_auto_end_measures_the_wall_peak_on_both_backends():
+    """Daraio's precompressed striker chain (F0 = 2e4 N: the linear, dispersed chain whose wall
+    completes latest against the planned end for contact N-1): both backends end with the wall's peak
+    complete and agree on it (20052.2 N); before, the stop at contact 19 ended the run at 5.3e-5 s,
+    the wall's force completing at 5.7e-5 s."""
+    from granchain.workflows.run import run_scene
+
+    sc = parse_scene(WALLED, source="walled.toml")
+    planned = plan_scene(sc, method="verlet").scene
+    assert planned.run.stop_after_contact == 20
+    lmp = run_scene(planned, backend="lammps").solution
+    ref = reference(planned, "verlet")
+    assert lmp.wall_peak_complete
+    assert ref.wall_peak_complete
+    assert np.isclose(lmp.wall_peak_force, ref.wall_peak_force, rtol=1e-7)
+    assert lmp.end_time < planned.run.end_time  # the stop check ended it
+
+
+def test_without_peak_force_or_wall_the_stop_stays_at_the_last_measured_contact():
+    """Simulate only what the scene calls for: no peak forces asked (histories only), or no wall, and the
+    stop check is the last measured contact's, the end the one planned for it."""
+    no_peaks = parse_scene(WALLED.replace("peak_force = true", "peak_force = false"), source="s.toml")
+    free = parse_scene(WALLED.replace('far_end = "wall"', 'far_end = "free"'), source="s.toml")
+    walled = parse_scene(WALLED, source="s.toml")
+    for sc in (no_peaks, free):
+        plan = plan_scene(sc)
+        assert plan.scene.run.stop_after_contact == 19
+        assert "wall's contact" not in dict((c.name, c.reason) for c in plan.choices)["end_time"]
+    assert plan_scene(no_peaks).scene.run.end_time < plan_scene(walled).scene.run.end_time
+
+
+def test_stop_after_contact_takes_the_wall_contact_only_on_a_wall():
+    text = WALLED.replace('end_time = "auto"', "end_time = 1e-4\nstop_after_contact = 20")
+    assert parse_scene(text, source="s.toml").run.stop_after_contact == 20
+    with pytest.raises(SceneError, match=r"1\.\.19, or 20, the wall's"):
+        parse_scene(text.replace("stop_after_contact = 20", "stop_after_contact = 21"), source="s.toml")
+    with pytest.raises(SceneError, match=r"1\.\.19$"):
+        parse_scene(text.replace('far_end = "wall"', 'far_end = "free"'), source="s.toml")
