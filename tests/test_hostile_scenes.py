@@ -33,7 +33,7 @@ SCHEMA: dict[str, tuple[str, ...]] = {
     "chain.material": ("density", "youngs_modulus", "poisson_ratio", "yield_strength"),
     "contact": ("law", *sorted({k for law in LAWS.values() for k in law.scene_keys})),
     "loading": ("kind", "amplitude", "duration", "impulse", "velocity", "radius", "mass", "material"),
-    "run": ("end_time", "timestep", "stop_after_contact"),
+    "run": ("end_time", "timestep", "stop_after_contact", "stop_after_wall"),
     "outputs": ("peak_force", "histories", "snapshots", "window", "history_interval", "dump_interval"),
     **{name: tuple(effect.scene_keys) for name, effect in sections().items()},
 }

@@ -1,6 +1,6 @@
 """end_time = "auto" on a chain with a wall whose peak forces are asked for measures the wall's peak:
-the stop check waits for the wall's contact (contact N, bead N on the flat) and the planned end
-covers it (granchain.workflows.plan.wall_peak_planned). A chain without a wall, or without peak_force,
+the stop check also waits for the wall's contact ([run] stop_after_wall: bead N on the flat) and the
+planned end covers it (granchain.workflows.plan.wall_peak_planned). A chain without a wall, or without peak_force,
 is planned as before: its stop check at the last measured contact.
 """
 
@@ -78,9 +78,12 @@ def test_auto_end_measures_the_wall_peak(scene):
                 f"planned/ran {planned.run.end_time / sol.end_time:.3f} complete {sol.wall_peak_complete} "
                 f"extended {extended} first {plan.scene.run.end_time:.4g} ran {sol.end_time:.4g}\n"
             )
-    assert planned.run.stop_after_contact == planned.chain.beads, "the stop check waits for the wall's contact"
+    assert planned.run.stop_after_wall, "the stop check waits for the wall's contact"
     assert sol.wall_peak_complete, f"the wall's peak was not complete at {sol.end_time:.4g} s\n{scene.to_toml()}"
-    longer = replace(planned, run=replace(planned.run, end_time=LONGER * sol.end_time, stop_after_contact=None))
+    longer = replace(
+        planned,
+        run=replace(planned.run, end_time=LONGER * sol.end_time, stop_after_contact=None, stop_after_wall=False),
+    )
     ref = reference(longer)
     if ref.wall_time_of_peak > sol.end_time:
         # a later, larger maximum (a precompressed chain's main wave behind its precursors): the run's
@@ -101,7 +104,7 @@ def test_auto_end_measures_the_wall_peak_on_both_backends():
 
     sc = parse_scene(WALLED, source="walled.toml")
     planned = plan_scene(sc, method="verlet").scene
-    assert planned.run.stop_after_contact == 20
+    assert planned.run.stop_after_wall
     lmp = run_scene(planned, backend="lammps").solution
     ref = reference(planned, "verlet")
     assert lmp.wall_peak_complete
@@ -119,14 +122,18 @@ def test_without_peak_force_or_wall_the_stop_stays_at_the_last_measured_contact(
     for sc in (no_peaks, free):
         plan = plan_scene(sc)
         assert plan.scene.run.stop_after_contact == 19
+        assert not plan.scene.run.stop_after_wall
         assert "wall's contact" not in dict((c.name, c.reason) for c in plan.choices)["end_time"]
     assert plan_scene(no_peaks).scene.run.end_time < plan_scene(walled).scene.run.end_time
 
 
-def test_stop_after_contact_takes_the_wall_contact_only_on_a_wall():
-    text = WALLED.replace('end_time = "auto"', "end_time = 1e-4\nstop_after_contact = 20")
-    assert parse_scene(text, source="s.toml").run.stop_after_contact == 20
-    with pytest.raises(SceneError, match=r"1\.\.19, or 20, the wall's"):
-        parse_scene(text.replace("stop_after_contact = 20", "stop_after_contact = 21"), source="s.toml")
-    with pytest.raises(SceneError, match=r"1\.\.19$"):
+def test_stop_after_wall_needs_a_wall_and_a_stop_contact():
+    text = WALLED.replace('end_time = "auto"', "end_time = 1e-4\nstop_after_contact = 19\nstop_after_wall = true")
+    assert parse_scene(text, source="s.toml").run.stop_after_wall
+    assert parse_scene(parse_scene(text, source="s.toml").to_toml(), source="again.toml").run.stop_after_wall
+    with pytest.raises(SceneError, match='needs a wall: \\[boundary\\] far_end = "wall"'):
         parse_scene(text.replace('far_end = "wall"', 'far_end = "free"'), source="s.toml")
+    with pytest.raises(SceneError, match="needs \\[run\\] stop_after_contact"):
+        parse_scene(text.replace("stop_after_contact = 19\n", ""), source="s.toml")
+    with pytest.raises(SceneError, match="stop_after_wall = 1 is invalid: true or false"):
+        parse_scene(text.replace("stop_after_wall = true", "stop_after_wall = 1"), source="s.toml")

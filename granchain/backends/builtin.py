@@ -41,6 +41,7 @@ class ReferenceBackend(Backend):
                 history_stride=history_stride(scene),
                 snapshots=scene.outputs.snapshots,
                 stop_after=None if scene.run.stop_after_contact is None else scene.run.stop_after_contact - 1,
+                stop_at_wall=scene.run.stop_after_wall,
                 stop_floor=stop_force_floor(scene),
                 lead_floor=lead_floor(scene),
                 lead_fall=lead_fall(scene),

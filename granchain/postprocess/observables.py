@@ -212,7 +212,7 @@ def unmeasured_outputs(scene, solution) -> list[str]:
     wave speed (a peak-force table), each with the reason, the window's last contact's peak while
     the force there still rises at the end (peaks.still_rising: a main wave behind a smaller
     precursor; not while a force load still acts, whose plateau the force rises to), and the wall's
-    peak where the stop check waits for the wall's contact and it is not complete; [] when everything
+    peak where the stop check waits for the wall's contact (stop_after_wall) and it is not complete; [] when everything
     asked for is there. A run that ends too soon says so (the command
     line exits 1), not only in summary.json. The wave speed of a scene that can never measure it
     (wave_speed_unmeasurable: a window of fewer than FIT_CONTACTS contacts) is not missed by the run:
@@ -230,17 +230,11 @@ def unmeasured_outputs(scene, solution) -> list[str]:
     lasting = ld.is_force and ld.duration > solution.end_time
     if not lasting and still_rising(solution.complete, solution.time_of_peak, solution.velocity)[b - 1]:
         lines.append(f"peak_force_contact_{b}: {_why_still_rising(scene, solution, b)}")
-    # a stop check on the wall's contact (contact N: the planner's, where the wall's peak is asked for)
-    # waits for it; a run that ended before its force fell back to half its peak missed it
-    wall = scene.n_contacts + 1
-    if (
-        scene.effects.far_end == "wall"
-        and scene.run.stop_after_contact == wall
-        and not lasting
-        and solution.wall_peak_complete is False
-    ):
+    # a stop check that waits for the wall's contact ([run] stop_after_wall: the planner's, where the
+    # wall's peak is asked for); a run that ended before its force fell back to half its peak missed it
+    if scene.run.stop_after_wall and not lasting and solution.wall_peak_complete is False:
         lines.append(
-            f"wall_peak_force: the wave did not reach or pass the wall's contact {wall} (its force falling to half "
-            f"its peak) before the run ended at t = {solution.end_time:g} s"
+            "wall_peak_force: the wave did not reach or pass the wall (its force falling to half its peak) "
+            f"before the run ended at t = {solution.end_time:g} s"
         )
     return lines

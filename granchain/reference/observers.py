@@ -553,17 +553,23 @@ class RunWatch(Observer):
 
 
 class EarlyStop(Observer):
-    """Stop once contact c's force has fallen below half its peak (checked every every steps, as
-    LAMMPS's fix halt does): the leading wave has passed it. Only a peak above stop_floor counts
-    (round-off forces ahead of the wave must not stop the run), and only once the force has also
-    fallen by lead_fall below it: then a leading pulse that waits for that fall (leading.LeadingPulse, which
-    sees every step before this check) has frozen."""
+    """Stop once the force of each of contacts cs has fallen below half its peak (checked every every
+    steps, as LAMMPS's fix halt does): the leading wave has passed them. Only a peak above stop_floor
+    counts (round-off forces ahead of the wave must not stop the run), and only once the force has
+    also fallen by lead_fall below it: then a leading pulse that waits for that fall
+    (leading.LeadingPulse, which sees every step before this check) has frozen."""
 
     def __init__(
-        self, state: ChainState, peaks: PeakTracker, contact: int, every: int, stop_floor: float, lead_fall: float = 0.0
+        self,
+        state: ChainState,
+        peaks: PeakTracker,
+        contacts: tuple[int, ...],
+        every: int,
+        stop_floor: float,
+        lead_fall: float = 0.0,
     ) -> None:
         self.peaks = peaks
-        self.contact = contact
+        self.contacts = contacts
         self.every = every
         self.stop_floor = stop_floor
         self.lead_fall = lead_fall
@@ -571,6 +577,10 @@ class EarlyStop(Observer):
 
     @override
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
-        now, peak = self.peaks.now_and_peak(state, self.contact)
+        return all(self.passed(state, c) for c in self.contacts)
+
+    def passed(self, state: ChainState, c: int) -> bool:
+        """Whether the wave has passed contact c."""
+        now, peak = self.peaks.now_and_peak(state, c)
         passed = peak > self.stop_floor and now - self.f0 < PEAK_PASSED_FRACTION * (peak - self.f0)
         return passed and (self.lead_fall <= 0.0 or now <= peak - self.lead_fall)

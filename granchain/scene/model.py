@@ -136,13 +136,16 @@ class Run:
     timestep : float or None
         The time step dt in s; None: "auto".
     stop_after_contact : int or None
-        The stop check: stop once the leading wave has passed this contact (1-based; on a wall, contact N
-        is the wall's, bead N on the flat), or None.
+        The stop check: stop once the leading wave has passed this contact (1-based), or None.
+    stop_after_wall : bool
+        The stop check also waits for the wall's contact (bead N on the flat) to pass: its force back
+        below half its peak after the reflection (only on a chain with a wall).
     """
 
     end_time: float | None  # s; None: "auto"
     timestep: float | None  # s; None: "auto"
     stop_after_contact: int | None = None  # stop once the leading wave has passed this contact
+    stop_after_wall: bool = False  # ... and the wall's contact (a walled chain)
 
 
 @dataclass(frozen=True)

@@ -291,8 +291,16 @@ def _read_run(s: _Section, loading: Loading) -> Run:
                 "a contact number >= 1: the run stops once its force has "
                 "fallen below half its peak (the leading wave has passed it)",
             )
-    s.finish(("end_time", "timestep", "stop_after_contact"))
-    return Run(end_time=end, timestep=dt, stop_after_contact=stop)
+    wall = s.raw("stop_after_wall", False) if s.has("stop_after_wall") else False
+    if not isinstance(wall, bool):
+        raise s.fail(
+            "stop_after_wall",
+            wall,
+            "true or false: true also waits for the wall's contact (bead N on the flat) to fall below half its "
+            "peak after the reflection",
+        )
+    s.finish(("end_time", "timestep", "stop_after_contact", "stop_after_wall"))
+    return Run(end_time=end, timestep=dt, stop_after_contact=stop, stop_after_wall=wall)
 
 
 def _int_list(s: _Section, key: str, low: int, high: int, what: str) -> tuple[int, ...]:
@@ -336,9 +344,35 @@ def _read_window(s: _Section, nc: int) -> tuple[int, int] | None:
     return (v[0], v[1])
 
 
+def _check_stop(s: _Section, run: Run, nc: int, snapshots, wall: bool) -> None:
+    """[run]'s stop check against the chain and the outputs: a contact of the chain, no snapshots; the
+    wall's contact only on a wall and with a stop contact (so never with snapshots either)."""
+    if run.stop_after_contact is not None:
+        if run.stop_after_contact > nc:
+            raise SceneError(
+                f"{s.file}: [run] stop_after_contact = {run.stop_after_contact} is invalid: "
+                f"a contact of this chain, 1..{nc}"
+            )
+        if snapshots:
+            raise SceneError(
+                f"{s.file}: [run] stop_after_contact = {run.stop_after_contact} and [outputs] snapshots "
+                "do not go together: snapshots need the run to reach their times; remove one"
+            )
+    if run.stop_after_wall:
+        if run.stop_after_contact is None:
+            raise SceneError(
+                f"{s.file}: [run] stop_after_wall = true needs [run] stop_after_contact: the contact the leading "
+                "wave passes first (the run stops once it has passed both)"
+            )
+        if not wall:
+            raise SceneError(
+                f'{s.file}: [run] stop_after_wall = true needs a wall: [boundary] far_end = "wall" (or remove it)'
+            )
+
+
 def _read_outputs(s: _Section, chain: Chain, run: Run, wall: bool = False) -> Outputs:
-    """The [outputs] section; wall: the chain ends on a wall, whose contact (bead N's with the flat,
-    contact N) a stop check may wait for."""
+    """The [outputs] section (and the checks of [run]'s stop against it); wall: the chain ends on a
+    wall, whose contact a stop check may wait for ([run] stop_after_wall)."""
     nc = chain.beads - 1 if chain.beads is not None else 10**9  # beads = "auto": the planner checks
     contacts = f"contact i is between bead i and i+1; this chain has contacts 1..{nc}"
     peak: bool | tuple[int, ...] = True
@@ -378,21 +412,7 @@ def _read_outputs(s: _Section, chain: Chain, run: Run, wall: bool = False) -> Ou
         # interval whose dump-derived peaks stay within rtol (granchain.workflows.plan)
         interval = AUTO
     dump = interval_or_auto("dump_interval", "s between whole-chain dump frames (LAMMPS), at least the time step")
-    if run.stop_after_contact is not None:
-        if run.stop_after_contact > nc + (1 if wall else 0):
-            raise SceneError(
-                f"{s.file}: [run] stop_after_contact = {run.stop_after_contact} is invalid: "
-                + (
-                    f"a contact of this chain, 1..{nc}, or {nc + 1}, the wall's (bead {nc + 1} on the flat)"
-                    if wall
-                    else f"a contact of this chain, 1..{nc}"
-                )
-            )
-        if snapshots:
-            raise SceneError(
-                f"{s.file}: [run] stop_after_contact = {run.stop_after_contact} and [outputs] snapshots "
-                "do not go together: snapshots need the run to reach their times; remove one"
-            )
+    _check_stop(s, run, nc, snapshots, wall)
     s.finish(("peak_force", "histories", "snapshots", "window", "history_interval", "dump_interval"))
     return Outputs(
         peak_force=peak,

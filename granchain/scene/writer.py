@@ -86,6 +86,8 @@ def scene_to_dict(scene) -> dict:
     }
     if scene.run.stop_after_contact is not None:
         d["run"]["stop_after_contact"] = scene.run.stop_after_contact
+    if scene.run.stop_after_wall:
+        d["run"]["stop_after_wall"] = True
     d["outputs"] = _outputs_to_dict(scene.outputs)
     for name, effect in sections().items():
         section = effect.to_dict(scene.effects)

@@ -203,7 +203,16 @@ def render_deck(scene, yardstick: str | None = None, options: DeckOptions = DECK
             pair_style_args="".join(e.pair_style_args(scene) for e in active_effects(scene)),
             energy_columns=energy_columns(scene, layout),
             stop=(
-                StopCheck(stop, stop + layout.offset, stop_force_floor(scene), fall=lead_fall(scene)) if stop else None
+                StopCheck(
+                    stop,
+                    stop + layout.offset,
+                    stop_force_floor(scene),
+                    fall=lead_fall(scene),
+                    # the wall's contact lives on bead N's atom
+                    wall_atom=scene.chain.beads + layout.offset if scene.run.stop_after_wall else 0,
+                )
+                if stop
+                else None
             ),
         )
     )

@@ -214,6 +214,9 @@ class StopCheck:
     fall : float
         How far the force must also have fallen below the peak (peaks.lead_fall): then the leading
         pulse, which waits for that fall, has frozen. 0: no further condition.
+    wall_atom : int
+        [run] stop_after_wall: the atom the wall's contact lives on (bead N's), whose force must also
+        have fallen back below the fraction of its peak; 0: no wall to wait for.
     """
 
     contact: int
@@ -222,3 +225,4 @@ class StopCheck:
     every: int = STOP_CHECK_EVERY
     fraction: float = PEAK_PASSED_FRACTION
     fall: float = 0.0
+    wall_atom: int = 0

@@ -233,6 +233,7 @@ def extended_plan(scene: Scene, plan: Plan, solution) -> Plan | None:
         f"extended after a first run to {run.end_time:.4g} s ended before {what} was measured "
         f"(not measured: {names}): at most {LINEAR_HORIZON:g} x the slowest front's crossing of the whole chain "
         f"({budget:.4g} s), the stop check ending it once the wave has passed contact {run.stop_after_contact}"
+        + (" and the wall's" if run.stop_after_wall else "")
     )
     longer = replace(plan.scene, run=replace(run, end_time=budget))
     choices = [PlanChoice(c.name, budget, f"{c.reason}; {note}") if c.name == "end_time" else c for c in plan.choices]
@@ -566,15 +567,15 @@ def _beads_choice(scene, end: float, last: int, fast: float) -> PlanChoice:
 
 
 def _stop_choice(scene, last: int) -> PlanChoice:
-    """The stop check at the last measured contact, or at the wall's contact (wall_peak_planned)."""
+    """The stop check at the last measured contact, and at the wall's contact (stop_after_wall) where
+    the wall's peak is measured (wall_peak_planned)."""
     if wall_peak_planned(scene):
-        wall = scene.n_contacts + 1
         return PlanChoice(
             "stop_after_contact",
-            wall,
-            f"stop as soon as the wave has passed the wall's contact {wall} (its force below half its peak after "
-            f"the reflection), both backends: the wall's peak is asked for (peak_force), and the wave has "
-            f"passed contact {last} before",
+            last,
+            f"stop as soon as the leading wave has passed contact {last} (its force below half its peak) and the "
+            f"wall's contact (bead {scene.n_contacts + 1} on the flat, its force below half its peak after the "
+            "reflection: stop_after_wall), both backends: the wall's peak is asked for (peak_force)",
         )
     return PlanChoice(
         "stop_after_contact",
@@ -667,7 +668,9 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     stop = scene.run.stop_after_contact
     if scene.run.end_time is None and stop is None and last is not None and not scene.outputs.snapshots:
         choices.append(_stop_choice(scene, last))
-        stop = choices[-1].value
+        stop = last
+        if wall_peak_planned(scene):
+            d["run"]["stop_after_wall"] = True
     if stop is not None:
         d["run"]["stop_after_contact"] = stop
     choices += _output_interval_choices(scene, d, omega, end, rtol_plan)
