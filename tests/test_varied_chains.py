@@ -456,18 +456,32 @@ MAIN_WAVE_BEHIND_A_PRECURSOR = material_chain(
 
 
 def test_a_main_wave_still_rising_at_the_planned_end_is_said_and_run_again_longer():
-    """The planned end comes while the window's last contact's force still rises behind a smaller
-    precursor: its peak so far is not complete (peaks.csv) and the run says why (peaks.still_rising in
-    unmeasured_outputs: the command line exits 1 on it); the plan is run again, longer
-    (plan.extended_plan, as run_scene does), its stop check ending it once the main wave has passed, and
-    the peak it reports there is the main wave's maximum, complete; the leading pulse (the precursor,
-    the first maximum) stands."""
+    """A walled chain whose peak forces are asked for runs until the wall's peak is measured, by when
+    the main wave behind a smaller precursor has passed the window's last contact. Planned for that
+    contact alone, the end comes while its force still rises: its peak so far is not complete
+    (peaks.csv) and the run says why (peaks.still_rising in unmeasured_outputs: the command line exits 1
+    on it); the plan is run again, longer (plan.extended_plan, as run_scene does), its stop check
+    ending it once the main wave has passed, and the peak it reports there is the main wave's maximum,
+    complete; the leading pulse (the precursor, the first maximum) stands."""
     from granchain.postprocess.observables import unmeasured_outputs
-    from granchain.workflows.plan import extended_plan, plan_scene
+    from granchain.workflows.plan import _front_end_time, extended_plan, plan_scene, wave_speeds
 
-    plan = plan_scene(MAIN_WAVE_BEHIND_A_PRECURSOR, method="verlet")
+    walled = plan_scene(MAIN_WAVE_BEHIND_A_PRECURSOR, method="verlet")
+    b = walled.scene.window[1]
+    # the chain is walled and asks for peak forces: the plan runs until the wall's peak is measured
+    # ([run] stop_after_wall), by when the main wave has passed contact b too
+    assert walled.scene.run.stop_after_wall
+    got = run_reference(walled.scene, "verlet").solution
+    assert got.complete[b - 1]
+    assert got.wall_peak_complete
+    assert got.peak_force[b - 1] > 2 * got.leading_pulse_force[b - 1]
+    assert not unmeasured_outputs(walled.scene, got)
+    # the plan for contact b alone (no wall's peak): its end comes while the main wave still rises there
+    sc = MAIN_WAVE_BEHIND_A_PRECURSOR
+    end = _front_end_time(sc, b, wave_speeds(sc)[0], walled.omega_max)
+    run = replace(walled.scene.run, end_time=end.value, stop_after_wall=False)
+    plan = replace(walled, scene=replace(walled.scene, run=run))
     first = run_reference(plan.scene, "verlet").solution
-    b = plan.scene.window[1]
     assert first.end_time == plan.scene.run.end_time  # the stop check did not end it
     assert not first.complete[b - 1]
     assert first.peak_force[b - 1] > 2 * first.leading_pulse_force[b - 1]  # the main wave, above the precursor
@@ -483,6 +497,7 @@ def test_a_main_wave_still_rising_at_the_planned_end_is_said_and_run_again_longe
     assert s.peak_force[b - 1] > first.peak_force[b - 1]
     assert s.time_of_peak[b - 1] > first.end_time
     assert s.leading_pulse_force[b - 1] == first.leading_pulse_force[b - 1]  # the same run up to the first end
+    assert s.peak_force[b - 1] == got.peak_force[b - 1]  # the main wave's, as the walled plan measured it
 
 
 @pytest.mark.slow
