@@ -123,6 +123,21 @@ def _planned(sc):
     return plan_scene(sc, method="verlet").scene
 
 
+def _plan_for_the_window_alone(sc):
+    """The planner's plan (Verlet) of a walled chain as it would be without the wall's peak: its end the
+    one for the window's last contact (plan._front_end_time), no stop on the wall's contact. A walled
+    chain whose peak forces are asked for is planned until the wall's peak is measured
+    (plan.wall_peak_planned), which covers that contact too; this is the plan whose end can still come
+    too soon for it."""
+    from granchain.workflows.plan import _front_end_time, plan_scene, wave_speeds
+
+    plan = plan_scene(sc, method="verlet")
+    end = _front_end_time(sc, plan.scene.window[1], wave_speeds(sc)[0], plan.omega_max)
+    run = replace(plan.scene.run, end_time=end.value, stop_after_wall=False)
+    choices = [end if c.name == "end_time" else c for c in plan.choices]
+    return replace(plan, scene=replace(plan.scene, run=run), choices=choices)
+
+
 #: a uniform brass chain at F0 = 1e3 x its kick's force: the linear regime, the first maximum lagging
 #: the sonic front by dispersion (0.51 n^(1/3) periods at contact n)
 LINEAR_UNIFORM = parse_scene(chain_text('radius = 4.76e-3\nmaterial = "brass"\n', 40, 0.1, 1e4), source="linear.toml")
@@ -420,25 +435,36 @@ def test_a_front_that_ramps_until_the_walls_reflection_is_covered():
 
 @pytest.mark.slow
 def test_a_walled_ptfe_chain_that_ramps_past_every_front_estimate_is_run_again_longer():
-    """The planned end comes before the window's last contact has its first maximum, and the run says so
-    (unmeasured_outputs: the command line exits 1 on it); run_scene runs it again, longer
-    (PlanExtendedWarning), and its stop check ends it within 1.5x of that maximum."""
+    """Planned for the window's last contact alone, the end comes before that contact has its first
+    maximum, and the run says so (unmeasured_outputs: the command line exits 1 on it); it is run again,
+    longer (plan.extended_plan, as run_scene does), and its stop check ends it within 1.5x of that
+    maximum. The chain is walled and asks for peak forces: run_scene plans it until the wall's peak is
+    measured, which covers that maximum in one run."""
     from granchain.postprocess.observables import unmeasured_outputs
-    from granchain.workflows.run import PlanExtendedWarning
+    from granchain.workflows.plan import extended_plan
 
-    planned = _planned(NONLINEAR_WALLED_RAMP)
+    plan = _plan_for_the_window_alone(NONLINEAR_WALLED_RAMP)
+    planned = plan.scene
     first = run_reference(planned, "verlet")
     b = planned.window[1]
     assert not np.isfinite(first.solution.leading_pulse_time[b - 1])
     assert any("no leading pulse yet" in line for line in unmeasured_outputs(planned, first.solution))
-    with pytest.warns(PlanExtendedWarning, match="ended before the window's last contact was measured"):
-        result = run_scene(NONLINEAR_WALLED_RAMP, backend="reference", method="verlet")
-    s = result.solution
+    longer = extended_plan(NONLINEAR_WALLED_RAMP, plan, first.solution)
+    assert longer is not None
+    assert (
+        "ended before the window's last contact was measured"
+        in dict((c.name, c.reason) for c in longer.choices)["end_time"]
+    )
+    s = run_reference(longer.scene, "verlet").solution
     arrival = s.leading_pulse_time[b - 1]
     assert np.isfinite(arrival)
-    assert result.observables()["leading_peak_force"] is not None
-    assert result.plan.scene.run.end_time > planned.run.end_time
     assert planned.run.end_time < arrival < s.end_time <= 1.5 * arrival
+    walled = run_scene(NONLINEAR_WALLED_RAMP, backend="reference", method="verlet")
+    assert walled.plan.scene.run.stop_after_wall
+    assert walled.observables()["leading_peak_force"] is not None
+    assert walled.solution.wall_peak_complete
+    # the same first maximum (run_scene's step may be refined, refined_plan: 5e-9 apart measured)
+    assert walled.solution.leading_pulse_time[b - 1] == pytest.approx(arrival, rel=1e-6)
 
 
 #: numpy's draw (benchmarks/bench_ptfe_end_time.py 100 --seed 2 --precompressed mixed, its chain 10): PTFE
@@ -464,7 +490,7 @@ def test_a_main_wave_still_rising_at_the_planned_end_is_said_and_run_again_longe
     ending it once the main wave has passed, and the peak it reports there is the main wave's maximum,
     complete; the leading pulse (the precursor, the first maximum) stands."""
     from granchain.postprocess.observables import unmeasured_outputs
-    from granchain.workflows.plan import _front_end_time, extended_plan, plan_scene, wave_speeds
+    from granchain.workflows.plan import extended_plan, plan_scene
 
     walled = plan_scene(MAIN_WAVE_BEHIND_A_PRECURSOR, method="verlet")
     b = walled.scene.window[1]
@@ -477,10 +503,7 @@ def test_a_main_wave_still_rising_at_the_planned_end_is_said_and_run_again_longe
     assert got.peak_force[b - 1] > 2 * got.leading_pulse_force[b - 1]
     assert not unmeasured_outputs(walled.scene, got)
     # the plan for contact b alone (no wall's peak): its end comes while the main wave still rises there
-    sc = MAIN_WAVE_BEHIND_A_PRECURSOR
-    end = _front_end_time(sc, b, wave_speeds(sc)[0], walled.omega_max)
-    run = replace(walled.scene.run, end_time=end.value, stop_after_wall=False)
-    plan = replace(walled, scene=replace(walled.scene, run=run))
+    plan = _plan_for_the_window_alone(MAIN_WAVE_BEHIND_A_PRECURSOR)
     first = run_reference(plan.scene, "verlet").solution
     assert first.end_time == plan.scene.run.end_time  # the stop check did not end it
     assert not first.complete[b - 1]
@@ -502,23 +525,27 @@ def test_a_main_wave_still_rising_at_the_planned_end_is_said_and_run_again_longe
 
 @pytest.mark.slow
 def test_run_scene_runs_a_main_wave_still_rising_at_the_planned_end_again_on_lammps():
-    """run_scene's own path on LAMMPS (its time step refined, then its end extended): the window's last
-    contact's force still rises at the planned end there as on the reference (the end state's
-    velocities: peaks.still_rising), and the run made again ends with its peak complete."""
+    """LAMMPS: planned for the window's last contact alone, its force still rises at the planned end
+    there as on the reference (the end state's velocities: peaks.still_rising), and the run made again
+    (plan.extended_plan) ends with its peak complete; run_scene's own plan, until the wall's peak is
+    measured, measures both in one run."""
     from granchain.postprocess.observables import unmeasured_outputs
-    from granchain.workflows.run import PlanExtendedWarning
+    from granchain.workflows.plan import extended_plan
 
-    with pytest.warns(
-        PlanExtendedWarning, match=r"window's last contact was measured \(not measured: peak_force_contact_18\)"
-    ):
-        result = run_scene(MAIN_WAVE_BEHIND_A_PRECURSOR, backend="lammps", method="verlet")
-    s, planned = result.solution, _planned(MAIN_WAVE_BEHIND_A_PRECURSOR)
-    b = planned.window[1]
-    assert result.plan.scene.run.end_time > planned.run.end_time
-    assert s.end_time < result.plan.scene.run.end_time  # the stop check ended it
+    plan = _plan_for_the_window_alone(MAIN_WAVE_BEHIND_A_PRECURSOR)
+    b = plan.scene.window[1]
+    first = run_scene(plan.scene, backend="lammps").solution
+    assert [line.split(":")[0] for line in unmeasured_outputs(plan.scene, first)] == [f"peak_force_contact_{b}"]
+    longer = extended_plan(MAIN_WAVE_BEHIND_A_PRECURSOR, plan, first)
+    s = run_scene(longer.scene, backend="lammps").solution
+    assert s.end_time < longer.scene.run.end_time  # the stop check ended it
     assert s.complete[b - 1]
-    assert not unmeasured_outputs(result.scene, s)
-    assert s.time_of_peak[b - 1] > planned.run.end_time
+    assert not unmeasured_outputs(longer.scene, s)
+    assert s.time_of_peak[b - 1] > plan.scene.run.end_time
+    result = run_scene(MAIN_WAVE_BEHIND_A_PRECURSOR, backend="lammps", method="verlet")
+    assert result.solution.complete[b - 1]
+    assert result.solution.wall_peak_complete
+    assert not unmeasured_outputs(result.scene, result.solution)
 
 
 #: CI's draw: a taper 0.8125 over 25 beads (bead 25 of radius 33 um) kicked at 2 m/s: contact 1 (beads of
