@@ -115,7 +115,7 @@ def parse_scene(text: str, source: str = "<notebook>"):
     return _parse(text, source=source)
 
 
-def plan(scene, rtol: float | None = None, method: str = "rk4"):
+def plan(scene, rtol: float | None = None, method: str | None = None):
     """The planner's choices for a scene: every "auto" value, and the time step when rtol is given.
 
     Parameters
@@ -125,9 +125,10 @@ def plan(scene, rtol: float | None = None, method: str = "rk4"):
     rtol : float, optional
         Relative tolerance of the peak forces; sets the time step (default: only "auto" values are
         chosen, the time step for 1e-3).
-    method : {"rk4", "verlet"}
+    method : {None, "rk4", "verlet"}
         The integrator the plan is for: the reference's RK4, or velocity Verlet (reference Verlet
-        and LAMMPS). The same rtol needs a finer Verlet step.
+        and LAMMPS); None: the one :func:`run` uses on the reference for this scene (RK4, or Verlet
+        on a scene with a dashpot). The same rtol needs a finer Verlet step.
 
     Returns
     -------
@@ -139,7 +140,8 @@ def plan(scene, rtol: float | None = None, method: str = "rk4"):
     from granchain.workflows.plan import plan_scene
     from granchain.workflows.run import integrator
 
-    return plan_scene(_scene(scene), rtol=rtol, method=integrator(REFERENCE, method))
+    scene = _scene(scene)
+    return plan_scene(scene, rtol=rtol, method=integrator(REFERENCE, method, scene))
 
 
 def run(
@@ -162,7 +164,10 @@ def run(
         A key of ``granchain.backends.BACKENDS``: "reference" (the pure-Python reference solver) or
         "lammps" (LAMMPS with granchain's pair styles).
     method : {None, "rk4", "verlet"}
-        Reference integrator (default RK4); LAMMPS runs velocity Verlet only.
+        Reference integrator: None runs RK4, or velocity Verlet on a scene with a dashpot (where
+        RK4's peak is the elastic force where the overlap turns and it gives no error bars; the
+        reason is printed once and kept in ``result.summary["method_reason"]``); LAMMPS runs velocity
+        Verlet only.
     rtol : float, optional
         Plan the time step for this relative tolerance (otherwise a fixed step is checked against
         1e-3 and an ``AccuracyWarning`` says when the planner's error model predicts it misses).

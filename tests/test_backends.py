@@ -14,6 +14,7 @@ from granchain.results import ChainSolution
 from granchain.scene import parse_scene
 from granchain.workflows.run import calculate_scene, integrator
 
+from .conftest import make_scene
 from .scenegen import overlap_fraction, scene_texts
 
 
@@ -25,7 +26,7 @@ def test_every_backend_declares_what_the_code_asks_of_it():
         assert set(backend.implemented_properties) <= set(PROPERTIES)
         assert backend.methods
         assert set(backend.methods) <= set(METHODS)
-        assert backend.integrator(None) == backend.methods[0]
+        assert backend.integrator(None, make_scene()) == backend.methods[0]  # (no dashpot)
         assert set(backend.work_files) <= {"histories.npy", "histories.csv", "chain.dump"}
     fields = {f.name for f in dataclasses.fields(ChainSolution)}
     assert {f for props in PROPERTIES.values() for f in props} <= fields
@@ -33,13 +34,13 @@ def test_every_backend_declares_what_the_code_asks_of_it():
 
 def test_an_unknown_backend_or_method_is_refused_with_the_choices():
     with pytest.raises(UsageError, match="backend = 'gromacs' is not known; choose one of reference, lammps"):
-        integrator("gromacs", None)
+        integrator("gromacs", None, make_scene())
     with pytest.raises(UsageError, match="method = 'euler' is not known; choose rk4 or verlet"):
-        integrator("reference", "euler")
+        integrator("reference", "euler", make_scene())
     with pytest.raises(UsageError, match="the LAMMPS backend integrates with velocity Verlet only"):
-        integrator(LAMMPS, "rk4")
-    assert integrator(REFERENCE, None) == "rk4"
-    assert integrator("lammps", None) == "verlet"
+        integrator(LAMMPS, "rk4", make_scene())
+    assert integrator(REFERENCE, None, make_scene()) == "rk4"
+    assert integrator("lammps", None, make_scene()) == "verlet"
 
 
 def test_the_file_backend_writes_its_input_and_names_its_command(tmp_path):

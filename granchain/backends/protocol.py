@@ -97,7 +97,8 @@ class Backend:
     implemented_properties : tuple of str
         The keys of :data:`PROPERTIES` its runs fill.
     methods : tuple of str
-        The integrators it runs, its default first.
+        The integrators it runs, its default first (:meth:`default_method` may choose another for a
+        scene).
     method_text : str
         Its integrators in words, for the refusal of another.
     mpi : bool
@@ -130,18 +131,37 @@ class Backend:
     absolute_positions: ClassVar[bool] = False
     numpy_speed: ClassVar[bool] = False
 
-    def integrator(self, method: str | None) -> str:
-        """The integrator a run with ``method`` (None: the default) uses on this backend.
+    def default_method(self, scene) -> tuple[str, str | None]:
+        """The integrator a run of this scene uses when none is asked for, and why where the scene
+        changes it.
+
+        Parameters
+        ----------
+        scene : granchain.scene.Scene
+            The scene to run.
+
+        Returns
+        -------
+        (str, str or None)
+            The integrator (``methods[0]`` unless the scene calls for another) and the reason in words
+            where it is not ``methods[0]``, else None.
+        """
+        return self.methods[0], None
+
+    def integrator(self, method: str | None, scene) -> str:
+        """The integrator a run of ``scene`` with ``method`` (None: the default) uses on this backend.
 
         Parameters
         ----------
         method : str or None
             An integrator some backend runs, or None.
+        scene : granchain.scene.Scene
+            The scene to run (the default may depend on it: :meth:`default_method`).
 
         Returns
         -------
         str
-            ``method``, or this backend's default for None.
+            ``method``, or this backend's default for the scene for None.
 
         Raises
         ------
@@ -149,7 +169,7 @@ class Backend:
             ``method`` is not one this backend runs.
         """
         if method is None:
-            return self.methods[0]
+            return self.default_method(scene)[0]
         if method not in self.methods:
             raise UsageError(f"method = {method!r}: the {self.title} backend integrates with {self.method_text} only")
         return method

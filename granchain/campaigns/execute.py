@@ -88,7 +88,7 @@ class Runner:
         self.ex = executor
         self.rerun, self.retry_failed = rerun, retry_failed
         self.stream = sys.stderr if stream is None else stream
-        self.method = _method(campaign)
+        self.methods: dict[str, str | None] = {}  # the integrators its points run, each with its reason
         self.code = wsp.code_version(campaign.backend)
         self.project = wsp.create_workspace(ws)
         self._stale = wsp.stale_versions(self.project, self.code)
@@ -113,11 +113,38 @@ class Runner:
             except OSError:
                 pass
 
+    def method(self, point: Point) -> str:
+        """The integrator this point runs: [campaign] method, or the backend's default for the point's
+        scene (workflows.run.method_choice: the reference's Verlet where the point has a dashpot),
+        said once per campaign run where the scene chose it."""
+        method, why = point_method(self.c, point.scene)
+        if why is not None and method not in self.methods:
+            self.say(
+                f"points with a dashpot: the {self.c.backend} backend runs {why}; their state points say "
+                f'{method}, so results of them made with another method are not theirs ([campaign] method = "rk4" '
+                "runs and finds those)"
+            )
+        self.methods.setdefault(method, why)
+        return method
+
+    @property
+    def record_method(self) -> tuple[str | None, str | None]:
+        """(method, reason) for the campaign's record: the one integrator its points ran so far (None
+        when they ran several: each point's state point names its own), and why the scene chose it
+        where it did (None where no point's scene did); before any point, the base scene's."""
+        if not self.methods:
+            from granchain.scene import scene_from_dict
+
+            return point_method(self.c, scene_from_dict(self.c.base, source=self.c.base_source))
+        only = next(iter(self.methods)) if len(self.methods) == 1 else None
+        return only, next((why for why in self.methods.values() if why is not None), None)
+
     def job(self, point: Point):
         """The point's signac job, created if new: its state point is the canonical scene, backend,
-        method, rtol, error_estimate and the code (granchain.campaigns.workspace.statepoint)."""
+        method (the one the point runs: method), rtol, error_estimate and the code
+        (granchain.campaigns.workspace.statepoint)."""
         sp = wsp.statepoint(
-            point.scene_dict, self.c.backend, self.method, self.c.rtol, self.c.error_estimate, self.code
+            point.scene_dict, self.c.backend, self.method(point), self.c.rtol, self.c.error_estimate, self.code
         )
         job = self.project.open_job(sp)
         job.init()
@@ -157,7 +184,7 @@ class Runner:
             "scene": point.scene_dict,
             "source": f"campaign point ({params_text(point.params)})",
             "backend": self.c.backend,
-            "method": self.method,
+            "method": self.method(point),
             "rtol": self.c.rtol,
             "error_estimate": self.c.error_estimate,
             "code": self.code,
@@ -229,21 +256,23 @@ def planned_beads(campaign: Campaign, scene) -> int:
     return plan_for(scene, campaign.backend, campaign.method, campaign.rtol)[0].chain.beads
 
 
-def _method(c: Campaign) -> str:
-    from granchain.workflows.run import integrator
+def point_method(c: Campaign, scene) -> tuple[str, str | None]:
+    """The integrator a point of this scene runs, and why where its scene chose it
+    (workflows.run.method_choice)."""
+    from granchain.workflows.run import method_choice
 
-    return integrator(c.backend, c.method)
+    return method_choice(c.backend, c.method, scene)
 
 
 def preflight(campaign: Campaign, points: list[Point]) -> None:
     """Plan every point and check its time step against the stability limit before anything runs:
     one bad point is reported with its parameters and nothing starts."""
-    from granchain.workflows.run import check_resources, check_timestep, integrator, plan_for
+    from granchain.workflows.run import check_resources, check_timestep, plan_for
 
-    method = integrator(campaign.backend, campaign.method)
     said: list[str] = []  # what the ranks rule says of the points, once for the campaign
     for p in points:
         try:
+            method, _ = point_method(campaign, p.scene)
             scene, _ = plan_for(p.scene, campaign.backend, method, campaign.rtol)
             check_timestep(scene, method)
             if isinstance(campaign.ranks, int) and campaign.ranks > 1:  # the cores are the job's, not ours

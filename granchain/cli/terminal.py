@@ -74,12 +74,11 @@ def planned(scene: Scene, rtol: float | None, backend: str | Backend, method: st
     from granchain.progress import is_quiet
     from granchain.workflows.run import integrator, plan_for
 
+    used = integrator(backend, method, scene)
     scene, plan = plan_for(scene, backend, method, rtol)
     if plan is not None and not is_quiet():  # (--quiet: no plan lines either)
         for c in plan.choices:
-            print(
-                f"plan ({integrator(backend, method)}): {c.name} = {c.value:.6g}  ({shown(c.reason)})", file=sys.stderr
-            )
+            print(f"plan ({used}): {c.name} = {c.value:.6g}  ({shown(c.reason)})", file=sys.stderr)
     return scene, plan
 
 
@@ -144,6 +143,8 @@ def print_result(result, out) -> None:
         f"backend    {s['backend']} ({s['method']}), dt = {s['timestep']:g} s, {s['steps']} steps, "
         f"{s['wall_time']:.3g} s wall"
     )
+    if s.get("method_reason"):  # the scene chose the integrator (workflows.run.method_choice)
+        print(f"           ({shown(s['method_reason'])})")
     missing = s.get("observables_missing", {})
     errors = (s.get("errors") or {}).get("observables", {})
     for k, v in s["observables"].items():

@@ -30,6 +30,9 @@ class RunResult:
     result was made, i.e. the end of the run. command: the command line that made the run (default:
     this Python process's sys.argv when the summary is written). errors: the run's measured error
     estimates (granchain.workflows.error_estimates.ErrorReport), None when none were made.
+    method_reason: why the run's integrator was chosen for its scene when none was asked for
+    (workflows.run.method_choice: the reference's Verlet on a scene with a dashpot), else None;
+    summary.json's "method_reason".
     """
 
     scene: object  # granchain.scene.Scene
@@ -41,6 +44,7 @@ class RunResult:
     finished_utc: datetime = field(default_factory=_now_utc)
     command: list[str] | None = None
     errors: object | None = None  # granchain.workflows.error_estimates.ErrorReport
+    method_reason: str | None = None
     # a result read back from a run directory (granchain.load_run): the directory, and what it keeps
     # that a solution cannot give again (summary.json; peaks.csv's error columns)
     path: Path | None = None
@@ -118,6 +122,7 @@ class RunResult:
             "scene_source": sc.source,
             "backend": self.backend,
             "method": s.method,
+            **({"method_reason": self.method_reason} if self.method_reason is not None else {}),
             "timestep": s.timestep,
             "steps": s.steps,
             "end_time": s.end_time,

@@ -6,21 +6,29 @@ import threading
 from pathlib import Path
 
 from granchain.backends import LAMMPS, REFERENCE
-from granchain.postprocess.comparison_table import compare_runs, peak_definition, write_compare
+from granchain.postprocess.comparison_table import compare_runs, write_compare
 from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain, write_run_dir
 from granchain.safe_files import UnsafeFileError, atomic_directory
 from granchain.workflows import run as run_module
 from granchain.workflows.error_estimates import rk4_companions
-from granchain.workflows.run import calculate_scene, check_resources, plan_for, run_scene, shared_reference_runs
+from granchain.workflows.run import (
+    calculate_scene,
+    check_resources,
+    method_choice,
+    plan_for,
+    run_scene,
+    shared_reference_runs,
+)
 from granchain.workflows.shared_runs import Abandoned
 
 
 def reference_method(scene, method: str | None = None) -> tuple[str, str | None]:
-    """The reference's integrator in a compare of this scene, and why where it is not RK4 by default.
+    """The reference's integrator in a compare of this scene, and why where the scene chose it.
 
-    method: the user's choice, kept; None: RK4, but Verlet on a scene with a dashpot, whose peaks RK4
-    reads as a different quantity from LAMMPS's Verlet (comparison_table.peak_definition): the
-    reference's Verlet is still the independent numpy solver, and defines a peak as LAMMPS does.
+    method: the user's choice, kept; None: the reference's default for the scene
+    (workflows.run.method_choice: RK4, but Verlet on a scene with a dashpot, whose peaks RK4 reads
+    as a different quantity from LAMMPS's Verlet, comparison_table.peak_definition; the reference's
+    Verlet is still the independent numpy solver, and defines a peak as LAMMPS does).
 
     Parameters
     ----------
@@ -35,16 +43,7 @@ def reference_method(scene, method: str | None = None) -> tuple[str, str | None]
         The integrator, and the reason it was chosen for this scene (None where the user chose it or
         it is the default RK4).
     """
-    if method is not None:
-        return REFERENCE.integrator(method), None
-    lammps_peak = peak_definition(LAMMPS.integrator(None), scene)
-    if peak_definition(REFERENCE.integrator(None), scene) == lammps_peak:
-        return REFERENCE.integrator(None), None
-    why = (
-        f"verlet, not rk4, on a scene with a dashpot: rk4's peak is {peak_definition('rk4', scene)}, LAMMPS's "
-        f"{lammps_peak}, as the reference's Verlet's (--method rk4 runs RK4; its peak rows are then not comparable)"
-    )
-    return "verlet", why
+    return method_choice(REFERENCE, method, scene)
 
 
 def compare_scene(
@@ -74,7 +73,7 @@ def compare_scene(
     compare.csv and compare.md, written atomically.
     """
     run_module.check_error_estimate(error_estimate)
-    method, _ = reference_method(scene, method)
+    method, why_method = reference_method(scene, method)
     if out is not None:
         check_output_dir(out, overwrite)
     # each backend runs the step planned for its own integrator; with timestep = "auto" each is
@@ -112,6 +111,7 @@ def compare_scene(
             ref = run_scene(reference_scene or scene, **ref_kw)
             lam_calc = calculate_scene(scene, **lam_kw)
     lam = lam_calc.result
+    ref.method_reason = why_method  # (its run was given the method: the reason is the compare's)
     try:
         rows = compare_runs(lam, ref, rtol)
         if out is not None:

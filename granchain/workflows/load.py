@@ -250,6 +250,7 @@ def load_run(path: str | Path) -> RunResult:
         "plan": plan_from_dict(prov.get("plan"), scene),
         "started_utc": _time(prov.get("started_utc")) if prov.get("start_time") == "measured" else None,
         "command": prov.get("command"),
+        "method_reason": summary.get("method_reason") if isinstance(summary.get("method_reason"), str) else None,
         "path": d,
         "stored": StoredRun(summary=summary, peaks=peaks),
     }

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 import warnings
 from contextlib import contextmanager, nullcontext
 from datetime import UTC, datetime
@@ -69,13 +70,44 @@ class SmallChainRanksWarning(UserWarning):
     """More MPI ranks than a chain this short can use: the run is slower, its results the same."""
 
 
-def integrator(backend: str | Backend, method: str | None) -> str:
-    """The integrator a backend runs (Backend.integrator): reference rk4 (default) or verlet; LAMMPS
-    velocity Verlet."""
+def method_choice(backend: str | Backend, method: str | None, scene) -> tuple[str, str | None]:
+    """The integrator a run of this scene with ``method`` uses on this backend, and why where the
+    scene chose it: every entry point (run, the API, compare, campaigns, the planner's notes) asks
+    here.
+
+    Parameters
+    ----------
+    backend : str or Backend
+        The backend, or its name.
+    method : str or None
+        The integrator asked for (kept), or None: the backend's default for this scene
+        (Backend.default_method: the reference's RK4, or Verlet on a scene with a dashpot).
+    scene : granchain.scene.Scene
+        The scene to run.
+
+    Returns
+    -------
+    (str, str or None)
+        The integrator, and the reason the scene chose it (None where it was asked for or is the
+        backend's plain default).
+
+    Raises
+    ------
+    UsageError
+        ``method`` is not known, or not one this backend runs.
+    """
     backend = backend_named(backend)
     if method not in (None, *METHODS):
         raise UsageError(f"method = {method!r} is not known; choose {' or '.join(METHODS)}")
-    return backend.integrator(method)
+    if method is None:
+        return backend.default_method(scene)
+    return backend.integrator(method, scene), None
+
+
+def integrator(backend: str | Backend, method: str | None, scene) -> str:
+    """The integrator a run of this scene uses on a backend (method_choice without its reason):
+    reference rk4 (default; verlet on a scene with a dashpot) or verlet; LAMMPS velocity Verlet."""
+    return method_choice(backend, method, scene)[0]
 
 
 def ranks_refused(np_, backend: Backend) -> str:
@@ -277,7 +309,7 @@ def plan_for(scene, backend: str = "reference", method: str | None = None, rtol:
         return scene, None
     from granchain.workflows.plan import plan_scene
 
-    plan = plan_scene(scene, rtol=rtol, method=integrator(backend, method))
+    plan = plan_scene(scene, rtol=rtol, method=integrator(backend, method, scene))
     return plan.scene, plan
 
 
@@ -366,9 +398,10 @@ def run_scene(
 ) -> RunResult:
     """Run a scene on a backend; if out is given, write the run directory (checked before the run).
 
-    reference: method rk4 (default) or verlet. lammps: velocity Verlet with granchain's pair
-    styles, np_ MPI ranks; the run directory also gets the deck, data file, log and dumps (the
-    backend's work files, removed once copied). The other arguments are calculate_scene's.
+    reference: method rk4 (default; verlet on a scene with a dashpot, method_choice) or verlet.
+    lammps: velocity Verlet with granchain's pair styles, np_ MPI ranks; the run directory also gets
+    the deck, data file, log and dumps (the backend's work files, removed once copied). The other
+    arguments are calculate_scene's.
     """
     calc = _calculate(
         scene, backend, method, out, overwrite, np_, force, rtol, oversubscribe, error_estimate, before_run, after_run
@@ -428,7 +461,12 @@ def _calculate(
     started = datetime.now(UTC)
     check_error_estimate(error_estimate)
     backend = backend_named(backend)
-    method = integrator(backend, method)
+    method, why = method_choice(backend, method, scene)
+    if why is not None:  # the scene chose the integrator: said once, and kept in summary.json
+        from granchain.progress import is_quiet
+
+        if not is_quiet():
+            print(f"granchain: the {backend.name} backend runs {why}", file=sys.stderr, flush=True)
     given = scene
     scene, plan = plan_for(scene, backend, method, rtol)
     check_resources(scene, backend, np_, oversubscribe, out=out, given=given)
@@ -454,4 +492,5 @@ def _calculate(
         calc = _execute(scene, backend, method, np_)
         calc = _finish(calc, given, scene, plan, backend, method, np_, rtol, error_estimate, after_run)
     calc.result.started_utc = started
+    calc.result.method_reason = why
     return calc

@@ -177,7 +177,7 @@ def submit(
             "'granchain render SCENE --out DIR' and run it there by hand)"
         )
     concrete, plan = plan_for(scene, LAMMPS, None, None)
-    check_timestep(concrete, LAMMPS.integrator(None))
+    check_timestep(concrete, LAMMPS.integrator(None, concrete))
     check_resources(concrete, LAMMPS, ranks, oversubscribe=True)  # the cores are the job's, not this machine's
     out = Path(out)
     script_text = job_script(out, ranks, walltime, queue, account, memory, _job_name(out))
