@@ -11,6 +11,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from granchain.physics.effects.dashpot import dashpot_accel
 from granchain.reference import events
 from granchain.reference.events import Piece, first_kink_crossing
 from granchain.reference.hermite import hermite_max, max1
@@ -71,6 +72,13 @@ class RK4Integrator(Integrator):
         self.consts: dict[float, tuple[np.ndarray, ...]] = {}
         self.scratch = tuple(np.zeros(()) for _ in range(6))
         self.vt = np.empty(n) if state.gamma else None  # stage velocities, needed only by the dashpot
+        # the dashpot's forces at the stages: a contact touching and closing counts as closed (the
+        # force just after the touch: dashpot_accel's closing_at_touch)
+        self.dash_accel = (
+            dashpot_accel(state.law, state.inv_m, state.gamma, state.fp, state.alpha_hist, closing_at_touch=True)
+            if state.gamma
+            else None
+        )
         self.u_save, self.v_save = np.empty(n), np.empty(n)
         self.views = (state.u[:-1], state.u[1:], state.v[:-1], state.v[1:])  # (u and v change in place)
         self.history = state.law.history
@@ -366,7 +374,7 @@ class RK4Integrator(Integrator):
 
     def rk4_dashpot(self, state: ChainState, h: float, a_ext: float, consts: tuple[np.ndarray, ...]) -> None:
         """rk4 with a dashpot: the stage velocities too (the dashpot force), and its energy."""
-        u, v, accel = state.u, state.v, state.accel
+        u, v, accel = state.u, state.v, self.dash_accel
         k1v, k2v, k3v, k4v, ut, vt, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.ut, self.vt, self.hv
         half_h, quarter_h2, h_, half_h2, h2_6, h_6 = consts
         power = 0.0

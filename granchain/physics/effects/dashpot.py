@@ -91,15 +91,29 @@ class DashpotEffect(Effect):
 
 
 def dashpot_accel(
-    law, inv_m: np.ndarray, gamma: float, fp: np.ndarray, alpha_hist: np.ndarray
+    law, inv_m: np.ndarray, gamma: float, fp: np.ndarray, alpha_hist: np.ndarray, closing_at_touch: bool = False
 ) -> Callable[[np.ndarray, np.ndarray, np.ndarray | None], float]:
     """The reference's force evaluation with a dashpot (granchain.reference.state.make_accel): the
-    accelerations into out, the contact forces into fp[1:-1], returns the dashpot's power."""
+    accelerations into out, the contact forces into fp[1:-1], returns the dashpot's power.
+
+    The dashpot acts while the beads overlap (alpha > 0), so its force jumps from 0 to gamma alpha'
+    where a contact closes. closing_at_touch: a contact at exactly zero overlap that is closing
+    (alpha' > 0) counts as closed, the force just after the touch (where it is not closing the
+    force is 0 either way). RK4 asks for this: its stages move forward in time, and a stage at zero
+    overlap with a closing rate -- bead 1 kicked or struck at t = 0 (the stage positions lag the
+    stage velocities: a stage 2 at rest positions) or a piece that starts where event location found
+    the touch -- is at the start of the contact; taking the force before it gives each such touch a
+    first-order error. Measured (reference RK4 at the step planned for rtol 1e-3, peaks against the
+    run at dt / 16): two brass beads kicked at 1 m/s with gamma = 20.6 N s/m 3.3e-3 without it,
+    2.1e-5 with it; struck by a striker at 1 m/s 1.5e-3, 7.2e-6. Velocity Verlet keeps the force
+    before the touch, as LAMMPS's pair styles (r < 2R), with which it agrees step for step.
+    """
     n = fp.size - 1
     fc = fp[1:n]
     alpha = np.empty(n - 1)
     tmp = np.empty(n - 1)
     fe = np.empty(n - 1)
+    touching = np.greater_equal if closing_at_touch else np.greater
 
     def accel_dashpot(uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None) -> float:
         np.subtract(uu[:-1], uu[1:], out=alpha)
@@ -108,7 +122,7 @@ def dashpot_accel(
         # dashpot gamma * d(alpha)/dt while the beads overlap; the total never pulls
         rate = vv[:-1] - vv[1:]
         fe[:] = fc
-        fc[:] = np.where(uu[:-1] - uu[1:] > 0.0, np.maximum(fc + gamma * rate, 0.0), fc)
+        fc[:] = np.where(touching(uu[:-1] - uu[1:], 0.0), np.maximum(fc + gamma * rate, 0.0), fc)
         power = float(np.dot(fc - fe, rate))
         np.subtract(fp[:-1], fp[1:], out=out)
         out *= inv_m
