@@ -71,6 +71,13 @@ def test_run_without_a_method_on_a_dashpot_scene_runs_verlet_and_says_why(tmp_pa
     assert f"({WHY}" in out
     assert granchain.load_run(run_dir).method_reason == summary["method_reason"]
 
+    assert main(["plan", "dash.toml", "--json"]) == 0  # granchain plan: for the integrator run uses
+    plan = json.loads(capsys.readouterr().out)
+    assert plan["method"] == "verlet"
+    assert plan["method_reason"].startswith(WHY)
+    assert main(["plan", "dash.toml", "--method", "rk4"]) == 0
+    assert "method      rk4," in capsys.readouterr().out
+
     assert main(["run", "dash.toml", "--method", "rk4"]) == 0
     out, err = capsys.readouterr()
     summary = json.loads((tmp_path / "runs" / "dash-reference-rk4" / "summary.json").read_text())

@@ -45,17 +45,26 @@ def add_plan_parser(sub) -> None:
     pp = sub.add_parser("plan", help="print the planner's choices (time step, beads, end time) with reasons")
     pp.add_argument("scene", nargs="?", help=SCENE_HELP)
     pp.add_argument("--rtol", type=float, default=None, help="relative tolerance (default 1e-3; sets the time step)")
-    pp.add_argument("--method", default=METHODS[0], choices=list(METHODS), help="integrator the plan is for")
+    pp.add_argument(
+        "--method",
+        default=None,
+        choices=list(METHODS),
+        help="integrator the plan is for (default: the one `granchain run` uses on the reference: rk4, or verlet on "
+        "a scene with a dashpot)",
+    )
     pp.add_argument("--json", action="store_true", help="the plan as JSON on stdout")
     pp.set_defaults(func=cmd_plan)
 
 
 def cmd_plan(args) -> int:
     """The planner's choices for a scene, each with its reason, and the run's cost."""
+    from granchain.backends import REFERENCE
     from granchain.workflows.plan import plan_scene
+    from granchain.workflows.run import method_choice
 
     scene = resolve_scene(args.scene)
-    plan = plan_scene(scene, rtol=args.rtol, method=args.method)
+    method, why = method_choice(REFERENCE, args.method, scene)
+    plan = plan_scene(scene, rtol=args.rtol, method=method)
     s = plan.scene
     steps = math.ceil(s.run.end_time / s.run.timestep)
     kept = [("beads", s.chain.beads), ("end_time", s.run.end_time), ("timestep", s.run.timestep)]
@@ -65,6 +74,7 @@ def cmd_plan(args) -> int:
             {
                 "scene": {"title": scene.title, "source": scene.source},
                 "method": plan.method,
+                "method_reason": why,
                 "rtol": plan.rtol,
                 "stable_timestep": plan.stable_timestep,
                 "omega_max": plan.omega_max,
@@ -84,6 +94,8 @@ def cmd_plan(args) -> int:
         f"method      {plan.method}, rtol {plan.rtol:g}; stability limit {plan.stable_timestep:.4g} s "
         f"(omega_max = {plan.omega_max:.4g} rad/s)"
     )
+    if why is not None:
+        print(f"            ({shown(why)})")
     for c in plan.choices:
         print(f"{c.name:11s} {c.value:.6g}  because {shown(c.reason)}")
     for name, v in kept:
