@@ -103,6 +103,13 @@ def test_the_python_api_runs_verlet_on_a_dashpot_scene_unless_told(capsys, monke
     assert plain.solution.method == "rk4"
     assert "method_reason" not in plain.summary
     assert WHY not in capsys.readouterr().err
+    # planned and given error bars for the integrator it runs (RK4 with a dashpot withholds its bars)
+    auto_text = DASHPOT_TEXT.replace("timestep = 4e-08", "timestep = 'auto'")
+    assert auto_text != DASHPOT_TEXT
+    auto = granchain.run(parse_scene(auto_text, source="auto.toml"), rtol=1e-3, error_estimate=True)
+    assert auto.plan.method == "verlet"
+    assert auto.summary["provenance"]["plan"]["method"] == "verlet"
+    assert auto.errors.error_estimate is not None, auto.errors.why_none
 
 
 def _campaign_jobs(tmp_path, text: str):
