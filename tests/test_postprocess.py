@@ -266,8 +266,7 @@ def test_compare_on_a_dashpot_compares_peaks_of_one_definition(tmp_path, capsys)
     are marked not comparable, not failed. Before, the default compare ran RK4 and failed its peak rows."""
     rtol, factor = 1e-3, 10.0
     text = _two_bead_dashpot(rtol, factor)
-    # the two definitions at a fine fixed step (each within 2e-4 of its converged value there; at the
-    # planned steps RK4, which no error model plans on a dashpot, is off by more)
+    # the two definitions at a fine fixed step (each within 2e-4 of its converged value there)
     sc = parse_scene(text.replace("timestep = 'auto'", "timestep = 3e-8"), source="dash.toml")
     rk4, verlet = (run_scene(sc, method=m, error_estimate=False) for m in ("rk4", "verlet"))
     f_rk4, f_verlet = rk4.observables()["leading_peak_force"], verlet.observables()["leading_peak_force"]
