@@ -190,12 +190,7 @@ def _solve(
     state = ChainState(problem)
     plan = step_plan(end_time, timestep, problem.duration if problem.amplitude else 0.0, snapshots)
     total_steps = sum(g.steps for g in plan)
-    integrator: Integrator
-    if method == "verlet":
-        integrator = VerletIntegrator(state)
-    else:
-        max_splits = MAX_SPLITS_BASE + MAX_SPLITS_PER_CONTACT * (problem.beads - 1)  # per step
-        integrator = RK4Integrator(state, timestep, event_location, max_splits)
+    integrator = _integrator(method, state, timestep, event_location)
     peaks = ForceSamplePeaks(state) if method == "verlet" else HermitePeaks(state)
     ledger = EnergyLedger(state, max(1, total_steps // max(1, energy_samples)))
     observers: list[Observer] = [
@@ -227,6 +222,14 @@ def _solve(
         momentum=float(np.dot(state.mass_ke, state.v)),
         **fields,
     )
+
+
+def _integrator(method: str, state: ChainState, timestep: float, event_location: bool) -> Integrator:
+    """The method's integrator of the state (RK4 with at most so many kink splits per step)."""
+    if method == "verlet":
+        return VerletIntegrator(state)
+    max_splits = MAX_SPLITS_BASE + MAX_SPLITS_PER_CONTACT * (state.n - 1)  # per step
+    return RK4Integrator(state, timestep, event_location, max_splits)
 
 
 def _start_run(integrator: Integrator, state: ChainState, t: float, observers: list[Observer]) -> None:
