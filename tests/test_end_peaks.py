@@ -186,3 +186,29 @@ def test_a_wall_the_wave_has_not_reached_prints_not_reached_not_a_round_off_forc
     else:
         assert "-   not reached: the wave had not reached the wall's contact" in line, line
         assert f"{summary['wall_peak_force']:g}" not in line.split("not reached")[0], line
+
+
+def test_run_marks_each_force_of_a_precompressed_chain_dynamic_or_total(tmp_path, capsys):
+    """Under precompression granchain run's peaks are dynamic (F - F0) and the wall's total force was
+    printed among them unmarked (a glass chain at F0 = 5 N: max_peak_force 32.67 N beside
+    wall_peak_force 60.54 N): every force line says which it is, and the wall's is dynamic, as compare
+    names it (dynamic_wall_peak_force), with its total alongside."""
+    from granchain.cli.terminal import print_result
+
+    result = run_scene(walled(4e-4, 1.0, True), backend="reference", method="verlet", error_estimate=False)
+    print_result(result, tmp_path)
+    lines = capsys.readouterr().out.splitlines()
+    s = result.summary()
+    assert any("forces (precompressed)" in x and "F0 = 1 N" in x for x in lines), lines
+    for name in ("leading_peak_force", "max_peak_force", "leading_peak_force_nondim"):
+        line = next(x for x in lines if x.split()[:1] == [name])
+        assert "above F0)" in line, line
+        assert float(line.split(")")[1].split()[0]) == pytest.approx(s["observables"][name], rel=1e-5)
+    assert "(N, total)" in next(x for x in lines if x.split()[:1] == ["static_force"])
+    assert not any(x.split()[:1] == ["wall_peak_force"] for x in lines), lines
+    wall = next(x for x in lines if x.split()[:1] == ["dynamic_wall_peak_force"])
+    assert "(N, above F0)" in wall, wall
+    assert float(wall.split(")")[1].split()[0]) == pytest.approx(s["wall_peak_force"] - 1.0, rel=1e-5)
+    assert f"total {s['wall_peak_force']:.6g} N" in wall, wall
+    striker = next(x for x in lines if x.split()[:1] == ["striker_peak_force"])
+    assert "(N)" in striker, striker  # the striker's contact carries no F0

@@ -59,6 +59,19 @@ def resolve_scene(arg: str | None) -> Scene:
     return load_scene(arg or DEFAULT_SCENE)
 
 
+#: how a force is marked on a precompressed chain: the dynamic force F - F0 or the total force F
+DYNAMIC, TOTAL = "above F0", "total"
+
+
+def force_unit(name: str, f0: float) -> str:
+    """The unit an observable is printed with; on a precompressed chain (f0 > 0) a force's says whether
+    it is dynamic (the peaks, F - F0, docs/observables.md) or total (static_force, F0 itself)."""
+    unit = OBSERVABLE_UNITS.get(name, "?")
+    if not f0 or not (unit == "N" or name.endswith("_force_nondim")):
+        return unit
+    return f"{unit}, {TOTAL if name == 'static_force' else DYNAMIC}"
+
+
 def fmt(v) -> str:
     """A number as the result lines print it (6 significant digits; "-" for None)."""
     if v is None:
@@ -134,29 +147,10 @@ def ended_too_soon(result, planned_end: bool) -> int:
     return 1 if unmeasured and planned_end else 0
 
 
-def print_result(result, out) -> None:
-    """What `granchain run` (and `granchain collect`) prints about a finished run."""
-    scene = result.scene
-    s = result.summary()
-    print(f"scene      {scene_name(scene)}")
-    print(
-        f"backend    {s['backend']} ({s['method']}), dt = {s['timestep']:g} s, {s['steps']} steps, "
-        f"{s['wall_time']:.3g} s wall"
-    )
-    if s.get("method_reason"):  # the scene chose the integrator (workflows.run.method_choice)
-        print(f"           ({shown(s['method_reason'])})")
-    missing = s.get("observables_missing", {})
-    errors = (s.get("errors") or {}).get("observables", {})
-    for k, v in s["observables"].items():
-        label = f"{k} ({OBSERVABLE_UNITS.get(k, '?')})"
-        why = f"   not measured: {shown(missing[k])}" if v is None and k in missing else ""
-        bar = ""
-        if v is not None and k in errors:  # the measured error bar, or why there is none
-            e = errors[k]
-            bar = f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})"
-        print(f"  {label:38s} {fmt(v)}{bar}{why}")
+def print_end_peaks(result, s: dict, f0: float) -> None:
+    """The striker's and the wall's contact lines of print_result (s: the run's summary, f0: the
+    precompression): a peak, the largest force so far, or "not reached"."""
     end_errors = (s.get("errors") or {}).get("end_peaks", {})
-    f0 = float(scene.effects.precompression)
     ends = (("striker_peak_force", "striker's contact", 0.0), ("wall_peak_force", "wall's contact", f0))
     rises = [*(np.asarray(result.solution.peak_force, dtype=float) - f0)]
     rises += [s[name] - static for name, _, static in ends if s.get(name) is not None]
@@ -164,9 +158,12 @@ def print_result(result, out) -> None:
         value = s.get(name)
         if value is None:
             continue
+        # the wall's contact carries F0 at rest: shown dynamic, as compare names it (dynamic_name)
+        shown_name, shown_value = (f"dynamic_{name}", value - static) if static else (name, value)
+        row = f"{shown_name} (N{f', {DYNAMIC}' if static else ''})"
         if s.get(name.replace("_force", "_complete")) is False and not end_contact_reached(value, static, rises):
             print(
-                f"  {name + ' (N)':38s} -   not reached: the wave had not reached the {label} when the run "
+                f"  {row:38s} -   not reached: the wave had not reached the {label} when the run "
                 f"ended (t = {result.solution.end_time:g} s)"
                 + (
                     f"; its largest force{f' above F0 = {static:g} N' if static else ''}, {value - static:.2g} N, "
@@ -190,7 +187,39 @@ def print_result(result, out) -> None:
                 if e is None
                 else ""
             )
-        print(f"  {name + ' (N)':38s} {fmt(value)}{bar}   ({what})")
+        if static:
+            what += f"; total {fmt(value)} N"
+        print(f"  {row:38s} {fmt(shown_value)}{bar}   ({what})")
+
+
+def print_result(result, out) -> None:
+    """What `granchain run` (and `granchain collect`) prints about a finished run."""
+    scene = result.scene
+    s = result.summary()
+    print(f"scene      {scene_name(scene)}")
+    print(
+        f"backend    {s['backend']} ({s['method']}), dt = {s['timestep']:g} s, {s['steps']} steps, "
+        f"{s['wall_time']:.3g} s wall"
+    )
+    if s.get("method_reason"):  # the scene chose the integrator (workflows.run.method_choice)
+        print(f"           ({shown(s['method_reason'])})")
+    missing = s.get("observables_missing", {})
+    errors = (s.get("errors") or {}).get("observables", {})
+    f0 = float(scene.effects.precompression)
+    if f0:  # the observables' forces are dynamic, peaks.csv's and summary.json's contact forces total
+        print(
+            f"  {'forces (precompressed)':38s} '{DYNAMIC}': dynamic, F - F0 over the static force F0 = {f0:g} N; "
+            f"'{TOTAL}': F (peaks.csv's peak_force and peak_force_nondim are total, its dynamic_peak_force F - F0)"
+        )
+    for k, v in s["observables"].items():
+        label = f"{k} ({force_unit(k, f0)})"
+        why = f"   not measured: {shown(missing[k])}" if v is None and k in missing else ""
+        bar = ""
+        if v is not None and k in errors:  # the measured error bar, or why there is none
+            e = errors[k]
+            bar = f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})"
+        print(f"  {label:38s} {fmt(v)}{bar}{why}")
+    print_end_peaks(result, s, f0)
     outside = "outside the law's domain"
     for line in s.get("outside_domain") or ():  # an elastic law beyond yield (postprocess.domains)
         print(f"  {outside:38s} {shown(line)}")

@@ -9,7 +9,9 @@ PEAK_UNITS = {
     "contact": "1",
     "peak_force": "N",
     "time_of_peak": "s",
-    "peak_force_nondim": "1",  # F / (E* R*^2) of the contact's own pair (Scene.contact_force_scales), Eq. 5
+    # peak_force / (E* R*^2) of the contact's own pair (Scene.contact_force_scales), Eq. 5: the total force, F0
+    # included on a precompressed chain (dynamic_peak_force is F - F0)
+    "peak_force_nondim": "1",
     "complete": "bool",
     "leading_pulse_force": "N",
     "arrival_time": "s",
