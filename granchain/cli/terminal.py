@@ -220,8 +220,8 @@ def print_result(result, out) -> None:
             bar = f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})"
         print(f"  {label:38s} {fmt(v)}{bar}{why}")
     print_end_peaks(result, s, f0)
-    outside = "outside the law's domain"
-    for line in s.get("outside_domain") or ():  # an elastic law beyond yield (postprocess.domains)
+    outside = "beyond first yield"
+    for line in s.get("outside_domain") or ():  # an elastic law beyond first yield (postprocess.domains)
         print(f"  {outside:38s} {shown(line)}")
     c = s["conservation"]
     ld = scene.loading

@@ -1,12 +1,15 @@
-"""Where a run left its contact law's domain: an elastic law's contacts loaded beyond yield.
+"""Where an elastic law's contacts were loaded beyond first yield.
 
 The Hertz law is elastic at any force, the beads are not: a contact of two beads whose materials have
 a yield strength sigma_y starts to yield once its peak Hertz pressure reaches p_y = 1.61 sigma_y of the
 softer one (von Mises, nu = 0.3; Johnson, Contact Mechanics, 1985, Sec. 6.2), at the force
 F_y = pi^3 p_y^3 R*^2 / (6 E*^2), where Thornton's law leaves Hertz (ThorntonLaw.yield_force of the
-same pair). A peak above F_y is the elastic law's answer outside its domain: the real contact flows
-plastically, dissipates and carries less. Such peaks are marked, with the contacts and by how much;
-where a material has no yield strength (brass in the paper, glass, PTFE) nothing is said.
+same pair). First yield is where a small plastic zone appears under the surface; it grows with
+F / F_y (Johnson, Ch. 6) until the contact is fully plastic, and the elastic law ignores it: a
+deformation and a dissipation that are small near F_y and grow with F / F_y. Peaks above F_y are
+marked, with the contacts and by how much (and on a precompressed chain whether F0 alone passes F_y),
+as a fact about the run, not a verdict on its numbers; where a material has no yield strength (brass
+in the paper, glass, PTFE) nothing is said.
 """
 
 from __future__ import annotations
@@ -64,50 +67,68 @@ def _kn(force: float) -> str:
     return f"{force / 1e3:.3g} kN" if abs(force) >= 1e3 else f"{force:.3g} N"
 
 
+def _sigma_y(materials) -> str:
+    """The softer material's sigma_y as the note gives it: with its name where it is a built-in one."""
+    m = min(materials, key=lambda x: x.yield_strength)
+    name = next((k for k, v in mat.MATERIALS.items() if v == m), None)
+    where = f"the library's for {name}" if name else "the scene's"
+    return f"sigma_y = {m.yield_strength / 1e6:.4g} MPa, {where}"
+
+
+#: what every note says the elastic law leaves out, and which laws model it
+IGNORED = (
+    "the elastic law ignores the plastic deformation this implies, small near F_y and growing with F/F_y "
+    "([contact] law = 'thornton' or 'bilinear' models it)"
+)
+
+
 def beyond_yield(scene, solution) -> list[str]:
     """One line per kind of contact (the beads', the striker's, the wall's) whose peak force under an
-    elastic law passed the force F_y at which it starts to yield (see the module docstring), naming the
-    contacts, the largest excess and that the law is outside its domain there; [] under a plastic law,
-    where no material has a yield strength, or where every peak stayed below F_y."""
+    elastic law passed Johnson's first-yield force F_y (see the module docstring): the contacts, the
+    largest F / F_y, the yield strength used, on a precompressed chain whether F0 alone passes F_y, and
+    that the law leaves out the plastic deformation; [] under a plastic law, where no material has a
+    yield strength, or where every peak stayed below F_y. First yield is not a failure of the law: the
+    plastic zone starts small under the surface and grows with F / F_y, so the note says how far
+    beyond first yield a run went and does not call its numbers wrong."""
     if not np.all(np.isinf(scene.law.plastic_onset_force())):
         return []  # the law yields on its own (bilinear, Thornton)
     law = scene.contact.law
+    ignored = IGNORED  # said once, on the first line
+    f0 = float(scene.effects.precompression)
     lines = []
     f = np.asarray(solution.peak_force, dtype=float)
     fy = _chain_yield_forces(scene)
     over = np.flatnonzero(np.isfinite(f) & np.isfinite(fy) & (f > fy))
     if over.size:
         worst = int(over[np.argmax(f[over] / fy[over])])
-        ratio = f[worst] / fy[worst]
         beads = scene.bead_materials[worst : worst + 2]
-        p_y = mat.YIELD_PRESSURE_FACTOR * min(m.yield_strength for m in beads)
+        static = ""
+        if f0 and np.nanmin(fy) < f0:  # the chain's contacts start beyond first yield before the wave
+            static = f"; F0 = {_kn(f0)} alone is {f0 / np.nanmin(fy):.3g}x F_y, at rest"
+        total = " (total force, F0 included)" if f0 else ""
         lines.append(
-            f"{law} law beyond yield at {over.size} of {f.size} contacts ({contact_runs(over + 1)}): at contact "
-            f"{worst + 1} the peak {_kn(f[worst])} is {ratio:.3g}x F_y = {_kn(fy[worst])}, the force at which "
-            f"it starts to yield (its peak pressure {p_y * ratio ** (1 / 3) / 1e9:.3g} GPa against p_y = "
-            f"{mat.YIELD_PRESSURE_FACTOR} sigma_y = {p_y / 1e9:.3g} GPa); the elastic law is outside its domain "
-            "there: the real contacts yield and carry less, the more so the further beyond F_y (a plastic law: "
-            "[contact] law = 'thornton')"
+            f"{law} law beyond first yield at {over.size} of {f.size} contacts ({contact_runs(over + 1)}): the "
+            f"largest peak{total}, {_kn(f[worst])} at contact {worst + 1}, is {f[worst] / fy[worst]:.3g}x "
+            f"F_y = {_kn(fy[worst])} (Johnson's first yield, p_y = {mat.YIELD_PRESSURE_FACTOR} sigma_y, "
+            f"{_sigma_y(beads)}){static}; {ignored}"
         )
+        ignored = ""
     ends = []
     if scene.loading.kind == "striker" and solution.striker_peak_force is not None:
         ld = scene.loading
         e_star = mat.pair_effective_modulus(ld.striker_material, scene.chain.material)
         r_star = mat.pair_effective_radius(ld.striker_radius, scene.chain.radius)
-        ends.append(
-            (
-                "striker's",
-                solution.striker_peak_force,
-                yield_force(e_star, r_star, (ld.striker_material, scene.chain.material)),
-            )
-        )
+        pair = (ld.striker_material, scene.chain.material)
+        ends.append(("striker's", solution.striker_peak_force, yield_force(e_star, r_star, pair), 0.0))
     if scene.effects.far_end == "wall" and solution.wall_peak_force is not None:
         m, r = scene.bead_materials[-1], float(scene.bead_radii[-1])
-        ends.append(("wall's", solution.wall_peak_force, yield_force(mat.flat_effective_modulus(m), r, (m,))))
-    for who, peak, limit in ends:
+        ends.append(("wall's", solution.wall_peak_force, yield_force(mat.flat_effective_modulus(m), r, (m,)), f0))
+    for who, peak, limit, static in ends:
         if limit is not None and peak > limit:
+            at_rest = f"; F0 = {_kn(static)} alone is {static / limit:.3g}x F_y" if static > limit else ""
             lines.append(
-                f"{law} law beyond yield at the {who} contact: its peak {_kn(peak)} is {peak / limit:.3g}x F_y = "
-                f"{_kn(limit)}, the force at which it starts to yield; the elastic law is outside its domain there"
+                f"{law} law beyond first yield at the {who} contact: its peak {_kn(peak)} is {peak / limit:.3g}x "
+                f"F_y = {_kn(limit)}{at_rest}" + (f"; {ignored}" if ignored else "")
             )
+            ignored = ""
     return lines
