@@ -8,7 +8,7 @@ numbered from 1 in scene files and output tables.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
@@ -146,6 +146,26 @@ class Run:
     timestep: float | None  # s; None: "auto"
     stop_after_contact: int | None = None  # stop once the leading wave has passed this contact
     stop_after_wall: bool = False  # ... and the wall's contact (a walled chain)
+
+    def stop_check(self) -> dict:
+        """The stop check's fields (every field but end_time and timestep) that differ from "no stop".
+
+        Returns
+        -------
+        dict
+            Field name -> value, as [run] writes them: what a run rebuilt from this one (another
+            time step, another end) carries over so that it stops where this one does.
+        """
+        return {f.name: getattr(self, f.name) for f in stop_fields() if getattr(self, f.name) != f.default}
+
+    def without_stop(self) -> Run:
+        """The run without a stop check: it lasts to its end time."""
+        return replace(self, **{f.name: f.default for f in stop_fields()})
+
+
+def stop_fields() -> tuple:
+    """The dataclass fields of Run that make up its stop check: all but end_time and timestep."""
+    return tuple(f for f in fields(Run) if f.name not in ("end_time", "timestep"))
 
 
 @dataclass(frozen=True)

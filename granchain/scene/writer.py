@@ -84,10 +84,7 @@ def scene_to_dict(scene) -> dict:
     d["run"] = {
         k: AUTO if v is None else v for k, v in (("end_time", scene.run.end_time), ("timestep", scene.run.timestep))
     }
-    if scene.run.stop_after_contact is not None:
-        d["run"]["stop_after_contact"] = scene.run.stop_after_contact
-    if scene.run.stop_after_wall:
-        d["run"]["stop_after_wall"] = True
+    d["run"].update(scene.run.stop_check())
     d["outputs"] = _outputs_to_dict(scene.outputs)
     for name, effect in sections().items():
         section = effect.to_dict(scene.effects)

@@ -162,7 +162,7 @@ def _dump_interval_errors(scene, dt: float) -> list[tuple[int, float, float]]:
 
     sc = replace(
         scene,
-        run=replace(scene.run, timestep=dt, stop_after_contact=None, stop_after_wall=False),
+        run=replace(scene.run.without_stop(), timestep=dt),
         outputs=replace(scene.outputs, dump_interval=dt, snapshots=()),
     )
     res, work = run_lammps(sc)

@@ -669,7 +669,8 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     # a finer step is always allowed: the step also fits inside the end time and any explicit output
     # interval (a 1e-18 s load with history_interval = 1e-7 s: the interval stands, the step is the load's)
     given = [v for v in (scene.outputs.history_interval, scene.outputs.dump_interval) if isinstance(v, float)]
-    d["run"] = {"end_time": end, "timestep": min([dt, end, *given])}
+    # the given stop check travels with the planned run (scene_to_dict writes every stop field)
+    d["run"].update(end_time=end, timestep=min([dt, end, *given]))
     stop = scene.run.stop_after_contact
     if scene.run.end_time is None and stop is None and last is not None and not scene.outputs.snapshots:
         choices.append(_stop_choice(scene, last))
