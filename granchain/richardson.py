@@ -181,6 +181,12 @@ def richardson(
     return ErrorBars(err, status, used)
 
 
+#: the status of a value a run or its companion lacks: a peak is nan there until it is complete (its force
+#: fell to half of it), a leading pulse until the contact had a maximum (error_estimates.per_contact)
+NOT_COMPLETE = "not measured: not complete"
+NOT_PASSED = " (the peak or pulse had not passed when that run ended)"
+
+
 def _one(f, c, cc, p, times, jump_time, accepted, floor=0.0):
     e, used, status = _richardson_one(f, c, cc, p, times, jump_time, accepted, floor)
     unmeasured = status.startswith("not measured") or "another pulse" in status
@@ -196,12 +202,12 @@ def _one(f, c, cc, p, times, jump_time, accepted, floor=0.0):
 
 def _richardson_one(f, c, cc, p, times, jump_time, accepted, floor):
     if not (np.isfinite(f) and np.isfinite(c)):
-        return math.nan, math.nan, "not measured: missing in the run or its 2 dt companion"
+        return math.nan, math.nan, NOT_COMPLETE + " in the run or its 2 dt companion" + NOT_PASSED
     if times is not None and jump_time is not None:
         tf, tc, tcc = times
         moved = [abs(a - b) for a, b in ((tf, tc), (tc, tcc)) if a is not None and b is not None]
         if any(not np.isfinite(m) for m in moved):
-            return math.nan, math.nan, "not measured: missing in a companion run"
+            return math.nan, math.nan, NOT_COMPLETE + " in a companion run" + NOT_PASSED
         if any(m > jump_time for m in moved):
             return (
                 math.nan,
@@ -215,7 +221,7 @@ def _richardson_one(f, c, cc, p, times, jump_time, accepted, floor):
     if cc is None:
         return abs(d1) / (2.0**p - 1.0), float(p), "order not checked"
     if not np.isfinite(cc):
-        return math.nan, math.nan, "not measured: missing in the 4 dt companion"
+        return math.nan, math.nan, NOT_COMPLETE + " in the 4 dt companion" + NOT_PASSED
     d2 = c - cc
     if abs(d2) <= ulp:
         # the coarser pair agrees to round-off but the finer does not: no convergence to speak of
@@ -292,7 +298,7 @@ def erratic_bounds(
     err, status, used = bars.error.copy(), bars.status.copy(), bars.order.copy()
     for i, st in enumerate(bars.status):
         st = str(st)
-        if "another pulse" in st or st.startswith("not measured: missing in the run"):
+        if "another pulse" in st or st.startswith(NOT_COMPLETE + " in the run"):
             continue  # (not the same peak, or not measured at dt or 2 dt: nothing to bound)
         if "not measured" in st and not (np.isfinite(f[i]) and np.isfinite(c[i])):
             continue
@@ -493,10 +499,10 @@ def against_reference(
 
 def _against_one(v, r, rc, times, jump_time):
     if not (np.isfinite(v) and np.isfinite(r) and np.isfinite(rc)):
-        return math.nan, "not measured: missing in the run or an RK4 companion"
+        return math.nan, NOT_COMPLETE + " in the run or an RK4 companion" + NOT_PASSED
     if times is not None and jump_time is not None:
         if not all(np.isfinite(times)):
-            return math.nan, "not measured: missing in the run or an RK4 companion"
+            return math.nan, NOT_COMPLETE + " in the run or an RK4 companion" + NOT_PASSED
         if abs(times[0] - times[1]) > jump_time:
             return (
                 math.nan,

@@ -97,9 +97,19 @@ def test_without_a_4dt_run_the_order_is_assumed_and_said():
 
 
 def test_missing_values_are_not_measured():
+    """A value is nan where the peak was not complete (or the pulse had not come) when a run ended: the
+    status says so, not "missing", which read as lost data (error_estimates.per_contact)."""
+    from granchain.richardson import against_reference, erratic_bounds
+
     bars = richardson([np.nan, 1.0], [1.0, np.nan], [1.0, 1.0], 2)
     assert all(s.startswith("not measured") for s in bars.status)
     assert np.all(np.isnan(bars.error))
+    against = against_reference([np.nan], [1.0], [1.0])
+    bounds = erratic_bounds([np.nan], [1.0], [1.0], 2)
+    for status in (*bars.status, *against.status, *bounds.status):
+        assert "missing" not in status, status
+        assert "not complete in the run or " in status, status
+        assert "had not passed when that run ended" in status, status
 
 
 @given(
