@@ -123,3 +123,17 @@ def test_default_rk4_bars_on_kinked_laws_against_the_true_error(law):
     for r in (force, time_bars):
         assert np.mean(r < 1 / 3) <= 0.05, f"{np.sum(r < 1 / 3)} of {r.size} below 1/3: {np.sort(r)[:5]}"
     assert np.median(force) >= 1.0, np.median(force)
+
+
+def test_granchain_run_calls_rk4s_one_companion_bars_bounds(tmp_path, capsys):
+    """RK4's bars on a kinked law are bounds from the run at 2 dt: the summary line said "measured: runs
+    at ..." and the why_unchecked line "not checked at dt / 2"."""
+    from granchain.cli.terminal import print_result
+
+    got = run_scene(parse_scene(chain("thornton"), source="t.toml"), method="rk4", error_estimate=True)
+    print_result(got, tmp_path)
+    out = capsys.readouterr().out.splitlines()
+    line = next(x for x in out if "largest peak-force error" in x)
+    assert f"(bounds from a run at 2 dt = {2 * got.scene.run.timestep:g} s," in line, line
+    assert "measured" not in line, line
+    assert any(x.split()[:3] == ["bounds,", "not", "measured"] for x in out), out

@@ -256,17 +256,20 @@ def print_result(result, out) -> None:
             worst = e["error_estimate"]
             where = f" at contact {e['error_estimate_contact']}" if worst is not None else ""
             n_bad = len(e["unreliable_contacts"])
+            # bounds: Verlet's on a kinked law (bound), RK4's there from its one companion (one_companion)
+            bounded = bool(e.get("bound") or e.get("one_companion"))
+            times = e["companion_timesteps"]
             print(
                 f"  {'largest peak-force error (1)':38s} {fmt(worst)}{where}   ("
-                + ("bounds from " if e.get("bound") else "measured: ")
+                + ("bounds from " if bounded else "measured: ")
                 + ("reference RK4 " if e.get("companion_method") == "rk4" else "")
-                + "runs at "
-                + ", ".join(f"{t:g}" for t in e["companion_timesteps"])
+                + ("a run at 2 dt = " if len(times) == 1 and e.get("one_companion") else "runs at ")
+                + ", ".join(f"{t:g}" for t in times)
                 + f" s, {e['companion_wall_time']:.3g} s more)"
             )
             if n_bad:
                 print(f"  {'peaks without an estimate':38s} {n_bad}   (peaks.csv error_status says why)")
             if e.get("why_unchecked"):
-                label = "bounds, not measured" if e.get("bound") else "not checked at dt / 2"
+                label = "bounds, not measured" if bounded else "not checked at dt / 2"
                 print(f"  {label:38s} {shown(e['why_unchecked'])}")
     print(f"run directory: {shown(out)}")
