@@ -224,3 +224,40 @@ def test_the_decay_law_is_fitted_only_where_a_contact_yielded(velocity):
     row = cmp.table()[1]
     assert row["decay_per_contact"] is None
     assert row["decay_per_contact_stderr"] is None
+
+
+def test_the_figure_keeps_its_axis_label_and_signs_its_fits_once(tmp_path, monkeypatch):
+    """Three brass beads struck at 1 m/s: peak forces 107-172 N, less than a decade, whose log axis
+    labelled its minor ticks "1.7 x 10^2", pushing "peak force (N)" off the figure; a growing fit's
+    legend read "i^--0.0499"."""
+    from matplotlib.figure import Figure
+
+    from granchain.postprocess.response_regimes import DecayFit
+    from granchain.workflows.law_comparison import fit_labels
+
+    growing = DecayFit(transition_contact=4, decay_per_contact=-0.012, power=-0.0499, rms_log_residual=0.0)
+    expo, inv = fit_labels("hertz", growing)
+    assert "--" not in expo + inv
+    assert inv == "hertz: i^+0.0499 from 4"
+    assert expo == "hertz: exp(+0.012 i)"
+    decaying = DecayFit(transition_contact=4, decay_per_contact=0.012, power=0.5, rms_log_residual=0.0)
+    assert fit_labels("hertz", decaying) == ("hertz: exp(-0.012 i)", "hertz: i^-0.5 from 4")
+
+    sc = parse_scene(
+        make_scene_text(beads=3, loading='kind = "striker"\nvelocity = 1.0', end_time=1e-4), source="t.toml"
+    )
+    cmp = compare_laws(sc, ("thornton", "bilinear"), backend="reference", error_estimate=False)
+    figures = []
+    save = Figure.savefig
+    monkeypatch.setattr(Figure, "savefig", lambda fig, *a, **k: (figures.append(fig), save(fig, *a, **k))[1])
+    write_law_comparison(cmp, tmp_path / "laws")
+    fig = figures[0]
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)
+    ax = fig.axes[0]
+    label = ax.yaxis.label.get_window_extent(renderer)
+    assert label.x0 >= 0.0, label
+    for tick in ax.yaxis.get_ticklabels(minor=True) + ax.yaxis.get_ticklabels():
+        assert "times" not in tick.get_text(), tick.get_text()

@@ -362,10 +362,25 @@ def write_law_comparison(cmp: LawComparison, out: str | Path, overwrite: bool = 
     return out
 
 
+#: the figure's left margin (a fraction of its width): room for the peak forces' tick labels and the axis label
+LEFT_MARGIN = 0.14
+
+
+def fit_labels(law: str, fit: DecayFit) -> tuple[str, str]:
+    """The legend's labels of a law's decay fit: its exponential, exp(-lambda i), and its inverse power,
+    i^-p from the transition contact, each sign printed once (a growing fit, lambda or p < 0, reads
+    exp(+0.01 i) or i^+0.05, not exp(--0.01 i))."""
+    return (
+        f"{law}: exp({-fit.decay_per_contact:+.3g} i)",
+        f"{law}: i^{-fit.power:+.3g} from {fit.transition_contact}",
+    )
+
+
 def _write_laws(cmp, tmp: Path, formats) -> None:
     """laws.csv, laws.json and the figure into the directory being written (a Figure of its own: no
     pyplot, no change of the caller's matplotlib backend)."""
     from matplotlib.figure import Figure
+    from matplotlib.ticker import LogFormatter
 
     n = max((r.contacts.size for r in cmp.runs), default=0)
     header = ["contact"]
@@ -406,20 +421,20 @@ def _write_laws(cmp, tmp: Path, formats) -> None:
             )
         if r.fit is not None:
             i, expo, inv = fit_curves(r)
-            ax.plot(i, expo, "-", color=color, lw=1, label=f"{r.law}: exp(-{r.fit.decay_per_contact:.3g} i)")
-            ax.plot(
-                i,
-                inv,
-                "--",
-                color=color,
-                lw=1,
-                label=f"{r.law}: i^-{r.fit.power:.3g} from {r.fit.transition_contact}",
-            )
+            expo_label, inv_label = fit_labels(r.law, r.fit)
+            ax.plot(i, expo, "-", color=color, lw=1, label=expo_label)
+            ax.plot(i, inv, "--", color=color, lw=1, label=inv_label)
         else:
             notes.append(f"{r.law}: no decay fit ({r.why_no_fit.split(';')[0]})")
     if drawn:  # log axes only over positive data
         ax.set_xscale("log")
         ax.set_yscale("log")
+        # plain numbers: a log axis over less than a decade labels its minor ticks 1.7 x 10^2 ..., wide
+        # enough to push the axis label off the figure (LogFormatter: "170"; minor ticks labelled only
+        # over a short range, as the default's)
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.set_major_formatter(LogFormatter())
+            axis.set_minor_formatter(LogFormatter(labelOnlyBase=False))
         ax.legend(fontsize=7)
     else:
         ax.text(0.5, 0.5, "no positive peak force measured", ha="center", va="center", transform=ax.transAxes)
@@ -431,5 +446,6 @@ def _write_laws(cmp, tmp: Path, formats) -> None:
         lines = [line for note in notes for line in textwrap.wrap(note, 110)]
         fig.subplots_adjust(bottom=0.12 + 0.03 * len(lines))
         fig.text(0.01, 0.01, "\n".join(lines), fontsize=6, va="bottom", parse_math=False)
+    fig.subplots_adjust(left=LEFT_MARGIN)
     for fmt in formats:
         fig.savefig(tmp / f"laws.{fmt}", dpi=120)
