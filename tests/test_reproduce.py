@@ -243,3 +243,22 @@ def test_granchain_reproduce_is_a_subcommand_with_its_own_options(tmp_path, caps
     assert "fig4" in err
     assert len(err.strip().splitlines()) == 1
     assert not (out / "report.md").exists()
+
+
+def test_the_eq8_row_says_what_its_verdict_says():
+    """The Eq. 8 row, 0.7176 against the printed 0.719 with an error bar of 9e-9, is "disagrees" (beyond
+    the printed precision, test_verdicts) and its text said "not a disagreement of the model", with a
+    fixed "0.2% below": the text follows the verdict and the numbers."""
+    from granchain.reproduce.constants import eq8_reason
+
+    row = Row("constants.eq8", "Eq. 8 constant", "-", 0.719, "0.719", ours=0.7175511, ours_error=9.1e-9).judge()
+    assert row.verdict == DISAGREES
+    text = eq8_reason(row, 42004.3, 1.3e-10)
+    assert "not a disagreement" not in text
+    assert "disagree" in text
+    assert "0.20% below the printed 0.719" in text
+    near = Row("constants.eq8", "Eq. 8 constant", "-", 0.719, "0.719", ours=0.7193, ours_error=9.1e-9).judge()
+    assert near.verdict == AGREES
+    text = eq8_reason(near, 42100.0, 1e-10)
+    assert "0.04% above the printed 0.719" in text
+    assert "disagree" not in text
