@@ -276,9 +276,13 @@ def add_accuracy_parser(sub) -> None:
     """granchain accuracy SCENE [--methods M1,M2] [--levels N] [--repeats N] [--out DIR]."""
     acc = sub.add_parser("accuracy", help="work-precision study: error vs wall time per method")
     acc.add_argument("scene", nargs="?", help=SCENE_HELP)
-    acc.add_argument("--methods", default="lammps,rk4,verlet,dop853", help="comma-separated methods")
-    acc.add_argument("--levels", type=int, default=7, help="time steps (tolerances) per method")
-    acc.add_argument("--repeats", type=int, default=3, help="repeats per run (median wall time)")
+    acc.add_argument(
+        "--methods",
+        default="lammps,rk4,verlet,dop853",
+        help="comma-separated methods among lammps, rk4, verlet, dop853 (default all four)",
+    )
+    acc.add_argument("--levels", type=int, default=7, help="time steps (tolerances) per method, at least 1")
+    acc.add_argument("--repeats", type=int, default=3, help="repeats per run (median wall time), at least 1")
     acc.add_argument("--out", help="output directory (default runs/<scene>-accuracy)")
     acc.add_argument("--overwrite", action="store_true", help="replace --out if granchain wrote it")
     add_quiet(acc)
@@ -287,12 +291,19 @@ def add_accuracy_parser(sub) -> None:
 
 def cmd_accuracy(args) -> int:
     """Error against wall time per method, the plan's point marked."""
-    from granchain.workflows.accuracy import accuracy_study, check_study_dir, summary_text, write_study
+    from granchain.workflows.accuracy import (
+        accuracy_study,
+        check_study_dir,
+        check_study_options,
+        summary_text,
+        write_study,
+    )
 
+    methods = check_study_options(args.methods, args.levels, args.repeats)  # before any run
     scene, _ = planned(resolve_scene(args.scene), None, REFERENCE, "rk4")
     out = args.out or f"runs/{scene_stem(args)}-accuracy"
     check_study_dir(out, args.overwrite)  # before the study runs
-    study = accuracy_study(scene, methods=tuple(args.methods.split(",")), levels=args.levels, repeats=args.repeats)
+    study = accuracy_study(scene, methods=methods, levels=args.levels, repeats=args.repeats)
     for p in write_study(study, out, overwrite=args.overwrite):
         print(p)
     print(summary_text(study))

@@ -28,6 +28,11 @@ from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain
 from granchain.workflows.plan import plan_scene
 
 TARGETS = (1e-2, 1e-3, 1e-4)
+#: the methods a study can compare (``--methods``)
+METHODS = ("lammps", "rk4", "verlet", "dop853")
+#: SciPy's solve_ivp raises any rtol below 100 machine epsilons to that floor with a warning; the
+#: DOP853 ladder stops there rather than repeat the floor's run under a smaller label
+DOP853_MIN_RTOL = 100 * np.finfo(float).eps
 #: the tolerance whose planned time step is marked on the diagram (the planner's default)
 PLAN_RTOL = 1e-3
 
@@ -83,15 +88,45 @@ def _errors(scene, sol, ref, idx) -> tuple[float, float | None]:
     return e, es
 
 
+def check_study_options(methods, levels: int, repeats: int) -> tuple[str, ...]:
+    """The methods as a tuple, or a UsageError naming the option and the fix (before any run):
+    methods known and not empty (METHODS), levels and repeats at least 1."""
+    if isinstance(methods, str):
+        methods = tuple(m.strip() for m in methods.split(","))
+    methods = tuple(methods)
+    bad = [m for m in methods if m not in METHODS]
+    if not methods or bad:
+        what = f"unknown method(s) {', '.join(repr(m) for m in bad)}" if bad else "no method given"
+        raise UsageError(f"--methods: {what}; give a comma-separated list of {', '.join(METHODS)}")
+    if isinstance(levels, bool) or not isinstance(levels, int) or levels < 1:
+        raise UsageError(f"--levels {levels!r}: give a whole number of settings per method, at least 1")
+    if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
+        raise UsageError(f"--repeats {repeats!r}: give a whole number of timed runs per setting, at least 1")
+    return tuple(dict.fromkeys(methods))
+
+
 def accuracy_study(
-    scene, methods=("lammps", "rk4", "verlet", "dop853"), levels: int = 5, repeats: int = 3, dump_intervals: bool = True
+    scene, methods=METHODS, levels: int = 5, repeats: int = 3, dump_intervals: bool = True
 ) -> AccuracyStudy:
     """Run the scene with each method at `levels` settings (``repeats`` timings each) against a
-    converged RK4 run: errors, orders and prices for the work-precision diagram."""
+    converged RK4 run: errors, orders and prices for the work-precision diagram.
+
+    The study measures the peak forces of bead-bead contacts (a striker's or a wall's contact is
+    not among them); a scene without one (a single bead) is a UsageError, as are the options
+    check_study_options refuses.
+    """
+    methods = check_study_options(methods, levels, repeats)
     if scene.needs_plan:
         scene = plan_scene(scene).scene
     a, b = scene.window
-    contacts = np.asarray(scene.peak_contacts if isinstance(scene.outputs.peak_force, tuple) else range(a, b + 1))
+    contacts = np.asarray(
+        scene.peak_contacts if isinstance(scene.outputs.peak_force, tuple) else range(a, b + 1), dtype=int
+    )
+    if contacts.size == 0:
+        raise UsageError(
+            f"{scene.source}: no bead-bead contact to measure (the chain has {scene.chain.beads} bead(s)); "
+            "the accuracy study compares bead-bead contacts' peak forces: use a chain of at least two beads"
+        )
     idx = contacts - 1
     problem = ChainProblem.from_scene(scene)
     end = scene.run.end_time
@@ -101,7 +136,14 @@ def accuracy_study(
         m: 0.5 * plan_scene(scene, method="verlet" if m in ("lammps", "verlet") else "rk4").stable_timestep
         for m in ("lammps", "rk4", "verlet")
     }
-    finest = min(ladders["rk4"] / 2 ** (levels - 1), ladders["verlet"] / 2 ** (levels - 1)) / 4
+    # each integrator's step planned for PLAN_RTOL (the stars on the diagram)
+    planned = {
+        m: plan_scene(scene, rtol=PLAN_RTOL, method="verlet" if m in ("lammps", "verlet") else "rk4").scene.run.timestep
+        for m in methods
+        if m != "dop853"
+    }
+    # the converged reference: a quarter of the finest step the study runs (ladders and plans)
+    finest = min([ladders["rk4"] / 2 ** (levels - 1), ladders["verlet"] / 2 ** (levels - 1), *planned.values()]) / 4
     ref = solve_chain(problem, end, finest, "rk4")
     ref2 = solve_chain(problem, end, finest / 2, "rk4")
     passed = ref2.time_of_peak[idx] < 0.99 * ref2.end_time  # the leading wave has passed them
@@ -119,15 +161,14 @@ def accuracy_study(
         if m == "dop853":
             if scene.contact.law_class.history:  # DOP853 integrates a state without history
                 continue
-            settings = [10.0**-e for e in range(4, 4 + 2 * levels, 2)]
+            settings = [r for r in (10.0**-e for e in range(4, 4 + 2 * levels, 2)) if r >= DOP853_MIN_RTOL]
         else:
             settings = [ladders[m] / 2**j for j in range(levels)]
         for s in settings:
             study.points.append(_measure(study, scene, problem, m, s, repeats, ref, idx))
         if m != "dop853":
             # the current plan's point: the step the planner chooses for PLAN_RTOL with this integrator
-            dt_plan = plan_scene(scene, rtol=PLAN_RTOL, method="verlet" if m in ("lammps", "verlet") else "rk4")
-            study.plan_points.append(_measure(study, scene, problem, m, dt_plan.scene.run.timestep, repeats, ref, idx))
+            study.plan_points.append(_measure(study, scene, problem, m, planned[m], repeats, ref, idx))
     if dump_intervals and "lammps" in methods:
         study.dump_errors = _dump_interval_errors(scene, ladders["lammps"] / 4)
     return study
@@ -159,6 +200,7 @@ def _dump_interval_errors(scene, dt: float) -> list[tuple[int, float, float]]:
     from granchain.lammps.runner import cleanup, run_lammps
     from granchain.postprocess.dumps import peaks_from_samples, read_dump
     from granchain.schedule import step_plan, step_times
+    from granchain.templates.atoms import atom_layout
 
     sc = replace(
         scene,
@@ -171,7 +213,10 @@ def _dump_interval_errors(scene, dt: float) -> list[tuple[int, float, float]]:
         dd = read_dump(work / "chain.dump", times)
     finally:
         cleanup(work)
-    force = dd.columns["d_fc"][:, :-1]
+    # the bead-bead contacts: contact i lives on atom i + offset (a striker is atom 1, a wall follows
+    # bead N), as in the in-run peaks
+    n, o = scene.chain.beads, atom_layout(scene)["offset"]
+    force = dd.columns["d_fc"][:, o : o + n - 1]
     inrun = res.solution.peak_force
     out = []
     for stride in (1, 2, 5, 10, 20, 50):
@@ -334,4 +379,13 @@ def summary_text(study: AccuracyStudy) -> str:
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["accuracy_study", "check_study_dir", "write_study", "summary_text", "AccuracyStudy", "Point"]
+__all__ = [
+    "METHODS",
+    "accuracy_study",
+    "check_study_options",
+    "check_study_dir",
+    "write_study",
+    "summary_text",
+    "AccuracyStudy",
+    "Point",
+]
