@@ -91,3 +91,19 @@ def test_dump_interval_errors_with_a_striker_or_a_wall(loading, far):
     errs = _dump_interval_errors(sc, 2e-8)
     assert errs
     assert errs[0][2] < 1e-12
+
+
+def test_cheapest_follows_steps_not_timing_noise():
+    # /tmp/explore4/acc-dimer: LAMMPS at 120 steps timed 0.0104 s, at 960 steps 0.0062 s; both met 1e-2
+    from granchain.workflows.accuracy import AccuracyStudy, Point
+
+    study = AccuracyStudy(scene=None, contacts=np.array([2]), reference_timestep=1e-9, reference_error=1e-9)
+    study.points = [
+        Point("lammps", 5.87e-6, 120, 0.0104, 5e-3, None),
+        Point("lammps", 7.34e-7, 960, 0.0062, 1e-4, None),
+        Point("rk4", 5.87e-6, 120, 0.05, 1e-5, None, 0.04),
+    ]
+    assert study.cheapest(1e-2).steps == 120
+    assert study.cheapest(1e-2).method == "lammps"
+    assert study.cheapest(1e-3).steps == 960  # only the finer LAMMPS run meets it, still under RK4
+    assert study.cheapest(1e-6) is None
