@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
 from granchain.backends import METHODS
 from granchain.exceptions import UsageError
 from granchain.results import printable
@@ -52,13 +50,21 @@ def add_plan_parser(sub) -> None:
         help="integrator the plan is for (default: the one `granchain run` uses on the reference: rk4, or verlet on "
         "a scene with a dashpot)",
     )
+    pp.add_argument(
+        "--error-estimate",
+        default="on",
+        choices=["on", "off", "checked"],
+        help="the error bars the run's cost includes, as `granchain run --error-estimate` (default on: the "
+        "companion runs at 2 dt and 4 dt, or those the scene's law asks for)",
+    )
     pp.add_argument("--json", action="store_true", help="the plan as JSON on stdout")
     pp.set_defaults(func=cmd_plan)
 
 
 def cmd_plan(args) -> int:
-    """The planner's choices for a scene, each with its reason, and the run's cost."""
+    """The planner's choices for a scene, each with its reason, and the run's cost with its error bars'."""
     from granchain.backends import REFERENCE
+    from granchain.schedule import scene_step_plan
     from granchain.workflows.plan import plan_scene
     from granchain.workflows.run import method_choice
 
@@ -66,9 +72,13 @@ def cmd_plan(args) -> int:
     method, why = method_choice(REFERENCE, args.method, scene)
     plan = plan_scene(scene, rtol=args.rtol, method=method)
     s = plan.scene
-    steps = math.ceil(s.run.end_time / s.run.timestep)
+    steps = sum(g.steps for g in scene_step_plan(s))
     kept = [("beads", s.chain.beads), ("end_time", s.run.end_time), ("timestep", s.run.timestep)]
     chosen = {c.name for c in plan.choices}
+    bars = planned_bars(plan, args.error_estimate)
+    extra = sum(c["steps"] for c in bars["companions"])
+    again = run_again_conditions(plan)
+    at_most = "at most " if s.run.stop_after_contact is not None else ""
     if args.json:
         print_json(
             {
@@ -85,7 +95,31 @@ def cmd_plan(args) -> int:
                 "timestep": s.run.timestep,
                 "steps": steps,
                 "bead_steps": steps * s.chain.beads,
-                "units": {"end_time": "s", "timestep": "s", "stable_timestep": "s", "omega_max": "rad/s"},
+                "error_estimate": args.error_estimate,
+                "companions": bars["companions"],
+                "why_no_companions": bars["why_none"],
+                "companion_steps": extra,
+                "companion_bead_steps": extra * s.chain.beads,
+                "total_steps": steps + extra,
+                "total_bead_steps": (steps + extra) * s.chain.beads,
+                "steps_are_upper_bounds": bool(at_most),
+                "not_counted": bars["not_counted"],
+                "run_again": again,
+                "units": {
+                    "end_time": "s",
+                    "timestep": "s",
+                    "stable_timestep": "s",
+                    "omega_max": "rad/s",
+                    "steps": "steps",
+                    "bead_steps": "bead-steps",
+                    "companions.timestep": "s",
+                    "companions.factor": "x timestep",
+                    "companions.steps": "steps",
+                    "companion_steps": "steps",
+                    "companion_bead_steps": "bead-steps",
+                    "total_steps": "steps",
+                    "total_bead_steps": "bead-steps",
+                },
             }
         )
         return 0
@@ -101,8 +135,104 @@ def cmd_plan(args) -> int:
     for name, v in kept:
         if name not in chosen:
             print(f"{name:11s} {v:.6g}  as given in the scene")
-    print(f"cost        about {steps} steps x {s.chain.beads} beads = {steps * s.chain.beads:.3g} bead-steps")
+    b = s.chain.beads
+    print(f"cost        the run: {at_most}{steps} steps x {b} beads = {steps * b:.3g} bead-steps")
+    named = "; ".join(
+        f"{c['method']} at {c['factor']:.3g} dt ({c['role']}): {c['steps']} steps" for c in bars["companions"]
+    )
+    if named:
+        print(f"error bars  --error-estimate {args.error_estimate}: {named}; together {at_most}{extra} steps")
+    else:
+        print(f"error bars  --error-estimate {args.error_estimate}: no companion runs ({shown(bars['why_none'])})")
+    print(
+        f"total       {at_most}{steps + extra} steps x {b} beads = {(steps + extra) * b:.3g} bead-steps"
+        + (f" ({(steps + extra) / steps:.2f}x the run)" if steps else "")
+    )
+    for note in bars["not_counted"]:
+        print(f"            not counted: {shown(note)}")
+    for name, when in again.items():
+        print(f"may rerun   {name}: {shown(when)}")
+    if not again:
+        print("may rerun   no: neither the time step nor the end time can change after the first run")
     return 0
+
+
+def planned_bars(plan, error_estimate: str) -> dict:
+    """The companion runs a reference run of the plan's scene makes for its error bars (error_estimate
+    "on", "off" or "checked", as `granchain run --error-estimate`), from the function the run's error
+    estimate follows (error_estimates.planned_companions): {"companions": [{method, role, factor,
+    timestep, steps}], "why_none": why there are none, or None, "not_counted": what the steps leave out}."""
+    from granchain.backends import REFERENCE
+    from granchain.physics.laws import law_class
+    from granchain.workflows.error_estimates import (
+        RK4_STEP_COST,
+        companion_steps,
+        planned_companions,
+        withheld_because,
+    )
+
+    s = plan.scene
+    runs = []
+    if error_estimate != "off":
+        runs = planned_companions(
+            s, plan.method, plan.stable_timestep, error_estimate == "checked", numpy_speed=REFERENCE.numpy_speed
+        )
+    not_counted = []
+    if "rk4" in {plan.method, *(c.method for c in runs)} and law_class(s.contact.law).slope_kinks:
+        not_counted.append(
+            "RK4's extra tries at every kink crossing (ChainSolution.extra_steps), known only after a run"
+        )
+    if {c.method for c in runs} - {plan.method}:
+        not_counted.append(
+            f"an RK4 step costs about {RK4_STEP_COST:g} Verlet steps in numpy (error_estimates.RK4_STEP_COST): "
+            "steps of both are summed as steps"
+        )
+    dt = s.run.timestep
+    why = None
+    if error_estimate == "off":
+        why = "--error-estimate off"
+    elif not runs:
+        why = withheld_because(plan.method, s) or f"2 dt = {2 * dt:.3g} s is above the stability limit: no estimate"
+    return {
+        "companions": [
+            {
+                "method": c.method,
+                "role": c.role,
+                "factor": c.factor,
+                "timestep": c.factor * dt,
+                "steps": companion_steps(s, c.factor),
+            }
+            for c in runs
+        ],
+        "why_none": why,
+        "not_counted": not_counted,
+    }
+
+
+def run_again_conditions(plan) -> dict[str, str]:
+    """When a run of this plan is run again after its first run (workflows.run: refined_plan, then
+    extended_plan), by the conditions those functions check before they look at the run: name -> when.
+    Its companions then run at the new plan's step and end, so its whole cost grows with it."""
+    from granchain.workflows.plan import LINEAR_HORIZON, MAX_REFINE_STEP, REFINE_ABOVE
+
+    s = plan.scene
+    chosen = {c.name for c in plan.choices}
+    out = {}
+    if "timestep" in chosen:
+        out["refined"] = (
+            "run again at a finer step (at most "
+            f"{MAX_REFINE_STEP:g}x finer, companions with it) when the first run's smallest measured peak is so far "
+            f"below the force scale that the error model's error times their ratio exceeds {REFINE_ABOVE:g} x rtol "
+            "(PlanRefinedWarning; plan.refined_plan)"
+        )
+    if "end_time" in chosen and "beads" not in chosen and s.run.stop_after_contact is not None and s.n_contacts:
+        out["extended"] = (
+            "run again, longer (to at most "
+            f"{LINEAR_HORIZON:g}x the slowest front's crossing of the whole chain, its stop check ending it), when the "
+            "first run reached its end before the window's last contact or the wall's peak was measured "
+            "(PlanExtendedWarning; plan.extended_plan)"
+        )
+    return out
 
 
 def add_doctor_parser(sub) -> None:

@@ -90,6 +90,9 @@ class ErrorReport:
     why_unchecked: str | None = None
     #: why the bars come from one companion at 2 dt with an assumed order (one_companion_because)
     one_companion: str | None = None
+    #: the steps each companion took (its ChainSolution.steps, in the order of timesteps)
+    steps: list[int] = field(default_factory=list)
+    check_steps: int | None = None  # the steps the run that checks the bars took
 
     @property
     def peak_bounds(self) -> bool:
@@ -128,6 +131,8 @@ class ErrorReport:
             "one_companion": self.one_companion,
             "order": self.order,
             "companion_timesteps": self.timesteps,
+            "companion_steps": self.steps,
+            "check_steps": self.check_steps,
             "companion_wall_time": sum(self.wall_times),
             "overhead": (sum(self.wall_times) / main_wall_time) if main_wall_time > 0 else None,
             "error_estimate": self.error_estimate,
@@ -365,23 +370,94 @@ def against_rk4_because(method: str, scene, checked: bool = False, numpy_speed: 
 def rk4_companions(scene, method: str, checked: bool = False, numpy_speed: bool = False) -> list:
     """The RK4 companion scenes the error estimate of a run of this concrete scene with `method` will
     ask for (the reference's own at 2 dt and 4 dt, or those a Verlet run is measured against), as far
-    as they are known before the run: compare starts them early (a run the planner refines after it
-    asks for others)."""
+    as they are known before the run (planned_companions): compare starts them early (a run the planner
+    refines after it asks for others)."""
     from granchain.workflows.plan import plan_scene
 
-    if withheld_because("rk4", scene) or (
-        method != "rk4" and not against_rk4_because("verlet", scene, checked, numpy_speed)
-    ):
-        return []
-    if method != "rk4":
-        return [companion_scene(scene, f) for f in against_rk4_factors(scene)]
-    stable = plan_scene(scene, method="rk4").stable_timestep
+    stable = plan_scene(scene, method=method).stable_timestep
+    return [
+        companion_scene(scene, c.factor)
+        for c in planned_companions(scene, method, stable, checked, numpy_speed)
+        if c.method == "rk4"
+    ]
+
+
+def richardson_factors(method: str, scene, checked: bool = False) -> tuple[float, ...]:
+    """The steps, as multiples of the run's dt, of a run's own companions before the stability limit
+    drops any: 2 dt alone where the bars are bounds from one companion (one_companion_because), else
+    2 dt and 4 dt."""
+    return (2.0,) if one_companion_because(method, scene, checked) else (2.0, 4.0)
+
+
+@dataclass(frozen=True)
+class Companion:
+    """One run a run's error estimate makes (planned_companions).
+
+    Attributes
+    ----------
+    method : str
+        Its integrator (the run's own, or rk4 for the RK4 runs a Verlet run is measured against).
+    factor : float
+        Its time step as a multiple of the run's.
+    role : str
+        "companion" (Richardson's or the bounds' runs at 2 dt and 4 dt), "check" (the run at dt / 2
+        that checks RK4's bars, check_because) or "rk4 reference" (against_rk4_because).
+    """
+
+    method: str
+    factor: float
+    role: str
+
+
+def planned_companions(
+    scene, method: str, stable_timestep: float, checked: bool = False, numpy_speed: bool = False
+) -> list[Companion]:
+    """The runs the error estimate of a run of this concrete scene with `method` makes when none fails
+    (estimate_errors with run_rk4 given, as granchain run and the API give it): RK4 runs at
+    against_rk4_factors where a Verlet run is measured against RK4 (against_rk4_because); else its own
+    runs at richardson_factors within stable_timestep (none where 2 dt is above it or no bar is given,
+    withheld_because), and the run at dt / 2 where check_because. An empty list: no companion runs.
+
+    Parameters
+    ----------
+    scene : granchain.scene.Scene
+        The concrete scene the run runs (its time step and end time set).
+    method : str
+        The run's integrator.
+    stable_timestep : float
+        The planner's stability limit for this scene and integrator, s.
+    checked : bool
+        Checked bars asked for (error_estimate="checked").
+    numpy_speed : bool
+        The run's backend integrates at numpy's speed (Backend.numpy_speed).
+
+    Returns
+    -------
+    list of Companion
+        In the order the estimate runs them.
+    """
+    from granchain.workflows.plan import plan_scene
+
     dt = scene.run.timestep
-    check = []
-    if 2.0 * dt <= stable and check_because("rk4", scene, checked):
-        check = [companion_scene(scene, CHECK_FACTOR)]
-    factors = (2.0,) if one_companion_because(method, scene, checked) else (2.0, 4.0)
-    return [companion_scene(scene, f) for f in factors if f * dt <= stable] + check
+    if against_rk4_because(method, scene, checked, numpy_speed):
+        if withheld_because("rk4", scene) or 2 * dt > plan_scene(scene, method="rk4").stable_timestep:
+            return []
+        return [Companion("rk4", f, "rk4 reference") for f in against_rk4_factors(scene)]
+    if withheld_because(method, scene) or 2.0 * dt > stable_timestep:
+        return []
+    runs = [Companion(method, f, "companion") for f in richardson_factors(method, scene, checked)]
+    runs = [c for c in runs if c.factor * dt <= stable_timestep]
+    if check_because(method, scene, checked):
+        runs.append(Companion(method, CHECK_FACTOR, "check"))
+    return runs
+
+
+def companion_steps(scene, factor: float) -> int:
+    """The steps a companion of this concrete scene at factor x its time step takes to its end time
+    (schedule.scene_step_plan; fewer where a stop check ends it earlier)."""
+    from granchain.schedule import scene_step_plan
+
+    return sum(g.steps for g in scene_step_plan(companion_scene(scene, factor)))
 
 
 #: the RK4 companions a Verlet run is measured against aim at this fraction of the Verlet run's
@@ -461,7 +537,7 @@ def estimate_errors(
     if report.one_companion is not None:
         report.order = BOUND_ORDER
     with kept_lammps():
-        factors = (2.0,) if report.one_companion is not None else (2.0, 4.0)
+        factors = richardson_factors(method, scene, checked)
         runs = _richardson_runs(report, scene, run_one, stable_timestep, factors)
         if runs is None:
             return report
@@ -522,6 +598,7 @@ def _richardson_runs(
             break
         report.wall_times.append(time.perf_counter() - t0)
         report.timesteps.append(factor * dt)
+        report.steps.append(int(runs[-1].steps))
     return runs
 
 
@@ -540,6 +617,7 @@ def _check_run(report: ErrorReport, scene, run_one):
     report.check_wall_time = time.perf_counter() - t0
     report.wall_times.append(report.check_wall_time)
     report.check_timestep = CHECK_FACTOR * scene.run.timestep
+    report.check_steps = int(sol.steps)
     return sol
 
 
@@ -761,6 +839,7 @@ def _against_rk4(result, run_rk4) -> ErrorReport:
         # shared_reference_runs) or made ahead in a worker returns at once, but it cost its wall time
         report.wall_times.append(max(time.perf_counter() - t0, companion.solution.wall_time))
         report.timesteps.append(factor * dt)
+        report.steps.append(int(companion.solution.steps))
     jump = np.pi / highest_frequency(scene)[0]
     n = len(sol.peak_force)
 
