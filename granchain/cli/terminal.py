@@ -204,6 +204,7 @@ def print_result(result, out) -> None:
     if s.get("method_reason"):  # the scene chose the integrator (workflows.run.method_choice)
         print(f"           ({shown(s['method_reason'])})")
     missing = s.get("observables_missing", {})
+    notes = s.get("observables_notes", {})
     errors = (s.get("errors") or {}).get("observables", {})
     f0 = float(scene.effects.precompression)
     if f0:  # the observables' forces are dynamic, peaks.csv's and summary.json's contact forces total
@@ -212,13 +213,20 @@ def print_result(result, out) -> None:
             f"'{TOTAL}': F (peaks.csv's peak_force and peak_force_nondim are total, its dynamic_peak_force F - F0)"
         )
     for k, v in s["observables"].items():
+        if k == "wave_speed_sections":  # one line per uniform stretch of the window
+            for sec in v:
+                first, last = sec["contacts"]
+                row = f"wave_speed, contacts {first}-{last} (m/s)"
+                print(f"  {row:38s} {fmt(sec['speed'])} +- {sec['stderr']:.2g}   (fit over {sec['arrivals']} arrivals)")
+            continue
         label = f"{k} ({force_unit(k, f0)})"
         why = f"   not measured: {shown(missing[k])}" if v is None and k in missing else ""
         bar = ""
         if v is not None and k in errors:  # the measured error bar, or why there is none
             e = errors[k]
             bar = f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})"
-        print(f"  {label:38s} {fmt(v)}{bar}{why}")
+        note = f"   note: {shown(notes[k])}" if v is not None and k in notes else ""
+        print(f"  {label:38s} {fmt(v)}{bar}{why}{note}")
     print_end_peaks(result, s, f0)
     outside = "beyond first yield"
     for line in s.get("outside_domain") or ():  # an elastic law beyond first yield (postprocess.domains)

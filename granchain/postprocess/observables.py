@@ -15,6 +15,11 @@ wave_speed: the front's speed, 1 / (d t_arrival / d x), a least-squares line thr
     times of the window's contacts that have one (wave_speed_contacts of them) against their
     positions, with the slope's standard error propagated to the speed. The arrival is the leading
     pulse's time; on a precompressed chain the half-amplitude arrival (front_arrivals).
+    Where the window's contacts are not all alike (contact_kinds: a contact's law constants and its
+    two beads' masses; an interface between two sections, an impurity, a dimer, a taper) the front's
+    speed differs along the window and the fit is an average over it: measure_observables says so in
+    the dict passed as `notes`, and wave_speed_sections gives the speed fitted over each uniform
+    stretch of the window that has FIT_CONTACTS arrivals (section_speeds).
 max_peak_force: the largest complete peak (of any pulse), and its contact.
 Each is None where it cannot be measured (the window's last contact not reached or its peak not
 complete before the end of the run; fewer than three complete peaks in the window; no complete
@@ -32,6 +37,7 @@ from granchain.peaks import (
     position_resolution,
     still_rising,
 )
+from granchain.physics.materials import MATERIALS
 from granchain.problem import contact_positions
 
 
@@ -105,6 +111,104 @@ def wave_speed_unmeasurable(scene) -> str | None:
     )
 
 
+#: relative difference under which two contacts' constants or masses count as alike: the same kind
+#: of bead computed twice (round-off), not a different bead
+_ALIKE = 1e-9
+
+
+def contact_kinds(scene) -> list[int]:
+    """Each bead-bead contact's kind (0, 1, ...; in chain order): two contacts are of one kind where
+    their laws' constants (ContactLaw.pair_coefficients: stiffness and any yield or plastic constants) and their
+    two beads' masses, in chain order, agree to _ALIKE. A wave crosses contacts of one kind at one
+    speed; where the kind changes, the speed does (stiffer contacts or lighter beads: faster)."""
+    if not scene.per_bead:  # one bead kind: every contact alike (precompressed or not)
+        return [0] * scene.n_contacts
+    m = np.asarray(scene.bead_masses, dtype=float)
+    keys = [
+        np.array([*law.pair_coefficients(), m[i], m[i + 1]], dtype=float) for i, law in enumerate(scene.contact_laws)
+    ]
+    kinds: list[int] = []
+    seen: list[np.ndarray] = []
+    for k in keys:
+        for j, ref in enumerate(seen):
+            if k.shape == ref.shape and np.allclose(k, ref, rtol=_ALIKE, atol=0.0):
+                kinds.append(j)
+                break
+        else:
+            seen.append(k)
+            kinds.append(len(seen) - 1)
+    return kinds
+
+
+def uniform_sections(scene) -> list[tuple[int, int]]:
+    """The measurement window split into runs of consecutive contacts of one kind (contact_kinds):
+    (first, last) 1-based contacts each; one run where the window's contacts are all alike."""
+    if not scene.n_contacts:
+        return []
+    a, b = scene.window
+    kind = contact_kinds(scene)
+    runs = [[a, a]]
+    for c in range(a + 1, b + 1):
+        if kind[c - 1] == kind[runs[-1][1] - 1]:
+            runs[-1][1] = c
+        else:
+            runs.append([c, c])
+    return [(int(f), int(last)) for f, last in runs]
+
+
+#: at most this many stretches of like beads are named one by one in the wave speed's note
+_NAMED_STRETCHES = 6
+
+
+def _bead_label(radius: float, material, named: bool) -> str:
+    """A bead kind as the wave speed's note names it: its radius, and its material where the chain has several."""
+    text = f"R = {radius * 1e3:.4g} mm"
+    if named:
+        name = next((k for k, v in MATERIALS.items() if v == material), None)
+        text += f" {name}" if name else f" (rho {material.density:.4g} kg/m^3, E {material.youngs_modulus:.4g} Pa)"
+    return text
+
+
+def _window_beads(scene) -> str:
+    """The window's beads by stretches of one radius and material ("beads 1-20 of R = 1 mm, 21-40 of
+    R = 2 mm"); a chain whose beads change every few beads (a taper) by the range of its radii."""
+    a, b = scene.window
+    r, mats = scene.bead_radii, scene.bead_materials
+    named = any(m != mats[0] for m in mats)
+    runs: list[list] = []
+    for i in range(a - 1, b + 1):  # the window's contacts a..b join beads a..b+1
+        label = _bead_label(float(r[i]), mats[i], named)
+        if runs and runs[-1][2] == label:
+            runs[-1][1] = i + 1
+        else:
+            runs.append([i + 1, i + 1, label])
+    if len(runs) > _NAMED_STRETCHES:
+        w = r[a - 1 : b + 1] * 1e3
+        return (
+            f"beads {a}-{b + 1} change in {len(runs)} stretches (radii {w.min():.4g} to {w.max():.4g} mm"
+            + (", several materials" if named else "")
+            + ")"
+        )
+    return "beads " + ", ".join(f"{f}-{last} of {lab}" if f != last else f"{f} of {lab}" for f, last, lab in runs)
+
+
+def section_speeds(scene, arrival: np.ndarray, positions: np.ndarray) -> list[dict]:
+    """The wave speed fitted over each uniform stretch of the window (uniform_sections) that has
+    FIT_CONTACTS arrivals (arrival: per contact, nan where none): {contacts: [first, last], speed,
+    stderr, arrivals} each, in chain order; the stretches with fewer, or whose times do not increase,
+    are left out."""
+    out = []
+    for f, last in uniform_sections(scene):
+        c = np.arange(f, last + 1)
+        ok = np.isfinite(arrival[c - 1])
+        if np.sum(ok) < FIT_CONTACTS:
+            continue
+        fit = fit_wave_speed(c[ok], arrival[c - 1][ok], scene.diameter, positions)
+        if fit is not None:
+            out.append({"contacts": [f, last], "speed": fit[0], "stderr": fit[1], "arrivals": int(np.sum(ok))})
+    return out
+
+
 def _why_no_leading_pulse(scene, solution, contact: int) -> str:
     """Why a 1-based contact has no leading pulse."""
     t = float(solution.time_of_peak[contact - 1])
@@ -127,8 +231,10 @@ def _floor_reason(scene) -> str:
     return f"{LEAD_FRACTION:g} of the largest expected force"
 
 
-def measure_observables(scene, solution, missing: dict | None = None) -> dict:
-    """The observables of a run (complete peaks only); `missing`, if given, gets name -> reason for each None.
+def measure_observables(scene, solution, missing: dict | None = None, notes: dict | None = None) -> dict:
+    """The observables of a run (complete peaks only); `missing`, if given, gets name -> reason for each
+    None; `notes`, if given, name -> what a measured value is where it is not what its name says
+    (wave_speed over a window whose contacts differ: an average over it).
 
     Forces are dynamic on a precompressed chain: the rise above the static force F0 (static_force),
     which every contact carries at rest; the leading pulse and its arrival are measured on it too.
@@ -164,10 +270,25 @@ def measure_observables(scene, solution, missing: dict | None = None) -> dict:
         why["leading_peak_force"] = why["leading_peak_force_nondim"] = _why_no_leading_pulse(scene, solution, b)
     arrival = front_arrivals(solution, f0)
     ok = np.isfinite(arrival[contacts - 1])
-    fit = fit_wave_speed(contacts[ok], arrival[contacts - 1][ok], scene.diameter, contact_positions(scene))
+    positions = contact_positions(scene)
+    fit = fit_wave_speed(contacts[ok], arrival[contacts - 1][ok], scene.diameter, positions)
     out["wave_speed"] = fit[0] if fit else None
     out["wave_speed_stderr"] = fit[1] if fit else None
     out["wave_speed_contacts"] = int(np.sum(ok))
+    sections = uniform_sections(scene)
+    average = None
+    if fit and len(sections) > 1:  # the front's speed differs along the window: the fit averages it
+        out["wave_speed_sections"] = section_speeds(scene, arrival, positions)
+        each = (
+            f"; wave_speed_sections: the speed over each uniform stretch with {FIT_CONTACTS} arrivals or more"
+            if out["wave_speed_sections"]
+            else f"; no uniform stretch of the window has {FIT_CONTACTS} arrivals to fit on its own"
+        )
+        average = (
+            f"an average over contacts {a}-{b}, whose contacts differ (law constants or bead masses: "
+            f"{len(sections)} uniform stretches; {_window_beads(scene)}): the front's speed is not one "
+            f"number along this window{each}"
+        )
     if fit is None:
         why["wave_speed"] = why["wave_speed_stderr"] = (
             wave_speed_unmeasurable(scene)
@@ -185,6 +306,8 @@ def measure_observables(scene, solution, missing: dict | None = None) -> dict:
     else:
         out["max_peak_force"] = out["max_peak_contact"] = None
         why["max_peak_force"] = why["max_peak_contact"] = "no contact has a complete peak before the end of the run"
+    if average is not None and notes is not None:
+        notes["wave_speed"] = average
     if missing is not None:
         missing.update(why)
     return out

@@ -86,6 +86,15 @@ class RunResult:
         measure_observables(self.scene, self.solution, missing)
         return missing
 
+    def observables_notes(self) -> dict[str, str]:
+        """What each measured observable that is not what its name says is (name -> note): a wave
+        speed averaged over a window whose contacts differ."""
+        if self.stored is not None:
+            return dict(self.stored.summary.get("observables_notes") or {})
+        notes: dict[str, str] = {}
+        measure_observables(self.scene, self.solution, None, notes)
+        return notes
+
     def peak_status(self) -> dict:
         """How many of the measured contacts (those of peaks.csv) have a complete peak, one that is not
         complete yet (the wave is still there at the end of the run) and one never reached."""
@@ -114,7 +123,8 @@ class RunResult:
         eb = s.energy_balance_error
         work_scale = float(np.max(np.abs(s.work))) if s.work.size else 0.0
         missing: dict[str, str] = {}
-        observables = measure_observables(sc, s, missing)
+        notes: dict[str, str] = {}
+        observables = measure_observables(sc, s, missing, notes)
         extra = {k: v for k, v in self.extra.items() if k not in _PROVENANCE_EXTRA}  # the rest: provenance
         outside = beyond_yield(sc, s)
         return {
@@ -132,6 +142,9 @@ class RunResult:
             "wall_time": s.wall_time,
             "observables": observables,
             "observables_missing": missing,
+            # what a measured value is where it is not what its name says (a wave speed averaged over
+            # a window whose contacts differ); only where there is one
+            **({"observables_notes": notes} if notes else {}),
             "peaks": self.peak_status(),
             # an elastic law's peaks beyond the force at which the beads yield (postprocess.domains)
             **({"outside_domain": outside} if outside else {}),
@@ -333,13 +346,15 @@ class RunResult:
             f"{sm['contact_law']} contacts, {sm['loading']} load"
         )
         missing = sm.get("observables_missing") or {}
+        notes = sm.get("observables_notes") or {}
         for name, value, unit, err in _key_observables(sm):
             if value is None:
                 why = printable(missing.get(name, "not measured"), 100)
                 lines.append(f"  {name:28s} -   ({why})")
                 continue
             bar = f" +- {err:.2g}" if err is not None else ""
-            lines.append(f"  {name:28s} {_num(value)}{bar} {unit}")
+            note = f"   (note: {printable(notes[name], 100)})" if name in notes else ""
+            lines.append(f"  {name:28s} {_num(value)}{bar} {unit}{note}")
         pk = sm.get("peaks") or {}
         if pk:
             lines.append(

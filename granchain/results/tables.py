@@ -32,6 +32,8 @@ OBSERVABLE_UNITS = {
     "wave_speed": "m/s",
     "wave_speed_stderr": "m/s",
     "wave_speed_contacts": "contacts fitted",
+    # a window whose contacts differ: the speed over each uniform stretch, {contacts, speed, stderr, arrivals}
+    "wave_speed_sections": "m/s per stretch",
     "max_peak_force": "N",
     "max_peak_contact": "contact",
     "static_force": "N",  # a precompression's F0: the forces above are dynamic, F - F0

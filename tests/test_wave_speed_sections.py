@@ -1,0 +1,120 @@
+"""A wave speed fitted over a window whose contacts differ is marked as an average over it, with the
+speed of each uniform stretch of the window beside it; a uniform chain's is not."""
+
+import io
+from contextlib import redirect_stdout
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from granchain.physics import materials as mat
+from granchain.postprocess.observables import FIT_CONTACTS, front_arrivals
+from granchain.scene import parse_scene
+from granchain.workflows.run import run_reference
+
+from .test_varied_chains import _planned, chain_text, precompression_range, real_contact_positions
+
+SETTINGS = settings(max_examples=15, deadline=None, suppress_health_check=list(HealthCheck))
+#: two materials per section draw, told apart by their density (the mass a wave carries)
+MATERIAL_NAMES = sorted(mat.MATERIALS)
+
+
+def _window(n: int) -> tuple[int, int]:
+    """The default window of a chain of n beads (Scene.window: its second and third quarters)."""
+    c = n - 1
+    a = max(1, c // 4)
+    return a, min(max(a + 1, (3 * c) // 4), c)
+
+
+@st.composite
+def two_section_chains(draw):
+    """A Hertz chain of 20-40 beads whose beads change once, inside the window with FIT_CONTACTS
+    contacts of each section in it: two radii of one material or two materials of one radius.
+    Returns (scene, the first bead of the second section)."""
+    n = draw(st.integers(20, 40), label="beads")
+    a, b = _window(n)
+    # section 1: contacts a..s-2 of the window, the interface contact s-1, section 2: s..b
+    s = draw(st.integers(a + FIT_CONTACTS + 1, b - FIT_CONTACTS + 1), label="first bead of section 2")
+    if draw(st.booleans(), label="two radii"):
+        r1 = draw(st.floats(1e-3, 6e-3), label="R1")
+        r2 = r1 * draw(st.sampled_from([0.5, 0.7, 1.5, 2.0]), label="R2 / R1")
+        radii = [r1] * (s - 1) + [r2] * (n - s + 1)
+        chain = f'radius = {radii!r}\nmaterial = "stainless-steel-316"\n'
+    else:
+        m1 = draw(st.sampled_from(MATERIAL_NAMES), label="material 1")
+        m2 = draw(
+            st.sampled_from([m for m in MATERIAL_NAMES if mat.MATERIALS[m].density != mat.MATERIALS[m1].density]),
+            label="material 2",
+        )
+        chain = f"radius = 4.76e-3\nmaterial = {[m1] * (s - 1) + [m2] * (n - s + 1)!r}\n"
+    velocity = draw(st.floats(0.1, 2.0), label="velocity")
+    return parse_scene(chain_text(chain, n, velocity), source="two-sections.toml"), s
+
+
+@st.composite
+def uniform_chains(draw):
+    """A uniform Hertz chain of 20-40 beads: any built-in material and radius, precompressed or not."""
+    n = draw(st.integers(20, 40), label="beads")
+    chain = (
+        f"radius = {draw(st.floats(1e-3, 6e-3), label='R')!r}\n"
+        f"material = {draw(st.sampled_from(MATERIAL_NAMES), label='material')!r}\n"
+    )
+    velocity = draw(st.floats(0.1, 2.0), label="velocity")
+    sc = parse_scene(chain_text(chain, n, velocity), source="uniform.toml")
+    if not draw(st.booleans(), label="precompressed"):
+        return sc
+    f_kick, f_max = precompression_range(sc)
+    f0 = min(10.0 ** draw(st.floats(-3.0, 3.0), label="log10 F0 / kick's force") * f_kick, f_max)
+    return parse_scene(chain_text(chain, n, velocity, f0), source="uniform.toml")
+
+
+def _own_fit(result, first: int, last: int) -> float:
+    """The speed fitted here over contacts first..last's own arrivals against their real positions."""
+    c = np.arange(first, last + 1)
+    t = front_arrivals(result.solution, result.scene.effects.precompression)[c - 1]
+    ok = np.isfinite(t)
+    x = real_contact_positions(result.scene)[c - 1][ok]
+    return 1.0 / np.polyfit(x, t[ok], 1)[0]
+
+
+@SETTINGS
+@given(drawn=two_section_chains())
+def test_a_two_section_window_is_marked_and_fitted_per_section(drawn):
+    sc, s = drawn
+    result = run_reference(_planned(sc), "verlet")
+    obs, notes = result.observables(), result.observables_notes()
+    assert obs["wave_speed"] is not None, result.observables_missing().get("wave_speed")
+    a, b = result.scene.window
+    note = notes["wave_speed"]
+    assert note.startswith(f"an average over contacts {a}-{b}")
+    assert f"beads {a}-{s - 1} of " in note
+    assert f", {s}-{b + 1} of " in note
+    sections = obs["wave_speed_sections"]
+    # the interface contact s - 1 is a stretch of one: no speed of its own
+    assert [sec["contacts"] for sec in sections] == [[a, s - 2], [s, b]]
+    for sec in sections:
+        assert sec["speed"] == pytest.approx(_own_fit(result, *sec["contacts"]), rel=1e-6)
+        assert sec["stderr"] >= 0.0
+    summary = result.summary()
+    assert summary["observables_notes"] == notes
+    printed = io.StringIO()
+    with redirect_stdout(printed):
+        from granchain.cli.terminal import print_result
+
+        print_result(result, "out")
+    text = printed.getvalue()
+    assert "note: an average over contacts" in text
+    assert f"wave_speed, contacts {s}-{b} (m/s)" in text
+
+
+@SETTINGS
+@given(sc=uniform_chains())
+def test_a_uniform_window_has_no_note_and_no_sections(sc):
+    result = run_reference(_planned(sc), "verlet")
+    obs = result.observables()
+    assert obs["wave_speed"] is not None, result.observables_missing().get("wave_speed")
+    assert "wave_speed_sections" not in obs
+    assert result.observables_notes() == {}
+    assert "observables_notes" not in result.summary()
