@@ -42,6 +42,7 @@ import numpy as np
 
 from granchain.exceptions import UsageError
 from granchain.peaks import LEAD_FRACTION
+from granchain.physics.effects.base import watched_force
 from granchain.physics.estimates import (
     damping_rate,
     expected_peak_force,
@@ -527,7 +528,18 @@ def wall_peak_planned(scene) -> bool:
     if scene.chain.beads is None or scene.n_contacts < 1:
         return False
     step = step_equivalent(scene)
-    return step is None or step[1] < 1e3
+    if step is not None and step[1] >= 1e3:
+        return False
+    # the reflected wave, up to F0 + twice the expected force, must stay within what the run watch lets
+    # the far end's contacts carry (watched_force): on a taper's micron end beads it would crush them, a
+    # force the contact law does not describe; the run then ends at contact N-1 as without a wall
+    far = scene.effects.precompression + 2.0 * expected_peak_force(scene)
+    r = scene.bead_radii
+    held = min(
+        float(watched_force(scene.contact_laws[-1], min(r[-2], r[-1]))),
+        float(watched_force(scene.wall_law, r[-1])),
+    )
+    return far <= held
 
 
 def _wall_end_time(scene, choice: PlanChoice, measured: int, slow: float, omega_max: float) -> PlanChoice:
