@@ -169,6 +169,26 @@ def test_tangent_stiffness_bounds_every_slope(name, data):
 
 
 @pytest.mark.parametrize("name", LAW_NAMES)
+@settings(max_examples=60, deadline=None)
+@given(data=st.data())
+def test_loading_stiffness_is_the_slope_a_further_compression_meets(name, data):
+    """loading_stiffness(F) (the precompressed chain's linearised contact, estimates.linearised_stiffnesses)
+    is the forward slope of the virgin curve where it carries F: on Thornton's plastic line beyond F_y,
+    not Hertz's tangent at F (the planner took that, 2-100x too stiff, and planned a precompressed
+    Thornton chain's fronts too fast)."""
+    law, amax, _ = data.draw(law_and_state(name))
+    if amax <= 0.0:
+        return
+    h = 1e-7 * amax
+    levels = [float(np.broadcast_to(k.level, (1,))[0]) for k in law.kinks(np.array([amax]))]
+    if any(amax <= lv < amax + 2 * h for lv in levels if lv != amax):
+        return  # a forward difference across the yield kink is neither slope
+    f = float(law.loading_force(amax))
+    forward = (float(law.loading_force(amax + h)) - f) / h
+    assert math.isclose(float(law.loading_stiffness(f)), forward, rel_tol=1e-5)
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
 @settings(max_examples=40, deadline=None)
 @given(data=st.data())
 def test_zero_force_kink_is_where_the_force_vanishes(name, data):

@@ -171,13 +171,12 @@ LINEAR_SAMPLES_PER_PERIOD = 32
 
 def linearised_stiffnesses(scene) -> tuple[np.ndarray, float]:
     """Each bead-bead contact's stiffness about the precompression F0 and the wall contact's (0 without
-    a wall), N/m: the Hertz tangent 3/2 k^(2/3) F0^(1/3), or a linear loading line's own k."""
+    a wall), N/m: the slope of its law's virgin curve at F0 (ContactLaw.loading_stiffness: Hertz's
+    tangent 3/2 k^(2/3) F0^(1/3), a linear loading line's own k, Thornton's plastic line beyond F_y)."""
     f0 = float(scene.effects.precompression)
-    k = np.asarray(scene.contact_stiffnesses, dtype=float)
-    kw = float(scene.wall_stiffness) if scene.effects.far_end == "wall" else 0.0
-    if scene.contact.law_class.loading_is_linear():
-        return k, kw
-    return 1.5 * k ** (2.0 / 3.0) * f0 ** (1.0 / 3.0), 1.5 * kw ** (2.0 / 3.0) * f0 ** (1.0 / 3.0)
+    k = np.array([float(law.loading_stiffness(f0)) for law in scene.contact_laws])
+    kw = float(scene.wall_law.loading_stiffness(f0)) if scene.effects.far_end == "wall" else 0.0
+    return k, kw
 
 
 def linearised_first_maximum(scene, contact: int, horizon: float, step: bool = False, floor: float = 0.0):

@@ -170,6 +170,12 @@ class ContactLaw:
         """The stiffest dF/dalpha of a contact loaded up to `force` (planner, stability)."""
         raise NotImplementedError
 
+    def loading_stiffness(self, force: ArrayLike) -> np.ndarray:
+        """dF/dalpha of the virgin curve where it carries `force`: the stiffness a further compression
+        meets from a static force on it (precompression's linearised chain; the unloading slope,
+        ``tangent_stiffness``, may be stiffer)."""
+        raise NotImplementedError
+
     def max_stiffness(self, force: ArrayLike) -> np.ndarray:
         """The stiffest dF/dalpha of a contact loaded up to `force`: ``tangent_stiffness`` unless a law
         says otherwise."""

@@ -180,6 +180,11 @@ class BilinearLaw(ContactLaw):
         return np.asarray(force, dtype=float) / np.asarray(self.k, dtype=float)
 
     @override
+    def loading_stiffness(self, force=None):
+        """k at any force: the loading line."""
+        return np.asarray(self.k, dtype=float)
+
+    @override
     def tangent_stiffness(self, force=None):
         """k_u at any force: unloading is the stiffer line."""
         return np.asarray(self.k_unloading)

@@ -121,6 +121,10 @@ class HertzLaw(ContactLaw):
         return hertz_tangent_stiffness(force, self.k)
 
     @override
+    def loading_stiffness(self, force):
+        return hertz_tangent_stiffness(force, self.k)
+
+    @override
     def kinks(self, alpha_max):
         # F'' is infinite at zero overlap: the contact opens or closes
         return [Kink(np.zeros(np.shape(alpha_max)), "zero overlap")]

@@ -35,7 +35,7 @@ from typing_extensions import override
 from granchain.physics import materials as mat
 from granchain.physics import models
 from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, LawCoefficients, forbid_others
-from granchain.physics.laws.hertz import HertzLaw, hertz_force
+from granchain.physics.laws.hertz import HertzLaw, hertz_force, hertz_tangent_stiffness
 
 
 def yield_overlap(yield_pressure: float, e_star: float, r_star: float) -> float:
@@ -366,6 +366,14 @@ class ThorntonLaw(ContactLaw):
         fy = self.yield_force
         hertz = (f / np.asarray(self.k, dtype=float)) ** (2.0 / 3.0)
         return np.where(f > fy, np.asarray(self.yield_overlap) + (f - fy) / self.plastic_slope, hertz)
+
+    @override
+    def loading_stiffness(self, force):
+        """Hertz's 3/2 k^(2/3) F^(1/3) up to the yield force F_y, the plastic line's S = pi p_y R* above:
+        a chain precompressed beyond F_y is loaded further along the plastic line, several times softer
+        than Hertz's slope at the same force (its linear sound speed lower by sqrt of that)."""
+        f = np.maximum(np.asarray(force, dtype=float), 0.0)
+        return np.where(f > self.yield_force, self.plastic_slope, hertz_tangent_stiffness(f, self.k))
 
     @override
     def tangent_stiffness(self, force):
