@@ -15,6 +15,16 @@ from granchain.physics.materials import MATERIALS
 from granchain.scene import parse_scene
 
 
+def brass_impulse_text(beads: int, impulse: float, duration: float = 1e-6, extra: str = "") -> str:
+    """The tests' plain chain as TOML text: `beads` 4.76 mm brass beads, Hertz, bead 1 given `impulse`
+    (N s) over `duration` (s), end time and step "auto"; `extra` (more TOML sections) appended."""
+    return (
+        f'\n[chain]\nbeads = {beads}\nradius = 4.76e-3\nmaterial = "brass"\n[contact]\nlaw = "hertz"\n'
+        f'[loading]\nkind = "impulse"\nimpulse = {impulse!r}\nduration = {duration!r}\n'
+        f'[run]\nend_time = "auto"\ntimestep = "auto"\n{extra}'
+    )
+
+
 @st.composite
 def scene_texts(
     draw,

@@ -14,6 +14,7 @@ from granchain.campaigns import workspace as wsp
 from granchain.campaigns.spec import CampaignError, parse_campaign
 
 from .conftest import CAMPAIGN_SCENE
+from .scenegen import brass_impulse_text
 
 SMALL_SCENE = CAMPAIGN_SCENE
 
@@ -233,23 +234,7 @@ def test_the_table_counts_pulses_on_the_dynamic_force(tmp_path):
     from granchain.campaigns.run import run_campaign
     from granchain.physics.models import weakly_nonlinear_ratio
 
-    scene = """
-[chain]
-beads = 24
-radius = 4.76e-3
-material = "brass"
-[contact]
-law = "hertz"
-[loading]
-kind = "impulse"
-impulse = 1e-4
-duration = 1e-6
-[run]
-end_time = "auto"
-timestep = "auto"
-[outputs]
-histories = [18]
-"""
+    scene = brass_impulse_text(24, 1e-4, extra="[outputs]\nhistories = [18]\n")
     campaign = 'backend = "reference"\nmethod = "verlet"\nerror_estimate = false'
     c = parse_campaign(campaign_text(PRECOMPRESSED, scene=scene, campaign=campaign))
     df = run_campaign(c, tmp_path / "ws", workers=1)[0]["table"].set_index("precompression.force")

@@ -21,7 +21,7 @@ from granchain.scene import parse_scene
 from granchain.workflows import run as run_mod
 from granchain.workflows.plan import peak_ratio, plan_scene
 from granchain.workflows.run import AccuracyWarning, PlanRefinedWarning, check_resources, plan_for, run_scene
-from tests.scenegen import scenes
+from tests.scenegen import brass_impulse_text, scenes
 
 STEEL = """
 title = "steel bilinear chain, 2 kN step for 50 us"
@@ -402,21 +402,7 @@ def test_the_timestep_reason_names_the_stiffness_omega_max_comes_from(f0):
     """A uniform free chain's omega_max is 2 sqrt(k_t / m) exactly: the reason's stiffness is that k_t,
     the tangent at F0 plus the expected force under precompression (2000 N: 4.85e7 N/m, named as the
     nominal 5.55e6 N/m at 3 N before)."""
-    text = """
-[chain]
-beads = 60
-radius = 4.76e-3
-material = "brass"
-[contact]
-law = "hertz"
-[loading]
-kind = "impulse"
-impulse = 1e-4
-duration = 1e-6
-[run]
-end_time = "auto"
-timestep = "auto"
-"""
+    text = brass_impulse_text(60, 1e-4)
     if f0:
         text += f"[precompression]\nforce = {f0}\n"
     plan = plan_scene(parse_scene(text, source="pre.toml"), rtol=1e-3)
