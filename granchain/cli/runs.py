@@ -59,8 +59,10 @@ def add_run_parser(sub) -> None:
         "--error-estimate",
         default="on",
         choices=["on", "off", "checked"],
-        help="also run at 2 dt and 4 dt and give every number a measured error (default on; about 0.75x a run "
-        "more); checked: RK4's estimates also checked by a run at dt / 2 (2x a run more), one it contradicts withheld, "
+        help="give every number an error from companion runs (default on): at 2 dt and 4 dt, 3/4 of the run's steps "
+        "more; reference RK4 on a kinked law (bilinear, Thornton) one at 2 dt, half of them (`granchain plan "
+        "--error-estimate` counts them); checked: RK4's estimates also checked by a run at dt / 2 "
+        "(2x a run more), one it contradicts withheld, "
         "and Verlet's on a kinked law (bilinear, Thornton) measured against RK4 runs instead of bounded",
     )
     r.add_argument("--json", action="store_true", help="print the summary (summary.json and run_dir) as JSON on stdout")
@@ -122,8 +124,9 @@ def add_compare_parser(sub) -> None:
         "--error-estimate",
         default="on",
         choices=["on", "off", "checked"],
-        help="give both runs measured error bars (companions at 2 dt and 4 dt); a difference fails only "
-        "beyond rtol plus both errors (default on); checked: RK4's also checked by a run at dt / 2, and "
+        help="give both runs error bars from companion runs (as `granchain run --error-estimate`); a "
+        "difference fails only beyond rtol plus both errors (default on); checked: RK4's also checked by a "
+        "run at dt / 2, and "
         "Verlet's on a kinked law measured against RK4 runs",
     )
     c.add_argument(
