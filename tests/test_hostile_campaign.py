@@ -191,6 +191,25 @@ def test_a_point_failed_on_a_run_link_says_what_to_do_and_retry_failed_recovers_
     assert _tree(elsewhere) == before
 
 
+def test_a_failure_record_that_is_a_link_is_refused_and_said(tmp_path):
+    """A failed point whose failure.json is a link planted in its job directory: nothing is written
+    through the link, and the point's record (the driver's message) says the failure could not be
+    recorded, not silently nothing."""
+    from granchain.campaigns.point_task import run_point
+
+    job, outside = tmp_path / "job", tmp_path / "outside.json"
+    job.mkdir()
+    outside.write_text("untouched")
+    (job / wsp.FAILURE).symlink_to(outside)
+    code = dict(wsp.code_version("reference"), source="0" * 16)  # refused: fails before any run
+    record = run_point({"job_dir": str(job), "backend": "reference", "code": code, "scene": {}, "source": None})
+    assert record["status"] == "failed"
+    assert "install the same granchain on every worker" in record["message"]
+    assert f"its {wsp.FAILURE} could not be written" in record["message"], record["message"]
+    assert outside.read_text() == "untouched"
+    assert (job / wsp.FAILURE).is_symlink()
+
+
 # --------------------------------------------------------------- damaged files: incomplete or one line
 
 

@@ -76,8 +76,8 @@ def run_point(payload: dict) -> dict:
                 job / wsp.FAILURE,
                 {"message": message, "type": type(e).__name__, "traceback": detail, "host": socket.gethostname()},
             )
-        except OSError:  # a full or read-only disk: the point stays failed, its record below says why
-            pass
+        except OSError as refused:  # a link at its name, a full or read-only disk: the record says so
+            message += f"; and its {wsp.FAILURE} could not be written: {one_line(refused)}"
     wall = time.perf_counter() - t0
     record = {
         "job": job.name,
