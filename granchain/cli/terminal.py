@@ -14,6 +14,7 @@ import numpy as np
 from granchain.backends import Backend, backend_named
 from granchain.peaks import REACHED_FRACTION, end_contact_reached
 from granchain.physics.effects import unbalanced_forces
+from granchain.postprocess.comparison_table import dynamic_name
 from granchain.results import OBSERVABLE_UNITS, printable
 from granchain.scene import Scene, load_scene
 
@@ -159,7 +160,7 @@ def print_end_peaks(result, s: dict, f0: float) -> None:
         if value is None:
             continue
         # the wall's contact carries F0 at rest: shown dynamic, as compare names it (dynamic_name)
-        shown_name, shown_value = (f"dynamic_{name}", value - static) if static else (name, value)
+        shown_name, shown_value = (dynamic_name(name), value - static) if static else (name, value)
         row = f"{shown_name} (N{f', {DYNAMIC}' if static else ''})"
         if s.get(name.replace("_force", "_complete")) is False and not end_contact_reached(value, static, rises):
             print(

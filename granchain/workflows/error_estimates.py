@@ -878,7 +878,8 @@ def _observable_error(name: str, value, bars, measured: dict, withheld_bound: fl
     error too: the reported error is both in quadrature (on a taper or a dimer the fit's spread is
     30x to 20 000x the step's), each kept under its own name.
 
-    Where the check at dt / 2 withheld the step's error but withheld_bound (_withheld_step_bound)
+    Where a check withheld the step's error (the run at dt / 2, or the order checks of 2 dt and 4 dt) but
+    withheld_bound (_withheld_step_bound)
     puts it under 1 / FIT_DOMINATES of the fit's standard error, the wave speed's error is the fit's
     alone (the step's stays withheld, its bound given as step_error_bound) and the status says so.
     """
@@ -896,8 +897,9 @@ def _observable_error(name: str, value, bars, measured: dict, withheld_bound: fl
             out["step_error_bound"] = float(withheld_bound)
             out["status"] = (
                 f"fit's spread alone: the step's error is withheld ({out['status'].removeprefix('unreliable: ')}); "
-                f"the runs at dt / 2, dt and 2 dt bound it at {withheld_bound:.2g} on either reading of that "
-                f"check, under 1/{FIT_DOMINATES:g} of the fit's standard error {float(fit):.2g}"
+                f"the runs at dt / 2, dt and 2 dt bound it at {withheld_bound:.2g} whichever reading of the "
+                f"check that withheld it is right, under 1/{FIT_DOMINATES:g} of the fit's standard error "
+                f"{float(fit):.2g}"
             )
     return out
 
