@@ -688,6 +688,15 @@ def _richardson_bars(
         return checked(b, [h], [v[0]], [v[1]], p_end, times=t, jump_time=jump, orders=orders)
 
     report.end_peaks = _end_peaks((sol, *runs) + (() if finer is None else (finer,)), bars_of)
+    _observable_bars(report, scene, (sol, coarse, coarser, finer), extrapolate, (p, jump, orders), floor)
+
+
+def _observable_bars(report: ErrorReport, scene, sols: tuple, extrapolate, rule: tuple, floor) -> None:
+    """The scalar observables' bars (ESTIMATED_OBSERVABLES) for _richardson_bars: measured on each of
+    sols = (the run, 2 dt, 4 dt or None, dt / 2 or None), extrapolated with the run's rule (order,
+    jump_time, orders) and checked against dt / 2 where that run was made."""
+    sol, coarse, coarser, finer = sols
+    p, jump, orders = rule
     obs = [measure_observables(scene, s) for s in (sol, coarse) + ((coarser,) if coarser is not None else ())]
     obs_h = None if finer is None else measure_observables(scene, finer)
     b = max(scene.window[1] - 1, 0)
