@@ -232,6 +232,13 @@ def print_result(result, out) -> None:
     outside = "beyond first yield"
     for line in s.get("outside_domain") or ():  # an elastic law beyond first yield (postprocess.domains)
         print(f"  {outside:38s} {shown(line)}")
+    _print_conservation(scene, s)
+    _print_error_summary(s.get("errors"))
+    print(f"run directory: {shown(out)}")
+
+
+def _print_conservation(scene, s: dict) -> None:
+    """print_result's lines on the momentum put in and kept and the energy balance (s: the summary)."""
     c = s["conservation"]
     ld = scene.loading
     if ld.is_force:  # A min(T, t_end): the load delivers A T only if it ended before the run
@@ -257,7 +264,10 @@ def print_result(result, out) -> None:
     )
     err = fmt(c["energy_balance_error_relative"])
     print(f"  {'energy balance error (1)':38s} {err}   (relative to the energy put in)")
-    e = s.get("errors")
+
+
+def _print_error_summary(e: dict | None) -> None:
+    """print_result's lines on the run's error bars as a whole (e: the summary's errors, or None)."""
     if e is not None:
         if e["why_none"]:
             print(f"  {'error estimate':38s} none: {shown(e['why_none'])}")
@@ -281,4 +291,3 @@ def print_result(result, out) -> None:
             if e.get("why_unchecked"):
                 label = "bounds, not measured" if bounded else "not checked at dt / 2"
                 print(f"  {label:38s} {shown(e['why_unchecked'])}")
-    print(f"run directory: {shown(out)}")
