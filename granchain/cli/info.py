@@ -61,6 +61,15 @@ def add_plan_parser(sub) -> None:
     pp.set_defaults(func=cmd_plan)
 
 
+#: what `granchain plan` costs: a run on this backend (planned_bars); what a LAMMPS run would change
+PLAN_BACKEND_NOTE = (
+    "the integrator, companion runs and steps here are a reference run's; a LAMMPS run's may differ: it runs "
+    "velocity Verlet (planned as --method verlet), and on a bilinear or Thornton chain without a dashpot its "
+    "default bars are bounds from its own runs at 2 dt and 4 dt, where the reference's Verlet takes RK4 runs "
+    "that cost at most the run"
+)
+
+
 def cmd_plan(args) -> int:
     """The planner's choices for a scene, each with its reason, and the run's cost with its error bars'."""
     from granchain.backends import REFERENCE
@@ -83,6 +92,8 @@ def cmd_plan(args) -> int:
         print_json(
             {
                 "scene": {"title": scene.title, "source": scene.source},
+                "backend": REFERENCE.name,
+                "backend_note": PLAN_BACKEND_NOTE,
                 "method": plan.method,
                 "method_reason": why,
                 "rtol": plan.rtol,
@@ -124,6 +135,7 @@ def cmd_plan(args) -> int:
         )
         return 0
     print(f"scene       {scene_name(scene)}")
+    print(f"backend     {REFERENCE.name}: {PLAN_BACKEND_NOTE}")
     print(
         f"method      {plan.method}, rtol {plan.rtol:g}; stability limit {plan.stable_timestep:.4g} s "
         f"(omega_max = {plan.omega_max:.4g} rad/s)"
