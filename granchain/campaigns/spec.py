@@ -4,9 +4,11 @@ A campaign file is TOML::
 
     [campaign]
     base = "elastic-short-pulse"       # a bundled scene, a scene file inside this file's folder, or an inline [scene]
-    backend = "lammps"                 # or "reference" (with method = "rk4" | "verlet")
+    backend = "lammps"                 # or "reference" (with method = "rk4" | "verlet"; default per point:
+                                       # verlet where it has a dashpot, else rk4)
     rtol = 1e-3                        # optional: plan every point for this tolerance
-    error_estimate = true              # default: every observable gets its measured error (2 dt, 4 dt runs)
+    error_estimate = true              # default: every observable gets its error bar from companion runs
+                                       # (workflows.error_estimates.planned_companions)
     regime_contact = 20                # optional: the contact whose force history gives the table's
                                        # pulse count and regime (default: the last of [outputs] histories)
 
