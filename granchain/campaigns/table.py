@@ -10,8 +10,9 @@ Columns, in order:
   histories) and 'single solitary wave' / 'wave train' / 'no wave', or on a precompressed chain whose
   pulse stays small against F0 'weakly nonlinear wave' (granchain.postprocess.response_regimes);
   blank without histories;
-* every observable of summary.json with its estimated error (``<name>_error``, from the run's 2 dt and
-  4 dt companions; blank where no estimate could be stood behind: summary.json ``errors`` says why),
+* every observable of summary.json with its estimated error (``<name>_error``, from the run's companions,
+  an estimate or a bound as ``granchain run`` gives it; blank where no estimate could be stood behind:
+  summary.json ``errors`` says why),
   and ``error_estimate``, the largest relative peak-force error over the measured contacts;
 * ``beads``, ``timestep``, ``steps`` (as run, after planning), ``bead_steps`` (summary.json price),
   ``wall_time`` (the run plus its error-estimate companions, s), ``warnings``, ``message``, ``job``

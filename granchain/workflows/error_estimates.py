@@ -1,4 +1,5 @@
-"""The per-run error estimate: the run repeated at 2 dt and 4 dt, and Richardson on every number.
+"""The per-run error estimate: the run repeated at 2 dt and 4 dt and Richardson on every number, or,
+on the kinked laws, bounds or RK4 runs (below).
 
 estimate_errors(result, ...) runs the companions of a finished run (the same scene and plan, the
 time step doubled and quadrupled; no histories, snapshots or dumps, which no estimate needs) and
@@ -6,10 +7,11 @@ returns an ErrorReport: for every contact its peak force, time of peak and leadi
 error estimate and a status (granchain.richardson), the same for every scalar observable, the
 largest relative error over the measured contacts, and what the companions cost.
 
-Verlet on a law with slope kinks (bilinear, Thornton) without a dashpot: its error is erratic in sign,
-and its bars are bounds from the same companions (bounded_because, richardson.erratic_bounds), which
-may overstate it; on request (error_estimate="checked") it is measured against RK4 runs instead
-(against_rk4_because), at several times a LAMMPS run's price.
+Verlet on a law with slope kinks (bilinear, Thornton) without a dashpot: its error is erratic in sign.
+A LAMMPS run's bars are bounds from the same companions (bounded_because, richardson.erratic_bounds),
+which may overstate it; a reference Verlet run's are measured against RK4 runs where those cost at most
+the run (against_rk4_because, rk4_companions_cost), and LAMMPS's too on request (error_estimate="checked",
+at several times a LAMMPS run's price).
 
 On request (error_estimate="checked"), RK4's bars are checked against one more run, at dt / 2
 (check_because, richardson.checked): its error mixes orders (2.5 at Hertzian onsets, 4 and beyond),
@@ -66,7 +68,7 @@ class ErrorReport:
     """Measured error estimates of a run (see the module docstring)."""
 
     order: int
-    timesteps: list[float]  # the companions' steps (2 dt, and 4 dt where stable)
+    timesteps: list[float]  # the companions' steps (2 dt, and 4 dt where stable; 2 dt alone for one_companion; RK4's)
     wall_times: list[float]  # their wall times, s
     peak_force: ErrorBars | None = None
     time_of_peak: ErrorBars | None = None
