@@ -1,5 +1,7 @@
 """A wave speed fitted over a window whose contacts differ is marked as an average over it, with the
-speed of each uniform stretch of the window beside it; a uniform chain's is not."""
+speed of each uniform stretch of the window beside it; a uniform chain's is not; a periodic chain's (a
+dimer, a trimer) is its cell-averaged speed, one number at the cell's scale, with no stretches. A
+contact's kind does not depend on which of its two beads comes first."""
 
 import io
 from contextlib import redirect_stdout
@@ -10,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from granchain.physics import materials as mat
-from granchain.postprocess.observables import FIT_CONTACTS, front_arrivals
+from granchain.postprocess.observables import FIT_CONTACTS, contact_kinds, front_arrivals, uniform_sections
 from granchain.scene import parse_scene
 from granchain.workflows.run import run_reference
 
@@ -118,3 +120,85 @@ def test_a_uniform_window_has_no_note_and_no_sections(sc):
     assert "wave_speed_sections" not in obs
     assert result.observables_notes() == {}
     assert "observables_notes" not in result.summary()
+
+
+@st.composite
+def periodic_chains(draw):
+    """A Hertz chain of 20-40 beads that repeats a cell of 2 or 3 beads, each of a random radius and
+    material (the last cell possibly cut short), possibly walled or precompressed. Returns (scene, the
+    cell's length in beads: 1 where the drawn cell's beads are all alike, a uniform chain)."""
+    p = draw(st.integers(2, 3), label="beads per cell")
+    cell = [
+        (draw(st.floats(2e-3, 6e-3), label=f"R{i + 1}"), draw(st.sampled_from(MATERIAL_NAMES), label=f"m{i + 1}"))
+        for i in range(p)
+    ]
+    n = draw(st.integers(20, 40), label="beads")
+    beads = [cell[i % p] for i in range(n)]
+    chain = f"radius = {[r for r, _ in beads]!r}\nmaterial = {[m for _, m in beads]!r}\n"
+    velocity = draw(st.floats(0.1, 2.0), label="velocity")
+    wall = draw(st.booleans(), label="wall")
+    sc = parse_scene(chain_text(chain, n, velocity, wall=wall), source="periodic.toml")
+    if draw(st.booleans(), label="precompressed"):
+        f_kick, f_max = precompression_range(sc)
+        f0 = min(10.0 ** draw(st.floats(-3.0, 3.0), label="log10 F0 / kick's force") * f_kick, f_max)
+        sc = parse_scene(chain_text(chain, n, velocity, f0, wall), source="periodic.toml")
+    return sc, (1 if all(b == cell[0] for b in cell) else p)  # p is 2 or 3, a prime: the cell is primitive
+
+
+@SETTINGS
+@given(drawn=periodic_chains())
+def test_a_periodic_window_has_one_cell_averaged_speed(drawn):
+    sc, p = drawn
+    result = run_reference(_planned(sc), "verlet")
+    obs, notes = result.observables(), result.observables_notes()
+    assert obs["wave_speed"] is not None, result.observables_missing().get("wave_speed")
+    a, b = result.scene.window
+    if p == 1:  # the cell's beads all alike: a uniform chain
+        assert notes == {}
+    else:
+        note = notes["wave_speed"]
+        assert "not one number" not in note
+        assert note.startswith(f"the cell-averaged speed of a periodic chain over contacts {a}-{b}")
+        assert f"beads {a}-{b + 1} repeat a cell of {p} beads" in note
+        assert "one number at the scale of the cell" in note
+    # a periodic chain's speed is one number at the scale of its cell: no stretch per contact kind
+    assert "wave_speed_sections" not in obs
+    assert uniform_sections(result.scene) == [(a, b)]
+
+
+#: three bead kinds (radius, material) a mirrored chain is drawn from, so that kinds recur
+BEAD_POOL = st.tuples(st.sampled_from([2.38e-3, 3.5e-3, 4.76e-3]), st.sampled_from(MATERIAL_NAMES[:3]))
+
+
+def _scene_of(beads: list, window: tuple[int, int]):
+    """A Hertz chain of these (radius, material) beads measured over `window`, run nowhere."""
+    chain = f"radius = {[r for r, _ in beads]!r}\nmaterial = {[m for _, m in beads]!r}\n"
+    window_line = f"peak_force = true\nwindow = {list(window)!r}"
+    text = chain_text(chain, len(beads), 1.0).replace("peak_force = true", window_line)
+    return parse_scene(text, source="mirror.toml")
+
+
+def _partition(kinds: list[int]) -> list[int]:
+    """Kinds renumbered by first appearance: two lists of kinds that group the contacts alike compare equal."""
+    first: dict[int, int] = {}
+    return [first.setdefault(k, len(first)) for k in kinds]
+
+
+@settings(max_examples=100, deadline=None)
+@given(half=st.lists(BEAD_POOL, min_size=3, max_size=15))
+def test_a_chain_and_its_mirror_image_have_the_same_kinds_and_sections(half):
+    # the chain, then its mirror image: contact i and contact N - i join the same two beads, in the
+    # opposite order; they are one law between one pair of masses, one kind
+    beads = half + half[::-1]
+    n_c = len(beads) - 1
+    sc = _scene_of(beads, (1, n_c))
+    kinds = contact_kinds(sc)
+    assert kinds == kinds[::-1]
+    mirrored = [(n_c + 1 - last, n_c + 1 - f) for f, last in uniform_sections(sc)][::-1]
+    assert uniform_sections(sc) == mirrored
+    # the chain alone and its mirror image, each over its whole length: the mirror's kinds and
+    # stretches are the chain's, reversed
+    n_h = len(half) - 1
+    one, other = _scene_of(half, (1, n_h)), _scene_of(half[::-1], (1, n_h))
+    assert _partition(contact_kinds(other)[::-1]) == _partition(contact_kinds(one))
+    assert uniform_sections(other) == [(n_h + 1 - last, n_h + 1 - f) for f, last in uniform_sections(one)][::-1]

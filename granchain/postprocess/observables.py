@@ -16,10 +16,13 @@ wave_speed: the front's speed, 1 / (d t_arrival / d x), a least-squares line thr
     positions, with the slope's standard error propagated to the speed. The arrival is the leading
     pulse's time; on a precompressed chain the half-amplitude arrival (front_arrivals).
     Where the window's contacts are not all alike (contact_kinds: a contact's law constants and its
-    two beads' masses; an interface between two sections, an impurity, a dimer, a taper) the front's
-    speed differs along the window and the fit is an average over it: measure_observables says so in
-    the dict passed as `notes`, and wave_speed_sections gives the speed fitted over each uniform
-    stretch of the window that has FIT_CONTACTS arrivals (section_speeds).
+    two beads' masses, whichever comes first; an interface between two sections, an impurity, a taper)
+    the front's speed differs along the window and the fit is an average over it: measure_observables
+    says so in the dict passed as `notes`, and wave_speed_sections gives the speed fitted over each
+    uniform stretch of the window that has FIT_CONTACTS arrivals (section_speeds). A periodic window
+    (periodic_cell: a dimer, a trimer, a cell of beads repeated PERIODIC_CELLS times or more) has one
+    speed at the scale of its cell: the note says the fit is that cell-averaged speed, and there are no
+    sections.
 max_peak_force: the largest complete peak (of any pulse), and its contact.
 Each is None where it cannot be measured (the window's last contact not reached or its peak not
 complete before the end of the run; fewer than three complete peaks in the window; no complete
@@ -115,23 +118,35 @@ def wave_speed_unmeasurable(scene) -> str | None:
 #: of bead computed twice (round-off), not a different bead
 _ALIKE = 1e-9
 
+#: the least number of times a cell of beads repeats over the window for the window to count as a
+#: periodic chain (periodic_cell): fewer is a pattern, not a chain with a speed at the cell's scale
+PERIODIC_CELLS = 3
+
+
+def _alike(k: np.ndarray, ref: np.ndarray) -> bool:
+    """Two keys (contact constants, masses, radii) agree to _ALIKE."""
+    return k.shape == ref.shape and bool(np.allclose(k, ref, rtol=_ALIKE, atol=0.0))
+
 
 def contact_kinds(scene) -> list[int]:
     """Each bead-bead contact's kind (0, 1, ...; in chain order): two contacts are of one kind where
     their laws' constants (ContactLaw.pair_coefficients: stiffness and any yield or plastic constants) and their
-    two beads' masses, in chain order, agree to _ALIKE. A wave crosses contacts of one kind at one
-    speed; where the kind changes, the speed does (stiffer contacts or lighter beads: faster)."""
+    two beads' masses agree to _ALIKE, whichever bead comes first: a large-small contact and a small-large
+    one are one law between one pair of masses (the laws' mixing rules are symmetric), so a chain and its
+    mirror image have the same kinds. A wave crosses contacts of one kind at one speed; where the kind
+    changes, the speed does (stiffer contacts or lighter beads: faster)."""
     if not scene.per_bead:  # one bead kind: every contact alike (precompressed or not)
         return [0] * scene.n_contacts
     m = np.asarray(scene.bead_masses, dtype=float)
     keys = [
-        np.array([*law.pair_coefficients(), m[i], m[i + 1]], dtype=float) for i, law in enumerate(scene.contact_laws)
+        np.array([*law.pair_coefficients(), *sorted((m[i], m[i + 1]))], dtype=float)
+        for i, law in enumerate(scene.contact_laws)
     ]
     kinds: list[int] = []
     seen: list[np.ndarray] = []
     for k in keys:
         for j, ref in enumerate(seen):
-            if k.shape == ref.shape and np.allclose(k, ref, rtol=_ALIKE, atol=0.0):
+            if _alike(k, ref):
                 kinds.append(j)
                 break
         else:
@@ -140,12 +155,42 @@ def contact_kinds(scene) -> list[int]:
     return kinds
 
 
+def periodic_cell(scene) -> int | None:
+    """The number of beads p >= 2 of the cell that the measurement window's beads repeat (a dimer: 2,
+    a trimer: 3), or None: bead i + p is bead i's radius and mass and contact i + p has contact i's law
+    constants (to _ALIKE) all over the window's beads, which hold at least PERIODIC_CELLS cells; p is
+    the shortest such cell. A window of one bead kind (p = 1) is uniform, not periodic (None).
+
+    A periodic chain has one wave speed at the scale of its cell, the cell-averaged speed that dimer
+    and trimer chains are measured by (Jayaprakash, Starosvetsky & Vakakis, PRL 2011; Potekin et al.),
+    though within a cell the front's hops from contact to contact (their lengths, the masses they move)
+    differ."""
+    if not scene.per_bead or not scene.n_contacts:
+        return None
+    a, b = scene.window
+    n = b - a + 2  # the window's contacts a..b join beads a..b+1
+    r, m = np.asarray(scene.bead_radii, dtype=float), np.asarray(scene.bead_masses, dtype=float)
+    beads = [np.array([r[i], m[i]]) for i in range(a - 1, b + 1)]
+    laws = scene.contact_laws
+    contacts = [np.array(laws[c - 1].pair_coefficients(), dtype=float) for c in range(a, b + 1)]
+    for p in range(1, n // PERIODIC_CELLS + 1):
+        if all(_alike(beads[i + p], beads[i]) for i in range(n - p)) and all(
+            _alike(contacts[j + p], contacts[j]) for j in range(len(contacts) - p)
+        ):
+            return p if p >= 2 else None
+    return None
+
+
 def uniform_sections(scene) -> list[tuple[int, int]]:
     """The measurement window split into runs of consecutive contacts of one kind (contact_kinds):
-    (first, last) 1-based contacts each; one run where the window's contacts are all alike."""
+    (first, last) 1-based contacts each; one run where the window's contacts are all alike, and one
+    where the window is a periodic chain (periodic_cell), uniform at the scale of its cell: a single
+    contact kind of it is no stretch the wave crosses at a speed of its own."""
     if not scene.n_contacts:
         return []
     a, b = scene.window
+    if periodic_cell(scene):
+        return [(int(a), int(b))]
     kind = contact_kinds(scene)
     runs = [[a, a]]
     for c in range(a + 1, b + 1):
@@ -171,10 +216,18 @@ def _bead_label(radius: float, material, named: bool) -> str:
 
 def _window_beads(scene) -> str:
     """The window's beads by stretches of one radius and material ("beads 1-20 of R = 1 mm, 21-40 of
-    R = 2 mm"); a chain whose beads change every few beads (a taper) by the range of its radii."""
+    R = 2 mm"); a chain whose beads change every few beads (a taper) by the range of its radii; a
+    periodic window (periodic_cell) by its cell ("beads 7-22 repeat a cell of 2 beads (R = 4.76 mm,
+    R = 2.38 mm): 8 cells")."""
     a, b = scene.window
     r, mats = scene.bead_radii, scene.bead_materials
     named = any(m != mats[0] for m in mats)
+    p = periodic_cell(scene)
+    if p:
+        cell = ", ".join(_bead_label(float(r[i]), mats[i], named) for i in range(a - 1, a - 1 + p))
+        whole, rest = divmod(b - a + 2, p)
+        more = f" and {rest} bead{'s' if rest > 1 else ''}" if rest else ""
+        return f"beads {a}-{b + 1} repeat a cell of {p} beads ({cell}): {whole} cells{more}"
     runs: list[list] = []
     for i in range(a - 1, b + 1):  # the window's contacts a..b join beads a..b+1
         label = _bead_label(float(r[i]), mats[i], named)
@@ -234,7 +287,8 @@ def _floor_reason(scene) -> str:
 def measure_observables(scene, solution, missing: dict | None = None, notes: dict | None = None) -> dict:
     """The observables of a run (complete peaks only); `missing`, if given, gets name -> reason for each
     None; `notes`, if given, name -> what a measured value is where it is not what its name says
-    (wave_speed over a window whose contacts differ: an average over it).
+    (wave_speed over a window whose contacts differ: an average over it; over a periodic window: the
+    cell-averaged speed).
 
     Forces are dynamic on a precompressed chain: the rise above the static force F0 (static_force),
     which every contact carries at rest; the leading pulse and its arrival are measured on it too.
@@ -277,7 +331,13 @@ def measure_observables(scene, solution, missing: dict | None = None, notes: dic
     out["wave_speed_contacts"] = int(np.sum(ok))
     sections = uniform_sections(scene)
     average = None
-    if fit and len(sections) > 1:  # the front's speed differs along the window: the fit averages it
+    if fit and periodic_cell(scene):  # one speed at the scale of the cell, none per contact kind
+        average = (
+            f"the cell-averaged speed of a periodic chain over contacts {a}-{b} ({_window_beads(scene)}): "
+            "one number at the scale of the cell, the speed dimer and trimer chains are measured by (none "
+            "per contact kind: the front's hops from contact to contact differ within the cell)"
+        )
+    elif fit and len(sections) > 1:  # the front's speed differs along the window: the fit averages it
         out["wave_speed_sections"] = section_speeds(scene, arrival, positions)
         each = (
             f"; wave_speed_sections: the speed over each uniform stretch with {FIT_CONTACTS} arrivals or more"
