@@ -202,3 +202,25 @@ def test_a_chain_and_its_mirror_image_have_the_same_kinds_and_sections(half):
     one, other = _scene_of(half, (1, n_h)), _scene_of(half[::-1], (1, n_h))
     assert _partition(contact_kinds(other)[::-1]) == _partition(contact_kinds(one))
     assert uniform_sections(other) == [(n_h + 1 - last, n_h + 1 - f) for f, last in uniform_sections(one)][::-1]
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=list(HealthCheck))
+@given(
+    big=st.sampled_from([3.5e-3, 4.76e-3, 6e-3]),
+    ratio=st.sampled_from([0.4, 0.5, 0.7]),
+    first=st.integers(2, 8),
+    contacts=st.integers(FIT_CONTACTS, 2 * 3 - 2),  # fewer than 3 cells (6 beads): up to 4 contacts
+)
+def test_a_dimer_window_shorter_than_three_cells_is_still_marked(big, ratio, first, contacts):
+    """A dimer window of fewer than PERIODIC_CELLS cells is no periodic chain to the note, and its
+    contacts are all of one kind (large-small and small-large alike): its beads still alternate, so the
+    speed fitted over it is an average and is marked so (before: no note at all)."""
+    beads = [(big if i % 2 == 0 else big * ratio, "brass") for i in range(20)]
+    window = (first, first + contacts - 1)
+    sc = _scene_of(beads, window)
+    result = run_reference(_planned(sc), "verlet")
+    obs, notes = result.observables(), result.observables_notes()
+    if obs["wave_speed"] is None:  # nothing fitted: nothing to mark
+        return
+    assert "not one number" in notes["wave_speed"], notes
+    assert "wave_speed_sections" not in obs

@@ -181,6 +181,16 @@ def periodic_cell(scene) -> int | None:
     return None
 
 
+def _window_beads_alike(scene) -> bool:
+    """Whether the measurement window's beads (a..b+1) all have one radius and mass (to _ALIKE)."""
+    if not scene.per_bead or not scene.n_contacts:
+        return True
+    a, b = scene.window
+    r, m = np.asarray(scene.bead_radii, dtype=float), np.asarray(scene.bead_masses, dtype=float)
+    beads = [np.array([r[i], m[i]]) for i in range(a - 1, b + 1)]
+    return all(_alike(x, beads[0]) for x in beads)
+
+
 def uniform_sections(scene) -> list[tuple[int, int]]:
     """The measurement window split into runs of consecutive contacts of one kind (contact_kinds):
     (first, last) 1-based contacts each; one run where the window's contacts are all alike, and one
@@ -337,17 +347,19 @@ def measure_observables(scene, solution, missing: dict | None = None, notes: dic
             "one number at the scale of the cell, the speed dimer and trimer chains are measured by (none "
             "per contact kind: the front's hops from contact to contact differ within the cell)"
         )
-    elif fit and len(sections) > 1:  # the front's speed differs along the window: the fit averages it
-        out["wave_speed_sections"] = section_speeds(scene, arrival, positions)
+    elif fit and (len(sections) > 1 or not _window_beads_alike(scene)):  # the fit averages the speed
+        # (a dimer window of fewer than PERIODIC_CELLS cells: one contact kind, beads that alternate)
+        if len(sections) > 1:
+            out["wave_speed_sections"] = section_speeds(scene, arrival, positions)
         each = (
             f"; wave_speed_sections: the speed over each uniform stretch with {FIT_CONTACTS} arrivals or more"
-            if out["wave_speed_sections"]
+            if out.get("wave_speed_sections")
             else f"; no uniform stretch of the window has {FIT_CONTACTS} arrivals to fit on its own"
         )
+        stretches = f"{len(sections)} uniform stretches" if len(sections) > 1 else "beads that differ"
         average = (
             f"an average over contacts {a}-{b}, whose contacts differ (law constants or bead masses: "
-            f"{len(sections)} uniform stretches; {_window_beads(scene)}): the front's speed is not one "
-            f"number along this window{each}"
+            f"{stretches}; {_window_beads(scene)}): the front's speed is not one number along this window{each}"
         )
     if fit is None:
         why["wave_speed"] = why["wave_speed_stderr"] = (
