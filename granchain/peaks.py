@@ -41,7 +41,8 @@ def end_contact_reached(force: float, static_force: float, rises) -> bool:
     static_force : float
         The force it carries at rest (a wall: the precompression F0; a striker: 0).
     rises : array_like
-        Every other contact's largest rise above its static force (N).
+        Every other contact's largest rise above its static force (N); nan for a contact without one
+        (a peak_force list's other contacts) is left out.
 
     Returns
     -------
@@ -51,7 +52,9 @@ def end_contact_reached(force: float, static_force: float, rises) -> bool:
         with forces of 1e-18 N and less), not a force the run measured.
     """
     rise = float(force) - float(static_force)
-    largest = max(float(np.max(np.asarray(rises, dtype=float), initial=0.0)), rise)
+    rises = np.asarray(rises, dtype=float)
+    # a nan (a contact not measured) left out: np.max's nan made every wall and striker "not reached"
+    largest = max(float(np.max(rises[~np.isnan(rises)], initial=0.0)), rise)
     return rise > REACHED_FRACTION * largest
 
 

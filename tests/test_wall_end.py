@@ -10,8 +10,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from hypothesis import Phase, assume, example, given, settings
+from hypothesis import strategies as st
 
 from granchain.backends.builtin import ReferenceBackend
+from granchain.peaks import end_contact_reached
 from granchain.scene import SceneError, parse_scene
 from granchain.workflows.plan import extended_plan, plan_scene
 from tests.scenegen import scenes
@@ -166,3 +168,20 @@ def test_stop_after_wall_needs_a_wall_and_a_stop_contact():
         parse_scene(text.replace("stop_after_contact = 19\n", ""), source="s.toml")
     with pytest.raises(SceneError, match="stop_after_wall = 1 is invalid: true or false"):
         parse_scene(text.replace("stop_after_wall = true", "stop_after_wall = 1"), source="s.toml")
+
+
+@settings(max_examples=200, deadline=None, derandomize=True)
+@given(
+    force=st.floats(0.0, 1e6),
+    rises=st.lists(st.floats(0.0, 1e6), max_size=8),
+    gaps=st.lists(st.integers(0, 8), min_size=1, max_size=4),
+)
+def test_end_contact_reached_leaves_out_the_contacts_without_a_peak(force, rises, gaps):
+    """A nan among the other contacts' rises (a peak_force list's other contacts) is left out: the wall's
+    or striker's contact is reached or not as without it. Fails before: np.max gave nan, and every end
+    contact read 'not reached' (end_contact_reached(5.0, 0.0, [1.0, nan]) was False)."""
+    with_nan = list(rises)
+    for g in gaps:
+        with_nan.insert(min(g, len(with_nan)), float("nan"))
+    assert end_contact_reached(force, 0.0, with_nan) == end_contact_reached(force, 0.0, rises)
+    assert end_contact_reached(5.0, 0.0, [1.0, float("nan")])
