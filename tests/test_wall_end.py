@@ -9,14 +9,21 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import Phase, assume, example, given, settings
+from hypothesis import HealthCheck, Phase, assume, example, given, settings
 from hypothesis import strategies as st
 
 from granchain.backends.builtin import ReferenceBackend
 from granchain.peaks import end_contact_reached
 from granchain.scene import SceneError, parse_scene
-from granchain.workflows.plan import extended_plan, plan_scene
-from tests.scenegen import scenes
+from granchain.workflows.plan import (
+    _front_end_time,
+    extended_plan,
+    last_measured_contact,
+    plan_scene,
+    wall_peak_planned,
+    wave_speeds,
+)
+from tests.scenegen import overlap_fraction, scene_texts, scenes
 
 #: bead-steps one example may cost (the planned run and the longer one)
 MAX_BEAD_STEPS = 3e6
@@ -168,6 +175,76 @@ def test_stop_after_wall_needs_a_wall_and_a_stop_contact():
         parse_scene(text.replace("stop_after_contact = 19\n", ""), source="s.toml")
     with pytest.raises(SceneError, match="stop_after_wall = 1 is invalid: true or false"):
         parse_scene(text.replace("stop_after_wall = true", "stop_after_wall = 1"), source="s.toml")
+
+
+#: 20 brass beads, Hertz, kicked at 0.5 m/s, a wall, every "auto"; the stop check the scene's own:
+#: contact 5, not the wall's
+BRASS_KICK_STOPPED_AT_5 = """
+[chain]
+beads = 20
+radius = 4.76e-3
+material = "brass"
+[contact]
+law = "hertz"
+[loading]
+kind = "velocity"
+velocity = 0.5
+[run]
+end_time = "auto"
+timestep = "auto"
+stop_after_contact = 5
+[boundary]
+far_end = "wall"
+[outputs]
+peak_force = true
+"""
+
+PLAN_SETTINGS = settings(
+    max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.filter_too_much]
+)
+
+
+def _with_stop(text: str, stop: int) -> str:
+    run = '[run]\nend_time = "auto"\ntimestep = "auto"\n'
+    assert run in text
+    return text.replace(run, f"{run}stop_after_contact = {stop}\n")
+
+
+@st.composite
+def walled_with_a_stop(draw):
+    """A generated walled chain (every law, load and effect) whose [run] gives stop_after_contact (any of
+    its contacts), without stop_after_wall; and its text."""
+    text = draw(scene_texts(max_beads=30, wall=True))
+    beads = int(next(line for line in text.splitlines() if line.startswith("beads = ")).split("=")[1])
+    text = _with_stop(text, draw(st.integers(1, beads - 1)))
+    sc = parse_scene(text, source="generated.toml")
+    assume(overlap_fraction(sc) < 0.05)
+    return sc, text
+
+
+@PLAN_SETTINGS
+@example(case=(parse_scene(BRASS_KICK_STOPPED_AT_5, source="w1.toml"), BRASS_KICK_STOPPED_AT_5))
+@given(case=walled_with_a_stop())
+def test_a_given_stop_without_the_walls_keeps_the_end_for_the_measured_contacts(case):
+    """A scene that gives its own stop check without stop_after_wall ends before the wall's peak: its auto
+    end is the one for its measured contacts (plan._front_end_time), whose reason does not say the wall's
+    contact is measured; the same scene with stop_after_wall = true keeps the wall's end. Fails before:
+    20 brass beads kicked, stop_after_contact = 5: the end extended for the wall (7.8e-4 s against 4.4e-4 s)
+    and its reason said 'the wall's contact 20 ... measured'; the run stopped at 1.34e-4 s and printed
+    wall_peak_force not reached."""
+    sc, text = case
+    plan = plan_scene(sc)
+    end = dict((c.name, c) for c in plan.choices)["end_time"]
+    alone = _front_end_time(sc, last_measured_contact(sc), wave_speeds(sc)[0], plan.omega_max)
+    assert "the wall's contact" not in end.reason
+    assert end.value == alone.value
+    assert not plan.scene.run.stop_after_wall
+    waits = parse_scene(text.replace("[run]\n", "[run]\nstop_after_wall = true\n", 1), source="waits.toml")
+    waiting = plan_scene(waits)
+    assert waiting.scene.run.stop_after_wall
+    if wall_peak_planned(waits):
+        assert waiting.scene.run.end_time >= end.value
+        assert "the wall's contact" in dict((c.name, c.reason) for c in waiting.choices)["end_time"]
 
 
 @settings(max_examples=200, deadline=None, derandomize=True)

@@ -27,7 +27,8 @@ end time    long enough for the leading wave to pass the last measured contact L
             check ending it. On a wall, with peak forces asked for (wall_peak_planned), until the
             wall's peak is measured too: the end for contact N-1 (or the load's end crossing the
             chain) and WALL_PULSE_CONTACTS contacts' travel more, the stop check also waiting for
-            the wall's contact ([run] stop_after_wall).
+            the wall's contact ([run] stop_after_wall; a stop check the scene gives without it
+            keeps its end).
 
 The estimates it plans with (step equivalent, expected peak force, stiffest tangents, highest
 frequency, dashpot rate) are granchain.physics.estimates; the output strides granchain.schedule.
@@ -670,7 +671,10 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
             choices.append(_one_bead_end_time(scene, impacts))
         else:
             choices.append(_front_end_time(scene, last, slow, omega))
-            if wall_peak_planned(scene):
+            # only where the stop check waits for the wall: the planner's own (below) or a given one
+            # with stop_after_wall; a given stop without it ends the run before the wall's peak
+            waits = scene.run.stop_after_contact is None or scene.run.stop_after_wall
+            if waits and wall_peak_planned(scene):
                 choices[-1] = _wall_end_time(scene, choices[-1], last, slow, omega)
         end = choices[-1].value
     beads = scene.chain.beads
