@@ -9,15 +9,18 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, Phase, assume, example, given, settings
+from hypothesis import HealthCheck, Phase, assume, event, example, given, settings
 from hypothesis import strategies as st
 
 from granchain.backends.builtin import ReferenceBackend
 from granchain.peaks import end_contact_reached
 from granchain.scene import SceneError, parse_scene
 from granchain.workflows.plan import (
+    WALL_PULSE_CONTACTS,
     _front_end_time,
     extended_plan,
+    extension_budget,
+    front_travel_time,
     last_measured_contact,
     plan_scene,
     wall_peak_planned,
@@ -98,6 +101,8 @@ def test_auto_end_measures_the_wall_peak(scene):
     stays up past the planned end (a plastic, damped chain that settles on the wall) the run is
     extended once (extended_plan), as granchain run does. Fails before the wall's stop: the stop
     check at contact N-1 ended the run before the wall's force fell back."""
+    # a load lasting longer than any run (plan.extension_budget) is a lasting one: the wall's peak not planned
+    assume(wall_peak_planned(scene))
     plan = plan_scene(scene, method="rk4")
     planned = plan.scene
     cost = planned.run.end_time / planned.run.timestep * planned.chain.beads
@@ -177,6 +182,27 @@ def test_stop_after_wall_needs_a_wall_and_a_stop_contact():
         parse_scene(text.replace("stop_after_wall = true", "stop_after_wall = 1"), source="s.toml")
 
 
+#: 30 brass beads, Hertz, a 40 N step on bead 1 (its duration DURATION), a wall, every "auto"
+BRASS_STEP_ON_A_WALL = """
+[chain]
+beads = 30
+radius = 4.76e-3
+material = "brass"
+[contact]
+law = "hertz"
+[loading]
+kind = "step"
+amplitude = 40.0
+duration = DURATION
+[run]
+end_time = "auto"
+timestep = "auto"
+[boundary]
+far_end = "wall"
+[outputs]
+peak_force = true
+"""
+
 #: 20 brass beads, Hertz, kicked at 0.5 m/s, a wall, every "auto"; the stop check the scene's own:
 #: contact 5, not the wall's
 BRASS_KICK_STOPPED_AT_5 = """
@@ -202,6 +228,53 @@ peak_force = true
 PLAN_SETTINGS = settings(
     max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.filter_too_much]
 )
+
+
+@st.composite
+def walled_steps(draw):
+    """A generated walled chain (tests.scenegen: laws, materials, tapers, precompression, dashpots) under
+    a step force lasting 1e-6 to 100 s (below the 1e3 s of plan._front_end_time's own lasting load)."""
+    text = draw(scene_texts(max_beads=30, wall=True))
+    assume('kind = "step"' in text)
+    lines = text.splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith("duration = "))
+    lines[i] = f"duration = {10.0 ** draw(st.floats(-6.0, 2.0), label='log10 T')!r}"
+    sc = parse_scene("\n".join(lines) + "\n", source="generated.toml")
+    assume(overlap_fraction(sc) < 0.05)
+    return sc
+
+
+@PLAN_SETTINGS
+@example(sc=parse_scene(BRASS_STEP_ON_A_WALL.replace("DURATION", "1.0"), source="st_1.0.toml"))
+@example(sc=parse_scene(BRASS_STEP_ON_A_WALL.replace("DURATION", "1e-2"), source="st_1e-2.toml"))
+@given(sc=walled_steps())
+def test_a_step_longer_than_the_budget_is_a_lasting_load_for_the_wall(sc):
+    """A step lasting longer than the longest end a run is ever run to (plan.extension_budget: 3x the
+    slowest front's crossing of the whole chain) keeps pressing the wall past any run: the wall's peak is
+    not planned for, and the planned end is at most the end for contact N-1 or the load's end crossing
+    the chain within that budget, with the wall's pulse (WALL_PULSE_CONTACTS contacts' time) after it. A
+    shorter step is planned until its end has crossed the chain, the stop check waiting for the wall.
+    Fails before: the wall's end was the load's whole duration after the crossing, for any step under
+    1e3 s (30 brass beads, 40 N for 1 s: 1.001 s and 8.8e5 steps, for a budget of 2.7e-3 s)."""
+    plan = plan_scene(sc)
+    slow = wave_speeds(sc)[0]
+    nc = sc.n_contacts
+    crossing = front_travel_time(sc, nc, slow)
+    hop = crossing - front_travel_time(sc, nc - 1, slow)
+    budget = extension_budget(sc, slow)
+    load = sc.loading.duration
+    end_n1 = _front_end_time(sc, nc, slow, plan.omega_max).value
+    end = plan.scene.run.end_time
+    bound = max(end_n1, crossing + budget) + WALL_PULSE_CONTACTS * hop
+    assert end <= bound * (1 + 1e-12), f"planned end {end:.4g} s beyond {bound:.4g} s (a {load:.3g} s step)"
+    event("beyond the budget" if load > budget else "within it")
+    event(f"stop_after_wall {plan.scene.run.stop_after_wall}")
+    if load > budget:
+        assert not wall_peak_planned(sc)
+        assert not plan.scene.run.stop_after_wall
+        assert "the wall's contact" not in dict((c.name, c.reason) for c in plan.choices)["end_time"]
+    if plan.scene.run.stop_after_wall:  # the wall's peak planned for: the load's end crosses the chain first
+        assert end >= crossing + load
 
 
 def _with_stop(text: str, stop: int) -> str:

@@ -24,11 +24,11 @@ end time    long enough for the leading wave to pass the last measured contact L
             A run of a chain of given length that still ends before its window's last contact
             has a first maximum, or while the force there still rises (a main wave behind a
             smaller precursor), says so and is run again, once, longer (extended_plan), its stop
-            check ending it. On a wall, with peak forces asked for (wall_peak_planned), until the
-            wall's peak is measured too: the end for contact N-1 (or the load's end crossing the
-            chain) and WALL_PULSE_CONTACTS contacts' travel more, the stop check also waiting for
-            the wall's contact ([run] stop_after_wall; a stop check the scene gives without it
-            keeps its end).
+            check ending it. On a wall, with peak forces asked for (wall_peak_planned: under a load
+            that ends within LINEAR_HORIZON crossings of the chain), until the wall's peak is
+            measured too: the end for contact N-1 (or the load's end crossing the chain) and
+            WALL_PULSE_CONTACTS contacts' travel more, the stop check also waiting for the wall's
+            contact ([run] stop_after_wall; a stop check the scene gives without it keeps its end).
 
 The estimates it plans with (step equivalent, expected peak force, stiffest tangents, highest
 frequency, dashpot rate) are granchain.physics.estimates; the output strides granchain.schedule.
@@ -228,7 +228,7 @@ def extended_plan(scene: Scene, plan: Plan, solution) -> Plan | None:
     unmeasured = unmeasured_outputs(plan.scene, solution)
     if solution.end_time < run.end_time * (1.0 - 1e-9) or not unmeasured:
         return None
-    budget = LINEAR_HORIZON * front_travel_time(plan.scene, plan.scene.n_contacts, wave_speeds(scene)[0])
+    budget = extension_budget(plan.scene, wave_speeds(scene)[0])
     if budget <= run.end_time * (1.0 + 1e-9):
         return None
     names = [line.split(":", 1)[0] for line in unmeasured]
@@ -379,6 +379,14 @@ def front_travel_time(scene, last: int, slow: float) -> float:
     return travel
 
 
+def extension_budget(scene, slow: float) -> float:
+    """The longest end a run of `scene` (a chain of given length) is ever run to (s): LINEAR_HORIZON x
+    the slowest front's crossing of the whole chain (front_travel_time to its last contact at the
+    slowest expected speed `slow`), the end extended_plan runs a run again to. A load lasting longer
+    than it is a lasting one for the wall (wall_peak_planned)."""
+    return LINEAR_HORIZON * front_travel_time(scene, scene.n_contacts, slow)
+
+
 def last_measured_contact(scene) -> int | None:
     """The farthest contact a requested output measures: histories, a peak_force list, the window;
     peak_force = true on a chain of given length measures the leading peak and the wave speed over
@@ -526,13 +534,15 @@ WALL_PULSE_CONTACTS = 6
 def wall_peak_planned(scene) -> bool:
     """Whether "auto" plans the run to measure the wall's peak: a chain of given length on a wall whose
     peak forces are asked for ([outputs] peak_force), with a stop check (no snapshots), under a load that
-    ends (a lasting force keeps pressing the wall: its force need not fall back)."""
+    ends within the longest end a run is ever run to (extension_budget: LINEAR_HORIZON x the slowest
+    front's crossing of the whole chain). A load lasting longer is a lasting force: it keeps pressing the
+    wall, whose force need not fall back before its end has crossed the chain, and an end planned to
+    that (_wall_end_time: the crossing after the whole load) would outlast any run the planner makes
+    (a 40 N step for 1 s on 30 brass beads: 1.001 s, 8.8e5 steps, 4.2e9 with a dashpot, for a
+    budget of 2.7e-3 s). The run then ends as without a wall, the wall's peak not measured."""
     if scene.effects.far_end != "wall" or not scene.outputs.peak_force or scene.outputs.snapshots:
         return False
     if scene.chain.beads is None or scene.n_contacts < 1:
-        return False
-    step = step_equivalent(scene)
-    if step is not None and step[1] >= 1e3:
         return False
     # the reflected wave, up to F0 + twice the expected force, must stay within what the run watch lets
     # the far end's contacts carry (watched_force): on a taper's micron end beads it would crush them, a
@@ -543,7 +553,10 @@ def wall_peak_planned(scene) -> bool:
         float(watched_force(scene.contact_laws[-1], min(r[-2], r[-1]))),
         float(watched_force(scene.wall_law, r[-1])),
     )
-    return far <= held
+    if far > held:
+        return False
+    step = step_equivalent(scene)
+    return step is None or step[1] <= extension_budget(scene, wave_speeds(scene)[0])
 
 
 def _wall_end_time(scene, choice: PlanChoice, measured: int, slow: float, omega_max: float) -> PlanChoice:
