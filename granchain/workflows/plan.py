@@ -24,8 +24,8 @@ end time    long enough for the leading wave to pass the last measured contact L
             A run of a chain of given length that still ends before its window's last contact
             has a first maximum, or while the force there still rises (a main wave behind a
             smaller precursor), says so and is run again, once, longer (extended_plan), its stop
-            check ending it. On a wall, with peak forces asked for (wall_peak_planned: under a load
-            that ends within LINEAR_HORIZON crossings of the chain), until the wall's peak is
+            check ending it. On a wall, with peak forces asked for (wall_peak_planned: a kick, a
+            striker, or a force load that ends within LINEAR_HORIZON crossings of the chain), until the wall's peak is
             measured too: the end for contact N-1 (or the load's end crossing the chain) and
             WALL_PULSE_CONTACTS contacts' travel more, the stop check also waiting for the wall's
             contact ([run] stop_after_wall; a stop check the scene gives without it keeps its end).
@@ -534,8 +534,9 @@ WALL_PULSE_CONTACTS = 6
 def wall_peak_planned(scene) -> bool:
     """Whether "auto" plans the run to measure the wall's peak: a chain of given length on a wall whose
     peak forces are asked for ([outputs] peak_force), with a stop check (no snapshots), under a load that
-    ends within the longest end a run is ever run to (extension_budget: LINEAR_HORIZON x the slowest
-    front's crossing of the whole chain). A load lasting longer is a lasting force: it keeps pressing the
+    ends: a force load within the longest end a run is ever run to (extension_budget: LINEAR_HORIZON x
+    the slowest front's crossing of the whole chain), a kick, or a striker. A force load lasting longer
+    is a lasting force: it keeps pressing the
     wall, whose force need not fall back before its end has crossed the chain, and an end planned to
     that (_wall_end_time: the crossing after the whole load) would outlast any run the planner makes
     (a 40 N step for 1 s on 30 brass beads: 1.001 s, 8.8e5 steps, 4.2e9 with a dashpot, for a
@@ -556,7 +557,15 @@ def wall_peak_planned(scene) -> bool:
     if far > held:
         return False
     step = step_equivalent(scene)
-    return step is None or step[1] <= extension_budget(scene, wave_speeds(scene)[0])
+    if step is None:
+        return True
+    if scene.loading.is_force:
+        return step[1] <= extension_budget(scene, wave_speeds(scene)[0])
+    # a striker's push ends by itself (its momentum over the piston force, step_equivalent): a heavy one
+    # pushes for several crossings and the wall's peak completes when it has turned back (generated
+    # heavy strikers on walls: 3.4-5.9 crossings of push, the wall's peak complete at 2.3-3.5 ms), the
+    # stop check ending the run then; the absolute cap only keeps an absurd striker from planning years
+    return step[1] < 1e3
 
 
 def _wall_end_time(scene, choice: PlanChoice, measured: int, slow: float, omega_max: float) -> PlanChoice:
