@@ -699,6 +699,14 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
             if waits and wall_peak_planned(scene):
                 choices[-1] = _wall_end_time(scene, choices[-1], last, slow, omega)
         end = choices[-1].value
+    if scene.run.timestep is not None and rtol is None and scene.run.timestep > end:
+        # the scene's own step, longer than the end the planner chose: the run would be one step of another
+        # length than the scene says (scene_from_dict refuses a step above a given end_time alike)
+        raise SceneError(
+            f"{scene.source or '<scene>'}: [run] timestep = {scene.run.timestep:g} s is invalid: it is longer than "
+            f'the whole run (end_time = "auto": {end:.3g} s); give a time step of at most the stability '
+            f'limit {stable:.3g} s ({method}), or timestep = "auto"'
+        )
     beads = scene.chain.beads
     if beads is None:
         if last is None:
