@@ -22,13 +22,13 @@ from .info import add_doctor_parser, add_materials_parser, add_plan_parser, add_
 from .runs import add_accuracy_parser, add_compare_laws_parser, add_compare_parser, add_run_parser
 from .terminal import DEFAULT_SCENE as DEFAULT_SCENE
 from .terminal import auto_np as auto_np
+from .terminal import check_out, shown
 from .terminal import json_safe as json_safe
 from .terminal import np_arg as np_arg
 from .terminal import planned as planned
 from .terminal import print_json as print_json
 from .terminal import print_result as print_result
 from .terminal import resolve_scene as resolve_scene
-from .terminal import shown
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -81,6 +81,7 @@ def main(argv: list[str] | None = None) -> int:
         with warnings.catch_warnings(), progress.quiet(getattr(args, "quiet", False)):
             warnings.showwarning = one_line
             warnings.simplefilter("always", UserWarning)
+            check_out(args)
             return args.func(args)
     except GranchainError as e:  # a user's error: one line; anything else is a bug and keeps its traceback
         print(f"granchain: error: {shown(e)}", file=sys.stderr)

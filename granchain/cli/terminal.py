@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from granchain.backends import Backend, backend_named
+from granchain.exceptions import UsageError
 from granchain.peaks import REACHED_FRACTION, end_contact_reached
 from granchain.physics.effects import unbalanced_forces
 from granchain.postprocess.comparison_table import dynamic_name
@@ -129,6 +130,15 @@ def auto_np(scene: Scene, backend: str | Backend) -> int:
 def add_quiet(parser) -> None:
     """-q/--quiet: no progress lines on stderr."""
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+
+
+def check_out(args) -> None:
+    """Refuse an empty --out: every subcommand's default takes over from an absent one, and an empty
+    one would silently write there (runs/...) instead of where the user pointed."""
+    if getattr(args, "out", None) == "":
+        raise UsageError(
+            '--out "" is empty: give the directory (or path) to write to, or leave --out out for the default'
+        )
 
 
 def scene_stem(args) -> str:
