@@ -9,7 +9,7 @@ import tomllib
 from pathlib import Path
 
 from granchain.physics import materials as mat
-from granchain.physics.effects import active_effects, refusal, sections
+from granchain.physics.effects import OVERLAP_WATCH, PrecompressionEffect, active_effects, refusal, sections
 from granchain.scene.limits import MAX_FORCE, MAX_SCENE_BYTES, MIN_TAU
 from granchain.scene.model import Chain, Scene
 from granchain.scene.read_sections import (
@@ -178,6 +178,12 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
         title=title,
         source=source,
     )
+    if chain.beads is None and effects.far_end == "wall":
+        raise SceneError(
+            f'{source}: [chain] beads = "auto" with [boundary] far_end = "wall" is invalid: an "auto" chain is '
+            "made long enough that no reflection from its far end reaches the measured contacts, so a wall "
+            'there is never felt; give [chain] beads = N for a wall N beads away, or far_end = "free"'
+        )
     _check_scales(scene, source)
     why = refusal(active_effects(scene))
     if why:
@@ -190,6 +196,13 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
             f"{source}: [chain] beads = 1 has no contact to load: a single bead needs a striker "
             '([loading] kind = "striker") or a wall ([boundary] far_end = "wall") to touch'
         )
+    if chain.beads == 1 and effects.precompression and effects.far_end != "wall":
+        raise SceneError(
+            f"{source}: [precompression] force = {effects.precompression:g} N on [chain] beads = 1 with a free far "
+            "end compresses no contact: the push on bead 1 and the pull holding its far end act on the same "
+            "bead and cancel, and the striker touches it unloaded; remove [precompression], or give "
+            '[boundary] far_end = "wall" for the wall\'s contact to carry it'
+        )
     return scene
 
 
@@ -201,7 +214,9 @@ def _check_scales(scene: Scene, source: str) -> None:
     """Refuse a scene whose values, each within its own range, together give a chain outside double
     precision or outside any mechanics: a contact time scale below MIN_TAU, a law's constants that
     over- or underflow, a dashpot that damps faster than an attosecond, a precompression beyond
-    MAX_FORCE. Each message names the keys the scene set that make it so, and the fix."""
+    MAX_FORCE or beyond what a contact it compresses carries within the run watch's overlap bound
+    (PrecompressionEffect.largest_force: a run would stop at its first step). Each message names the
+    keys the scene set that make it so, and the fix."""
     chain = scene.chain
     radii = (min(chain.radii), max(chain.radii)) if chain.radii else (chain.radius,)
     materials = list(dict.fromkeys(map(mat.bead_material, chain.materials))) if chain.materials else [chain.material]
@@ -250,3 +265,24 @@ def _check_scales(scene: Scene, source: str) -> None:
         raise SceneError(
             f"{source}: [precompression] force = {f0:g} N is invalid: a static force F0 in N of at most {MAX_FORCE:g}"
         )
+    held = PrecompressionEffect.largest_force(scene) if f0 else None
+    if held is not None and not f0 <= held[0]:
+        f_max, which, bound, law = held
+        alpha = float(law.static_overlap(f0))
+        raise SceneError(
+            f"{source}: [precompression] force = {f0:g} N is invalid: it presses {which} to a static overlap of "
+            f"{alpha:.3g} m, beyond {bound:.3g} m ({OVERLAP_WATCH:g} x the smaller radius of its two bodies), where "
+            f"the run watch stops a run; a force of at most {_below(f_max):.4g} N (and less, for the wave's own "
+            "force on top of it)"
+        )
+
+
+def _below(x: float) -> float:
+    """x rounded down to 4 significant digits: a bound a message may quote that still holds when read back."""
+    if not (math.isfinite(x) and x > 0.0):
+        return x
+    q = 10.0 ** (math.floor(math.log10(x)) - 3)
+    v = math.floor(x / q) * q
+    while float(f"{v:.4g}") > x:
+        v -= q
+    return float(f"{v:.4g}")

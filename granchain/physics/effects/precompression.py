@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from typing_extensions import override
 
-from granchain.physics.effects.base import Bounds, Effect
+from granchain.physics.effects.base import OVERLAP_WATCH, Bounds, Effect, watched_force
 
 
 class PrecompressionEffect(Effect):
@@ -69,6 +69,41 @@ class PrecompressionEffect(Effect):
     @override
     def to_dict(cls, effects) -> dict[str, Any] | None:
         return {"force": effects.precompression} if effects.precompression else None
+
+    @staticmethod
+    def held_contacts(scene) -> list[tuple[str, Any, float]]:
+        """Every kind of contact F0 compresses: (which, its law, the smaller radius of its two bodies),
+        the bead-bead contacts (one per distinct pair of neighbouring bead kinds, the first in chain
+        order) and the wall's (bead N on the flat: bead N's radius). The striker touches bead 1
+        unloaded (problem.initial_state): its contact carries no F0."""
+        if not scene.per_bead:  # also beads = "auto": a uniform chain
+            held = [("every bead-bead contact", scene.law, float(scene.chain.radius))] if scene.chain.beads != 1 else []
+        else:
+            kinds, kind_of = scene.bead_kinds
+            first: dict[tuple[int, int], int] = {}
+            for i, pair in enumerate(zip(kind_of[:-1], kind_of[1:], strict=True)):
+                first.setdefault(pair, i)
+            held = []
+            for (a, b), i in first.items():
+                (ra, ma), (rb, mb) = kinds[a], kinds[b]
+                which = f"contact {i + 1} (beads {i + 1} and {i + 2})"
+                held.append((which, scene.bead_pair_law(ra, ma, rb, mb), min(ra, rb)))
+        if scene.effects.far_end == "wall":
+            held.append((f"bead {scene.chain.beads} on the wall", scene.wall_law, float(scene.bead_radii[-1])))
+        return held
+
+    @classmethod
+    def largest_force(cls, scene) -> tuple[float, str, float, Any] | None:
+        """The largest F0 the run watch lets a run start with: the smallest, over the contacts F0
+        compresses (held_contacts), of the force its law's virgin curve carries at the run watch's
+        overlap bound (watched_force: OVERLAP_WATCH x the smaller radius, the planner's rule); with the
+        contact that sets it, its overlap bound in m and its law. None where F0 compresses no contact."""
+        best = None
+        for which, law, r in cls.held_contacts(scene):
+            f = float(watched_force(law, r))
+            if best is None or f < best[0]:
+                best = (f, which, OVERLAP_WATCH * r, law)
+        return best
 
     @classmethod
     @override
