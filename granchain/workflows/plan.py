@@ -650,6 +650,27 @@ def _output_interval_choices(scene, d: dict, omega: float, end: float, rtol_plan
     return choices
 
 
+def _fitted_step(scene, choices: list[PlanChoice], dt: float, end: float) -> float:
+    """The run's step: the planned (or given) step dt, shortened to fit inside the end time and any
+    given output interval (a sample every interval needs a step no longer than it); where that shortens
+    the planner's step its time step choice says so, with its value and the field that set it."""
+    o = scene.outputs
+    given = (("history_interval", o.history_interval), ("dump_interval", o.dump_interval))
+    bounds = [(f"[outputs] {k} = {v:g} s", v) for k, v in given if isinstance(v, float)]
+    bounds.append((f"the end time {end:.3g} s", end))
+    what, step = min(bounds, key=lambda b: b[1])
+    if step >= dt:
+        return dt
+    at = next((i for i, c in enumerate(choices) if c.name == "timestep"), None)
+    if at is not None:
+        c = choices[at]
+        why = f"; {what} is shorter than this step {dt:.3g} s: the step is {step:.3g} s"
+        if what.startswith("[outputs]"):
+            why += f" ({dt / step:.3g}x the steps; {what.split(' =')[0]} >= {dt:.3g} s keeps the planned step)"
+        choices[at] = PlanChoice("timestep", step, c.reason + why)
+    return step
+
+
 def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", peak_ratio: float = 1.0) -> Plan:
     """Fill "auto" values (and the time step, when rtol is given) with the reasons.
 
@@ -717,9 +738,9 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     d["chain"]["beads"] = beads
     # a finer step is always allowed: the step also fits inside the end time and any explicit output
     # interval (a 1e-18 s load with history_interval = 1e-7 s: the interval stands, the step is the load's)
-    given = [v for v in (scene.outputs.history_interval, scene.outputs.dump_interval) if isinstance(v, float)]
+    step = _fitted_step(scene, choices, dt, end)
     # the given stop check travels with the planned run (scene_to_dict writes every stop field)
-    d["run"].update(end_time=end, timestep=min([dt, end, *given]))
+    d["run"].update(end_time=end, timestep=step)
     stop = scene.run.stop_after_contact
     if scene.run.end_time is None and stop is None and last is not None and not scene.outputs.snapshots:
         choices.append(_stop_choice(scene, last))

@@ -17,7 +17,7 @@ from granchain.rundir import check_output_dir, write_run_dir
 from granchain.workflows import shared_runs
 from granchain.workflows.guards import DUMP_FRAME_HEADER_BYTES as DUMP_FRAME_HEADER_BYTES
 from granchain.workflows.guards import DUMP_LINE_BYTES as DUMP_LINE_BYTES
-from granchain.workflows.guards import check_run, output_sizes
+from granchain.workflows.guards import RUN_DIR_TABLES, check_run, output_sizes
 from granchain.workflows.shared_runs import Abandoned
 
 
@@ -288,11 +288,13 @@ class OutputSizeWarning(UserWarning):
 OUTPUT_WARN_BYTES = 1e9
 
 
-def output_size_warning(scene) -> str | None:
-    """A sentence naming each file that will exceed OUTPUT_WARN_BYTES and the interval that fits."""
+def output_size_warning(scene, backend: str | Backend = REFERENCE) -> str | None:
+    """A sentence naming each file the backend writes (the run directory's tables, its work_files)
+    that will exceed OUTPUT_WARN_BYTES, and the interval that fits: the reference writes no chain.dump."""
+    kept = (*RUN_DIR_TABLES, *backend_named(backend).work_files)
     parts = []
     for name, size in output_sizes(scene).items():
-        if size > OUTPUT_WARN_BYTES:
+        if size > OUTPUT_WARN_BYTES and name in kept:
             key = "dump_interval" if name == "chain.dump" else "history_interval"
             now = getattr(scene.outputs, key) or scene.run.timestep
             fits = now * size / OUTPUT_WARN_BYTES
@@ -339,7 +341,7 @@ def _run_again(calc, plan, backend, method: str, np_: int, choice: str, how: str
     warnings.warn(
         f"{scene.source}: running again with {choice} = {value:.4g} s: {how} {reason}", category, stacklevel=5
     )
-    msg = output_size_warning(scene)
+    msg = output_size_warning(scene, backend)
     if msg:
         warnings.warn(msg, OutputSizeWarning, stacklevel=5)
     check_run(scene, backend, stacklevel=6, planned_step=True)
@@ -478,7 +480,7 @@ def _calculate(
         msg = timestep_warning(scene, method, 1e-3 if rtol is None else rtol)
         if msg:
             warnings.warn(msg, AccuracyWarning, stacklevel=3)
-    msg = output_size_warning(scene)
+    msg = output_size_warning(scene, backend)
     if msg:
         warnings.warn(msg, OutputSizeWarning, stacklevel=3)
     if before_run is not None:
