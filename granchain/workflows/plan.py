@@ -213,7 +213,8 @@ def extended_plan(scene: Scene, plan: Plan, solution) -> Plan | None:
     scattered by soft, light beads among stiff ones rises at a contact without a maximum until a
     reflection comes back) the run says so and runs again, once, to LINEAR_HORIZON x the slowest front's
     crossing of the whole chain (front_travel_time to its last contact), its stop check ending it as soon
-    as the wave has passed the stop contact. scene: the scene as given; plan: the plan the run used;
+    as the wave has passed the stop contact (on a wall, the window's last contact when the rerun is for
+    its peak: _extended_stop). scene: the scene as given; plan: the plan the run used;
     solution: that run's ChainSolution. None when the end time was not the planner's, the number of beads
     was (chosen for that end), there is no stop check, the stop check ended the run, everything asked for
     was measured, or the budget is no longer than the end that ran.
@@ -233,16 +234,40 @@ def extended_plan(scene: Scene, plan: Plan, solution) -> Plan | None:
         return None
     names = [line.split(":", 1)[0] for line in unmeasured]
     what = "the wall's contact" if names == ["wall_peak_force"] else "the window's last contact"
+    stop = _extended_stop(plan.scene, names)
     names = ", ".join(names)
     note = (
         f"extended after a first run to {run.end_time:.4g} s ended before {what} was measured "
         f"(not measured: {names}): at most {LINEAR_HORIZON:g} x the slowest front's crossing of the whole chain "
-        f"({budget:.4g} s), the stop check ending it once the wave has passed contact {run.stop_after_contact}"
+        f"({budget:.4g} s), the stop check ending it once the wave has passed contact {stop}"
         + (" and the wall's" if run.stop_after_wall else "")
     )
-    longer = replace(plan.scene, run=replace(run, end_time=budget))
+    longer = replace(plan.scene, run=replace(run, end_time=budget, stop_after_contact=stop))
     choices = [PlanChoice(c.name, budget, f"{c.reason}; {note}") if c.name == "end_time" else c for c in plan.choices]
+    if stop != run.stop_after_contact:
+        why = (
+            f"; extended: the rerun is for contact {stop}'s peak, so its stop check waits for contact {stop} "
+            f"(not {run.stop_after_contact}, which the wave has passed once it has passed the wall beyond it)"
+        )
+        choices = [PlanChoice(c.name, stop, c.reason + why) if c.name == "stop_after_contact" else c for c in choices]
     return replace(plan, scene=longer, choices=choices)
+
+
+def _extended_stop(scene: Scene, names: list[str]) -> int:
+    """The stop contact of a run extended for the outputs `names` (extended_plan): the planned one, but
+    the window's last contact b where the rerun is for b's peak (peak_force_contact_b: its force still
+    rising at the end) and the stop check also waits for the wall: a stop at a contact beyond b ends the
+    rerun as soon as the wall and that contact have passed, whatever b does (on a precompressed plastic
+    chain hit by a striker, thornton_F10_striker_wall_nodp: contact 14's reflected peak, 0.988 N above
+    F0 at 5.48e-4 s, had not fallen to half at the stop at 6.53e-4 s, 11 us before it did, and was
+    flagged as still rising). The wall's stop keeps the rerun going until the wave has reached the wall,
+    past every contact before it; without a wall the planned stop contact stays (a stop at b could end
+    the rerun before the wave reaches the contacts beyond it)."""
+    run = scene.run
+    b = scene.window[1]
+    if run.stop_after_wall and f"peak_force_contact_{b}" in names and b < run.stop_after_contact:
+        return b
+    return run.stop_after_contact
 
 
 def accurate_timestep(method: str, omega_max: float, rate: float, rtol: float) -> float:
