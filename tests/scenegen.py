@@ -83,8 +83,20 @@ def scene_texts(
     if dashpot:
         text += f"[damping]\ndashpot = {dashpot!r}\n"
     if pre:
-        text += f"[precompression]\nforce = {draw(st.floats(0.1, 50.0))!r}\n"
+        # up to 50 N, within what every contact F0 compresses carries at the run watch's overlap bound
+        # (a larger F0 is refused at reading: PrecompressionEffect.largest_force; a micron taper's end)
+        hi = min(50.0, 0.9 * largest_precompression(text))
+        text += f"[precompression]\nforce = {draw(st.floats(min(0.1, 0.5 * hi), hi))!r}\n"
     return text
+
+
+def largest_precompression(text: str) -> float:
+    """The largest F0 (N) a scene's text without [precompression] may be given (PrecompressionEffect.
+    largest_force over the contacts F0 would compress)."""
+    from granchain.physics.effects.precompression import PrecompressionEffect
+
+    tiny = parse_scene(text + "[precompression]\nforce = 1e-12\n", source="generated.toml")
+    return PrecompressionEffect.largest_force(tiny)[0]
 
 
 def overlap_fraction(scene) -> float:
