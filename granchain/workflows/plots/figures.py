@@ -122,6 +122,31 @@ def model_curves(scene, contacts: np.ndarray, skipped: dict[str, str] | None = N
     return scene.contact.law_class.model_curves(scene, contacts, applies)
 
 
+def _end_peaks_text(summary: dict, f0: float) -> str:
+    """The striker's and the wall's contact peaks of a run's summary, as a sentence ("" without them)."""
+    out = []
+    for name, label, static in (("striker_peak_force", "the striker's", 0.0), ("wall_peak_force", "the wall's", f0)):
+        value = summary.get(name)
+        if value is None or not np.isfinite(value):
+            continue
+        what = "peak" if summary.get(name.replace("_force", "_complete")) is not False else "largest force so far"
+        nb = "\N{NO-BREAK SPACE}"  # a number and its unit on one line of the wrapped panel text
+        total = f" above F0 (total {value:.4g}{nb}N)" if static else ""
+        out.append(f"{label} contact {what} {value - static:.4g}{nb}N{total}")
+    return "; ".join(out)
+
+
+def _no_peaks_text(r: RunResult) -> str:
+    """Why a peak figure shows no bead-bead peak, and the end contacts' peaks (summary.json) it has instead."""
+    n = int(r.scene.chain.beads)
+    if n < 2:
+        why = "one bead: no bead-bead contact to plot"
+    else:
+        why = f"no contact reached by the wave when the run ended (t = {float(r.summary['end_time']):.4g} s)"
+    ends = _end_peaks_text(r.summary, float(r.scene.effects.precompression))
+    return why + (f"; {ends} (summary.json)" if ends else "")
+
+
 def _draw_peaks(r: RunResult, log: bool = True):
     summary = r.summary
     scene = r.scene
@@ -131,6 +156,21 @@ def _draw_peaks(r: RunResult, log: bool = True):
     curves = model_curves(scene, contacts, skipped)
     fig = _new_figure(figsize=(8, 5))
     ax = fig.subplots()
+    # a log axis needs a positive value to show: a run without a reached bead-bead peak (one bead, or a
+    # run ended before the wave reached contact 1) and without a model curve gets linear axes and says why
+    positive = pk.reached.any() or any(np.any(np.isfinite(y) & (y > 0)) for y in curves.values())
+    log = log and bool(positive)
+    if not pk.reached.any():
+        ax.text(
+            0.5,
+            0.5,
+            "\n".join(textwrap.wrap(_plain(_no_peaks_text(r)), width=70)),
+            transform=ax.transAxes,
+            ha="center",
+            va="center",
+            fontsize=9,
+            color="0.3",
+        )
     # on log axes, the tiny peaks of contacts the front is still reaching at the end of the run (not
     # complete) would squash the profile into a line: the axis is set by the complete peaks, the rest
     # are counted in the legend (and kept in peaks_plot.csv)
@@ -159,7 +199,10 @@ def _draw_peaks(r: RunResult, log: bool = True):
     # chain whose beads differ each contact has its own pair's E* R*^2 (peaks.csv's peak_force_nondim), and
     # one axis in bead 1's would read the others' wrong, so there is none
     axes = [ax]
-    if not scene.per_bead:
+    if not positive:  # nothing drawn: no scale to read (the panel text says why)
+        ax.set_xticks([])
+        ax.set_yticks([])
+    elif not scene.per_bead:
         fs = scene.force_scale
         sec = ax.secondary_yaxis("right", functions=(lambda f: f / fs, lambda g: g * fs))
         sec.set_ylabel(r"$F_p \,/\, (E^* R^{*2})$")
@@ -168,7 +211,8 @@ def _draw_peaks(r: RunResult, log: bool = True):
         _plain_log_ticks(*axes)
     ax.set_title(_plain(scene.title or "peak force along the chain"), fontsize=9)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
+    if positive:  # (a legend of nothing drawn: none)
+        ax.legend(fontsize=8)
     if skipped:  # say which models are left out, and why
         note = "\n".join(
             _plain(textwrap.shorten(f"not drawn, {label}: {reason}", width=160, placeholder=" ..."))
