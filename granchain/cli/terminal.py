@@ -203,6 +203,31 @@ def print_end_peaks(result, s: dict, f0: float) -> None:
         print(f"  {row:38s} {fmt(shown_value)}{bar}   ({what})")
 
 
+def print_incomplete_peaks(result) -> None:
+    """print_result's line on the measured contacts ([outputs] peak_force) whose peak was not complete
+    when the run ended (reached, the force not yet fallen to half of its peak, or never reached): how
+    many and which, as contact runs; none when every peak is complete."""
+    from granchain.postprocess.domains import contact_runs
+
+    contacts = np.asarray(result.scene.peak_contacts, dtype=int)
+    if contacts.size == 0:
+        return
+    s = result.solution
+    complete = np.asarray(s.complete, dtype=bool)[contacts - 1]
+    reached = np.isfinite(np.asarray(s.time_of_peak, dtype=float)[contacts - 1])
+    open_ = contacts[~complete]
+    if open_.size == 0:
+        return
+    never = contacts[~reached]
+    row = "peaks not complete (contacts)"
+    print(
+        f"  {row:38s} {open_.size} of {contacts.size}: {contact_runs(open_)}   (not measured: the force had not "
+        f"fallen to half of its peak when the run ended, t = {s.end_time:g} s"
+        + (f"; never reached: {contact_runs(never)}" if never.size else "")
+        + "; peaks.csv's complete = 0, its peak_force the largest force so far)"
+    )
+
+
 def print_result(result, out) -> None:
     """What `granchain run` (and `granchain collect`) prints about a finished run."""
     scene = result.scene
@@ -239,6 +264,7 @@ def print_result(result, out) -> None:
         note = f"   note: {shown(notes[k])}" if v is not None and k in notes else ""
         print(f"  {label:38s} {fmt(v)}{bar}{why}{note}")
     print_end_peaks(result, s, f0)
+    print_incomplete_peaks(result)
     outside = "beyond first yield"
     for line in s.get("outside_domain") or ():  # an elastic law beyond first yield (postprocess.domains)
         print(f"  {outside:38s} {shown(line)}")
