@@ -8,7 +8,7 @@ import sys
 from granchain.backends import LAMMPS
 from granchain.exceptions import UsageError
 
-from .terminal import SCENE_HELP, planned, print_result, resolve_scene, shown
+from .terminal import SCENE_HELP, ended_too_soon, planned, print_result, resolve_scene, shown
 
 
 def add_plot_parser(sub) -> None:
@@ -85,4 +85,16 @@ def cmd_collect(args) -> int:
 
     result = collect(args.run_dir, out=args.out, overwrite=args.overwrite)
     print_result(result, args.out or args.run_dir)
-    return 0
+    # what the scene asked for and the run ended before measuring, as granchain run says it (and exits
+    # 1 where the end time was the planner's); granchain run runs a planned end again, longer, and a
+    # plain-LAMMPS run is run once
+    plan = getattr(result, "plan", None)
+    planned_end = plan is not None and any(c.name == "end_time" for c in plan.choices)
+    then = (
+        "granchain run would have run this planned scene again, longer, to measure it; this plain-LAMMPS run "
+        "ran once: run it with 'granchain run SCENE --backend lammps', or set a longer [run] end_time in the "
+        "scene, render it again and run that deck"
+        if planned_end
+        else "a longer [run] end_time in the scene would measure it: render it again and run that deck"
+    )
+    return ended_too_soon(result, planned_end, then)

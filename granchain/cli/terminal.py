@@ -146,15 +146,18 @@ def scene_stem(args) -> str:
     return Path(args.scene).stem if args.scene else DEFAULT_SCENE
 
 
-def ended_too_soon(result, planned_end: bool) -> int:
+def ended_too_soon(result, planned_end: bool, then: str | None = None) -> int:
     """Say on stderr what the scene asked for that the run ended before measuring (a wave that had
     not passed the window's end), with why; 1 when the end time was the planner's ("auto", which
-    promised to cover it), else 0 (a fixed end_time the user chose, now told what it missed)."""
+    promised to cover it), else 0 (a fixed end_time the user chose, now told what it missed).
+    then: a last line after them, what to do (granchain collect: granchain run would run it longer)."""
     from granchain.postprocess.observables import unmeasured_outputs
 
     unmeasured = unmeasured_outputs(result.scene, result.solution)
     for line in unmeasured:
         print(f"granchain: not measured: {shown(line)}", file=sys.stderr)
+    if unmeasured and then:
+        print(f"granchain: {then}", file=sys.stderr)
     return 1 if unmeasured and planned_end else 0
 
 
