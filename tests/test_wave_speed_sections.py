@@ -91,7 +91,7 @@ def test_a_two_section_window_is_marked_and_fitted_per_section(drawn):
     a, b = result.scene.window
     note = notes["wave_speed"]
     assert note.startswith(f"an average over contacts {a}-{b}")
-    assert f"beads {a}-{s - 1} of " in note
+    assert f"beads in 2 stretches of one radius and material: {a}-{s - 1} of " in note
     assert f", {s}-{b + 1} of " in note
     sections = obs["wave_speed_sections"]
     # the interface contact s - 1 is a stretch of one: no speed of its own

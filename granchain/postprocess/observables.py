@@ -224,11 +224,32 @@ def _bead_label(radius: float, material, named: bool) -> str:
     return text
 
 
+def _stretches(runs) -> str:
+    """1-based (first, last) stretches as a list: "4-9, 10, 11-19"."""
+    return ", ".join(f"{f}-{last}" if f != last else f"{f}" for f, last in runs)
+
+
+def _span(lo: str, hi: str, unit: str) -> str:
+    """A range of formatted values ("2.1 to 2.4 mm"), or the one value where they agree ("2.38 mm")."""
+    return f"{lo} {unit}" if lo == hi else f"{lo} to {hi} {unit}"
+
+
+def _window_contacts(scene) -> str:
+    """The window's contacts by stretches of one kind (uniform_sections), counted and, up to
+    _NAMED_STRETCHES, listed ("contacts in 3 stretches of one kind: 4-9, 10, 11-19")."""
+    sections = uniform_sections(scene)
+    a, b = scene.window
+    if len(sections) > _NAMED_STRETCHES:
+        return f"contacts {a}-{b} in {len(sections)} stretches of one kind"
+    return f"contacts in {len(sections)} stretches of one kind: {_stretches(sections)}"
+
+
 def _window_beads(scene) -> str:
-    """The window's beads by stretches of one radius and material ("beads 1-20 of R = 1 mm, 21-40 of
-    R = 2 mm"); a chain whose beads change every few beads (a taper) by the range of its radii; a
-    periodic window (periodic_cell) by its cell ("beads 7-22 repeat a cell of 2 beads (R = 4.76 mm,
-    R = 2.38 mm): 8 cells")."""
+    """The window's beads by stretches of one radius and material ("beads in 2 stretches of one radius
+    and material: 1-20 of R = 1 mm, 21-40 of R = 2 mm"; one stretch: "beads 1-40 of R = 1 mm"); a chain
+    whose beads change every few beads (a taper) counted, with the range of its radii; a periodic window
+    (periodic_cell) by its cell ("beads 7-22 repeat a cell of 2 beads (R = 4.76 mm, R = 2.38 mm): 8
+    cells"). The count is that of the stretches listed."""
     a, b = scene.window
     r, mats = scene.bead_radii, scene.bead_materials
     named = any(m != mats[0] for m in mats)
@@ -247,12 +268,18 @@ def _window_beads(scene) -> str:
             runs.append([i + 1, i + 1, label])
     if len(runs) > _NAMED_STRETCHES:
         w = r[a - 1 : b + 1] * 1e3
+        radii = _span(f"{w.min():.4g}", f"{w.max():.4g}", "mm")
         return (
-            f"beads {a}-{b + 1} change in {len(runs)} stretches (radii {w.min():.4g} to {w.max():.4g} mm"
+            f"beads {a}-{b + 1} in {len(runs)} stretches of one radius and material ("
+            + ("radii " if radii.count(" to ") else "radius ")
+            + radii
             + (", several materials" if named else "")
             + ")"
         )
-    return "beads " + ", ".join(f"{f}-{last} of {lab}" if f != last else f"{f} of {lab}" for f, last, lab in runs)
+    listed = ", ".join(f"{f}-{last} of {lab}" if f != last else f"{f} of {lab}" for f, last, lab in runs)
+    if len(runs) == 1:
+        return f"beads {listed}"
+    return f"beads in {len(runs)} stretches of one radius and material: {listed}"
 
 
 def section_speeds(scene, arrival: np.ndarray, positions: np.ndarray) -> list[dict]:
@@ -356,7 +383,7 @@ def measure_observables(scene, solution, missing: dict | None = None, notes: dic
             if out.get("wave_speed_sections")
             else f"; no uniform stretch of the window has {FIT_CONTACTS} arrivals to fit on its own"
         )
-        stretches = f"{len(sections)} uniform stretches" if len(sections) > 1 else "beads that differ"
+        stretches = _window_contacts(scene) if len(sections) > 1 else "one contact kind, joining beads that differ"
         average = (
             f"an average over contacts {a}-{b}, whose contacts differ (law constants or bead masses: "
             f"{stretches}; {_window_beads(scene)}): the front's speed is not one number along this window{each}"
