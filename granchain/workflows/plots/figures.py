@@ -119,6 +119,8 @@ def model_curves(scene, contacts: np.ndarray, skipped: dict[str, str] | None = N
             skipped[label] = verdict.reason
         return verdict.applies
 
+    if np.size(contacts) == 0:  # one bead: no bead-bead contact to draw a model along
+        return {}
     return scene.contact.law_class.model_curves(scene, contacts, applies)
 
 
