@@ -93,6 +93,23 @@ def front_arrivals(solution, static_force: float) -> np.ndarray:
     return np.where(np.isfinite(lead_t), front, np.nan)
 
 
+def _under_front_resolution(rises: np.ndarray, f0: float) -> str:
+    """Why a precompressed window has no arrivals where its leading pulses (rises above F0, N) are no
+    larger than FRONT_RESOLUTION F0, below which no arrival is read (postprocess.fronts); "" otherwise."""
+    from granchain.postprocess.fronts import FRONT_RESOLUTION
+
+    r = rises[np.isfinite(rises)]
+    limit = FRONT_RESOLUTION * f0
+    if r.size and float(np.max(r)) > limit:
+        return ""
+    top = f"rise at most {float(np.max(r)):.2g} N above F0" if r.size else "have no leading pulse"
+    return (
+        f": the window's leading pulses {top}, not above FRONT_RESOLUTION x F0 = {limit:.2g} N, below which "
+        "no arrival is read (a precompressed contact's total force is resolved only to about 1e-9 F0 by "
+        "LAMMPS); a larger load or a smaller F0 makes a front that can be read"
+    )
+
+
 #: the least number of contacts with an arrival that the wave-speed fit takes (fit_wave_speed: a line
 #: and its standard error, which needs a residual)
 FIT_CONTACTS = 3
@@ -393,7 +410,7 @@ def measure_observables(scene, solution, missing: dict | None = None, notes: dic
             wave_speed_unmeasurable(scene)
             or (
                 f"{int(np.sum(ok))} of the window's contacts {a}-{b} have {_ARRIVAL[bool(f0)]}; the fit needs "
-                f"{FIT_CONTACTS}"
+                f"{FIT_CONTACTS}" + (_under_front_resolution(lead_f[contacts - 1], f0) if f0 else "")
             )
             if np.sum(ok) < FIT_CONTACTS
             else f"the arrival times of the window's complete leading pulses (contacts {a}-{b}) do not increase"
