@@ -2,6 +2,7 @@
 larger than FRONT_RESOLUTION F0, postprocess.fronts) says so where wave_speed is not measured, instead
 of only counting the window's contacts without an arrival."""
 
+import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -42,7 +43,7 @@ def test_a_wave_below_the_front_resolution_is_named_as_the_reason(radius, materi
     result = run_reference(plan_scene(sc, method="verlet").scene, "verlet")
     if result.observables()["wave_speed"] is not None:  # a readable front after all: nothing to explain
         rises = result.solution.leading_pulse_force - f0
-        assert rises.max() > FRONT_RESOLUTION * f0
+        assert np.nanmax(rises) > FRONT_RESOLUTION * f0
         return
     why = result.observables_missing()["wave_speed"]
     assert "FRONT_RESOLUTION x F0" in why, why

@@ -94,19 +94,26 @@ def front_arrivals(solution, static_force: float) -> np.ndarray:
 
 
 def _under_front_resolution(rises: np.ndarray, f0: float) -> str:
-    """Why a precompressed window has no arrivals where its leading pulses (rises above F0, N) are no
-    larger than FRONT_RESOLUTION F0, below which no arrival is read (postprocess.fronts); "" otherwise."""
+    """Why a precompressed window lacks arrivals where some of its leading pulses (rises above F0, N)
+    are no larger than FRONT_RESOLUTION F0, below which no arrival is read (postprocess.fronts); ""
+    where none is."""
     from granchain.postprocess.fronts import FRONT_RESOLUTION
 
     r = rises[np.isfinite(rises)]
     limit = FRONT_RESOLUTION * f0
-    if r.size and float(np.max(r)) > limit:
+    small = int(np.sum(r <= limit))
+    if r.size and not small:
         return ""
-    top = f"rise at most {float(np.max(r)):.2g} N above F0" if r.size else "have no leading pulse"
+    if not r.size:
+        which = "the window's contacts have no leading pulse"
+    elif small == r.size:
+        which = f"the window's leading pulses rise at most {float(np.max(r)):.2g} N above F0"
+    else:
+        which = f"{small} of the window's {r.size} leading pulses rise"
     return (
-        f": the window's leading pulses {top}, not above FRONT_RESOLUTION x F0 = {limit:.2g} N, below which "
-        "no arrival is read (a precompressed contact's total force is resolved only to about 1e-9 F0 by "
-        "LAMMPS); a larger load or a smaller F0 makes a front that can be read"
+        f": {which}, not above FRONT_RESOLUTION x F0 = {limit:.2g} N, below which no arrival is read (a "
+        "precompressed contact's total force is resolved only to about 1e-9 F0 by LAMMPS); a larger load or "
+        "a smaller F0 makes a front that can be read"
     )
 
 

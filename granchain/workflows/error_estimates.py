@@ -699,7 +699,9 @@ def _observable_bars(report: ErrorReport, scene, sols: tuple, extrapolate, rule:
     jump_time, orders) and checked against dt / 2 where that run was made."""
     sol, coarse, coarser, finer = sols
     p, jump, orders = rule
-    obs = [measure_observables(scene, s) for s in (sol, coarse) + ((coarser,) if coarser is not None else ())]
+    missing: dict[str, str] = {}  # why the run itself lacks a value: that, not its companions', is said
+    obs = [measure_observables(scene, sol, missing)]
+    obs += [measure_observables(scene, s) for s in (coarse,) + ((coarser,) if coarser is not None else ())]
     obs_h = None if finer is None else measure_observables(scene, finer)
     b = max(scene.window[1] - 1, 0)
     for name in ESTIMATED_OBSERVABLES:
@@ -735,6 +737,8 @@ def _observable_bars(report: ErrorReport, scene, sols: tuple, extrapolate, rule:
         if obs_h is not None:
             bound = _withheld_step_bound(obs_h.get(name), v[0], v[1], float(p if orders is None else orders[0]))
         report.observables[name] = _observable_error(name, vals[0], bars, obs[0], bound)
+        if vals[0] is None and name in missing:
+            report.observables[name]["status"] = f"not measured: {missing[name]}"
 
 
 #: a withheld step error the fit's standard error outweighs this many times over is left out of the
