@@ -193,8 +193,7 @@ def periodic_cell(scene) -> int | None:
         return None
     a, b = scene.window
     n = b - a + 2  # the window's contacts a..b join beads a..b+1
-    r, m = np.asarray(scene.bead_radii, dtype=float), np.asarray(scene.bead_masses, dtype=float)
-    beads = [np.array([r[i], m[i]]) for i in range(a - 1, b + 1)]
+    beads = _window_bead_keys(scene)
     laws = scene.contact_laws
     contacts = [np.array(laws[c - 1].pair_coefficients(), dtype=float) for c in range(a, b + 1)]
     for p in range(1, n // PERIODIC_CELLS + 1):
@@ -209,10 +208,15 @@ def _window_beads_alike(scene) -> bool:
     """Whether the measurement window's beads (a..b+1) all have one radius and mass (to _ALIKE)."""
     if not scene.per_bead or not scene.n_contacts:
         return True
+    beads = _window_bead_keys(scene)
+    return all(_alike(x, beads[0]) for x in beads)
+
+
+def _window_bead_keys(scene) -> list[np.ndarray]:
+    """The measurement window's beads a..b+1 as (radius, mass) keys to compare with _alike."""
     a, b = scene.window
     r, m = np.asarray(scene.bead_radii, dtype=float), np.asarray(scene.bead_masses, dtype=float)
-    beads = [np.array([r[i], m[i]]) for i in range(a - 1, b + 1)]
-    return all(_alike(x, beads[0]) for x in beads)
+    return [np.array([r[i], m[i]]) for i in range(a - 1, b + 1)]
 
 
 def uniform_sections(scene) -> list[tuple[int, int]]:
