@@ -336,7 +336,8 @@ def test_ctrl_c_while_the_local_workers_start_is_one_message_and_no_traceback(tm
     deadline = time.time() + 120
     worker = False
     while time.time() < deadline and p.poll() is None and not worker:
-        ps = subprocess.run(["ps", "-o", "args=", "-g", str(p.pid)], capture_output=True, text=True).stdout
+        # -ww: without it ps cuts args at $COLUMNS (80 on many CI hosts) before "spawn_main" on a long venv path
+        ps = subprocess.run(["ps", "-ww", "-o", "args=", "-g", str(p.pid)], capture_output=True, text=True).stdout
         worker = any("spawn_main" in line for line in ps.splitlines())
         time.sleep(0.02)
     assert worker, p.communicate()
