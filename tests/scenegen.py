@@ -14,14 +14,38 @@ from granchain.physics.laws import LAWS
 from granchain.physics.materials import MATERIALS
 from granchain.scene import parse_scene
 
+#: the [run] of a scene whose end time and step the planner chooses
+AUTO_RUN = '[run]\nend_time = "auto"\ntimestep = "auto"\n'
+#: a far-end wall and the peak forces, the sections most walled test scenes end with
+WALL = '[boundary]\nfar_end = "wall"\n'
+PEAKS = "[outputs]\npeak_force = true\n"
 
-def brass_impulse_text(beads: int, impulse: float, duration: float = 1e-6, extra: str = "") -> str:
-    """The tests' plain chain as TOML text: `beads` 4.76 mm brass beads, Hertz, bead 1 given `impulse`
-    (N s) over `duration` (s), end time and step "auto"; `extra` (more TOML sections) appended."""
+
+def brass_text(beads: int, loading: str, extra: str = "") -> str:
+    """The tests' plain chain as TOML text: `beads` 4.76 mm brass beads, Hertz, the [loading] lines
+    `loading`, end time and step "auto"; `extra` (more TOML sections) appended."""
     return (
         f'\n[chain]\nbeads = {beads}\nradius = 4.76e-3\nmaterial = "brass"\n[contact]\nlaw = "hertz"\n'
-        f'[loading]\nkind = "impulse"\nimpulse = {impulse!r}\nduration = {duration!r}\n'
-        f'[run]\nend_time = "auto"\ntimestep = "auto"\n{extra}'
+        f"[loading]\n{loading}{AUTO_RUN}{extra}"
+    )
+
+
+def brass_impulse_text(beads: int, impulse: float, duration: float = 1e-6, extra: str = "") -> str:
+    """brass_text with bead 1 given `impulse` (N s) over `duration` (s)."""
+    return brass_text(beads, f'kind = "impulse"\nimpulse = {impulse!r}\nduration = {duration!r}\n', extra)
+
+
+def stainless_on_wall_text(
+    kind: str, velocity: float, force: float, contact: str = 'law = "hertz"\n', histories=None
+) -> str:
+    """The testers' walled chain as TOML text: 20 stainless-steel-316 beads of 2.38 mm, the [contact]
+    lines `contact`, a `kind` ("striker" or "velocity") load at `velocity` (m/s), precompressed by
+    `force` (N), a wall, end time and step "auto", the peak forces and `histories` (a list) if given."""
+    outputs = PEAKS if histories is None else f"{PEAKS}histories = {histories!r}\n"
+    return (
+        '\n[chain]\nbeads = 20\nradius = 2.38e-3\nmaterial = "stainless-steel-316"\n'
+        f'[contact]\n{contact}[loading]\nkind = "{kind}"\nvelocity = {velocity!r}\n'
+        f"[precompression]\nforce = {force!r}\n{WALL}{AUTO_RUN}{outputs}"
     )
 
 

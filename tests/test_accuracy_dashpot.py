@@ -10,26 +10,10 @@ from granchain.reference.solver import solve_chain
 from granchain.scene import parse_scene
 from granchain.workflows.accuracy import PLAN_RTOL, accuracy_study, summary_text
 from granchain.workflows.plan import plan_scene
+from tests.scenegen import PEAKS, brass_text
 
 # the reviewer's scene (/tmp/rev/acc.toml): 8 brass beads struck at 1 m/s, gamma = 20 N s/m
-DASHPOT_SCENE = """
-[chain]
-beads = 8
-radius = 4.76e-3
-material = "brass"
-[contact]
-law = "hertz"
-[loading]
-kind = "velocity"
-velocity = 1.0
-[run]
-end_time = "auto"
-timestep = "auto"
-[damping]
-dashpot = 20.0
-[outputs]
-peak_force = true
-"""
+DASHPOT_SCENE = brass_text(8, 'kind = "velocity"\nvelocity = 1.0\n', "[damping]\ndashpot = 20.0\n" + PEAKS)
 
 
 def test_verlet_planned_error_is_its_step_error_not_the_peak_definitions_difference():

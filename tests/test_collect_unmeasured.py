@@ -10,33 +10,14 @@ from granchain.postprocess.observables import unmeasured_outputs
 from granchain.workflows.collect import collect
 
 from .conftest import make_scene_text
+from .scenegen import stainless_on_wall_text
 from .test_collect import lmp, render
 
 #: a 20-bead chain whose fixed end time stops the wave before the window's end
 SHORT = make_scene_text(beads=20, end_time=3e-5, timestep=2e-8)
 
 #: a planned scene (end "auto") whose wall's peak plain LAMMPS, run once, may not see
-PLANNED_WALL = """
-[chain]
-beads = 20
-radius = 2.38e-3
-material = "stainless-steel-316"
-[contact]
-law = "thornton"
-yield_pressure = 3e8
-[loading]
-kind = "velocity"
-velocity = 0.5
-[precompression]
-force = 10
-[boundary]
-far_end = "wall"
-[run]
-end_time = "auto"
-timestep = "auto"
-[outputs]
-peak_force = true
-"""
+PLANNED_WALL = stainless_on_wall_text("velocity", 0.5, 10, contact='law = "thornton"\nyield_pressure = 3e8\n')
 
 
 def collected(tmp_path, text, capsys):

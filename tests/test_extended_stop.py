@@ -13,7 +13,7 @@ from granchain.backends.builtin import ReferenceBackend
 from granchain.postprocess.observables import unmeasured_outputs
 from granchain.scene import parse_scene
 from granchain.workflows.plan import extended_plan, plan_scene, refined_plan
-from tests.scenegen import scenes
+from tests.scenegen import scenes, stainless_on_wall_text
 
 #: bead-steps one example may cost (its first run; the extended and the longer run cost a few times it)
 MAX_BEAD_STEPS = 2e5
@@ -21,28 +21,9 @@ MAX_BEAD_STEPS = 2e5
 #: the tester's scene: 20 stainless beads, Thornton beyond yield, F0 = 10 N, a striker at 0.5 m/s, a
 #: wall; contact 14's largest force is the reflection's (0.988 N above F0 at 5.48e-4 s), rippling above
 #: half of it at the stop at contact 19 and the wall (6.53e-4 s), falling to half 11 us later
-STRIKER_ON_WALL = """
-[chain]
-beads = 20
-radius = 2.38e-3
-material = "stainless-steel-316"
-[contact]
-law = "thornton"
-yield_pressure = 3e8
-[loading]
-kind = "striker"
-velocity = 0.5
-[precompression]
-force = 10
-[boundary]
-far_end = "wall"
-[run]
-end_time = "auto"
-timestep = "auto"
-[outputs]
-peak_force = true
-histories = [1, 10, 19]
-"""
+STRIKER_ON_WALL = stainless_on_wall_text(
+    "striker", 0.5, 10, contact='law = "thornton"\nyield_pressure = 3e8\n', histories=[1, 10, 19]
+)
 
 
 def reference(scene):

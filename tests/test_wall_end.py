@@ -26,7 +26,16 @@ from granchain.workflows.plan import (
     wall_peak_planned,
     wave_speeds,
 )
-from tests.scenegen import overlap_fraction, scene_texts, scenes
+from tests.scenegen import (
+    AUTO_RUN,
+    PEAKS,
+    WALL,
+    brass_text,
+    overlap_fraction,
+    scene_texts,
+    scenes,
+    stainless_on_wall_text,
+)
 
 #: bead-steps one example may cost (the planned run and the longer one)
 MAX_BEAD_STEPS = 3e6
@@ -34,27 +43,7 @@ MAX_BEAD_STEPS = 3e6
 #: second arrival at the wall needs a round trip through the chain, far later
 LONGER = 1.5
 
-WALLED = """
-[chain]
-beads = 20
-radius = 2.38e-3
-material = "stainless-steel-316"
-[contact]
-law = "hertz"
-[loading]
-kind = "striker"
-velocity = 0.44
-[precompression]
-force = 20000
-[boundary]
-far_end = "wall"
-[run]
-end_time = "auto"
-timestep = "auto"
-[outputs]
-peak_force = true
-histories = [1, 10, 19]
-"""
+WALLED = stainless_on_wall_text("striker", 0.44, 20000, histories=[1, 10, 19])
 
 #: a CI draw: a Thornton chain precompressed 450x beyond its yield force (F0 = 5.6 N, F_y = 0.0125 N),
 #: whose fronts move on the plastic line, 0.36x as fast as Hertz's tangent at F0 made the planner expect;
@@ -183,47 +172,17 @@ def test_stop_after_wall_needs_a_wall_and_a_stop_contact():
 
 
 #: 30 brass beads, Hertz, a 40 N step on bead 1 (its duration DURATION), a wall, every "auto"
-BRASS_STEP_ON_A_WALL = """
-[chain]
-beads = 30
-radius = 4.76e-3
-material = "brass"
-[contact]
-law = "hertz"
-[loading]
-kind = "step"
-amplitude = 40.0
-duration = DURATION
-[run]
-end_time = "auto"
-timestep = "auto"
-[boundary]
-far_end = "wall"
-[outputs]
-peak_force = true
-"""
+BRASS_STEP_ON_A_WALL = brass_text(30, 'kind = "step"\namplitude = 40.0\nduration = DURATION\n', WALL + PEAKS)
+
+
+def _with_stop(text: str, stop: int) -> str:
+    assert AUTO_RUN in text
+    return text.replace(AUTO_RUN, f"{AUTO_RUN}stop_after_contact = {stop}\n")
+
 
 #: 20 brass beads, Hertz, kicked at 0.5 m/s, a wall, every "auto"; the stop check the scene's own:
 #: contact 5, not the wall's
-BRASS_KICK_STOPPED_AT_5 = """
-[chain]
-beads = 20
-radius = 4.76e-3
-material = "brass"
-[contact]
-law = "hertz"
-[loading]
-kind = "velocity"
-velocity = 0.5
-[run]
-end_time = "auto"
-timestep = "auto"
-stop_after_contact = 5
-[boundary]
-far_end = "wall"
-[outputs]
-peak_force = true
-"""
+BRASS_KICK_STOPPED_AT_5 = _with_stop(brass_text(20, 'kind = "velocity"\nvelocity = 0.5\n', WALL + PEAKS), 5)
 
 PLAN_SETTINGS = settings(
     max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.filter_too_much]
@@ -275,12 +234,6 @@ def test_a_step_longer_than_the_budget_is_a_lasting_load_for_the_wall(sc):
         assert "the wall's contact" not in dict((c.name, c.reason) for c in plan.choices)["end_time"]
     if plan.scene.run.stop_after_wall:  # the wall's peak planned for: the load's end crosses the chain first
         assert end >= crossing + load
-
-
-def _with_stop(text: str, stop: int) -> str:
-    run = '[run]\nend_time = "auto"\ntimestep = "auto"\n'
-    assert run in text
-    return text.replace(run, f"{run}stop_after_contact = {stop}\n")
 
 
 @st.composite
