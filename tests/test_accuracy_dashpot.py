@@ -16,14 +16,15 @@ from tests.scenegen import PEAKS, brass_text
 DASHPOT_SCENE = brass_text(8, 'kind = "velocity"\nvelocity = 1.0\n', "[damping]\ndashpot = 20.0\n" + PEAKS)
 
 
-def test_verlet_planned_error_is_its_step_error_not_the_peak_definitions_difference():
-    study = accuracy_study(
-        parse_scene(DASHPOT_SCENE, source="dashpot.toml"),
-        methods=("verlet", "rk4"),
-        levels=1,
-        repeats=1,
-        dump_intervals=False,
+def dashpot_study(methods):
+    """accuracy_study of DASHPOT_SCENE with these methods: one level, one repeat, no dump intervals."""
+    return accuracy_study(
+        parse_scene(DASHPOT_SCENE, source="dashpot.toml"), methods=methods, levels=1, repeats=1, dump_intervals=False
     )
+
+
+def test_verlet_planned_error_is_its_step_error_not_the_peak_definitions_difference():
+    study = dashpot_study(("verlet", "rk4"))
     q = next(q for q in study.plan_points if q.method == "verlet")
     # independently: Verlet at the planned step against Verlet at a 16x finer step
     scene = study.scene
@@ -68,13 +69,7 @@ def test_cli_plans_with_verlet_and_says_what_each_row_is_measured_against(tmp_pa
 
 def test_dop853_is_not_run_on_a_scene_it_does_not_model(tmp_path, capsys):
     # DOP853 integrates a free elastic Hertz chain: no dashpot (nor wall, striker, precompression)
-    study = accuracy_study(
-        parse_scene(DASHPOT_SCENE, source="dashpot.toml"),
-        methods=("rk4", "dop853"),
-        levels=1,
-        repeats=1,
-        dump_intervals=False,
-    )
+    study = dashpot_study(("rk4", "dop853"))
     assert {p.method for p in study.points} == {"rk4"}
     assert "dashpot" in study.skipped["dop853"]
     assert "not run: dop853" in summary_text(study)

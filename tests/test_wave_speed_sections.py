@@ -81,13 +81,19 @@ def _own_fit(result, first: int, last: int) -> float:
     return 1.0 / np.polyfit(x, t[ok], 1)[0]
 
 
+def _fitted(sc):
+    """The planned scene run with Verlet, its wave speed fitted: (result, observables, notes)."""
+    result = run_reference(_planned(sc), "verlet")
+    obs, notes = result.observables(), result.observables_notes()
+    assert obs["wave_speed"] is not None, result.observables_missing().get("wave_speed")
+    return result, obs, notes
+
+
 @SETTINGS
 @given(drawn=two_section_chains())
 def test_a_two_section_window_is_marked_and_fitted_per_section(drawn):
     sc, s = drawn
-    result = run_reference(_planned(sc), "verlet")
-    obs, notes = result.observables(), result.observables_notes()
-    assert obs["wave_speed"] is not None, result.observables_missing().get("wave_speed")
+    result, obs, notes = _fitted(sc)
     a, b = result.scene.window
     note = notes["wave_speed"]
     assert note.startswith(f"an average over contacts {a}-{b}")
@@ -149,9 +155,7 @@ def periodic_chains(draw):
 @given(drawn=periodic_chains())
 def test_a_periodic_window_has_one_cell_averaged_speed(drawn):
     sc, p = drawn
-    result = run_reference(_planned(sc), "verlet")
-    obs, notes = result.observables(), result.observables_notes()
-    assert obs["wave_speed"] is not None, result.observables_missing().get("wave_speed")
+    result, obs, notes = _fitted(sc)
     a, b = result.scene.window
     if p == 1:  # the cell's beads all alike: a uniform chain
         assert notes == {}
