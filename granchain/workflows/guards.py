@@ -68,6 +68,13 @@ def output_sizes(scene) -> dict[str, float]:
     return sizes
 
 
+def written_sizes(scene, backend: str | Backend = "reference") -> dict[str, float]:
+    """output_sizes of the files this backend writes: the run directory's tables (RUN_DIR_TABLES) and
+    its Backend.work_files (LAMMPS's dumps); the reference writes no chain.dump."""
+    kept = (*RUN_DIR_TABLES, *backend_named(backend).work_files)
+    return {name: size for name, size in output_sizes(scene).items() if name in kept}
+
+
 class ResourceError(UsageError):
     """A run needs more steps, memory or disk than it may have; the message gives the estimate and the fix."""
 
@@ -120,10 +127,8 @@ def estimate(scene, backend: str | Backend = "reference") -> Estimate:
     """
     beads = int(scene.chain.beads)
     steps = scene.run.end_time / scene.run.timestep
-    files = output_sizes(scene)
-    history = files.get("histories.npy", 0.0)  # the histories as doubles, in memory until written
-    kept = backend_named(backend).work_files
-    files = {k: v for k, v in files.items() if k in RUN_DIR_TABLES or k in kept}
+    history = output_sizes(scene).get("histories.npy", 0.0)  # the histories as doubles, in memory until written
+    files = written_sizes(scene, backend)
     snapshots = 16.0 * beads * len(scene.outputs.snapshots)
     # the solver's arrays, the histories and snapshots kept until the run is written (LAMMPS's
     # whole-chain dump goes to disk and is only copied)

@@ -17,7 +17,8 @@ from granchain.rundir import check_output_dir, write_run_dir
 from granchain.workflows import shared_runs
 from granchain.workflows.guards import DUMP_FRAME_HEADER_BYTES as DUMP_FRAME_HEADER_BYTES
 from granchain.workflows.guards import DUMP_LINE_BYTES as DUMP_LINE_BYTES
-from granchain.workflows.guards import RUN_DIR_TABLES, check_run, output_sizes
+from granchain.workflows.guards import check_run, written_sizes
+from granchain.workflows.guards import output_sizes as output_sizes
 from granchain.workflows.shared_runs import Abandoned
 
 
@@ -291,10 +292,9 @@ OUTPUT_WARN_BYTES = 1e9
 def output_size_warning(scene, backend: str | Backend = REFERENCE) -> str | None:
     """A sentence naming each file the backend writes (the run directory's tables, its work_files)
     that will exceed OUTPUT_WARN_BYTES, and the interval that fits: the reference writes no chain.dump."""
-    kept = (*RUN_DIR_TABLES, *backend_named(backend).work_files)
     parts = []
-    for name, size in output_sizes(scene).items():
-        if size > OUTPUT_WARN_BYTES and name in kept:
+    for name, size in written_sizes(scene, backend).items():
+        if size > OUTPUT_WARN_BYTES:
             key = "dump_interval" if name == "chain.dump" else "history_interval"
             now = getattr(scene.outputs, key) or scene.run.timestep
             fits = now * size / OUTPUT_WARN_BYTES
