@@ -172,9 +172,13 @@ LINEAR_SAMPLES_PER_PERIOD = 32
 def linearised_stiffnesses(scene) -> tuple[np.ndarray, float]:
     """Each bead-bead contact's stiffness about the precompression F0 and the wall contact's (0 without
     a wall), N/m: the slope of its law's virgin curve at F0 (ContactLaw.loading_stiffness: Hertz's
-    tangent 3/2 k^(2/3) F0^(1/3), a linear loading line's own k, Thornton's plastic line beyond F_y)."""
+    tangent 3/2 k^(2/3) F0^(1/3), the paper's Eq. 16 differentiated, a linear loading line's own k,
+    Thornton's plastic line beyond F_y)."""
     f0 = float(scene.effects.precompression)
-    k = np.array([float(law.loading_stiffness(f0)) for law in scene.contact_laws])
+    if scene.per_bead:
+        k = np.array([float(law.loading_stiffness(f0)) for law in scene.contact_laws])
+    else:  # the nominal law's, as the scene's other uniform-chain estimates
+        k = np.full(scene.n_contacts, float(scene.law.loading_stiffness(f0)))
     kw = float(scene.wall_law.loading_stiffness(f0)) if scene.effects.far_end == "wall" else 0.0
     return k, kw
 

@@ -49,6 +49,7 @@ from granchain.physics.estimates import (
     expected_peak_force,
     highest_frequency,
     linearised_first_maximum,
+    linearised_stiffnesses,
     max_stiffness,
     one_bead_impacts,
     step_equivalent,
@@ -329,16 +330,13 @@ def sonic_travel_times(scene, last: int, step: bool = False) -> np.ndarray:
     """The time the first maximum of a precompressed chain's front takes from bead 1 to each contact
     1 .. last (s), at the linear sound speed: per contact tau_i = sqrt(<m> <1 / k_lin>) over the contact
     and its PRECOMPRESSED_NEIGHBOURS neighbours on each side, with the heavier bead of each contact and
-    k_lin the slope of the law's virgin curve at F0 (ContactLaw.loading_stiffness: 3/2 k^(2/3) F0^(1/3)
-    for Hertz, a linear loading line's own k, Thornton's plastic line beyond F_y), so that
+    k_lin the slope of the law's virgin curve at F0 (estimates.linearised_stiffnesses: for Hertz
+    3/2 k^(2/3) F0^(1/3), dF/dalpha of the paper's Eq. 16, a linear loading line's own k, Thornton's
+    plastic line beyond F_y), so that
     c0 = a sqrt(k_lin / m) on a uniform chain; summed, with the dispersion lag PRECOMPRESSED_LAG of a
     kick or, with step = True, STEP_LAG of a lasting force."""
-    f0 = float(scene.effects.precompression)
     n_c = scene.n_contacts
-    if scene.per_bead:
-        k_lin = np.array([float(law.loading_stiffness(f0)) for law in scene.contact_laws])
-    else:
-        k_lin = np.full(n_c, float(scene.law.loading_stiffness(f0)))
+    k_lin = linearised_stiffnesses(scene)[0]
     m = scene.bead_masses if scene.per_bead else np.full(n_c + 1, scene.mass)
     heavier = np.maximum(m[:-1], m[1:])
     h = PRECOMPRESSED_NEIGHBOURS

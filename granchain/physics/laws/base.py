@@ -27,7 +27,10 @@ on them; tests/test_laws.py and tests/test_kernels.py check them for every regis
 3. ``loading_force(alpha)``: the virgin curve, the force at a contact's largest overlap (its peak
    force); ``static_overlap(force)``: its inverse (precompression, on the virgin curve: a law with
    history starts with alpha_max = that overlap); ``tangent_stiffness(force)``: the stiffest dF/dalpha
-   a contact loaded to that force can show (the planner's omega_max and the stability check).
+   a contact loaded to that force can show (the planner's omega_max and the stability check);
+   ``loading_stiffness(force)``: the virgin curve's own dF/dalpha where it carries that force, the
+   stiffness a further compression meets from a static force (a precompressed chain's linearised
+   fronts). Each law defines both: a plastic law's virgin curve is softer than its unloading.
 4. ``kinks(alpha_max)``: where dF/dalpha (or a higher derivative) jumps, for RK4's event location:
    overlaps (one per contact) with where they apply; ``turn_level(alpha_max)``: a contact whose
    overlap turns (from rising to falling) above this level starts unloading on another curve (None:

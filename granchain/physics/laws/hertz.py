@@ -35,7 +35,8 @@ def hertz_energy(alpha: ArrayLike, k: ArrayLike) -> np.ndarray:
 
 
 def hertz_tangent_stiffness(force: ArrayLike, k: ArrayLike) -> np.ndarray:
-    """dF/dalpha = 3/2 k alpha^(1/2) = 3/2 k^(2/3) F^(1/3), the stiffness at a given force."""
+    """dF/dalpha = 3/2 k alpha^(1/2) = 3/2 k^(2/3) F^(1/3) (the paper's Eq. 16 differentiated), the
+    stiffness at a given force."""
     return 1.5 * np.cbrt(np.asarray(k) ** 2 * np.maximum(force, 0.0))
 
 

@@ -369,7 +369,8 @@ class ThorntonLaw(ContactLaw):
 
     @override
     def loading_stiffness(self, force):
-        """Hertz's 3/2 k^(2/3) F^(1/3) up to the yield force F_y, the plastic line's S = pi p_y R* above:
+        """Hertz's 3/2 k^(2/3) F^(1/3) up to the yield force F_y, the plastic line's S = pi p_y R* above
+        (Thornton 1997, J. Appl. Mech. 64, 383: dF/dalpha = pi p_y R* once the contact pressure is p_y):
         a chain precompressed beyond F_y is loaded further along the plastic line, several times softer
         than Hertz's slope at the same force (its linear sound speed lower by sqrt of that)."""
         f = np.maximum(np.asarray(force, dtype=float), 0.0)
