@@ -61,7 +61,7 @@ def add_run_parser(sub) -> None:
         choices=["on", "off", "checked"],
         help="give every number an error from companion runs (default on): at 2 dt and 4 dt (3/4 of the run's "
         "steps more); on a kinked law (bilinear, Thornton) bounds from those on LAMMPS, one run at 2 dt on reference "
-        "RK4 (half), RK4 runs at their own larger steps on reference Verlet where they cost less than the run; "
+        "RK4 (half), RK4 runs at their own larger steps on reference Verlet where they cost at most the run; "
         "`granchain plan --error-estimate` counts them; checked: RK4's estimates also checked by a run at dt / 2 "
         "(2x a run more), one it contradicts withheld, and Verlet's on a kinked law measured against RK4 runs "
         "instead of bounded",
