@@ -93,10 +93,14 @@ def front_arrivals(solution, static_force: float) -> np.ndarray:
     return np.where(np.isfinite(lead_t), front, np.nan)
 
 
-def _under_front_resolution(rises: np.ndarray, f0: float) -> str:
-    """Why a precompressed window lacks arrivals where some of its leading pulses (rises above F0, N)
-    are no larger than FRONT_RESOLUTION F0, below which no arrival is read (postprocess.fronts); ""
-    where none is."""
+def _under_front_resolution(rises: np.ndarray, passed: np.ndarray, f0: float) -> str:
+    """Why a precompressed window lacks arrivals where some of its leading pulses (rises above F0, N;
+    nan where none) are no larger than FRONT_RESOLUTION F0, below which no arrival is read
+    (postprocess.fronts), or where it has no leading pulse and the wave that passed its contacts (passed:
+    their complete peaks above F0, N; nan where not complete) rose no higher; "" otherwise. A window
+    with no leading pulse and no complete peak is one the wave had not passed when the run ended (not
+    reached, or still rising there): no size of front would have been read there, and the count of
+    arrivals says enough."""
     from granchain.postprocess.fronts import FRONT_RESOLUTION
 
     r = rises[np.isfinite(rises)]
@@ -105,6 +109,9 @@ def _under_front_resolution(rises: np.ndarray, f0: float) -> str:
     if r.size and not small:
         return ""
     if not r.size:
+        done = passed[np.isfinite(passed)]
+        if not done.size or float(np.max(done)) > limit:
+            return ""
         which = "the window's contacts have no leading pulse"
     elif small == r.size:
         which = f"the window's leading pulses rise at most {float(np.max(r)):.2g} N above F0"
@@ -440,11 +447,13 @@ def measure_observables(scene, solution, missing: dict | None = None, notes: dic
             f"{stretches}; {_window_beads(scene)}): the front's speed is not one number along this window{each}"
         )
     if fit is None:
+        done = complete[contacts - 1]
+        passed = np.where(done, np.asarray(solution.peak_force, dtype=float)[contacts - 1] - f0, np.nan)
         why["wave_speed"] = why["wave_speed_stderr"] = (
             wave_speed_unmeasurable(scene)
             or (
                 f"{int(np.sum(ok))} of the window's contacts {a}-{b} have {_ARRIVAL[bool(f0)]}; the fit needs "
-                f"{FIT_CONTACTS}" + (_under_front_resolution(lead_f[contacts - 1], f0) if f0 else "")
+                f"{FIT_CONTACTS}" + (_under_front_resolution(lead_f[contacts - 1], passed, f0) if f0 else "")
             )
             if np.sum(ok) < FIT_CONTACTS
             else f"the arrival times of the window's complete leading pulses (contacts {a}-{b}) do not increase"
