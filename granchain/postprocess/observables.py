@@ -432,19 +432,25 @@ def measure_observables(scene, solution, missing: dict | None = None, notes: dic
             "one number at the scale of the cell, the speed dimer and trimer chains are measured by (none "
             "per contact kind: the front's hops from contact to contact differ within the cell)"
         )
-    elif fit and (len(sections) > 1 or not _window_beads_alike(scene)):  # the fit averages the speed
-        # (a dimer window of fewer than PERIODIC_CELLS cells: one contact kind, beads that alternate)
-        if len(sections) > 1:
-            out["wave_speed_sections"] = section_speeds(scene, arrival, positions)
+    elif fit and len(sections) > 1:  # the fit averages the speed over stretches of several contact kinds
+        out["wave_speed_sections"] = section_speeds(scene, arrival, positions)
         each = (
-            f"; wave_speed_sections: the speed over each uniform stretch with {FIT_CONTACTS} arrivals or more"
-            if out.get("wave_speed_sections")
-            else f"; no uniform stretch of the window has {FIT_CONTACTS} arrivals to fit on its own"
+            f"wave_speed_sections: the speed over each uniform stretch with {FIT_CONTACTS} arrivals or more"
+            if out["wave_speed_sections"]
+            else f"no uniform stretch of the window has {FIT_CONTACTS} arrivals to fit on its own"
         )
-        stretches = _window_contacts(scene) if len(sections) > 1 else "one contact kind, joining beads that differ"
         average = (
             f"an average over contacts {a}-{b}, whose contacts differ (law constants or bead masses: "
-            f"{stretches}; {_window_beads(scene)}): the front's speed is not one number along this window{each}"
+            f"{_window_contacts(scene)}; {_window_beads(scene)}): the front's speed is not one number along this "
+            f"window; {each}"
+        )
+    elif fit and not _window_beads_alike(scene):  # one contact kind between beads that alternate: a dimer
+        # window of fewer than PERIODIC_CELLS cells, no periodic chain (periodic_cell) and no stretches
+        average = (
+            f"an average over contacts {a}-{b}, whose contacts are of one kind but join beads that differ "
+            f"({_window_beads(scene)}): the front's speed is not one number along this window; its "
+            f"{b - a + 2} beads repeat a cell fewer than {PERIODIC_CELLS} times, too few to count as a periodic "
+            "chain with a cell-averaged speed, and its one contact kind makes no stretch to fit on its own"
         )
     if fit is None:
         done = complete[contacts - 1]
