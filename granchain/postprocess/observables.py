@@ -22,7 +22,8 @@ wave_speed: the front's speed, 1 / (d t_arrival / d x), a least-squares line thr
     uniform stretch of the window that has FIT_CONTACTS arrivals (section_speeds). A periodic window
     (periodic_cell: a dimer, a trimer, a cell of beads repeated PERIODIC_CELLS times or more) has one
     speed at the scale of its cell: the note says the fit is that cell-averaged speed, and there are no
-    sections.
+    sections. A window whose contacts are all of one kind but whose beads differ (a dimer window of
+    fewer than PERIODIC_CELLS cells) is noted as an average too, with no sections.
 max_peak_force: the largest complete peak (of any pulse), and its contact.
 Each is None where it cannot be measured (the window's last contact not reached or its peak not
 complete before the end of the run; fewer than three complete peaks in the window; no complete
