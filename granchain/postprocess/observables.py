@@ -194,9 +194,13 @@ def periodic_cell(scene) -> int | None:
     the shortest such cell. A window of one bead kind (p = 1) is uniform, not periodic (None).
 
     A periodic chain has one wave speed at the scale of its cell, the cell-averaged speed that dimer
-    and trimer chains are measured by (Jayaprakash, Starosvetsky & Vakakis, PRL 2011; Potekin et al.),
-    though within a cell the front's hops from contact to contact (their lengths, the masses they move)
-    differ."""
+    and trimer chains are measured by (Jayaprakash, Starosvetsky & Vakakis, PRL 2011; Porter, Daraio,
+    Szelengowicz, Herbold & Kevrekidis, "Highly nonlinear solitary waves in heterogeneous periodic
+    granular media", arXiv:0712.3552, dimer and trimer cells and the speed of their long-wavelength
+    solitary wave; Potekin, Jayaprakash, McFarland, Remick, Bergman & Vakakis, "Experimental study of
+    strongly nonlinear resonances and anti-resonances in granular dimer chains", Exp. Mech. 2013:
+    reference not verified), though within a cell the front's hops from contact to contact (their
+    lengths, the masses they move) differ."""
     if not scene.per_bead or not scene.n_contacts:
         return None
     a, b = scene.window  # the window's contacts a..b join beads a..b+1
