@@ -194,7 +194,8 @@ def periodic_cell(scene) -> int | None:
     the shortest such cell. A window of one bead kind (p = 1) is uniform, not periodic (None).
 
     A periodic chain has one wave speed at the scale of its cell, the cell-averaged speed that dimer
-    and trimer chains are measured by (Jayaprakash, Starosvetsky & Vakakis, PRL 2011; Porter, Daraio,
+    and trimer chains are measured by (Jayaprakash, Starosvetsky & Vakakis, "New family of solitary
+    waves in granular dimer chains with no precompression", Phys. Rev. E 83, 036606, 2011; Porter, Daraio,
     Szelengowicz, Herbold & Kevrekidis, "Highly nonlinear solitary waves in heterogeneous periodic
     granular media", arXiv:0712.3552, dimer and trimer cells and the speed of their long-wavelength
     solitary wave; Potekin, Jayaprakash, McFarland, Remick, Bergman & Vakakis, "Experimental study of
