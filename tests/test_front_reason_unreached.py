@@ -14,30 +14,16 @@ from granchain.postprocess.fronts import FRONT_RESOLUTION
 from granchain.scene import parse_scene
 from granchain.workflows.plan import plan_scene
 from granchain.workflows.run import run_reference
+from tests.conftest import make_scene_text
+from tests.scenegen import WALL
 
-#: effect-precompression, 40 beads (window 9-29), cut short
-SHORT = """
-[chain]
-beads = 40
-radius = 4.76e-3
-material = "brass"
-[contact]
-law = "hertz"
-[loading]
-kind = "impulse"
-impulse = 0.1
-duration = 1e-6
-[run]
-end_time = {end!r}
-timestep = 5e-8
-[precompression]
-force = 100.0
-[boundary]
-far_end = "wall"
-[outputs]
-peak_force = true
-histories = [1, 10]
-"""
+
+def short(end: float) -> str:
+    """effect-precompression, 40 beads (window 9-29), cut short at `end` (s)."""
+    outputs = 'peak_force = true\nhistories = [1, 10]\nhistory_interval = "auto"'
+    text = make_scene_text(beads=40, end_time=end, timestep=5e-8, outputs=outputs)
+    return text + "[precompression]\nforce = 100.0\n" + WALL
+
 
 TINY = """
 [chain]
@@ -67,7 +53,7 @@ def run(text: str):
 
 @pytest.mark.parametrize("end", [3e-5, 5e-5], ids=["not-reached", "still-rising"])
 def test_a_wave_that_has_not_passed_the_window_is_not_blamed_on_the_resolution(end):
-    result = run(SHORT.format(end=end))
+    result = run(short(end))
     a, b = result.scene.window
     s = result.solution
     # the case: no leading pulse and no complete peak in the window (nothing passed it before the end)
