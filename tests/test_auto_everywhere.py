@@ -5,9 +5,11 @@ keys as the reader declares them (its ``_Section.finish`` calls while it reads t
 key is "auto"-able where the reader accepts ``"auto"`` for it. A new "auto"-able key is then drawn
 here without a change to this file. Each draw sets every such key of a small base scene (each law,
 loading kind and effect) to "auto" or to a valid number (the planner's own value for it, or a part of
-that), and `plan`, `predict`, `render`, `run` (reference), `compare` (LAMMPS and the reference) and
-`campaign run` of a one-point campaign must each run or give one `granchain: error:` line and exit 2:
-never a traceback (an exception escaping granchain.cli.main fails the test with its traceback).
+that), and every command that takes a scene (COMMANDS: `plan`, `predict`, `render`, `submit`, `run` on
+the reference; slow: `compare` on LAMMPS and the reference, `campaign run` of a one-point campaign,
+`compare-laws`, `accuracy`) must each run or give one `granchain: error:` line and exit 2: never a
+traceback (an exception escaping granchain.cli.main fails the test with its traceback). The commands
+run in-process; a run of more than GRANCHAIN_MAX_STEPS steps is refused, so each stays short.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import functools
 import io
 
 import pytest
-from hypothesis import HealthCheck, example, given, settings
+from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from granchain.cli import main
@@ -164,14 +166,15 @@ def _number(value, part: float):
 
 @st.composite
 def auto_scenes(draw) -> dict:
-    """A base scene with every "auto"-able key "auto" or a valid number (a planned value or a part of it)."""
+    """A base scene with every "auto"-able key "auto" or a valid number (the base's own, a planned value
+    or a part of it)."""
     data = copy.deepcopy(draw(st.sampled_from(BASES)))
     for section, key in auto_keys():
-        if draw(st.booleans()):
-            value = AUTO
-        else:
-            value = _number(planned_values()[(section, key)], draw(st.sampled_from([1.0, 0.5, 0.25])))
-        _set(data, section, key, value)
+        table = _table(data, section)
+        own = [] if table is None or table.get(key) in (None, AUTO) else [table[key]]  # the base's own value
+        planned = planned_values()[(section, key)]
+        numbers = [*own, *(_number(planned, part) for part in (1.0, 0.5, 0.25))]
+        _set(data, section, key, AUTO if draw(st.booleans()) else draw(st.sampled_from(numbers)))
     return data
 
 
@@ -215,6 +218,10 @@ def run_cli(argv: list[str]) -> tuple[int, str]:
 #: the exit 1 each command may give on a run that finished: what it did not measure, or differing solvers
 EXIT_1 = {"run": "granchain: not measured", "compare": "differ by more than rtol"}
 
+#: the commands drawn here, by the name granchain.cli's parser gives them (campaign: `campaign run` of
+#: a one-point campaign file holding the scene)
+COMMANDS = ("plan", "predict", "render", "submit", "run", "compare", "compare-laws", "accuracy", "campaign")
+
 
 def check(argv: list[str], rc: int, err: str) -> None:
     """A command ran (exit 0, or its own exit 1 with its reason) or gave one `granchain: error:` line, exit 2."""
@@ -239,16 +246,30 @@ def commands(data: dict, tmp_path, names: tuple[str, ...]) -> list[int]:
         "run": ["run", str(path), "--backend", "reference", "--out", str(tmp_path / "run"), "--quiet", "--overwrite"],
         "compare": ["compare", str(path), "--out", str(tmp_path / "compare"), "--overwrite"],
         "campaign": ["campaign", "run", str(_one_point(data, tmp_path)), "--out", str(tmp_path / "ws")],
+        "submit": ["submit", str(path), "--out", str(tmp_path / "submit"), "-q"],
+        "compare-laws": ["compare-laws", str(path), "--backend", "reference", "--error-estimate", "off"],
+        "accuracy": ["accuracy", str(path), "--methods", "rk4", "--levels", "1", "--repeats", "1"],
     }
     codes = []
     for name in names:
         argv = argvs[name]
+        if name in ("compare-laws", "accuracy"):
+            argv += ["--out", str(tmp_path / name), "--overwrite", "--quiet"]
         if name == "campaign":
             argv += ["--workers", "1", "--rerun", "-q"]
         rc, err = run_cli(argv)
         check(argv, rc, err)
+        _event(f"{name}: " + ("refused: " + err.rsplit("is invalid", 1)[0][-60:] if rc == 2 else f"exit {rc}"))
         codes.append(rc)
     return codes
+
+
+def _event(text: str) -> None:
+    """A hypothesis event (its statistics: how many draws ran, how many were refused)."""
+    from hypothesis.errors import InvalidArgument
+
+    with contextlib.suppress(InvalidArgument):
+        event(text)
 
 
 def _one_point(data: dict, tmp_path):
@@ -290,10 +311,25 @@ def test_the_auto_keys_are_found_in_the_reader_and_each_needs_a_plan():
 @example(AUTO_PRECOMPRESSED_CHAIN)
 @example(_pinned(2, chain__beads=AUTO, run__end_time=AUTO))  # precompressed, a step load: its later maximum
 def test_plan_predict_and_render_take_every_auto_key(tmp_path, data):
-    commands(data, tmp_path, ("plan", "predict", "render"))
+    commands(data, tmp_path, ("plan", "predict", "render", "submit"))
 
 
-@settings(max_examples=15, **SETTINGS)
+def test_every_command_that_takes_a_scene_is_drawn():
+    """Each subcommand of granchain.cli whose parser takes a scene (a `scene` argument) is one of COMMANDS."""
+    import argparse
+
+    from granchain.cli import build_parser
+
+    def subcommands(parser):
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                yield from action.choices.items()
+
+    takes_a_scene = {name for name, sub in subcommands(build_parser()) if any(a.dest == "scene" for a in sub._actions)}
+    assert takes_a_scene <= set(COMMANDS), takes_a_scene - set(COMMANDS)
+
+
+@settings(max_examples=30, **SETTINGS)
 @given(auto_scenes())
 @example(AUTO_PRECOMPRESSED_CHAIN)
 def test_a_reference_run_takes_every_auto_key(tmp_path, data):
@@ -304,5 +340,5 @@ def test_a_reference_run_takes_every_auto_key(tmp_path, data):
 @settings(max_examples=4, **SETTINGS)
 @given(auto_scenes())
 @example(AUTO_PRECOMPRESSED_CHAIN)
-def test_compare_and_a_one_point_campaign_take_every_auto_key(tmp_path, data):
-    commands(data, tmp_path, ("compare", "campaign"))
+def test_compare_campaign_compare_laws_and_accuracy_take_every_auto_key(tmp_path, data):
+    commands(data, tmp_path, ("compare", "campaign", "compare-laws", "accuracy"))
