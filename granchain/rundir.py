@@ -30,6 +30,7 @@ from granchain.exceptions import GranchainError
 from granchain.results import RunResult, peak_columns
 from granchain.safe_files import pid_alive  # noqa: F401 - where callers have imported it from
 
+
 class RunDirError(GranchainError, RuntimeError):
     """The run directory cannot be written (exists, not writable, disk full, ...) or read (missing,
     damaged, a symbolic link)."""

@@ -60,6 +60,7 @@ def test_overwrite_leaves_an_unmarked_directory_with_granchains_names_alone(scen
     err = one_error_line(capsys.readouterr().err)
     assert str(d) in err
     assert f"no {MARKER} marker" in err
-    assert "choose another --out" in err and "remove that directory yourself" in err
+    assert "choose another --out" in err
+    assert "remove that directory yourself" in err
     assert {n: (d / n).read_text() for n in files} == files
     assert not (d / MARKER).exists()
