@@ -145,6 +145,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Exit status: 0 every section ran, 1 a section or campaign point failed, 2 a user error."""
+    for out in (sys.stdout, sys.stderr):  # as granchain.cli.terminal.tolerant_output (a layer above this one)
+        if hasattr(out, "reconfigure"):
+            out.reconfigure(errors="backslashreplace")
     args = build_parser().parse_args(argv)
     if args.workers is not None and args.workers < 1:
         print(f"granchain: error: --workers {args.workers}: give 1 or more", file=sys.stderr)
