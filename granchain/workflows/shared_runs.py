@@ -119,7 +119,11 @@ def current() -> SharedRuns | None:
 
 def _worker_start(parent: int) -> None:
     """The prefetch worker's first act (its pool's initializer): die with ``parent``, and let go of
-    the caller's stdout and stderr (a pipe it held open would outlive the caller)."""
+    the caller's stdout and stderr (a pipe it held open would outlive the caller).
+
+    PR_SET_PDEATHSIG fires when the thread that forked the worker ends: the pool is made and its
+    first task submitted (which forks) by the thread that holds the :func:`sharing` block, and the
+    block outlives the pool."""
     if sys.platform.startswith("linux"):
         import ctypes
 
