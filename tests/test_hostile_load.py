@@ -11,7 +11,10 @@ import time
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
+from granchain.cli import main
 from granchain.exceptions import GranchainError
 from granchain.results import StoredRun
 from granchain.rundir import write_run_dir
@@ -254,3 +257,137 @@ def test_load_run_errors_are_granchain_errors(d):
     (d / "peaks.csv").write_text("contact,peak_force\n0,1.0\n")
     with pytest.raises(GranchainError):
         load_run(d)
+
+
+# ------------------------------------------------------------------ any damage: the property
+
+RUN_FILES = ["summary.json", "scene.toml", "peaks.csv", "histories.csv", "snapshots.csv", "energy.csv"]
+_JSON = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=20) | st.just(HOSTILE),
+    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=8), inner, max_size=3),
+    max_leaves=6,
+)
+
+
+def _paths(value, prefix=()):
+    """Every key path of a JSON document (summary.json's: every field at any depth)."""
+    if isinstance(value, dict):
+        for k, v in value.items():
+            yield (*prefix, k)
+            yield from _paths(v, (*prefix, k))
+
+
+def _set_field(d: Path, pick: float, value) -> None:
+    try:
+        s = json.loads((d / "summary.json").read_bytes())
+    except (OSError, ValueError, RecursionError):
+        return  # an earlier damage left no summary to retype
+    paths = list(_paths(s))
+    if not paths:
+        return
+    *parents, last = paths[min(int(pick * len(paths)), len(paths) - 1)]
+    node = s
+    for p in parents:
+        node = node[p]
+    node[last] = value
+    (d / "summary.json").write_text(json.dumps(s))
+
+
+def _damage(d: Path, damage, secret: Path) -> None:
+    kind, name = damage[0], d / damage[1]
+    data = name.read_bytes() if name.is_file() and not name.is_symlink() else b""
+    if kind == "truncate":
+        name.write_bytes(data[: int(damage[2] * len(data))])
+    elif kind == "garbage":
+        k = int(damage[2] * len(data))
+        name.write_bytes(data[:k] + damage[3] + data[k + len(damage[3]) :])
+    elif kind == "field":
+        _set_field(d, damage[2], damage[3])
+    elif kind == "nest":
+        (d / "summary.json").write_text('{"backend": ' + "[" * damage[2] + "]" * damage[2] + "}")
+    elif kind == "bom":
+        name.write_bytes(b"\xef\xbb\xbf" + data)
+    elif kind == "quote" and data:
+        header, _, rest = data.partition(b"\n")
+        name.write_bytes(b",".join(b'"' + h + b'"' for h in header.split(b",")) + b"\n" + rest)
+    elif kind == "delete" and name.exists():
+        name.unlink()
+    elif kind == "link":
+        name.unlink(missing_ok=True)
+        name.symlink_to(secret)
+
+
+_FILE = st.sampled_from(RUN_FILES)
+_CSV = st.sampled_from([f for f in RUN_FILES if f.endswith(".csv")])
+DAMAGE = st.one_of(
+    st.tuples(st.just("truncate"), _FILE, st.floats(0, 1)),
+    st.tuples(st.just("garbage"), _FILE, st.floats(0, 1), st.binary(min_size=1, max_size=16)),
+    st.tuples(st.just("field"), st.just("summary.json"), st.floats(0, 1), _JSON),
+    st.tuples(st.just("nest"), st.just("summary.json"), st.sampled_from([50, 5_000, 100_000])),
+    st.tuples(st.just("bom"), _CSV),
+    st.tuples(st.just("quote"), _CSV),
+    st.tuples(st.just("delete"), _FILE),
+    st.tuples(st.just("link"), _FILE),
+)
+
+
+def _use(r) -> None:
+    """Everything a notebook does with a loaded run: its displays escaped, its tables and records."""
+    text, page = repr(r), r._repr_html_()
+    assert "\x1b" not in text
+    assert "<img" not in page
+    for table in ("peaks", "energy", "histories", "snapshots"):
+        getattr(r, table)
+    r.observables(), r.price(), r.provenance(), r.peak_status(), r.observables_missing()
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(damages=st.lists(DAMAGE, min_size=1, max_size=3))
+def test_any_damaged_run_directory_loads_or_is_one_granchain_error(made, tmp_path_factory, damages):
+    """Whatever is cut, overwritten, retyped, nested, re-quoted, deleted or linked: load_run returns a
+    run whose displays, tables and records work, or raises a GranchainError naming the directory."""
+    tmp = tmp_path_factory.mktemp("h")
+    secret = tmp / "secret"
+    secret.write_text(SECRET)
+    d = tmp / "run"
+    shutil.copytree(made, d)
+    for damage in damages:
+        _damage(d, damage, secret)
+    try:
+        r = load_run(d)  # any other exception propagates: the test fails
+    except GranchainError as e:
+        refused = str(e)
+    else:
+        refused = None
+    if refused is not None:
+        assert str(d) in refused
+        assert "\x1b" not in refused
+    else:
+        _use(r)
+        assert SECRET not in repr(r)
+    shutil.rmtree(tmp)
+
+
+SECRET = "SECRET-CONTENT-NOT-TO-LEAK"
+
+
+@pytest.mark.parametrize(
+    "damage",
+    [("edit", "plan {}"), ("edit", "provenance a list"), ("nest", "summary.json", 100_000), ("link", "peaks.csv")],
+    ids=["plan {}", "provenance a list", "nested 1e5 deep", "a linked peaks.csv"],
+)
+def test_granchain_plot_of_a_damaged_run_directory_is_one_error_line(d, tmp_path, capsys, damage):
+    secret = tmp_path / "secret"
+    secret.write_text(SECRET)
+    if damage[0] == "edit":
+        s = json.loads((d / "summary.json").read_text())
+        SUMMARY_DAMAGE[damage[1]][0](s)
+        (d / "summary.json").write_text(json.dumps(s))
+    else:
+        _damage(d, damage, secret)
+    assert main(["plot", str(d)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("granchain: error: "), err
+    assert err.count("granchain: error:") == 1, err
+    assert "Traceback" not in err
+    assert str(d) in err

@@ -152,9 +152,13 @@ def _read_peaks(d: Path, beads: int) -> dict[str, np.ndarray]:
 
 
 def _scene(d: Path, summary: dict):
-    from granchain.scene import parse_scene
+    from granchain.scene import SceneError, parse_scene
 
-    return parse_scene(read_text(d, "scene.toml"), source=summary.get("scene_source") or str(d / "scene.toml"))
+    text = read_text(d, "scene.toml")
+    try:
+        return parse_scene(text, source=summary.get("scene_source") or str(d / "scene.toml"))
+    except SceneError as e:  # named by the scene's own source: say which run directory's it is
+        raise LoadRunError(f"{d / 'scene.toml'}: {printable(str(e), 500)}") from None
 
 
 def _time(text: str | None) -> datetime | None:
