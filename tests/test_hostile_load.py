@@ -60,9 +60,12 @@ def _same(a, b) -> bool:
 # ------------------------------------------------------------------ a directory replaced meanwhile
 
 
-def test_a_directory_replaced_while_it_is_read_is_never_a_mixture(runs, tmp_path):
-    """run --overwrite of two different runs, again and again, while load_run reads the directory:
-    every load is one run's summary and tables (or, should the writer never pause, an error saying so)."""
+@pytest.mark.parametrize("how", ["run --overwrite", "collect in place"])
+def test_a_directory_replaced_while_it_is_read_is_never_a_mixture(runs, tmp_path, how):
+    """run --overwrite (a new directory renamed over the old) or collect in place (new files renamed
+    in one by one, summary.json last) of two different runs, again and again, while load_run reads the
+    directory: every load is one run's summary and tables (or, should the writer never pause, an
+    error saying so)."""
     refs = [load_run(write_run_dir(r, tmp_path / f"ref{k}")) for k, r in enumerate(runs)]
     d = write_run_dir(runs[0], tmp_path / "shared")
     stop = threading.Event()
@@ -70,7 +73,7 @@ def test_a_directory_replaced_while_it_is_read_is_never_a_mixture(runs, tmp_path
     def writer():
         k = 0
         while not stop.is_set():
-            write_run_dir(runs[k % 2], d, overwrite=True)
+            _write(how, runs[k % 2], d)
             k += 1
 
     t = threading.Thread(target=writer)
@@ -93,6 +96,39 @@ def test_a_directory_replaced_while_it_is_read_is_never_a_mixture(runs, tmp_path
     assert loaded > 0
     assert all("changed each of" in e or "no such directory" in e for e in refused), refused[:3]
     assert mixed == [], f"{len(mixed)} of {loaded} loads mixed two runs"
+
+
+def _write(how: str, result, d: Path) -> None:
+    """Rewrite run directory d with result as run --overwrite does, or as collect in place does."""
+    from granchain.workflows.collect import _write_in_place
+
+    if how == "run --overwrite":
+        write_run_dir(result, d, overwrite=True)
+    else:
+        _write_in_place(result, d)
+
+
+@pytest.mark.parametrize("how", ["run --overwrite", "collect in place"])
+def test_a_directory_rewritten_just_after_its_summary_is_read_loads_as_one_run(runs, tmp_path, monkeypatch, how):
+    """The interleaving of the loop above, made to happen: the other run is written right after
+    load_run has read summary.json. Then its tables are the other run's: load_run reads it again."""
+    from granchain.workflows import load
+
+    refs = [load_run(write_run_dir(r, tmp_path / f"ref{k}")) for k, r in enumerate(runs)]
+    d = write_run_dir(runs[0], tmp_path / "shared")
+    real, swapped = load.read_text, []
+
+    def read_then_rewrite(where, name):
+        text = real(where, name)
+        if name == "summary.json" and not swapped:
+            swapped.append(name)
+            _write(how, runs[1], d)
+        return text
+
+    monkeypatch.setattr(load, "read_text", read_then_rewrite)
+    got = load_run(d)
+    assert swapped
+    assert _same(got, refs[1])
 
 
 # ------------------------------------------------------------------ crafted summary.json

@@ -237,14 +237,15 @@ class _Changed(Exception):
     """The run directory changed while it was read (run --overwrite, collect): read it again."""
 
 
-def _identity(path: Path):
+def _identity(path: Path, fd: int | None = None):
     """What tells one summary.json from the next written at the same path: its inode, size and
-    times (a replaced directory's, or collect's new one, is a different file), None if absent."""
+    modification time, None if absent. ``fd``: the file held open, whose inode no new file can take
+    (a freed inode number is reused, and times are coarser than a fast writer)."""
     try:
-        st = os.lstat(path)
+        st = os.fstat(fd) if fd is not None else os.lstat(path)
     except OSError:
         return None
-    return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+    return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
 
 
 def load_run(path: str | Path) -> RunResult:
@@ -284,8 +285,11 @@ def load_run(path: str | Path) -> RunResult:
 
 def _being_replaced(p: Path) -> bool:
     """Whether p is absent because atomic_directory is between its two renames (its old or its new
-    version is beside it under a hidden name)."""
-    return not os.path.lexists(p) and any(p.parent.glob(f".{glob.escape(p.name)}.[op][la]*-*"))
+    version is beside it under a hidden name), or its summary.json because collect is renaming its
+    new files in (safe_files.atomic_files: they are written in p/.collect-PID first)."""
+    if not os.path.lexists(p):
+        return any(p.parent.glob(f".{glob.escape(p.name)}.[op][la]*-*"))
+    return not os.path.lexists(p / "summary.json") and any(p.glob(".collect-*"))
 
 
 def _load_once(p: Path) -> RunResult:
@@ -294,19 +298,27 @@ def _load_once(p: Path) -> RunResult:
     try:
         d = run_dir_of(p)
     except LoadRunError:
-        if _being_replaced(p):
+        if _being_replaced(p) or os.path.lexists(p / "summary.json"):  # (absent a moment ago)
             raise _Changed from None
         raise
-    before = _identity(d / "summary.json")
+    try:  # held open while the directory is read: its inode stays this file's
+        held = os.open(d / "summary.json", os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError:
+        held = None  # missing or a link: _read_run says so
     try:
-        result = _read_run(d)
-    except LoadRunError:
-        if _identity(d / "summary.json") != before or _being_replaced(p):
-            raise _Changed from None
-        raise
-    if before is None or _identity(d / "summary.json") != before:
-        raise _Changed
-    return result
+        before = _identity(d / "summary.json", held) if held is not None else None
+        try:
+            result = _read_run(d)
+        except LoadRunError:
+            if _identity(d / "summary.json") != before or _being_replaced(p):
+                raise _Changed from None
+            raise
+        if before is None or _identity(d / "summary.json") != before:
+            raise _Changed
+        return result
+    finally:
+        if held is not None:
+            os.close(held)
 
 
 def _read_summary(d: Path) -> dict:
