@@ -52,11 +52,18 @@ def read_run_end(work: Path) -> tuple[int, float]:
     p = Path(work) / RUN_END_FILE
     try:
         step, t = safe_files.read_text(p, 4096).split()
-        return int(step), float(t)
+        step, t = int(step), float(t)
     except FileNotFoundError:
         raise ResultsError(f"{p}: missing; the deck writes it when the run has finished") from None
     except (OSError, ValueError) as e:
         raise ResultsError(f"{p}: not the line 'step time' the deck writes at the end of the run ({e})") from None
+    if step < 0 or not (np.isfinite(t) and t >= 0):
+        # no run ends at a negative step or time: the file was damaged or edited, the physics is not at fault
+        raise ResultsError(
+            f"{p}: says step {step}, time {t!r}; a run ends at a step and a time of at least 0, so the file is "
+            "damaged or edited (not what the deck writes): run the deck again"
+        )
+    return step, t
 
 
 def read_results(work: Path) -> dict[str, np.ndarray]:
@@ -195,6 +202,7 @@ def peak_fields(scene, work: Path, res: dict[str, np.ndarray], o: int) -> dict[s
     running peak, its time and what completes it, the leading pulse, the crossing-time ladder and
     the half-amplitude arrival read off it (postprocess.fronts). o: the atom of contact 1 less one."""
     n, f0 = scene.chain.beads, scene.effects.precompression
+    _check_finite_peaks(work, res)
     fpeak = res["fpeak"][o : o + n - 1]
     tpeak = unreached_as_nan(fpeak, res["tpeak"][o : o + n - 1], f0)
     # the smallest force since each peak (a deck without d_fmin: no peak counts as complete)
@@ -219,6 +227,22 @@ def peak_fields(scene, work: Path, res: dict[str, np.ndarray], o: int) -> dict[s
         "front_ladder": ladder,
         "front_time": front,
     }
+
+
+def _check_finite_peaks(work: Path, res: dict[str, np.ndarray]) -> None:
+    """Refuse a results dump whose running peaks (or what completes them) are not finite while every
+    bead's position and velocity is: LAMMPS keeps finite maxima of finite forces, so the file is
+    damaged (a run that blew up has a non-finite state, which check_solution reports as such)."""
+    if not (np.isfinite(res["x"]).all() and np.isfinite(res["vx"]).all()):
+        return
+    for name in ("fpeak", "tpeak", "fmin", "flead", "tlead", "amax"):
+        bad = np.flatnonzero(~np.isfinite(res[name])) if name in res else ()
+        if len(bad):
+            raise ResultsError(
+                f"{Path(work) / RESULTS_DUMP}: d_{name} of atom {bad[0] + 1} is {float(res[name][bad[0]])!r}, although "
+                "every bead's position and velocity are finite; LAMMPS writes finite running peaks, so the file is "
+                "damaged or edited: run the deck again"
+            )
 
 
 def energy_fields(scene, work: Path) -> dict[str, np.ndarray]:

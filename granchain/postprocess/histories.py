@@ -12,10 +12,13 @@ Both give the same doubles (tests/test_history_output.py)."""
 
 from __future__ import annotations
 
+import math
+import os
 from pathlib import Path
 
 import numpy as np
 
+from granchain import safe_files
 from granchain.postprocess.dumps import read_dump
 
 HISTORY_NPY = "histories.npy"
@@ -26,9 +29,29 @@ class HistoryFileError(ValueError):
     """histories.npy is not what fix chain/history writes."""
 
 
+def _load_checked(path: str | Path) -> np.ndarray:
+    """histories.npy's array, its header's shape checked against the file's size before anything is
+    allocated (a header claiming (1e12, 3) would ask for 21.8 TiB); never read through a link."""
+    with safe_files.open_for_read(path, "rb") as fh:
+        version = np.lib.format.read_magic(fh)
+        if version == (1, 0):
+            shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
+        else:
+            shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
+        need = math.prod(shape) * dtype.itemsize
+        have = os.fstat(fh.fileno()).st_size - fh.tell()
+        if dtype.hasobject or need != have:
+            raise HistoryFileError(
+                f"{path}: its header says shape {shape} of {dtype} ({need} bytes), the file holds {have} bytes of "
+                "data: not what fix chain/history writes (damaged or cut off)"
+            )
+        fh.seek(0)
+        return np.load(fh, allow_pickle=False)
+
+
 def read_history_table(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """histories.npy -> (steps (frames,), ids (n,), force (frames, n), velocity (frames, n))."""
-    a = np.load(path, allow_pickle=False)
+    a = _load_checked(path)
     if a.ndim != 2 or a.dtype != np.float64 or a.shape[0] < 1 or a.shape[1] < 3 or (a.shape[1] - 1) % 2:
         raise HistoryFileError(f"{path}: not a fix chain/history table (shape {a.shape}, {a.dtype})")
     n = (a.shape[1] - 1) // 2

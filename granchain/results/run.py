@@ -339,11 +339,12 @@ class RunResult:
             sm = self.summary
         except Exception as e:  # a display never raises: say what is missing
             return f"<{type(self).__name__} {self.backend}: summary unavailable ({type(e).__name__}: {e})>"
+        t = lambda x: printable(x, 80)  # noqa: E731 - the summary's text as a terminal shows it
         lines = [f"<{type(self).__name__}: {printable(self.scene.title or self.scene.source or 'untitled scene', 120)}"]
         lines.append(
-            f"  {sm['backend']} ({sm['method']}), dt = {sm['timestep']:.4g} s, {sm['steps']} steps to "
-            f"t = {sm['end_time']:.4g} s, {sm['wall_time']:.3g} s wall; {sm['beads']} beads, "
-            f"{sm['contact_law']} contacts, {sm['loading']} load"
+            f"  {t(sm['backend'])} ({t(sm['method'])}), dt = {sm['timestep']:.4g} s, {sm['steps']} steps to "
+            f"t = {sm['end_time']:.4g} s, {sm['wall_time']:.3g} s wall; {t(sm.get('beads', '?'))} beads, "
+            f"{t(sm.get('contact_law', '?'))} contacts, {t(sm.get('loading', '?'))} load"
         )
         missing = sm.get("observables_missing") or {}
         notes = sm.get("observables_notes") or {}
@@ -354,12 +355,12 @@ class RunResult:
                 continue
             bar = f" +- {err:.2g}" if err is not None else ""
             note = f"   (note: {printable(notes[name], 100)})" if name in notes else ""
-            lines.append(f"  {name:28s} {_num(value)}{bar} {unit}{note}")
+            lines.append(f"  {name:28s} {t(_num(value))}{bar} {unit}{note}")
         pk = sm.get("peaks") or {}
         if pk:
             lines.append(
-                f"  peaks: {pk.get('complete', 0)} complete, {pk.get('incomplete', 0)} incomplete, "
-                f"{pk.get('unreached', 0)} unreached"
+                f"  peaks: {t(pk.get('complete', 0))} complete, {t(pk.get('incomplete', 0))} incomplete, "
+                f"{t(pk.get('unreached', 0))} unreached"
             )
         if self.path is not None:
             lines.append(f"  run directory: {printable(str(self.path), 200)}")
@@ -374,15 +375,17 @@ class RunResult:
         rows = [
             ("scene", esc(self.scene.title or self.scene.source or "untitled scene"), ""),
             ("backend", esc(f"{sm['backend']} ({sm['method']})"), ""),
-            ("time step", f"{sm['timestep']:.4g}", "s"),
-            ("steps", f"{sm['steps']}", ""),
-            ("end time", f"{sm['end_time']:.4g}", "s"),
-            ("wall time", f"{sm['wall_time']:.3g}", "s"),
-            ("beads", f"{sm['beads']}", ""),
-            ("contact law, load", esc(f"{sm['contact_law']}, {sm['loading']}"), ""),
+            ("time step", esc(f"{sm['timestep']:.4g}"), "s"),
+            ("steps", esc(sm["steps"]), ""),
+            ("end time", esc(f"{sm['end_time']:.4g}"), "s"),
+            ("wall time", esc(f"{sm['wall_time']:.3g}"), "s"),
+            ("beads", esc(sm.get("beads", "?")), ""),
+            ("contact law, load", esc(f"{sm.get('contact_law', '?')}, {sm.get('loading', '?')}"), ""),
         ]
         for name, value, unit, err in _key_observables(sm):
-            rows.append((esc(name), esc(_num(value)) + (f" &plusmn; {err:.2g}" if err is not None else ""), esc(unit)))
+            rows.append(
+                (esc(name), esc(_num(value)) + (f" &plusmn; {esc(f'{err:.2g}')}" if err is not None else ""), esc(unit))
+            )
         pk = sm.get("peaks") or {}
         if pk:
             rows.append(("peaks", esc(", ".join(f"{v} {k}" for k, v in pk.items())), ""))

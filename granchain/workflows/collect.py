@@ -184,6 +184,11 @@ def read_log(path: Path) -> LammpsLog:
                 f"{path}: 'Loop time of {t[:40]} on {n[:20]} procs' is not LAMMPS's (a time and a number of ranks): "
                 "the log is damaged; run 'lmp -in deck.lmp' in this directory again"
             )
+    if not math.isfinite(sum(float(t) for t, _ in loops)):  # each finite, e.g. 1e308 twice
+        raise CollectError(
+            f"{path}: its 'Loop time of' lines add up to more than any run takes: the log is damaged; "
+            "run 'lmp -in deck.lmp' in this directory again"
+        )
     threads = re.search(r"using (\d{1,9}) OpenMP thread", text)
     wall = re.search(r"^Total wall time: (\S+)", text, re.M)
     return LammpsLog(

@@ -45,10 +45,11 @@ class Comparison:
         """A few lines: the scene, both runs' methods and steps, rtol and the verdict (which differ)."""
         title = printable(self.lammps.scene.title or self.lammps.scene.source or "untitled scene", 120)
         bad = self.disagreements()
+        method = printable(self.reference.solution.method, 40)  # a loaded run's, from its summary.json
         verdict = "all agree" if not bad else f"{len(bad)} differ: {', '.join(bad)}"
         lines = [
             f"<Comparison: {title}",
-            f"  lammps verlet dt = {self.lammps.solution.timestep:.4g} s; reference {self.reference.solution.method} "
+            f"  lammps verlet dt = {self.lammps.solution.timestep:.4g} s; reference {method} "
             f"dt = {self.reference.solution.timestep:.4g} s; rtol {self.rtol:g}: {verdict}",
             f"  {len(self.rows)} quantities (.table: a pandas DataFrame)",
         ]

@@ -23,8 +23,11 @@ granchain read outside it.
 
 from __future__ import annotations
 
+import glob
 import io
 import json
+import os
+import time
 from datetime import datetime
 from pathlib import Path
 
@@ -33,7 +36,8 @@ import numpy as np
 from granchain import safe_files
 from granchain.backends import BACKENDS, LAMMPS, REFERENCE, FileIOBackend
 from granchain.exceptions import GranchainError
-from granchain.results import ChainSolution, RunResult, StoredRun
+from granchain.results import ChainSolution, RunResult, StoredRun, printable
+from granchain.workflows.summary_check import SummaryFieldError, check_summary
 
 #: a campaign point's run directory inside its job directory (granchain.campaigns.workspace.RUN_DIR)
 CAMPAIGN_RUN_DIR = "run"
@@ -69,10 +73,11 @@ def run_dir_of(path: str | Path) -> Path:
 
 def read_text(d: Path, name: str) -> str:
     """The text of file name in directory d: a regular file, never read through a symbolic link, of
-    bounded size (granchain.safe_files); anything else is a LoadRunError naming the file and the fix."""
+    bounded size (granchain.safe_files); anything else is a LoadRunError naming the file and the fix.
+    A UTF-8 byte-order mark (as spreadsheet programs save a CSV file) is not part of the text."""
     path = d / name
     try:
-        return safe_files.read_text(path)
+        return safe_files.read_text(path).removeprefix("\ufeff")
     except FileNotFoundError:
         raise LoadRunError(f"{path}: missing; the run directory is incomplete") from None
     except safe_files.UnsafeFileError as e:
@@ -92,46 +97,72 @@ def _csv(d: Path, name: str, **kw):
         raise LoadRunError(f"{d / name}: not a granchain CSV table ({e})") from None
 
 
-def _read_peaks(d: Path) -> dict[str, np.ndarray]:
-    text = read_text(d, "peaks.csv")
-    header = text.split("\n", 1)[0].strip().split(",")
-    floats = [h for h in header if h not in ("contact", "complete", "error_status")]
-    df = _csv(
-        d,
-        "peaks.csv",
-        keep_default_na=False,
-        na_values={h: ["nan"] for h in floats},
-        dtype={"error_status": str, "contact": np.int64},
-    )
-    out: dict[str, np.ndarray] = {}
-    for h in header:
-        v = df[h].to_numpy()
-        if h == "complete":
-            v = v.astype(np.int64) == 1
-        elif h == "error_status":
-            v = v.astype(object)
-        elif h != "contact":
-            v = v.astype(np.float64)
-        out[h] = v
+def _peak_column(path: Path, name: str, cells: np.ndarray) -> np.ndarray:
+    """One column of peaks.csv (read as text) as the array granchain wrote: contact whole numbers,
+    complete 0 or 1, error_status text, every other column floats ("nan" where not measured)."""
+    if name == "error_status":
+        return cells.astype(object)
+    try:
+        if name == "contact":
+            return cells.astype(np.int64)
+        if name == "complete":
+            if not np.isin(cells, ("0", "1")).all():
+                raise ValueError("not 0 or 1")
+            return cells == "1"
+        return cells.astype(np.float64)
+    except (ValueError, OverflowError):
+        bad = next((str(x) for x in cells if not _parses(x, name)), "?")
+        what = {"contact": "a contact number", "complete": "0 or 1"}.get(name, "a number")
+        raise LoadRunError(
+            f"{path}: column {printable(name)!r} holds {printable(bad[:40])!r}, not {what}; the table is damaged "
+            "(edited, or not granchain's): run the scene again"
+        ) from None
+
+
+def _parses(cell, name: str) -> bool:
+    try:
+        if name == "contact":
+            int(cell)
+        elif name == "complete":
+            return cell in ("0", "1")
+        else:
+            float(cell)
+    except (ValueError, OverflowError):
+        return False
+    return True
+
+
+def _read_peaks(d: Path, beads: int) -> dict[str, np.ndarray]:
+    """peaks.csv's columns (see RunResult.peaks); its contacts those of a chain of beads beads."""
+    path = d / "peaks.csv"
+    df = _csv(d, "peaks.csv", dtype=str, keep_default_na=False)
+    out = {str(h): _peak_column(path, str(h), df[h].to_numpy(dtype=str)) for h in df.columns}
+    if "contact" not in out or "peak_force" not in out:
+        raise LoadRunError(f"{path}: has no contact or peak_force column; not the peak table granchain writes")
+    c = out["contact"]
+    wrong = c[(c < 1) | (c > beads - 1)]
+    if wrong.size:
+        raise LoadRunError(
+            f"{path}: contact {wrong[0]} is not a contact of the {beads}-bead chain of scene.toml (contacts are "
+            f"numbered 1 to {beads - 1}); the table is damaged or another scene's: run the scene again"
+        )
+    if np.unique(c).size != c.size:
+        raise LoadRunError(f"{path}: names a contact twice; the table is damaged: run the scene again")
     return out
 
 
 def _scene(d: Path, summary: dict):
-    from granchain.scene import parse_scene
+    from granchain.scene import SceneError, parse_scene
 
-    return parse_scene(read_text(d, "scene.toml"), source=summary.get("scene_source") or str(d / "scene.toml"))
+    text = read_text(d, "scene.toml")
+    try:
+        return parse_scene(text, source=summary.get("scene_source") or str(d / "scene.toml"))
+    except SceneError as e:  # named by the scene's own source: say which run directory's it is
+        raise LoadRunError(f"{d / 'scene.toml'}: {printable(str(e), 500)}") from None
 
 
 def _time(text: str | None) -> datetime | None:
     return None if text is None else datetime.fromisoformat(text)
-
-
-def _flag(summary: dict, name: str) -> bool | None:
-    """A true/false field of summary.json (None where absent): anything else is a damaged summary."""
-    value = summary.get(name)
-    if value is not None and not isinstance(value, bool):
-        raise ValueError(f"{name} = {value!r} is not true or false")
-    return value
 
 
 def _solution(d: Path, scene, summary: dict, peaks: dict) -> ChainSolution:
@@ -190,16 +221,38 @@ def _solution(d: Path, scene, summary: dict, peaks: dict) -> ChainSolution:
         momentum=float(c.get("momentum", 0.0)),
         extra_steps=max(int(price.get("steps", steps)) - steps, 0),
         wall_peak_force=summary.get("wall_peak_force"),
-        wall_peak_complete=_flag(summary, "wall_peak_complete"),
+        wall_peak_complete=summary.get("wall_peak_complete"),
         striker_peak_force=summary.get("striker_peak_force"),
-        striker_peak_complete=_flag(summary, "striker_peak_complete"),
+        striker_peak_complete=summary.get("striker_peak_complete"),
         striker_velocity=summary.get("striker_velocity"),
         **kw,
     )
 
 
+#: how many times load_run reads a directory that another process is replacing meanwhile
+_ATTEMPTS = 8
+
+
+class _Changed(Exception):
+    """The run directory changed while it was read (run --overwrite, collect): read it again."""
+
+
+def _identity(path: Path, fd: int | None = None):
+    """What tells one summary.json from the next written at the same path: its inode, size and
+    modification time, None if absent. ``fd``: the file held open, whose inode no new file can take
+    (a freed inode number is reused, and times are coarser than a fast writer)."""
+    try:
+        st = os.fstat(fd) if fd is not None else os.lstat(path)
+    except OSError:
+        return None
+    return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
+
+
 def load_run(path: str | Path) -> RunResult:
     """A run directory read back as the RunResult that wrote it (see the module docstring).
+
+    Every file is one run's: a directory replaced while it is read (``granchain run --overwrite``,
+    ``granchain collect``) is read again, so the result never mixes the tables of two runs.
 
     Parameters
     ----------
@@ -216,28 +269,85 @@ def load_run(path: str | Path) -> RunResult:
     Raises
     ------
     LoadRunError
-        (a GranchainError) the directory is missing, incomplete, or holds a file that is a symbolic
-        link or not granchain's.
+        (a GranchainError) the directory is missing, incomplete, holds a file that is a symbolic
+        link or not granchain's, or a summary.json field of the wrong type (named).
     """
-    d = run_dir_of(path)
+    for attempt in range(_ATTEMPTS):
+        try:
+            return _load_once(Path(path))
+        except _Changed:
+            time.sleep(0.002 * 2**attempt)
+    raise LoadRunError(
+        f"{path}: changed each of the {_ATTEMPTS} times it was read (another process is writing it: "
+        "granchain run --overwrite or collect); load it when that has finished"
+    )
+
+
+def _being_replaced(p: Path) -> bool:
+    """Whether p is absent because atomic_directory is between its two renames (its old or its new
+    version is beside it under a hidden name), or its summary.json because collect is renaming its
+    new files in (safe_files.atomic_files: they are written in p/.collect-PID first)."""
+    if not os.path.lexists(p):
+        return any(p.parent.glob(f".{glob.escape(p.name)}.[op][la]*-*"))
+    return not os.path.lexists(p / "summary.json") and any(p.glob(".collect-*"))
+
+
+def _load_once(p: Path) -> RunResult:
+    """load_run's one reading of the directory; _Changed when summary.json is not the same file at
+    the end of it as at its start (the directory was replaced or rewritten meanwhile)."""
+    try:
+        d = run_dir_of(p)
+    except LoadRunError:
+        if _being_replaced(p) or os.path.lexists(p / "summary.json"):  # (absent a moment ago)
+            raise _Changed from None
+        raise
+    try:  # held open while the directory is read: its inode stays this file's
+        held = os.open(d / "summary.json", os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError:
+        held = None  # missing or a link: _read_run says so
+    try:
+        before = _identity(d / "summary.json", held) if held is not None else None
+        try:
+            result = _read_run(d)
+        except LoadRunError:
+            if _identity(d / "summary.json") != before or _being_replaced(p):
+                raise _Changed from None
+            raise
+        if before is None or _identity(d / "summary.json") != before:
+            raise _Changed
+        return result
+    finally:
+        if held is not None:
+            os.close(held)
+
+
+def _read_summary(d: Path) -> dict:
+    """summary.json, parsed and checked against its schema (workflows.summary_check)."""
+    where = d / "summary.json"
     try:
         summary = json.loads(read_text(d, "summary.json"))
-    except json.JSONDecodeError as e:
-        raise LoadRunError(f"{d / 'summary.json'}: not JSON ({e}); the run directory is damaged") from None
-    if not isinstance(summary, dict) or "backend" not in summary or "steps" not in summary:
-        raise LoadRunError(f"{d / 'summary.json'}: not a granchain run summary (no backend or steps)")
-    scene = _scene(d, summary)
-    peaks = _read_peaks(d)
-    if "contact" not in peaks or "peak_force" not in peaks:
+    except (json.JSONDecodeError, RecursionError) as e:
+        raise LoadRunError(f"{where}: not JSON ({str(e)[:200]}); the run directory is damaged") from None
+    try:
+        check_summary(summary)
+    except SummaryFieldError as e:
         raise LoadRunError(
-            f"{d / 'peaks.csv'}: has no contact or peak_force column; not the peak table granchain writes"
-        )
+            f"{where}: {printable(str(e), 300)}; not the summary granchain writes (damaged or edited): "
+            "run the scene again"
+        ) from None
+    return summary
+
+
+def _read_run(d: Path) -> RunResult:
+    summary = _read_summary(d)
+    scene = _scene(d, summary)
+    peaks = _read_peaks(d, int(scene.chain.beads))
     try:
         solution = _solution(d, scene, summary, peaks)
     except (KeyError, TypeError, ValueError, IndexError) as e:
         raise LoadRunError(
-            f"{d}: its summary.json or tables do not fit together ({type(e).__name__}: {e}); the run directory "
-            "is damaged: run the scene again"
+            f"{d}: its summary.json or tables do not fit together ({type(e).__name__}: {printable(str(e), 300)}); "
+            "the run directory is damaged: run the scene again"
         ) from None
     prov = summary.get("provenance") or {}
     from granchain.workflows.collect import plan_from_dict
@@ -250,13 +360,13 @@ def load_run(path: str | Path) -> RunResult:
         "plan": plan_from_dict(prov.get("plan"), scene),
         "started_utc": _time(prov.get("started_utc")) if prov.get("start_time") == "measured" else None,
         "command": prov.get("command"),
-        "method_reason": summary.get("method_reason") if isinstance(summary.get("method_reason"), str) else None,
+        "method_reason": summary.get("method_reason"),
         "path": d,
         "stored": StoredRun(summary=summary, peaks=peaks),
     }
     if prov.get("finished_utc"):
         kw["finished_utc"] = _time(prov["finished_utc"])
-    backend = BACKENDS.get(summary["backend"]) if isinstance(summary["backend"], str) else None
+    backend = BACKENDS.get(summary["backend"])
     if backend is None:
         return RunResult(**kw)
     if isinstance(backend, FileIOBackend) and "collected" in prov:  # a run made elsewhere, collected
