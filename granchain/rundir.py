@@ -29,7 +29,6 @@ import numpy as np
 from granchain import safe_files
 from granchain.exceptions import GranchainError
 from granchain.results import RunResult, peak_columns
-from granchain.safe_files import pid_alive  # noqa: F401 - where callers have imported it from
 
 #: what a run directory written before the marker existed may hold: granchain run's, compare's,
 #: compare-laws', accuracy's and plot's files (lammps/ and reference/ of a compare directory are such

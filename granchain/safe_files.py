@@ -393,32 +393,14 @@ def not_owned_message(directory: str | Path, option: str = "--out") -> str:
     )
 
 
-def pid_alive(pid: int) -> bool:
-    """Whether a process exists (stale partial directories name their writer's pid)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    except OverflowError:
-        return False
-    return True
-
-
-#: a directory whose lock is free is taken for a dead writer's only once it is this old (seconds since
-#: its last change): the moment between making a directory and locking it is not mistaken for death
-LOCK_GRACE = 60.0
-#: another host's (or an earlier boot's) directory, whose lock cannot be asked here, is taken for a
-#: dead writer's only when nothing in it changed for this long (seconds)
+#: seconds another host's (or boot's) directory, whose lock cannot be asked here, must be unchanged to go
 FOREIGN_AGE = 7 * 86400.0
 
 
 @functools.lru_cache(maxsize=1)
 def host_tag() -> str:
-    """12 hex digits naming this host and boot (its name and /proc/sys/kernel/random/boot_id): a
-    temporary directory named with it is this kernel's, so its lock (hold_lock) says whether its
-    writer lives, in whatever PID namespace (a container) the writer runs."""
+    """12 hex digits naming this host and boot (hostname, boot_id): a directory named with it is this
+    kernel's, whose lock (hold_lock) says if its writer lives, in whatever PID namespace it runs."""
     try:
         with open("/proc/sys/kernel/random/boot_id", "rb") as fh:
             boot = fh.read(64)
@@ -427,10 +409,27 @@ def host_tag() -> str:
     return hashlib.sha256(socket.gethostname().encode() + b"\0" + boot.strip()).hexdigest()[:12]
 
 
+def make_locked(path: str | Path, mode: int = 0o777) -> int:
+    """Make the directory ``path`` locked (hold_lock's descriptor returned): made and locked under a
+    hidden name, then renamed, so no sweeper sees it unlocked. FileExistsError if ``path`` exists."""
+    path = Path(path)
+    staging = path.parent / f".granchain-new-{os.urandom(6).hex()}"
+    os.mkdir(staging, mode)
+    fd = hold_lock(staging)
+    try:
+        if os.path.lexists(path):  # rename would replace an empty directory there
+            raise FileExistsError(errno.EEXIST, "exists", str(path))
+        os.rename(staging, path)
+    except BaseException:
+        os.close(fd)
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return fd
+
+
 def hold_lock(directory: str | Path) -> int:
-    """Lock ``directory`` (a shared flock on a descriptor of it) while the returned descriptor is open:
-    the writer's mark of life. The kernel drops it when the writer dies, however it dies; a file
-    system without locks leaves it unlocked (then owner_gone cannot take the lock either)."""
+    """Lock ``directory`` (flock, shared) while the returned descriptor is open: the kernel drops it
+    when the writer dies, however (a file system without locks: owner_gone cannot lock it either)."""
     fd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY | _O_NOFOLLOW | _O_CLOEXEC)
     with contextlib.suppress(OSError):
         fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
@@ -449,19 +448,17 @@ def _newest_change(path: str | Path, st: os.stat_result) -> float:
 def owner_gone(path: str | Path, tag: str | None) -> bool:
     """Whether the temporary directory ``path``, named with host tag ``tag`` (None: a name without
     one), is provably a dead writer's and the user's to remove: a real directory (not a link) the
-    user owns, and either this kernel's (``tag`` is host_tag()) with its lock free (hold_lock) and
-    unchanged for LOCK_GRACE, or another host's (or boot's, or unnamed) unchanged for FOREIGN_AGE."""
+    user owns, and either this kernel's (``tag`` is host_tag()) with its lock free (hold_lock; a
+    directory is made locked: make_locked), or another host's (or boot's, or unnamed) unchanged for
+    FOREIGN_AGE."""
     try:
         st = os.lstat(path)
     except OSError:
         return False
     if not stat.S_ISDIR(st.st_mode) or st.st_uid != os.geteuid():
         return False
-    age = time.time() - _newest_change(path, st)
     if tag != host_tag():
-        return age > FOREIGN_AGE
-    if age < LOCK_GRACE:
-        return False
+        return time.time() - _newest_change(path, st) > FOREIGN_AGE
     try:
         fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY | _O_NOFOLLOW | _O_CLOEXEC)
         try:
@@ -514,7 +511,7 @@ def sibling_stem(name: str) -> str:
 
 
 def _fresh_temp(parent: Path, prefix: str) -> Path:
-    """``parent/<prefix><host tag>-<pid>-<random>``, not yet made (the caller locks it: hold_lock);
+    """``parent/<prefix><host tag>-<pid>-<random>``, not yet made (the caller makes it: make_locked);
     temporary directories with this prefix that are provably a dead writer's (owner_gone) go first."""
     for stale in parent.glob(f"{glob.escape(prefix)}*"):
         rest = stale.name[len(prefix) :].split("-")
@@ -546,8 +543,7 @@ def atomic_directory(
     parent = out.absolute().parent
     parent.mkdir(parents=True, exist_ok=True)
     tmp = _fresh_temp(parent, f".{sibling_stem(out.name)}.partial-")
-    tmp.mkdir()
-    lock = hold_lock(tmp)
+    lock = make_locked(tmp)
     try:
         yield tmp
         if kind is not None:

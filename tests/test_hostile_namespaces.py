@@ -35,12 +35,8 @@ def _other_namespace() -> list[str]:
 
 
 def _in_namespace(ns, code: str, env: dict) -> subprocess.CompletedProcess:
-    """Python ``code`` in the other namespace, taking a free lock for a dead run's at once (no grace
-    for a young directory: only the lock protects the live one)."""
-    prelude = "import granchain.safe_files as s; s.LOCK_GRACE = 0\n"
-    return subprocess.run(
-        [*ns, sys.executable, "-c", prelude + code], env=env, capture_output=True, text=True, timeout=300
-    )
+    """Python ``code`` in the other namespace."""
+    return subprocess.run([*ns, sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300)
 
 
 def _dead_dir(tmp: Path) -> Path:
@@ -135,8 +131,7 @@ def test_a_writer_in_another_pid_namespace_leaves_a_live_partial_directory_alone
         holder.stdout.close()
 
 
-def test_another_hosts_directory_is_kept_until_it_is_old(tmp_path, monkeypatch):
-    monkeypatch.setattr(safe_files, "LOCK_GRACE", 0)
+def test_another_hosts_directory_is_kept_until_it_is_old(tmp_path):
     d = tmp_path / "foreign"
     d.mkdir()
     (d / "progress.txt").write_text("1")
@@ -152,8 +147,7 @@ def test_another_hosts_directory_is_kept_until_it_is_old(tmp_path, monkeypatch):
     assert safe_files.owner_gone(d, other_tag) is False
 
 
-def test_only_the_users_own_real_directories_are_swept(tmp_path, monkeypatch):
-    monkeypatch.setattr(safe_files, "LOCK_GRACE", 0)
+def test_only_the_users_own_real_directories_are_swept(tmp_path):
     tag = safe_files.host_tag()
     target = tmp_path / "target"
     target.mkdir()

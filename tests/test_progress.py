@@ -246,7 +246,7 @@ def test_stale_work_directories_are_named_when_they_cannot_be_removed(own_tmp, m
     live = own_tmp / f"{runner.WORK_PREFIX}{os.getpid()}-{tag}-efgh"
     live.mkdir()
     held = safe_files.hold_lock(live)  # as a running run holds its work directory (runner.new_work_dir)
-    for d in (stale, live, stale / "log.lammps"):  # older than the grace: the lock alone tells them apart
+    for d in (stale, live, stale / "log.lammps"):  # both old: the lock alone tells them apart
         os.utime(d, (1e9, 1e9))
     text = runner.work_dirs_report()
     assert str(stale) in text

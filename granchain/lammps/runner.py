@@ -86,9 +86,13 @@ def new_work_dir() -> Path:
     this host, in whatever PID namespace, takes it for a killed run's meanwhile (sweep_stale_work_dirs)."""
     for gone in [p for p in _held if not os.path.lexists(p)]:  # removed by their caller (WorkFiles.remove)
         os.close(_held.pop(gone))
-    work = Path(tempfile.mkdtemp(prefix=f"{WORK_PREFIX}{os.getpid()}-{safe_files.host_tag()}-"))
-    _held[work] = safe_files.hold_lock(work)
-    return work
+    while True:
+        work = Path(tempfile.gettempdir()) / f"{WORK_PREFIX}{os.getpid()}-{safe_files.host_tag()}-{os.urandom(4).hex()}"
+        try:
+            _held[work] = safe_files.make_locked(work, 0o700)
+            return work
+        except FileExistsError:  # (as mkdtemp: another name)
+            continue
 
 
 def _owner_gone(d: Path) -> bool:
