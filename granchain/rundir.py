@@ -28,7 +28,6 @@ import numpy as np
 from granchain import safe_files
 from granchain.exceptions import GranchainError
 from granchain.results import RunResult, peak_columns
-from granchain.safe_files import pid_alive  # noqa: F401 - where callers have imported it from
 
 
 class RunDirError(GranchainError, RuntimeError):

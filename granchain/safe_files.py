@@ -24,11 +24,16 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import fcntl
+import functools
 import glob
+import hashlib
 import io
 import os
 import shutil
+import socket
 import stat
+import time
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
@@ -388,15 +393,79 @@ def not_owned_message(directory: str | Path, option: str = "--out") -> str:
     )
 
 
-def pid_alive(pid: int) -> bool:
-    """Whether a process exists (stale partial directories name their writer's pid)."""
+#: seconds another host's (or boot's) directory, whose lock cannot be asked here, must be unchanged to go
+FOREIGN_AGE = 7 * 86400.0
+
+
+@functools.lru_cache(maxsize=1)
+def host_tag() -> str:
+    """12 hex digits naming this host and boot (hostname, boot_id): a directory named with it is this
+    kernel's, whose lock (hold_lock) says if its writer lives, in whatever PID namespace it runs."""
     try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
+        with open("/proc/sys/kernel/random/boot_id", "rb") as fh:
+            boot = fh.read(64)
+    except OSError:
+        boot = b""
+    return hashlib.sha256(socket.gethostname().encode() + b"\0" + boot.strip()).hexdigest()[:12]
+
+
+def make_locked(path: str | Path, mode: int = 0o777) -> int:
+    """Make the directory ``path`` locked (hold_lock's descriptor returned): made and locked under a
+    hidden name, then renamed, so no sweeper sees it unlocked. FileExistsError if ``path`` exists."""
+    path = Path(path)
+    staging = path.parent / f".granchain-new-{os.urandom(6).hex()}"
+    os.mkdir(staging, mode)
+    fd = hold_lock(staging)
+    try:
+        if os.path.lexists(path):  # rename would replace an empty directory there
+            raise FileExistsError(errno.EEXIST, "exists", str(path))
+        os.rename(staging, path)
+    except BaseException:
+        os.close(fd)
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return fd
+
+
+def hold_lock(directory: str | Path) -> int:
+    """Lock ``directory`` (flock, shared) while the returned descriptor is open: the kernel drops it
+    when the writer dies, however (a file system without locks: owner_gone cannot lock it either)."""
+    fd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY | _O_NOFOLLOW | _O_CLOEXEC)
+    with contextlib.suppress(OSError):
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    return fd
+
+
+def _newest_change(path: str | Path, st: os.stat_result) -> float:
+    newest = st.st_mtime
+    with contextlib.suppress(OSError), os.scandir(path) as it:
+        for entry in it:
+            with contextlib.suppress(OSError):
+                newest = max(newest, entry.stat(follow_symlinks=False).st_mtime)
+    return newest
+
+
+def owner_gone(path: str | Path, tag: str | None) -> bool:
+    """Whether the temporary directory ``path``, named with host tag ``tag`` (None: a name without
+    one), is provably a dead writer's and the user's to remove: a real directory (not a link) the
+    user owns, and either this kernel's (``tag`` is host_tag()) with its lock free (hold_lock; a
+    directory is made locked: make_locked), or another host's (or boot's, or unnamed) unchanged for
+    FOREIGN_AGE."""
+    try:
+        st = os.lstat(path)
+    except OSError:
         return False
-    except PermissionError:
-        return True
-    except OverflowError:
+    if not stat.S_ISDIR(st.st_mode) or st.st_uid != os.geteuid():
+        return False
+    if tag != host_tag():
+        return time.time() - _newest_change(path, st) > FOREIGN_AGE
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY | _O_NOFOLLOW | _O_CLOEXEC)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # refused while a live writer holds its lock
+        finally:
+            os.close(fd)
+    except OSError:  # locked, gone, or no locks on this file system: not provably dead
         return False
     return True
 
@@ -426,15 +495,29 @@ def check_replaceable(
         raise UnsafeFileError(errno.EEXIST, not_owned_message(out, option), str(out))
 
 
+#: the most UTF-8 bytes of a name that a hidden sibling's name (``.NAME.partial-...``) carries: with
+#: its suffix, far below a file name's 255-byte limit (a longer NAME is cut, and a hash of it added)
+SIBLING_NAME_BYTES = 160
+
+
+def sibling_stem(name: str) -> str:
+    """``name`` as a hidden sibling's name holds it: itself, or, if longer than SIBLING_NAME_BYTES,
+    its start and 8 hex digits of its hash (names that differ keep different stems)."""
+    raw = os.fsencode(name)
+    if len(raw) <= SIBLING_NAME_BYTES:
+        return name
+    cut = os.fsdecode(raw[: SIBLING_NAME_BYTES - 9]).encode("utf-8", "ignore").decode()  # whole characters
+    return f"{cut}~{hashlib.sha256(raw).hexdigest()[:8]}"
+
+
 def _fresh_temp(parent: Path, prefix: str) -> Path:
-    """``parent/<prefix><pid>``, not yet made: stale ones of a killed writer (their pid gone, or this
-    pid's past) are removed first."""
-    tmp = parent / f"{prefix}{os.getpid()}"
+    """``parent/<prefix><host tag>-<pid>-<random>``, not yet made (the caller makes it: make_locked);
+    temporary directories with this prefix that are provably a dead writer's (owner_gone) go first."""
     for stale in parent.glob(f"{glob.escape(prefix)}*"):
-        pid = stale.name.rsplit("-", 1)[-1]
-        if not os.path.islink(stale) and (stale == tmp or (pid.isdigit() and not pid_alive(int(pid)))):
+        rest = stale.name[len(prefix) :].split("-")
+        if owner_gone(stale, rest[0] if len(rest) == 3 else None):
             shutil.rmtree(stale, ignore_errors=True)
-    return tmp
+    return parent / f"{prefix}{host_tag()}-{os.getpid()}-{os.urandom(4).hex()}"
 
 
 @contextlib.contextmanager
@@ -459,15 +542,15 @@ def atomic_directory(
     check_replaceable(out, overwrite, legacy, option, owned)
     parent = out.absolute().parent
     parent.mkdir(parents=True, exist_ok=True)
-    tmp = _fresh_temp(parent, f".{out.name}.partial-")
-    tmp.mkdir()
+    tmp = _fresh_temp(parent, f".{sibling_stem(out.name)}.partial-")
+    lock = make_locked(tmp)
     try:
         yield tmp
         if kind is not None:
             mark_owned(tmp, kind)
         if out.exists() or os.path.islink(out):
             check_replaceable(out, overwrite, legacy, option, owned)  # again: it may have appeared meanwhile
-            old = parent / f".{out.name}.old-{os.getpid()}"
+            old = parent / f".{sibling_stem(out.name)}.old-{os.getpid()}-{os.urandom(4).hex()}"
             os.replace(out, old)
             os.replace(tmp, out)
             shutil.rmtree(old, ignore_errors=True)
@@ -476,6 +559,8 @@ def atomic_directory(
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+    finally:
+        os.close(lock)
 
 
 @contextlib.contextmanager
@@ -492,8 +577,10 @@ def atomic_files(
     """
     d = Path(directory)
     tmp = _fresh_temp(d, prefix)
+    lock = -1
     try:
         yield tmp
+        lock = hold_lock(tmp)  # as it is emptied into d: not taken for a dead writer's meanwhile
         keep = {*keep, last}
         made = sorted(p.name for p in tmp.iterdir() if p.name not in keep)
         (d / last).unlink(missing_ok=True)
@@ -502,3 +589,5 @@ def atomic_files(
         os.replace(tmp / last, d / last)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+        if lock >= 0:
+            os.close(lock)

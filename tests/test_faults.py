@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from granchain import safe_files
 from granchain.lammps import build
 
 from .conftest import make_scene_text
@@ -95,7 +96,7 @@ def test_killed_mid_run_then_rerun(tmp_path):
     assert not out.exists()  # the run directory appears only complete, by a rename at the end
     left = list((tmp_path / "tmp").glob("granchain-lammps-*"))
     # a killed writer's hidden partial directory, as a kill during the final write would leave it
-    stale = tmp_path / f".out.partial-{proc.pid}"
+    stale = tmp_path / f".out.partial-{safe_files.host_tag()}-{proc.pid}-abcd"  # its lock went with its process
     stale.mkdir()
     (stale / "peaks.csv").write_text("half")
     scene.write_text(SHORT)

