@@ -127,10 +127,11 @@ def statepoint(scene_dict: dict, backend: str, method: str, rtol: float | None, 
 
 def point_key(sp) -> str:
     """The state point without its code: the same for one point under two versions of granchain."""
-    return json.dumps({k: v for k, v in dict(sp).items() if k != "code"}, sort_keys=True, default=_plain)
+    return json.dumps({k: v for k, v in dict(sp).items() if k != "code"}, sort_keys=True, default=plain)
 
 
-def _plain(o):
+def plain(o):
+    """json.dumps' default for a scene's values: a mapping as a dict, a tuple as a list."""
     if hasattr(o, "items"):
         return dict(o.items())
     if isinstance(o, (list, tuple)):
@@ -398,7 +399,7 @@ def write_text(path: Path, text: str) -> None:
 def write_json(path: Path, data) -> None:
     """Write aside and rename (a reader never sees half a file, a full disk leaves no temporary
     file); a link at path is refused (a WorkspaceWriteError, as is a file that cannot be written)."""
-    write_text(path, json.dumps(data, indent=1, default=_plain) + "\n")
+    write_text(path, json.dumps(data, indent=1, default=plain) + "\n")
 
 
 def stale_versions(project, code: dict) -> dict[str, dict]:

@@ -1,0 +1,139 @@
+"""What a campaign's points hold and its table stores: "auto" beside numbers in one column, a derived
+integer key, a varied taper, each run's own points when two campaigns share a workspace."""
+
+from __future__ import annotations
+
+import json
+import math
+import textwrap
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from granchain.campaigns import workspace as wsp
+from granchain.campaigns.spec import parse_campaign
+from granchain.cli import main
+
+from .conftest import CAMPAIGN_SCENE
+
+QUICK = 'backend = "reference"\nmethod = "verlet"\nerror_estimate = false'
+
+
+def campaign_text(body: str, scene: str = CAMPAIGN_SCENE, campaign: str = QUICK) -> str:
+    return f"[campaign]\n{campaign}\n\n{textwrap.dedent(body)}\n[scene]\n" + scene.replace("\n[", "\n[scene.")
+
+
+# ------------------------------------------------------------ two campaigns, one workspace
+
+
+def test_two_campaigns_on_one_workspace_each_return_and_print_their_own_points(tmp_path, monkeypatch, capsys):
+    """Campaign B runs into A's workspace while A's points run (B rewrites campaign.json): A's table
+    is A's 3 points, B's is B's 1."""
+    from granchain.campaigns import run as run_module
+
+    a = parse_campaign(campaign_text('[vary]\n"loading.amplitude" = [10.0, 20.0, 30.0]\n'))
+    b = parse_campaign(campaign_text('[vary]\n"loading.amplitude" = [40.0]\n'))
+    ws = tmp_path / "ws"
+    grid, tables_of_b = run_module.run_grid, []
+
+    def and_another_campaign_meanwhile(campaign, runner, points):
+        grid(campaign, runner, points)
+        if campaign is a:
+            tables_of_b.append(run_module.run_campaign(b, ws, workers=1)[0]["table"])
+
+    monkeypatch.setattr(run_module, "run_grid", and_another_campaign_meanwhile)
+    table_of_a = run_module.run_campaign(a, ws, workers=1)[0]["table"]
+    assert table_of_a["loading.amplitude"].tolist() == [10.0, 20.0, 30.0]
+    assert tables_of_b[0]["loading.amplitude"].tolist() == [40.0]
+    assert set(table_of_a["status"]) == {"done"}
+
+
+# ------------------------------------------------------------ "auto" beside numbers
+
+#: the scene keys that take "auto" (the planner's choice) and a strategy of their other values
+AUTO_KEYS = {
+    "chain.beads": st.integers(1, 10**6),
+    "run.end_time": st.floats(1e-9, 1.0),
+    "run.timestep": st.floats(1e-15, 1e-6),
+    "outputs.history_interval": st.floats(1e-12, 1e-3),
+    "outputs.dump_interval": st.floats(1e-12, 1e-3),
+}
+
+
+def _workspace_of(tmp_path: Path, params: list[dict]) -> Path:
+    """A workspace whose record has these points (none run yet: every row 'missing')."""
+    import signac
+
+    ws = tmp_path / "ws"
+    ws.mkdir(exist_ok=True)
+    signac.init_project(str(ws))
+    points = [{"params": p, "job": f"{k:032x}", "key": None} for k, p in enumerate(params)]
+    wsp.write_json(ws / wsp.RECORD, {"kind": "grid", "code": {}, "points": points})
+    return ws
+
+
+def _stored_as_given(df, params: list[dict]) -> None:
+    """Each point's value in the stored table: a number as that number, "auto" as NaN with
+    <key>_auto True, in a column of mixed kinds (true, [5, 10]) the value as JSON writes it."""
+    import pandas as pd
+
+    for i, p in enumerate(params):
+        for key, v in p.items():
+            cell = df[key].iloc[i]
+            if f"{key}_auto" in df.columns:
+                assert bool(df[f"{key}_auto"].iloc[i]) == (v == "auto")
+                assert math.isnan(cell) if v == "auto" else cell == float(v)
+            elif isinstance(v, list) or pd.api.types.is_string_dtype(df[key]):
+                assert cell == (v if isinstance(v, str) else json.dumps(v))
+            else:
+                assert cell == v
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    data=st.data(),
+    keys=st.lists(st.sampled_from(sorted(AUTO_KEYS)), min_size=1, max_size=3, unique=True),
+    points=st.integers(1, 5),
+)
+def test_a_key_that_is_auto_at_some_points_and_a_number_at_others_is_stored_and_read(
+    tmp_path_factory, data, keys, points
+):
+    """Every mix of "auto" and numbers of every auto-able key (and peak_force true / a list of
+    contacts): table.csv and table.parquet are written, read back with each point's value, and
+    `campaign table --csv` prints them."""
+    import pandas as pd
+
+    from granchain.campaigns.table import write_tables
+
+    params = []
+    for _ in range(points):
+        p = {k: data.draw(st.one_of(st.just("auto"), AUTO_KEYS[k])) for k in keys}
+        p["outputs.peak_force"] = data.draw(st.one_of(st.booleans(), st.lists(st.integers(1, 99), max_size=3)))
+        params.append(p)
+    ws = _workspace_of(tmp_path_factory.mktemp("auto"), params)
+    write_tables(ws)
+    _stored_as_given(pd.read_parquet(ws / "table.parquet"), params)
+    csv = pd.read_csv(ws / "table.csv")
+    for key in keys:
+        assert csv[key].tolist() == pytest.approx(pd.read_parquet(ws / "table.parquet")[key].tolist(), nan_ok=True)
+    assert main(["campaign", "table", str(ws), "--csv"]) == 0
+
+
+def test_a_campaign_varying_end_time_between_auto_and_a_number_runs_and_its_table_reads(tmp_path, capsys):
+    """end_time "auto" and 1e-4, peak_force true and [5, 10]: 4 points run, the table is written
+    (it was an ArrowTypeError after every point had run), and `campaign table` reads it."""
+    import pandas as pd
+
+    f = tmp_path / "c.toml"
+    f.write_text(campaign_text('[vary]\n"run.end_time" = ["auto", 1e-4]\n"outputs.peak_force" = [true, [5, 10]]\n'))
+    assert main(["campaign", "run", str(f), "--out", str(tmp_path / "ws"), "--workers", "1"]) == 0
+    df = pd.read_parquet(tmp_path / "ws" / "table.parquet")
+    assert df["run.end_time_auto"].tolist() == [True, True, False, False]
+    assert df["run.end_time"].tolist()[2:] == [1e-4, 1e-4]
+    assert df["outputs.peak_force"].tolist() == ["true", "[5, 10]"] * 2
+    assert set(df["status"]) == {"done"}
+    capsys.readouterr()
+    assert main(["campaign", "table", str(tmp_path / "ws")]) == 0
+    assert "run.end_time_auto" in capsys.readouterr().out
