@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import textwrap
 from pathlib import Path
 
@@ -13,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from granchain.campaigns import workspace as wsp
-from granchain.campaigns.spec import parse_campaign
+from granchain.campaigns.spec import CampaignError, parse_campaign
 from granchain.cli import main
 
 from .conftest import CAMPAIGN_SCENE
@@ -137,3 +138,72 @@ def test_a_campaign_varying_end_time_between_auto_and_a_number_runs_and_its_tabl
     capsys.readouterr()
     assert main(["campaign", "table", str(tmp_path / "ws")]) == 0
     assert "run.end_time_auto" in capsys.readouterr().out
+
+
+# ------------------------------------------------------------ a derived integer key
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(0, 4000), offset=st.sampled_from([0.0, 0.5, 0.25]))
+def test_a_derived_integral_value_of_an_integer_key_is_that_integer(n, offset):
+    """[derive] "chain.beads" = "2 * n + 6": 2 n + 6 beads (a float 20.0 from the expression was
+    refused: 'an integer'); 2 n + 6.5 is refused, naming the key and what it takes."""
+    text = campaign_text(f'[vary]\nn = [{n}]\n[derive]\n"chain.beads" = "2 * n + 6 + {offset}"\n')
+    if offset:
+        with pytest.raises(CampaignError, match=rf"\[chain\] beads = {2 * n + 6 + offset!r} is invalid: an integer"):
+            parse_campaign(text).points()
+        return
+    (point,) = parse_campaign(text).points()
+    assert point.scene.chain.beads == 2 * n + 6
+    assert type(point.params["chain.beads"]) is int
+
+
+def test_a_spaced_integer_key_takes_whole_numbers():
+    """{ linear = [8, 32], num = 4 } for chain.beads: 8, 16, 24, 32 beads (not 8.0, ... refused)."""
+    c = parse_campaign(campaign_text('[vary]\n"chain.beads" = { linear = [8, 32], num = 4 }\n'))
+    assert [p.scene.chain.beads for p in c.points()] == [8, 16, 24, 32]
+
+
+# ------------------------------------------------------------ a varied taper
+
+TAPERED = CAMPAIGN_SCENE.replace('material = "brass"\n', 'material = "brass"\ntaper = 0.97\n')
+
+
+@settings(max_examples=20, deadline=None)
+@given(taper=st.floats(0.8, 1.05), beads=st.integers(6, 40), how=st.sampled_from(["inline", "file", "bundled"]))
+def test_a_varied_taper_is_the_scene_file_with_that_taper(tmp_path_factory, taper, beads, how):
+    """Varying chain.taper (and chain.beads) over a tapered base: each point's scene is the scene that
+    the base's file with those values parses to (every value was refused: 'a rule for a single
+    nominal radius and a given number of beads', the base's taper having become per-bead radii)."""
+    from granchain.scene import SceneError, bundled_scenes, parse_scene, scene_to_dict
+
+    vary = f'[vary]\n"chain.taper" = [{taper!r}]\n"chain.beads" = [{beads}]\n'
+    if how == "inline":
+        text, base = campaign_text(vary, scene=TAPERED), TAPERED
+    else:
+        d = tmp_path_factory.mktemp("taper")
+        base = TAPERED if how == "file" else bundled_scenes()["classic-struck-taper"]
+        (d / "base.toml").write_text(base)
+        name = "base.toml" if how == "file" else "classic-struck-taper"
+        text = f'[campaign]\nbase = "{name}"\n{QUICK}\n\n{vary}'
+    edited = base.replace("taper = 0.97\n", f"taper = {taper!r}\n").replace("taper = 0.9 ", f"taper = {taper!r} ")
+    edited = edited.replace("beads = 20\n", f"beads = {beads}\n")
+    base_dir = None if how == "inline" else d
+    try:
+        expected = scene_to_dict(parse_scene(edited))
+    except SceneError as e:  # the file refuses it: so does the campaign, for the same reason
+        with pytest.raises(CampaignError, match="is not a valid scene: " + re.escape(str(e).split(": ", 1)[1])):
+            parse_campaign(text, base_dir=base_dir).points()
+        return
+    (point,) = parse_campaign(text, base_dir=base_dir).points()
+    assert point.scene_dict == expected
+
+
+def test_a_campaign_varying_the_taper_of_a_tapered_chain_runs(tmp_path):
+    import granchain
+
+    f = tmp_path / "c.toml"
+    f.write_text(campaign_text('[vary]\n"chain.taper" = [0.95, 1.0]\n', scene=TAPERED))
+    df = granchain.campaign(str(f), tmp_path / "ws", workers=1)
+    assert set(df["status"]) == {"done"}
+    assert df["chain.taper"].tolist() == [0.95, 1.0]
