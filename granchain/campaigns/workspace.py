@@ -66,6 +66,7 @@ WORKSPACE_NAMES = (
     "plots",
     "workspace",
     ".signac",
+    ".signac/config",  # signac reads it: a link there would have it read a file outside the workspace
     DAMAGED,
 )
 #: the most read from one JSON file of a workspace (bytes)
@@ -311,7 +312,7 @@ def _signac(open_project, ws: Path, **kw):
 
     try:
         return open_project(str(ws), **kw)
-    except (Error, ValueError, OSError) as e:  # (a config that is not UTF-8 is signac's UnicodeDecodeError)
+    except (Error, ValueError, OSError, LookupError) as e:  # (not UTF-8: UnicodeDecodeError; no config: LookupError)
         why = " ".join(str(e).split())[:200]
         raise CampaignError(
             f"{ws / '.signac' / 'config'}: signac cannot open the workspace ({why}); it is damaged or another "
