@@ -137,7 +137,9 @@ def test_a_campaign_varying_end_time_between_auto_and_a_number_runs_and_its_tabl
     assert set(df["status"]) == {"done"}
     capsys.readouterr()
     assert main(["campaign", "table", str(tmp_path / "ws")]) == 0
-    assert "run.end_time_auto" in capsys.readouterr().out
+    lines = capsys.readouterr().out.splitlines()  # the terminal view: "auto" where the point left it "auto"
+    assert lines[0].split()[0] == "run.end_time"
+    assert [line.split()[0] for line in lines[1:]] == ["auto", "auto", "0.0001", "0.0001"]
 
 
 # ------------------------------------------------------------ a derived integer key

@@ -3,6 +3,8 @@ r"""The campaign table: one row per point, read from the workspace (its run dire
 Columns, in order:
 
 * the point's parameters: every [vary], [zip], searched and [derive] key (dotted scene keys as written);
+  a key "auto" at some points and a number at others as the number (NaN for "auto") and ``<key>_auto``,
+  one of other mixed values (``peak_force = [true, [5, 10]]``) as JSON text (storable);
 * ``status``: done, failed (the message is in ``message``), missing (not run yet, or lost), stale
   (not computed by this code; a result of another granchain or plugin version exists);
 * ``pulses`` and ``regime``: distinct pulses in the dynamic force (F - F0 on a precompressed chain)
@@ -317,10 +319,14 @@ def printable(text: str) -> str:
 def format_table(df, columns: list[str] | None = None, max_rows: int = 60) -> str:
     """A short text view for the terminal: the parameters, status, regime and the observables that
     have values (with their errors)."""
-    if columns is None:
-        columns = [c for c in df.columns if c not in ("job", "warnings", "message")]
-        columns = [c for c in columns if not df[c].isna().all()]
-    view = df[columns].head(max_rows)
+    autos = [c for c in df.columns if c.endswith("_auto") and c[: -len("_auto")] in df.columns]
+    if columns is None:  # (a key's <key>_auto shows as "auto" in the key's own column)
+        columns = [c for c in df.columns if c not in ("job", "warnings", "message", *autos)]
+        columns = [c for c in columns if not df[c].isna().all() or f"{c}_auto" in autos]
+    view = df[columns].head(max_rows).astype(object)
+    for c in autos:
+        if c[: -len("_auto")] in columns:
+            view[c[: -len("_auto")]] = view[c[: -len("_auto")]].where(~df[c].head(max_rows).astype(bool), "auto")
 
     def fmt(v):
         if v is None or (isinstance(v, float) and math.isnan(v)):
