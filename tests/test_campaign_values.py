@@ -140,6 +140,13 @@ def test_a_campaign_varying_end_time_between_auto_and_a_number_runs_and_its_tabl
     lines = capsys.readouterr().out.splitlines()  # the terminal view: "auto" where the point left it "auto"
     assert lines[0].split()[0] == "run.end_time"
     assert [line.split()[0] for line in lines[1:]] == ["auto", "auto", "0.0001", "0.0001"]
+    plot = ["campaign", "plot", str(tmp_path / "ws"), "--y", "max_peak_force"]
+    assert main([*plot, "--x", "run.end_time", "--hue", "outputs.peak_force"]) == 0
+    capsys.readouterr()
+    assert main([*plot, "--x", "outputs.peak_force"]) == 2  # text on an axis: one message (a ValueError traceback)
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith("granchain: error: ")
+    assert "--x 'outputs.peak_force' is not a column of numbers" in line
 
 
 # ------------------------------------------------------------ a derived integer key
