@@ -15,7 +15,7 @@ import tempfile
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from granchain.campaigns import workspace as wsp
@@ -151,18 +151,21 @@ _TARGETS = [
     (".", "table.csv"),
     (".", "table.parquet"),
 ]
+
+
+def _nested(depth: int) -> str:
+    return "[" * depth + "]" * depth
+
+
 _WRONG = st.one_of(
     st.none(),
     st.booleans(),
     st.integers(-(2**70), 2**70),
     st.floats(allow_nan=True, allow_infinity=True),
     st.text(max_size=8),
-    st.sampled_from([[], {}, [1, "a", None], {"x": [1]}, "auto", "\ud800"]),
+    st.sampled_from([[], {}, [1, "a", None], {"x": [1]}, "auto", "\ud800", "search", [{"a": 1}, {"a": "x", "b": [2]}]]),
+    st.sampled_from([400, 900, 990]).map(lambda n: json.loads(_nested(n))),
 )
-
-
-def _nested(depth: int) -> str:
-    return "[" * depth + "]" * depth
 
 
 _DAMAGE = st.one_of(
@@ -226,6 +229,9 @@ def _damage(ws: Path, where: str, name: str, how: tuple, victim: Path) -> None:
     damages=st.lists(st.tuples(st.sampled_from(_TARGETS), _DAMAGE), min_size=1, max_size=3),
     csv=st.booleans(),
 )
+@example(damages=[(("job", wsp.STATEPOINT), ("retype", (51806, True)))], csv=False)  # outputs = true: AttributeError
+@example(damages=[((".", ".signac/config"), ("link", "dangling"))], csv=True)  # signac's LookupError
+@example(damages=[((".", wsp.RECORD), ("retype", (3, [{"a": 1}, {"a": "x"}])))], csv=True)
 def test_campaign_table_of_any_damaged_workspace_is_a_table_or_one_error_line(
     made, tmp_path_factory, capsys, damages, csv
 ):

@@ -69,7 +69,7 @@ def regime_contact(record: dict, sp_scene: dict) -> int | None:
     rc = record.get("regime_contact")
     if rc is not None:
         return rc
-    hist = (sp_scene.get("outputs") or {}).get("histories") or []
+    hist = _dict(_dict(sp_scene).get("outputs")).get("histories") or []
     return int(hist[-1]) if hist else None
 
 
@@ -98,16 +98,15 @@ def point_row(ws: Path, record: dict, entry: dict, stale: dict) -> dict:
 
     row = {k: _scalar(v) for k, v in entry["params"].items()}
     job_dir = ws / "workspace" / entry["job"]
-    sp = wsp.read_json(job_dir / wsp.STATEPOINT)
-    sp = sp if isinstance(sp, dict) else {}
-    state = wsp.job_state(job_dir, sp or None)
+    sp = wsp.read_statepoint(job_dir) or {}  # (a damaged one: the point is missing)
+    state = wsp.job_state(job_dir, sp) if sp else "missing"
     key = entry.get("key") or (wsp.point_key(sp) if sp else None)
     if state == "missing" and key in stale:
         state = "stale"
     row["status"] = state
     summary = wsp.read_json(job_dir / wsp.RUN_DIR / "summary.json") if state == "done" else None
     try:  # the scene's histories, when the job is there
-        contact = regime_contact(record, sp.get("scene") if isinstance(sp.get("scene"), dict) else {})
+        contact = regime_contact(record, sp.get("scene"))
     except (TypeError, ValueError, IndexError):
         contact = None
     row["pulses"], row["regime"] = None, None

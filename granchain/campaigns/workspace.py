@@ -168,24 +168,26 @@ def job_dirs(ws: str | Path) -> dict[str, dict | None]:
     """Job id -> state point of every job directory of the workspace; None for one that is damaged:
     a link, not a directory, or a signac_statepoint.json that does not parse or does not hash to the
     directory's name. Read without signac (which stops at the first damaged one)."""
-    from signac.job import calc_id
-
     out: dict[str, dict | None] = {}
     root = Path(ws) / "workspace"
     if os.path.islink(root) or not root.is_dir():
         return out
     with os.scandir(root) as it:
         for e in it:
-            sp = None
-            if e.is_dir(follow_symlinks=False):
-                sp = read_json(Path(e.path) / STATEPOINT)
-                try:
-                    if not isinstance(sp, dict) or calc_id(sp) != e.name:
-                        sp = None
-                except (TypeError, ValueError, RecursionError):
-                    sp = None
-            out[e.name] = sp
+            out[e.name] = read_statepoint(Path(e.path)) if e.is_dir(follow_symlinks=False) else None
     return out
+
+
+def read_statepoint(job_dir: Path) -> dict | None:
+    """A job directory's state point; None when it is damaged: not a JSON object, or not the state
+    point whose hash names the directory."""
+    from signac.job import calc_id
+
+    sp = read_json(Path(job_dir) / STATEPOINT)
+    try:
+        return sp if isinstance(sp, dict) and calc_id(sp) == Path(job_dir).name else None
+    except (TypeError, ValueError, RecursionError):
+        return None
 
 
 #: a job directory without a state point made within this many seconds is not set aside (another
