@@ -95,6 +95,7 @@ class Runner:
         self.report = RunReport()
         self.in_flight: dict = {}  # future key -> job directory
         self.token = uuid.uuid4().hex  # this campaign run's: a task Dask runs twice finds its own result
+        self.record: dict | None = None  # campaign.json as this run wrote it last (run.write_record)
 
     def submit(self, job, point: Point):
         """Submit one point's run (the job directory counts as in flight until collected)."""

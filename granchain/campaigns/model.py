@@ -11,6 +11,7 @@ from typing import Any
 from granchain.campaigns import expr
 from granchain.exceptions import GranchainError
 from granchain.scene import Scene, SceneError, scene_from_dict, scene_to_dict
+from granchain.scene.section import _shown
 
 
 class CampaignError(GranchainError, ValueError):
@@ -32,7 +33,9 @@ class CampaignInterrupted(KeyboardInterrupt):
 
 
 def _num_text(v: Any) -> str:
-    return f"{v:.6g}" if isinstance(v, float) else repr(v) if isinstance(v, str) else str(v)
+    """A parameter's value in a message: a float to 6 digits, anything else as its repr, shortened (a
+    list of a million values is not a message of megabytes)."""
+    return f"{v:.6g}" if isinstance(v, float) else str(v) if isinstance(v, int) else _shown(v)
 
 
 def params_text(params: dict) -> str:
@@ -194,6 +197,11 @@ class Campaign:
         The file's text ("" for a dict), copied into the workspace as campaign.toml.
     base : dict
         The base scene, canonical (granchain.scene.scene_to_dict of the validated scene).
+    base_table : dict or None
+        The base scene's tables as its file (or inline [scene]) writes them: what each point's keys
+        are set on, so that a point is the scene file with those keys written in it (a tapered base
+        keeps its taper rule and nominal radius, which the canonical form writes as per-bead radii);
+        None: the canonical base.
     base_source : str
         Where the base scene came from: a bundled scene's name, a path, or the inline [scene].
     backend : str
@@ -240,6 +248,7 @@ class Campaign:
     title: str = ""
     ranks: int | str = 1  # MPI ranks per point, or "auto" (granchain.campaigns.execute.point_ranks)
     cluster: dict | None = None  # the [cluster] table's values (granchain.campaigns.cluster)
+    base_table: dict | None = None  # the base scene as written: what the points' keys are set on
 
     @property
     def varied_keys(self) -> tuple[str, ...]:
@@ -277,9 +286,9 @@ class Campaign:
                 v = expr.evaluate(d.tree, values, d.text)
             except expr.ExpressionError as e:
                 raise CampaignError(f"{where}: [derive] {d.key!r}: {e}") from None
-            full[d.key] = v
+            full[d.key] = whole(d.key, v)
             values = self._values(full)
-        data = _deep_copy(self.base)
+        data = _deep_copy(self.base if self.base_table is None else self.base_table)
         for key, value in full.items():
             if "." in key:
                 _set_key(data, key, value, where)
@@ -293,6 +302,7 @@ class Campaign:
     def _values(self, params: dict) -> dict:
         """Names an expression may read: the base scene's numbers, the parameters, their short names."""
         values = scene_numbers(self.base)
+        values.update(scene_numbers(self.base_table or {}))  # a tapered chain's nominal radius and taper
         values.update(params)
         shorts: dict[str, list[str]] = {}
         for k in params:
@@ -307,6 +317,19 @@ class Campaign:
         key at both ends of its range are validated by :func:`check_search_points`."""
         grid = self.grid()
         return [self.point(p, i, len(grid)) for i, p in enumerate(grid)]
+
+
+#: the scene keys that take a whole number (granchain.scene: an integer, not a float)
+INTEGER_KEYS = ("chain.beads", "run.stop_after_contact")
+
+
+def whole(key: str, value: Any) -> Any:
+    """A computed value ([derive], a spaced [vary] list) for key: for an integer key, an integral
+    float as that integer (2 * n = 20.0 is 20 beads); anything else as it is (20.5 beads is refused
+    by the scene, naming the key)."""
+    if key in INTEGER_KEYS and isinstance(value, float) and value.is_integer():
+        return int(value)
+    return value
 
 
 def _deep_copy(d):
@@ -343,3 +366,88 @@ def _set_key(data: dict, key: str, value: Any, where: str) -> None:
             )
         node = nxt
     node[parts[-1]] = value
+
+
+#: the most points a campaign may have (a typo in num can ask for millions); counted from the lists'
+#: lengths and num before any value is made
+MAX_POINTS = 100_000
+#: the most beads a campaign point's chain may have when [vary] or [zip] sets chain.beads (one chain
+#: longer than this is one run: granchain run, or granchain submit on a cluster)
+MAX_POINT_BEADS = 10_000_000
+#: the most MPI ranks a point may ask for
+MAX_RANKS = 4096
+
+
+#: the deepest a campaign's tables and lists nest (the file's tables, a [vary] list, a value that is a
+#: list of contacts, an inline [scene]'s per-bead material tables: 6 levels)
+MAX_NESTING = 32
+
+
+def check_nesting(data: dict, source: str) -> None:
+    """Refuse tables and lists nested deeper than MAX_NESTING (without recursing: a dict of the
+    caller's may even contain itself), before any of them is read or shown in a message."""
+    stack = [(data, 1)]
+    while stack:
+        value, depth = stack.pop()
+        if depth > MAX_NESTING:
+            raise CampaignError(
+                f"{source}: nests arrays or tables more than {MAX_NESTING} levels deep; no campaign key takes more "
+                "than a list of values, each a number, a string or a short list (e.g. [outputs] histories)"
+            )
+        if isinstance(value, dict):
+            stack.extend((v, depth + 1) for v in value.values())
+        elif isinstance(value, list):
+            stack.extend((v, depth + 1) for v in value)
+
+
+def _length(spec: Any) -> int | None:
+    """How many values a [vary] / [zip] entry makes, read before any is made (None: not a valid entry;
+    _values_of says why)."""
+    if isinstance(spec, list):
+        return len(spec)
+    if isinstance(spec, dict):
+        num = spec.get("num")
+        if isinstance(num, int) and not isinstance(num, bool):
+            return num
+        if isinstance(num, float) and math.isfinite(num) and num >= 1:
+            return math.floor(num)
+    return None
+
+
+def check_size(data: dict, source: str) -> None:
+    """The grid's point count from the lists' lengths and num, before any value is made: a num of
+    1e12 is refused here, naming the key and the limit (not after building a trillion values); so is
+    a varied chain.beads above MAX_POINT_BEADS (its planning alone would not end)."""
+    count = 1
+    for name in ("vary", "zip"):
+        table = data.get(name, {})
+        lengths = []
+        for key, spec in table.items():
+            n = _length(spec)
+            if n is None:
+                continue
+            if n > MAX_POINTS:
+                raise CampaignError(
+                    f"{source}: [{name}] {key!r} makes {n:g} values; a campaign has at most {MAX_POINTS} points "
+                    "(granchain.campaigns.spec.MAX_POINTS): reduce num or the list"
+                )
+            if key == "chain.beads" and isinstance(spec, list):
+                big = [v for v in spec if isinstance(v, int) and not isinstance(v, bool) and v > MAX_POINT_BEADS]
+                if big:
+                    raise CampaignError(
+                        f"{source}: [{name}] 'chain.beads' = {big[0]}: a campaign point has at most "
+                        f"{MAX_POINT_BEADS} beads (granchain.campaigns.spec.MAX_POINT_BEADS); one chain this long "
+                        "is one run: granchain run, or granchain submit on a cluster"
+                    )
+            lengths.append(n)
+        if not lengths:
+            continue
+        count *= max(lengths) if name == "zip" else math.prod(lengths)
+        if count > MAX_POINTS:
+            keys = ", ".join(repr(k) for k in data.get("vary", {})) + (
+                ", [zip] " + ", ".join(repr(k) for k in data.get("zip", {})) if "zip" in data else ""
+            )
+            raise CampaignError(
+                f"{source}: the grid of {keys} has {count:g} points or more; a campaign has at most {MAX_POINTS} "
+                "(granchain.campaigns.spec.MAX_POINTS): reduce num or the lists"
+            )

@@ -57,10 +57,17 @@ def _write_csv(df, path: Path) -> None:
 
 
 def _check_columns(df, ws, **cols) -> None:
+    """Every column named is the table's; those on an axis (x, y, map) hold numbers (a key of text
+    values, such as peak_force = [true, [5, 10]], can only be --hue)."""
+    numeric = [c for c in df.columns if df[c].dtype.kind in "if"]
     for what, col in cols.items():
         if col is not None and col not in df.columns:
-            numeric = [c for c in df.columns if df[c].dtype.kind in "if"]
             raise CampaignError(f"{ws}: --{what} {col!r} is not a column of the table; columns: {', '.join(numeric)}")
+        if col is not None and what != "hue" and col not in numeric:
+            raise CampaignError(
+                f"{ws}: --{what} {col!r} is not a column of numbers (its values are text); put it on --hue, or "
+                f"choose one of: {', '.join(numeric)}"
+            )
 
 
 def plot_campaign(ws, x: str, y: str, hue: str | None = None, map_key: str | None = None, out=None, formats=("png",)):

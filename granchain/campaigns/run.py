@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import shutil
 import sys
 import time
@@ -67,7 +68,8 @@ def write_record(ws: Path, campaign: Campaign, runner: Runner, entries: list[dic
     """Write campaign.json, the workspace's record of this campaign run: its settings, the code, the
     varied keys, the search, the points in order (entries: {"params", "job", "key"}) and a search's
     rows. Written before the points run and kept current, so that the table can be read meanwhile
-    and after a killed driver."""
+    and after a killed driver; kept as runner.record too (as campaign.json reads back), the record
+    this run's table is made from: another campaign run into the same workspace rewrites the file."""
     record = {
         "schema": wsp.RECORD_SCHEMA,
         "kind": campaign.kind,
@@ -94,6 +96,7 @@ def write_record(ws: Path, campaign: Campaign, runner: Runner, entries: list[dic
         "points": entries,
         "search_results": search_rows,
     }
+    runner.record = json.loads(json.dumps(record, default=wsp.plain))
     wsp.write_json(ws / wsp.RECORD, record)
 
 
@@ -168,13 +171,13 @@ def run_campaign(
         ex.check_failure()  # every batch job ended, none may be replaced: the points not run are missing
     except CampaignError:
         ex.close()
-        write_tables(ws)
+        write_tables(ws, runner.record)
         raise
     except KeyboardInterrupt:
         raise CampaignInterrupted(_stop_interrupted(campaign, runner, ex, ws)) from None
     finally:
         ex.close()
-    tables = write_tables(ws)
+    tables = write_tables(ws, runner.record)
     _say_failures(runner)
     return tables, runner.report
 
@@ -222,7 +225,7 @@ def _stop_interrupted(campaign: Campaign, runner: Runner, ex: Executor, ws: Path
     ex.close()
     runner.forget_interrupted(interrupted)
     if campaign.kind == "grid":
-        write_tables(ws)
+        write_tables(ws, runner.record)
     if ex.jobs is not None and ex.jobs.jobs:
         runner.say(f"campaign interrupted: cancelled its worker jobs {', '.join(ex.jobs.jobs)} (only those)")
     return runner.say(

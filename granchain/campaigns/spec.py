@@ -62,6 +62,9 @@ from granchain import safe_files
 from granchain.backends import BACKENDS, METHODS
 from granchain.campaigns import expr
 from granchain.campaigns.model import (
+    MAX_POINT_BEADS,
+    MAX_POINTS,
+    MAX_RANKS,
     Axis,
     Campaign,
     CampaignError,
@@ -69,8 +72,11 @@ from granchain.campaigns.model import (
     Point,
     Predicate,
     Search,
+    check_nesting,
+    check_size,
     params_text,
     scene_numbers,
+    whole,
 )
 from granchain.scene import (
     MAX_SCENE_BYTES,
@@ -101,14 +107,6 @@ OBSERVABLES = (
     "max_peak_contact",
 )
 OPS = (">", ">=", "<", "<=", "==", "!=")
-#: the most points a campaign may have (a typo in num can ask for millions); counted from the lists'
-#: lengths and num before any value is made
-MAX_POINTS = 100_000
-#: the most beads a campaign point's chain may have when [vary] or [zip] sets chain.beads (one chain
-#: longer than this is one run: granchain run, or granchain submit on a cluster)
-MAX_POINT_BEADS = 10_000_000
-#: the most MPI ranks a point may ask for
-MAX_RANKS = 4096
 
 
 def load_campaign_file(path: str | Path) -> Campaign:
@@ -118,10 +116,21 @@ def load_campaign_file(path: str | Path) -> Campaign:
     if not p.is_file():
         raise CampaignError(f"{p}: no such campaign file; give the path of a .toml campaign (docs/campaigns.md)")
     try:
-        text = p.read_text(encoding="utf-8")
+        with open(p, "rb") as fh:
+            data = fh.read(MAX_SCENE_BYTES + 1)  # at most the limit: a file of gigabytes is not read whole
+        text = data.decode("utf-8") if len(data) <= MAX_SCENE_BYTES else ""
     except (OSError, UnicodeDecodeError) as e:
         raise CampaignError(f"{p}: cannot be read as UTF-8 text ({e})") from None
+    if len(data) > MAX_SCENE_BYTES:
+        raise CampaignError(_too_large(str(p)))
     return parse_campaign(text, source=str(p), base_dir=p.parent)
+
+
+def _too_large(source: str) -> str:
+    return (
+        f"{source}: is over {MAX_SCENE_BYTES:,} bytes; a campaign file, like a scene file, is text of at most that "
+        "(a [vary] list of 100,000 values takes about 2 MB)"
+    )
 
 
 def parse_campaign(text: str, source: str = "<campaign>", base_dir: str | Path | None = None) -> Campaign:
@@ -147,10 +156,17 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: str | Path |
     CampaignError
         The text is not TOML or not a valid campaign.
     """
+    if len(text) > MAX_SCENE_BYTES or len(text.encode("utf-8", "surrogatepass")) > MAX_SCENE_BYTES:
+        raise CampaignError(_too_large(source))
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise CampaignError(f"{source}: is not valid TOML: {e}") from None
+    except RecursionError:  # the TOML reader recurses once per level of nested arrays or tables
+        raise CampaignError(
+            f"{source}: nests arrays or tables too deeply for a campaign file (hundreds of levels); no campaign "
+            "key takes more than a list of values, each a number, a string or a short list"
+        ) from None
     return campaign_from_dict(data, source=source, base_dir=base_dir, text=text)
 
 
@@ -160,6 +176,7 @@ def campaign_from_dict(
     """A validated campaign from its tables (the TOML file's content as a dict)."""
     if not isinstance(data, dict):
         raise CampaignError(f"{source}: a campaign is a table with [campaign] and [vary] (or [search])")
+    check_nesting(data, source)
     for key in data:
         if key not in TABLES:
             raise CampaignError(
@@ -184,7 +201,7 @@ def campaign_from_dict(
         except ClusterError as e:
             raise CampaignError(str(e)) from None
     axes = _read_axes(data, source)
-    base, base_source = _read_base(c, data.get("scene"), source, base_dir)
+    base, base_source, base_table = _read_base(c, data.get("scene"), source, base_dir)
     kind = c.get("kind", "search" if "search" in data else "grid")
     if kind not in KINDS:
         raise CampaignError(f"{source}: [campaign] kind = {kind!r} is invalid: 'grid' or 'search'")
@@ -200,11 +217,14 @@ def campaign_from_dict(
     grid_keys = [k for a in axes for k in a.keys]
     if search is not None and search.key in grid_keys:
         raise CampaignError(f"{source}: [search] key {search.key!r} is also varied in [vary]/[zip]; drop it there")
-    derive = _read_derive(data.get("derive", {}), grid_keys + ([search.key] if search else []), base, source)
+    derive = _read_derive(
+        data.get("derive", {}), grid_keys + ([search.key] if search else []), (base, base_table), source
+    )
     return Campaign(
         source=source,
         text=text if text is not None else "",
         base=base,
+        base_table=base_table,
         base_source=base_source,
         kind=kind,
         axes=tuple(axes),
@@ -277,10 +297,10 @@ def _read_axes(data: dict, source: str) -> list[Axis]:
     for name in ("vary", "zip"):
         if name in data and not data[name]:
             raise CampaignError(f"{source}: [{name}] is empty: the grid has no points; give each key a list of values")
-    _check_size(data, source)
+    check_size(data, source)
     for key, spec in data.get("vary", {}).items():
         _check_key(key, "vary", source)
-        values = _values_of(spec, f"{source}: [vary] {key!r}")
+        values = _spaced(key, spec, _values_of(spec, f"{source}: [vary] {key!r}"))
         axes.append(Axis((key,), tuple((v,) for v in values)))
     if "zip" in data:
         cols = {}
@@ -288,7 +308,7 @@ def _read_axes(data: dict, source: str) -> list[Axis]:
             _check_key(key, "zip", source)
             if key in {a.keys[0] for a in axes}:
                 raise CampaignError(f"{source}: {key!r} is in both [vary] and [zip]; keep it in one")
-            cols[key] = _values_of(spec, f"{source}: [zip] {key!r}")
+            cols[key] = _spaced(key, spec, _values_of(spec, f"{source}: [zip] {key!r}"))
         lengths = {k: len(v) for k, v in cols.items()}
         if len(set(lengths.values())) > 1:
             raise CampaignError(
@@ -299,60 +319,9 @@ def _read_axes(data: dict, source: str) -> list[Axis]:
     return axes
 
 
-def _length(spec: Any) -> int | None:
-    """How many values a [vary] / [zip] entry makes, read before any is made (None: not a valid entry;
-    _values_of says why)."""
-    if isinstance(spec, list):
-        return len(spec)
-    if isinstance(spec, dict):
-        num = spec.get("num")
-        if isinstance(num, int) and not isinstance(num, bool):
-            return num
-        if isinstance(num, float) and math.isfinite(num) and num >= 1:
-            return math.floor(num)
-    return None
-
-
-def _check_size(data: dict, source: str) -> None:
-    """The grid's point count from the lists' lengths and num, before any value is made: a num of
-    1e12 is refused here, naming the key and the limit (not after building a trillion values); so is
-    a varied chain.beads above MAX_POINT_BEADS (its planning alone would not end)."""
-    count = 1
-    for name in ("vary", "zip"):
-        table = data.get(name, {})
-        lengths = []
-        for key, spec in table.items():
-            n = _length(spec)
-            if n is None:
-                continue
-            if n > MAX_POINTS:
-                raise CampaignError(
-                    f"{source}: [{name}] {key!r} makes {n:g} values; a campaign has at most {MAX_POINTS} points "
-                    "(granchain.campaigns.spec.MAX_POINTS): reduce num or the list"
-                )
-            if key == "chain.beads" and isinstance(spec, list):
-                big = [v for v in spec if isinstance(v, int) and not isinstance(v, bool) and v > MAX_POINT_BEADS]
-                if big:
-                    raise CampaignError(
-                        f"{source}: [{name}] 'chain.beads' = {big[0]}: a campaign point has at most "
-                        f"{MAX_POINT_BEADS} beads (granchain.campaigns.spec.MAX_POINT_BEADS); one chain this long "
-                        "is one run: granchain run, or granchain submit on a cluster"
-                    )
-            lengths.append(n)
-        if not lengths:
-            continue
-        count *= max(lengths) if name == "zip" else math.prod(lengths)
-        if count > MAX_POINTS:
-            keys = ", ".join(repr(k) for k in data.get("vary", {})) + (
-                ", [zip] " + ", ".join(repr(k) for k in data.get("zip", {})) if "zip" in data else ""
-            )
-            raise CampaignError(
-                f"{source}: the grid of {keys} has {count:g} points or more; a campaign has at most {MAX_POINTS} "
-                "(granchain.campaigns.spec.MAX_POINTS): reduce num or the lists"
-            )
-
-
-def _read_base(c: dict, inline: dict | None, source: str, base_dir) -> tuple[dict, str]:
+def _read_base(c: dict, inline: dict | None, source: str, base_dir) -> tuple[dict, str, dict]:
+    """The base scene: canonical (scene_to_dict), where it came from, and its tables as written (a
+    taper as its rule, not the radii it makes: what the points' keys are set on)."""
     base = c.get("base")
     if base is not None and inline is not None:
         raise CampaignError(f"{source}: both [campaign] base = {base!r} and an inline [scene]: keep one")
@@ -361,7 +330,7 @@ def _read_base(c: dict, inline: dict | None, source: str, base_dir) -> tuple[dic
             scene = scene_from_dict(inline, source=f"{source} [scene]")
         except SceneError as e:
             raise CampaignError(str(e)) from None
-        return scene_to_dict(scene), f"{source} [scene]"
+        return scene_to_dict(scene), f"{source} [scene]", inline
     if base is None:
         raise CampaignError(
             f"{source}: no base scene: set [campaign] base = a bundled scene name or a path, or give an inline [scene]"
@@ -373,11 +342,16 @@ def _read_base(c: dict, inline: dict | None, source: str, base_dir) -> tuple[dic
             scene = load_scene(base)
         except SceneError as e:
             raise CampaignError(f"{source}: [campaign] base = {base!r}: {e}") from None
-        return scene_to_dict(scene), base
+        return scene_to_dict(scene), base, _tables(scene)
     return _read_base_file(base, source, Path(base_dir))
 
 
-def _read_base_file(base: str, source: str, folder: Path) -> tuple[dict, str]:
+def _tables(scene) -> dict:
+    """A parsed scene's tables as its text writes them."""
+    return tomllib.loads(scene.source_text)
+
+
+def _read_base_file(base: str, source: str, folder: Path) -> tuple[dict, str, dict]:
     """A campaign file's base scene: a bundled scene's name, or a scene file inside the campaign file's
     folder, named relative to it. A campaign file is shared: its base is never read outside that
     folder (no absolute path, no '..', no symbolic link at any part of it, wherever it points), and
@@ -396,7 +370,8 @@ def _read_base_file(base: str, source: str, folder: Path) -> tuple[dict, str]:
                 f"{where}: is neither a bundled scene nor a file beside the campaign file; bundled: "
                 f"{', '.join(scenes)} (or give a .toml file beside the campaign file)"
             )
-        return scene_to_dict(parse_scene(scenes[base], source=f"<bundled scene {base}>")), base
+        scene = parse_scene(scenes[base], source=f"<bundled scene {base}>")
+        return scene_to_dict(scene), base, _tables(scene)
     why = safe_files.escapes(base)
     if why is not None:
         raise CampaignError(f"{where}: {why}; {fix}")
@@ -415,7 +390,7 @@ def _read_base_file(base: str, source: str, folder: Path) -> tuple[dict, str]:
         scene = parse_scene(text, source=str(path))
     except SceneError as e:
         raise CampaignError(f"{where}: {e}") from None
-    return scene_to_dict(scene), str(path)
+    return scene_to_dict(scene), str(path), _tables(scene)
 
 
 def _check_key(key: str, table: str, source: str) -> None:
@@ -433,6 +408,12 @@ def _check_key(key: str, table: str, source: str) -> None:
             f"{_did_you_mean(section, SECTIONS)}a scene key is section.key with section one of "
             f"{', '.join(s for s in SECTIONS if s != 'title')}"
         )
+
+
+def _spaced(key: str, spec: Any, values: list) -> list:
+    """A { log / linear, num } entry's values, for an integer key the integral ones as integers
+    (model.whole); a list's values as written (beads = 20.0 is refused as in a scene file)."""
+    return [whole(key, v) for v in values] if isinstance(spec, dict) else values
 
 
 def _values_of(spec: Any, where: str) -> list:
@@ -479,9 +460,11 @@ def _values_of(spec: Any, where: str) -> list:
     )
 
 
-def _read_derive(table: dict, varied: list[str], base: dict, source: str) -> list[Derived]:
+def _read_derive(table: dict, varied: list[str], bases: tuple[dict, ...], source: str) -> list[Derived]:
+    """The [derive] keys, each expression reading only varied keys, derived keys above it and numbers
+    of the base scene (bases: canonical and as written, Campaign.base and base_table)."""
     out: list[Derived] = []
-    known = set(varied) | set(scene_numbers(base))
+    known = set(varied).union(*(scene_numbers(b) for b in bases))
     shorts: dict[str, list[str]] = {}
     for k in varied:
         shorts.setdefault(k.rsplit(".", 1)[-1], []).append(k)

@@ -3,6 +3,8 @@ r"""The campaign table: one row per point, read from the workspace (its run dire
 Columns, in order:
 
 * the point's parameters: every [vary], [zip], searched and [derive] key (dotted scene keys as written);
+  a key "auto" at some points and a number at others as the number (NaN for "auto") and ``<key>_auto``,
+  one of other mixed values (``peak_force = [true, [5, 10]]``) as JSON text (storable);
 * ``status``: done, failed (the message is in ``message``), missing (not run yet, or lost), stale
   (not computed by this code; a result of another granchain or plugin version exists);
 * ``pulses`` and ``regime``: distinct pulses in the dynamic force (F - F0 on a precompressed chain)
@@ -41,9 +43,18 @@ from granchain.campaigns.spec import OBSERVABLES, CampaignError
 TIMING_COLUMNS = ("wall_time",)  # differ between two runs of the same point; everything else is reproducible
 
 
+#: the whole numbers a table column stores as integers (Parquet's int64); a larger one is a float
+INT64 = range(-(2**63), 2**63)
+
+
 def _number(v):
-    """A number of summary.json as it is; anything else (a damaged file's) as blank."""
-    return v if isinstance(v, (int, float)) and not isinstance(v, bool) else None
+    """A number of summary.json as it is; anything else (a damaged file's) as blank, a whole number
+    too large for int64 as a float (or blank past the floats)."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return None
+    if isinstance(v, int) and v not in INT64:
+        return float(v) if abs(v) < 2**1023 else None
+    return v
 
 
 def _scalar(v):
@@ -58,7 +69,7 @@ def regime_contact(record: dict, sp_scene: dict) -> int | None:
     rc = record.get("regime_contact")
     if rc is not None:
         return rc
-    hist = (sp_scene.get("outputs") or {}).get("histories") or []
+    hist = _dict(_dict(sp_scene).get("outputs")).get("histories") or []
     return int(hist[-1]) if hist else None
 
 
@@ -87,16 +98,15 @@ def point_row(ws: Path, record: dict, entry: dict, stale: dict) -> dict:
 
     row = {k: _scalar(v) for k, v in entry["params"].items()}
     job_dir = ws / "workspace" / entry["job"]
-    sp = wsp.read_json(job_dir / wsp.STATEPOINT)
-    sp = sp if isinstance(sp, dict) else {}
-    state = wsp.job_state(job_dir, sp or None)
+    sp = wsp.read_statepoint(job_dir) or {}  # (a damaged one: the point is missing)
+    state = wsp.job_state(job_dir, sp) if sp else "missing"
     key = entry.get("key") or (wsp.point_key(sp) if sp else None)
     if state == "missing" and key in stale:
         state = "stale"
     row["status"] = state
     summary = wsp.read_json(job_dir / wsp.RUN_DIR / "summary.json") if state == "done" else None
     try:  # the scene's histories, when the job is there
-        contact = regime_contact(record, sp.get("scene") if isinstance(sp.get("scene"), dict) else {})
+        contact = regime_contact(record, sp.get("scene"))
     except (TypeError, ValueError, IndexError):
         contact = None
     row["pulses"], row["regime"] = None, None
@@ -139,35 +149,73 @@ def _dict(x) -> dict:
     return x if isinstance(x, dict) else {}
 
 
-def build_table(ws: str | Path):
-    """The campaign table of a workspace as a pandas DataFrame (one row per point of its record)."""
+def build_table(ws: str | Path, record: dict | None = None):
+    """The campaign table of a workspace as a pandas DataFrame (one row per point of its record).
+
+    record: the points of one campaign run (what its campaign.json was when it wrote it); None, the
+    workspace's campaign.json now. Another campaign run into the same workspace meanwhile rewrites
+    that file: a run's own table is made from its own record."""
     import pandas as pd
 
     ws = Path(ws)
-    record = read_record(ws)
+    record = read_record(ws) if record is None else record
     project = wsp.open_workspace(ws)
     stale = wsp.stale_versions(project, record["code"])
     rows = [point_row(ws, record, e, stale) for e in record["points"]]
-    df = pd.DataFrame(rows)
-    for col in df.columns:  # all-blank columns as float NaN, numbers as numbers (CSV/Parquet types)
-        if df[col].isna().all():
-            df[col] = df[col].astype(float)
-    return df
+    keys = {k for e in record["points"] for k in e["params"]}
+    return storable(pd.DataFrame(rows), keys)
 
 
-def build_search_table(ws: str | Path):
+def build_search_table(ws: str | Path, record: dict | None = None):
     """The search table of a workspace as a pandas DataFrame: one row per outer point (its bracket,
-    transition, runs and status: Bisection.row), as the record keeps it; a CampaignError for a grid."""
+    transition, runs and status: Bisection.row), as the record (build_table) keeps it; a CampaignError
+    for a grid."""
     import pandas as pd
 
-    record = read_record(Path(ws))
+    record = read_record(Path(ws)) if record is None else record
     if record.get("kind") != "search":
         raise CampaignError(f"{ws}: is a {record.get('kind')} campaign; only a search has transitions")
-    rows = record.get("search_results") or []
-    df = pd.DataFrame([{k: _scalar(v) for k, v in r.items()} for r in rows])
-    for col in df.columns:
-        if df[col].isna().all():
+    rows = [r for r in record.get("search_results") or [] if isinstance(r, dict)]
+    return storable(pd.DataFrame([{str(k): _scalar(v) for k, v in r.items()} for r in rows]), set())
+
+
+def _kind(v) -> str | None:
+    """What a table cell holds, for its column's type: None (blank), bool, number, auto or text."""
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return None
+    if isinstance(v, bool):
+        return "bool"
+    if isinstance(v, float) or (isinstance(v, int) and v in INT64):
+        return "number"
+    return "auto" if v == "auto" else "text"
+
+
+def _text(v):
+    """A cell of a column of mixed values as text: a string as it is (a character UTF-8 cannot
+    write, a lone surrogate of a damaged file's JSON, escaped), anything else as JSON writes it
+    (true, 0.0005, [5, 10]); blank stays blank."""
+    if _kind(v) is None:
+        return None
+    text = v if isinstance(v, str) else json.dumps(v)
+    return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def storable(df, keys: set):
+    """df with every column of one type, as CSV and Parquet store it: an all-blank column as float
+    NaN; a parameter (keys) that is "auto" at some points and a number at others as the number
+    (NaN where "auto") and beside it ``<key>_auto`` (True where the point left it "auto"); any other
+    column of mixed values (``peak_force = [true, [5, 10]]``, a damaged file's) as text, each value
+    as JSON writes it."""
+    for col in list(df.columns):
+        kinds = {_kind(v) for v in df[col]} - {None}
+        if not kinds:
             df[col] = df[col].astype(float)
+        elif kinds == {"number", "auto"} and col in keys and f"{col}_auto" not in df.columns:
+            auto = df[col].map(lambda v: v == "auto")
+            df[col] = df[col].map(lambda v: math.nan if _kind(v) in (None, "auto") else float(v)).astype(float)
+            df.insert(df.columns.get_loc(col) + 1, f"{col}_auto", auto)
+        elif len(kinds) > 1 or kinds == {"text"} or kinds == {"auto"}:
+            df[col] = df[col].map(_text).astype(object)
     return df
 
 
@@ -210,15 +258,29 @@ def read_record(ws: Path) -> dict:
     return rec
 
 
-def write_tables(ws: str | Path) -> dict:
-    """Write table.csv and table.parquet (and search.csv / search.parquet); returns the tables."""
+def campaign_tables(ws: str | Path, record: dict | None = None) -> dict:
+    """The tables of a workspace, written nowhere: {"table": ...} and for a search {"search": ...}.
+    record: one campaign run's own (build_table); None, the workspace's campaign.json."""
     ws = Path(ws)
-    tables = {"table": build_table(ws)}
-    if read_record(ws).get("kind") == "search":
-        tables["search"] = build_search_table(ws)
+    record = read_record(ws) if record is None else record
+    tables = {"table": build_table(ws, record)}
+    if record.get("kind") == "search":
+        tables["search"] = build_search_table(ws, record)
+    return tables
+
+
+def save_tables(ws: str | Path, tables: dict) -> None:
+    """Write the tables (campaign_tables) as table.csv and table.parquet (search.csv / search.parquet)."""
     for name, df in tables.items():
-        _write_atomic(df, ws / f"{name}.csv", "csv")
-        _write_atomic(df, ws / f"{name}.parquet", "parquet")
+        _write_atomic(df, Path(ws) / f"{name}.csv", "csv")
+        _write_atomic(df, Path(ws) / f"{name}.parquet", "parquet")
+
+
+def write_tables(ws: str | Path, record: dict | None = None) -> dict:
+    """Write table.csv and table.parquet (and search.csv / search.parquet) of one campaign run's
+    record (build_table; None: the workspace's campaign.json); returns the tables."""
+    tables = campaign_tables(ws, record)
+    save_tables(ws, tables)
     return tables
 
 
@@ -256,10 +318,14 @@ def printable(text: str) -> str:
 def format_table(df, columns: list[str] | None = None, max_rows: int = 60) -> str:
     """A short text view for the terminal: the parameters, status, regime and the observables that
     have values (with their errors)."""
-    if columns is None:
-        columns = [c for c in df.columns if c not in ("job", "warnings", "message")]
-        columns = [c for c in columns if not df[c].isna().all()]
-    view = df[columns].head(max_rows)
+    autos = [c for c in df.columns if c.endswith("_auto") and c[: -len("_auto")] in df.columns]
+    if columns is None:  # (a key's <key>_auto shows as "auto" in the key's own column)
+        columns = [c for c in df.columns if c not in ("job", "warnings", "message", *autos)]
+        columns = [c for c in columns if not df[c].isna().all() or f"{c}_auto" in autos]
+    view = df[columns].head(max_rows).astype(object)
+    for c in autos:
+        if c[: -len("_auto")] in columns:
+            view[c[: -len("_auto")]] = view[c[: -len("_auto")]].where(~df[c].head(max_rows).astype(bool), "auto")
 
     def fmt(v):
         if v is None or (isinstance(v, float) and math.isnan(v)):

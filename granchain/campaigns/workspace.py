@@ -66,6 +66,7 @@ WORKSPACE_NAMES = (
     "plots",
     "workspace",
     ".signac",
+    ".signac/config",  # signac reads it: a link there would have it read a file outside the workspace
     DAMAGED,
 )
 #: the most read from one JSON file of a workspace (bytes)
@@ -127,10 +128,11 @@ def statepoint(scene_dict: dict, backend: str, method: str, rtol: float | None, 
 
 def point_key(sp) -> str:
     """The state point without its code: the same for one point under two versions of granchain."""
-    return json.dumps({k: v for k, v in dict(sp).items() if k != "code"}, sort_keys=True, default=_plain)
+    return json.dumps({k: v for k, v in dict(sp).items() if k != "code"}, sort_keys=True, default=plain)
 
 
-def _plain(o):
+def plain(o):
+    """json.dumps' default for a scene's values: a mapping as a dict, a tuple as a list."""
     if hasattr(o, "items"):
         return dict(o.items())
     if isinstance(o, (list, tuple)):
@@ -166,24 +168,26 @@ def job_dirs(ws: str | Path) -> dict[str, dict | None]:
     """Job id -> state point of every job directory of the workspace; None for one that is damaged:
     a link, not a directory, or a signac_statepoint.json that does not parse or does not hash to the
     directory's name. Read without signac (which stops at the first damaged one)."""
-    from signac.job import calc_id
-
     out: dict[str, dict | None] = {}
     root = Path(ws) / "workspace"
     if os.path.islink(root) or not root.is_dir():
         return out
     with os.scandir(root) as it:
         for e in it:
-            sp = None
-            if e.is_dir(follow_symlinks=False):
-                sp = read_json(Path(e.path) / STATEPOINT)
-                try:
-                    if not isinstance(sp, dict) or calc_id(sp) != e.name:
-                        sp = None
-                except (TypeError, ValueError, RecursionError):
-                    sp = None
-            out[e.name] = sp
+            out[e.name] = read_statepoint(Path(e.path)) if e.is_dir(follow_symlinks=False) else None
     return out
+
+
+def read_statepoint(job_dir: Path) -> dict | None:
+    """A job directory's state point; None when it is damaged: not a JSON object, or not the state
+    point whose hash names the directory."""
+    from signac.job import calc_id
+
+    sp = read_json(Path(job_dir) / STATEPOINT)
+    try:
+        return sp if isinstance(sp, dict) and calc_id(sp) == Path(job_dir).name else None
+    except (TypeError, ValueError, RecursionError):
+        return None
 
 
 #: a job directory without a state point made within this many seconds is not set aside (another
@@ -310,7 +314,7 @@ def _signac(open_project, ws: Path, **kw):
 
     try:
         return open_project(str(ws), **kw)
-    except (Error, ValueError, OSError) as e:  # (a config that is not UTF-8 is signac's UnicodeDecodeError)
+    except (Error, ValueError, OSError, LookupError) as e:  # (not UTF-8: UnicodeDecodeError; no config: LookupError)
         why = " ".join(str(e).split())[:200]
         raise CampaignError(
             f"{ws / '.signac' / 'config'}: signac cannot open the workspace ({why}); it is damaged or another "
@@ -398,7 +402,7 @@ def write_text(path: Path, text: str) -> None:
 def write_json(path: Path, data) -> None:
     """Write aside and rename (a reader never sees half a file, a full disk leaves no temporary
     file); a link at path is refused (a WorkspaceWriteError, as is a file that cannot be written)."""
-    write_text(path, json.dumps(data, indent=1, default=_plain) + "\n")
+    write_text(path, json.dumps(data, indent=1, default=plain) + "\n")
 
 
 def stale_versions(project, code: dict) -> dict[str, dict]:

@@ -69,10 +69,21 @@ def cmd_campaign_run(args) -> int:
 
 
 def cmd_campaign_table(args) -> int:
-    """``granchain campaign table``: a workspace's table (or a search's transitions), also as CSV."""
-    from granchain.campaigns.table import format_table, write_tables
+    """``granchain campaign table``: a workspace's table (or a search's transitions), also as CSV.
+    Only reads the workspace to print it: --csv writes nothing there; without it table.csv and
+    table.parquet are written too, and a workspace that cannot be written (read-only, someone else's,
+    a full disk) is a warning, the table printed all the same."""
+    import warnings
 
-    tables = write_tables(args.workspace)
+    from granchain.campaigns.table import campaign_tables, format_table, save_tables
+    from granchain.campaigns.workspace import WorkspaceWriteError
+
+    tables = campaign_tables(args.workspace)
+    if not args.csv:
+        try:
+            save_tables(args.workspace, tables)
+        except WorkspaceWriteError as e:
+            warnings.warn(f"{e}; the table is printed, not saved", stacklevel=1)
     df = tables["search"] if args.search else tables["table"]
     if args.search and "search" not in tables:
         raise UsageError(f"{args.workspace}: is a grid campaign; --search is for a search campaign's transitions")
