@@ -91,8 +91,8 @@ def point_row(ws: Path, record: dict, entry: dict, stale: dict) -> dict:
     sp = sp if isinstance(sp, dict) else {}
     state = wsp.job_state(job_dir, sp or None)
     key = entry.get("key") or (wsp.point_key(sp) if sp else None)
-    if state == "missing" and key in stale:
-        state = "stale"
+    if state == wsp.MISSING and key in stale:
+        state = wsp.STALE
     row["status"] = state
     summary = wsp.read_json(job_dir / wsp.RUN_DIR / "summary.json") if state == "done" else None
     try:  # the scene's histories, when the job is there

@@ -54,6 +54,9 @@ STATEPOINT = "signac_statepoint.json"
 #: where campaign run moves a damaged job directory (its state point unreadable, or a link) and a
 #: point's run directory that is a link
 DAMAGED = "damaged"
+#: a point's status, in the words of the table's status column (job_state; "stale" is the table's) and
+#: of the progress line: a point lost in flight has no run and no failure.json, so it is missing
+DONE, FAILED, MISSING, STALE = "done", "failed", "missing", "stale"
 #: the names granchain reads or writes at the top of a workspace: none may be a symbolic link
 WORKSPACE_NAMES = (
     "campaign.toml",
@@ -323,14 +326,14 @@ def job_state(job_dir: str | Path, sp: dict | None = None) -> str:
     (failure.json) or 'missing'. sp: the job's state point, read from the job directory if not given."""
     d = Path(job_dir)
     if os.path.islink(d) or not d.is_dir():
-        return "missing"
+        return MISSING
     if sp is None:
         sp = read_json(d / STATEPOINT)
     if isinstance(sp, dict) and run_is_complete(d / RUN_DIR, sp):
-        return "done"
+        return DONE
     if isinstance(read_json(d / FAILURE), dict):
-        return "failed"
-    return "missing"
+        return FAILED
+    return MISSING
 
 
 def run_is_complete(run: Path, sp: dict) -> bool:
