@@ -29,6 +29,12 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from granchain.campaigns.cluster_security import (
+    campaign_security,
+    private_cluster_class,
+    private_directory,
+    remove_directory,
+)
 from granchain.campaigns.cluster_settings import (
     SUBMIT,
     ClusterError,
@@ -170,6 +176,7 @@ class JobCluster:
         self.counts = JobCounts()
         self._last_poll = 0.0
         self._closed = False
+        self.private: Path | None = None  # the key files' and job scripts' directory (private_directory)
 
     # ---------------------------------------------------------------------------- start and close
     def start(self):
@@ -189,10 +196,14 @@ class JobCluster:
 
             check_not_link(self.log_directory)  # the jobs' output is written there: not through a planted link
             self.log_directory.mkdir(parents=True, exist_ok=True)
+        # TLS (granchain.campaigns.cluster_security): the scheduler binds the cluster's network, where
+        # anyone reaching it would run code as the user; the jobs' key files and scripts go in a
+        # directory of mode 0700 beside their output (on the filesystem the jobs share)
+        self.private = private_directory(self, self.log_directory)
         # a job that ended is noticed by the driver's own poll (replace_ended); Dask's own timeout before
         # it closes a lost worker's job object stays, but the driver does not wait for it
         dask.config.set({"distributed.scheduler.allowed-failures": 3})
-        cls = self._cluster_class()
+        cls = private_cluster_class(self._cluster_class(), self.private)
         cores = s.cores(self.ranks)
         processes = s.workers_per_job(self.ranks)
         prologue = [
@@ -216,6 +227,8 @@ class JobCluster:
             log_directory=str(self.log_directory) if self.log_directory else None,
             scheduler_options={"dashboard_address": None},
             death_timeout=60,
+            security=campaign_security(),
+            shared_temp_directory=str(self.private),  # the key files, mode 0600 (dask-jobqueue's)
         )
         if s.memory is None and s.kind == "slurm":
             # no --mem unless asked for: the partition's default applies (a node declared without
@@ -230,6 +243,7 @@ class JobCluster:
         try:
             self.cluster = cls(**kwargs)
         except (ValueError, OSError) as e:
+            remove_directory(self.private, self.cluster)
             raise ClusterError(f"--cluster {s.kind}: cannot start the scheduler ({e})") from None
         self._submit(s.jobs)
         return Client(self.cluster)
@@ -290,6 +304,7 @@ class JobCluster:
             except Exception:  # noqa: BLE001
                 pass
         self.cancel_all()
+        remove_directory(self.private, self.cluster)  # the jobs are cancelled: their key files go
 
     def cancel_all(self) -> list[str]:
         """Cancel the jobs this run submitted that are still queued or running; returns their ids."""
