@@ -7,6 +7,7 @@ import io
 
 import pytest
 
+from granchain.campaigns import model
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.campaign_progress import CampaignProgress
 from granchain.campaigns.dask_executor import Executor
@@ -43,7 +44,9 @@ def test_progress_words_are_the_table_status_of_the_same_points(tmp_path, monkey
 
     monkeypatch.setattr(progress, "DELAY", 0.0)
     monkeypatch.setattr(progress, "is_quiet", lambda: False)
-    c = parse_campaign(campaign_text(THREE, campaign='backend = "reference"\nmethod = "verlet"\nerror_estimate = false'))
+    c = parse_campaign(
+        campaign_text(THREE, campaign='backend = "reference"\nmethod = "verlet"\nerror_estimate = false')
+    )
     runner = Runner(c, tmp_path / "ws", Executor(workers=1), stream=io.StringIO())
     stream = io.StringIO()
     prog = CampaignProgress(3, stream=stream)
@@ -58,7 +61,7 @@ def test_progress_words_are_the_table_status_of_the_same_points(tmp_path, monkey
     prog.close()
     line = stream.getvalue().strip().splitlines()[-1]
     table_words = [wsp.job_state(job.path) for job in jobs]
-    assert table_words == [wsp.DONE, wsp.FAILED, wsp.MISSING]
+    assert table_words == [model.DONE, model.FAILED, model.MISSING]
     for word in set(table_words):
         assert f"{word} {table_words.count(word)}" in line, line
     assert (runner.report.done, runner.report.failed, runner.report.lost) == (1, 1, 1)
@@ -70,4 +73,4 @@ def test_every_outcome_has_a_table_word(outcome):
     prog = CampaignProgress(1, stream=io.StringIO())
     prog.update(outcome)
     (word,) = [w for w, n in prog.finished.items() if n]
-    assert word in (wsp.DONE, wsp.FAILED, wsp.MISSING, wsp.STALE)
+    assert word in (model.DONE, model.FAILED, model.MISSING, model.STALE)

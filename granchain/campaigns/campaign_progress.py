@@ -9,7 +9,7 @@ import time
 from tqdm import tqdm
 
 from granchain import progress
-from granchain.campaigns.workspace import DONE, FAILED, MISSING
+from granchain.campaigns.model import DONE, FAILED, MISSING
 
 #: the outcome of a point's task (point_task.run_point's status; "lost": no result came back) as the
 #: table's status column names it: a lost point has neither a run nor a failure.json, so it is missing

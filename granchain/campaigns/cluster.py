@@ -26,23 +26,22 @@ from __future__ import annotations
 import shutil
 import subprocess
 import time
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 
-from granchain.campaigns.cluster_security import (
-    campaign_security,
-    private_cluster_class,
-    private_directory,
-    remove_directory,
-)
 from granchain.campaigns.cluster_settings import (
     SUBMIT,
     ClusterError,
     ClusterSettings,
+    campaign_security,
     check,
     describe,
     from_table,
     merge,
+    private_cluster_class,
+    private_directory,
+    remove_directory,
 )
 from granchain.exceptions import GranchainError
 
@@ -196,10 +195,10 @@ class JobCluster:
 
             check_not_link(self.log_directory)  # the jobs' output is written there: not through a planted link
             self.log_directory.mkdir(parents=True, exist_ok=True)
-        # TLS (granchain.campaigns.cluster_security): the scheduler binds the cluster's network, where
+        # TLS (granchain.campaigns.cluster_settings): the scheduler binds the cluster's network, where
         # anyone reaching it would run code as the user; the jobs' key files and scripts go in a
         # directory of mode 0700 beside their output (on the filesystem the jobs share)
-        self.private = private_directory(self, self.log_directory)
+        self.private = private_directory(self.log_directory)
         # a job that ended is noticed by the driver's own poll (replace_ended); Dask's own timeout before
         # it closes a lost worker's job object stays, but the driver does not wait for it
         dask.config.set({"distributed.scheduler.allowed-failures": 3})
@@ -243,8 +242,10 @@ class JobCluster:
         try:
             self.cluster = cls(**kwargs)
         except (ValueError, OSError) as e:
-            remove_directory(self.private, self.cluster)
+            remove_directory(self.private)
             raise ClusterError(f"--cluster {s.kind}: cannot start the scheduler ({e})") from None
+        # the key files go when this object does, if close() is never called (the API's callers)
+        weakref.finalize(self, remove_directory, self.private, self.cluster)
         self._submit(s.jobs)
         return Client(self.cluster)
 

@@ -14,7 +14,7 @@ from distributed.diagnostics.plugin import WorkerPlugin
 from typing_extensions import override
 
 from granchain.campaigns.cluster import ClusterSettings, JobCluster, NoWorkerJobs
-from granchain.campaigns.cluster_security import campaign_security
+from granchain.campaigns.cluster_settings import campaign_security
 from granchain.campaigns.model import CampaignError
 from granchain.campaigns.point_task import run_point
 
@@ -213,7 +213,7 @@ class Executor:
         self._loop = _loop_blocking_sigint()
         made: dict = {}
         # TLS with this run's own certificate: a plain tcp:// scheduler on a shared machine runs the code
-        # of any local user who connects (granchain.campaigns.cluster_security)
+        # of any local user who connects (granchain.campaigns.cluster_settings)
         security = campaign_security()
 
         def make() -> None:

@@ -44,7 +44,7 @@ from pathlib import Path
 from granchain import safe_files
 from granchain._version import __version__
 from granchain.backends import backend_named
-from granchain.campaigns.model import CampaignError
+from granchain.campaigns.model import DONE, FAILED, MISSING, CampaignError
 
 RUN_DIR = "run"
 FAILURE = "failure.json"
@@ -54,9 +54,6 @@ STATEPOINT = "signac_statepoint.json"
 #: where campaign run moves a damaged job directory (its state point unreadable, or a link) and a
 #: point's run directory that is a link
 DAMAGED = "damaged"
-#: a point's status, in the words of the table's status column (job_state; "stale" is the table's) and
-#: of the progress line: a point lost in flight has no run and no failure.json, so it is missing
-DONE, FAILED, MISSING, STALE = "done", "failed", "missing", "stale"
 #: the names granchain reads or writes at the top of a workspace: none may be a symbolic link
 WORKSPACE_NAMES = (
     "campaign.toml",
