@@ -36,6 +36,7 @@ from granchain.campaigns.cluster_settings import (
     ClusterSettings,
     campaign_security,
     check,
+    check_log_directory,
     describe,
     from_table,
     merge,
@@ -183,7 +184,7 @@ class JobCluster:
         import dask
         from distributed import Client
 
-        s = self.s
+        s = check(self.s, ranks=self.ranks)  # the values the job script takes, as used (an API caller's too)
         cmd = SUBMIT[s.kind]
         if shutil.which(cmd) is None:
             raise ClusterError(
@@ -193,6 +194,7 @@ class JobCluster:
         if self.log_directory is not None:
             from granchain.safe_files import check_not_link
 
+            check_log_directory(self.log_directory)  # into #SBATCH -e/-o, unquoted
             check_not_link(self.log_directory)  # the jobs' output is written there: not through a planted link
             self.log_directory.mkdir(parents=True, exist_ok=True)
         # TLS (granchain.campaigns.cluster_settings): the scheduler binds the cluster's network, where
@@ -203,6 +205,26 @@ class JobCluster:
         # it closes a lost worker's job object stays, but the driver does not wait for it
         dask.config.set({"distributed.scheduler.allowed-failures": 3})
         cls = private_cluster_class(self._cluster_class(), self.private)
+        kwargs = dict(
+            self.job_options(),
+            scheduler_options={"dashboard_address": None},
+            security=campaign_security(),
+            shared_temp_directory=str(self.private),  # the key files, mode 0600 (dask-jobqueue's)
+        )
+        try:
+            self.cluster = cls(**kwargs)
+        except (ValueError, OSError) as e:
+            remove_directory(self.private)
+            raise ClusterError(f"--cluster {s.kind}: cannot start the scheduler ({e})") from None
+        # the key files go when this object does, if close() is never called (the API's callers)
+        weakref.finalize(self, remove_directory, self.private, self.cluster)
+        self._submit(s.jobs)
+        return Client(self.cluster)
+
+    def job_options(self) -> dict:
+        """What each worker job's script is made of (dask-jobqueue's Job options: resources, the
+        prologue, the worker's arguments, the output directory), from the checked settings."""
+        s = self.s
         cores = s.cores(self.ranks)
         processes = s.workers_per_job(self.ranks)
         prologue = [
@@ -224,10 +246,7 @@ class JobCluster:
             job_script_prologue=prologue,
             worker_extra_args=["--lifetime", f"{lifetime}s", "--lifetime-stagger", f"{min(120, lifetime // 10)}s"],
             log_directory=str(self.log_directory) if self.log_directory else None,
-            scheduler_options={"dashboard_address": None},
             death_timeout=60,
-            security=campaign_security(),
-            shared_temp_directory=str(self.private),  # the key files, mode 0600 (dask-jobqueue's)
         )
         if s.memory is None and s.kind == "slurm":
             # no --mem unless asked for: the partition's default applies (a node declared without
@@ -239,15 +258,7 @@ class JobCluster:
         else:
             mem = s.memory_text(self.ranks).replace(" ", "")
             kwargs["resource_spec"] = f"select=1:ncpus={cores}:mem={mem}"
-        try:
-            self.cluster = cls(**kwargs)
-        except (ValueError, OSError) as e:
-            remove_directory(self.private)
-            raise ClusterError(f"--cluster {s.kind}: cannot start the scheduler ({e})") from None
-        # the key files go when this object does, if close() is never called (the API's callers)
-        weakref.finalize(self, remove_directory, self.private, self.cluster)
-        self._submit(s.jobs)
-        return Client(self.cluster)
+        return kwargs
 
     def _cluster_class(self):
         import signal

@@ -12,6 +12,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from granchain.exceptions import GranchainError
+from granchain.workflows.submit import NAME_PATTERN as _NAME
+from granchain.workflows.submit import WALLTIME_PATTERN as _WALLTIME
+from granchain.workflows.submit import check_job_text
 
 KINDS = ("local", "slurm", "pbs")
 #: the keys a [cluster] table may hold (flags: --cluster, --queue, ...; the same names with dashes)
@@ -19,10 +22,10 @@ KEYS = ("kind", "queue", "account", "walltime", "jobs", "cores_per_job", "memory
 #: the jobs' submit command per kind (its absence on PATH is refused before anything starts)
 SUBMIT = {"slurm": "sbatch", "pbs": "qsub"}
 
-_NAME = re.compile(r"^[A-Za-z0-9_.,:@+-]{1,64}$")
-_WALLTIME = re.compile(r"^(?:(\d+)-)?(\d{1,4}):([0-5]\d):([0-5]\d)$")
-_MEMORY = re.compile(r"^(\d+(?:\.\d+)?)\s*(B|kB|KB|MB|GB|TB|KiB|MiB|GiB|TiB)$")
-_INTERFACE = re.compile(r"^[A-Za-z0-9_.:-]{1,32}$")
+# matched with fullmatch, on the value as used (never stripped): "$" would also match before a trailing
+# newline, which ends a job script's directive (a PBS header's end: its walltime, -e and -o dropped)
+_MEMORY = re.compile(r"(\d+(?:\.\d+)?) ?(B|kB|KB|MB|GB|TB|KiB|MiB|GiB|TiB)", re.ASCII)
+_INTERFACE = re.compile(r"[A-Za-z0-9_.:-]{1,32}", re.ASCII)
 
 
 class ClusterError(GranchainError, ValueError):
@@ -97,7 +100,7 @@ class ClusterSettings:
 
     def walltime_seconds(self) -> int:
         """The walltime in s."""
-        m = _WALLTIME.match(self.walltime)
+        m = _WALLTIME.fullmatch(self.walltime)
         assert m is not None  # checked by check()
         d, h, mi, s = (int(x) if x else 0 for x in m.groups())
         return ((d * 24 + h) * 60 + mi) * 60 + s
@@ -123,11 +126,11 @@ def check(settings: ClusterSettings, source: str | None = None, ranks: int = 1) 
         raise ClusterError(f"{_where(source, 'kind')} = {s.kind!r} is invalid: one of {', '.join(KINDS)}")
     for key in ("queue", "account"):
         v = getattr(s, key)
-        if v is not None and (not isinstance(v, str) or not _NAME.match(v)):
+        if v is not None and (not isinstance(v, str) or not _NAME.fullmatch(v)):
             raise ClusterError(
                 f"{_where(source, key)} = {v!r} is invalid: a {key} name (letters, digits and _ . , : @ + -)"
             )
-    if not isinstance(s.walltime, str) or not _WALLTIME.match(s.walltime):
+    if not isinstance(s.walltime, str) or not _WALLTIME.fullmatch(s.walltime):
         raise ClusterError(
             f"{_where(source, 'walltime')} = {s.walltime!r} is invalid: HH:MM:SS or D-HH:MM:SS, e.g. '02:00:00'"
         )
@@ -144,18 +147,33 @@ def check(settings: ClusterSettings, source: str | None = None, ranks: int = 1) 
             f"{_where(source, 'cores_per_job')} = {s.cores_per_job}: a point runs on {ranks} MPI ranks, so a job "
             f"needs at least {ranks} cores (give cores_per_job >= ranks, a multiple of it)"
         )
-    if s.memory is not None and (not isinstance(s.memory, str) or not _MEMORY.match(s.memory.strip())):
+    if s.memory is not None and (not isinstance(s.memory, str) or not _MEMORY.fullmatch(s.memory)):
         raise ClusterError(f"{_where(source, 'memory')} = {s.memory!r} is invalid: an amount such as '4GB' or '500MB'")
     _check_interface(s, source)
     for line in s.prologue:
-        if not isinstance(line, str) or "\n" in line or "\r" in line:
+        if not isinstance(line, str):
             raise ClusterError(f"--prologue {line!r} is invalid: one shell line per --prologue")
+        check_job_text(line.replace("\t", " "), "--prologue", "one shell line per --prologue", error=ClusterError)
+    if s.log_directory is not None:
+        check_log_directory(s.log_directory)
     return s
+
+
+def check_log_directory(path) -> None:
+    """Refuse a directory for the jobs' output that cannot go into ``#SBATCH -o`` / ``#PBS -o`` as it is
+    (dask-jobqueue writes it there unquoted): no control character, no whitespace."""
+    check_job_text(
+        str(path),
+        "the jobs' output directory (the workspace --out's jobs/)",
+        "give --out a path without spaces or control characters",
+        directive=True,
+        error=ClusterError,
+    )
 
 
 def _check_interface(s: ClusterSettings, source: str | None) -> None:
     if s.interface is not None:
-        if not isinstance(s.interface, str) or not _INTERFACE.match(s.interface):
+        if not isinstance(s.interface, str) or not _INTERFACE.fullmatch(s.interface):
             raise ClusterError(f"{_where(source, 'interface')} = {s.interface!r} is invalid: a network interface name")
         import psutil
 

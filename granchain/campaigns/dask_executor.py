@@ -14,7 +14,7 @@ from distributed.diagnostics.plugin import WorkerPlugin
 from typing_extensions import override
 
 from granchain.campaigns.cluster import ClusterSettings, JobCluster, NoWorkerJobs
-from granchain.campaigns.cluster_settings import campaign_security
+from granchain.campaigns.cluster_settings import campaign_security, check_log_directory
 from granchain.campaigns.model import CampaignError
 from granchain.campaigns.point_task import run_point
 
@@ -131,6 +131,8 @@ class Executor:
             )
         self.workers, self.scheduler = workers, scheduler
         self.batch = cluster if cluster is not None and cluster.batch else None
+        if self.batch is not None and log_directory is not None:
+            check_log_directory(log_directory)  # before the workspace is made, before any job
         self.ranks = ranks
         self.log_directory = log_directory
         self.client = None
