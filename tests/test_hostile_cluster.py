@@ -15,6 +15,7 @@ import json
 import os
 import secrets
 import shutil
+import signal
 import stat
 import subprocess
 import sys
@@ -154,13 +155,21 @@ def _attack(second_user, tmp_path: Path, ports: list[int]) -> dict:
     cmd, _ = second_user
     target = tmp_path / "private" / "payload-ran"  # where only this user (the payload, if it ran) can write
     target.parent.mkdir(mode=0o700)
-    r = subprocess.run(
+    p = subprocess.Popen(
         [*cmd, "-c", ATTACKER, str(os.geteuid()), str(target), ",".join(map(str, ports))],
-        capture_output=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
         text=True,
         cwd="/",
-        timeout=300,
+        start_new_session=True,  # its own group: a hang is ended whole, and the user can be removed
     )
+    try:
+        stdout, stderr = p.communicate(timeout=300)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        p.communicate()
+        raise
+    r = subprocess.CompletedProcess(p.args, p.returncode, stdout, stderr)
     assert r.returncode == 0, r.stderr[-3000:]
     out = json.loads(r.stdout.strip().splitlines()[-1])
     out["target_exists"] = target.exists()
