@@ -1,4 +1,5 @@
-"""A campaign's progress on stderr: points done, running and failed, with an ETA."""
+"""A campaign's progress on stderr: points done, running, failed and missing, with an ETA; a finished
+point is counted under the word the campaign table's status column gives it (workspace.job_state)."""
 
 from __future__ import annotations
 
@@ -8,17 +9,25 @@ import time
 from tqdm import tqdm
 
 from granchain import progress
+from granchain.campaigns.model import DONE, FAILED, MISSING
+
+#: the outcome of a point's task (point_task.run_point's status; "lost": no result came back) as the
+#: table's status column names it: a lost point has neither a run nor a failure.json, so it is missing
+STATUS_OF_OUTCOME = {DONE: DONE, FAILED: FAILED, "lost": MISSING}
 
 
 class CampaignProgress:
-    """done / running / failed with an ETA on stderr: a tqdm bar on a terminal, a line every
-    progress.LINE_EVERY seconds otherwise; nothing when quiet (granchain.progress)."""
+    """done / running / failed / missing with an ETA on stderr: a tqdm bar on a terminal, a line every
+    progress.LINE_EVERY seconds otherwise; nothing when quiet (granchain.progress). A finished point
+    is counted under its status in the table's words (STATUS_OF_OUTCOME)."""
 
     def __init__(self, total: int, desc: str = "campaign", stream=None, workers: int = 1):
         self.stream = sys.stderr if stream is None else stream
         self.disabled = progress.is_quiet() or self.stream is None
         self.tty = bool(not self.disabled and getattr(self.stream, "isatty", lambda: False)())
-        self.total, self.done, self.failed, self.pending, self.workers = total, 0, 0, 0, max(1, workers)
+        self.total, self.pending, self.workers = total, 0, max(1, workers)
+        #: finished points by status, in the table's words (missing: lost in flight)
+        self.finished = {DONE: 0, FAILED: 0, MISSING: 0}
         self.desc = f"granchain: {desc}"
         self.t0 = time.perf_counter()
         self._next_line = self.t0 + progress.DELAY
@@ -33,24 +42,32 @@ class CampaignProgress:
         """Points running now: those submitted and not finished, at most one per worker."""
         return min(self.pending, self.workers)
 
+    @property
+    def n_finished(self) -> int:
+        """Points finished, whatever their status."""
+        return sum(self.finished.values())
+
     def _postfix(self) -> str:
-        text = f"done {self.done}, running {self.running}, failed {self.failed}"
+        f = self.finished
+        text = f"{DONE} {f[DONE]}, running {self.running}, {FAILED} {f[FAILED]}"
+        if f[MISSING]:
+            text += f", {MISSING} {f[MISSING]}"
         jobs = self.jobs() if self.jobs is not None else None
         return f"{text}; {jobs}" if jobs else text
 
-    def update(self, done: int = 0, failed: int = 0, pending: int | None = None, total: int | None = None) -> None:
-        """Count points done and failed (added), set the points submitted and not finished and the
-        total (a search's changes as bisections end), and show it: the bar at once, a line when one
-        is due."""
-        self.done += done
-        self.failed += failed
+    def update(self, outcome: str | None = None, pending: int | None = None, total: int | None = None) -> None:
+        """Count one finished point by its task's outcome (a key of STATUS_OF_OUTCOME), set the points
+        submitted and not finished and the total (a search's changes as bisections end), and show it:
+        the bar at once, a line when one is due."""
+        if outcome is not None:
+            self.finished[STATUS_OF_OUTCOME[outcome]] += 1
         if pending is not None:
             self.pending = pending
         if total is not None:
             self.total = total
         if self.disabled:
             return
-        n = self.done + self.failed
+        n = self.n_finished
         if self._bar is not None:
             if total is not None:
                 self._bar.total = total
@@ -63,8 +80,7 @@ class CampaignProgress:
             self._next_line = now + progress.LINE_EVERY
 
     def _line(self, now: float) -> None:
-        n = self.done + self.failed
-        text = tqdm.format_meter(n, self.total or None, now - self.t0, prefix=self.desc, unit="pt")
+        text = tqdm.format_meter(self.n_finished, self.total or None, now - self.t0, prefix=self.desc, unit="pt")
         try:
             print(f"{text} ({self._postfix()})", file=self.stream, flush=True)
         except (OSError, ValueError):

@@ -26,6 +26,7 @@ from __future__ import annotations
 import shutil
 import subprocess
 import time
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,10 +34,15 @@ from granchain.campaigns.cluster_settings import (
     SUBMIT,
     ClusterError,
     ClusterSettings,
+    campaign_security,
     check,
+    check_log_directory,
     describe,
     from_table,
     merge,
+    private_cluster_class,
+    private_directory,
+    remove_directory,
 )
 from granchain.exceptions import GranchainError
 
@@ -170,6 +176,7 @@ class JobCluster:
         self.counts = JobCounts()
         self._last_poll = 0.0
         self._closed = False
+        self.private: Path | None = None  # the key files' and job scripts' directory (private_directory)
 
     # ---------------------------------------------------------------------------- start and close
     def start(self):
@@ -177,7 +184,7 @@ class JobCluster:
         import dask
         from distributed import Client
 
-        s = self.s
+        s = check(self.s, ranks=self.ranks)  # the values the job script takes, as used (an API caller's too)
         cmd = SUBMIT[s.kind]
         if shutil.which(cmd) is None:
             raise ClusterError(
@@ -187,12 +194,37 @@ class JobCluster:
         if self.log_directory is not None:
             from granchain.safe_files import check_not_link
 
+            check_log_directory(self.log_directory)  # into #SBATCH -e/-o, unquoted
             check_not_link(self.log_directory)  # the jobs' output is written there: not through a planted link
             self.log_directory.mkdir(parents=True, exist_ok=True)
+        # TLS (granchain.campaigns.cluster_settings): the scheduler binds the cluster's network, where
+        # anyone reaching it would run code as the user; the jobs' key files and scripts go in a
+        # directory of mode 0700 beside their output (on the filesystem the jobs share)
+        self.private = private_directory(self.log_directory)
         # a job that ended is noticed by the driver's own poll (replace_ended); Dask's own timeout before
         # it closes a lost worker's job object stays, but the driver does not wait for it
         dask.config.set({"distributed.scheduler.allowed-failures": 3})
-        cls = self._cluster_class()
+        cls = private_cluster_class(self._cluster_class(), self.private)
+        kwargs = dict(
+            self.job_options(),
+            scheduler_options={"dashboard_address": None},
+            security=campaign_security(),
+            shared_temp_directory=str(self.private),  # the key files, mode 0600 (dask-jobqueue's)
+        )
+        try:
+            self.cluster = cls(**kwargs)
+        except (ValueError, OSError) as e:
+            remove_directory(self.private)
+            raise ClusterError(f"--cluster {s.kind}: cannot start the scheduler ({e})") from None
+        # the key files go when this object does, if close() is never called (the API's callers)
+        weakref.finalize(self, remove_directory, self.private, self.cluster)
+        self._submit(s.jobs)
+        return Client(self.cluster)
+
+    def job_options(self) -> dict:
+        """What each worker job's script is made of (dask-jobqueue's Job options: resources, the
+        prologue, the worker's arguments, the output directory), from the checked settings."""
+        s = self.s
         cores = s.cores(self.ranks)
         processes = s.workers_per_job(self.ranks)
         prologue = [
@@ -214,7 +246,6 @@ class JobCluster:
             job_script_prologue=prologue,
             worker_extra_args=["--lifetime", f"{lifetime}s", "--lifetime-stagger", f"{min(120, lifetime // 10)}s"],
             log_directory=str(self.log_directory) if self.log_directory else None,
-            scheduler_options={"dashboard_address": None},
             death_timeout=60,
         )
         if s.memory is None and s.kind == "slurm":
@@ -227,12 +258,7 @@ class JobCluster:
         else:
             mem = s.memory_text(self.ranks).replace(" ", "")
             kwargs["resource_spec"] = f"select=1:ncpus={cores}:mem={mem}"
-        try:
-            self.cluster = cls(**kwargs)
-        except (ValueError, OSError) as e:
-            raise ClusterError(f"--cluster {s.kind}: cannot start the scheduler ({e})") from None
-        self._submit(s.jobs)
-        return Client(self.cluster)
+        return kwargs
 
     def _cluster_class(self):
         import signal
@@ -290,6 +316,7 @@ class JobCluster:
             except Exception:  # noqa: BLE001
                 pass
         self.cancel_all()
+        remove_directory(self.private, self.cluster)  # the jobs are cancelled: their key files go
 
     def cancel_all(self) -> list[str]:
         """Cancel the jobs this run submitted that are still queued or running; returns their ids."""

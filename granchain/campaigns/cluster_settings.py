@@ -4,10 +4,17 @@ reaches a job script but these values), and their one-line description."""
 
 from __future__ import annotations
 
+import os
 import re
+import shutil
+import tempfile
 from dataclasses import dataclass
+from pathlib import Path
 
 from granchain.exceptions import GranchainError
+from granchain.workflows.submit import NAME_PATTERN as _NAME
+from granchain.workflows.submit import WALLTIME_PATTERN as _WALLTIME
+from granchain.workflows.submit import check_job_text
 
 KINDS = ("local", "slurm", "pbs")
 #: the keys a [cluster] table may hold (flags: --cluster, --queue, ...; the same names with dashes)
@@ -15,10 +22,10 @@ KEYS = ("kind", "queue", "account", "walltime", "jobs", "cores_per_job", "memory
 #: the jobs' submit command per kind (its absence on PATH is refused before anything starts)
 SUBMIT = {"slurm": "sbatch", "pbs": "qsub"}
 
-_NAME = re.compile(r"^[A-Za-z0-9_.,:@+-]{1,64}$")
-_WALLTIME = re.compile(r"^(?:(\d+)-)?(\d{1,4}):([0-5]\d):([0-5]\d)$")
-_MEMORY = re.compile(r"^(\d+(?:\.\d+)?)\s*(B|kB|KB|MB|GB|TB|KiB|MiB|GiB|TiB)$")
-_INTERFACE = re.compile(r"^[A-Za-z0-9_.:-]{1,32}$")
+# matched with fullmatch, on the value as used (never stripped): "$" would also match before a trailing
+# newline, which ends a job script's directive (a PBS header's end: its walltime, -e and -o dropped)
+_MEMORY = re.compile(r"(\d+(?:\.\d+)?) ?(B|kB|KB|MB|GB|TB|KiB|MiB|GiB|TiB)", re.ASCII)
+_INTERFACE = re.compile(r"[A-Za-z0-9_.:-]{1,32}", re.ASCII)
 
 
 class ClusterError(GranchainError, ValueError):
@@ -93,7 +100,7 @@ class ClusterSettings:
 
     def walltime_seconds(self) -> int:
         """The walltime in s."""
-        m = _WALLTIME.match(self.walltime)
+        m = _WALLTIME.fullmatch(self.walltime)
         assert m is not None  # checked by check()
         d, h, mi, s = (int(x) if x else 0 for x in m.groups())
         return ((d * 24 + h) * 60 + mi) * 60 + s
@@ -119,11 +126,11 @@ def check(settings: ClusterSettings, source: str | None = None, ranks: int = 1) 
         raise ClusterError(f"{_where(source, 'kind')} = {s.kind!r} is invalid: one of {', '.join(KINDS)}")
     for key in ("queue", "account"):
         v = getattr(s, key)
-        if v is not None and (not isinstance(v, str) or not _NAME.match(v)):
+        if v is not None and (not isinstance(v, str) or not _NAME.fullmatch(v)):
             raise ClusterError(
                 f"{_where(source, key)} = {v!r} is invalid: a {key} name (letters, digits and _ . , : @ + -)"
             )
-    if not isinstance(s.walltime, str) or not _WALLTIME.match(s.walltime):
+    if not isinstance(s.walltime, str) or not _WALLTIME.fullmatch(s.walltime):
         raise ClusterError(
             f"{_where(source, 'walltime')} = {s.walltime!r} is invalid: HH:MM:SS or D-HH:MM:SS, e.g. '02:00:00'"
         )
@@ -140,18 +147,33 @@ def check(settings: ClusterSettings, source: str | None = None, ranks: int = 1) 
             f"{_where(source, 'cores_per_job')} = {s.cores_per_job}: a point runs on {ranks} MPI ranks, so a job "
             f"needs at least {ranks} cores (give cores_per_job >= ranks, a multiple of it)"
         )
-    if s.memory is not None and (not isinstance(s.memory, str) or not _MEMORY.match(s.memory.strip())):
+    if s.memory is not None and (not isinstance(s.memory, str) or not _MEMORY.fullmatch(s.memory)):
         raise ClusterError(f"{_where(source, 'memory')} = {s.memory!r} is invalid: an amount such as '4GB' or '500MB'")
     _check_interface(s, source)
     for line in s.prologue:
-        if not isinstance(line, str) or "\n" in line or "\r" in line:
+        if not isinstance(line, str):
             raise ClusterError(f"--prologue {line!r} is invalid: one shell line per --prologue")
+        check_job_text(line.replace("\t", " "), "--prologue", "one shell line per --prologue", error=ClusterError)
+    if s.log_directory is not None:
+        check_log_directory(s.log_directory)
     return s
+
+
+def check_log_directory(path) -> None:
+    """Refuse a directory for the jobs' output that cannot go into ``#SBATCH -o`` / ``#PBS -o`` as it is
+    (dask-jobqueue writes it there unquoted): no control character, no whitespace."""
+    check_job_text(
+        str(path),
+        "the jobs' output directory (the workspace --out's jobs/)",
+        "give --out a path without spaces or control characters",
+        directive=True,
+        error=ClusterError,
+    )
 
 
 def _check_interface(s: ClusterSettings, source: str | None) -> None:
     if s.interface is not None:
-        if not isinstance(s.interface, str) or not _INTERFACE.match(s.interface):
+        if not isinstance(s.interface, str) or not _INTERFACE.fullmatch(s.interface):
             raise ClusterError(f"{_where(source, 'interface')} = {s.interface!r} is invalid: a network interface name")
         import psutil
 
@@ -218,3 +240,102 @@ def describe(settings: ClusterSettings, ranks: int) -> str:
         parts.append(f"account {s.account}")
     parts.append(f"walltime {s.walltime}")
     return ", ".join(parts)
+
+
+# ------------------------------------------------------------------------------------ security
+# TLS for every Dask cluster granchain starts: a campaign's scheduler, workers and nannies accept only
+# peers holding this run's certificate.
+#
+# A Dask scheduler runs what a client sends it (``Client.run_on_scheduler``), a worker what the
+# scheduler sends it: a plain ``tcp://`` scheduler on a shared machine (any local user finds its port
+# in ``/proc/net/tcp``), or bound to a cluster's network (``--cluster slurm``), runs anyone's code as
+# the user who started the campaign. Each cluster granchain starts (the local one, the batch jobs'
+# scheduler) therefore gets :func:`campaign_security`: a certificate authority, key and certificate
+# made for this run alone (distributed's ``Security.temporary``), ``require_encryption``, and the
+# mutual TLS of distributed's ``tls://`` (a peer is refused unless its certificate is signed by this
+# run's authority). The key never leaves the driver but to its own workers: in memory for local
+# workers, and for batch jobs in files of mode 0600 inside a directory of mode 0700 that only the
+# user can enter (:func:`private_directory`, on the shared filesystem the jobs read), removed when the
+# campaign ends. The job scripts name those files; they hold no key.
+#
+# An external ``--scheduler`` address is the user's own cluster: its security is the user's choice
+# (docs/clusters.md).
+
+
+def campaign_security():
+    """A distributed Security of this run's own certificate authority, key and certificate (in memory),
+    with encryption required.
+
+    Raises
+    ------
+    GranchainError
+        The ``cryptography`` package, which makes the certificates, is not installed.
+    """
+    from distributed.security import Security
+
+    try:
+        return Security.temporary()
+    except ImportError:
+        raise GranchainError(
+            "a campaign's Dask cluster needs TLS (else any user who reaches its port runs code as you), and "
+            "its certificates need the cryptography package: pip install cryptography"
+        ) from None
+
+
+def private_directory(parent: str | Path | None) -> Path:
+    """A new directory of mode 0700 in `parent` (the system's temporary directory if None) for this
+    run's key files and job scripts; the caller removes it (:func:`remove_directory`).
+
+    Raises
+    ------
+    UnsafeFileError
+        `parent` is a symbolic link.
+    """
+    from granchain.safe_files import check_not_link
+
+    if parent is not None:
+        check_not_link(parent)
+        Path(parent).mkdir(parents=True, exist_ok=True)
+    return Path(tempfile.mkdtemp(prefix=".granchain-tls-", dir=parent))  # mode 0700, a fresh name
+
+
+def remove_directory(path: Path | None, cluster=None) -> None:
+    """Remove a private directory and the key files in it (nothing when None or gone); `cluster`: the
+    dask-jobqueue cluster whose open key files (its ``_job_<key>`` temporary files) are closed first."""
+    for key in ("key", "cert", "ca_file"):
+        f = getattr(cluster, f"_job_{key}", None)
+        if f is not None:
+            f.close()  # a NamedTemporaryFile: closing removes its file
+    if path is not None:
+        shutil.rmtree(path, ignore_errors=True)
+
+
+def private_cluster_class(cluster_class, directory: Path):
+    """A dask-jobqueue cluster class (SLURMCluster, PBSCluster) whose jobs' scripts are written, mode
+    0600, into `directory` (:func:`private_directory`), not into the shared temporary directory under
+    a name another user could take (dask's tmpfile makes a name, removes it and opens it again)."""
+    base = cluster_class.job_cls
+
+    class PrivateJob(base):
+        def job_file(self):
+            import contextlib
+
+            @contextlib.contextmanager
+            def written():
+                fd, name = tempfile.mkstemp(suffix=".sh", dir=directory)  # a fresh name, O_EXCL, mode 0600
+                try:
+                    with os.fdopen(fd, "w") as f:
+                        f.write(self.job_script())
+                    yield name
+                finally:
+                    with contextlib.suppress(OSError):
+                        os.unlink(name)
+
+            return written()
+
+    class PrivateCluster(cluster_class):
+        job_cls = PrivateJob
+
+    PrivateJob.__name__ = PrivateJob.__qualname__ = f"Private{base.__name__}"
+    PrivateCluster.__name__ = PrivateCluster.__qualname__ = f"Private{cluster_class.__name__}"
+    return PrivateCluster

@@ -14,6 +14,7 @@ from distributed.diagnostics.plugin import WorkerPlugin
 from typing_extensions import override
 
 from granchain.campaigns.cluster import ClusterSettings, JobCluster, NoWorkerJobs
+from granchain.campaigns.cluster_settings import campaign_security, check_log_directory
 from granchain.campaigns.model import CampaignError
 from granchain.campaigns.point_task import run_point
 
@@ -130,6 +131,8 @@ class Executor:
             )
         self.workers, self.scheduler = workers, scheduler
         self.batch = cluster if cluster is not None and cluster.batch else None
+        if self.batch is not None and log_directory is not None:
+            check_log_directory(log_directory)  # before the workspace is made, before any job
         self.ranks = ranks
         self.log_directory = log_directory
         self.client = None
@@ -211,6 +214,9 @@ class Executor:
             return self.client
         self._loop = _loop_blocking_sigint()
         made: dict = {}
+        # TLS with this run's own certificate: a plain tcp:// scheduler on a shared machine runs the code
+        # of any local user who connects (granchain.campaigns.cluster_settings)
+        security = campaign_security()
 
         def make() -> None:
             try:
@@ -223,6 +229,8 @@ class Executor:
                     # no dashboard; the scheduler's HTTP routes on a free port (the default 8787 may be taken)
                     scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                     silence_logs=logging.ERROR,
+                    security=security,
+                    protocol="tls://",
                 )
                 made["client"] = Client(made["cluster"])
                 made["client"].register_plugin(QuietInterrupt())

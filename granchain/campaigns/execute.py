@@ -205,15 +205,14 @@ class Runner:
             r = {"status": "lost", "message": one_line(e)}
         if r["status"] == "done":
             self.report.done += 1
-            prog.update(done=1)
         elif r["status"] == "failed":
             self.report.failed += 1
             self.report.messages.append((params, r["message"]))
-            prog.update(failed=1)
         else:
+            r["status"] = "lost"
             self.report.lost += 1
             self.report.messages.append((params, r["message"]))
-            prog.update(failed=1)
+        prog.update(r["status"])
         return r
 
     def say(self, text: str) -> bool:

@@ -13,6 +13,10 @@ from granchain.exceptions import GranchainError
 from granchain.scene import Scene, SceneError, scene_from_dict, scene_to_dict
 from granchain.scene.section import _shown
 
+#: a point's status, in the words of the table's status column (workspace.job_state; "stale" is the
+#: table's) and of the progress line: a point lost in flight has no run and no failure.json: missing
+DONE, FAILED, MISSING, STALE = "done", "failed", "missing", "stale"
+
 
 class CampaignError(GranchainError, ValueError):
     """A campaign file or one of its points is invalid; the message names the key and the fix."""

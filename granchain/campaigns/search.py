@@ -241,7 +241,7 @@ def run_search(campaign: Campaign, runner, on_progress=None) -> tuple[list, list
         evaluated.append((point, job.id, b.index, wsp.point_key(job.cached_statepoint)))
         if not runner.needs_run(job):
             q, why = _quantity(job.path, s.predicate)
-            prog.update(done=1)
+            prog.update(wsp.DONE)
             b.record(value, q, why)
             return
         if not prepared:

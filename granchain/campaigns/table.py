@@ -36,6 +36,7 @@ import unicodedata
 from pathlib import Path
 
 from granchain import safe_files
+from granchain.campaigns import model
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.search import read_history, static_force
 from granchain.campaigns.spec import OBSERVABLES, CampaignError
@@ -101,8 +102,8 @@ def point_row(ws: Path, record: dict, entry: dict, stale: dict) -> dict:
     sp = wsp.read_statepoint(job_dir) or {}  # (a damaged one: the point is missing)
     state = wsp.job_state(job_dir, sp) if sp else "missing"
     key = entry.get("key") or (wsp.point_key(sp) if sp else None)
-    if state == "missing" and key in stale:
-        state = "stale"
+    if state == model.MISSING and key in stale:
+        state = model.STALE
     row["status"] = state
     summary = wsp.read_json(job_dir / wsp.RUN_DIR / "summary.json") if state == "done" else None
     try:  # the scene's histories, when the job is there

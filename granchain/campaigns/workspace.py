@@ -44,7 +44,7 @@ from pathlib import Path
 from granchain import safe_files
 from granchain._version import __version__
 from granchain.backends import backend_named
-from granchain.campaigns.model import CampaignError
+from granchain.campaigns.model import DONE, FAILED, MISSING, CampaignError
 
 RUN_DIR = "run"
 FAILURE = "failure.json"
@@ -327,14 +327,14 @@ def job_state(job_dir: str | Path, sp: dict | None = None) -> str:
     (failure.json) or 'missing'. sp: the job's state point, read from the job directory if not given."""
     d = Path(job_dir)
     if os.path.islink(d) or not d.is_dir():
-        return "missing"
+        return MISSING
     if sp is None:
         sp = read_json(d / STATEPOINT)
     if isinstance(sp, dict) and run_is_complete(d / RUN_DIR, sp):
-        return "done"
+        return DONE
     if isinstance(read_json(d / FAILURE), dict):
-        return "failed"
-    return "missing"
+        return FAILED
+    return MISSING
 
 
 def run_is_complete(run: Path, sp: dict) -> bool:

@@ -24,6 +24,7 @@ import shutil
 import subprocess
 import sys
 import time
+import unicodedata
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -35,12 +36,14 @@ from granchain.exceptions import GranchainError
 JOB_SCRIPT = "job.sh"
 JOB_RECORD = "job.json"
 
+# every pattern is matched with fullmatch (a "$" also matches before a trailing newline, which would
+# end a job script's directive and start a line of its own) and is ASCII (\d also matches '٤' or '႔')
 #: a queue or account name, as the job script's #SBATCH lines may hold it
-NAME_PATTERN = re.compile(r"^[A-Za-z0-9_.,:@+-]{1,64}$")
+NAME_PATTERN = re.compile(r"[A-Za-z0-9_.,:@+-]{1,64}", re.ASCII)
 #: a walltime: [D-]HH:MM:SS
-WALLTIME_PATTERN = re.compile(r"^(?:(\d+)-)?(\d{1,4}):([0-5]\d):([0-5]\d)$")
+WALLTIME_PATTERN = re.compile(r"(?:(\d+)-)?(\d{1,4}):([0-5]\d):([0-5]\d)", re.ASCII)
 #: a memory amount for --mem ("4GB", "500M")
-MEMORY_PATTERN = re.compile(r"^(\d+)\s*([KMGT])i?B?$", re.I)
+MEMORY_PATTERN = re.compile(r"(\d+)([KMGT])i?B?", re.I | re.ASCII)
 
 #: SLURM states of a job that has not ended yet
 ACTIVE = {"PENDING", "CONFIGURING", "RUNNING", "COMPLETING", "SUSPENDED", "REQUEUED", "RESIZING", "STAGE_OUT"}
@@ -62,16 +65,37 @@ class Submission:
     script: Path
 
 
+def job_text_problem(value: str, directive: bool = False) -> str | None:
+    """What makes `value` unfit for a job script, or None: a control character (a newline or carriage
+    return ends the line it is on, a comment or a directive, and starts a command of its own), a line
+    or paragraph separator, and where a directive takes the text (``#SBATCH -o PATH``), whitespace,
+    which ends the directive's argument."""
+    for c in value:
+        if unicodedata.category(c) in ("Cc", "Zl", "Zp"):
+            return f"it holds the control character {c!r}"
+        if directive and c.isspace():
+            return f"it holds whitespace ({c!r}), which ends a job script directive's value"
+    return None
+
+
+def check_job_text(value: str, what: str, fix: str, directive: bool = False, error=None) -> None:
+    """Refuse `value` (named `what`) if it cannot go into a job script as it is (job_text_problem),
+    with `fix`; error: the GranchainError class raised (SubmitError by default)."""
+    problem = job_text_problem(value, directive)
+    if problem is not None:
+        raise (error or SubmitError)(f"{what} = {value!r} cannot go into a job script: {problem}; {fix}")
+
+
 def check_settings(ranks: int, queue: str | None, account: str | None, walltime: str, memory: str | None) -> None:
     """Refuse what would not make a valid job script, naming the flag and the fix."""
     if isinstance(ranks, bool) or not isinstance(ranks, int) or not 1 <= ranks <= 100_000:
         raise SubmitError(f"--ranks = {ranks!r} is invalid: a whole number of MPI ranks >= 1")
     for flag, v in (("--queue", queue), ("--account", account)):
-        if v is not None and not NAME_PATTERN.match(v):
+        if v is not None and not NAME_PATTERN.fullmatch(v):
             raise SubmitError(f"{flag} = {v!r} is invalid: a name of letters, digits and _ . , : @ + -")
-    if not WALLTIME_PATTERN.match(walltime):
+    if not WALLTIME_PATTERN.fullmatch(walltime):
         raise SubmitError(f"--walltime = {walltime!r} is invalid: HH:MM:SS or D-HH:MM:SS, e.g. 02:00:00")
-    if memory is not None and not MEMORY_PATTERN.match(memory):
+    if memory is not None and not MEMORY_PATTERN.fullmatch(memory):
         raise SubmitError(f"--memory = {memory!r} is invalid: an amount such as 4GB or 500M")
 
 
@@ -180,6 +204,10 @@ def submit(
     check_timestep(concrete, LAMMPS.integrator(None, concrete))
     check_resources(concrete, LAMMPS, ranks, oversubscribe=True)  # the cores are the job's, not this machine's
     out = Path(out)
+    # the directory's path goes into the script's cd line and its collect comment (quoted: spaces are fine)
+    fix = "give a directory whose path has no control characters"
+    check_job_text(str(out), "--out", fix)  # as given (a NUL byte stops resolve)
+    check_job_text(str(out.resolve()), "--out", fix)  # whole, the working directory's part too
     script_text = job_script(out, ranks, walltime, queue, account, memory, _job_name(out))
     render_dir(concrete, out, plan, scene)
     script = out / JOB_SCRIPT
@@ -293,4 +321,14 @@ def submit_and_collect(scene, out, wait_for_it: bool = False, on_state=None, **s
     return sub, collect(sub.directory)
 
 
-__all__ = ["SubmitError", "Submission", "cancel", "job_script", "job_state", "submit", "submit_and_collect", "wait"]
+__all__ = [
+    "SubmitError",
+    "Submission",
+    "cancel",
+    "check_job_text",
+    "job_script",
+    "job_state",
+    "submit",
+    "submit_and_collect",
+    "wait",
+]
