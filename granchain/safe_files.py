@@ -356,33 +356,18 @@ def mark_owned(directory: str | Path, kind: str) -> None:
     write_text(Path(directory) / MARKER, _MARKER_TEXT.format(kind=kind))
 
 
-def is_owned(directory: str | Path, legacy: Iterable[str] = ()) -> bool:
+def is_owned(directory: str | Path) -> bool:
     """Whether granchain wrote ``directory``: it is a real directory (not a link) holding the marker
-    as a regular file. ``legacy``: names of a directory written before the marker existed (a run
-    directory: ``summary.json``, ``peaks.csv``, ...); such a directory counts as owned when it holds
-    the first of them and nothing but regular files named in it."""
+    as a regular file. Nothing else counts, whatever names the directory holds (a directory of the
+    user's with a summary.json beside their own files is not a run directory: docs/security.md)."""
     d = Path(directory)
     if os.path.islink(d) or not d.is_dir():
         return False
     try:
         text = read_bytes(d / MARKER, limit=4096).decode("utf-8", "replace")
     except OSError:
-        text = ""
-    if text.startswith(_MARKER_MAGIC):
-        return True
-    legacy = list(legacy)
-    if not legacy:
         return False
-    try:
-        with os.scandir(d) as it:
-            entries = list(it)
-    except OSError:
-        return False
-    names = {e.name for e in entries}
-    if legacy[0] not in names:
-        return False
-    allowed = set(legacy)
-    return all(e.name in allowed and e.is_file(follow_symlinks=False) for e in entries)
+    return text.startswith(_MARKER_MAGIC)
 
 
 def not_owned_message(directory: str | Path, option: str = "--out") -> str:
@@ -470,9 +455,7 @@ def owner_gone(path: str | Path, tag: str | None) -> bool:
     return True
 
 
-def check_replaceable(
-    out: str | Path, overwrite: bool, legacy: Iterable[str] = (), option: str = "--out", owned=None
-) -> None:
+def check_replaceable(out: str | Path, overwrite: bool, option: str = "--out", owned=None) -> None:
     """Refuse an existing ``out`` unless ``overwrite`` and granchain owns it (:func:`is_owned`, or the
     predicate ``owned(path) -> bool`` when given).
 
@@ -491,7 +474,7 @@ def check_replaceable(
         raise _refuse(out, errno.EEXIST, f"exists and is not a directory; choose another {option}")
     if not overwrite:
         raise _refuse(out, errno.EEXIST, f"already exists; choose another {option} or pass --overwrite to replace it")
-    if not (owned(out) if owned is not None else is_owned(out, legacy)):
+    if not (owned(out) if owned is not None else is_owned(out)):
         raise UnsafeFileError(errno.EEXIST, not_owned_message(out, option), str(out))
 
 
@@ -525,7 +508,6 @@ def atomic_directory(
     out: str | Path,
     kind: str | None,
     overwrite: bool = False,
-    legacy: Iterable[str] = (),
     option: str = "--out",
     owned=None,
 ) -> Iterator[Path]:
@@ -539,7 +521,7 @@ def atomic_directory(
     pid gone) are removed first. ``owned``: as in :func:`check_replaceable`.
     """
     out = Path(out)
-    check_replaceable(out, overwrite, legacy, option, owned)
+    check_replaceable(out, overwrite, option, owned)
     parent = out.absolute().parent
     parent.mkdir(parents=True, exist_ok=True)
     tmp = _fresh_temp(parent, f".{sibling_stem(out.name)}.partial-")
@@ -549,7 +531,7 @@ def atomic_directory(
         if kind is not None:
             mark_owned(tmp, kind)
         if out.exists() or os.path.islink(out):
-            check_replaceable(out, overwrite, legacy, option, owned)  # again: it may have appeared meanwhile
+            check_replaceable(out, overwrite, option, owned)  # again: it may have appeared meanwhile
             old = parent / f".{sibling_stem(out.name)}.old-{os.getpid()}-{os.urandom(4).hex()}"
             os.replace(out, old)
             os.replace(tmp, out)
