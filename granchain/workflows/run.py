@@ -13,6 +13,7 @@ from granchain.backends import BACKENDS, METHODS, REFERENCE, Backend, Calculatio
 from granchain.exceptions import UsageError
 from granchain.invariants import InvariantError
 from granchain.results import RunResult
+from granchain.peaks import reflection_pending
 from granchain.rundir import check_output_dir, write_run_dir
 from granchain.workflows import shared_runs
 from granchain.workflows.guards import DUMP_FRAME_HEADER_BYTES as DUMP_FRAME_HEADER_BYTES
@@ -225,13 +226,21 @@ def _execute(scene, backend: Backend, method: str, np_: int) -> Calculation:
     """One run of a concrete scene: its result, and its work files if the backend keeps any."""
     shared = shared_runs.current()
     if backend is REFERENCE:  # the yardstick's runs: made once inside a shared_reference_runs() block
-        return Calculation(
-            run_reference(scene, method) if shared is None else shared.get((scene, method), run_reference)
+        return _cut_off(
+            Calculation(run_reference(scene, method) if shared is None else shared.get((scene, method), run_reference))
         )
     if shared is not None and shared.abandoned:
         raise Abandoned("not started: the block is being left")
     with _with_fix(scene, method):
-        return backend.calculate(scene, method, np_)
+        return _cut_off(backend.calculate(scene, method, np_))
+
+
+def _cut_off(calc: Calculation) -> Calculation:
+    """calc with the peaks a wall's reflection may still exceed not complete (peaks.reflection_pending),
+    every backend's the same way: a peak the run's end cut off is not one."""
+    sol = calc.result.solution
+    sol.complete = sol.complete & ~reflection_pending(calc.result.scene, sol)
+    return calc
 
 
 def _extended(given, plan, result):
