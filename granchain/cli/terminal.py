@@ -13,7 +13,7 @@ import numpy as np
 
 from granchain.backends import Backend, backend_named
 from granchain.exceptions import UsageError
-from granchain.peaks import REACHED_FRACTION, end_contact_reached
+from granchain.peaks import REACHED_FRACTION, end_contact_reached, reflection_pending
 from granchain.physics.effects import unbalanced_forces
 from granchain.postprocess.comparison_table import dynamic_name
 from granchain.results import OBSERVABLE_UNITS, printable
@@ -222,11 +222,19 @@ def print_incomplete_peaks(result) -> None:
     if open_.size == 0:
         return
     never = contacts[~reached]
+    # not complete although passed: the wave reflected from a wall may still exceed them (peaks.reflection_pending)
+    back = contacts[~complete & reflection_pending(result.scene, s)[contacts - 1]]
     row = "peaks not complete (contacts)"
     print(
         f"  {row:38s} {open_.size} of {contacts.size}: {contact_runs(open_)}   (not measured: the force had not "
         f"fallen to half of its peak when the run ended, t = {s.end_time:g} s"
         + (f"; never reached: {contact_runs(never)}" if never.size else "")
+        + (
+            f"; the wave reflected from the wall, larger at some contacts, had not passed back through "
+            f"{contact_runs(back)} (their largest force came before the wall's, and the chain was not in free flight)"
+            if back.size
+            else ""
+        )
         + "; peaks.csv's complete = 0, its peak_force the largest force so far)"
     )
 

@@ -12,8 +12,8 @@ from pathlib import Path
 from granchain.backends import BACKENDS, METHODS, REFERENCE, Backend, Calculation, backend_named
 from granchain.exceptions import UsageError
 from granchain.invariants import InvariantError
-from granchain.results import RunResult
 from granchain.peaks import reflection_pending
+from granchain.results import RunResult
 from granchain.rundir import check_output_dir, write_run_dir
 from granchain.workflows import shared_runs
 from granchain.workflows.guards import DUMP_FRAME_HEADER_BYTES as DUMP_FRAME_HEADER_BYTES
