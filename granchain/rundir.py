@@ -16,7 +16,6 @@ that holds anything else. Reads and writes never follow a symbolic link planted 
 from __future__ import annotations
 
 import csv
-import fnmatch
 import io
 import json
 import math
@@ -31,36 +30,6 @@ from granchain.exceptions import GranchainError
 from granchain.results import RunResult, peak_columns
 from granchain.safe_files import pid_alive  # noqa: F401 - where callers have imported it from
 
-#: what a run directory written before the marker existed may hold: granchain run's, compare's,
-#: compare-laws', accuracy's and plot's files (lammps/ and reference/ of a compare directory are such
-#: directories themselves); :func:`owned_by_granchain` accepts an unmarked directory of only these
-_LEGACY_FILES = (
-    "scene.toml",
-    "summary.json",
-    "peaks.csv",
-    "histories.csv",
-    "snapshots.csv",
-    "energy.csv",
-    "deck.lmp",
-    "chain.data",
-    "log.lammps",
-    "*.dump",
-    "histories.npy",
-    "energy.txt",
-    "compare.csv",
-    "compare.md",
-    "laws.csv",
-    "laws.json",
-    "accuracy.csv",
-    "accuracy.md",
-    "*.png",
-    "*.pdf",
-    "*.svg",
-    "*_plot.csv",  # granchain plot: each figure's plotted data beside it
-)
-_LEGACY_SIGNS = ("summary.json", "compare.csv", "laws.json", "accuracy.csv")
-_LEGACY_SUBDIRS = ("lammps", "reference")
-
 
 class RunDirError(GranchainError, RuntimeError):
     """The run directory cannot be written (exists, not writable, disk full, ...) or read (missing,
@@ -68,28 +37,12 @@ class RunDirError(GranchainError, RuntimeError):
 
 
 def owned_by_granchain(d: str | Path) -> bool:
-    """Whether granchain wrote the directory d: it carries the marker (safe_files.MARKER), or it was
-    written before the marker existed and holds only granchain's files (a summary.json, compare.csv,
-    laws.json or accuracy.csv among them) and no link."""
-    d = Path(d)
-    if safe_files.is_owned(d):
-        return True
-    if os.path.islink(d) or not d.is_dir():
-        return False
-    try:
-        with os.scandir(d) as it:
-            entries = list(it)
-    except OSError:
-        return False
-    if not any(e.name in _LEGACY_SIGNS for e in entries):
-        return False
-    for e in entries:
-        if e.is_dir(follow_symlinks=False):
-            if e.name not in _LEGACY_SUBDIRS or not owned_by_granchain(e.path):
-                return False
-        elif not e.is_file(follow_symlinks=False) or not any(fnmatch.fnmatch(e.name, g) for g in _LEGACY_FILES):
-            return False
-    return True
+    """Whether granchain wrote the directory d: only its marker (safe_files.MARKER) says so.
+
+    A directory without it is the user's, whatever it holds: a ``summary.json`` beside a
+    ``holiday.png`` is not proof (names are anyone's), so ``--overwrite`` never deletes it; the
+    refusal says to choose another ``--out`` or remove the directory by hand."""
+    return safe_files.is_owned(d)
 
 
 def check_output_dir(out: str | Path, overwrite: bool = False) -> Path:

@@ -22,7 +22,7 @@ from .info import add_doctor_parser, add_materials_parser, add_plan_parser, add_
 from .runs import add_accuracy_parser, add_compare_laws_parser, add_compare_parser, add_run_parser
 from .terminal import DEFAULT_SCENE as DEFAULT_SCENE
 from .terminal import auto_np as auto_np
-from .terminal import check_out, shown
+from .terminal import check_out, shown, tolerant_output
 from .terminal import json_safe as json_safe
 from .terminal import np_arg as np_arg
 from .terminal import planned as planned
@@ -67,6 +67,7 @@ def main(argv: list[str] | None = None) -> int:
     GranchainError is one line and exit 2; anything else keeps its traceback)."""
     from granchain import progress
 
+    tolerant_output()
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["reproduce"]:  # its own parser (argparse's REMAINDER drops leading options)
         from granchain import reproduce

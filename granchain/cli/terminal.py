@@ -24,6 +24,15 @@ DEFAULT_SCENE = "default"
 SCENE_HELP = "scene file or bundled scene name"
 
 
+def tolerant_output() -> None:
+    """Make every line granchain prints printable on any terminal: a character stdout's or stderr's
+    encoding lacks (a title's "ü" under PYTHONIOENCODING=ascii) is written as a backslash escape
+    instead of raising UnicodeEncodeError after the run directory was written."""
+    for stream in (sys.stdout, sys.stderr):
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
+
+
 def shown(text) -> str:
     """Text from a scene, a file or a path as printed on a terminal: control characters escaped
     (a title's ESC sequences cannot retitle the window or clear the screen); newlines and tabs kept."""

@@ -169,16 +169,17 @@ LINEAR_EXACT_BEADS = 600
 LINEAR_SAMPLES_PER_PERIOD = 32
 
 
-def linearised_stiffnesses(scene) -> tuple[np.ndarray, float]:
+def linearised_stiffnesses(scene, contacts: int | None = None) -> tuple[np.ndarray, float]:
     """Each bead-bead contact's stiffness about the precompression F0 and the wall contact's (0 without
     a wall), N/m: the slope of its law's virgin curve at F0 (ContactLaw.loading_stiffness: Hertz's
     tangent 3/2 k^(2/3) F0^(1/3), the paper's Eq. 16 differentiated, a linear loading line's own k,
-    Thornton's plastic line beyond F_y)."""
+    Thornton's plastic line beyond F_y). contacts: how many of a uniform chain's contacts, default all
+    (Scene.n_contacts); a chain of beads = "auto" (uniform: no per-bead lists) has no count of its own."""
     f0 = float(scene.effects.precompression)
     if scene.per_bead:
         k = np.array([float(law.loading_stiffness(f0)) for law in scene.contact_laws])
     else:  # the nominal law's, as the scene's other uniform-chain estimates
-        k = np.full(scene.n_contacts, float(scene.law.loading_stiffness(f0)))
+        k = np.full(scene.n_contacts if contacts is None else contacts, float(scene.law.loading_stiffness(f0)))
     kw = float(scene.wall_law.loading_stiffness(f0)) if scene.effects.far_end == "wall" else 0.0
     return k, kw
 

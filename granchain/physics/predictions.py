@@ -66,6 +66,10 @@ MODEL_DOMAINS: dict[str, tuple[str, str]] = {
     n: (name, needs) for name, cls in LAWS.items() for n, needs in cls.model_domains.items()
 }
 
+#: Models whose value is a contact within the chain, so needs its length: on a chain of beads = "auto"
+#: (the planner's) they give NaN and do not apply (applicability says why).
+NEEDS_THE_LENGTH = frozenset({"transition_contact"})
+
 #: (model, measured quantity) pairs where the run measures something other than what the model
 #: predicts, whatever the scene. A run's wave_speed follows the times of peak force along the window.
 MEASURES_OTHER = {
@@ -100,6 +104,12 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
     if name not in MODEL_DOMAINS:
         raise ValueError(f"{name!r}: no such model; known: {', '.join([*SCENE_QUANTITIES, *MODEL_DOMAINS])}")
     law, needs = MODEL_DOMAINS[name]
+    if name in NEEDS_THE_LENGTH and scene.chain.beads is None:
+        return Applicability(
+            False,
+            'a contact of the chain, within its length or not, and [chain] beads = "auto": the length is the '
+            "planner's (granchain plan gives it; give [chain] beads = N to predict this for N beads)",
+        )
     if needs in EFFECT_DOMAINS:
         return _effect_model_applies(law, needs, scene)
     why_not: list[str] = []

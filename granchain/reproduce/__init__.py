@@ -21,8 +21,9 @@ from dataclasses import asdict
 from datetime import UTC, datetime
 from pathlib import Path
 
+from granchain import safe_files
 from granchain.exceptions import GranchainError, UsageError
-from granchain.reproduce.sections import Context, SectionResult, not_yet
+from granchain.reproduce.sections import Context, SectionResult, not_yet, output_dir, output_file
 
 #: the sections, in the report's order: (module under granchain.reproduce, title)
 SECTIONS = (
@@ -81,6 +82,7 @@ def reproduce(
     t0 = time.monotonic()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    output_dir(out / "ws", "its campaign workspaces")  # before any section: one error, not one per section
     ctx = Context(out, quick=quick, workers=workers, scheduler=scheduler, stream=stream)
     results = [run_section(ctx, n, t) for n, t in SECTIONS if not sections or n in sections]
     meta = {
@@ -96,7 +98,8 @@ def reproduce(
     for r in results:
         for row in r.rows:
             row.judge()
-    (out / "rows.json").write_text(
+    safe_files.write_text(
+        output_file(out / "rows.json"),
         json.dumps(
             {
                 **meta,
@@ -114,7 +117,7 @@ def reproduce(
             },
             indent=1,
             default=float,
-        )
+        ),
     )
     md = report.write_markdown(out, results, meta)
     page = report.write_html(out, results, meta)
@@ -142,6 +145,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Exit status: 0 every section ran, 1 a section or campaign point failed, 2 a user error."""
+    for out in (sys.stdout, sys.stderr):  # as granchain.cli.terminal.tolerant_output (a layer above this one)
+        if hasattr(out, "reconfigure"):
+            out.reconfigure(errors="backslashreplace")
     args = build_parser().parse_args(argv)
     if args.workers is not None and args.workers < 1:
         print(f"granchain: error: --workers {args.workers}: give 1 or more", file=sys.stderr)

@@ -1,13 +1,22 @@
-"""report.md and a self-contained report.html (figures embedded as base64 PNG) from the sections."""
+"""report.md and a self-contained report.html (figures embedded as base64 PNG) from the sections.
+
+Text in them may come from the campaign workspaces (a failed point's message, a scene's title), which
+anyone who can write the workspace controls: every piece of text is escaped where it is placed (HTML
+in report.html; Markdown's and HTML's characters in report.md) and its control characters are shown
+as escapes, so a crafted message reads as what it is and cannot add markup, a link or a terminal
+escape. Both files are written atomically, replacing a link planted at their names (sections.output_file).
+"""
 
 from __future__ import annotations
 
 import base64
 import html
 import math
+import re
 from pathlib import Path
 
-from granchain.reproduce.sections import SectionResult
+from granchain import safe_files
+from granchain.reproduce.sections import SectionResult, output_file
 
 ROW_HEADER = ["key", "quantity", "unit", "paper", "ours", "+-", "model", "verdict", "tolerance", "reason"]
 
@@ -63,8 +72,51 @@ def cost_rows(sections: list[SectionResult]) -> list[list[str]]:
     return rows
 
 
+#: control characters (C0 but newline and tab, DEL, C1) and the bidirectional overrides that make
+#: text display other than it reads
+_CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u200e\u200f\u202a-\u202e\u2066-\u2069]")
+#: what Markdown (CommonMark and GitHub's) or inline HTML gives a meaning to, inside a line
+_MD_SPECIAL = re.compile(r"([\\`*_\[\]<>&|~!#@])")
+#: GitHub's bare-URL autolinks ("https://...", "www....")
+_AUTOLINK = re.compile(r"(?i)(:)(//)|(www)(\.)")
+
+
+def plain(text) -> str:
+    r"""``text`` with its control characters shown as escapes (``\\x1b``), never sent."""
+    return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), str(text))
+
+
+def md_text(text, one_line: bool = False) -> str:
+    """``text`` as literal Markdown: every character Markdown or HTML would read as markup
+    backslash-escaped (rendered as itself), bare URLs broken up so none becomes a link;
+    ``one_line``: its line breaks as spaces (a heading, a caption, a table cell)."""
+    out = _MD_SPECIAL.sub(r"\\\1", plain(text))
+    out = _AUTOLINK.sub(lambda m: "\\".join(g for g in m.groups() if g), out)
+    return " ".join(out.splitlines()) if one_line else out
+
+
+def html_text(text) -> str:
+    """``text`` as literal HTML (quotes too: safe in an attribute)."""
+    return html.escape(plain(text), quote=True)
+
+
+def _code_block(note: str) -> str | None:
+    """A note written as a fenced block (a failed section's traceback): its text, else None."""
+    if note.startswith("```\n") and note.endswith("```"):
+        return note[4:-3]
+    return None
+
+
+def _md_note(note: str) -> list[str]:
+    code = _code_block(note)
+    if code is None:
+        return [md_text(note), ""]
+    # indented, not fenced: no line of the text (a message with ``` in it) can end the block
+    return [*("    " + plain(line) for line in code.rstrip("\n").split("\n")), ""]
+
+
 def _md_table(header, rows) -> list[str]:
-    esc = [[str(c).replace("|", "\\|").replace("\n", " ") for c in r] for r in rows]
+    esc = [[md_text(c, one_line=True) for c in r] for r in rows]
     return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header), *("| " + " | ".join(r) + " |" for r in esc)]
 
 
@@ -74,7 +126,7 @@ def write_markdown(out: Path, sections: list[SectionResult], meta: dict) -> Path
     lines = [
         "# Reproducing Pal & Geubelle, *Wave propagation in elastic and elastoplastic granular chains*",
         "",
-        f"Mode: **{meta['mode']}**; granchain {meta['version']}; {meta['when']}. "
+        f"Mode: **{md_text(meta['mode'])}**; granchain {md_text(meta['version'])}; {md_text(meta['when'])}. "
         f"Runs this call: {meta['ran']} (cached: {meta['cached']}). Wall time of this call: {meta['elapsed']:.1f} s.",
         "",
         "A verdict compares our value with the printed one within the paper's own stated error where it states "
@@ -88,26 +140,24 @@ def write_markdown(out: Path, sections: list[SectionResult], meta: dict) -> Path
         "",
     ]
     for s in sections:
-        lines += [f"## {s.title}", ""]
+        lines += [f"## {md_text(s.title, one_line=True)}", ""]
         if not s.reproduced:
             lines += ["**Not yet reproduced.**", ""]
         for n in s.notes:
-            lines += [n, ""]
+            lines += _md_note(n)
         if s.rows:
             lines += [*_md_table(ROW_HEADER, [row_cells(r) for r in s.rows]), ""]
         for f in s.figures:
-            lines += [f"![{f.name}](figures/{f.name}.png)", "", f"*{f.caption}*", ""]
+            lines += [f"![{md_text(f.name)}](figures/{f.name}.png)", "", f"*{md_text(f.caption, one_line=True)}*", ""]
     lines += ["## Cost", "", COST_NOTE, "", *_md_table(COST_HEADER, cost_rows(sections)), ""]
-    path = out / "report.md"
-    path.write_text("\n".join(lines))
+    path = output_file(out / "report.md")
+    safe_files.write_text(path, "\n".join(lines))
     return path
 
 
 def _html_table(header, rows) -> str:
-    h = "".join(f"<th>{html.escape(c)}</th>" for c in header)
-    body = "".join(
-        "<tr>" + "".join(f"<td class='{_cls(c)}'>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows
-    )
+    h = "".join(f"<th>{html_text(c)}</th>" for c in header)
+    body = "".join("<tr>" + "".join(f"<td class='{_cls(c)}'>{html_text(c)}</td>" for c in r) + "</tr>" for r in rows)
     return f"<table><tr>{h}</tr>{body}</table>"
 
 
@@ -125,24 +175,30 @@ def write_html(out: Path, sections: list[SectionResult], meta: dict) -> Path:
         ".todo{background:#eee}img{max-width:100%}",
         "</style></head><body>",
         "<h1>Reproducing Pal &amp; Geubelle, wave propagation in granular chains</h1>",
-        f"<p>Mode: <b>{meta['mode']}</b>; granchain {html.escape(meta['version'])}; {meta['when']}. "
+        f"<p>Mode: <b>{html_text(meta['mode'])}</b>; granchain {html_text(meta['version'])}; "
+        f"{html_text(meta['when'])}. "
         f"Runs this call: {meta['ran']} (cached: {meta['cached']}). Wall time: {meta['elapsed']:.1f} s.</p>",
         "<h2>Every printed number</h2>",
         _html_table(ROW_HEADER, [row_cells(r) for s in sections for r in s.rows]),
     ]
     for s in sections:
-        parts.append(f"<h2>{html.escape(s.title)}</h2>")
+        parts.append(f"<h2>{html_text(s.title)}</h2>")
         if not s.reproduced:
             parts.append("<p><b>Not yet reproduced.</b></p>")
-        parts += [f"<p>{html.escape(n)}</p>" for n in s.notes]
+        parts += [_html_note(n) for n in s.notes]
         for f in s.figures:
-            data = base64.b64encode((out / "figures" / f"{f.name}.png").read_bytes()).decode()
+            data = base64.b64encode(safe_files.read_bytes(out / "figures" / f"{f.name}.png")).decode()
             parts.append(
-                f"<figure><img alt='{f.name}' src='data:image/png;base64,{data}'>"
-                f"<figcaption>{html.escape(f.caption)}</figcaption></figure>"
+                f"<figure><img alt='{html_text(f.name)}' src='data:image/png;base64,{data}'>"
+                f"<figcaption>{html_text(f.caption)}</figcaption></figure>"
             )
-    parts += ["<h2>Cost</h2>", f"<p>{html.escape(COST_NOTE)}</p>", _html_table(COST_HEADER, cost_rows(sections))]
+    parts += ["<h2>Cost</h2>", f"<p>{html_text(COST_NOTE)}</p>", _html_table(COST_HEADER, cost_rows(sections))]
     parts.append("</body></html>")
-    path = out / "report.html"
-    path.write_text("\n".join(parts))
+    path = output_file(out / "report.html")
+    safe_files.write_text(path, "\n".join(parts))
     return path
+
+
+def _html_note(note: str) -> str:
+    code = _code_block(note)
+    return f"<p>{html_text(note)}</p>" if code is None else f"<pre>{html_text(code)}</pre>"

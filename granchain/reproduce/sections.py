@@ -9,10 +9,14 @@ complete and runs nothing; only the figures and the report are drawn again.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from granchain import safe_files
+from granchain.exceptions import GranchainError
 
 #: verdicts a row can get
 AGREES, DISAGREES, NOT_YET, NO_CLAIM = "agrees", "disagrees", "not yet reproduced", "no comparison"
@@ -98,6 +102,32 @@ def not_yet(key: str, title: str, why: str) -> SectionResult:
     return SectionResult(key, title, notes=[f"Not yet reproduced: {why}"], reproduced=False)
 
 
+class ReproduceDirError(GranchainError):
+    """A directory of `reproduce`'s OUT it will not write into (a symbolic link planted there)."""
+
+
+def output_file(path: Path) -> Path:
+    """``path``, a file `reproduce` writes afresh on every call (report, rows, figure), made safe
+    to write: a symbolic link planted there is removed, never written through (the file is
+    granchain's output, drawn again from the cache), and the caller writes it atomically
+    (safe_files), so a kill leaves the old file or the new one, never a truncated one."""
+    if safe_files.is_link(path):
+        os.unlink(path)
+    return path
+
+
+def output_dir(path: Path, what: str) -> Path:
+    """Make the directory ``path`` of OUT (``what`` says what it holds), refusing a symbolic link
+    there: what `reproduce` writes stays inside OUT. Returns ``path``."""
+    if safe_files.is_link(path):
+        raise ReproduceDirError(
+            f"{path}: is a symbolic link; reproduce writes {what} only inside --out "
+            "(remove the link, or move the directory it points to in its place)"
+        )
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
 class Context:
     """One `reproduce` call: where it writes, how it runs campaigns, what they did."""
 
@@ -105,7 +135,9 @@ class Context:
         self.out, self.quick = Path(out), quick
         self.workers, self.scheduler, self.stream = workers, scheduler, stream
         self.fig_dir = self.out / "figures"
-        self.fig_dir.mkdir(parents=True, exist_ok=True)
+        if safe_files.is_link(self.fig_dir):  # figures are drawn again on every call: a link is not ours
+            os.unlink(self.fig_dir)
+        output_dir(self.fig_dir, "its figures")
         self.reports: dict[str, object] = {}  # campaign name -> RunReport
 
     @property
@@ -119,16 +151,16 @@ class Context:
         failed) for the report's metadata."""
         from granchain.campaigns.run import run_campaign
 
-        ws = self.out / "ws" / f"{self.mode}-{name}"
-        ws.mkdir(parents=True, exist_ok=True)
+        output_dir(self.out / "ws", "its campaign workspaces")  # the cache: refused, not replaced
+        ws = output_dir(self.out / "ws" / f"{self.mode}-{name}", "a campaign's workspace")
         tables, report = run_campaign(spec, ws, workers=self.workers, scheduler=self.scheduler, stream=self.stream)
         self.reports[f"{self.mode}-{name}"] = report
         return ws
 
     def figure(self, fig, name: str) -> Path:
         """Save a matplotlib figure as OUT/figures/<name>.png and close it; returns the path."""
-        path = self.fig_dir / f"{name}.png"
-        fig.savefig(path, dpi=110)
+        path = output_file(self.fig_dir / f"{name}.png")
+        safe_files.save_figure(fig, path, dpi=110)
         import matplotlib.pyplot as plt
 
         plt.close(fig)

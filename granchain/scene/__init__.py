@@ -29,7 +29,7 @@ from granchain.scene.limits import (
     MIN_TIMESTEP,
     TIME_TEXT,
 )
-from granchain.scene.model import Chain, Contact, Effects, Loading, Outputs, Run, Scene
+from granchain.scene.model import Chain, Contact, Effects, Loading, Outputs, Run, Scene, UnplannedChainError
 from granchain.scene.reader import SECTIONS, bundled_scenes, load_scene, parse_scene, scene_from_dict
 from granchain.scene.section import SceneError, _did_you_mean, _Section, _shown
 from granchain.scene.writer import dump_toml, scene_to_dict
@@ -50,6 +50,7 @@ __all__ = [
     "MIN_TIMESTEP",
     "SECTIONS",
     "TIME_TEXT",
+    "UnplannedChainError",
     "Chain",
     "Contact",
     "Effects",

@@ -20,6 +20,12 @@ from granchain.scene.limits import AUTO
 from granchain.scene.writer import dump_toml, scene_to_dict
 
 
+class UnplannedChainError(RuntimeError):
+    """A quantity that needs the number of beads was asked of a chain of beads = "auto" before the
+    planner chose it: a bug of the caller (it must plan the scene, or handle the unknown length), not
+    the user's error, so it keeps its traceback."""
+
+
 @dataclass(frozen=True)
 class Chain:
     """The [chain] section: how many beads, their radius and material (one each, or one per bead).
@@ -274,10 +280,32 @@ class Scene:
         )
 
     # ---- derived quantities (definitions live in granchain.physics) ----
+    def planned_beads(self, what: str) -> int:
+        """N, the number of beads, for a quantity that needs it (`what`, named in the error).
+
+        Raises
+        ------
+        UnplannedChainError
+            The scene says beads = "auto": the count is the planner's, which the caller must ask
+            first (granchain.workflows.plan.plan_scene), or handle the chain of unknown length itself.
+        """
+        if self.chain.beads is None:
+            raise UnplannedChainError(
+                f'Scene.{what} needs the number of beads, and this scene says [chain] beads = "auto": plan it '
+                "first (granchain.workflows.plan.plan_scene), or handle a chain of unknown length explicitly"
+            )
+        return self.chain.beads
+
+    @property
+    def has_contacts(self) -> bool:
+        """The chain has a bead-bead contact: N > 1, or beads = "auto" (the planner makes it long)."""
+        return self.chain.beads is None or self.chain.beads > 1
+
     @property
     def n_contacts(self) -> int:
-        """The number of bead-bead contacts, N - 1 (a wall's contact not counted)."""
-        return self.chain.beads - 1
+        """The number of bead-bead contacts, N - 1 (a wall's contact not counted); the planned N
+        (planned_beads: an "auto" chain is an UnplannedChainError)."""
+        return self.planned_beads("n_contacts") - 1
 
     @property
     def mass(self) -> float:
@@ -352,17 +380,17 @@ class Scene:
 
     @property
     def bead_radii(self) -> np.ndarray:
-        """Every bead's radius, bead 1 first, m."""
-        n = self.chain.beads
-        return np.asarray(self.chain.radii) if self.chain.radii else np.full(n, self.chain.radius)
+        """Every bead's radius, bead 1 first, m (of the planned N: planned_beads)."""
+        if self.chain.radii:
+            return np.asarray(self.chain.radii)
+        return np.full(self.planned_beads("bead_radii"), self.chain.radius)
 
     @property
     def bead_materials(self) -> list:
-        """Every bead's Material, bead 1 first."""
-        n = self.chain.beads
+        """Every bead's Material, bead 1 first (of the planned N: planned_beads)."""
         if self.chain.materials:
             return [mat.bead_material(entry) for entry in self.chain.materials]
-        return [self.chain.material] * n
+        return [self.chain.material] * self.planned_beads("bead_materials")
 
     @property
     def bead_masses(self) -> np.ndarray:

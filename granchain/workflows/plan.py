@@ -334,9 +334,11 @@ def sonic_travel_times(scene, last: int, step: bool = False) -> np.ndarray:
     3/2 k^(2/3) F0^(1/3), dF/dalpha of the paper's Eq. 16, a linear loading line's own k, Thornton's
     plastic line beyond F_y), so that
     c0 = a sqrt(k_lin / m) on a uniform chain; summed, with the dispersion lag PRECOMPRESSED_LAG of a
-    kick or, with step = True, STEP_LAG of a lasting force."""
-    n_c = scene.n_contacts
-    k_lin = linearised_stiffnesses(scene)[0]
+    kick or, with step = True, STEP_LAG of a lasting force. A chain of beads = "auto" is uniform and
+    reaches past `last` (the planner's N is at least last + 5: _beads_choice): its contacts up to
+    last + PRECOMPRESSED_NEIGHBOURS are every window's."""
+    n_c = scene.n_contacts if scene.chain.beads is not None else last + PRECOMPRESSED_NEIGHBOURS
+    k_lin = linearised_stiffnesses(scene, n_c)[0]
     m = scene.bead_masses if scene.per_bead else np.full(n_c + 1, scene.mass)
     heavier = np.maximum(m[:-1], m[1:])
     h = PRECOMPRESSED_NEIGHBOURS
@@ -397,7 +399,7 @@ def front_travel_time(scene, last: int, slow: float) -> float:
         heavier = np.maximum(m[:-1], m[1:])[:last]
         per_contact = per_contact * (float(scene.stiffness) / k) ** e * np.sqrt(heavier / scene.mass)
     travel = float(np.sum(per_contact))
-    if scene.effects.precompression and scene.n_contacts:
+    if scene.effects.precompression and scene.has_contacts:  # an "auto" chain: the asymptotic front
         travel = min(travel, precompressed_front_time(scene, last))
     return travel
 
@@ -509,7 +511,7 @@ def _front_end_time(scene, last: int | None, slow: float, omega_max: float) -> P
             f"at most {cap_text})"
         )
     notes = []
-    if step is not None and scene.effects.precompression and scene.n_contacts:
+    if step is not None and scene.effects.precompression and scene.has_contacts:
         sonic = precompressed_front_time(scene, last), precompressed_front_time(scene, last, step=True)
         if sonic[0] <= travel:  # the travel is the linearised chain's (the load is small against F0)
             # a lasting force's first maximum trails a kick's by more than that tail near the loaded end

@@ -4,10 +4,18 @@ granchain compare needs the same reference RK4 runs twice (the reference's error
 LAMMPS's, workflows.run.shared_reference_runs). :class:`SharedRuns` holds the runs made inside the
 block, by key, for every thread of the process; :func:`sharing` opens the block and may start the
 runs it will be asked for at once in one worker process.
+
+The worker dies with the process that started it, however that one ends (SIGTERM, SIGHUP, kill -9):
+on Linux the kernel kills it (``PR_SET_PDEATHSIG``), a SIGTERM or SIGHUP to the parent first ends the
+worker (:func:`_ending_pool_on`), and the worker holds none of the caller's output (its stdout and
+stderr are /dev/null), so ``granchain compare | tee log`` ends when compare does.
 """
 
 from __future__ import annotations
 
+import os
+import signal
+import sys
 import threading
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, wait
@@ -109,6 +117,68 @@ def current() -> SharedRuns | None:
     return _current
 
 
+def _worker_start(parent: int) -> None:
+    """The prefetch worker's first act (its pool's initializer): die with ``parent``, and let go of
+    the caller's stdout and stderr (a pipe it held open would outlive the caller).
+
+    PR_SET_PDEATHSIG fires when the thread that forked the worker ends: the pool is made and its
+    first task submitted (which forks) by the thread that holds the :func:`sharing` block, and the
+    block outlives the pool."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        pr_set_pdeathsig = 1
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):  # no prctl: the check below and the parent's handler remain
+            pass
+    if os.getppid() != parent:  # the parent died before the line above took effect
+        os._exit(70)
+    for sig in (signal.SIGTERM, signal.SIGHUP):  # the parent's handler (_ending_pool_on) is not ours
+        signal.signal(sig, signal.SIG_DFL)
+    null = os.open(os.devnull, os.O_RDWR)
+    for fd in (0, 1, 2):
+        os.dup2(null, fd)
+    os.close(null)
+
+
+def _kill_workers(pool) -> None:
+    """End a pool's worker processes now (not after their run, as shutdown would)."""
+    if hasattr(pool, "kill_workers"):  # Python 3.14
+        pool.kill_workers()
+        return
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        proc.kill()
+
+
+@contextmanager
+def _ending_pool_on(pool, signals=(signal.SIGTERM, signal.SIGHUP)) -> Iterator[None]:
+    """Inside this block, ``signals`` end the pool's worker before they act as they did before
+    (the default: this process ends too). Only the main thread may set handlers: elsewhere the
+    worker's PR_SET_PDEATHSIG alone ends it."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = {sig: signal.getsignal(sig) for sig in signals}
+
+    def handler(sig, frame):
+        _kill_workers(pool)
+        previous = before[sig]
+        if callable(previous):
+            previous(sig, frame)
+            return
+        signal.signal(sig, previous if previous is not None else signal.SIG_DFL)
+        signal.raise_signal(sig)
+
+    for sig in signals:
+        signal.signal(sig, handler)
+    try:
+        yield
+    finally:
+        for sig, previous in before.items():
+            signal.signal(sig, previous if previous is not None else signal.SIG_DFL)
+
+
 @contextmanager
 def sharing(prefetch: Iterable = (), prefetched: Callable | None = None) -> Iterator[SharedRuns]:
     """A block inside which runs are shared (:meth:`SharedRuns.get`); yields its SharedRuns.
@@ -136,10 +206,18 @@ def sharing(prefetch: Iterable = (), prefetched: Callable | None = None) -> Iter
             import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
 
-            pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("fork"))
-            for key in todo:
-                _current.runs[key] = pool.submit(prefetched, *key)
-        yield _current
+            pool = ProcessPoolExecutor(
+                max_workers=1,
+                mp_context=multiprocessing.get_context("fork"),
+                initializer=_worker_start,
+                initargs=(os.getpid(),),
+            )
+            with _ending_pool_on(pool):
+                for key in todo:
+                    _current.runs[key] = pool.submit(prefetched, *key)
+                yield _current
+        else:
+            yield _current
     finally:
         if pool is not None:
             pool.shutdown(wait=False, cancel_futures=True)

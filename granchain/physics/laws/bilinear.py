@@ -17,6 +17,7 @@ steady fronts of a long load, Eqs. 35-38).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import ClassVar
@@ -393,7 +394,10 @@ def _short_load_predictions(scene) -> list[dict]:
             valid="exponential regime: contacts before the transition",
         ),
     ]
-    tc = models.transition_contact(lin["F_p"], lam, scene.unloading_stiffness, m, coeffs.omega, scene.n_contacts)
+    if scene.chain.beads is None:  # "auto": whether the chain reaches the transition is its planned length's
+        tc = math.nan  # (predictions.applicability: it does not apply, and why)
+    else:
+        tc = models.transition_contact(lin["F_p"], lam, scene.unloading_stiffness, m, coeffs.omega, scene.n_contacts)
     if tc is not None:
         out.append(
             dict(

@@ -315,6 +315,8 @@ def _effect_predictions(scene) -> list[dict]:
                 valid=EFFECT_DOMAINS["precompressed"] + "; the speed of a small perturbation's front",
             )
         )
+    if scene.chain.beads not in (1, 2):  # the impacts of one or two bodies; an "auto" chain is a long one
+        return out
     ld, m1 = scene.loading, float(scene.bead_masses[0])
     if scene.chain.beads == 2 and ld.kind == "velocity" and scene.effects.far_end == "free":
         m2 = float(scene.bead_masses[1])

@@ -5,6 +5,7 @@ the text on them (user text shown as is, time units), and the peak-force markers
 from __future__ import annotations
 
 import csv
+import errno
 import io
 from collections.abc import Iterable
 from pathlib import Path
@@ -72,6 +73,21 @@ def _unsafe(e: OSError) -> PlotError:
     return PlotError(f"{e}; nothing was written there")
 
 
+def _not_written(path: Path, e: OSError) -> PlotError:
+    """A figure or its CSV that could not be written (a read-only directory, a full disk): one
+    sentence naming the directory and the fix. (Written atomically: nothing half-written is left.)"""
+    if isinstance(e, safe_files.UnsafeFileError):
+        return _unsafe(e)
+    where = path.parent
+    if e.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
+        fix = "make it writable, or copy the directory somewhere writable and plot the copy"
+    elif e.errno in (errno.ENOSPC, errno.EDQUOT):
+        fix = "free some space there (or copy the directory to another disk and plot the copy)"
+    else:
+        fix = "check that directory, or copy it somewhere else and plot the copy"
+    return PlotError(f"{where}: cannot write {path.name} there ({e.strerror or e}); {fix}")
+
+
 def save_figure(fig: Figure, base: Path, formats=("png",)) -> list[Path]:
     """fig as base.<format> for each format, written atomically and never through a symbolic link
     (granchain.safe_files: a link planted at the name is refused, its target untouched)."""
@@ -80,8 +96,8 @@ def save_figure(fig: Figure, base: Path, formats=("png",)) -> list[Path]:
         p = base.with_name(f"{base.name}.{fmt}")
         try:
             safe_files.save_figure(fig, p, format=fmt, dpi=DPI, metadata={"Date": None} if fmt == "svg" else None)
-        except safe_files.UnsafeFileError as e:
-            raise _unsafe(e) from None
+        except OSError as e:  # the filesystem's answer (a link refused, read-only, full), not a bug
+            raise _not_written(p, e) from None
         out.append(p)
     return out
 
@@ -97,8 +113,8 @@ def _write_csv(path: Path, header: list[str], columns: list[np.ndarray]) -> None
         w.writerow([repr(float(x)) for x in row])
     try:
         safe_files.write_text(path, text.getvalue())
-    except safe_files.UnsafeFileError as e:
-        raise _unsafe(e) from None
+    except OSError as e:
+        raise _not_written(path, e) from None
 
 
 def _cmap(name: str):
