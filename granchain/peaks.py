@@ -313,8 +313,11 @@ def reflection_pending(scene, solution) -> np.ndarray:
     and at a contact it passed on its way in the reflection can be the larger pulse (a dimer, mass
     ratio 1/8, struck at 1 m/s: contact 21's 114.5 N was 122.3 N once the reflection had passed). A
     contact whose largest force came before the wall's (its incoming pulse's) is pending unless the
-    run ended in free flight (free_flight): a run that stops once the wave has passed the wall ends
-    before the reflection has passed the contacts behind it. On a precompressed chain the reflection
+    run ended in free flight (free_flight) or its stop check ended it once the reflection had passed
+    back through contact 1 ([run] stop_after_reflection, the planner's on such a chain: the run ended
+    before its end time), the last the reflection reaches: a run that stops once the wave has passed
+    the wall, or a fixed end time, can end before the reflection has passed the contacts behind it.
+    On a precompressed chain the reflection
     comes back too, but the chain never flies apart and nothing is proved: not marked (a limit,
     docs/observables.md).
     """
@@ -323,8 +326,15 @@ def reflection_pending(scene, solution) -> np.ndarray:
     tw = solution.wall_time_of_peak
     if scene.effects.far_end != "wall" or scene.effects.precompression or tw is None:
         return pending
-    if free_flight(scene, solution):
+    returned = scene.run.stop_after_reflection and solution.end_time < scene.run.end_time * (1.0 - 1e-9)
+    if returned or free_flight(scene, solution):
         return pending
     if not math.isfinite(tw):  # the wave has not reached the wall: its reflection is still to come everywhere
         return np.isfinite(t)
     return np.isfinite(t) & (t < tw)
+
+
+def mark_reflection_pending(scene, solution) -> None:
+    """Make the peaks the wall's reflection may still exceed (reflection_pending) not complete in
+    solution, in place: every backend's result, and a collected plain-LAMMPS run's, the same way."""
+    solution.complete = solution.complete & ~reflection_pending(scene, solution)

@@ -12,7 +12,7 @@ from pathlib import Path
 from granchain.backends import BACKENDS, METHODS, REFERENCE, Backend, Calculation, backend_named
 from granchain.exceptions import UsageError
 from granchain.invariants import InvariantError
-from granchain.peaks import reflection_pending
+from granchain.peaks import mark_reflection_pending
 from granchain.results import RunResult
 from granchain.rundir import check_output_dir, write_run_dir
 from granchain.workflows import shared_runs
@@ -238,8 +238,7 @@ def _execute(scene, backend: Backend, method: str, np_: int) -> Calculation:
 def _cut_off(calc: Calculation) -> Calculation:
     """calc with the peaks a wall's reflection may still exceed not complete (peaks.reflection_pending),
     every backend's the same way: a peak the run's end cut off is not one."""
-    sol = calc.result.solution
-    sol.complete = sol.complete & ~reflection_pending(calc.result.scene, sol)
+    mark_reflection_pending(calc.result.scene, calc.result.solution)
     return calc
 
 
