@@ -127,3 +127,17 @@ def test_dimer_wall_peak_cut_off_by_a_fixed_end_is_not_complete(mass_ratio):
     missed = truth > sol.peak_force * (1 + 1e-3)
     assert missed.any(), "the case needs a later, larger pulse the run did not see"
     assert not (missed & sol.complete).any()
+
+
+def test_granchain_run_says_the_reflection_had_not_passed(tmp_path, capsys):
+    """The contacts a fixed end cut off before the wall's reflection came back are named as such, not
+    as contacts whose force had not fallen to half of its peak (it had: their incoming pulse passed)."""
+    from granchain.cli import main
+
+    end = 1.2 * dimer_run(1 / 8)[0].solution.wall_time_of_peak
+    p = tmp_path / "dimer.toml"
+    p.write_text(dimer_wall_text(16, 1 / 8).replace('end_time = "auto"', f"end_time = {end!r}"))
+    assert main(["run", str(p), "--backend", "reference", "--out", str(tmp_path / "r"), "--error-estimate", "off"]) == 0
+    line = next(s for s in capsys.readouterr().out.splitlines() if "peaks not complete" in s)
+    assert "the wall's reflection, which can be larger, had not passed back through" in line, line
+    assert "the force had not fallen to half of its peak: 1-" not in line, line

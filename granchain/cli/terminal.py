@@ -233,17 +233,20 @@ def print_incomplete_peaks(result) -> None:
     never = contacts[~reached]
     # not complete although passed: the wave reflected from a wall may still exceed them (peaks.reflection_pending)
     back = contacts[~complete & reflection_pending(result.scene, s)[contacts - 1]]
+    falling = np.setdiff1d(open_, np.union1d(back, never))  # the force had not fallen to half of its peak
     row = "peaks not complete (contacts)"
-    print(
-        f"  {row:38s} {open_.size} of {contacts.size}: {contact_runs(open_)}   (not measured: the force had not "
-        f"fallen to half of its peak when the run ended, t = {s.end_time:g} s"
-        + (f"; never reached: {contact_runs(never)}" if never.size else "")
-        + (
-            f"; the wave reflected from the wall, larger at some contacts, had not passed back through "
-            f"{contact_runs(back)} (their largest force came before the wall's, and the chain was not in free flight)"
-            if back.size
-            else ""
+    said = [f"never reached: {contact_runs(never)}"] if never.size else []
+    if falling.size:
+        said.append(f"the force had not fallen to half of its peak: {contact_runs(falling)}")
+    if back.size:
+        said.append(
+            f"the wall's reflection, which can be larger, had not passed back through {contact_runs(back)} "
+            '(their largest force came before the wall\'s; end_time = "auto" runs until it has)'
         )
+    print(
+        f"  {row:38s} {open_.size} of {contacts.size}: {contact_runs(open_)}   (not measured when the run ended, "
+        f"t = {s.end_time:g} s: "
+        + "; ".join(said)
         + "; peaks.csv's complete = 0, its peak_force the largest force so far)"
     )
 
