@@ -271,3 +271,70 @@ def chain_laws(scene) -> list:
 def reached_floor(scene) -> float:
     """REACHED_FRACTION of the largest expected force: round-off forces ahead of the wave stay below."""
     return REACHED_FRACTION * expected_peak_force(scene)
+
+
+def free_flight(scene, solution) -> bool:
+    """Whether the run ended with no force able to act again: every peak so far is then final.
+
+    Provable only on an uncompressed chain whose load has stopped acting: every contact open (its
+    overlap, the beads' displacements' difference from the touching placement, at most 0) and not
+    closing (the bead behind no faster than the one ahead), and, with a wall, bead N neither pressing
+    it nor moving towards it. Then each bead flies free, every gap only grows, and no contact closes
+    again. A striker's end position is not recorded: with a striker nothing is proved.
+
+    Parameters
+    ----------
+    scene : Scene
+        The planned scene that ran.
+    solution : ChainSolution
+        Its result: the end state's displacement and velocity (N,).
+
+    Returns
+    -------
+    bool
+        The end state is free flight (False where a backend left the end state out).
+    """
+    u, v = np.asarray(solution.displacement, dtype=float), np.asarray(solution.velocity, dtype=float)
+    ld = scene.loading
+    if scene.effects.precompression or ld.kind == "striker" or u.size != scene.chain.beads or v.size != u.size:
+        return False
+    if ld.is_force and ld.duration >= solution.end_time:
+        return False
+    free = bool(np.all(u[:-1] - u[1:] <= 0.0) and np.all(v[:-1] <= v[1:]))
+    if scene.effects.far_end == "wall":
+        free = free and u[-1] <= 0.0 and v[-1] <= 0.0
+    return free
+
+
+def reflection_pending(scene, solution) -> np.ndarray:
+    """Which contacts' peaks the wave reflected from a wall may still exceed when the run ends (N-1,).
+
+    On an uncompressed chain against a wall the wave comes back from the wall through every contact,
+    and at a contact it passed on its way in the reflection can be the larger pulse (a dimer, mass
+    ratio 1/8, struck at 1 m/s: contact 21's 114.5 N was 122.3 N once the reflection had passed). A
+    contact whose largest force came before the wall's (its incoming pulse's) is pending unless the
+    run ended in free flight (free_flight) or its stop check ended it once the reflection had passed
+    back through contact 1 ([run] stop_after_reflection, the planner's on such a chain: the run ended
+    before its end time), the last the reflection reaches: a run that stops once the wave has passed
+    the wall, or a fixed end time, can end before the reflection has passed the contacts behind it.
+    On a precompressed chain the reflection
+    comes back too, but the chain never flies apart and nothing is proved: not marked (a limit,
+    docs/observables.md).
+    """
+    t = np.asarray(solution.time_of_peak, dtype=float)
+    pending = np.zeros(t.shape, dtype=bool)
+    tw = solution.wall_time_of_peak
+    if scene.effects.far_end != "wall" or scene.effects.precompression or tw is None:
+        return pending
+    returned = scene.run.stop_after_reflection and solution.end_time < scene.run.end_time * (1.0 - 1e-9)
+    if returned or free_flight(scene, solution):
+        return pending
+    if not math.isfinite(tw):  # the wave has not reached the wall: its reflection is still to come everywhere
+        return np.isfinite(t)
+    return np.isfinite(t) & (t < tw)
+
+
+def mark_reflection_pending(scene, solution) -> None:
+    """Make the peaks the wall's reflection may still exceed (reflection_pending) not complete in
+    solution, in place: every backend's result, and a collected plain-LAMMPS run's, the same way."""
+    solution.complete = solution.complete & ~reflection_pending(scene, solution)

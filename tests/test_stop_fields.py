@@ -41,7 +41,7 @@ peak_force = true
 """
 
 #: a non-default value of each stop field (a new stop field must be given one here)
-STOP_VALUES = {"stop_after_contact": 21, "stop_after_wall": True}
+STOP_VALUES = {"stop_after_contact": 21, "stop_after_wall": True, "stop_after_reflection": True}
 GIVEN_STOP = "\n".join(f"{k} = {str(v).lower() if isinstance(v, bool) else v}" for k, v in STOP_VALUES.items())
 
 

@@ -58,6 +58,7 @@ class ReferenceBackend(Backend):
                 snapshots=scene.outputs.snapshots,
                 stop_after=None if scene.run.stop_after_contact is None else scene.run.stop_after_contact - 1,
                 stop_at_wall=scene.run.stop_after_wall,
+                stop_at_reflection=scene.run.stop_after_reflection,
                 stop_floor=stop_force_floor(scene),
                 lead_floor=lead_floor(scene),
                 lead_fall=lead_fall(scene),

@@ -13,7 +13,7 @@ import numpy as np
 
 from granchain.backends import Backend, backend_named
 from granchain.exceptions import UsageError
-from granchain.peaks import REACHED_FRACTION, end_contact_reached
+from granchain.peaks import REACHED_FRACTION, end_contact_reached, reflection_pending
 from granchain.physics.effects import unbalanced_forces
 from granchain.postprocess.comparison_table import dynamic_name
 from granchain.results import OBSERVABLE_UNITS, printable
@@ -231,11 +231,22 @@ def print_incomplete_peaks(result) -> None:
     if open_.size == 0:
         return
     never = contacts[~reached]
+    # not complete although passed: the wave reflected from a wall may still exceed them (peaks.reflection_pending)
+    back = contacts[~complete & reflection_pending(result.scene, s)[contacts - 1]]
+    falling = np.setdiff1d(open_, np.union1d(back, never))  # the force had not fallen to half of its peak
     row = "peaks not complete (contacts)"
+    said = [f"never reached: {contact_runs(never)}"] if never.size else []
+    if falling.size:
+        said.append(f"the force had not fallen to half of its peak: {contact_runs(falling)}")
+    if back.size:
+        said.append(
+            f"the wall's reflection, which can be larger, had not passed back through {contact_runs(back)} "
+            '(their largest force came before the wall\'s; end_time = "auto" runs until it has)'
+        )
     print(
-        f"  {row:38s} {open_.size} of {contacts.size}: {contact_runs(open_)}   (not measured: the force had not "
-        f"fallen to half of its peak when the run ended, t = {s.end_time:g} s"
-        + (f"; never reached: {contact_runs(never)}" if never.size else "")
+        f"  {row:38s} {open_.size} of {contacts.size}: {contact_runs(open_)}   (not measured when the run ended, "
+        f"t = {s.end_time:g} s: "
+        + "; ".join(said)
         + "; peaks.csv's complete = 0, its peak_force the largest force so far)"
     )
 

@@ -557,7 +557,12 @@ class EarlyStop(Observer):
     steps, as LAMMPS's fix halt does): the leading wave has passed them. Only a peak above stop_floor
     counts (round-off forces ahead of the wave must not stop the run), and only once the force has
     also fallen by lead_fall below it: then a leading pulse that waits for that fall
-    (leading.LeadingPulse, which sees every step before this check) has frozen."""
+    (leading.LeadingPulse, which sees every step before this check) has frozen.
+
+    back (a wall's reflection, [run] stop_after_reflection): the last of cs is the wall's contact, and
+    the stop also waits for the reflection to pass back through contact `back`: its force above F0 at
+    the checks where the wall's contact has passed (0 at the others, as templates/stop.lmp.j2's fix
+    vector stores it) has a largest value above stop_floor - F0 and is back below half of it."""
 
     def __init__(
         self,
@@ -567,6 +572,7 @@ class EarlyStop(Observer):
         every: int,
         stop_floor: float,
         lead_fall: float = 0.0,
+        back: int | None = None,
     ) -> None:
         self.peaks = peaks
         self.contacts = contacts
@@ -574,10 +580,18 @@ class EarlyStop(Observer):
         self.stop_floor = stop_floor
         self.lead_fall = lead_fall
         self.f0 = state.f0
+        self.back = back
+        self.back_max = -math.inf  # the largest sample so far (the deck's max(f_back))
 
     @override
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
-        return all(self.passed(state, c) for c in self.contacts)
+        passed = [self.passed(state, c) for c in self.contacts]
+        if self.back is None:
+            return all(passed)
+        now = self.peaks.now_and_peak(state, self.back)[0] - self.f0
+        self.back_max = max(self.back_max, now if passed[-1] else 0.0)
+        returned = self.back_max > self.stop_floor - self.f0 and now < PEAK_PASSED_FRACTION * self.back_max
+        return all(passed) and returned
 
     def passed(self, state: ChainState, c: int) -> bool:
         """Whether the wave has passed contact c."""

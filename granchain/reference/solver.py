@@ -156,6 +156,7 @@ def _solve(
     event_location: bool = True,
     stop_after: int | None = None,
     stop_at_wall: bool = False,
+    stop_at_reflection: bool = False,
     stop_floor: float = 0.0,
     lead_floor: float = 0.0,
     lead_fall: float = 0.0,
@@ -173,7 +174,7 @@ def _solve(
     stop_after: 0-based contact; stop (checked every STOP_CHECK_EVERY steps, as LAMMPS's fix halt
     does) once its force has fallen below half its peak: the leading wave has passed it. Only a
     peak above stop_floor counts (round-off forces ahead of the wave must not stop the run).
-    stop_at_wall: the stop also waits for the last contact (a wall's: bead N on the flat) to pass.
+    stop_at_wall, stop_at_reflection: it also waits for the wall's contact, then its reflection (EarlyStop).
     lead_floor, lead_fall: a leading pulse's least rise above F0, and its fall that makes it one (peaks).
     max_overlap, energy_watch, momentum_watch: the run watch (granchain.invariants); None = off.
     max_overlap: one bound in m for every contact, or one per contact of the problem's chain with its
@@ -201,9 +202,9 @@ def _solve(
         RunWatch(state, ledger, watch_every, max_overlap, energy_watch, momentum_watch),
     ]
     if stop_after is not None:
-        # a wall's contact is the problem's last (ChainProblem.with_ends)
-        contacts = (stop_after, state.n - 2) if stop_at_wall else (stop_after,)
-        observers.append(EarlyStop(state, peaks, contacts, STOP_CHECK_EVERY, stop_floor, lead_fall))
+        contacts = (stop_after, state.n - 2) if stop_at_wall else (stop_after,)  # a wall's: the last
+        back = 0 if stop_at_wall and stop_at_reflection else None  # the reflection's last contact
+        observers.append(EarlyStop(state, peaks, contacts, STOP_CHECK_EVERY, stop_floor, lead_fall, back))
     _drive(state, integrator, plan, observers, timestep, progress)
     fields = {}
     for observer in observers:  # in list order: the leading pulse reads the peak tracker's result

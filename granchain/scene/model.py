@@ -146,12 +146,18 @@ class Run:
     stop_after_wall : bool
         The stop check also waits for the wall's contact (bead N on the flat) to pass: its force back
         below half its peak after the reflection (only on a chain with a wall).
+    stop_after_reflection : bool
+        The stop check also waits for the wall's reflection to pass back through contact 1: after the
+        wall's contact has passed, contact 1's force rose above the stop floor and fell back below half
+        of its largest since (only with stop_after_wall). Then every contact's peak has seen the
+        reflection (peaks.reflection_pending).
     """
 
     end_time: float | None  # s; None: "auto"
     timestep: float | None  # s; None: "auto"
     stop_after_contact: int | None = None  # stop once the leading wave has passed this contact
     stop_after_wall: bool = False  # ... and the wall's contact (a walled chain)
+    stop_after_reflection: bool = False  # ... and the wall's reflection back through contact 1
 
     def stop_check(self) -> dict:
         """The stop check's fields (every field but end_time and timestep) that differ from "no stop".

@@ -291,16 +291,27 @@ def _read_run(s: _Section, loading: Loading) -> Run:
                 "a contact number >= 1: the run stops once its force has "
                 "fallen below half its peak (the leading wave has passed it)",
             )
-    wall = s.raw("stop_after_wall", False) if s.has("stop_after_wall") else False
-    if not isinstance(wall, bool):
-        raise s.fail(
-            "stop_after_wall",
-            wall,
-            "true or false: true also waits for the wall's contact (bead N on the flat) to fall below half its "
-            "peak after the reflection",
-        )
-    s.finish(("end_time", "timestep", "stop_after_contact", "stop_after_wall"))
-    return Run(end_time=end, timestep=dt, stop_after_contact=stop, stop_after_wall=wall)
+    wall = _read_flag(
+        s,
+        "stop_after_wall",
+        "true also waits for the wall's contact (bead N on the flat) to fall below half its peak after the reflection",
+    )
+    back = _read_flag(
+        s,
+        "stop_after_reflection",
+        "true also waits for the wall's reflection to pass back through contact 1 (its force risen and fallen "
+        "below half of its largest after the wall's)",
+    )
+    s.finish(("end_time", "timestep", "stop_after_contact", "stop_after_wall", "stop_after_reflection"))
+    return Run(end_time=end, timestep=dt, stop_after_contact=stop, stop_after_wall=wall, stop_after_reflection=back)
+
+
+def _read_flag(s: _Section, key: str, what: str) -> bool:
+    """A true/false field of s (false when absent); what: what true does."""
+    v = s.raw(key, False) if s.has(key) else False
+    if not isinstance(v, bool):
+        raise s.fail(key, v, f"true or false: {what}")
+    return v
 
 
 def _int_list(s: _Section, key: str, low: int, high: int, what: str) -> tuple[int, ...]:
@@ -368,6 +379,11 @@ def _check_stop(s: _Section, run: Run, nc: int, snapshots, wall: bool) -> None:
             raise SceneError(
                 f'{s.file}: [run] stop_after_wall = true needs a wall: [boundary] far_end = "wall" (or remove it)'
             )
+    if run.stop_after_reflection and not run.stop_after_wall:
+        raise SceneError(
+            f"{s.file}: [run] stop_after_reflection = true needs [run] stop_after_wall = true: the reflection "
+            "comes back once the wave has passed the wall"
+        )
 
 
 def _read_outputs(s: _Section, chain: Chain, run: Run, wall: bool = False) -> Outputs:

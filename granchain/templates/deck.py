@@ -210,6 +210,8 @@ def render_deck(scene, yardstick: str | None = None, options: DeckOptions = DECK
                     fall=lead_fall(scene),
                     # the wall's contact lives on bead N's atom
                     wall_atom=scene.chain.beads + layout.offset if scene.run.stop_after_wall else 0,
+                    # ... and contact 1's, for the wall's reflection coming back
+                    back_atom=1 + layout.offset if scene.run.stop_after_reflection else 0,
                 )
                 if stop
                 else None

@@ -217,6 +217,10 @@ class StopCheck:
     wall_atom : int
         [run] stop_after_wall: the atom the wall's contact lives on (bead N's), whose force must also
         have fallen back below the fraction of its peak; 0: no wall to wait for.
+    back_atom : int
+        [run] stop_after_reflection: the atom contact 1 lives on (bead 1's), through which the wall's
+        reflection must have passed back: its force, sampled at the checks after the wall's contact
+        has passed, risen above the floor and back below the fraction of its largest; 0: no wait.
     """
 
     contact: int
@@ -226,3 +230,4 @@ class StopCheck:
     fraction: float = PEAK_PASSED_FRACTION
     fall: float = 0.0
     wall_atom: int = 0
+    back_atom: int = 0

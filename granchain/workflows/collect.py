@@ -47,6 +47,7 @@ from granchain.lammps.runner import (
     invariant_from_lammps,
     output_files,
 )
+from granchain.peaks import mark_reflection_pending
 from granchain.results import RunResult, scene_hash
 from granchain.rundir import RunDirError, write_run_dir
 from granchain.scene import load_scene, parse_scene
@@ -370,6 +371,7 @@ def collect(run_dir: str | Path, out: str | Path | None = None, overwrite: bool 
         ) from None
     except _DAMAGED as e:  # a result file that is not what the deck writes (damaged, edited, another deck's)
         raise CollectError(_damaged_message(d, scene, e)) from None
+    mark_reflection_pending(base.scene, base.solution)  # as workflows.run marks granchain's own runs
     rendered = _RENDERED_BY.search(deck)
     refinement = _refinement(d, plan_record, plan, base)
     result = CollectedRunResult(

@@ -634,9 +634,57 @@ def _beads_choice(scene, end: float, last: int, fast: float) -> PlanChoice:
     )
 
 
+def reflection_planned(scene) -> bool:
+    """Whether the planned run waits for the wall's reflection to pass back through contact 1 ([run]
+    stop_after_reflection): an uncompressed chain of given length against a wall whose wall's peak is
+    planned (wall_peak_planned), end time "auto", the stop check the planner's or one that asks for it.
+    There the reflection can exceed a contact's incoming peak (peaks.reflection_pending), and a run
+    that stopped once the wave had passed the wall would leave those peaks not complete."""
+    run = scene.run
+    own = run.stop_after_contact is None and not scene.outputs.snapshots
+    return (
+        run.end_time is None
+        and (own or run.stop_after_reflection)
+        and scene.chain.beads is not None
+        and not scene.effects.precompression
+        and wall_peak_planned(scene)
+    )
+
+
+#: the planned end's time for the wall's reflection to come back to contact 1, in crossings of the
+#: chain by the slowest expected front: the reflected front is weaker (slower: speed ~ F^(1/6)) and a
+#: dimer scatters it; a cap only, the stop check ends the run once the reflection has passed
+REFLECTION_CROSSINGS = 2.0
+
+
+def _reflection_end_time(scene, choice: PlanChoice, slow: float) -> PlanChoice:
+    """The end time that also lets the wall's reflection pass back through contact 1
+    (reflection_planned): the wall's end (choice) and REFLECTION_CROSSINGS x the slowest front's
+    crossing of the chain."""
+    back = REFLECTION_CROSSINGS * front_travel_time(scene, scene.n_contacts, slow)
+    return PlanChoice(
+        "end_time",
+        choice.value + back,
+        f"{choice.reason}; and the wall's reflection back through contact 1 (uncompressed: it can exceed a "
+        f"contact's incoming peak): {REFLECTION_CROSSINGS:g} x the slowest front's crossing of the chain "
+        f"({back:.3g} s), a cap: the stop check ends the run once the reflection has passed",
+    )
+
+
 def _stop_choice(scene, last: int) -> PlanChoice:
     """The stop check at the last measured contact, and at the wall's contact (stop_after_wall) where
-    the wall's peak is measured (wall_peak_planned)."""
+    the wall's peak is measured (wall_peak_planned), and the reflection's return through contact 1
+    (stop_after_reflection) where reflection_planned."""
+    if reflection_planned(scene):
+        return PlanChoice(
+            "stop_after_contact",
+            last,
+            f"stop as soon as the leading wave has passed contact {last} and the wall's contact (bead "
+            f"{scene.n_contacts + 1} on the flat; stop_after_wall), and the wall's reflection has passed back "
+            "through contact 1 (its force after the wall's risen and back below half of its largest: "
+            "stop_after_reflection), both backends: on an uncompressed chain the reflection can exceed a "
+            "contact's incoming peak",
+        )
     if wall_peak_planned(scene):
         return PlanChoice(
             "stop_after_contact",
@@ -744,6 +792,8 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
             waits = scene.run.stop_after_contact is None or scene.run.stop_after_wall
             if waits and wall_peak_planned(scene):
                 choices[-1] = _wall_end_time(scene, choices[-1], last, slow, omega)
+            if reflection_planned(scene):
+                choices[-1] = _reflection_end_time(scene, choices[-1], slow)
         end = choices[-1].value
     if scene.run.timestep is not None and rtol is None and scene.run.timestep > end:
         # the scene's own step, longer than the end the planner chose: the run would be one step of another
@@ -772,6 +822,8 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
         stop = last
         if wall_peak_planned(scene):
             d["run"]["stop_after_wall"] = True
+        if reflection_planned(scene):
+            d["run"]["stop_after_reflection"] = True
     if stop is not None:
         d["run"]["stop_after_contact"] = stop
     choices += _output_interval_choices(scene, d, omega, end, rtol_plan)

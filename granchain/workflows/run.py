@@ -12,6 +12,7 @@ from pathlib import Path
 from granchain.backends import BACKENDS, METHODS, REFERENCE, Backend, Calculation, backend_named
 from granchain.exceptions import UsageError
 from granchain.invariants import InvariantError
+from granchain.peaks import mark_reflection_pending
 from granchain.results import RunResult
 from granchain.rundir import check_output_dir, write_run_dir
 from granchain.workflows import shared_runs
@@ -225,13 +226,20 @@ def _execute(scene, backend: Backend, method: str, np_: int) -> Calculation:
     """One run of a concrete scene: its result, and its work files if the backend keeps any."""
     shared = shared_runs.current()
     if backend is REFERENCE:  # the yardstick's runs: made once inside a shared_reference_runs() block
-        return Calculation(
-            run_reference(scene, method) if shared is None else shared.get((scene, method), run_reference)
+        return _cut_off(
+            Calculation(run_reference(scene, method) if shared is None else shared.get((scene, method), run_reference))
         )
     if shared is not None and shared.abandoned:
         raise Abandoned("not started: the block is being left")
     with _with_fix(scene, method):
-        return backend.calculate(scene, method, np_)
+        return _cut_off(backend.calculate(scene, method, np_))
+
+
+def _cut_off(calc: Calculation) -> Calculation:
+    """calc with the peaks a wall's reflection may still exceed not complete (peaks.reflection_pending),
+    every backend's the same way: a peak the run's end cut off is not one."""
+    mark_reflection_pending(calc.result.scene, calc.result.solution)
+    return calc
 
 
 def _extended(given, plan, result):
