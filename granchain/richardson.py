@@ -1,8 +1,8 @@
 """Measured error bars: Richardson extrapolation over runs at dt, 2 dt and 4 dt.
 
 A run at time step dt is repeated at 2 dt and, where that is stable, at 4 dt (the same plan
-otherwise). For a quantity Q measured by all three, with an integrator of order p (RK4 4, velocity
-Verlet 2):
+otherwise). For a quantity Q measured by all three, with an integrator of order p (its
+IntegratorFacts.order, granchain.integrators: RK4 4, velocity Verlet 2):
 
     Q(dt) = Q* + C dt^p + ...   =>   error of Q(dt) ~ (Q(dt) - Q(2 dt)) / (2^p - 1)
 
@@ -76,8 +76,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: the integrators' orders of accuracy
-ORDER = {"rk4": 4, "verlet": 2}
 #: an observed order within this of the nominal one confirms it
 ORDER_SLACK = 0.75
 #: an observed order up to this above the highest is the error expansion's next term mixing in
@@ -315,7 +313,8 @@ def erratic_bounds(
 
 
 #: the order one_companion assumes unless told: the middle of the orders RK4 (event location) shows on a
-#: chain, 1 + 3/2 at a Hertzian onset to 4 (workflows.error_estimates.expected_orders)
+#: chain, 1 + 3/2 at a Hertzian onset to 4 (workflows.error_estimates.expected_orders; the onset's 1 + 3/2
+#: is the law's: TODO issue 41 item 1, the laws declare their loading exponent)
 ONE_COMPANION_ORDER = 3
 #: the status of one_companion's estimates
 ONE_COMPANION_STATUS = "estimate: one companion at 2 dt, order 3 assumed, not checked"
@@ -450,7 +449,8 @@ def checked(
 
 
 #: RK4's own error, from its runs at h and 2 h, taken at its lowest order on a chain (1 + 3/2 at a
-#: Hertzian onset; workflows.error_estimates.RK4_ONSET_ORDER): the larger, conservative bound
+#: Hertzian onset; workflows.error_estimates.ONSET_ORDER): the larger, conservative bound. TODO issue 41
+#: item 1: 1 + 3/2 is the Hertz law's onset (1 + its loading exponent), which the laws will declare
 REFERENCE_ORDER = 2.5
 #: the reference's error may be at most this fraction of the distance it measures: the estimate
 #: (distance + reference error) is then within 1 - 3 times a true error in distance +- reference error

@@ -22,10 +22,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from granchain.integrators import RK4
 from granchain.lammps import server
 from granchain.workflows import error_estimates as errors
 from granchain.workflows.error_estimates import rk4_companions_cost
-from granchain.workflows.plan import STABILITY, highest_frequency, predicted_error
+from granchain.workflows.plan import highest_frequency, predicted_error
 from granchain.workflows.run import plan_for, run_scene
 
 from .conftest import make_scene
@@ -136,7 +137,7 @@ def test_rk4_companions_aim_at_a_share_of_verlet_error_within_stability(sc):
     if f1 >= errors.SHARED_BELOW:
         target = errors.RK4_COMPANION_SHARE * predicted_error("verlet", omega, 0.0, dt)
         assert predicted_error("rk4", omega, 0.0, h) <= target * (1 + 1e-9)
-        assert h <= 0.5 * STABILITY["rk4"] / omega * (1 + 1e-12)
+        assert h <= 0.5 * RK4.stability / omega * (1 + 1e-12)
     else:
         assert (f1, f2) in ((2.0, 4.0), (1.0, 2.0))
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from granchain.backends import METHODS
 from granchain.exceptions import UsageError
+from granchain.integrators import integrator
 from granchain.results import printable
 from granchain.scene import SceneError, bundled_scenes, parse_scene
 
@@ -190,7 +191,8 @@ def planned_bars(plan, error_estimate: str) -> dict:
             s, plan.method, plan.stable_timestep, error_estimate == "checked", numpy_speed=REFERENCE.numpy_speed
         )
     not_counted = []
-    if "rk4" in {plan.method, *(c.method for c in runs)} and law_class(s.contact.law).slope_kinks:
+    locating = any(integrator(m).locates_kinks for m in {plan.method, *(c.method for c in runs)})
+    if locating and law_class(s.contact.law).slope_kinks:  # (IntegratorFacts.locates_kinks: RK4's event location)
         not_counted.append(
             "RK4's extra tries at every kink crossing (ChainSolution.extra_steps), known only after a run"
         )

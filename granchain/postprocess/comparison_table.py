@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from granchain.integrators import integrator
 from granchain.peaks import REACHED_FRACTION
 from granchain.physics.effects import unbalanced_forces
 from granchain.physics.predictions import applicability, predict
@@ -157,8 +158,10 @@ def peak_definition(method: str, scene) -> str:
 
     Verlet (the reference's and LAMMPS's) tracks the contact force at step ends: its peak is the total
     force's maximum. RK4 tracks the overlap (reference.observers.HermitePeaks): its peak is the elastic
-    force where the overlap turns. Without a dashpot the two are one quantity (the force is the law's,
-    monotone in the overlap); with one they are not (the dashpot adds gamma alpha' > 0 before the turn):
+    force where the overlap turns. Each integrator declares which it tracks
+    (granchain.integrators.IntegratorFacts.peaks_by_overlap). Without a dashpot the two are one quantity
+    (the force is the law's, monotone in the overlap); with one they are not (the dashpot adds gamma
+    alpha' > 0 before the turn):
     /tmp/explore2 s09, a 40-bead chain with gamma = 20 N s/m, read 57.122 N at its window's end with
     RK4 and 57.268 N with the reference's Verlet (57.271 N LAMMPS), 2.6e-3 apart.
 
@@ -174,7 +177,7 @@ def peak_definition(method: str, scene) -> str:
     str
         The definition, in words.
     """
-    if method != "verlet" and scene.effects.dashpot:
+    if integrator(method).peaks_by_overlap and scene.effects.dashpot:
         return "the elastic force where the overlap turns"
     return "the total force's maximum"
 

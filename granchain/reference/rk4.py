@@ -56,6 +56,11 @@ class RK4Integrator(Integrator):
 
     name = "rk4"
 
+    @classmethod
+    def for_run(cls, state: ChainState, timestep: float, event_location: bool, max_splits: int) -> RK4Integrator:
+        """RK4 of a run's state, splitting its steps at kinks (event_location) at most max_splits times."""
+        return cls(state, timestep, event_location, max_splits)
+
     def __init__(self, state: ChainState, timestep: float, event_location: bool, max_splits: int) -> None:
         n = state.n
         self.load_bead = state.load_bead  # where the external load acts (a_ext): bead 1

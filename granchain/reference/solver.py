@@ -42,6 +42,7 @@ import time
 
 import numpy as np
 
+from granchain.integrators import INTEGRATORS
 from granchain.invariants import InvariantError
 from granchain.peaks import complete_peaks, unreached_as_nan
 from granchain.physics.effects import EFFECTS
@@ -75,6 +76,7 @@ __all__ = [
     "KINK_ROUNDOFF",
     "MAX_SPLITS_BASE",
     "MAX_SPLITS_PER_CONTACT",
+    "IMPLEMENTATIONS",
     "METHODS",
     "ChainProblem",
     "EventLocationError",
@@ -82,7 +84,10 @@ __all__ = [
     "solve_chain",
 ]
 
-METHODS = ("rk4", "verlet")
+#: the reference's integrators, one per integrator of granchain.integrators, by name
+IMPLEMENTATIONS: dict[str, type[Integrator]] = {cls.name: cls for cls in (RK4Integrator, VerletIntegrator)}
+#: the methods the reference runs (in the order of granchain.integrators.INTEGRATORS)
+METHODS = tuple(name for name in INTEGRATORS if name in IMPLEMENTATIONS)
 # RK4 event location: no step is split more often than MAX_SPLITS_PER_CONTACT per contact +
 # MAX_SPLITS_BASE (each crossing takes one split, rarely two or three while the located point
 # converges), else EventLocationError: a bug, not a slow run. Read by _solve at every run (so a test
@@ -192,7 +197,8 @@ def _solve(
     plan = step_plan(end_time, timestep, problem.duration if problem.amplitude else 0.0, snapshots)
     total_steps = sum(g.steps for g in plan)
     integrator = _integrator(method, state, timestep, event_location)
-    peaks = ForceSamplePeaks(state) if method == "verlet" else HermitePeaks(state)
+    # where the overlap turns (Hermite), or the force sampled at step ends (IntegratorFacts.peaks_by_overlap)
+    peaks = HermitePeaks(state) if INTEGRATORS[method].peaks_by_overlap else ForceSamplePeaks(state)
     ledger = EnergyLedger(state, max(1, total_steps // max(1, energy_samples)))
     observers: list[Observer] = [
         peaks,
@@ -227,10 +233,8 @@ def _solve(
 
 def _integrator(method: str, state: ChainState, timestep: float, event_location: bool) -> Integrator:
     """The method's integrator of the state (RK4 with at most so many kink splits per step)."""
-    if method == "verlet":
-        return VerletIntegrator(state)
     max_splits = MAX_SPLITS_BASE + MAX_SPLITS_PER_CONTACT * (state.n - 1)  # per step
-    return RK4Integrator(state, timestep, event_location, max_splits)
+    return IMPLEMENTATIONS[method].for_run(state, timestep, event_location, max_splits)
 
 
 def _start_run(integrator: Integrator, state: ChainState, t: float, observers: list[Observer]) -> None:

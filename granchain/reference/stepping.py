@@ -30,8 +30,14 @@ _ZERO = np.array(0.0)  # 0-d: a cheaper operand than the Python float (RK4Integr
 class Integrator:
     """What the driver asks of an integrator (granchain.reference.solver._drive)."""
 
-    name = ""
+    name = ""  # the integrator's name in granchain.integrators.INTEGRATORS, whose facts it implements
     extra_steps = 0  # steps beyond the plan's: rejected and split steps (RK4 event location)
+
+    @classmethod
+    def for_run(cls, state: ChainState, timestep: float, event_location: bool, max_splits: int) -> Integrator:
+        """The integrator of a run's state (solver._solve): timestep, the plan's step; event_location and
+        max_splits, the splits at the law's kinks for an integrator that locates them (RK4)."""
+        return cls(state)
 
     def start(self, state: ChainState) -> None:
         """The run begins at state (t = 0)."""

@@ -22,6 +22,7 @@ import numpy as np
 
 from granchain import safe_files
 from granchain.exceptions import UsageError
+from granchain.integrators import INTEGRATORS, RK4, IntegratorFacts, Verlet, integrator
 from granchain.postprocess.comparison_table import peak_definition
 from granchain.postprocess.observables import fit_wave_speed
 from granchain.problem import ChainProblem, contact_positions
@@ -31,13 +32,35 @@ from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain
 from granchain.workflows.plan import plan_scene
 
 TARGETS = (1e-2, 1e-3, 1e-4)
+
+
+@dataclass(frozen=True)
+class StudyMethod:
+    """A method the study can compare (``--methods``): its name, its label on the diagram, and the
+    integrator it runs (granchain.integrators), which plans its scene and defines its peak
+    (peak_definition); DOP853's is RK4's: it is planned as RK4 and its peaks are located alike, where the
+    overlap turns, by the cubic Hermite interpolant (reference.scipy_solver)."""
+
+    name: str
+    label: str
+    integrator: IntegratorFacts
+
+
+#: the methods a study can compare, by name
+STUDY_METHODS = {
+    m.name: m
+    for m in (
+        StudyMethod("lammps", f"LAMMPS {Verlet.label} (chain pair styles)", Verlet()),
+        StudyMethod(RK4.name, f"reference {RK4.label}", RK4()),
+        StudyMethod(Verlet.name, f"reference {Verlet.label}", Verlet()),
+        StudyMethod("dop853", "SciPy DOP853 (rtol ladder)", RK4()),
+    )
+}
 #: the methods a study can compare (``--methods``)
-METHODS = ("lammps", "rk4", "verlet", "dop853")
+METHODS = tuple(STUDY_METHODS)
 #: SciPy's solve_ivp raises any rtol below 100 machine epsilons to that floor with a warning; the
 #: DOP853 ladder stops there rather than repeat the floor's run under a smaller label
 DOP853_MIN_RTOL = 100 * np.finfo(float).eps
-#: the integrator each method of the study runs (its peak definition: peak_definition)
-INTEGRATOR = {"lammps": "verlet", "rk4": "rk4", "verlet": "verlet", "dop853": "dop853"}
 #: the tolerance whose planned time step is marked on the diagram (the planner's default)
 PLAN_RTOL = 1e-3
 
@@ -165,20 +188,22 @@ def study_method(scene, methods=METHODS) -> tuple[str, str | None]:
     from granchain.workflows.run import method_choice
 
     default, why = method_choice(REFERENCE, None, scene)
-    runs = {"rk4" if INTEGRATOR[m] == "dop853" else INTEGRATOR[m] for m in check_study_options(methods, 1, 1)}
+    runs = {STUDY_METHODS[m].integrator.name for m in check_study_options(methods, 1, 1)}
     if default in runs:
         return default, why
     return runs.pop(), None  # (one integrator: the default is among any two)
 
 
 def reference_method(m: str, scene) -> str:
-    """The integrator of the converged run method m is measured against: RK4 where its peak is the
-    quantity m's peak is (postprocess.comparison_table.peak_definition; RK4 converges cheapest), else
-    Verlet. With a dashpot RK4's peak is the elastic force where the overlap turns, Verlet's and
-    LAMMPS's the total force's maximum: 4.5e-3 apart on an 8-bead brass chain at 1 m/s with gamma = 20
-    N s/m, at every step, which against RK4 read as Verlet's step error (order 0.89, the planned step
-    "missing" rtol 1e-3 by 4.7e-3 where Verlet against a 16x finer Verlet differs by 1.6e-4)."""
-    return "rk4" if peak_definition(INTEGRATOR[m], scene) == peak_definition("rk4", scene) else "verlet"
+    """The integrator of the converged run method m is measured against: the first registered
+    (granchain.integrators.INTEGRATORS: RK4, which converges cheapest, then Verlet) whose peak is the
+    quantity m's peak is (postprocess.comparison_table.peak_definition). With a dashpot RK4's peak is
+    the elastic force where the overlap turns, Verlet's and LAMMPS's the total force's maximum: 4.5e-3
+    apart on an 8-bead brass chain at 1 m/s with gamma = 20 N s/m, at every step, which against RK4 read
+    as Verlet's step error (order 0.89, the planned step "missing" rtol 1e-3 by 4.7e-3 where Verlet
+    against a 16x finer Verlet differs by 1.6e-4)."""
+    peak = peak_definition(STUDY_METHODS[m].integrator.name, scene)
+    return next(name for name in INTEGRATORS if peak_definition(name, scene) == peak)
 
 
 def dop853_skipped_because(scene, problem: ChainProblem) -> str | None:
@@ -224,27 +249,30 @@ class _Converged:
 def _converged(problem, scene, end: float, h: float, method: str) -> _Converged:
     """A converged run of method from runs at steps down to h / 2, and how its own error is estimated.
 
-    RK4: the run at h / 2, its error |Q(h) - Q(h / 2)| / 15 (order 4), or |Q(h) - Q(h / 2)| with a
-    dashpot, where RK4's error follows no order (error_estimates.withheld_because). Verlet: first order
-    with a dashpot (the dashpot sees half-step velocities, error_estimates.integrator_order), so a
-    finest run would carry its error into every point it judges (the planned step's 1.6e-4 read as
-    1.45e-4 against Verlet at an 8x finer step): the runs at 2h, h and h / 2 are extrapolated in pairs
+    An integrator of high order (IntegratorFacts.extrapolated_reference False: RK4): the run at h / 2,
+    its error |Q(h) - Q(h / 2)| / (2^p - 1) (RK4: / 15, order 4), or |Q(h) - Q(h / 2)| with a dashpot,
+    where RK4's error follows no order (error_estimates.withheld_because). Else (Verlet: first order
+    with a dashpot, the dashpot sees half-step velocities, error_estimates.integrator_order) a finest
+    run would carry its error into every point it judges (the planned step's 1.6e-4 read as 1.45e-4
+    against Verlet at an 8x finer step): the runs at 2h, h and h / 2 are extrapolated in pairs
     (Richardson at the integrator's order) and the finer extrapolation is the reference, its error the
     two extrapolations' difference.
     """
     from granchain.workflows.error_estimates import integrator_order, withheld_because
 
     peak = peak_definition(method, scene)
-    if method == "rk4":
-        a, b = solve_chain(problem, end, h, "rk4"), solve_chain(problem, end, h / 2, "rk4")
-        unordered = withheld_because("rk4", scene) is not None
+    facts = integrator(method)
+    if not facts.extrapolated_reference:
+        a, b = solve_chain(problem, end, h, method), solve_chain(problem, end, h / 2, method)
+        unordered = withheld_because(method, scene) is not None
         how = "the finer of runs at dt and 2 dt, its error " + (
-            "their difference (RK4's error follows no order with a dashpot)"
+            f"their difference ({facts.label}'s error follows no order with a dashpot)"
             if unordered
-            else "their difference / 15 (order 4)"
+            else f"their difference / {2**facts.order - 1} (order {facts.order})"
         )
-        info = Reference("rk4", h / 2, float("nan"), peak, (), how)
-        return _Converged(b.peak_force, b.time_of_peak, a.peak_force, 1.0 if unordered else 15.0, b, info)
+        info = Reference(method, h / 2, float("nan"), peak, (), how)
+        divisor = 1.0 if unordered else float(2**facts.order - 1)
+        return _Converged(b.peak_force, b.time_of_peak, a.peak_force, divisor, b, info)
     p = integrator_order(method, scene)
     runs = [solve_chain(problem, end, s, method) for s in (2 * h, h, h / 2)]
 
@@ -304,18 +332,19 @@ def accuracy_study(
     # time-step ladders: from half the stability limit down by factors of 2 (the planner's own
     # choice lies inside; starting coarser shows where each method stops being usable)
     ladders = {
-        m: 0.5 * plan_scene(scene, method="verlet" if m in ("lammps", "verlet") else "rk4").stable_timestep
-        for m in ("lammps", "rk4", "verlet")
+        m: 0.5 * plan_scene(scene, method=STUDY_METHODS[m].integrator.name).stable_timestep
+        for m in METHODS
+        if m != "dop853"
     }
     # each integrator's step planned for PLAN_RTOL (the stars on the diagram)
     planned = {
-        m: plan_scene(scene, rtol=PLAN_RTOL, method="verlet" if m in ("lammps", "verlet") else "rk4").scene.run.timestep
+        m: plan_scene(scene, rtol=PLAN_RTOL, method=STUDY_METHODS[m].integrator.name).scene.run.timestep
         for m in methods
         if m != "dop853"
     }
     # the converged references, one per peak definition the methods measure: a quarter of the finest
     # step the study runs (ladders and plans) and half that
-    finest = min([ladders["rk4"] / 2 ** (levels - 1), ladders["verlet"] / 2 ** (levels - 1), *planned.values()]) / 4
+    finest = min([*(ladder / 2 ** (levels - 1) for ladder in ladders.values()), *planned.values()]) / 4
     against = {m: reference_method(m, scene) for m in methods}
     refs = {r: _converged(problem, scene, end, finest, r) for r in dict.fromkeys(against.values())}
     passed = np.ones(idx.size, dtype=bool)
@@ -476,12 +505,7 @@ def _write_study_files(study: AccuracyStudy, out: Path) -> None:
     fig, ax = plt.subplots(figsize=(7, 5))
     for m in dict.fromkeys(p.method for p in study.points):
         pts = [p for p in study.points if p.method == m]
-        label = {
-            "lammps": "LAMMPS Verlet (chain pair styles)",
-            "rk4": "reference RK4",
-            "verlet": "reference Verlet",
-            "dop853": "SciPy DOP853 (rtol ladder)",
-        }[m]
+        label = STUDY_METHODS[m].label
         if len(study.references) > 1:
             label += f" vs converged {_name(pts[0].reference)}"
         (line,) = ax.loglog([p.wall_time for p in pts], [max(p.error_peak, 1e-16) for p in pts], "o-", label=label)
@@ -518,8 +542,9 @@ def _write_study_files(study: AccuracyStudy, out: Path) -> None:
         fh.write(summary_text(study))
 
 
-def _name(integrator: str) -> str:
-    return {"rk4": "RK4", "verlet": "Verlet"}.get(integrator, integrator)
+def _name(method: str) -> str:
+    facts = INTEGRATORS.get(method)
+    return method if facts is None else facts.label
 
 
 def reference_lines(study: AccuracyStudy) -> list[str]:

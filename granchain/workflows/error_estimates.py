@@ -25,10 +25,12 @@ bounds from the companion at 2 dt alone (one_companion_because, richardson.one_c
 overstate the error many times, and error_estimate="checked" gives the checked estimate (2 dt, 4 dt,
 dt / 2).
 
-Orders: RK4 4, velocity Verlet (reference and LAMMPS) 2, but 1 for Verlet with a dashpot: the
-dashpot sees half-step velocities and is first order (workflows.plan.DASHPOT_VERLET). Measured on
-effect-dashpot (LAMMPS, planned step, against dt / 16): with order 2 every estimate was 0.37-0.43 of
-the true error, an underestimate by the factor (2^2 - 1) / (2^1 - 1) = 3 the first order predicts.
+Orders: each integrator's (granchain.integrators: IntegratorFacts.order, dashpot_order): RK4 4,
+velocity Verlet (reference and LAMMPS) 2, but 1 for Verlet with a dashpot: the dashpot sees half-step
+velocities and is first order (Verlet.dashpot_error). Measured on effect-dashpot (LAMMPS, planned step,
+against dt / 16): with order 2 every estimate was 0.37-0.43 of the true error, an underestimate by the
+factor (2^2 - 1) / (2^1 - 1) = 3 the first order predicts. No function here asks which integrator a run
+has: each reads the integrator's facts (integrator(method)).
 
 The 4 dt companion is skipped where 4 dt is above the stability limit the planner predicts (then
 the order is not checked and the status says so); the 2 dt one where 2 dt is (then nothing is
@@ -44,12 +46,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from granchain.exceptions import GranchainError
+from granchain.integrators import RK4, integrator
 from granchain.postprocess.observables import measure_observables
 from granchain.progress import labelled
 from granchain.richardson import (
     BOUND_ORDER,
     CHECK_FACTOR,
-    ORDER,
     ErrorBars,
     against_reference,
     checked,
@@ -154,34 +156,32 @@ class ErrorReport:
 def withheld_because(method: str, scene) -> str | None:
     """Why no error bar is given for this integrator on this scene, or None.
 
-    RK4 with a dashpot: the dashpot force is clipped where it would pull, a kink in time RK4 does
-    not locate, so its runs converge at no definite order. Measured on 14 generated Hertz chains
-    planned for rtol 1e-3 (/tmp experiment recorded in docs/error-bars.md): on the 9 with a dashpot
-    14 of 55 estimates were outside 1/3-3 of the true error (0.013-12x), although the three runs'
-    differences looked like orders 1-5; on the 5 without, none of 51 (another sample of 12 chains
-    had 4 of about 100 outside, 0.21-3.5: RK4's Hertz onsets, docs/error-bars.md).
+    An integrator whose error follows no order with a dashpot (IntegratorFacts.unordered_with_dashpot;
+    RK4: the dashpot force is clipped where it would pull, a kink in time RK4 does not locate, so its
+    runs converge at no definite order). Measured on 14 generated Hertz chains planned for rtol 1e-3
+    (/tmp experiment recorded in docs/error-bars.md): on the 9 with a dashpot 14 of 55 estimates were
+    outside 1/3-3 of the true error (0.013-12x), although the three runs' differences looked like orders
+    1-5; on the 5 without, none of 51 (another sample of 12 chains had 4 of about 100 outside, 0.21-3.5:
+    RK4's Hertz onsets, docs/error-bars.md).
     """
-    if method == "rk4" and scene.effects.dashpot:
-        return (
-            "RK4 does not locate where the clipped dashpot force reaches zero, so its error follows no "
-            "order, and its peaks are the elastic force where the overlap turns, not the total force's "
-            "maximum: no companion runs, no estimate (--method verlet gives error bars)"
-        )
+    if scene.effects.dashpot:
+        return integrator(method).unordered_with_dashpot
     return None
 
 
-#: RK4's lowest order on a chain: 1 + 3/2 where a Hertzian contact closes (F ~ t^(3/2) is not
-#: smooth at the onset; docs/laws.md), the bilinear peaks at the turn measured 2.5-3.2 alike
-RK4_ONSET_ORDER = 2.5
+#: The lowest order of an integrator's error on a chain: 1 + 3/2 where a Hertzian contact closes (F ~
+#: t^(3/2) is not smooth at the onset; docs/laws.md), the bilinear peaks at the turn measured 2.5-3.2
+#: alike; it lowers an integrator of higher order (RK4's 4), not one below it (Verlet's 2).
+#: TODO issue 41 item 1: this is the law's fact, not an integrator's (1 + the loading exponent 3/2 of
+#: Hertz): the laws will declare their exponent, and this constant becomes the law's 1 + n.
+ONSET_ORDER = 2.5
 
 
 def expected_orders(method: str, scene) -> tuple[float, float]:
-    """The lowest and highest order the integrator's error can show on this scene (richardson)."""
-    if method == "verlet" and scene.effects.dashpot:
-        return 1.0, 2.0  # the dashpot's first-order term and Verlet's second
-    if method == "rk4":
-        return RK4_ONSET_ORDER, 4.0
-    return float(ORDER[method]), float(ORDER[method])
+    """The lowest and highest order the integrator's error can show on this scene (richardson): from
+    the lower of its order on the scene (integrator_order: Verlet's 1 with a dashpot, its first-order
+    term mixing with Verlet's second) and the onset's (ONSET_ORDER), to its order."""
+    return float(min(ONSET_ORDER, integrator_order(method, scene))), float(integrator(method).order)
 
 
 def check_because(method: str, scene, checked: bool = False) -> str | None:
@@ -196,11 +196,8 @@ def check_because(method: str, scene, checked: bool = False) -> str | None:
     true value) was 2.1-2.3 or 5.6-5.8 while the three runs showed 3.9-4.8, or the error changed sign
     just below dt. The run at dt / 2 costs twice the run (richardson.checked).
     """
-    if checked and method == "rk4":
-        return (
-            "RK4's error mixes orders (2.5 at Hertzian onsets, 4 and beyond): the order seen at dt, 2 dt and "
-            "4 dt is checked below dt by a run at dt / 2"
-        )
+    if checked:
+        return integrator(method).mixes_orders  # (IntegratorFacts.mixes_orders: RK4's, why)
     return None
 
 
@@ -229,10 +226,10 @@ def unchecked_because(method: str, scene) -> str:
 
 
 def integrator_order(method: str, scene) -> int:
-    """The order the error estimate assumes (see the module docstring)."""
-    if method == "verlet" and scene.effects.dashpot:
-        return 1
-    return ORDER[method]
+    """The order the error estimate assumes (see the module docstring): the integrator's, or its order
+    with a dashpot (IntegratorFacts.dashpot_order)."""
+    facts = integrator(method)
+    return facts.dashpot_order if scene.effects.dashpot else facts.order
 
 
 def companion_scene(scene, factor: float):
@@ -270,11 +267,13 @@ def per_contact(solutions, name: str, n: int, complete_only: bool = False) -> li
 
 
 def kinked_law(method: str, scene) -> bool:
-    """Whether this is a Verlet run on a law whose slope jumps at kinks the contacts cross
-    (ContactLaw.slope_kinks: bilinear, Thornton), without a dashpot: its error in dt is erratic in sign."""
+    """Whether this is a run of an integrator that does not locate kinks (IntegratorFacts.locates_kinks:
+    Verlet) on a law whose slope jumps at kinks the contacts cross (ContactLaw.slope_kinks: bilinear,
+    Thornton), without a dashpot: its error in dt is erratic in sign."""
     from granchain.physics.laws import law_class
 
-    return method == "verlet" and not scene.effects.dashpot and bool(law_class(scene.contact.law).slope_kinks)
+    locates = integrator(method).locates_kinks
+    return not locates and not scene.effects.dashpot and bool(law_class(scene.contact.law).slope_kinks)
 
 
 def bounded_because(method: str, scene) -> str | None:
@@ -312,7 +311,7 @@ def one_companion_because(method: str, scene, checked: bool = False) -> str | No
     true error on 0.2-1.3% of the numbers of each sample, and overstates the error about 10-15 times at
     the median, as Verlet's kinked bounds (bounded_because) about 6 times.
     """
-    if checked or method != "rk4" or scene.effects.dashpot:
+    if checked or not integrator(method).locates_kinks or scene.effects.dashpot:
         return None
     from granchain.physics.laws import law_class
 
@@ -380,7 +379,7 @@ def rk4_companions(scene, method: str, checked: bool = False, numpy_speed: bool 
     return [
         companion_scene(scene, c.factor)
         for c in planned_companions(scene, method, stable, checked, numpy_speed)
-        if c.method == "rk4"
+        if c.method == RK4.name
     ]
 
 
@@ -494,11 +493,11 @@ def against_rk4_factors(scene) -> tuple[float, float]:
     planned step for RK4_COMPANION_SHARE of the Verlet run's predicted error, and twice it (its own
     error), within RK4's stability, where that is at least SHARED_BELOW dt; else 2 dt and 4 dt, or dt
     and 2 dt where 4 dt is unstable."""
-    from granchain.workflows.plan import STABILITY, accurate_timestep, highest_frequency, predicted_error
+    from granchain.workflows.plan import accurate_timestep, highest_frequency, predicted_error
 
     omega = highest_frequency(scene)[0]
     dt = scene.run.timestep
-    stable = STABILITY["rk4"] / omega
+    stable = RK4.stability / omega
     h = accurate_timestep("rk4", omega, 0.0, RK4_COMPANION_SHARE * predicted_error("verlet", omega, 0.0, dt))
     h = min(h, 0.5 * stable)
     if h >= SHARED_BELOW * dt:
@@ -527,7 +526,7 @@ def estimate_errors(
     """
     scene = result.scene
     if run_rk4 is not None and against_rk4_because(method, scene, checked, numpy_speed):
-        report = _against_rk4(result, run_rk4)
+        report = _against_rk4(result, run_rk4, method)
         report.why_unchecked = unchecked_because(method, scene)
         return report
     report = ErrorReport(order=integrator_order(method, scene), timesteps=[], wall_times=[])
@@ -671,10 +670,11 @@ def _richardson_bars(
 
     _largest(report, scene, sol)
 
-    # a striker's or a wall's contact is one impact from zero overlap: RK4's error there is its Hertzian
-    # onset's, order 1 + 3/2 (two spheres, planned step: with order 4 the bar was 1/2.9 of the true error)
-    onset = method == "rk4" and report.one_companion is None and not scene.contact.law_class.loading_is_linear()
-    p_end = RK4_ONSET_ORDER if onset else p
+    # a striker's or a wall's contact is one impact from zero overlap: an integrator's error there is its
+    # Hertzian onset's, order 1 + 3/2, where its own is higher (RK4, two spheres, planned step: with order 4
+    # the bar was 1/2.9 of the true error); not on a loading line, nor for one companion's bounds
+    onset = report.one_companion is None and not scene.contact.law_class.loading_is_linear()
+    p_end = ONSET_ORDER if onset and ONSET_ORDER < p else p
 
     def bars_of(values, times):
         values, times = list(values), None if times is None else list(times)
@@ -822,14 +822,14 @@ def roundoff_floor(scene, sol, absolute_positions: bool = False) -> np.ndarray |
     return np.sqrt(float(sol.steps)) * np.finfo(float).eps * size * slope
 
 
-def _against_rk4(result, run_rk4) -> ErrorReport:
+def _against_rk4(result, run_rk4, method: str) -> ErrorReport:
     """A Verlet run's error report against RK4 runs at 2 dt and 4 dt, or dt and 2 dt (richardson.against_reference)."""
     from granchain.workflows.plan import highest_frequency, plan_scene
 
     scene, sol = result.scene, result.solution
     dt = scene.run.timestep
-    report = ErrorReport(order=ORDER["verlet"], timesteps=[], wall_times=[], against="rk4")
-    report.why_none = withheld_because("rk4", scene)
+    report = ErrorReport(order=integrator(method).order, timesteps=[], wall_times=[], against=RK4.name)
+    report.why_none = withheld_because(RK4.name, scene)
     if report.why_none:
         return report
     stable = plan_scene(scene, method="rk4").stable_timestep

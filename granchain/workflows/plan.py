@@ -6,7 +6,8 @@ time step   the stiffest contact the run will see sets the highest chain frequen
             omega_max = 2 sqrt(k_t / m), with k_t the Hertz tangent stiffness 3/2 k^(2/3) F^(1/3) at
             the largest expected force (from the paper's peak-force models) or k_u (bilinear).
             The step is the largest one whose error model C (omega_max dt)^p stays below rtol
-            (p = 4 for RK4, 2 for Verlet; C calibrated on the reference solver, see CALIBRATION),
+            (p the integrator's order, 4 for RK4, 2 for Verlet; C calibrated on the reference
+            solver: granchain.integrators, IntegratorFacts.calibration),
             below the stability limit, and short enough to resolve the load (T/4; a pulse shorter than
             one step is a step of its own, the step plan ends a step at T).
 beads       just enough that nothing reflected from the far end reaches the last measured contact
@@ -42,6 +43,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from granchain.exceptions import UsageError
+from granchain.integrators import INTEGRATORS, integrator
 from granchain.peaks import LEAD_FRACTION
 from granchain.physics.effects.base import watched_force
 from granchain.physics.estimates import (
@@ -57,12 +59,9 @@ from granchain.physics.estimates import (
 from granchain.scene import AUTO, Scene, SceneError, scene_from_dict, scene_to_dict
 from granchain.schedule import output_stride
 
-#: Error model constants C in  rel. error of peak forces ~ C (omega_max dt)^p. Measured C (planned
-#: runs against runs at dt/16, bundled scenes): RK4 0.2-0.54 (elastic long loads), Verlet 0.1-0.6;
-#: 1.0 keeps a safety factor of about 2.
-CALIBRATION = {"rk4": (1.0, 4), "verlet": (1.0, 2)}
-#: omega_max dt limits of stability: velocity Verlet 2; classical RK4 2.83 on the imaginary axis.
-STABILITY = {"rk4": 2.8, "verlet": 2.0}
+#: The error model  rel. error of peak forces ~ C (omega_max dt)^p, its constant C and order p, and the
+#: omega_max dt limits of stability are each integrator's (granchain.integrators: calibration, order,
+#: stability, with the measurements behind them).
 
 
 @dataclass(frozen=True)
@@ -79,7 +78,7 @@ class PlanChoice:
 class Plan:
     """The planner's choices for a scene (``plan_scene``): the concrete scene they make, the rtol and
     integrator planned for, each choice with its reason, omega_max and the stable step
-    STABILITY[method] / omega_max."""
+    integrator(method).stability / omega_max."""
 
     scene: Scene  # concrete: no "auto" left
     rtol: float
@@ -89,19 +88,14 @@ class Plan:
     stable_timestep: float = 0.0
 
 
-#: Velocity Verlet (and LAMMPS) evaluates the dashpot with the half-step velocities: its force is
-#: first-order accurate, and a peak carries an error of about DASHPOT_VERLET x rate x dt. Measured:
-#: a tapered aluminium chain with gamma = 6 N s/m (rate 8e4 1/s) planned by (omega_max dt)^2 alone
-#: missed rtol 1e-3 by 1.1x (tests/test_planner_property.py). RK4 integrates it with stage velocities.
-DASHPOT_VERLET = 1.0
-
-
 def predicted_error(method: str, omega_max: float, rate: float, dt: float) -> float:
-    """The planner's error model for the relative error of peak forces at a time step dt."""
-    c, p = CALIBRATION[method]
-    err = c * (omega_max * dt) ** p
-    if method == "verlet":
-        err += DASHPOT_VERLET * rate * dt
+    """The planner's error model for the relative error of peak forces at a time step dt: C (omega_max
+    dt)^p, plus D x rate x dt for an integrator whose dashpot force is first-order accurate (velocity
+    Verlet and LAMMPS evaluate it with the half-step velocities; IntegratorFacts.dashpot_error)."""
+    facts = integrator(method)
+    err = facts.calibration * (omega_max * dt) ** facts.order
+    if facts.dashpot_error:
+        err += facts.dashpot_error * rate * dt
     return err
 
 
@@ -115,7 +109,7 @@ def predicted_error(method: str, omega_max: float, rate: float, dt: float) -> fl
 #: force scale is therefore run again at the step planned for rtol / ratio (refined_plan); the ratio
 #: counts up to MAX_PEAK_RATIO, below which a peak is too small to be planned for (it is named).
 MAX_PEAK_RATIO = 1e4
-#: A run is refined only when its smallest peaks miss rtol by more than the margin CALIBRATION keeps
+#: A run is refined only when its smallest peaks miss rtol by more than the margin the calibration keeps
 #: (C = 1 against measured 0.1-0.6): a peak within a factor 2 of the scale is what the calibration
 #: measured (an elastic chain's first contacts peak 1.2 x above its formed wave) and costs no rerun.
 REFINE_ABOVE = 2.0
@@ -273,11 +267,12 @@ def _extended_stop(scene: Scene, names: list[str]) -> int:
 
 def accurate_timestep(method: str, omega_max: float, rate: float, rtol: float) -> float:
     """The largest dt whose predicted_error is at most rtol (each term gets half of rtol when a
-    dashpot's first-order term enters)."""
-    c, p = CALIBRATION[method]
-    if method != "verlet" or rate <= 0.0:
+    dashpot's first-order term enters: IntegratorFacts.dashpot_error)."""
+    facts = integrator(method)
+    c, p = facts.calibration, facts.order
+    if not facts.dashpot_error or rate <= 0.0:
         return (rtol / c) ** (1.0 / p) / omega_max
-    return min((rtol / 2 / c) ** (1.0 / p) / omega_max, rtol / 2 / (DASHPOT_VERLET * rate))
+    return min((rtol / 2 / c) ** (1.0 / p) / omega_max, rtol / 2 / (facts.dashpot_error * rate))
 
 
 def leading_edge_speed(scene) -> float:
@@ -430,7 +425,8 @@ def last_measured_contact(scene) -> int | None:
 def _timestep_choice(scene, method: str, rtol_plan: float, omega: float, stiffest: str, stable: float) -> PlanChoice:
     """The time step: the error model's for rtol_plan, within the stability limit, resolving the load."""
     k_t = max_stiffness(scene)
-    c, p = CALIBRATION[method]
+    facts = integrator(method)
+    c, p = facts.calibration, facts.order
     rate = damping_rate(scene)
     dt_acc = accurate_timestep(method, omega, rate, rtol_plan)
     dt_new = min(dt_acc, 0.5 * stable)
@@ -446,8 +442,8 @@ def _timestep_choice(scene, method: str, rtol_plan: float, omega: float, stiffes
         f"{omega:.4g} rad/s at {stiffest} (nominal contact's tangent stiffness {k_t:.4g} N/m{at}); "
         f"stability limit {stable:.3g} s"
     )
-    if method == "verlet" and rate > 0:
-        why += f"; the dashpot's first-order error {DASHPOT_VERLET:g} x rate {rate:.3g} 1/s x dt (Verlet)"
+    if facts.dashpot_error and rate > 0:
+        why += f"; the dashpot's first-order error {facts.dashpot_error:g} x rate {rate:.3g} 1/s x dt ({facts.label})"
     ld = scene.loading
     if ld.is_force and ld.duration < dt_new:
         # the step plan ends a step at T exactly and f is constant within it: one step is the
@@ -474,7 +470,7 @@ def _one_bead_end_time(scene, impacts) -> PlanChoice:
 
 #: a maximum is seen once the force has fallen after it: within two time steps of it (the sample past the
 #: maximum's own, which may fall a step after the maximum). The end time allows two of the largest stable
-#: step of either integrator (STABILITY / omega_max), so that it does not depend on the integrator: both
+#: step of either integrator (IntegratorFacts.stability / omega_max), so that it does not depend on the integrator: both
 #: backends of a compare end together
 PEAK_DETECTION_STEPS = 2
 
@@ -524,7 +520,7 @@ def _front_end_time(scene, last: int | None, slow: float, omega_max: float) -> P
                     "linearised about F0; later than the front and its peak's tail)"
                 ]
     if scene.effects.precompression:
-        seen = PEAK_DETECTION_STEPS * max(STABILITY.values()) / omega_max
+        seen = PEAK_DETECTION_STEPS * max(f.stability for f in INTEGRATORS.values()) / omega_max
         end += seen
         sums.append(f"{seen:.3g} s to see it ({PEAK_DETECTION_STEPS} of the largest stable steps)")
     if ld.kind == "impulse" and end < ld.duration:
@@ -754,7 +750,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     rtol : float, optional
         The relative tolerance the time step is planned for; without it a given time step stands.
     method : str
-        The integrator: "rk4" or "verlet".
+        The integrator: a name in granchain.integrators.INTEGRATORS ("rk4" or "verlet").
     peak_ratio : float
         The run's force scale over its smallest measured peak, when a first run measured it
         (refined_plan); the time step and the output intervals are planned for rtol / peak_ratio.
@@ -773,7 +769,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     rtol_plan = rtol_eff / peak_ratio  # what the step must meet at the run's force scale
     choices: list[PlanChoice] = []
     omega, stiffest = highest_frequency(scene)
-    stable = STABILITY[method] / omega
+    stable = integrator(method).stability / omega
     dt = scene.run.timestep
     if dt is None or rtol is not None:
         choices.append(_timestep_choice(scene, method, rtol_plan, omega, stiffest, stable))
