@@ -28,7 +28,7 @@ def two_beads(n, k, v0, material="brass", radius=4.76e-3, run=None):
             "chain": {"beads": 2, "radius": radius, "material": material},
             "contact": {"law": "power", "exponent": n, "stiffness": k},
             "loading": {"kind": "velocity", "velocity": v0},
-            "run": run or {"rtol": RTOL},
+            "run": run or {"end_time": "auto", "timestep": "auto"},
         },
         source="two.toml",
     )
@@ -69,7 +69,7 @@ def test_the_impact_model_has_its_known_limits():
 def test_two_body_impact_on_the_reference(case):
     n, k, v0, material, radius = case
     sc = two_beads(n, k, v0, material, radius)
-    check_impact(run_scene(sc, backend="reference").solution, sc, n, k, v0)
+    check_impact(run_scene(sc, backend="reference", rtol=RTOL).solution, sc, n, k, v0)
 
 
 @settings(max_examples=3, deadline=None, suppress_health_check=list(HealthCheck))
@@ -77,7 +77,7 @@ def test_two_body_impact_on_the_reference(case):
 def test_two_body_impact_on_lammps(case):
     n, k, v0, material, radius = case
     sc = two_beads(n, k, v0, material, radius)
-    check_impact(run_scene(sc, backend="lammps").solution, sc, n, k, v0)
+    check_impact(run_scene(sc, backend="lammps", rtol=RTOL).solution, sc, n, k, v0)
 
 
 def interface_problem(beads, exponents, v0=0.3):
@@ -140,5 +140,7 @@ def test_lammps_equals_the_reference_verlet_step_for_step(n):
     )
     lam = run_scene(sc, backend="lammps").solution
     ver = run_scene(sc, backend="reference", method="verlet").solution
-    assert np.allclose(lam.peak_force, ver.peak_force, rtol=1e-9, atol=0.0)
+    # to 1e-9 of the largest force (as tests/test_effect_combinations.py): a far contact's overlap is a
+    # small difference of LAMMPS's absolute positions
+    assert np.max(np.abs(lam.peak_force - ver.peak_force)) <= 1e-9 * np.max(ver.peak_force)
     assert np.allclose(lam.velocity, ver.velocity, rtol=1e-9, atol=1e-9 * 0.3)

@@ -129,7 +129,9 @@ class PowerLaw(ContactLaw):
         n = s.number(
             "exponent", low=low, low_open=False, high=high, high_open=False, what="the exponent n of F = K alpha^n"
         )
-        k = s.number("stiffness", low=0.0, high=1e16, what="K of F = K alpha^n in N/m^n, up to 1e16")
+        k = s.number(
+            "stiffness", low=0.0, high=1e30, what="K of F = K alpha^n in N/m^n (up to 1e30: n = 3 takes ~1e19)"
+        )
         s.finish(("law", *cls.scene_keys))
         return PowerCoefficients(exponent=n, stiffness=k)
 
