@@ -16,6 +16,7 @@ from granchain.physics.laws.power import power_impact
 from granchain.problem import ChainProblem
 from granchain.reference.solver import solve_chain
 from granchain.scene import scene_from_dict
+from granchain.workflows.error_estimates import expected_orders
 from granchain.workflows.run import run_scene
 
 RTOL = 1e-3
@@ -144,3 +145,24 @@ def test_lammps_equals_the_reference_verlet_step_for_step(n):
     # small difference of LAMMPS's absolute positions
     assert np.max(np.abs(lam.peak_force - ver.peak_force)) <= 1e-9 * np.max(ver.peak_force)
     assert np.allclose(lam.velocity, ver.velocity, rtol=1e-9, atol=1e-9 * 0.3)
+
+
+@settings(max_examples=20, deadline=None)
+@given(n=st.floats(1.0, 3.0))
+def test_the_error_bars_onset_order_is_one_plus_the_laws_exponent(n):
+    """RK4's lowest order on a chain is its onset's 1 + n (issue 41 item 1), not Hertz's 2.5 for every
+    law; the Hertz and Thornton laws keep 2.5, and each law declares its exponent."""
+    sc = two_beads(n, stiffness_for(n, 4.76e-3), 0.3)
+    assert expected_orders("rk4", sc) == (pytest.approx(1.0 + n), 4.0)
+    assert float(sc.law.loading_exponent()) == n
+    hertz = scene_from_dict(
+        {
+            "chain": {"beads": 2, "radius": 4.76e-3, "material": "brass"},
+            "contact": {"law": "hertz"},
+            "loading": {"kind": "velocity", "velocity": 0.3},
+            "run": {"end_time": "auto", "timestep": "auto"},
+        },
+        source="hertz.toml",
+    )
+    assert expected_orders("rk4", hertz) == (2.5, 4.0)
+    assert float(hertz.law.loading_exponent()) == 1.5
