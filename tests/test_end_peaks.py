@@ -153,7 +153,7 @@ def test_a_damaged_wall_flag_in_a_run_directory_is_one_clear_error(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     summary["wall_peak_complete"] = "garbage"
     (out / "summary.json").write_text(json.dumps(summary))
-    with pytest.raises(LoadRunError, match="wall_peak_complete = 'garbage'"):
+    with pytest.raises(LoadRunError, match="wall_peak_complete: 'garbage' is not true or false"):
         load_run(out)
 
 

@@ -177,7 +177,7 @@ def peak_definition(method: str, scene) -> str:
     str
         The definition, in words.
     """
-    if integrator(method).peaks_by_overlap and scene.effects.dashpot:
+    if scene.effects.dashpot and integrator(method).peaks_by_overlap:  # the integrator matters only then
         return "the elastic force where the overlap turns"
     return "the total force's maximum"
 
