@@ -21,12 +21,7 @@ MAX_MODULE_LINES = 600
 #: "path" (a module) or "path::qualified.name" (a function) -> why it is over its limit, and the issue
 #: that removes it
 EXCEPTIONS = {
-    "granchain/workflows/plan.py": "the planner's stability, calibration and error model with plan_scene: "
-    "to split into the error model and the plan (issue 41 item 6, after item 1 moves the law facts out)",
-    "granchain/workflows/accuracy.py": "the accuracy study's runs, fits and report in one module: to split "
-    "along them (issue 41 item 6)",
     "granchain/workflows/plan.py::plan_scene": "the planner's passes in one function (issue 41 item 6)",
-    "granchain/workflows/accuracy.py::accuracy_study": "the study's loop over steps and its report (issue 41 item 6)",
     "granchain/campaigns/dask_executor.py::Executor.start": "the cluster's start-up and its fallbacks "
     "(issue 41 item 6)",
     "granchain/cli/info.py::cmd_plan": "the plan's text and JSON output in one command (issue 41 item 6)",

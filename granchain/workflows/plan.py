@@ -56,75 +56,35 @@ from granchain.physics.estimates import (
 )
 from granchain.scene import AUTO, Scene, SceneError, scene_from_dict, scene_to_dict
 from granchain.schedule import output_stride
-from granchain.workflows.planning.choice import PlanChoice as PlanChoice
-from granchain.workflows.planning.end_time import (
-    PEAK_DETECTION_STEPS as PEAK_DETECTION_STEPS,
+from granchain.workflows.planning.choice import (
+    PlanChoice,
 )
 from granchain.workflows.planning.end_time import (
-    REFLECTION_CROSSINGS as REFLECTION_CROSSINGS,
-)
-from granchain.workflows.planning.end_time import (
-    WALL_PULSE_CONTACTS as WALL_PULSE_CONTACTS,
-)
-from granchain.workflows.planning.end_time import (
-    _beads_choice as _beads_choice,
-)
-from granchain.workflows.planning.end_time import (
-    _front_end_time as _front_end_time,
-)
-from granchain.workflows.planning.end_time import (
-    _one_bead_end_time as _one_bead_end_time,
-)
-from granchain.workflows.planning.end_time import (
-    _reflection_end_time as _reflection_end_time,
-)
-from granchain.workflows.planning.end_time import (
-    _stop_choice as _stop_choice,
-)
-from granchain.workflows.planning.end_time import (
-    _wall_end_time as _wall_end_time,
-)
-from granchain.workflows.planning.end_time import (
-    reflection_planned as reflection_planned,
-)
-from granchain.workflows.planning.end_time import (
-    wall_peak_planned as wall_peak_planned,
+    PEAK_DETECTION_STEPS,
+    REFLECTION_CROSSINGS,
+    WALL_PULSE_CONTACTS,
+    _beads_choice,
+    _front_end_time,
+    _one_bead_end_time,
+    _reflection_end_time,
+    _stop_choice,
+    _wall_end_time,
+    reflection_planned,
+    wall_peak_planned,
 )
 from granchain.workflows.planning.travel import (
-    LINEAR_HORIZON as LINEAR_HORIZON,
-)
-from granchain.workflows.planning.travel import (
-    PRECOMPRESSED_LAG as PRECOMPRESSED_LAG,
-)
-from granchain.workflows.planning.travel import (
-    PRECOMPRESSED_NEIGHBOURS as PRECOMPRESSED_NEIGHBOURS,
-)
-from granchain.workflows.planning.travel import (
-    PRECOMPRESSED_TAIL as PRECOMPRESSED_TAIL,
-)
-from granchain.workflows.planning.travel import (
-    STEP_LAG as STEP_LAG,
-)
-from granchain.workflows.planning.travel import (
-    extension_budget as extension_budget,
-)
-from granchain.workflows.planning.travel import (
-    front_travel_time as front_travel_time,
-)
-from granchain.workflows.planning.travel import (
-    last_measured_contact as last_measured_contact,
-)
-from granchain.workflows.planning.travel import (
-    leading_edge_speed as leading_edge_speed,
-)
-from granchain.workflows.planning.travel import (
-    precompressed_front_time as precompressed_front_time,
-)
-from granchain.workflows.planning.travel import (
-    sonic_travel_times as sonic_travel_times,
-)
-from granchain.workflows.planning.travel import (
-    wave_speeds as wave_speeds,
+    LINEAR_HORIZON,
+    PRECOMPRESSED_LAG,
+    PRECOMPRESSED_NEIGHBOURS,
+    PRECOMPRESSED_TAIL,
+    STEP_LAG,
+    extension_budget,
+    front_travel_time,
+    last_measured_contact,
+    leading_edge_speed,
+    precompressed_front_time,
+    sonic_travel_times,
+    wave_speeds,
 )
 
 #: The error model  rel. error of peak forces ~ C (omega_max dt)^p, its constant C and order p, and the
@@ -501,3 +461,45 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     planned = scene_from_dict(d, source=scene.source or "<scene>")
     planned = replace(planned, source=scene.source, source_text=None)
     return Plan(scene=planned, rtol=rtol_eff, method=method, choices=choices, omega_max=omega, stable_timestep=stable)
+
+
+#: the planner's names, its parts' among them (granchain.workflows.planning), as other modules import them
+__all__ = [
+    "LINEAR_HORIZON",
+    "MAX_PEAK_RATIO",
+    "MAX_REFINE_STEP",
+    "MIN_RTOL",
+    "PEAK_DETECTION_STEPS",
+    "PRECOMPRESSED_LAG",
+    "PRECOMPRESSED_NEIGHBOURS",
+    "PRECOMPRESSED_TAIL",
+    "Plan",
+    "PlanChoice",
+    "REFINE_ABOVE",
+    "REFLECTION_CROSSINGS",
+    "STEP_LAG",
+    "WALL_PULSE_CONTACTS",
+    "_beads_choice",
+    "_front_end_time",
+    "_one_bead_end_time",
+    "_reflection_end_time",
+    "_stop_choice",
+    "_wall_end_time",
+    "accurate_timestep",
+    "damping_rate",
+    "extended_plan",
+    "extension_budget",
+    "front_travel_time",
+    "highest_frequency",
+    "last_measured_contact",
+    "leading_edge_speed",
+    "peak_ratio",
+    "plan_scene",
+    "precompressed_front_time",
+    "predicted_error",
+    "refined_plan",
+    "reflection_planned",
+    "sonic_travel_times",
+    "wall_peak_planned",
+    "wave_speeds",
+]
