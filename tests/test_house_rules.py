@@ -21,7 +21,6 @@ MAX_MODULE_LINES = 600
 #: "path" (a module) or "path::qualified.name" (a function) -> why it is over its limit, and the issue
 #: that removes it
 EXCEPTIONS = {
-    "granchain/workflows/plan.py::plan_scene": "the planner's passes in one function (issue 41 item 6)",
     "granchain/campaigns/dask_executor.py::Executor.start": "the cluster's start-up and its fallbacks "
     "(issue 41 item 6)",
     "granchain/cli/info.py::cmd_plan": "the plan's text and JSON output in one command (issue 41 item 6)",
@@ -30,8 +29,7 @@ EXCEPTIONS = {
     "granchain/workflows/compare_backends.py::compare_scene": "both backends' runs and their shared companions "
     "(issue 41 item 6)",
     "granchain/workflows/guards.py::check_run": "every run guard in one pass (issue 41 item 6)",
-    "granchain/workflows/law_comparison.py::contact_and_sources": "each law's model and its sources "
-    "(issue 41 item 6)",
+    "granchain/workflows/law_comparison.py::contact_and_sources": "each law's model and its sources (issue 41 item 6)",
     "granchain/workflows/plots/figures.py::_draw_peaks": "the peaks figure's panels (issue 41 item 6)",
 }
 

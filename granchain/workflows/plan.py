@@ -52,7 +52,6 @@ from granchain.physics.estimates import (
     expected_peak_force,
     highest_frequency,
     max_stiffness,
-    one_bead_impacts,
 )
 from granchain.scene import AUTO, Scene, SceneError, scene_from_dict, scene_to_dict
 from granchain.schedule import output_stride
@@ -69,6 +68,7 @@ from granchain.workflows.planning.end_time import (
     _reflection_end_time,
     _stop_choice,
     _wall_end_time,
+    end_time_choice,
     reflection_planned,
     wall_peak_planned,
 )
@@ -413,18 +413,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     slow, fast = wave_speeds(scene)
     end = scene.run.end_time
     if end is None:
-        impacts = one_bead_impacts(scene)
-        if impacts:
-            choices.append(_one_bead_end_time(scene, impacts))
-        else:
-            choices.append(_front_end_time(scene, last, slow, omega))
-            # only where the stop check waits for the wall: the planner's own (below) or a given one
-            # with stop_after_wall; a given stop without it ends the run before the wall's peak
-            waits = scene.run.stop_after_contact is None or scene.run.stop_after_wall
-            if waits and wall_peak_planned(scene):
-                choices[-1] = _wall_end_time(scene, choices[-1], last, slow, omega)
-            if reflection_planned(scene):
-                choices[-1] = _reflection_end_time(scene, choices[-1], slow)
+        choices.append(end_time_choice(scene, last, slow, omega))
         end = choices[-1].value
     if scene.run.timestep is not None and rtol is None and scene.run.timestep > end:
         # the scene's own step, longer than the end the planner chose: the run would be one step of another
@@ -465,6 +454,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
 
 #: the planner's names, its parts' among them (granchain.workflows.planning), as other modules import them
 __all__ = [
+    "end_time_choice",
     "LINEAR_HORIZON",
     "MAX_PEAK_RATIO",
     "MAX_REFINE_STEP",

@@ -28,8 +28,8 @@ def expected_orders(method: str, scene) -> tuple[float, float]:
 
 
 def integrator_order(method: str, scene) -> int:
-    """The order the error estimate assumes (see the module docstring): the integrator's, or its order
-    with a dashpot (IntegratorFacts.dashpot_order)."""
+    """The order the error estimate assumes (see granchain.workflows.error_estimates' docstring): the
+    integrator's, or its order with a dashpot (IntegratorFacts.dashpot_order)."""
     facts = integrator(method)
     return facts.dashpot_order if scene.effects.dashpot else facts.order
 

@@ -13,7 +13,7 @@ ESTIMATED_OBSERVABLES = ("leading_peak_force", "leading_peak_force_nondim", "wav
 
 @dataclass
 class ErrorReport:
-    """Measured error estimates of a run (see the module docstring)."""
+    """Measured error estimates of a run (see granchain.workflows.error_estimates' docstring)."""
 
     order: int
     timesteps: list[float]  # the companions' steps (2 dt, and 4 dt where stable; 2 dt alone for one_companion; RK4's)

@@ -9,11 +9,10 @@ from granchain.integrators import INTEGRATORS
 from granchain.physics.effects.base import watched_force
 from granchain.physics.estimates import (
     expected_peak_force,
+    one_bead_impacts,
     step_equivalent,
 )
 from granchain.scene import SceneError
-
-#: The error model  rel. error of peak forces ~ C (omega_max dt)^p, its constant C and order p, and the
 from granchain.workflows.planning.choice import PlanChoice
 from granchain.workflows.planning.travel import (
     PRECOMPRESSED_TAIL,
@@ -186,8 +185,8 @@ def _wall_end_time(scene, choice: PlanChoice, measured: int, slow: float, omega_
 
 
 def _beads_choice(scene, end: float, last: int, fast: float) -> PlanChoice:
-    """The number of beads: no reflection from bead N reaches contact `last` before the end (see the
-    module docstring)."""
+    """The number of beads: no reflection from bead N reaches contact `last` before the end (see
+    granchain.workflows.plan's docstring)."""
     lead, d = leading_edge_speed(scene), scene.diameter
     n = math.ceil(1.1 * (end + last * d / fast) / (d / lead + d / fast)) + 5
     n = max(n, last + 5)
@@ -264,3 +263,20 @@ def _stop_choice(scene, last: int) -> PlanChoice:
         last,
         f"stop as soon as the leading wave has passed contact {last} (its force below half its peak), both backends",
     )
+
+
+def end_time_choice(scene, last: int | None, slow: float, omega_max: float) -> PlanChoice:
+    """The planned end time: one bead's (or two free beads') impacts, else the front past the last
+    measured contact, then the wall's pulse and the reflection where they are planned."""
+    impacts = one_bead_impacts(scene)
+    if impacts:
+        return _one_bead_end_time(scene, impacts)
+    choice = _front_end_time(scene, last, slow, omega_max)
+    # only where the stop check waits for the wall: the planner's own (plan_scene's) or a given one
+    # with stop_after_wall; a given stop without it ends the run before the wall's peak
+    waits = scene.run.stop_after_contact is None or scene.run.stop_after_wall
+    if waits and wall_peak_planned(scene):
+        choice = _wall_end_time(scene, choice, last, slow, omega_max)
+    if reflection_planned(scene):
+        choice = _reflection_end_time(scene, choice, slow)
+    return choice

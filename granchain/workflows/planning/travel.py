@@ -13,11 +13,9 @@ from granchain.physics.estimates import (
     step_equivalent,
 )
 
-#: The error model  rel. error of peak forces ~ C (omega_max dt)^p, its constant C and order p, and the
-
 
 def leading_edge_speed(scene) -> float:
-    """The fastest a disturbance can enter the undisturbed chain, m/s (see the module docstring)."""
+    """The fastest a disturbance can enter the undisturbed chain, m/s (see granchain.workflows.plan's docstring)."""
     return scene.contact.law_class.leading_edge_speed(scene, expected_peak_force(scene), step_equivalent(scene))
 
 
