@@ -23,7 +23,6 @@ MAX_MODULE_LINES = 600
 EXCEPTIONS = {
     "granchain/campaigns/dask_executor.py::Executor.start": "the cluster's start-up and its fallbacks "
     "(issue 41 item 6)",
-    "granchain/cli/info.py::cmd_plan": "the plan's text and JSON output in one command (issue 41 item 6)",
     "granchain/postprocess/comparison_table.py::compare_runs": "the table's rows per quantity (issue 41 item 6)",
     "granchain/postprocess/observables.py::measure_observables": "every observable in one pass (issue 41 item 6)",
     "granchain/workflows/compare_backends.py::compare_scene": "both backends' runs and their shared companions "
