@@ -14,19 +14,9 @@ from typing import ClassVar
 
 from granchain.integrators import RK4, integrator
 from granchain.richardson import BOUND_ORDER, CHECK_FACTOR, erratic_bounds, one_companion, richardson
+from granchain.workflows.errorbars import reasons
 from granchain.workflows.errorbars.bars import against_rk4_bars, extrapolated_bars
 from granchain.workflows.errorbars.facts import against_rk4_factors, integrator_order
-from granchain.workflows.errorbars.reasons import (
-    BOUNDED_BY_DEFAULT,
-    ONE_COMPANION_BY_DEFAULT,
-    UNCHECKED_BY_DEFAULT,
-    against_rk4_because,
-    bounded_because,
-    check_because,
-    one_companion_because,
-    unchecked_because,
-    withheld_because,
-)
 from granchain.workflows.errorbars.report import Companion, ErrorReport
 from granchain.workflows.errorbars.runs import _check_run, _richardson_runs, kept_lammps, rk4_runs
 
@@ -98,14 +88,17 @@ class AgainstRK4(ErrorBarStrategy):
         """against_rk4_because, where RK4 runs can be made."""
         if not req.rk4_runs:
             return None
-        return against_rk4_because(req.method, req.scene, req.checked, req.numpy_speed)
+        return reasons.against_rk4_because(req.method, req.scene, req.checked, req.numpy_speed)
 
     def companions(self, req: Request, stable_timestep: float) -> list[Companion]:
         """RK4 runs at against_rk4_factors; none where RK4 gives no bar or 2 dt is above its limit."""
         from granchain.workflows.plan import plan_scene
 
         scene = req.scene
-        if withheld_because("rk4", scene) or 2 * scene.run.timestep > plan_scene(scene, method="rk4").stable_timestep:
+        if (
+            reasons.withheld_because("rk4", scene)
+            or 2 * scene.run.timestep > plan_scene(scene, method="rk4").stable_timestep
+        ):
             return []
         return [Companion("rk4", f, "rk4 reference") for f in against_rk4_factors(scene)]
 
@@ -116,7 +109,7 @@ class AgainstRK4(ErrorBarStrategy):
         scene = result.scene
         dt = scene.run.timestep
         report = ErrorReport(order=integrator(req.method).order, timesteps=[], wall_times=[], against=RK4.name)
-        report.why_none = withheld_because(RK4.name, scene)
+        report.why_none = reasons.withheld_because(RK4.name, scene)
         if not report.why_none:
             if 2 * dt > plan_scene(scene, method="rk4").stable_timestep:
                 report.why_none = f"2 dt = {2 * dt:.3g} s is above RK4's stability limit: no RK4 companion, no estimate"
@@ -127,7 +120,7 @@ class AgainstRK4(ErrorBarStrategy):
                 runs = rk4_runs(report, scene, run_rk4, against_rk4_factors(scene))
                 if runs is not None:
                     against_rk4_bars(report, result, runs)
-        report.why_unchecked = unchecked_because(req.method, scene)
+        report.why_unchecked = reasons.unchecked_because(req.method, scene)
         return report
 
 
@@ -137,8 +130,8 @@ class Withheld(ErrorBarStrategy):
     name = "withheld"
 
     def because(self, req: Request) -> str | None:
-        """withheld_because."""
-        return withheld_because(req.method, req.scene)
+        """reasons.withheld_because."""
+        return reasons.withheld_because(req.method, req.scene)
 
     def companions(self, req: Request, stable_timestep: float) -> list[Companion]:
         """None: no companion runs."""
@@ -147,7 +140,7 @@ class Withheld(ErrorBarStrategy):
     def estimate(self, req: Request, result, run_one, run_rk4, stable_timestep: float, absolute_positions: bool):
         """A report without bars, saying why (why_none)."""
         report = ErrorReport(order=integrator_order(req.method, req.scene), timesteps=[], wall_times=[])
-        report.bound = bounded_because(req.method, req.scene)
+        report.bound = reasons.bounded_because(req.method, req.scene)
         report.why_none = self.because(req)
         return report
 
@@ -192,9 +185,9 @@ class Richardson(ErrorBarStrategy):
     def why_unchecked(self, req: Request) -> str | None:
         """What its bars leave unchecked below dt (ErrorReport.why_unchecked), or None."""
         if req.checked:
-            return unchecked_because(req.method, req.scene)
-        if check_because(req.method, req.scene, True):
-            return UNCHECKED_BY_DEFAULT
+            return reasons.unchecked_because(req.method, req.scene)
+        if reasons.check_because(req.method, req.scene, True):
+            return reasons.UNCHECKED_BY_DEFAULT
         return None
 
     def estimate(self, req: Request, result, run_one, run_rk4, stable_timestep: float, absolute_positions: bool):
@@ -222,8 +215,8 @@ class Checked(Richardson):
     check = True
 
     def because(self, req: Request) -> str | None:
-        """check_because."""
-        return check_because(req.method, req.scene, req.checked)
+        """reasons.check_because."""
+        return reasons.check_because(req.method, req.scene, req.checked)
 
     def why_unchecked(self, req: Request) -> str | None:
         """None: the run at dt / 2 checks them (_check_run says when it failed)."""
@@ -236,8 +229,8 @@ class Bounded(Richardson):
     name = "bounded"
 
     def because(self, req: Request) -> str | None:
-        """bounded_because."""
-        return bounded_because(req.method, req.scene)
+        """reasons.bounded_because."""
+        return reasons.bounded_because(req.method, req.scene)
 
     def mark(self, report: ErrorReport, req: Request) -> None:
         """ErrorReport.bound: the reason."""
@@ -248,10 +241,10 @@ class Bounded(Richardson):
     def why_unchecked(self, req: Request) -> str | None:
         """Asked for checked bars, but no RK4 runs to measure them against; else what the bounds leave."""
         if req.checked:  # (asked for, but no RK4 run to measure against: run_rk4 None)
-            return f"no RK4 runs to measure it against here. {BOUNDED_BY_DEFAULT}"
-        if check_because(req.method, req.scene, True):
-            return UNCHECKED_BY_DEFAULT
-        return BOUNDED_BY_DEFAULT
+            return f"no RK4 runs to measure it against here. {reasons.BOUNDED_BY_DEFAULT}"
+        if reasons.check_because(req.method, req.scene, True):
+            return reasons.UNCHECKED_BY_DEFAULT
+        return reasons.BOUNDED_BY_DEFAULT
 
 
 class OneCompanion(Richardson):
@@ -261,8 +254,8 @@ class OneCompanion(Richardson):
     factors = (2.0,)
 
     def because(self, req: Request) -> str | None:
-        """one_companion_because."""
-        return one_companion_because(req.method, req.scene, req.checked)
+        """reasons.one_companion_because."""
+        return reasons.one_companion_because(req.method, req.scene, req.checked)
 
     def order(self, req: Request) -> float:
         """BOUND_ORDER: the bound |Q(dt) - Q(2 dt)|."""
@@ -270,7 +263,7 @@ class OneCompanion(Richardson):
 
     def mark(self, report: ErrorReport, req: Request) -> None:
         """ErrorReport.bound (None) and one_companion: the reason."""
-        report.bound = bounded_because(req.method, req.scene)
+        report.bound = reasons.bounded_because(req.method, req.scene)
         report.one_companion = self.because(req)
 
     @staticmethod
@@ -281,8 +274,8 @@ class OneCompanion(Richardson):
         )
 
     def why_unchecked(self, req: Request) -> str | None:
-        """ONE_COMPANION_BY_DEFAULT."""
-        return ONE_COMPANION_BY_DEFAULT
+        """reasons.ONE_COMPANION_BY_DEFAULT."""
+        return reasons.ONE_COMPANION_BY_DEFAULT
 
 
 #: the strategies in the order they are tried: the first whose ``because`` gives a reason is the run's
