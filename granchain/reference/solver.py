@@ -215,19 +215,11 @@ def _solve(
     fields = {}
     for observer in observers:  # in list order: the leading pulse reads the peak tracker's result
         fields.update(observer.finish(state))
-    return _solution(problem, state, method, timestep, integrator.extra_steps, t_wall, fields)
-
-
-def _solution(
-    problem: ChainProblem, state: ChainState, method: str, timestep: float, extra_steps: int, t_wall: float, fields
-) -> ChainSolution:
-    """The run's ChainSolution: the final state and what the observers made of the run (fields);
-    t_wall: the perf_counter at its start."""
     return ChainSolution(
         method=method,
         timestep=timestep,
         steps=state.step,
-        extra_steps=extra_steps,
+        extra_steps=integrator.extra_steps,
         wall_time=time.perf_counter() - t_wall,
         end_time=state.t,
         displacement=state.u,
