@@ -8,6 +8,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from granchain.exceptions import GranchainError
+
 #: Plastic loading stiffness of the bilinear law: k = 18.5 sigma_y R* (paper, Sec. III).
 PLASTIC_STIFFNESS_FACTOR = 18.5
 
@@ -199,6 +201,68 @@ def flat_effective_modulus(m: Material) -> float:
 #: pressure at which a contact first yields (von Mises, nu = 0.3; Johnson, Contact Mechanics, 1985,
 #: Sec. 6.2). Used where a scene gives no yield_pressure: the softer body of each contact sets it.
 YIELD_PRESSURE_FACTOR = 1.61
+
+
+def read_material_table(ms) -> Material:
+    """A material given by its values: a [chain.material] or [loading.material] table, an inline
+    table in a per-bead [chain] material list, or a [boundary] wall_material table; ms is the scene
+    reader's section of it (granchain.scene.section._Section: quantity, number, error, finish)."""
+    # each value within the range of real solid beads (*_RANGE): outside it, a unit slip (g/cm^3,
+    # GPa, MPa) is the likely cause, and the message says which
+    material = Material(
+        density=ms.quantity("density", DENSITY_RANGE, what="kg/m^3"),
+        youngs_modulus=ms.quantity("youngs_modulus", YOUNGS_MODULUS_RANGE, what="Pa"),
+        poisson_ratio=ms.number("poisson_ratio", low=-1.0, high=0.5, what="-1 < nu < 0.5"),
+        yield_strength=ms.quantity("yield_strength", YIELD_STRENGTH_RANGE, required=False, what="Pa"),
+    )
+    why = yield_strain_refusal(material)
+    if why:
+        raise ms.error(f"[{ms.name}] {why}")
+    ms.finish(MATERIAL_KEYS)
+    return material
+
+
+#: The keys of a material table, in the order the scene writer gives them.
+MATERIAL_KEYS = ("density", "youngs_modulus", "poisson_ratio", "yield_strength")
+
+
+def material_values(m: Material) -> dict:
+    """A material's table as a scene file writes it: density, youngs_modulus, poisson_ratio, and
+    yield_strength where it has one (read_material_table reads it back)."""
+    out: dict = {"density": m.density, "youngs_modulus": m.youngs_modulus, "poisson_ratio": m.poisson_ratio}
+    if m.yield_strength is not None:
+        out["yield_strength"] = m.yield_strength
+    return out
+
+
+def wall_contact_pair(
+    bead: Material, radius: float, wall: Material | None, wall_radius: float | None
+) -> tuple[float, float, tuple]:
+    """E*, R* and the materials of a bead (material, radius) on the far-end wall (Johnson).
+
+    A rigid wall (``wall`` None) has no compliance: E* = E/(1-nu^2) of the bead; a wall of a material
+    adds its own, 1/E* = (1-nu_b^2)/E_b + (1-nu_w^2)/E_w. A flat (``wall_radius`` None) has infinite
+    radius: R* = R; a curved wall 1/R* = 1/R + 1/R_w. The materials are those a plastic law's mixing
+    rule reads (the softer one's yield): the bead's alone on a rigid wall.
+    """
+    e_star = flat_effective_modulus(bead) if wall is None else pair_effective_modulus(bead, wall)
+    r_star = float(radius) if wall_radius is None else pair_effective_radius(float(radius), float(wall_radius))
+    return e_star, r_star, (bead,) if wall is None else (bead, wall)
+
+
+class MissingYieldStrength(GranchainError, ValueError):
+    """A plastic law's mixing rule needs the yield strength of a material that has none (the scene
+    reader says which key gives it)."""
+
+
+def softer_yield_strength(materials) -> float:
+    """The smaller yield strength of the bodies that touch: the plastic laws' mixing rule (the softer
+    material yields first); MissingYieldStrength naming the material that has none."""
+    for m in materials:
+        if m.yield_strength is None:
+            name = next((n for n, x in MATERIALS.items() if x == m), m)
+            raise MissingYieldStrength(f"{material_label(name)} has no yield_strength")
+    return min(m.yield_strength for m in materials)
 
 
 def bead_material(entry: str | Material) -> Material:

@@ -122,7 +122,7 @@ def beyond_yield(scene, solution) -> list[str]:
         ends.append(("striker's", solution.striker_peak_force, yield_force(e_star, r_star, pair), 0.0))
     if scene.effects.far_end == "wall" and solution.wall_peak_force is not None:
         m, r = scene.bead_materials[-1], float(scene.bead_radii[-1])
-        ends.append(("wall's", solution.wall_peak_force, yield_force(mat.flat_effective_modulus(m), r, (m,)), f0))
+        ends.append(("wall's", solution.wall_peak_force, yield_force(*scene.wall_pair(r, m)), f0))
     for who, peak, limit, static in ends:
         if limit is not None and peak > limit:
             at_rest = f"; F0 = {_kn(static)} alone is {static / limit:.3g}x F_y" if static > limit else ""

@@ -208,9 +208,7 @@ def _solve(
         RunWatch(state, ledger, watch_every, max_overlap, energy_watch, momentum_watch),
     ]
     if stop_after is not None:
-        contacts = (stop_after, state.n - 2) if stop_at_wall else (stop_after,)  # a wall's: the last
-        back = 0 if stop_at_wall and stop_at_reflection else None  # the reflection's last contact
-        observers.append(EarlyStop(state, peaks, contacts, STOP_CHECK_EVERY, stop_floor, lead_fall, back))
+        observers.append(_early_stop(state, peaks, stop_after, stop_at_wall, stop_at_reflection, stop_floor, lead_fall))
     _drive(state, integrator, plan, observers, timestep, progress)
     fields = {}
     for observer in observers:  # in list order: the leading pulse reads the peak tracker's result
@@ -229,6 +227,13 @@ def _solve(
         momentum=float(np.dot(state.mass_ke, state.v)),
         **fields,
     )
+
+
+def _early_stop(state, peaks, stop_after: int, at_wall: bool, at_reflection: bool, floor: float, fall: float):
+    """The stop check's observer: contact stop_after, then the wall's (the last), then its reflection's (the first)."""
+    contacts = (stop_after, state.n - 2) if at_wall else (stop_after,)
+    back = 0 if at_wall and at_reflection else None
+    return EarlyStop(state, peaks, contacts, STOP_CHECK_EVERY, floor, fall, back)
 
 
 def _integrator(method: str, state: ChainState, timestep: float, event_location: bool) -> Integrator:

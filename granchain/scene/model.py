@@ -219,7 +219,12 @@ class Effects:
     Attributes
     ----------
     far_end : str
-        "free", or "wall": a rigid flat touching bead N ([boundary] far_end).
+        "free", or "wall": a wall touching bead N ([boundary] far_end).
+    wall_material : str, Material or None
+        The wall's material: a built-in name or a Material (an inline table); None: rigid
+        ([boundary] wall_material).
+    wall_radius : float or None
+        The wall's radius of curvature, m; None: a flat ([boundary] wall_radius).
     dashpot : float
         gamma in N s/m, a linear dashpot on every closing contact; 0: none ([damping] dashpot).
     precompression : float
@@ -227,6 +232,8 @@ class Effects:
     """
 
     far_end: str = "free"
+    wall_material: str | mat.Material | None = None
+    wall_radius: float | None = None
     dashpot: float = 0.0
     precompression: float = 0.0
 
@@ -494,14 +501,27 @@ class Scene:
         """k of the striker's contact on bead 1 (striker_law)."""
         return float(self.striker_law.k)
 
+    def wall_pair(self, r: float, m) -> tuple[float, float, tuple]:
+        """E*, R* and materials of a bead (radius, material) on the far-end wall: the wall's material
+        and radius, rigid and flat unless the scene gives them (materials.wall_contact_pair)."""
+        w = self.effects.wall_material
+        return mat.wall_contact_pair(m, r, None if w is None else mat.bead_material(w), self.effects.wall_radius)
+
     def flat_law(self, r: float, m) -> ContactLaw:
-        """A bead (radius, material) on a rigid flat: R* = R and E* = E/(1-nu^2) (Hertz, Thornton);
-        bilinear, k = 18.5 sigma_y R* with R* = R, i.e. twice the bead-bead k."""
-        return self.pair_law(mat.flat_effective_modulus(m), float(r), (m,))
+        """A bead (radius, material) on the wall (wall_pair's E*, R*, materials); on a rigid flat
+        R* = R and E* = E/(1-nu^2) (Hertz, Thornton), bilinear k = 18.5 sigma_y R* with R* = R,
+        i.e. twice the bead-bead k. On a wall of a material, a plastic law takes the softer's yield
+        as between beads: the [contact] value the law derives from the chain's yield strength
+        (yield_strength_key: the bilinear k) is left to the pair's mixing rule."""
+        e_star, r_star, materials = self.wall_pair(r, m)
+        if self.effects.wall_material is None or self.contact.law_class.yield_strength_key is None:
+            return self.pair_law(e_star, r_star, materials)
+        c = replace(self.contact.coefficients, **{self.contact.law_class.yield_strength_key: None})
+        return self.contact.law_class.for_pair(c, e_star, r_star, self.r_star, materials)
 
     @property
     def wall_law(self) -> ContactLaw:
-        """Bead N on the rigid flat (flat_law of bead N's radius and material)."""
+        """Bead N on the wall (flat_law of bead N's radius and material)."""
         return self.flat_law(float(self.bead_radii[-1]), self.bead_materials[-1])
 
     @property

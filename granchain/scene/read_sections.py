@@ -34,28 +34,6 @@ def _read_effects(source: str, data: dict) -> Effects:
     return Effects(**fields)
 
 
-def _read_material_table(ms: _Section) -> mat.Material:
-    """A material given by its values: a [chain.material] or [loading.material] table, or an inline
-    table in a per-bead [chain] material list."""
-    # each value within the range of real solid beads (materials.*_RANGE): outside it, a unit slip
-    # (g/cm^3, GPa, MPa) is the likely cause, and the message says which
-    material = mat.Material(
-        density=ms.quantity("density", mat.DENSITY_RANGE, what="kg/m^3"),
-        youngs_modulus=ms.quantity("youngs_modulus", mat.YOUNGS_MODULUS_RANGE, what="Pa"),
-        poisson_ratio=ms.number("poisson_ratio", low=-1.0, high=0.5, what="-1 < nu < 0.5"),
-        yield_strength=ms.quantity("yield_strength", mat.YIELD_STRENGTH_RANGE, required=False, what="Pa"),
-    )
-    why = mat.yield_strain_refusal(material)
-    if why:
-        raise ms.error(f"[{ms.name}] {why}")
-    ms.finish(MATERIAL_KEYS)
-    return material
-
-
-#: The keys of a material table, in the order the scene writer gives them.
-MATERIAL_KEYS = ("density", "youngs_modulus", "poisson_ratio", "yield_strength")
-
-
 def _read_material(s: _Section, source: str, required: bool = True) -> tuple[mat.Material | None, str | None]:
     """`material` of a section: a built-in name or an inline table."""
     allowed = f"a built-in name ({', '.join(mat.MATERIALS)}) or a [{s.name}.material] table"
@@ -67,7 +45,7 @@ def _read_material(s: _Section, source: str, required: bool = True) -> tuple[mat
             raise s.fail("material", m, allowed)
         return mat.MATERIALS[m], m
     if isinstance(m, dict):
-        return _read_material_table(_Section(source, f"{s.name}.material", m)), None
+        return mat.read_material_table(_Section(source, f"{s.name}.material", m)), None
     raise s.fail("material", m, allowed)
 
 
@@ -91,7 +69,7 @@ def _read_material_list(s: _Section, source: str, beads: int | None) -> tuple[st
                 raise s.fail(where, x, f"bead {i}'s material: {_did_you_mean(x, mat.MATERIALS)}{entry}")
             out.append(x)
         elif isinstance(x, dict):
-            out.append(_read_material_table(_Section(source, f"chain.{where}", x)))
+            out.append(mat.read_material_table(_Section(source, f"chain.{where}", x)))
         else:
             raise s.fail(where, x, f"bead {i}'s material: {entry}")
     return tuple(out)

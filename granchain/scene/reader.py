@@ -234,7 +234,7 @@ def _check_scales(scene: Scene, source: str) -> None:
     if scene.loading.kind == "striker":
         laws["the striker's contact"] = (scene.striker_law, "[loading] radius, material and [contact]")
     if scene.effects.far_end == "wall":
-        laws["the wall's contact"] = (scene.wall_law, keys + " and [contact]")
+        laws["the wall's contact"] = (_wall_law(scene, source), keys + " and [contact]")
     for what, (law, keys_of) in laws.items():
         values = {
             "k": law.k,
@@ -286,3 +286,17 @@ def _below(x: float) -> float:
     while float(f"{v:.4g}") > x:
         v -= q
     return float(f"{v:.4g}")
+
+
+def _wall_law(scene: Scene, source: str):
+    """The wall's law (Scene.wall_law), or why a plastic law cannot mix bead N's material with the
+    wall's (a yield strength missing: the softer one's sets the wall's contact)."""
+    try:
+        return scene.wall_law
+    except mat.MissingYieldStrength as e:
+        raise SceneError(
+            f"{source}: [boundary] wall_material with [contact] law = {scene.contact.law_class.name!r}: the wall's "
+            f"contact takes the softer material's yield strength, as between beads, but {e}: give "
+            "yield_strength in [boundary.wall_material] and [chain.material] tables (Pa), choose materials that "
+            "have one (granchain materials), or remove wall_material for a rigid wall"
+        ) from None

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from granchain.physics import materials as mat
 from granchain.physics.effects import sections
 from granchain.scene.limits import AUTO
 
@@ -20,7 +21,7 @@ def _loading_to_dict(ld) -> dict[str, Any]:
         return {"kind": "velocity", "velocity": ld.velocity}
     st: dict[str, Any] = {"kind": "striker", "velocity": ld.velocity, "radius": ld.striker_radius}
     # its yield_strength too: a plastic law's mixing rule for the striker's contact reads it
-    st["material"] = ld.striker_material_name or _material_values(ld.striker_material)
+    st["material"] = ld.striker_material_name or mat.material_values(ld.striker_material)
     if ld.striker_mass is not None:
         st["mass"] = ld.striker_mass
     return st
@@ -33,14 +34,6 @@ def _outputs_to_dict(o) -> dict[str, Any]:
     out.update({k: list(v) for k, v in lists if v})
     scalars = (("history_interval", o.history_interval), ("dump_interval", o.dump_interval))
     out.update({k: v for k, v in scalars if v is not None})
-    return out
-
-
-def _material_values(m) -> dict[str, Any]:
-    """A material's table: density, youngs_modulus, poisson_ratio, and yield_strength where it has one."""
-    out: dict[str, Any] = {"density": m.density, "youngs_modulus": m.youngs_modulus, "poisson_ratio": m.poisson_ratio}
-    if m.yield_strength is not None:
-        out["yield_strength"] = m.yield_strength
     return out
 
 
@@ -64,11 +57,11 @@ def scene_to_dict(scene) -> dict:
     contact = scene.contact.law_class.contact_to_dict(scene.contact)
     material: Any
     if c.materials:  # per bead, a built-in name or an inline table (each contact's law reads its yield_strength)
-        material = [e if isinstance(e, str) else _material_values(e) for e in c.materials]
+        material = [e if isinstance(e, str) else mat.material_values(e) for e in c.materials]
     elif c.material_name is not None:
         material = c.material_name
     else:
-        material = _material_values(c.material)
+        material = mat.material_values(c.material)
         if c.material.yield_strength is not None:  # the law's value derived from it is read back from it
             contact.pop(scene.contact.law_class.yield_strength_key, None)
     d: dict[str, Any] = {}

@@ -1,8 +1,10 @@
-"""The far end: free (the default) or a rigid flat touching bead N at t = 0 ([boundary] far_end = "wall").
+"""The far end: free (the default) or a wall touching bead N at t = 0 ([boundary] far_end = "wall"):
+rigid (the default) or of a material (wall_material), flat (the default) or curved (wall_radius).
 
 The wall is an immovable extra bead for the solvers (zero inverse mass) whose contact with bead N has
-the wall's law (scene.wall_law: Hertz with R* = R and E* = E/(1-nu^2); bilinear with twice the
-bead-bead k). It takes momentum: a walled chain does not conserve it.
+the wall's law (scene.wall_law: the scene's law with the pair's E* and R*, materials.wall_contact_pair;
+on a rigid flat Hertz has R* = R and E* = E/(1-nu^2), bilinear twice the bead-bead k). It takes
+momentum: a walled chain does not conserve it.
 """
 
 from __future__ import annotations
@@ -12,22 +14,33 @@ from typing import Any
 import numpy as np
 from typing_extensions import override
 
+from granchain.physics import materials as mat
 from granchain.physics.effects.base import Bounds, Effect, watched_force
 
 FAR_ENDS = ("free", "wall")
+
+#: what [boundary] wall_material takes, in words
+WALL_MATERIAL_TEXT = (
+    f"a built-in material name ({', '.join(mat.MATERIALS)}) or an inline table of the values a "
+    "[chain.material] table takes, {density = ..., youngs_modulus = ..., poisson_ratio = ...} (SI; "
+    "yield_strength optional); leave it out for a rigid wall"
+)
 
 
 class WallEffect(Effect):
     """A rigid wall at the far end: a flat touching bead N at t = 0, on which the wave reflects.
 
     The paper's chain is semi-infinite (its far end free and never reached); with a wall, bead N
-    presses on an immovable flat with the wall's law (``scene.wall_law``: the chain's law for a bead
-    on a flat, R* = R and E* = E/(1-nu^2); for the bilinear law, twice the bead-bead k). The
+    presses on an immovable wall with the wall's law (``scene.wall_law``: the chain's law for a bead
+    on the wall, with the pair's E* and R*; on a rigid flat R* = R and E* = E/(1-nu^2), for the
+    bilinear law twice the bead-bead k; the dashpot, where the scene has one, on it too). The
     solvers integrate it as an extra bead of zero inverse mass after bead N; the results report its
     contact's peak force and time (``wall_peak_force``, ``wall_time_of_peak``). The wall takes
     momentum: a walled chain does not conserve it.
 
-    Scene keys: ``[boundary] far_end`` = "free" (the default: no wall) or "wall". Deck block:
+    Scene keys: ``[boundary] far_end`` = "free" (the default: no wall) or "wall";
+    ``wall_material`` (a built-in name or an inline table; default: rigid) and ``wall_radius`` (m;
+    default: a flat), only with a wall. Deck block:
     ``wall.lmp.j2`` in the "ends" slot (the wall's group, held at rest); its atom is the ``wall``
     atom type after bead N. LAMMPS's built-in granular pair style would see it as a sphere, so a
     walled scene has no yardstick.
@@ -37,9 +50,9 @@ class WallEffect(Effect):
     label = '[boundary] far_end = "wall"'
     declaration = {"boundary": {"far_end": "wall"}}
     section = "boundary"
-    scene_keys = ("far_end",)
-    fields = {"far_end": "free"}
-    example = {"far_end": "wall"}
+    scene_keys = ("far_end", "wall_material", "wall_radius")
+    fields = {"far_end": "free", "wall_material": None, "wall_radius": None}
+    example = {"far_end": "wall", "wall_material": "aluminium-6061-t6", "wall_radius": 0.05}
     invalid = {"far_end": ("rigid", 1, True)}
     conserves_momentum = False
     deck_blocks = {"ends": "wall.lmp.j2"}
@@ -59,14 +72,36 @@ class WallEffect(Effect):
     @classmethod
     @override
     def read(cls, section) -> dict[str, Any]:
+        given = [k for k in ("wall_material", "wall_radius") if section.has(k)]
+        if given and section.raw("far_end", "free") != "wall":
+            raise section.error(
+                f"[boundary] {given[0]} is the far-end wall's, but the chain has no wall: add "
+                f'[boundary] far_end = "wall", or remove {" and ".join(given)}'
+            )
         far_end = section.choice("far_end", FAR_ENDS)
+        material = _read_wall_material(section) if section.has("wall_material") else None
+        radius = section.number(
+            "wall_radius",
+            required=False,
+            low=0.0,
+            high=1e3,
+            what="the wall's radius of curvature in m (no key: a flat)",
+        )
         section.finish(cls.scene_keys)
-        return {"far_end": far_end}
+        return {"far_end": far_end, "wall_material": material, "wall_radius": radius}
 
     @classmethod
     @override
     def to_dict(cls, effects) -> dict[str, Any] | None:
-        return {"far_end": effects.far_end} if effects.far_end != "free" else None
+        if effects.far_end == "free":
+            return None
+        out: dict[str, Any] = {"far_end": effects.far_end}
+        w = effects.wall_material
+        if w is not None:
+            out["wall_material"] = w if isinstance(w, str) else mat.material_values(w)
+        if effects.wall_radius is not None:
+            out["wall_radius"] = effects.wall_radius
+        return out
 
     @classmethod
     @override
@@ -127,3 +162,16 @@ class WallEffect(Effect):
         pairs = [(k + 1, tw, scene.flat_law(r, m), r) for k, (r, m) in enumerate(kinds)]
         rn = float(scene.bead_radii[-1])
         return pairs + [(tw, tw, scene.wall_law, rn)]
+
+
+def _read_wall_material(section) -> str | mat.Material:
+    """[boundary] wall_material: a built-in name (kept as the name, as the scene wrote it) or an
+    inline table, read as a [chain.material] table is."""
+    w = section.raw("wall_material")
+    if isinstance(w, str):
+        if w not in mat.MATERIALS:
+            raise section.fail("wall_material", w, WALL_MATERIAL_TEXT)
+        return w
+    if isinstance(w, dict):
+        return mat.read_material_table(type(section)(section.file, "boundary.wall_material", w))
+    raise section.fail("wall_material", w, WALL_MATERIAL_TEXT)

@@ -279,7 +279,7 @@ class BilinearLaw(ContactLaw):
     def for_pair(cls, coefficients, e_star, r_star, nominal_r_star, materials=()):
         beta = coefficients.unloading_coeff
         if coefficients.plastic_stiffness is None:  # several materials: 18.5 sigma_y R* of the pair, the softer's
-            k = mat.PLASTIC_STIFFNESS_FACTOR * min(m.yield_strength for m in materials) * r_star
+            k = mat.PLASTIC_STIFFNESS_FACTOR * mat.softer_yield_strength(materials) * r_star
             return cls(k=k, beta=beta)
         k = float(coefficients.plastic_stiffness)
         return cls(k=k if r_star == nominal_r_star else k * (r_star / nominal_r_star), beta=beta)

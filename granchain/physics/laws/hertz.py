@@ -331,6 +331,8 @@ def _effect_predictions(scene) -> list[dict]:
     elif ld.kind == "velocity" and scene.effects.far_end == "wall":
         hit = models.hertz_impact(float(scene.wall_law.k), m1, ld.velocity)
         name, law_text = "wall_impact", "bead on the flat, E* = E/(1-nu^2), R* = R, m* = m"
+        if scene.effects.wall_material is not None or scene.effects.wall_radius is not None:
+            law_text = "bead on the wall, E* and R* of the pair (1/E* = (1-nu^2)/E + (1-nu_w^2)/E_w), m* = m"
     else:
         return out
     return out + [

@@ -510,7 +510,7 @@ class ThorntonLaw(ContactLaw):
         # without a given p_y: the softer body's yield sets it (docs/effects.md, mixing rules)
         p_y = coefficients.yield_pressure
         if p_y is None:
-            p_y = mat.YIELD_PRESSURE_FACTOR * min(m.yield_strength for m in materials)
+            p_y = mat.YIELD_PRESSURE_FACTOR * mat.softer_yield_strength(materials)
         return cls(k=mat.hertz_contact_stiffness(e_star, r_star), yield_overlap=yield_overlap(p_y, e_star, r_star))
 
     @classmethod
