@@ -25,8 +25,6 @@ EXCEPTIONS = {
     "(issue 41 item 6)",
     "granchain/postprocess/comparison_table.py::compare_runs": "the table's rows per quantity (issue 41 item 6)",
     "granchain/postprocess/observables.py::measure_observables": "every observable in one pass (issue 41 item 6)",
-    "granchain/reference/solver.py::_solve": "the integrator, observers and events wired in one driver "
-    "(issue 41 item 6; tests/test_reference_structure.py holds it too)",
     "granchain/workflows/compare_backends.py::compare_scene": "both backends' runs and their shared companions "
     "(issue 41 item 6)",
     "granchain/workflows/guards.py::check_run": "every run guard in one pass (issue 41 item 6)",
