@@ -66,6 +66,7 @@ from granchain.workflows.errorbars.facts import (
     expected_orders,
     integrator_order,
     kinked_law,
+    onset_order,
     rk4_companions_cost,
 )
 from granchain.workflows.errorbars.observables import (
@@ -126,6 +127,7 @@ __all__ = [
     "kinked_law",
     "measured_contacts",
     "one_companion_because",
+    "onset_order",
     "per_contact",
     "planned_companions",
     "richardson_factors",

@@ -12,7 +12,7 @@ import numpy as np
 
 from granchain.postprocess.observables import measure_observables
 from granchain.richardson import ErrorBars, against_reference, checked
-from granchain.workflows.errorbars.facts import ONSET_ORDER, expected_orders
+from granchain.workflows.errorbars.facts import expected_orders, onset_order
 from granchain.workflows.errorbars.observables import (
     _observable_error,
     _observable_floor,
@@ -87,10 +87,10 @@ def extrapolated_bars(
     _largest(report, scene, sol)
 
     # a striker's or a wall's contact is one impact from zero overlap: an integrator's error there is its
-    # Hertzian onset's, order 1 + 3/2, where its own is higher (RK4, two spheres, planned step: with order 4
-    # the bar was 1/2.9 of the true error); not on a loading line, nor for one companion's bounds
+    # onset's, order 1 + n (Hertz: 1 + 3/2), where its own is higher (RK4, two spheres, planned step: with
+    # order 4 the bar was 1/2.9 of the true error); not on a loading line, nor for one companion's bounds
     onset = report.one_companion is None and not scene.contact.law_class.loading_is_linear()
-    p_end = ONSET_ORDER if onset and ONSET_ORDER < p else p
+    p_end = onset_order(scene) if onset and onset_order(scene) < p else p
 
     def bars_of(values, times):
         values, times = list(values), None if times is None else list(times)

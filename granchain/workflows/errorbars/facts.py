@@ -10,21 +10,31 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
+
 from granchain.integrators import RK4, integrator
 
-#: The lowest order of an integrator's error on a chain: 1 + 3/2 where a Hertzian contact closes (F ~
-#: t^(3/2) is not smooth at the onset; docs/laws.md), the bilinear peaks at the turn measured 2.5-3.2
-#: alike; it lowers an integrator of higher order (RK4's 4), not one below it (Verlet's 2).
-#: TODO issue 41 item 1: this is the law's fact, not an integrator's (1 + the loading exponent 3/2 of
-#: Hertz): the laws will declare their exponent, and this constant becomes the law's 1 + n.
+#: The lowest order of an integrator's error on a chain of a Hertzian onset: 1 + 3/2 where a contact
+#: closes (F ~ t^(3/2) is not smooth at the onset; docs/laws.md), the bilinear peaks at the turn measured
+#: 2.5-3.2 alike; it lowers an integrator of higher order (RK4's 4), not one below it (Verlet's 2). Of
+#: any other law it is 1 + its declared loading exponent (onset_order).
 ONSET_ORDER = 2.5
+
+
+def onset_order(scene) -> float:
+    """The order of an integrator's error where a contact of the scene closes: 1 + n of its onset F ~
+    alpha^n (ContactLaw.loading_exponent, the smallest over the nominal law's contacts: 2.5 for Hertz and
+    Thornton, 1 + n for the power law); ONSET_ORDER on a loading line (the bilinear law's measured 2.5-3.2)."""
+    if scene.contact.law_class.loading_is_linear():
+        return ONSET_ORDER
+    return 1.0 + float(np.min(scene.law.loading_exponent()))
 
 
 def expected_orders(method: str, scene) -> tuple[float, float]:
     """The lowest and highest order the integrator's error can show on this scene (richardson): from
     the lower of its order on the scene (integrator_order: Verlet's 1 with a dashpot, its first-order
-    term mixing with Verlet's second) and the onset's (ONSET_ORDER), to its order."""
-    return float(min(ONSET_ORDER, integrator_order(method, scene))), float(integrator(method).order)
+    term mixing with Verlet's second) and the onset's (onset_order), to its order."""
+    return float(min(onset_order(scene), integrator_order(method, scene))), float(integrator(method).order)
 
 
 def integrator_order(method: str, scene) -> int:

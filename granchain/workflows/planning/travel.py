@@ -122,7 +122,8 @@ def front_travel_time(scene, last: int, slow: float) -> float:
     d0 = scene.diameter
     per_contact = np.full(last, d0 / slow)
     if scene.per_bead and scene.n_contacts:
-        e = 0.5 if scene.contact.law_class.loading_is_linear() else 0.4
+        # 1/(1 + n) of the onset F ~ alpha^n: 0.4 Hertz, 0.5 a loading line (the impact's force ~ k^(1/(1+n)))
+        e = 0.5 if scene.contact.law_class.loading_is_linear() else 1.0 / (1.0 + float(scene.law.loading_exponent()))
         k = scene.contact_stiffnesses[:last]
         m = scene.bead_masses
         heavier = np.maximum(m[:-1], m[1:])[:last]
