@@ -313,8 +313,8 @@ def erratic_bounds(
 
 
 #: the order one_companion assumes unless told: the middle of the orders RK4 (event location) shows on a
-#: chain, 1 + 3/2 at a Hertzian onset to 4 (workflows.error_estimates.expected_orders; the onset's 1 + 3/2
-#: is the law's: TODO issue 41 item 1, the laws declare their loading exponent)
+#: chain, 1 + 3/2 at a Hertzian onset to 4 (workflows.error_estimates.expected_orders; the onset's 1 + n
+#: is the law's, workflows.error_estimates.onset_order: 2 to 4 for the power law's n = 1, still about 3)
 ONE_COMPANION_ORDER = 3
 #: the status of one_companion's estimates
 ONE_COMPANION_STATUS = "estimate: one companion at 2 dt, order 3 assumed, not checked"
@@ -449,8 +449,9 @@ def checked(
 
 
 #: RK4's own error, from its runs at h and 2 h, taken at its lowest order on a chain (1 + 3/2 at a
-#: Hertzian onset; workflows.error_estimates.ONSET_ORDER): the larger, conservative bound. TODO issue 41
-#: item 1: 1 + 3/2 is the Hertz law's onset (1 + its loading exponent), which the laws will declare
+#: Hertzian onset; workflows.error_estimates.ONSET_ORDER): the larger, conservative bound. RK4 references
+#: are made for the laws whose slope jumps at kinks (ContactLaw.slope_kinks: bilinear, Thornton), both of
+#: whose onsets give 2.5 (workflows.error_estimates.onset_order); no power law is one
 REFERENCE_ORDER = 2.5
 #: the reference's error may be at most this fraction of the distance it measures: the estimate
 #: (distance + reference error) is then within 1 - 3 times a true error in distance +- reference error

@@ -8,11 +8,12 @@ from __future__ import annotations
 from granchain.physics.laws.base import REGISTRY, ContactLaw, Kink, LawCoefficients
 from granchain.physics.laws.bilinear import BilinearCoefficients, BilinearLaw
 from granchain.physics.laws.hertz import HertzLaw
+from granchain.physics.laws.power import PowerCoefficients, PowerLaw
 from granchain.physics.laws.thornton import ThorntonCoefficients, ThorntonLaw
 
 #: name (the scene's [contact] law) -> law class
 LAWS: dict[str, type[ContactLaw]] = REGISTRY
-LAWS.update({cls.name: cls for cls in (HertzLaw, BilinearLaw, ThorntonLaw)})
+LAWS.update({cls.name: cls for cls in (HertzLaw, BilinearLaw, ThorntonLaw, PowerLaw)})
 
 __all__ = [
     "LAWS",
@@ -22,6 +23,8 @@ __all__ = [
     "HertzLaw",
     "Kink",
     "LawCoefficients",
+    "PowerCoefficients",
+    "PowerLaw",
     "ThorntonCoefficients",
     "ThorntonLaw",
     "contact_keys",

@@ -184,6 +184,13 @@ class ContactLaw:
         says otherwise."""
         return self.tangent_stiffness(force)
 
+    def loading_exponent(self) -> np.ndarray:
+        """The exponent n of the virgin curve's onset F ~ alpha^n at small overlaps, per contact (0-d for a
+        uniform law): 3/2 for Hertz and Thornton's elastic start, 1 for the bilinear loading line, the
+        power law's own n. An impact's force then grows as t^n from closing, and a smooth-force method's
+        error as dt^(1 + n) there (granchain.richardson, workflows.error_estimates read it)."""
+        raise NotImplementedError
+
     def plastic_onset_force(self) -> np.ndarray:
         """The force above which a contact deforms plastically, per contact (N): infinite for a law
         that never yields (Hertz)."""

@@ -172,6 +172,10 @@ class BilinearLaw(ContactLaw):
         return bilinear_dissipated(alpha_max, self.k, self.beta)
 
     @override
+    def loading_exponent(self):
+        return np.full(np.shape(self.k), 1.0)  # the loading line F = k alpha
+
+    @override
     def loading_force(self, alpha):
         """The force never exceeds the loading line: the peak is k alpha_max."""
         return np.asarray(self.k) * np.maximum(alpha, 0.0)

@@ -110,6 +110,10 @@ class HertzLaw(ContactLaw):
         return hertz_energy(alpha, self.k)
 
     @override
+    def loading_exponent(self):
+        return np.full(np.shape(self.k), 1.5)  # F = k alpha^(3/2)
+
+    @override
     def loading_force(self, alpha):
         return hertz_force(alpha, self.k)
 

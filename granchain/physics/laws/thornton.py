@@ -355,6 +355,10 @@ class ThorntonLaw(ContactLaw):
         return np.where(plastic, work - 0.4 * fmax * (am - dp), 0.0)
 
     @override
+    def loading_exponent(self):
+        return np.full(np.shape(self.k), 1.5)  # Hertz up to d_y
+
+    @override
     def loading_force(self, alpha):
         a = np.maximum(np.asarray(alpha, dtype=float), 0.0)
         dy = np.asarray(self.yield_overlap, dtype=float)
