@@ -131,9 +131,10 @@ def test_a_run_that_ends_before_measuring_says_so(tmp_path, capsys):
 
 def test_an_auto_end_time_that_misses_the_window_exits_1(tmp_path, capsys, monkeypatch):
     """end_time = "auto" promises the window: a plan that falls short (here forced so) exits 1."""
-    from granchain.workflows import plan as plan_mod
+    from granchain.workflows.planning import end_time, travel
 
-    monkeypatch.setattr(plan_mod, "front_travel_time", lambda scene, last, slow: 1e-5)  # a plan too short
+    for module in (end_time, travel):  # the planner's every use of it
+        monkeypatch.setattr(module, "front_travel_time", lambda scene, last, slow: 1e-5)  # a plan too short
     text = resolve_scene("default").source_text.replace("end_time = 7e-4", 'end_time = "auto"')
     text = "\n".join(x for x in text.splitlines() if not x.startswith("snapshots"))
     p = tmp_path / "auto.toml"

@@ -71,6 +71,34 @@ PLAN_BACKEND_NOTE = (
 )
 
 
+#: the units of `granchain info plan --json`'s numbers
+PLAN_JSON_UNITS = {
+    "end_time": "s",
+    "timestep": "s",
+    "stable_timestep": "s",
+    "omega_max": "rad/s",
+    "steps": "steps",
+    "bead_steps": "bead-steps",
+    "companions.timestep": "s",
+    "companions.factor": "x timestep",
+    "companions.steps": "steps",
+    "companion_steps": "steps",
+    "companion_bead_steps": "bead-steps",
+    "total_steps": "steps",
+    "total_bead_steps": "bead-steps",
+}
+
+
+def _companions_line(bars: dict, at_most: str, extra: int) -> str:
+    """The error bars' companion runs in words (planned_bars' entry), or why there are none."""
+    named = "; ".join(
+        f"{c['method']} at {c['factor']:.3g} dt ({c['role']}): {c['steps']} steps" for c in bars["companions"]
+    )
+    if named:
+        return f"{named}; together {at_most}{extra} steps"
+    return f"no companion runs ({shown(bars['why_none'])})"
+
+
 def cmd_plan(args) -> int:
     """The planner's choices for a scene, each with its reason, and the run's cost with its error bars'."""
     from granchain.backends import REFERENCE
@@ -117,21 +145,7 @@ def cmd_plan(args) -> int:
                 "steps_are_upper_bounds": bool(at_most),
                 "not_counted": bars["not_counted"],
                 "run_again": again,
-                "units": {
-                    "end_time": "s",
-                    "timestep": "s",
-                    "stable_timestep": "s",
-                    "omega_max": "rad/s",
-                    "steps": "steps",
-                    "bead_steps": "bead-steps",
-                    "companions.timestep": "s",
-                    "companions.factor": "x timestep",
-                    "companions.steps": "steps",
-                    "companion_steps": "steps",
-                    "companion_bead_steps": "bead-steps",
-                    "total_steps": "steps",
-                    "total_bead_steps": "bead-steps",
-                },
+                "units": dict(PLAN_JSON_UNITS),
             }
         )
         return 0
@@ -150,13 +164,7 @@ def cmd_plan(args) -> int:
             print(f"{name:11s} {v:.6g}  as given in the scene")
     b = s.chain.beads
     print(f"cost        the run: {at_most}{steps} steps x {b} beads = {steps * b:.3g} bead-steps")
-    named = "; ".join(
-        f"{c['method']} at {c['factor']:.3g} dt ({c['role']}): {c['steps']} steps" for c in bars["companions"]
-    )
-    if named:
-        print(f"error bars  --error-estimate {args.error_estimate}: {named}; together {at_most}{extra} steps")
-    else:
-        print(f"error bars  --error-estimate {args.error_estimate}: no companion runs ({shown(bars['why_none'])})")
+    print(f"error bars  --error-estimate {args.error_estimate}: {_companions_line(bars, at_most, extra)}")
     print(
         f"total       {at_most}{steps + extra} steps x {b} beads = {(steps + extra) * b:.3g} bead-steps"
         + (f" ({(steps + extra) / steps:.2f}x the run)" if steps else "")

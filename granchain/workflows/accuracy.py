@@ -12,144 +12,31 @@ dump-derived peaks against the dump interval.
 
 from __future__ import annotations
 
-import csv
-import os
 import statistics
-from dataclasses import dataclass, field, replace
-from pathlib import Path
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from granchain import safe_files
 from granchain.exceptions import UsageError
-from granchain.integrators import INTEGRATORS, RK4, IntegratorFacts, Verlet, integrator
+from granchain.integrators import INTEGRATORS, integrator
 from granchain.postprocess.comparison_table import peak_definition
 from granchain.postprocess.observables import fit_wave_speed
 from granchain.problem import ChainProblem, contact_positions
 from granchain.reference.scipy_solver import solve_chain_dop853
 from granchain.reference.solver import solve_chain
-from granchain.rundir import RunDirError, check_output_dir, owned_by_granchain
+from granchain.workflows.accuracy_model import (
+    DOP853_MIN_RTOL,
+    METHODS,
+    PLAN_RTOL,
+    STUDY_METHODS,
+    TARGETS,
+    AccuracyStudy,
+    Point,
+    Reference,
+    StudyMethod,
+)
+from granchain.workflows.accuracy_report import check_study_dir, reference_lines, summary_text, write_study
 from granchain.workflows.plan import plan_scene
-
-TARGETS = (1e-2, 1e-3, 1e-4)
-
-
-@dataclass(frozen=True)
-class StudyMethod:
-    """A method the study can compare (``--methods``): its name, its label on the diagram, and the
-    integrator it runs (granchain.integrators), which plans its scene and defines its peak
-    (peak_definition); DOP853's is RK4's: it is planned as RK4 and its peaks are located alike, where the
-    overlap turns, by the cubic Hermite interpolant (reference.scipy_solver)."""
-
-    name: str
-    label: str
-    integrator: IntegratorFacts
-
-
-#: the methods a study can compare, by name
-STUDY_METHODS = {
-    m.name: m
-    for m in (
-        StudyMethod("lammps", f"LAMMPS {Verlet.label} (chain pair styles)", Verlet()),
-        StudyMethod(RK4.name, f"reference {RK4.label}", RK4()),
-        StudyMethod(Verlet.name, f"reference {Verlet.label}", Verlet()),
-        StudyMethod("dop853", "SciPy DOP853 (rtol ladder)", RK4()),
-    )
-}
-#: the methods a study can compare (``--methods``)
-METHODS = tuple(STUDY_METHODS)
-#: SciPy's solve_ivp raises any rtol below 100 machine epsilons to that floor with a warning; the
-#: DOP853 ladder stops there rather than repeat the floor's run under a smaller label
-DOP853_MIN_RTOL = 100 * np.finfo(float).eps
-#: the tolerance whose planned time step is marked on the diagram (the planner's default)
-PLAN_RTOL = 1e-3
-
-
-@dataclass
-class Point:
-    """One point of the work-precision diagram: an integrator at one setting, its cost and errors."""
-
-    method: str
-    setting: float  # time step (s) or, for dop853, rtol
-    steps: int
-    wall_time: float  # s, median of repeats
-    error_peak: float  # max relative error of the measured contacts' peak forces
-    error_speed: float | None
-    wall_time_min: float | None = None  # s, the fastest of the repeats (the least disturbed by other load)
-    reference: str = "rk4"  # the integrator of the converged run it is measured against (AccuracyStudy.references)
-
-
-@dataclass
-class Reference:
-    """A converged run the study measures against: the integrator, its finest step, its own error
-    (Richardson), the peak it measures (peak_definition) and the study's methods measured against it."""
-
-    method: str  # "rk4" or "verlet"
-    timestep: float  # s, its finest run
-    error: float  # estimate of its own peak-force error
-    peak: str  # what its peak force is on the scene (postprocess.comparison_table.peak_definition)
-    measures: tuple[str, ...]  # the study's methods measured against it
-    how: str = ""  # how it was made and its error estimated, in words
-
-
-@dataclass
-class AccuracyStudy:
-    """A work-precision study of a scene: every point against a converged run of an integrator with
-    its own peak definition (references; Point.reference)."""
-
-    scene: object
-    contacts: np.ndarray  # 1-based measured contacts
-    reference_timestep: float  # the finest step of the converged runs
-    reference_error: float  # the largest of the converged runs' own peak errors (Richardson)
-    points: list[Point] = field(default_factory=list)
-    one_time: dict = field(default_factory=dict)
-    dump_errors: list[tuple[int, float, float]] = field(default_factory=list)  # (stride, raw, refined)
-    plan_points: list[Point] = field(default_factory=list)  # each method at the step planned for PLAN_RTOL
-    #: the converged runs by integrator (without any: one RK4 run, reference_timestep and reference_error)
-    references: dict[str, Reference] = field(default_factory=dict)
-    skipped: dict[str, str] = field(default_factory=dict)  # methods asked for but not run, and why
-    #: with two references (a dashpot): the largest relative difference of their peaks, the peak
-    #: definitions' difference (no step error of either)
-    definition_gap: float | None = None
-
-    def reference_error_of(self, p: Point) -> float:
-        """The own error of the converged run p is measured against."""
-        r = self.references.get(p.reference)
-        return self.reference_error if r is None else r.error
-
-    def orders(self) -> dict[str, float]:
-        """Each integrator's observed order: the slope of log error over log step (errors above its
-        reference's own)."""
-        out = {}
-        for m in sorted({p.method for p in self.points} - {"dop853"}):
-            pts = [p for p in self.points if p.method == m and p.error_peak > 10 * self.reference_error_of(p)]
-            if len(pts) >= 2:
-                out[m] = float(np.polyfit(np.log([p.setting for p in pts]), np.log([p.error_peak for p in pts]), 1)[0])
-        return out
-
-    def cheapest(self, target: float) -> Point | None:
-        """The cheapest point whose peak-force error is at most target, or None.
-
-        Within a method a run's cost grows with its steps, so each method's candidate is its point
-        with the fewest steps that meets target (timings of runs a few milliseconds long swing by 2x
-        with the machine's load: a median could rank 960 steps under 120). Across methods, whose
-        steps cost differently, the candidates are ranked by the fastest of their repeats (the least
-        disturbed timing), fewer steps breaking a tie.
-        """
-        ok = [p for p in self.points if p.error_peak <= target]
-        if not ok:
-            return None
-        best = {}
-        for p in ok:
-            q = best.get(p.method)
-            if q is None or (p.steps, _cost(p)) < (q.steps, _cost(q)):
-                best[p.method] = p
-        return min(best.values(), key=lambda p: (_cost(p), p.steps))
-
-
-def _cost(p: Point) -> float:
-    """A point's wall time for ranking: the fastest repeat where measured, else the median."""
-    return p.wall_time if p.wall_time_min is None else p.wall_time_min
 
 
 def _errors(scene, sol, ref, idx) -> tuple[float, float | None]:
@@ -311,15 +198,7 @@ def accuracy_study(
     methods = check_study_options(methods, levels, repeats)
     if scene.needs_plan:
         scene = plan_scene(scene, method=study_method(scene, methods)[0]).scene
-    a, b = scene.window
-    contacts = np.asarray(
-        scene.peak_contacts if isinstance(scene.outputs.peak_force, tuple) else range(a, b + 1), dtype=int
-    )
-    if contacts.size == 0:
-        raise UsageError(
-            f"{scene.source}: no bead-bead contact to measure (the chain has {scene.chain.beads} bead(s)); "
-            "the accuracy study compares bead-bead contacts' peak forces: use a chain of at least two beads"
-        )
+    contacts = _study_contacts(scene)
     idx = contacts - 1
     problem = ChainProblem.from_scene(scene)
     skipped = {}
@@ -329,19 +208,7 @@ def accuracy_study(
     if not methods:
         raise UsageError(f"{scene.source}: no method left to measure: {'; '.join(skipped.values())}")
     end = scene.run.end_time
-    # time-step ladders: from half the stability limit down by factors of 2 (the planner's own
-    # choice lies inside; starting coarser shows where each method stops being usable)
-    ladders = {
-        m: 0.5 * plan_scene(scene, method=STUDY_METHODS[m].integrator.name).stable_timestep
-        for m in METHODS
-        if m != "dop853"
-    }
-    # each integrator's step planned for PLAN_RTOL (the stars on the diagram)
-    planned = {
-        m: plan_scene(scene, rtol=PLAN_RTOL, method=STUDY_METHODS[m].integrator.name).scene.run.timestep
-        for m in methods
-        if m != "dop853"
-    }
+    ladders, planned = _study_steps(scene, methods)
     # the converged references, one per peak definition the methods measure: a quarter of the finest
     # step the study runs (ladders and plans) and half that
     finest = min([*(ladder / 2 ** (levels - 1) for ladder in ladders.values()), *planned.values()]) / 4
@@ -386,6 +253,39 @@ def accuracy_study(
     if dump_intervals and "lammps" in methods:
         study.dump_errors = _dump_interval_errors(scene, ladders["lammps"] / 4)
     return study
+
+
+def _study_contacts(scene) -> np.ndarray:
+    """The 1-based bead-bead contacts the study measures: the scene's peak contacts, or its window; a
+    UsageError where there is none (a single bead)."""
+    a, b = scene.window
+    contacts = np.asarray(
+        scene.peak_contacts if isinstance(scene.outputs.peak_force, tuple) else range(a, b + 1), dtype=int
+    )
+    if contacts.size == 0:
+        raise UsageError(
+            f"{scene.source}: no bead-bead contact to measure (the chain has {scene.chain.beads} bead(s)); "
+            "the accuracy study compares bead-bead contacts' peak forces: use a chain of at least two beads"
+        )
+    return contacts
+
+
+def _study_steps(scene, methods) -> tuple[dict[str, float], dict[str, float]]:
+    """The top of every integrator's time-step ladder, and each studied one's step planned for PLAN_RTOL."""
+    # time-step ladders: from half the stability limit down by factors of 2 (the planner's own
+    # choice lies inside; starting coarser shows where each method stops being usable)
+    ladders = {
+        m: 0.5 * plan_scene(scene, method=STUDY_METHODS[m].integrator.name).stable_timestep
+        for m in METHODS
+        if m != "dop853"
+    }
+    # each integrator's step planned for PLAN_RTOL (the stars on the diagram)
+    planned = {
+        m: plan_scene(scene, rtol=PLAN_RTOL, method=STUDY_METHODS[m].integrator.name).scene.run.timestep
+        for m in methods
+        if m != "dop853"
+    }
+    return ladders, planned
 
 
 def _measure(study: AccuracyStudy, scene, problem, m: str, s: float, repeats: int, ref, idx, against: str) -> Point:
@@ -446,194 +346,13 @@ def _dump_interval_errors(scene, dt: float) -> list[tuple[int, float, float]]:
     return out
 
 
-def check_study_dir(out: str | Path, overwrite: bool = False) -> Path:
-    """Fail early (before the study runs) if out cannot take the study: it exists and is not empty
-    (without overwrite), it is not a directory granchain wrote (with overwrite), it is a link, or its
-    parent is not writable (a RunDirError naming it and the fix). An empty directory is taken."""
-    out = Path(out)
-    if _empty_dir(out):
-        return out
-    return check_output_dir(out, overwrite)
-
-
-def _empty_dir(d: Path) -> bool:
-    if os.path.islink(d) or not d.is_dir():
-        return False
-    try:
-        with os.scandir(d) as it:
-            return next(it, None) is None
-    except OSError:
-        return False
-
-
-def write_study(study: AccuracyStudy, out: str | Path, overwrite: bool = False) -> list[Path]:
-    """accuracy.csv, accuracy.png and accuracy.md in the directory out, written aside and renamed into
-    place (granchain's marker in it): out must be new or empty, or, with overwrite, a directory
-    granchain wrote (check_study_dir). Returns the three paths."""
-    out = check_study_dir(out, overwrite)
-    if _empty_dir(out):
-        os.rmdir(out)  # taken as new: the directory is renamed into its place
-    try:
-        with safe_files.atomic_directory(out, "accuracy", overwrite=overwrite, owned=owned_by_granchain) as tmp:
-            _write_study_files(study, tmp)
-    except OSError as e:
-        raise RunDirError(f"{out}: could not write the study ({e}); nothing was left behind") from None
-    return [out / "accuracy.csv", out / "accuracy.png", out / "accuracy.md"]
-
-
-def _write_study_files(study: AccuracyStudy, out: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    with safe_files.create_new(out / "accuracy.csv") as fh:
-        w = csv.writer(fh)
-        w.writerow(["method", "setting", "steps", "wall_time", "error_peak_force", "error_wave_speed", "reference"])
-        for p in [*study.points, *study.plan_points]:
-            w.writerow(
-                [
-                    p.method + (" (planned)" if p in study.plan_points else ""),
-                    repr(p.setting),
-                    p.steps,
-                    repr(p.wall_time),
-                    repr(p.error_peak),
-                    "" if p.error_speed is None else repr(p.error_speed),
-                    p.reference,
-                ]
-            )
-    fig, ax = plt.subplots(figsize=(7, 5))
-    for m in dict.fromkeys(p.method for p in study.points):
-        pts = [p for p in study.points if p.method == m]
-        label = STUDY_METHODS[m].label
-        if len(study.references) > 1:
-            label += f" vs converged {_name(pts[0].reference)}"
-        (line,) = ax.loglog([p.wall_time for p in pts], [max(p.error_peak, 1e-16) for p in pts], "o-", label=label)
-        for q in (q for q in study.plan_points if q.method == m):
-            ax.loglog(
-                [q.wall_time],
-                [max(q.error_peak, 1e-16)],
-                "*",
-                ms=13,
-                mec="k",
-                color=line.get_color(),
-                label=f"{label}: planned for rtol {PLAN_RTOL:g} (dt {q.setting:.3g} s)",
-            )
-    for (r, ref), ls in zip(study.references.items(), (":", "-."), strict=False):
-        ax.axhline(ref.error, color="gray", ls=ls, label=f"converged {_name(r)}'s own error (Richardson)")
-    if not study.references:
-        ax.axhline(study.reference_error, color="gray", ls=":", label="converged reference's own error (Richardson)")
-    ax.axhline(PLAN_RTOL, color="0.5", ls="--", lw=0.8, label=f"rtol {PLAN_RTOL:g}")
-    ax.set_xlabel("wall time (s, median of repeats; LAMMPS start-up excluded)")
-    ax.set_ylabel("max relative error of peak forces")
-    import textwrap
-
-    text = "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in str(study.scene.title or ""))
-    title = "\n".join(textwrap.wrap(f"Work-precision: {text or study.scene.source}", 80))
-    ax.set_title(title, fontsize=9, parse_math=False)  # the scene's own text, not mathtext
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    try:
-        safe_files.save_figure(fig, out / "accuracy.png", dpi=120)
-    finally:
-        plt.close(fig)
-    with safe_files.create_new(out / "accuracy.md") as fh:
-        fh.write(summary_text(study))
-
-
-def _name(method: str) -> str:
-    facts = INTEGRATORS.get(method)
-    return method if facts is None else facts.label
-
-
-def reference_lines(study: AccuracyStudy) -> list[str]:
-    """What each row is measured against, as Markdown lines: each converged run, its own error, its
-    peak and the methods measured against it; with two, the definitions' difference; methods not run."""
-    if not study.references:
-        return [
-            f"Converged reference RK4 at dt = {study.reference_timestep:.3g} s, its own error "
-            f"(Richardson) {study.reference_error:.1e}.",
-        ]
-    lines = ["Each method is measured against a converged run whose peak is the same quantity:"]
-    for r, ref in study.references.items():
-        lines.append(
-            f"- converged {_name(r)} at dt = {ref.timestep:.3g} s ({ref.how}), its own error {ref.error:.1e}; "
-            f"its peak: {ref.peak}; measures {', '.join(ref.measures)}"
-        )
-    if study.definition_gap is not None:
-        lines.append(
-            f"- the two converged runs' peaks differ by {study.definition_gap:.1e}: different quantities (the "
-            "dashpot's force), not step error; a method's error is of its own peak, not the other's"
-        )
-    lines += [f"- not run: {m} ({why})" for m, why in study.skipped.items()]
-    return lines
-
-
-def summary_text(study: AccuracyStudy) -> str:
-    """The study as Markdown: the measured contacts, the converged runs each method is measured against
-    and their own errors, and a table per method."""
-    lines = [
-        f"# Work-precision: {study.scene.title or study.scene.source}",
-        "",
-        f"Measured contacts: {study.contacts.min()}..{study.contacts.max()} ({len(study.contacts)}).",
-        "",
-        *reference_lines(study),
-        "",
-    ]
-    lines.append("Observed orders (fit of log error vs log dt, points above 10x their reference's own error):")
-    orders = study.orders()
-    for m, o in orders.items():
-        against = next(p.reference for p in study.points if p.method == m)
-        lines.append(f"- {m}: {o:.2f} (against converged {_name(against)})")
-    lines += [
-        "",
-        "| target | cheapest method | setting | wall time (s) | error | measured against |",
-        "|---|---|---|---|---|---|",
-    ]
-    for t in TARGETS:
-        p = study.cheapest(t)
-        if p is None:
-            lines.append(f"| {t:g} | none reached it | | | | |")
-        else:
-            setting = f"rtol {p.setting:g}" if p.method == "dop853" else f"dt {p.setting:.3g} s"
-            lines.append(
-                f"| {t:g} | {p.method} | {setting} | {p.wall_time:.3g} | {p.error_peak:.1e} | "
-                f"converged {_name(p.reference)} |"
-            )
-    if study.plan_points:
-        lines += [
-            "",
-            f"The planner's choice for rtol {PLAN_RTOL:g} (the stars on the diagram), measured:",
-            "",
-            "| method | planned dt (s) | wall time (s) | error | meets rtol | measured against |",
-            "|---|---|---|---|---|---|",
-        ]
-        lines += [
-            f"| {q.method} | {q.setting:.3g} | {q.wall_time:.3g} | {q.error_peak:.1e} | "
-            f"{'yes' if q.error_peak <= PLAN_RTOL else 'no'} | converged {_name(q.reference)} |"
-            for q in study.plan_points
-        ]
-    if study.one_time:
-        lines += [
-            "",
-            "One-time costs (not in the wall times): "
-            + ", ".join(f"{k} {v:.3g} s" for k, v in study.one_time.items() if v is not None),
-        ]
-    if study.dump_errors:
-        lines += [
-            "",
-            "Dump-derived peaks vs in-run peaks (LAMMPS), max relative error:",
-            "",
-            "| dump every (steps) | raw samples | parabola-refined |",
-            "|---|---|---|",
-        ]
-        lines += [f"| {s} | {r:.1e} | {f:.1e} |" for s, r, f in study.dump_errors]
-    return "\n".join(lines) + "\n"
-
-
 __all__ = [
     "METHODS",
+    "PLAN_RTOL",
+    "STUDY_METHODS",
+    "TARGETS",
+    "StudyMethod",
+    "reference_lines",
     "accuracy_study",
     "study_method",
     "reference_method",

@@ -33,6 +33,9 @@ end time    long enough for the leading wave to pass the last measured contact L
 
 The estimates it plans with (step equivalent, expected peak force, stiffest tangents, highest
 frequency, dashpot rate) are granchain.physics.estimates; the output strides granchain.schedule.
+Here: the error model, the time step, refinement and extension, and plan_scene; the waves' speeds
+and travel times are granchain.workflows.planning.travel, the end-time and stop choices
+planning.end_time (this module re-exports the names others import).
 """
 
 from __future__ import annotations
@@ -43,35 +46,50 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from granchain.exceptions import UsageError
-from granchain.integrators import INTEGRATORS, integrator
-from granchain.peaks import LEAD_FRACTION
-from granchain.physics.effects.base import watched_force
+from granchain.integrators import integrator
 from granchain.physics.estimates import (
     damping_rate,
     expected_peak_force,
     highest_frequency,
-    linearised_first_maximum,
-    linearised_stiffnesses,
     max_stiffness,
-    one_bead_impacts,
-    step_equivalent,
 )
 from granchain.scene import AUTO, Scene, SceneError, scene_from_dict, scene_to_dict
 from granchain.schedule import output_stride
+from granchain.workflows.planning.choice import (
+    PlanChoice,
+)
+from granchain.workflows.planning.end_time import (
+    PEAK_DETECTION_STEPS,
+    REFLECTION_CROSSINGS,
+    WALL_PULSE_CONTACTS,
+    _beads_choice,
+    _front_end_time,
+    _one_bead_end_time,
+    _reflection_end_time,
+    _stop_choice,
+    _wall_end_time,
+    end_time_choice,
+    reflection_planned,
+    wall_peak_planned,
+)
+from granchain.workflows.planning.travel import (
+    LINEAR_HORIZON,
+    PRECOMPRESSED_LAG,
+    PRECOMPRESSED_NEIGHBOURS,
+    PRECOMPRESSED_TAIL,
+    STEP_LAG,
+    extension_budget,
+    front_travel_time,
+    last_measured_contact,
+    leading_edge_speed,
+    precompressed_front_time,
+    sonic_travel_times,
+    wave_speeds,
+)
 
 #: The error model  rel. error of peak forces ~ C (omega_max dt)^p, its constant C and order p, and the
 #: omega_max dt limits of stability are each integrator's (granchain.integrators: calibration, order,
 #: stability, with the measurements behind them).
-
-
-@dataclass(frozen=True)
-class PlanChoice:
-    """One choice of the planner (time step, end time, beads, an output interval, the stop check): its
-    value and the reason, in words with the scene's numbers."""
-
-    name: str
-    value: float
-    reason: str
 
 
 @dataclass
@@ -275,152 +293,9 @@ def accurate_timestep(method: str, omega_max: float, rate: float, rtol: float) -
     return min((rtol / 2 / c) ** (1.0 / p) / omega_max, rtol / 2 / (facts.dashpot_error * rate))
 
 
-def leading_edge_speed(scene) -> float:
-    """The fastest a disturbance can enter the undisturbed chain, m/s (see the module docstring)."""
-    return scene.contact.law_class.leading_edge_speed(scene, expected_peak_force(scene), step_equivalent(scene))
-
-
-def wave_speeds(scene) -> tuple[float, float]:
-    """(slowest leading-wave speed, fastest wave speed) expected, m/s (the law's estimate)."""
-    return scene.contact.law_class.wave_speeds(scene, expected_peak_force(scene), step_equivalent(scene))
-
-
 #: the smallest --rtol: below it round-off, not the time step, limits every number (and the planned
 #: step would fall below any a scene accepts)
 MIN_RTOL = 1e-12
-
-
-#: The first maximum of a linear chain's force trails the sonic front by dispersion. Bead 1 of a
-#: uniform chain (mass m, linearised stiffness k_lin, tau = sqrt(m / k_lin)) kicked at t = 0: the force
-#: of contact n goes as (2n / x) J_2n(x) with x = 2 t / tau (the free end as a mirror image of the
-#: infinite chain's Bessel solution), whose first maximum is near x = 2n + 0.81 (2n)^(1/3) (Abramowitz
-#: and Stegun 9.5.16), t = tau (n + 0.51 n^(1/3)): the front's travel is planned as
-#: sum(tau_i) (1 + PRECOMPRESSED_LAG n^(-2/3)). Measured (reference, Verlet): a uniform brass chain at
-#: F0 = 1e3 x the kick's force, 0.99 of the planned time at contact 35 (the Bessel value; 0.6 > 0.51).
-PRECOMPRESSED_LAG = 0.6
-#: A chain whose masses and stiffnesses vary from contact to contact (random radii, materials, a dimer)
-#: slows its first maximum more than the sum of local times sqrt(m_i / k_i) says: scattering at each
-#: change. Its long waves move at the homogenised slowness sqrt(<m> <1 / k_lin>) (masses in sum,
-#: springs in series), never less than the mean local time (Cauchy-Schwarz); averaged over the whole
-#: chain it overestimates a taper's time (heavy beads at one end, soft contacts at the other) by up to
-#: 2.6x, so each contact takes it over its PRECOMPRESSED_NEIGHBOURS neighbours on each side. Measured
-#: with the lag above (reference, Verlet; 13 chains at F0 = 10 to 1e3 x the kick's force, every
-#: contact): at most 0.99 of the planned time (the uniform chain), random materials with PTFE 0.96
-#: (1.12 with the local times alone), tapers 0.96, dimers 0.95, random radii 0.86; at the window's end
-#: the plan is at most 1.48 x the arrival (1.56 on a taper 0.8, where the stop check ends the run).
-PRECOMPRESSED_NEIGHBOURS = 2
-#: ... and the time after the front's arrival a long load's first maximum needs, as a fraction of the
-#: front's travel
-PRECOMPRESSED_TAIL = 0.3
-#: A lasting force on bead 1 of the linear chain (a step): the force of contact n is the integral of
-#: the kick's response, whose first maximum is where (2n / x) J_2n(x) first crosses zero, at
-#: x = j_2n,1 = 2n + 1.856 (2n)^(1/3) + 1.033 (2n)^(-1/3) (Abramowitz and Stegun 9.5.14), that is
-#: t = tau (n + 1.17 n^(1/3) + 0.41 n^(-1/3)): planned as sum(tau_i) (1 + STEP_LAG[0] n^(-2/3) +
-#: STEP_LAG[1] n^(-4/3)). Measured: a 300-bead brass chain at F0 = 100 N, a 0.1 N step: contact 1's first
-#: maximum at 1.6x the kick's planned travel (2.57 tau, j_2,1 / 2), contact 2's at 1.38x (j_4,1 / 2).
-STEP_LAG = (1.2, 0.45)
-
-
-def sonic_travel_times(scene, last: int, step: bool = False) -> np.ndarray:
-    """The time the first maximum of a precompressed chain's front takes from bead 1 to each contact
-    1 .. last (s), at the linear sound speed: per contact tau_i = sqrt(<m> <1 / k_lin>) over the contact
-    and its PRECOMPRESSED_NEIGHBOURS neighbours on each side, with the heavier bead of each contact and
-    k_lin the slope of the law's virgin curve at F0 (estimates.linearised_stiffnesses: for Hertz
-    3/2 k^(2/3) F0^(1/3), dF/dalpha of the paper's Eq. 16, a linear loading line's own k, Thornton's
-    plastic line beyond F_y), so that
-    c0 = a sqrt(k_lin / m) on a uniform chain; summed, with the dispersion lag PRECOMPRESSED_LAG of a
-    kick or, with step = True, STEP_LAG of a lasting force. A chain of beads = "auto" is uniform and
-    reaches past `last` (the planner's N is at least last + 5: _beads_choice): its contacts up to
-    last + PRECOMPRESSED_NEIGHBOURS are every window's."""
-    n_c = scene.n_contacts if scene.chain.beads is not None else last + PRECOMPRESSED_NEIGHBOURS
-    k_lin = linearised_stiffnesses(scene, n_c)[0]
-    m = scene.bead_masses if scene.per_bead else np.full(n_c + 1, scene.mass)
-    heavier = np.maximum(m[:-1], m[1:])
-    h = PRECOMPRESSED_NEIGHBOURS
-    # running sums give each contact's window [i - h, i + h] (clipped at the chain's ends)
-    cm, ck = np.concatenate(([0.0], np.cumsum(heavier))), np.concatenate(([0.0], np.cumsum(1.0 / k_lin)))
-    i = np.arange(last)
-    lo, hi = np.maximum(i - h, 0), np.minimum(i + h + 1, n_c)
-    width = hi - lo
-    tau = np.sqrt((cm[hi] - cm[lo]) / width * (ck[hi] - ck[lo]) / width)
-    n = np.arange(1, last + 1)
-    if step:
-        return np.cumsum(tau) * (1.0 + STEP_LAG[0] * n ** (-2.0 / 3.0) + STEP_LAG[1] * n ** (-4.0 / 3.0))
-    return np.cumsum(tau) * (1.0 + PRECOMPRESSED_LAG * n ** (-2.0 / 3.0))
-
-
-#: how far past the whole chain's sonic crossing (sonic_travel_times at its last contact) the linearised
-#: chain's response is searched for a contact's first maximum: a front that rises monotonically at a
-#: contact meets its maximum when a reflection comes back (the wall's adds to it, a free end's takes
-#: away), within a round trip through the chain and back. A run that ended before measuring its window
-#: is extended to as many crossings of the whole chain by the slowest front (extended_plan), for the same
-#: reason
-LINEAR_HORIZON = 3.0
-
-
-def precompressed_front_time(scene, last: int, step: bool = False) -> float:
-    """The time (s) the first maximum of a precompressed chain's front takes from bead 1 to contact `last`,
-    a kick's or (step = True) a lasting force's: the linearised chain solved exactly
-    (estimates.linearised_first_maximum: each bead's mass and contact's stiffness, the wall), with the
-    leading pulse's floor per unit load; on a chain too long to solve exactly (or one
-    of "auto" length, which is uniform), the asymptotic sonic_travel_times."""
-    asymptotic = float(sonic_travel_times(scene, last, step)[-1])
-    n = scene.chain.beads
-    if n is None or not scene.n_contacts:
-        return asymptotic
-    load = step_equivalent(scene)[0] if step else scene.input_impulse
-    horizon = LINEAR_HORIZON * float(sonic_travel_times(scene, scene.n_contacts, step)[-1])
-    # the leading pulse's floor (peaks.lead_floor) without its part for LAMMPS's round-off, which needs
-    # the planned end and time step and lies far below a front's rise
-    floor = LEAD_FRACTION * expected_peak_force(scene)
-    exact = linearised_first_maximum(scene, last, horizon, step=step, floor=floor / load)
-    return asymptotic if exact is None else max(asymptotic, exact)
-
-
-def front_travel_time(scene, last: int, slow: float) -> float:
-    """The time the slowest expected leading front takes from bead 1 to contact `last`: per contact,
-    the nominal chain's time per diameter (D / slow) scaled by the contact's own stiffness and the
-    heavier of its beads (speed ~ k^(2/5) / sqrt(m) for a Hertzian front, whose force also scales as
-    k^(2/5) at a given momentum (the Hertz impact) and whose speed as k^(1/3) F^(1/6); k^(1/2) / sqrt(m)
-    for a linear one; times the spacing: the time per contact does not depend on the spacing); under
-    precompression at most the time of the linearised chain's first maximum (precompressed_front_time):
-    a front moves at least at the sound speed c0 = a sqrt(k_lin / m), faster as its force grows."""
-    d0 = scene.diameter
-    per_contact = np.full(last, d0 / slow)
-    if scene.per_bead and scene.n_contacts:
-        # 1/(1 + n) of the onset F ~ alpha^n: 0.4 Hertz, 0.5 a loading line (the impact's force ~ k^(1/(1+n)))
-        e = 0.5 if scene.contact.law_class.loading_is_linear() else 1.0 / (1.0 + float(scene.law.loading_exponent()))
-        k = scene.contact_stiffnesses[:last]
-        m = scene.bead_masses
-        heavier = np.maximum(m[:-1], m[1:])[:last]
-        per_contact = per_contact * (float(scene.stiffness) / k) ** e * np.sqrt(heavier / scene.mass)
-    travel = float(np.sum(per_contact))
-    if scene.effects.precompression and scene.has_contacts:  # an "auto" chain: the asymptotic front
-        travel = min(travel, precompressed_front_time(scene, last))
-    return travel
-
-
-def extension_budget(scene, slow: float) -> float:
-    """The longest end a run of `scene` (a chain of given length) is ever run to (s): LINEAR_HORIZON x
-    the slowest front's crossing of the whole chain (front_travel_time to its last contact at the
-    slowest expected speed `slow`), the end extended_plan runs a run again to. A load lasting longer
-    than it is a lasting one for the wall (wall_peak_planned)."""
-    return LINEAR_HORIZON * front_travel_time(scene, scene.n_contacts, slow)
-
-
-def last_measured_contact(scene) -> int | None:
-    """The farthest contact a requested output measures: histories, a peak_force list, the window;
-    peak_force = true on a chain of given length measures the leading peak and the wave speed over
-    the window, so the run lasts until the wave has passed the window's end (scene.window)."""
-    o = scene.outputs
-    cands = list(o.histories)
-    if isinstance(o.peak_force, tuple) and o.peak_force:
-        cands.append(max(o.peak_force))
-    if o.window is not None:
-        cands.append(o.window[1])
-    elif o.peak_force is True and scene.chain.beads is not None and scene.n_contacts:
-        cands.append(scene.window[1])
-    return max(cands) if cands else None
 
 
 def _timestep_choice(scene, method: str, rtol_plan: float, omega: float, stiffest: str, stable: float) -> PlanChoice:
@@ -454,247 +329,6 @@ def _timestep_choice(scene, method: str, rtol_plan: float, omega: float, stiffes
         dt_new = ld.duration / 4
         why += f"; resolves the load (T/4 = {dt_new:.3g} s)"
     return PlanChoice("timestep", dt_new, why)
-
-
-def _one_bead_end_time(scene, impacts) -> PlanChoice:
-    """A one-bead (or two free beads') scene's end time: 1.5 x its impacts' contact times, after the load."""
-    load = scene.loading.duration if scene.loading.is_force else 0.0
-    end = load + 1.5 * sum(i["duration"] for _, i in impacts)
-    return PlanChoice(
-        "end_time",
-        end,
-        f"{'one bead' if scene.chain.beads == 1 else 'two free beads'}: 1.5 x the contact time of "
-        + " then ".join(f"the {name}'s impact ({i['duration']:.3g} s)" for name, i in impacts)
-        + (f", after a load of {load:.3g} s" if load else ""),
-    )
-
-
-#: a maximum is seen once the force has fallen after it: within two time steps of it (the sample past the
-#: maximum's own, which may fall a step after the maximum). The end time allows two of the largest stable
-#: step of either integrator (IntegratorFacts.stability / omega_max), so that it does not depend on the integrator: both
-#: backends of a compare end together
-PEAK_DETECTION_STEPS = 2
-
-
-def _front_end_time(scene, last: int | None, slow: float, omega_max: float) -> PlanChoice:
-    """The end time of a chain: the slowest leading front passes the last measured contact
-    (front_travel_time), after a long load; at least the pulse of an impulse and the last snapshot. A
-    precompressed chain's front time is its linearised chain's first maximum (precompressed_front_time),
-    which the run sees PEAK_DETECTION_STEPS time steps later (steps of either integrator up to its
-    stability limit at omega_max)."""
-    if last is None:
-        raise SceneError(
-            f'{scene.source}: end_time = "auto" needs the contacts you measure: give [outputs] '
-            "window, histories or a peak_force list"
-        )
-    ld = scene.loading
-    step = step_equivalent(scene)
-    load = step[1] if step is not None and step[1] < 1e3 else 0.0
-    travel = front_travel_time(scene, last, slow)
-    # a long load's leading peak trails its front; a precompressed chain's front is sonic, its
-    # peak forms within a few periods of it (dispersion): at most PRECOMPRESSED_TAIL of the travel
-    cap, cap_text = (
-        (PRECOMPRESSED_TAIL * travel, f"{PRECOMPRESSED_TAIL:g} x the travel under precompression")
-        if scene.effects.precompression
-        else (travel, "the travel")
-    )
-    tail = min(load, cap)
-    end = travel + tail
-    # the reason states the arithmetic that gives the end, one term at a time
-    sums = [f"{travel:.3g} s to pass contact {last}"]
-    if tail:
-        sums.append(
-            f"{tail:.3g} s for the leading peak, which trails the front under a load (the load's {load:.3g} s, "
-            f"at most {cap_text})"
-        )
-    notes = []
-    if step is not None and scene.effects.precompression and scene.has_contacts:
-        sonic = precompressed_front_time(scene, last), precompressed_front_time(scene, last, step=True)
-        if sonic[0] <= travel:  # the travel is the linearised chain's (the load is small against F0)
-            # a lasting force's first maximum trails a kick's by more than that tail near the loaded end
-            # (STEP_LAG); a pulse's comes no later than a step's, nor than the load's end after the front
-            later = min(float(sonic[1]), travel + step[1])
-            if later > end:
-                end = later
-                sums = [
-                    f"{later:.3g} s for the first maximum under the load to pass contact {last} (the chain "
-                    "linearised about F0; later than the front and its peak's tail)"
-                ]
-    if scene.effects.precompression:
-        seen = PEAK_DETECTION_STEPS * max(f.stability for f in INTEGRATORS.values()) / omega_max
-        end += seen
-        sums.append(f"{seen:.3g} s to see it ({PEAK_DETECTION_STEPS} of the largest stable steps)")
-    if ld.kind == "impulse" and end < ld.duration:
-        end = ld.duration  # an impulse is measured whole: the run lasts at least the pulse
-        notes.append(f"at least the pulse ({ld.duration:.3g} s)")
-    if scene.outputs.snapshots and end < max(scene.outputs.snapshots):
-        end = max(scene.outputs.snapshots)  # every requested snapshot is taken
-        notes.append(f"at least the last snapshot ({end:.3g} s)")
-    arithmetic = " + ".join(sums) + "".join(f"; {n}" for n in notes)
-    return PlanChoice(
-        "end_time",
-        end,
-        f"the leading wave (no slower than {slow:.4g} m/s on the nominal chain"
-        + (", each contact's own stiffness and masses" if scene.per_bead else "")
-        + (", and the first maximum of the chain linearised about F0" if scene.effects.precompression else "")
-        + f") passes contact {last} by {travel:.3g} s: t_end = {arithmetic} = {end:.3g} s",
-    )
-
-
-#: The wall's contact (bead N on the flat) is measured once its force has fallen back to half its peak
-#: after the reflection: the front's hop from contact N-1 to it and the pulse's width there. A Hertz
-#: solitary wave spans about five diameters (Nesterenko), so its force at a contact rises and falls
-#: within about five contacts' travel; with the hop, WALL_PULSE_CONTACTS contacts' travel at the chain's
-#: far end. Measured (reference RK4, stop check on the wall's contact): a striker on a 20-bead stainless
-#: chain at F0 = 2e4 N (linear, dispersed: the slowest case) complete 2.1 of its last contact's times
-#: after the end planned for contact N-1; unprecompressed chains long before that end (its slowest
-#: front). On 40 generated walled chains (tests/test_wall_end.py) the planned end is 1.1 to 4.4x the time
-#: the stop check ended the run (1.5 to 2 typical: the slowest front's own margin)
-WALL_PULSE_CONTACTS = 6
-
-
-def wall_peak_planned(scene) -> bool:
-    """Whether "auto" plans the run to measure the wall's peak: a chain of given length on a wall whose
-    peak forces are asked for ([outputs] peak_force), with a stop check (no snapshots), under a load that
-    ends: a force load within the longest end a run is ever run to (extension_budget: LINEAR_HORIZON x
-    the slowest front's crossing of the whole chain), a kick, or a striker. A force load lasting longer
-    is a lasting force: it keeps pressing the
-    wall, whose force need not fall back before its end has crossed the chain, and an end planned to
-    that (_wall_end_time: the crossing after the whole load) would outlast any run the planner makes
-    (a 40 N step for 1 s on 30 brass beads: 1.001 s, 8.8e5 steps, 4.2e9 with a dashpot, for a
-    budget of 2.7e-3 s). The run then ends as without a wall, the wall's peak not measured."""
-    if scene.effects.far_end != "wall" or not scene.outputs.peak_force or scene.outputs.snapshots:
-        return False
-    if scene.chain.beads is None or scene.n_contacts < 1:
-        return False
-    # the reflected wave, up to F0 + twice the expected force, must stay within what the run watch lets
-    # the far end's contacts carry (watched_force): on a taper's micron end beads it would crush them, a
-    # force the contact law does not describe; the run then ends at contact N-1 as without a wall
-    far = scene.effects.precompression + 2.0 * expected_peak_force(scene)
-    r = scene.bead_radii
-    held = min(
-        float(watched_force(scene.contact_laws[-1], min(r[-2], r[-1]))),
-        float(watched_force(scene.wall_law, r[-1])),
-    )
-    if far > held:
-        return False
-    step = step_equivalent(scene)
-    if step is None:
-        return True
-    if scene.loading.is_force:
-        return step[1] <= extension_budget(scene, wave_speeds(scene)[0])
-    # a striker's push ends by itself (its momentum over the piston force, step_equivalent): a heavy one
-    # pushes for several crossings and the wall's peak completes when it has turned back (generated
-    # heavy strikers on walls: 3.4-5.9 crossings of push, the wall's peak complete at 2.3-3.5 ms), the
-    # stop check ending the run then; the absolute cap only keeps an absurd striker from planning years
-    return step[1] < 1e3
-
-
-def _wall_end_time(scene, choice: PlanChoice, measured: int, slow: float, omega_max: float) -> PlanChoice:
-    """The end time that also measures the wall's peak (wall_peak_planned): the end planned for the
-    chain's last contact N-1 (_front_end_time), or the slowest front's crossing to it after the whole
-    load (a long load's end must cross the chain before the wall's force falls), plus
-    WALL_PULSE_CONTACTS x that contact's own time on the slowest front; at least the end planned for
-    the measured contacts (choice, up to contact `measured`)."""
-    nc = scene.n_contacts
-    last = choice if measured == nc else _front_end_time(scene, nc, slow, omega_max)
-    travel = front_travel_time(scene, nc, slow)
-    hop = travel - (front_travel_time(scene, nc - 1, slow) if nc > 1 else 0.0)
-    # a long load presses the wall until its end has crossed the chain too
-    step = step_equivalent(scene)
-    load = step[1] if step is not None else 0.0
-    wall = max(last.value, travel + load) + WALL_PULSE_CONTACTS * hop
-    if wall <= choice.value:
-        return choice
-    return PlanChoice(
-        "end_time",
-        wall,
-        f"{choice.reason}; the wall's contact {nc + 1} (bead {nc + 1} on the flat) measured: the end for contact "
-        f"{nc} ({last.value:.3g} s), or the load's end crossing the chain ({travel + load:.3g} s), and "
-        f"{WALL_PULSE_CONTACTS} x contact {nc}'s time on that front ({hop:.3g} s), the hop to the wall and the "
-        "pulse's rise and fall there",
-    )
-
-
-def _beads_choice(scene, end: float, last: int, fast: float) -> PlanChoice:
-    """The number of beads: no reflection from bead N reaches contact `last` before the end (see the
-    module docstring)."""
-    lead, d = leading_edge_speed(scene), scene.diameter
-    n = math.ceil(1.1 * (end + last * d / fast) / (d / lead + d / fast)) + 5
-    n = max(n, last + 5)
-    return PlanChoice(
-        "beads",
-        n,
-        f"a reflection from bead N (into the chain at up to {lead:.4g} m/s, back at up to "
-        f"{fast:.4g} m/s) reaches contact {last} after t_end = {end:.3g} s: "
-        "N > (t_end + L D / c_back) / (D / c_lead + D / c_back), +10% and 5 beads",
-    )
-
-
-def reflection_planned(scene) -> bool:
-    """Whether the planned run waits for the wall's reflection to pass back through contact 1 ([run]
-    stop_after_reflection): an uncompressed chain of given length against a wall whose wall's peak is
-    planned (wall_peak_planned), end time "auto", the stop check the planner's or one that asks for it.
-    There the reflection can exceed a contact's incoming peak (peaks.reflection_pending), and a run
-    that stopped once the wave had passed the wall would leave those peaks not complete."""
-    run = scene.run
-    own = run.stop_after_contact is None and not scene.outputs.snapshots
-    return (
-        run.end_time is None
-        and (own or run.stop_after_reflection)
-        and scene.chain.beads is not None
-        and not scene.effects.precompression
-        and wall_peak_planned(scene)
-    )
-
-
-#: the planned end's time for the wall's reflection to come back to contact 1, in crossings of the
-#: chain by the slowest expected front: the reflected front is weaker (slower: speed ~ F^(1/6)) and a
-#: dimer scatters it; a cap only, the stop check ends the run once the reflection has passed
-REFLECTION_CROSSINGS = 2.0
-
-
-def _reflection_end_time(scene, choice: PlanChoice, slow: float) -> PlanChoice:
-    """The end time that also lets the wall's reflection pass back through contact 1
-    (reflection_planned): the wall's end (choice) and REFLECTION_CROSSINGS x the slowest front's
-    crossing of the chain."""
-    back = REFLECTION_CROSSINGS * front_travel_time(scene, scene.n_contacts, slow)
-    return PlanChoice(
-        "end_time",
-        choice.value + back,
-        f"{choice.reason}; and the wall's reflection back through contact 1 (uncompressed: it can exceed a "
-        f"contact's incoming peak): {REFLECTION_CROSSINGS:g} x the slowest front's crossing of the chain "
-        f"({back:.3g} s), a cap: the stop check ends the run once the reflection has passed",
-    )
-
-
-def _stop_choice(scene, last: int) -> PlanChoice:
-    """The stop check at the last measured contact, and at the wall's contact (stop_after_wall) where
-    the wall's peak is measured (wall_peak_planned), and the reflection's return through contact 1
-    (stop_after_reflection) where reflection_planned."""
-    if reflection_planned(scene):
-        return PlanChoice(
-            "stop_after_contact",
-            last,
-            f"stop as soon as the leading wave has passed contact {last} and the wall's contact (bead "
-            f"{scene.n_contacts + 1} on the flat; stop_after_wall), and the wall's reflection has passed back "
-            "through contact 1 (its force after the wall's risen and back below half of its largest: "
-            "stop_after_reflection), both backends: on an uncompressed chain the reflection can exceed a "
-            "contact's incoming peak",
-        )
-    if wall_peak_planned(scene):
-        return PlanChoice(
-            "stop_after_contact",
-            last,
-            f"stop as soon as the leading wave has passed contact {last} (its force below half its peak) and the "
-            f"wall's contact (bead {scene.n_contacts + 1} on the flat, its force below half its peak after the "
-            "reflection: stop_after_wall), both backends: the wall's peak is asked for (peak_force)",
-        )
-    return PlanChoice(
-        "stop_after_contact",
-        last,
-        f"stop as soon as the leading wave has passed contact {last} (its force below half its peak), both backends",
-    )
 
 
 def _output_interval_choices(scene, d: dict, omega: float, end: float, rtol_plan: float) -> list[PlanChoice]:
@@ -779,18 +413,7 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     slow, fast = wave_speeds(scene)
     end = scene.run.end_time
     if end is None:
-        impacts = one_bead_impacts(scene)
-        if impacts:
-            choices.append(_one_bead_end_time(scene, impacts))
-        else:
-            choices.append(_front_end_time(scene, last, slow, omega))
-            # only where the stop check waits for the wall: the planner's own (below) or a given one
-            # with stop_after_wall; a given stop without it ends the run before the wall's peak
-            waits = scene.run.stop_after_contact is None or scene.run.stop_after_wall
-            if waits and wall_peak_planned(scene):
-                choices[-1] = _wall_end_time(scene, choices[-1], last, slow, omega)
-            if reflection_planned(scene):
-                choices[-1] = _reflection_end_time(scene, choices[-1], slow)
+        choices.append(end_time_choice(scene, last, slow, omega))
         end = choices[-1].value
     if scene.run.timestep is not None and rtol is None and scene.run.timestep > end:
         # the scene's own step, longer than the end the planner chose: the run would be one step of another
@@ -827,3 +450,46 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     planned = scene_from_dict(d, source=scene.source or "<scene>")
     planned = replace(planned, source=scene.source, source_text=None)
     return Plan(scene=planned, rtol=rtol_eff, method=method, choices=choices, omega_max=omega, stable_timestep=stable)
+
+
+#: the planner's names, its parts' among them (granchain.workflows.planning), as other modules import them
+__all__ = [
+    "end_time_choice",
+    "LINEAR_HORIZON",
+    "MAX_PEAK_RATIO",
+    "MAX_REFINE_STEP",
+    "MIN_RTOL",
+    "PEAK_DETECTION_STEPS",
+    "PRECOMPRESSED_LAG",
+    "PRECOMPRESSED_NEIGHBOURS",
+    "PRECOMPRESSED_TAIL",
+    "Plan",
+    "PlanChoice",
+    "REFINE_ABOVE",
+    "REFLECTION_CROSSINGS",
+    "STEP_LAG",
+    "WALL_PULSE_CONTACTS",
+    "_beads_choice",
+    "_front_end_time",
+    "_one_bead_end_time",
+    "_reflection_end_time",
+    "_stop_choice",
+    "_wall_end_time",
+    "accurate_timestep",
+    "damping_rate",
+    "extended_plan",
+    "extension_budget",
+    "front_travel_time",
+    "highest_frequency",
+    "last_measured_contact",
+    "leading_edge_speed",
+    "peak_ratio",
+    "plan_scene",
+    "precompressed_front_time",
+    "predicted_error",
+    "refined_plan",
+    "reflection_planned",
+    "sonic_travel_times",
+    "wall_peak_planned",
+    "wave_speeds",
+]
