@@ -16,6 +16,7 @@ from granchain.backends.builtin import ReferenceBackend
 from granchain.peaks import end_contact_reached
 from granchain.scene import SceneError, parse_scene
 from granchain.workflows.plan import (
+    REFLECTION_CROSSINGS,
     WALL_PULSE_CONTACTS,
     _front_end_time,
     extended_plan,
@@ -225,6 +226,8 @@ def test_a_step_longer_than_the_budget_is_a_lasting_load_for_the_wall(sc):
     end_n1 = _front_end_time(sc, nc, slow, plan.omega_max).value
     end = plan.scene.run.end_time
     bound = max(end_n1, crossing + budget) + WALL_PULSE_CONTACTS * hop
+    if plan.scene.run.stop_after_reflection:  # the cap for the wall's reflection back to contact 1 (peaks)
+        bound += REFLECTION_CROSSINGS * crossing
     assert end <= bound * (1 + 1e-12), f"planned end {end:.4g} s beyond {bound:.4g} s (a {load:.3g} s step)"
     event("beyond the budget" if load > budget else "within it")
     event(f"stop_after_wall {plan.scene.run.stop_after_wall}")

@@ -185,7 +185,7 @@ def test_an_inline_wall_material_and_a_radius_round_trip():
         (('wall_material = "ptfe"', "wall_material = 3"), r"\[boundary\] wall_material = 3 is invalid"),
         (('wall_material = "ptfe"', 'wall_material = "ptfe"\nwall_radius = -0.01'), r"\[boundary\] wall_radius"),
         (('far_end = "wall"', 'far_end = "free"'), r'wall_material .* no wall: add \[boundary\] far_end = "wall"'),
-        (('far_end = "wall"\n', ""), r'wall_material .* no wall: add \[boundary\] far_end = "wall"'),
+        (('far_end = "wall"\n', ""), r"\[boundary\] is missing 'far_end'"),
         (
             ('law = "hertz"', 'law = "thornton"'),
             r"\[boundary\] wall_material with \[contact\] law = 'thornton'.*ptfe has no yield_strength",

@@ -73,7 +73,8 @@ class WallEffect(Effect):
     @override
     def read(cls, section) -> dict[str, Any]:
         given = [k for k in ("wall_material", "wall_radius") if section.has(k)]
-        if given and section.raw("far_end", "free") != "wall":
+        # a missing far_end is the section's own message (it names the key and its values)
+        if given and section.has("far_end") and section.raw("far_end") != "wall":
             raise section.error(
                 f"[boundary] {given[0]} is the far-end wall's, but the chain has no wall: add "
                 f'[boundary] far_end = "wall", or remove {" and ".join(given)}'
