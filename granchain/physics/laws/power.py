@@ -55,7 +55,7 @@ class PowerLaw(ContactLaw):
     Coefficients: ClassVar[type[LawCoefficients]] = PowerCoefficients
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "exponent": EXPONENT_RANGE}
     #: brass beads of R = 4.76 mm: Hertz's own K and n (k = 4/3 E* sqrt(R*))
-    example_contact: ClassVar[dict[str, float]] = {"exponent": 1.5, "stiffness": 1.0e10}
+    example_contact: ClassVar[dict[str, float]] = {"exponent": 1.5, "stiffness": 4.11e9}
     #: (independent draws: K and n that keep a brass-like chain's overlaps small for any n of the range)
     scene_key_ranges: ClassVar[dict[str, tuple[float, float]]] = {"exponent": (1.3, 1.8), "stiffness": (1e10, 1e11)}
     label: ClassVar[str] = "power-law"
