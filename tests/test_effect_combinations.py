@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from granchain.lammps.runner import run_lammps
 from granchain.physics import materials as mat
 from granchain.physics.effects import EFFECTS, active_effects, external_forces
+from granchain.physics.laws import LAWS
 from granchain.physics.models import hertz_impact
 from granchain.physics.predictions import applicability, predict
 from granchain.scene import SceneError, parse_scene, scene_from_dict
@@ -34,7 +35,9 @@ def contact_table(law: str, several_materials: bool) -> str | None:
     several, the plastic laws' k and p_y from each material's yield strength."""
     if not several_materials:
         return None
-    return "unloading_coeff = 0.8\n" if law == "bilinear" else ""
+    cls = LAWS[law]
+    from_yield = {cls.yield_strength_key, "yield_pressure"}  # bilinear's k, Thornton's p_y: each material's
+    return "".join(f"{k} = {v!r}\n" for k, v in cls.example_contact.items() if k not in from_yield)
 
 
 @st.composite

@@ -223,6 +223,8 @@ def test_auto_end_time_covers_the_window_and_ends_soon_after(sc):
     if planned.run.stop_after_wall:  # the wall's peak asked for too: the front's crossing to the wall
         assert s.wall_peak_complete, "the run planned for the wall's peak ended before it"
         crossing = max(crossing, s.wall_time_of_peak)
+    if planned.run.stop_after_reflection:  # and the reflection back through contact 1: about the way in again
+        crossing = max(crossing, 2.0 * s.wall_time_of_peak)
     assert s.end_time <= 1.5 * crossing, f"the run ends at {s.end_time / crossing:.3f}x the front's crossing"
 
 
