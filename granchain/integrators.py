@@ -1,5 +1,5 @@
 """What each integrator declares of itself: its order, stability limit, the planner's calibration, how
-it locates a peak, and how its error behaves with a dashpot and on a kinked law.
+it locates a peak, and how its error behaves with velocity-dependent damping and on a kinked law.
 
 As scipy.integrate's solvers carry their ``order`` and ``error_estimator_order`` on their class, each
 integrator granchain runs is one frozen class here (RK4, Verlet), registered in INTEGRATORS by its name
@@ -52,18 +52,22 @@ class IntegratorFacts:
         omega_max; a companion above it is not run).
     calibration : float
         The planner's error model constant C in  rel. error of peak forces ~ C (omega_max dt)^order.
-    dashpot_error : float
-        The coefficient D of a first-order dashpot error the planner adds, D x rate x dt (0: none).
-    dashpot_order : int
-        The order its error shows with a dashpot (Richardson's nominal order there).
-    unordered_with_dashpot : str or None
-        Why its error follows no order with a dashpot, in words: its runs there get no error bar
-        (workflows.error_estimates.withheld_because); None: its error keeps dashpot_order.
+    damping_error : float
+        The coefficient D of the first-order error of a velocity-dependent damping force (a damping
+        part with ``velocity_dependent``: the dashpot, Kuwabara-Kono) the planner adds,
+        D x rate x dt, rate the damping's decay rate (0: none).
+    damping_order : int
+        The order its error shows with a velocity-dependent damping force (Richardson's nominal order
+        there).
+    unordered_with_damping : str or None
+        Why its error follows no order with a velocity-dependent damping force, in words: its runs
+        there get no error bar (workflows.error_estimates.withheld_because); None: its error keeps
+        damping_order.
     peaks_by_overlap : bool
-        True: a peak is located where the overlap turns (the maximum of the cubic Hermite interpolant of
-        the overlap over a step), so its force is the elastic force there; False: the contact force's
+        True: a peak is located where the overlap turns (the maximum of the quartic interpolant of the
+        overlap over a step: its value and rate at both ends, its second derivative at the start), so its force is the elastic force there; False: the contact force's
         samples at step ends are tracked, so its peak is the total force's maximum. The two are one
-        quantity unless a dashpot adds a velocity-dependent force (postprocess.comparison_table
+        quantity unless the damping part adds a velocity-dependent force (postprocess.comparison_table
         .peak_definition).
     locates_kinks : bool
         Whether it splits a step where a contact crosses a kink of its law (event location): its error
@@ -82,9 +86,9 @@ class IntegratorFacts:
     order: int
     stability: float
     calibration: float
-    dashpot_error: float
-    dashpot_order: int
-    unordered_with_dashpot: str | None
+    damping_error: float
+    damping_order: int
+    unordered_with_damping: str | None
     peaks_by_overlap: bool
     locates_kinks: bool
     mixes_orders: str | None
@@ -103,20 +107,21 @@ class RK4(IntegratorFacts):
     #: measured C (planned runs against runs at dt/16, bundled scenes): 0.2-0.54 (elastic long loads);
     #: 1.0 keeps a safety factor of about 2
     calibration: float = 1.0
-    #: RK4 integrates the dashpot with its stage velocities: no first-order term
-    dashpot_error: float = 0.0
-    dashpot_order: int = 4
-    #: the dashpot force is clipped where it would pull, a kink in time RK4 does not locate, so its runs
-    #: converge at no definite order. Measured on 14 generated Hertz chains planned for rtol 1e-3
+    #: RK4 integrates a velocity-dependent force with its stage velocities: no first-order term
+    damping_error: float = 0.0
+    damping_order: int = 4
+    #: the damped force is clipped where it would pull, a kink in time RK4 does not locate, so its runs
+    #: converge at no definite order (the message keeps the dashpot's words: it was measured on the
+    #: dashpot, and summaries quote it). Measured on 14 generated Hertz chains planned for rtol 1e-3
     #: (docs/error-bars.md): on the 9 with a dashpot 14 of 55 estimates were outside 1/3-3 of the true
     #: error (0.013-12x), although the three runs' differences looked like orders 1-5; on the 5 without,
     #: none of 51
-    unordered_with_dashpot: str | None = (
+    unordered_with_damping: str | None = (
         "RK4 does not locate where the clipped dashpot force reaches zero, so its error follows no "
         "order, and its peaks are the elastic force where the overlap turns, not the total force's "
         "maximum: no companion runs, no estimate (--method verlet gives error bars)"
     )
-    #: the running maximum of each overlap refined by its Hermite interpolant (reference.observers
+    #: the running maximum of each overlap refined by its quartic interpolant (reference.observers
     #: .HermitePeaks): with a dashpot the elastic force where the overlap turns, 4.4e-5 of the peak below
     #: Verlet's converged total on effect-dashpot (docs/error-bars.md)
     peaks_by_overlap: bool = True
@@ -146,16 +151,17 @@ class Verlet(IntegratorFacts):
     #: measured C (planned runs against runs at dt/16, bundled scenes): 0.1-0.6; 1.0 keeps a safety
     #: factor of about 2
     calibration: float = 1.0
-    #: Verlet (and LAMMPS) evaluates the dashpot with the half-step velocities: its force is first-order
+    #: Verlet (and LAMMPS) evaluates a velocity-dependent force with the half-step velocities (the
+    #: damping parts' force reads d(alpha)/dt at the half step): its force is first-order
     #: accurate, and a peak carries an error of about 1.0 x rate x dt. Measured: a tapered aluminium
     #: chain with gamma = 6 N s/m (rate 8e4 1/s) planned by (omega_max dt)^2 alone missed rtol 1e-3 by
     #: 1.1x (tests/test_planner_property.py)
-    dashpot_error: float = 1.0
-    #: the dashpot's first-order term: measured on effect-dashpot (LAMMPS, planned step, against
+    damping_error: float = 1.0
+    #: the damping force's first-order term: measured on effect-dashpot (LAMMPS, planned step, against
     #: dt / 16), with order 2 every estimate was 0.37-0.43 of the true error, the factor
     #: (2^2 - 1) / (2^1 - 1) = 3 the first order predicts
-    dashpot_order: int = 1
-    unordered_with_dashpot: str | None = None
+    damping_order: int = 1
+    unordered_with_damping: str | None = None
     #: the force samples at step ends, refined by the parabola through three (reference.observers
     #: .ForceSamplePeaks): the peak tracking of granchain's LAMMPS pair styles, step for step
     peaks_by_overlap: bool = False
@@ -163,9 +169,9 @@ class Verlet(IntegratorFacts):
     #: them and is erratic in sign in dt (workflows.error_estimates.bounded_because)
     locates_kinks: bool = False
     mixes_orders: str | None = None
-    #: first order with a dashpot, so a finest run would carry its error into every point it judges
-    #: (the planned step's 1.6e-4 read as 1.45e-4 against Verlet at an 8x finer step): the runs at 2h,
-    #: h and h / 2 are extrapolated in pairs
+    #: first order with a velocity-dependent damping force, so a finest run would carry its error into
+    #: every point it judges (the planned step's 1.6e-4 read as 1.45e-4 against Verlet at an 8x finer
+    #: step): the runs at 2h, h and h / 2 are extrapolated in pairs
     extrapolated_reference: bool = True
 
 

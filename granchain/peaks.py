@@ -10,9 +10,11 @@ lead_floor, reached_floor), from the planner's largest expected force (physics.e
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
+from granchain.physics.effects.gravity import scene_static_forces
 from granchain.physics.estimates import expected_peak_force
 
 #: A contact counts as reached by the wave when its peak force exceeds this fraction of the largest
@@ -164,9 +166,11 @@ def stop_force_floor(scene) -> float:
     the wave (an ulp of overlap: ~1e-11 N on a linear contact) stay far below.
     Under precompression the chain is linear about F0 and carries precursors ahead of the front (the
     integrator's dispersion too: a 300-bead brass chain at F0 = 100 N, a 0.1 N step, stopped at 2 dt
-    on one a millisecond before the front): there the leading pulse's floor (lead_floor)."""
-    f0 = float(scene.effects.precompression)
-    return f0 + (lead_floor(scene) if f0 else reached_floor(scene))
+    on one a millisecond before the front): there the leading pulse's floor (lead_floor).
+    Under gravity the static force is the largest, the wall's (F0 + the chain's weight): a floor above
+    every contact's own, as the leading pulse's (a contact opening below its weight is no reflection)."""
+    static = float(np.max(scene_static_forces(scene), initial=0.0))
+    return static + (lead_floor(scene) if scene.effects.precompression else reached_floor(scene))
 
 
 def lead_floor(scene) -> float:
@@ -263,9 +267,17 @@ def chain_laws(scene) -> list:
     laws = [scene.law]
     if scene.per_bead:
         kinds, kind_of = scene.bead_kinds
-        pairs = sorted(set(zip(kind_of[:-1], kind_of[1:], strict=True)))
-        laws = [scene.bead_pair_law(*kinds[i], *kinds[j]) for i, j in pairs] or laws
+        first: dict[tuple[int, int], int] = {}  # each pair's first contact (its [contact] values)
+        for c, pair in enumerate(zip(kind_of[:-1], kind_of[1:], strict=True)):
+            first.setdefault(pair, c)
+        laws = [scene.bead_pair_law(*kinds[i], *kinds[j], c) for (i, j), c in sorted(first.items())] or laws
     return laws
+
+
+def event_floor(scene) -> float:
+    """The rise above the wall's static force at which the event has begun (granchain.physics.event):
+    the stop check's floor above the static force (stop_force_floor less the largest static force)."""
+    return lead_floor(scene) if scene.effects.precompression else reached_floor(scene)
 
 
 def reached_floor(scene) -> float:
@@ -336,5 +348,9 @@ def reflection_pending(scene, solution) -> np.ndarray:
 
 def mark_reflection_pending(scene, solution) -> None:
     """Make the peaks the wall's reflection may still exceed (reflection_pending) not complete in
-    solution, in place: every backend's result, and a collected plain-LAMMPS run's, the same way."""
+    solution, in place: every backend's result, and a collected plain-LAMMPS run's, the same way; a
+    sensor bead's (granchain.postprocess.sensors) by the same rule on its own peak's time."""
     solution.complete = solution.complete & ~reflection_pending(scene, solution)
+    if np.size(solution.sensor_time_of_peak):
+        sensors = replace(solution, time_of_peak=solution.sensor_time_of_peak)
+        solution.sensor_complete = solution.sensor_complete & ~reflection_pending(scene, sensors)

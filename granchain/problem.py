@@ -1,5 +1,5 @@
 """The chain as equations, built from a scene: masses, one contact law over the contacts, the load at
-bead 1 and the effects (wall, striker, dashpot, precompression); its static precompressed state and
+bead 1 and the effects (wall, striker, damping, precompression); its static precompressed state and
 the energy it holds at t = 0. Both backends and the deck builder start from these.
 """
 
@@ -10,8 +10,13 @@ from typing import Any
 
 import numpy as np
 
+from granchain.physics.damping import DAMPING, DampingPart
 from granchain.physics.effects import EFFECTS, active_effects
+from granchain.physics.effects.gravity import scene_static_forces
+from granchain.physics.effects.gravity import static_profile as static_contact_forces
 from granchain.physics.laws import ContactLaw
+
+__all__ = ["scene_static_forces", "static_contact_forces"]  # (re-exported: the problem's static load)
 
 
 @dataclass(frozen=True)
@@ -19,7 +24,7 @@ class ChainProblem:
     """A chain of point masses joined by contact springs, loaded at bead 1: the paper's Eqs. 1-3,
     m_i u_i'' = F_(i-1,i)(alpha_(i-1,i)) - F_(i,i+1)(alpha_(i,i+1)) with the overlaps of Eq. 2 and
     the load on bead 1 (a step f(t) = A for 0 < t <= T, Eq. 4, or an initial velocity), and the
-    effects' fields (a wall, a striker, a dashpot, precompression)."""
+    effects' fields (a wall, a striker, damping, precompression)."""
 
     mass: np.ndarray  # (N,) kg
     law: ContactLaw  # over the N-1 contacts (parameters scalar or one per contact)
@@ -29,10 +34,18 @@ class ChainProblem:
     wall_law: ContactLaw | None = None  # far end: None free, else bead N on a rigid flat (scene.wall_law)
     striker_mass: float | None = None  # a striker before bead 1 (moving at initial_velocity), or None
     striker_law: ContactLaw | None = None  # its contact with bead 1
-    dashpot: float = 0.0  # gamma, N s/m, while beads overlap; the total force never pulls
+    damping: str = "none"  # the damping part (granchain.physics.damping), while beads overlap
+    damping_coefficient: float = 0.0  # its coefficient (a dashpot's gamma N s/m, Kuwabara-Kono's A s)
     precompression: float = 0.0  # F0, N: every contact starts in equilibrium at F0 (bead 1 pushed
     # by F0; the far end held by the wall, or pulled by F0 on bead N when free)
+    gravity: float = 0.0  # g, m/s^2: every moving bead carries m_i g toward the far end (a vertical
+    # chain on the wall), each contact starts in equilibrium at the weight above it (plus F0)
     front: int = 0  # beads in front of bead 1 (with_ends: a striker), whose contacts start unloaded
+
+    @property
+    def damping_part(self) -> type[DampingPart]:
+        """The damping part's class (DAMPING[damping])."""
+        return DAMPING[self.damping]
 
     @property
     def beads(self) -> int:
@@ -42,7 +55,7 @@ class ChainProblem:
     @classmethod
     def from_scene(cls, scene) -> ChainProblem:
         """The scene's chain: uniform beads and the nominal law, changed by every effect it declares
-        (granchain.physics.effects: masses, contact laws, wall, striker, dashpot, precompression)."""
+        (granchain.physics.effects: masses, contact laws, wall, striker, damping, precompression)."""
         fields: dict[str, Any] = {"mass": np.full(scene.chain.beads, scene.mass), "law": scene.law}
         for effect in active_effects(scene):
             effect.problem_fields(scene, fields)
@@ -67,52 +80,72 @@ class ChainProblem:
             amplitude=self.amplitude,
             duration=self.duration,
             initial_velocity=self.initial_velocity,
-            dashpot=self.dashpot,
+            damping=self.damping,
+            damping_coefficient=self.damping_coefficient,
             precompression=self.precompression,
+            gravity=self.gravity,
             front=sum(e.beads_in_front for e in EFFECTS.values() if e.in_problem(self)),
         )
 
 
-def static_state(law: ContactLaw, force: float, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Displacements (n,) and overlaps (n-1,) of a chain whose every contact carries `force` in static
-    equilibrium, the last bead (or wall) at u = 0: the law's virgin curve at F0 (Hertz (F0/k)^(2/3),
-    bilinear F0/k)."""
+def has_static_load(problem: ChainProblem) -> bool:
+    """Its contacts start loaded: a precompression's F0 or gravity's weight."""
+    return bool(problem.precompression) or bool(problem.gravity)
+
+
+def static_state(law: ContactLaw, force, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Displacements (n,) and overlaps (n-1,) of a chain whose contacts carry `force` (one value, or
+    one per contact) in static equilibrium, the last bead (or wall) at u = 0: the law's virgin curve
+    at each contact's force (Hertz (F/k)^(2/3), bilinear F/k)."""
     alpha0 = np.broadcast_to(np.asarray(law.per_contact(n - 1).static_overlap(force), dtype=float), (n - 1,))
     u = np.zeros(n)
     u[:-1] = np.cumsum(alpha0[::-1])[::-1]
     return u, alpha0
 
 
+def scene_static_load(scene) -> bool:
+    """The scene's contacts start loaded: a precompression's F0 or gravity's weight (has_static_load)."""
+    return bool(scene.effects.precompression) or bool(scene.effects.gravity)
+
+
 def precompressed_displacements(scene) -> tuple[np.ndarray, np.ndarray]:
-    """Static displacements of the scene's beads and overlaps of its contacts (the wall's last)."""
+    """Static displacements of the scene's beads and overlaps of its contacts (the wall's last), under
+    its precompression and gravity."""
     p = ChainProblem.from_scene(scene)
     n = p.beads
     parts = [(p.law, n - 1)]
+    mass = p.mass
     if p.wall_law is not None:
         parts.append((p.wall_law, 1))
+        mass = np.append(mass, np.inf)
         n += 1
-    u, alpha0 = static_state(type(p.law).join(parts), p.precompression, n)
+    force = static_contact_forces(mass, p.precompression, p.gravity)
+    u, alpha0 = static_state(type(p.law).join(parts), force, n)
     return u[: p.beads], alpha0
 
 
 def initial_state(problem: ChainProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(u, v, alpha_max) at t = 0 of a chain (also with its extra beads, ChainProblem.with_ends):
     at rest but for the first bead's initial velocity (bead 1's, or a striker's); with precompression
-    every contact from bead 1 on (the wall's included) in static equilibrium at F0 (a law with history
-    was loaded to it: alpha_max is the static overlap), and the beads in front of bead 1 (a striker)
-    touching it unloaded (docs/effects.md, the conventions)."""
+    or gravity every contact from bead 1 on (the wall's included) in static equilibrium at its static
+    force (static_contact_forces: F0 plus the weight above it; a law with history was loaded to it:
+    alpha_max is the static overlap as the steps compute it from u), and the beads in front of bead 1
+    (a striker) touching it unloaded (docs/effects.md, the conventions)."""
     n, s0 = problem.beads, problem.front
     u = np.zeros(n)
     v = np.zeros(n)
     v[0] = problem.initial_velocity
     alpha_hist = np.zeros(n - 1)  # the history alpha_max (laws with history)
-    f0 = float(problem.precompression)
-    if f0:
+    if has_static_load(problem):
         law = problem.law.contacts(n - 1, s0) if s0 else problem.law
-        u[s0:], alpha0 = static_state(law, f0, n - s0)
+        force = static_contact_forces(problem.mass[s0:], problem.precompression, problem.gravity)
+        u[s0:], _ = static_state(law, force, n - s0)
         u[:s0] = u[s0]  # the striker touches bead 1 with no overlap
         if problem.law.history:
-            alpha_hist[s0:] = alpha0  # the precompression loaded every contact to it
+            # the static load brought every contact to its overlap, as the steps compute it from u (a
+            # round-off off alpha0; alpha_max above it would start a contact struck at t = 0 on its
+            # unloading branch: tests/test_static_history.py); LAMMPS's setup does the same from its positions
+            alpha_hist[s0:] = u[s0:-1] - u[s0 + 1 :]
     return u, v, alpha_hist
 
 
@@ -147,7 +180,7 @@ def contact_positions(scene) -> np.ndarray:
     if scene.n_contacts == 0:
         return np.zeros(0)
     at = x[:-1] + r[:-1]
-    if scene.effects.precompression:
+    if scene.effects.precompression or scene.effects.gravity:
         u0, alpha0 = precompressed_displacements(scene)
         at = at + u0[:-1] - 0.5 * alpha0[: scene.n_contacts]
     return at

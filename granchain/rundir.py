@@ -82,6 +82,10 @@ def _fmt(x) -> str:
     return repr(x) if math.isfinite(x) else "nan"  # (math, not numpy: a third of a small run directory's write)
 
 
+#: a run directory's sensor bead histories: time, then force_bead_<i> of each sensor bead i
+SENSORS_CSV = "sensors.csv"
+
+
 def write_run_dir(result: RunResult, out: str | Path, overwrite: bool = False, extra_files: dict | None = None) -> Path:
     """Write the run directory atomically; returns its path.
 
@@ -114,6 +118,13 @@ def _write_contents(result: RunResult, d: Path, extra_files: dict) -> None:
                 np.concatenate(([t], f, v))
                 for t, f, v in zip(s.history_time, s.history_force, s.history_velocity, strict=True)
             ),
+        )
+    if s.sensor_history_time.size:  # each sensor bead's average force (postprocess.sensors)
+        cols = [f"force_bead_{b}" for b in s.sensor_beads]
+        _write_csv(
+            d / SENSORS_CSV,
+            ["time", *cols],
+            (np.append(t, f) for t, f in zip(s.sensor_history_time, s.sensor_history_force, strict=True)),
         )
     if s.snapshot_time.size:
         n = sc.chain.beads

@@ -150,7 +150,8 @@ def test_stopped_run_really_stopped_early(tmp_path):
 
 def test_results_dump_holds_every_result_column(tmp_path):
     """The deck writes the one column list (templates.RESULT_COLUMNS) at full precision."""
-    job = render(tmp_path, STRIKER_WALL)  # bilinear: every column, d_amax included
+    # bilinear: every column, d_amax included; a sensor bead: d_speak, d_stpeak, d_sfmin
+    job = render(tmp_path, STRIKER_WALL.replace("histories = [1, 10]", "histories = [1, 10]\nsensors = [5]"))
     assert lmp(job).returncode == 0
     header = (job / RESULTS_DUMP).read_text().splitlines()[8].split()
     assert header[2:] == ["id", *RESULT_COLUMNS]

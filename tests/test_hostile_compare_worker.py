@@ -46,6 +46,9 @@ def test_a_killed_compare_leaves_no_worker_and_ends_its_pipe(tmp_path, sig):
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         start_new_session=True,  # its own group: whatever it started is found by the group
+        # the signals' default action, whatever this test inherited (under nohup SIGHUP is ignored, and
+        # compare rightly carries on: exit 0)
+        preexec_fn=None if sig == signal.SIGKILL else lambda: signal.signal(sig, signal.SIG_DFL),
     )
     try:
         deadline = time.monotonic() + 60

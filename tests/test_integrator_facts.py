@@ -110,17 +110,17 @@ def test_every_integrator_declares_every_fact_in_its_own_class(name):
     assert facts.label
     assert isinstance(facts.order, int)
     assert facts.order >= 1
-    assert isinstance(facts.dashpot_order, int)
-    assert 1 <= facts.dashpot_order <= facts.order
+    assert isinstance(facts.damping_order, int)
+    assert 1 <= facts.damping_order <= facts.order
     for value in (facts.stability, facts.calibration):
         assert isinstance(value, float)
         assert math.isfinite(value)
         assert value > 0
-    assert isinstance(facts.dashpot_error, float)
-    assert facts.dashpot_error >= 0
+    assert isinstance(facts.damping_error, float)
+    assert facts.damping_error >= 0
     for flag in (facts.peaks_by_overlap, facts.locates_kinks, facts.extrapolated_reference):
         assert isinstance(flag, bool)
-    for why in (facts.unordered_with_dashpot, facts.mixes_orders):
+    for why in (facts.unordered_with_damping, facts.mixes_orders):
         assert why is None or (isinstance(why, str) and why.strip())
 
 
@@ -153,3 +153,14 @@ def test_every_integrator_runs_in_the_reference_and_is_looked_up_by_name():
 def test_facts_are_frozen():
     with pytest.raises(dataclasses.FrozenInstanceError):
         INTEGRATORS["rk4"].order = 3
+
+
+def test_no_fact_is_named_after_a_damping_part():
+    """The integrators' facts about damping are about a velocity-dependent force (the damping part's
+    velocity_dependent, which callers read), not about one part: a fact named after a part
+    (``dashpot_order``) would read as wrong for every other part that shares the property."""
+    from granchain.physics.damping import DAMPING
+
+    parts = {name for name in DAMPING if name != "none"} | {cls.key for cls in DAMPING.values() if cls.key}
+    named = [(fact, part) for fact in FACTS for part in parts if part in fact]
+    assert not named, f"integrator facts named after a damping part: {named}"

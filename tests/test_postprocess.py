@@ -17,6 +17,7 @@ from granchain.workflows.plots import plot_run
 from granchain.workflows.run import run_scene
 
 from .conftest import BILINEAR, make_scene, make_scene_text
+from .figure_checks import check_every_figure
 
 SHORT = 'kind = "impulse"\nimpulse = 0.1\nduration = 1e-6'
 
@@ -176,10 +177,13 @@ def test_compare_fails_when_the_solvers_get_different_physics(tmp_path, monkeypa
 @pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(set(bundled_scenes()) - {"default"}))
 def test_compare_passes_on_bundled_scenes(name):
+    """The compare passes; and every figure of its reference run is fit for a paper (figure_checks: the
+    check of tests/test_figure_axes.py, here on the one run of a bundled scene the slow set makes)."""
     sc = parse_scene(bundled_scenes()[name], source=name)
-    rows, _, _ = compare_scene(sc)
+    rows, _, reference = compare_scene(sc)
     print(format_table(rows))
     assert all(r.ok for r in rows), [r.quantity for r in rows if not r.ok]
+    check_every_figure(reference)
 
 
 def test_compare_runs_is_backend_agnostic():

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from granchain.physics import materials as mat
@@ -39,12 +39,44 @@ def precompressed_chains(draw):
     uniform = parse_scene(text(1.0) + f"[precompression]\nforce = {f0!r}\n")
     k_lin = 1.5 * uniform.stiffness ** (2.0 / 3.0) * f0 ** (1.0 / 3.0)
     chain = text(float(ratio * f0 / np.sqrt(k_lin * uniform.mass)))
+    radii = [4.76e-3] * n
     if shape == "taper":
-        chain = chain.replace("radius = 4.76e-3", f"radius = 4.76e-3\ntaper = {draw(st.floats(0.9, 0.99))!r}")
+        taper = draw(st.floats(0.9, 0.99))
+        chain = chain.replace("radius = 4.76e-3", f"radius = 4.76e-3\ntaper = {taper!r}")
+        radii = [4.76e-3 * taper**i for i in range(n)]
     elif shape == "dimer":
         small = 4.76e-3 / draw(st.floats(1.1, 2.5), label="radius ratio")
-        chain = chain.replace("radius = 4.76e-3", f"radius = {[4.76e-3 if i % 2 == 0 else small for i in range(n)]!r}")
+        radii = [4.76e-3 if i % 2 == 0 else small for i in range(n)]
+        chain = chain.replace("radius = 4.76e-3", f"radius = {radii!r}")
+    # within Hertz's domain: the largest force the kick can bring (a two-body impact of bead 1 on
+    # bead 2, or the linear estimate, on top of F0) overlaps even the smallest contact by less than a
+    # fifth of its smaller radius (CI drew a taper struck at 798 m/s, whose run the run watch stops:
+    # "the contact law does not describe it: reduce the load")
+    velocity = ratio * f0 / np.sqrt(k_lin * uniform.mass)
+    force = f0 + max(ratio * f0, hertz_impact_force(material, radii[0], velocity))
+    pairs = zip(radii[:-1], radii[1:], strict=True)
+    assume(all(overlap(material, r1, r2, force) < 0.2 * min(r1, r2) for r1, r2 in pairs))
     return parse_scene(chain + f"[precompression]\nforce = {f0!r}\n", source="precompressed.toml")
+
+
+def contact_stiffness(material: str, r1: float, r2: float) -> float:
+    """Hertz's K of two spheres of one material (F = K alpha^(3/2)): 4/3 E* sqrt(R1 R2 / (R1 + R2)),
+    E* = E / (2 (1 - nu^2))."""
+    m = mat.MATERIALS[material]
+    return 4.0 / 3.0 * m.youngs_modulus / (2.0 * (1.0 - m.poisson_ratio**2)) * np.sqrt(r1 * r2 / (r1 + r2))
+
+
+def overlap(material: str, r1: float, r2: float, force: float) -> float:
+    """The Hertz overlap (F / K)^(2/3) of two spheres pressed by force."""
+    return (force / contact_stiffness(material, r1, r2)) ** (2.0 / 3.0)
+
+
+def hertz_impact_force(material: str, radius: float, velocity: float) -> float:
+    """The largest force of two equal free spheres meeting at velocity (Hertz: the overlap
+    (5 m_eff v^2 / (4 K))^(2/5), m_eff = m / 2)."""
+    k = contact_stiffness(material, radius, radius)
+    m_eff = 0.5 * mat.MATERIALS[material].density * 4.0 / 3.0 * np.pi * radius**3
+    return k * (5.0 * m_eff * velocity**2 / (4.0 * k)) ** 0.6
 
 
 @pytest.mark.slow

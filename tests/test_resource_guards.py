@@ -156,3 +156,11 @@ def test_a_dashpot_that_forces_a_tiny_planned_step_is_refused_naming_the_planner
     rc, err, _ = cli(tmp_path, text.replace("timestep = 'auto'", 'timestep = "auto"'))
     refused(rc, err, tmp_path, "steps", "planner's step", "dashpot")
     assert "[run] timestep =" not in err
+
+
+def test_kuwabara_kono_damping_that_forces_a_tiny_planned_step_is_refused_naming_its_rate(tmp_path):
+    """The refusal names the scene's damping part's rate (the part's noun), not a dashpot it lacks."""
+    text = scene_text(end_time=2e-4, timestep="auto") + "[damping]\nkuwabara_kono = 1.0\n"
+    rc, err, _ = cli(tmp_path, text.replace("timestep = 'auto'", 'timestep = "auto"'))
+    refused(rc, err, tmp_path, "steps", "planner's step", "Kuwabara-Kono damping's rate")
+    assert "dashpot" not in err

@@ -11,7 +11,7 @@ from dataclasses import replace
 import pytest
 
 from granchain.scene import parse_scene, scene_from_dict, scene_to_dict
-from granchain.scene.model import stop_fields
+from granchain.scene.run_outputs import stop_fields
 from granchain.workflows.error_estimates import companion_scene
 from granchain.workflows.plan import extended_plan, plan_scene, refined_plan
 

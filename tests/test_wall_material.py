@@ -6,6 +6,7 @@ the Hertz two-body impact of one bead on the wall, and chains of stainless beads
 aluminium and steel. Before wall_material every scene here was refused ("unknown key").
 """
 
+import dataclasses
 import math
 
 import numpy as np
@@ -15,6 +16,7 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from granchain.lammps.runner import run_lammps
+from granchain.physics.laws import LAWS
 from granchain.physics.materials import MATERIALS
 from granchain.scene import SceneError, parse_scene, scene_to_dict
 from granchain.scene.reader import scene_from_dict
@@ -200,3 +202,31 @@ def test_bad_wall_input_is_one_clear_error(edit, match):
     text = walled_text(4, 3e-3, 1.0, "ptfe", end_time=1e-4, timestep=1e-8).replace(*edit)
     with pytest.raises(SceneError, match=match):
         parse_scene(text, source="t.toml")
+
+
+@pytest.mark.parametrize(
+    ("law", "given"),
+    [("bilinear", "unloading_coeff = 0.5\nplastic_stiffness = 2.43e7\n"), ("thornton", "yield_pressure = 3.25e9\n")],
+)
+def test_a_given_plastic_value_gives_way_to_the_softer_yield_on_a_wall_of_a_material(law, given):
+    """The law's declared yield_strength_key (bilinear's k, Thornton's p_y) is what a wall of a material
+    re-derives from the softer material's yield, for every plastic law alike (Thornton named none: its
+    wall kept the chain's p_y against a softer aluminium wall)."""
+    key = LAWS[law].yield_strength_key
+    assert key is not None
+    assert key in given
+    al, ss = MATERIALS["aluminium-6061-t6"], MATERIALS["stainless-steel-316"]
+    text = f'law = "{law}"\n{given}'
+    sc = parse_scene(walled_text(5, 3e-3, 1.0, "aluminium-6061-t6", end_time=1e-4, timestep=1e-8, law=text), "t")
+    softer = dataclasses.replace(sc.contact.coefficients, **{key: None})
+    pair = sc.wall_pair(3e-3, ss)
+    assert sc.wall_law == LAWS[law].for_pair(softer, *pair[:2], sc.r_star, (ss, al))
+    assert min(al.yield_strength, ss.yield_strength) == al.yield_strength
+
+
+def test_a_thornton_yield_pressure_and_a_tables_yield_strength_are_one_clear_error():
+    table = "{density = 8000.0, youngs_modulus = 2e11, poisson_ratio = 0.3, yield_strength = 3e8}"
+    text = walled_text(3, 3e-3, 1.0, "{}", end_time=1e-4, timestep=1e-8, law='law = "thornton"\nyield_pressure = 3e9\n')
+    text = text.replace('material = "stainless-steel-316"', f"material = {table}").replace("wall_material = {}\n", "")
+    with pytest.raises(SceneError, match=r"yield_pressure = 3000000000.0 and \[chain.material\] yield_strength"):
+        parse_scene(text, "t")

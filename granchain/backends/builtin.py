@@ -9,7 +9,8 @@ from typing_extensions import override
 
 from granchain.backends.protocol import PROPERTIES, Backend, Calculation, FileIOBackend, WorkFiles
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, contact_overlap_bounds
-from granchain.peaks import lead_fall, lead_floor, stop_force_floor
+from granchain.peaks import event_floor, lead_fall, lead_floor, stop_force_floor
+from granchain.postprocess.sensors import finish_sensors
 from granchain.problem import ChainProblem
 from granchain.results import RunResult
 from granchain.schedule import history_stride
@@ -28,7 +29,7 @@ class ReferenceBackend(Backend):
 
     @override
     def default_method(self, scene) -> tuple[str, str | None]:
-        """RK4, but velocity Verlet on a scene with a dashpot: there RK4's peak is another quantity
+        """RK4, but velocity Verlet on a scene with velocity-dependent damping: there RK4's peak is another quantity
         than Verlet's and LAMMPS's (postprocess.comparison_table.peak_definition) and RK4 gives no
         error bars (workflows.error_estimates.withheld_because); the reference's Verlet is still the
         independent numpy solver (see :meth:`Backend.default_method`)."""
@@ -38,7 +39,7 @@ class ReferenceBackend(Backend):
         if rk4 == verlet:
             return "rk4", None
         return "verlet", (
-            f"verlet, not rk4, on a scene with a dashpot: rk4's peak is {rk4}, Verlet's (and LAMMPS's) "
+            f"verlet, not rk4, on a scene with a {scene.damping.noun}: rk4's peak is {rk4}, Verlet's (and LAMMPS's) "
             f"{verlet}, and rk4 gives no error bars there (--method rk4 runs RK4)"
         )
 
@@ -54,12 +55,16 @@ class ReferenceBackend(Backend):
                 scene.run.timestep,
                 method,
                 histories=tuple(i - 1 for i in scene.outputs.histories),
+                sensors=tuple(b - 1 for b in scene.outputs.sensors),
+                # a sensor's history where the scene asks for one (a companion run's has no interval)
+                sensor_stride=history_stride(scene) if scene.outputs.history_interval is not None else 0,
                 history_stride=history_stride(scene),
                 snapshots=scene.outputs.snapshots,
                 stop_after=None if scene.run.stop_after_contact is None else scene.run.stop_after_contact - 1,
                 stop_at_wall=scene.run.stop_after_wall,
                 stop_at_reflection=scene.run.stop_after_reflection,
                 stop_floor=stop_force_floor(scene),
+                event_floor=event_floor(scene) if scene.wall_event else None,
                 lead_floor=lead_floor(scene),
                 lead_fall=lead_fall(scene),
                 # blow-up and garbage detectors (granchain.invariants), not accuracy targets; each
@@ -68,6 +73,8 @@ class ReferenceBackend(Backend):
                 energy_watch=ENERGY_WATCH,
                 momentum_watch=MOMENTUM_WATCH,
             )
+        if scene.outputs.sensors:
+            finish_sensors(scene, sol)
         return Calculation(RunResult(scene=scene, backend=self.name, solution=sol))
 
 

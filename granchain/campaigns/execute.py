@@ -116,12 +116,13 @@ class Runner:
 
     def method(self, point: Point) -> str:
         """The integrator this point runs: [campaign] method, or the backend's default for the point's
-        scene (workflows.run.method_choice: the reference's Verlet where the point has a dashpot),
+        scene (workflows.run.method_choice: the reference's Verlet where the point has velocity-dependent damping),
         said once per campaign run where the scene chose it."""
         method, why = point_method(self.c, point.scene)
         if why is not None and method not in self.methods:
             self.say(
-                f"points with a dashpot: the {self.c.backend} backend runs {why}; their state points say "
+                f"points with {point.scene.damping.phrase}: the {self.c.backend} backend runs {why}; their state "
+                "points say "
                 f'{method}, so results of them made with another method are not theirs ([campaign] method = "rk4" '
                 "runs and finds those)"
             )

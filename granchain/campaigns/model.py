@@ -10,7 +10,7 @@ from typing import Any
 
 from granchain.campaigns import expr
 from granchain.exceptions import GranchainError
-from granchain.scene import Scene, SceneError, scene_from_dict, scene_to_dict
+from granchain.scene import Scene, SceneError, scene_from_dict, scene_to_dict, set_key
 from granchain.scene.section import _shown
 
 #: a point's status, in the words of the table's status column (workspace.job_state; "stale" is the
@@ -71,7 +71,7 @@ class Predicate:
     ----------
     quantity : str
         "pulses" (distinct pulses in one contact's force history) or an observable of summary.json
-        (granchain.campaigns.spec.OBSERVABLES).
+        (granchain.postprocess.observables.table_columns).
     op : str
         The comparison, one of ``> >= < <= == !=``.
     value : float
@@ -294,8 +294,11 @@ class Campaign:
             values = self._values(full)
         data = _deep_copy(self.base if self.base_table is None else self.base_table)
         for key, value in full.items():
-            if "." in key:
-                _set_key(data, key, value, where)
+            if "." in key:  # the keys Scene.replace sets, set as it sets them (scene.set_key)
+                try:
+                    set_key(data, key, value, f"{where}: in the base scene")
+                except SceneError as e:
+                    raise CampaignError(str(e)) from None
         try:
             scene = scene_from_dict(data, source=f"campaign point ({params_text(full)})")
         except SceneError as e:
@@ -354,22 +357,6 @@ def scene_numbers(d: dict, prefix: str = "") -> dict[str, float]:
         elif isinstance(v, (int, float)) and not isinstance(v, bool):
             out[name] = v
     return out
-
-
-def _set_key(data: dict, key: str, value: Any, where: str) -> None:
-    parts = key.split(".")
-    node = data
-    for i, part in enumerate(parts[:-1]):
-        nxt = node.get(part)
-        if nxt is None:
-            nxt = node[part] = {}
-        if not isinstance(nxt, dict):
-            head = ".".join(parts[: i + 1])
-            raise CampaignError(
-                f"{where}: cannot set {key!r}: {head} is {nxt!r} in the base scene, not a table (set {head!r} itself)"
-            )
-        node = nxt
-    node[parts[-1]] = value
 
 
 #: the most points a campaign may have (a typo in num can ask for millions); counted from the lists'

@@ -1,7 +1,10 @@
 r"""Figures of a campaign table: an observable against a key, one line per value of the other varied
 keys (with error bars from ``<observable>_error``), or a 2D map over two keys.
 
-Axes are logarithmic when the values are positive and span at least a factor LOG_SPAN. The plotted
+Axes are logarithmic when the values are positive and span at least a factor LOG_SPAN. Each axis, the
+colour bar and the legend name a column with its unit (column_unit: a scene key's, scene.limits
+SCENE_KEY_UNITS; an observable's and its error's, the observable registry's units(); the table's own),
+and a line under the axes counts the points left out for lacking a value, by status. The plotted
 numbers are written beside each figure (``<figure>.csv``).
 
 Every text drawn (title, axis labels, legend) is the campaign file's own text, not matplotlib
@@ -18,10 +21,45 @@ from granchain import safe_files
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.model import CampaignError
 from granchain.campaigns.table import build_search_table, build_table, printable, read_record
+from granchain.postprocess.observables import units as observable_units
+from granchain.scene.limits import scene_key_unit
 
 FORMATS = ("png", "pdf", "svg")
 #: values spanning this factor (all > 0) get a log axis
 LOG_SPAN = 30.0
+
+#: the table's own numeric columns (table.point_row; a search's runs) -> unit
+TABLE_UNITS = {
+    "pulses": "pulses",
+    "error_estimate": "1",
+    "beads": "beads",
+    "timestep": "s",
+    "steps": "steps",
+    "bead_steps": "bead steps",
+    "wall_time": "s",
+    "runs": "runs",
+}
+
+
+def column_unit(column: str, record: dict | None = None) -> str | None:
+    """The unit of a campaign table's column, or None where it has none that is known (a free parameter
+    of [derive], a column of text). record: the workspace's (campaign.json), for a search's columns."""
+    search = (record or {}).get("search") or {}
+    key = search.get("key")
+    if key and column in ("transition", "transition_error", f"{key}_low", f"{key}_high"):
+        return scene_key_unit(key)
+    if column.endswith("_error") and column != "transition_error":
+        column = column.removesuffix("_error")
+    for table in (TABLE_UNITS, observable_units()):
+        if column in table:
+            return table[column]
+    return scene_key_unit(column)
+
+
+def axis_label(column: str, record: dict | None = None) -> str:
+    """An axis label: the column and its unit, "column (unit)"; "(unit unknown)" where there is none known."""
+    unit = column_unit(column, record)
+    return f"{column} ({unit if unit is not None else 'unit unknown'})"
 
 
 def _log_axis(values) -> bool:
@@ -30,7 +68,10 @@ def _log_axis(values) -> bool:
 
 
 def _label(key: str, value) -> str:
-    return printable(f"{key} = {value:.4g}" if isinstance(value, float) else f"{key} = {value}")
+    """A legend's "key = value unit" (the key's unit where it has one)."""
+    unit = column_unit(key)
+    text = f"{value:.4g}" if isinstance(value, float) else f"{value}"
+    return printable(f"{key} = {text}" + (f" {unit}" if unit and not isinstance(value, (bool, str)) else ""))
 
 
 def _write_failed(path, e: OSError) -> CampaignError:
@@ -70,16 +111,42 @@ def _check_columns(df, ws, **cols) -> None:
             )
 
 
-def plot_campaign(ws, x: str, y: str, hue: str | None = None, map_key: str | None = None, out=None, formats=("png",)):
-    """Draw y against x (lines, one per value of the other varied keys; hue first) or, with map_key,
-    a 2D map of y over (x, map_key); returns the paths written."""
+def _not_drawn(df, y: str) -> str:
+    """What the figure leaves out, in words ("" where every point is drawn): the points without a value
+    of y, by status (done without a value: its reason is in its summary.json's observables_missing)."""
+    left = df[(df["status"] != "done") | df[y].isna()]
+    if left.empty:
+        return ""
+    counts = left["status"].where(left["status"] != "done", "done, no value").value_counts(sort=False)
+    by = ", ".join(f"{n} {status}" for status, n in counts.items())
+    return f"{len(left)} of {len(df)} points not drawn, without a value of {y} ({by})"
+
+
+def _lines(ax, done, x: str, y: str, err, groups: list) -> None:
+    """y against x, one line per value of the grouping keys (their values and units in the legend)."""
     import numpy as np
+
+    parts = done.groupby(groups, sort=True, dropna=False) if groups else [((), done)]
+    for key, part in parts:
+        key = key if isinstance(key, tuple) else (key,)
+        part = part.sort_values(x)
+        yerr = part[err].to_numpy(dtype=float) if err else None
+        if yerr is not None and np.all(np.isnan(yerr)):
+            yerr = None
+        label = ", ".join(_label(k, v) for k, v in zip(groups, key, strict=True)) or None
+        ax.errorbar(part[x], part[y], yerr=yerr, marker="o", ms=4, capsize=3, label=label)
+    if groups:
+        for text in ax.legend(fontsize="small").get_texts():
+            text.set_parse_math(False)
+
+
+def campaign_figure(ws, x: str, y: str, hue: str | None = None, map_key: str | None = None):
+    """The figure of y against x (lines, one per value of the other varied keys; hue first) or, with
+    map_key, a 2D map of y over (x, map_key), and the table of its plotted points; its axes name each
+    column with its unit (column_unit) and a line under them the points left out for lacking a value."""
     from matplotlib.figure import Figure  # a figure of its own: the caller's matplotlib backend untouched
 
     ws = Path(ws)
-    for f in formats:
-        if f not in FORMATS:
-            raise CampaignError(f"--format {f!r}: one of {', '.join(FORMATS)}")
     record = read_record(ws)
     df = build_table(ws)
     varied = [k for k in record.get("varied", []) if k in df.columns]
@@ -92,46 +159,50 @@ def plot_campaign(ws, x: str, y: str, hue: str | None = None, map_key: str | Non
     if done.empty:
         raise CampaignError(f"{ws}: no complete point has a value of {y!r}; nothing to plot")
     err = f"{y}_error" if f"{y}_error" in df.columns else None
-    stem = f"{y}-vs-{x}" + (f"-map-{map_key}" if map_key else f"-by-{hue}" if hue else "")
-    base = str(out) if out is not None else str(ws / "plots" / stem)  # keys have dots: no with_suffix
-    _make_dir(Path(base).parent)
     fig = Figure(figsize=(6.4, 4.6), layout="constrained")
     ax = fig.subplots()
     if map_key is not None:
         grid = done.pivot_table(index=map_key, columns=x, values=y, aggfunc="mean")
         xs, ys = grid.columns.to_numpy(dtype=float), grid.index.to_numpy(dtype=float)
         mesh = ax.pcolormesh(xs, ys, grid.to_numpy(dtype=float), shading="nearest")
-        fig.colorbar(mesh, ax=ax).set_label(printable(y), parse_math=False)
-        ax.set_ylabel(printable(map_key), parse_math=False)
+        fig.colorbar(mesh, ax=ax).set_label(printable(axis_label(y, record)), parse_math=False)
+        ax.set_ylabel(printable(axis_label(map_key, record)), parse_math=False)
         if _log_axis(ys):
             ax.set_yscale("log")
-        _write_csv(done[[x, map_key, y] + ([err] if err else [])], Path(base + ".csv"))
+        cols = [x, map_key, y]
     else:
         groups = [k for k in ([hue] if hue else []) + [k for k in varied if k not in (x, hue)]]
         groups = [k for k in groups if done[k].nunique() > 1]
-        parts = done.groupby(groups, sort=True, dropna=False) if groups else [((), done)]
-        for key, part in parts:
-            key = key if isinstance(key, tuple) else (key,)
-            part = part.sort_values(x)
-            yerr = part[err].to_numpy(dtype=float) if err else None
-            if yerr is not None and np.all(np.isnan(yerr)):
-                yerr = None
-            label = ", ".join(_label(k, v) for k, v in zip(groups, key, strict=True)) or None
-            ax.errorbar(part[x], part[y], yerr=yerr, marker="o", ms=4, capsize=3, label=label)
-        if groups:
-            for text in ax.legend(fontsize="small").get_texts():
-                text.set_parse_math(False)
-        ax.set_ylabel(printable(y), parse_math=False)
+        _lines(ax, done, x, y, err, groups)
+        ax.set_ylabel(printable(axis_label(y, record)), parse_math=False)
         if _log_axis(done[y]):
             ax.set_yscale("log")
-        cols = [x, *groups, y] + ([err] if err else [])
-        _write_csv(done[cols], Path(base + ".csv"))
-    ax.set_xlabel(printable(x), parse_math=False)
+        cols = [x, *groups, y]
+    ax.set_xlabel(printable(axis_label(x, record)), parse_math=False)
     if _log_axis(done[x]):
         ax.set_xscale("log")
     title = record.get("title")
     if title:
         ax.set_title(printable(str(title)), fontsize="medium", parse_math=False)
+    left = _not_drawn(df, y)
+    if left:
+        fig.get_layout_engine().set(rect=(0, 0.05, 1, 0.95))  # room under the axes for the line
+        fig.text(0.01, 0.01, printable(left), fontsize="small", color="0.3", wrap=True, parse_math=False)
+    return fig, done[cols + ([err] if err else [])]
+
+
+def plot_campaign(ws, x: str, y: str, hue: str | None = None, map_key: str | None = None, out=None, formats=("png",)):
+    """Draw y against x (lines, one per value of the other varied keys; hue first) or, with map_key,
+    a 2D map of y over (x, map_key) (campaign_figure); returns the paths written."""
+    ws = Path(ws)
+    for f in formats:
+        if f not in FORMATS:
+            raise CampaignError(f"--format {f!r}: one of {', '.join(FORMATS)}")
+    fig, data = campaign_figure(ws, x, y, hue, map_key)
+    stem = f"{y}-vs-{x}" + (f"-map-{map_key}" if map_key else f"-by-{hue}" if hue else "")
+    base = str(out) if out is not None else str(ws / "plots" / stem)  # keys have dots: no with_suffix
+    _make_dir(Path(base).parent)
+    _write_csv(data, Path(base + ".csv"))
     return _save(fig, base, formats)
 
 

@@ -67,6 +67,7 @@ def run_point(payload: dict) -> dict:
         run_time = time.perf_counter() - t_run
         caught = [str(x.message).splitlines()[0] for x in w]
         (job / wsp.FAILURE).unlink(missing_ok=True)
+        write_job_document(job)
     except Exception as e:  # noqa: BLE001 - recorded with its message; the campaign goes on
         status, message = "failed", one_line(e)
         if not isinstance(e, GranchainError):  # a bug: keep where it happened
@@ -132,3 +133,26 @@ def one_line(e: BaseException) -> str:
     """An exception as one line: a GranchainError's message; anything else with its type."""
     text = " ".join(str(e).split()) or type(e).__name__
     return text if isinstance(e, GranchainError) else f"{type(e).__name__}: {text}"
+
+
+def write_job_document(job: Path) -> None:
+    """The point's results as its signac job document (signac_job_document.json), so that signac's own
+    tools (``project.to_dataframe()``, ``find_jobs(doc_filter=...)``) show them beside the state point:
+    each measured observable of summary.json, and ``unmeasured`` (which could not be, and why). The
+    run directory stays the truth the campaign table is read from; a document that cannot be written
+    (a link at its name, a full disk) leaves the point done."""
+    summary = wsp.read_json(job / wsp.RUN_DIR / "summary.json")
+    if not isinstance(summary, dict):
+        return
+    obs = summary.get("observables") if isinstance(summary.get("observables"), dict) else {}
+    missing = wsp.measurable_missing(summary)
+    doc = {k: v for k, v in obs.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
+    doc["unmeasured"] = "; ".join(f"{k}: {v}" for k, v in missing.items()) or None
+    try:
+        wsp.write_json(job / JOB_DOCUMENT, doc)
+    except OSError:
+        pass
+
+
+#: signac's job document file in a job directory (signac.job.Job.FN_DOCUMENT)
+JOB_DOCUMENT = "signac_job_document.json"

@@ -25,6 +25,7 @@ from granchain.campaigns.spec import (
     params_text,
 )
 from granchain.campaigns.table import build_search_table, build_table, write_tables
+from granchain.results import CAMPAIGN_PACKAGES, RUN_PACKAGES, package_versions
 
 #: a workspace's folder for the batch jobs' output (stdout and stderr of each worker job)
 JOB_LOGS = "jobs"
@@ -83,6 +84,8 @@ def write_record(ws: Path, campaign: Campaign, runner: Runner, entries: list[dic
         "error_estimate": campaign.error_estimate,
         "regime_contact": campaign.regime_contact,
         "code": runner.code,
+        # the libraries the campaign runs on (dask, distributed, signac) besides each run's own
+        "provenance": {"packages": package_versions(RUN_PACKAGES + CAMPAIGN_PACKAGES)},
         "varied": list(campaign.varied_keys),
         "search": None
         if campaign.search is None

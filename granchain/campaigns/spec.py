@@ -78,6 +78,7 @@ from granchain.campaigns.model import (
     scene_numbers,
     whole,
 )
+from granchain.postprocess.observables import table_columns
 from granchain.scene import (
     MAX_SCENE_BYTES,
     SECTIONS,
@@ -95,17 +96,6 @@ CAMPAIGN_KEYS = ("base", "backend", "method", "rtol", "error_estimate", "regime_
 TABLES = ("campaign", "scene", "vary", "zip", "derive", "search", "cluster")
 SEARCH_KEYS = ("key", "range", "scale", "tolerance", "predicate")
 PREDICATE_KEYS = ("quantity", "contact", "op", "value")
-#: the observables of summary.json a predicate may test (granchain.postprocess.observables)
-OBSERVABLES = (
-    "leading_peak_force",
-    "leading_peak_force_nondim",
-    "leading_peak_contact",
-    "wave_speed",
-    "wave_speed_stderr",
-    "wave_speed_contacts",
-    "max_peak_force",
-    "max_peak_contact",
-)
 OPS = (">", ">=", "<", "<=", "==", "!=")
 
 
@@ -546,10 +536,11 @@ def _read_predicate(p: Any, source: str) -> Predicate:
                 f"allowed keys: {', '.join(PREDICATE_KEYS)}"
             )
     q = p.get("quantity")
-    if q != "pulses" and q not in OBSERVABLES:
+    observables = table_columns()  # the observables of summary.json a predicate may test (the registry's)
+    if q != "pulses" and q not in observables:
         raise CampaignError(
             f"{source}: [search] predicate quantity = {q!r} is invalid: 'pulses' (at a contact) or an observable: "
-            + ", ".join(OBSERVABLES)
+            + ", ".join(observables)
         )
     contact = p.get("contact")
     if q == "pulses":
@@ -576,7 +567,6 @@ __all__ = [
     "MAX_POINTS",
     "MAX_POINT_BEADS",
     "MAX_RANKS",
-    "OBSERVABLES",
     "OPS",
     "PREDICATE_KEYS",
     "SEARCH_KEYS",

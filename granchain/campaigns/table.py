@@ -15,10 +15,17 @@ Columns, in order:
 * every observable of summary.json with its estimated error (``<name>_error``, from the run's companions,
   an estimate or a bound as ``granchain run`` gives it; blank where no estimate could be stood behind:
   summary.json ``errors`` says why),
-  and ``error_estimate``, the largest relative peak-force error over the measured contacts;
+  then ``unmeasured``, the observables a done point could not measure, each with summary.json's reason
+  (observables_missing: "leading_peak_force: contact 14 was not reached by the wave ..."), blank when it
+  measured every one, and ``error_estimate``, the largest relative peak-force error over the measured contacts;
+* each sensor bead's quantities (``sensor_peak_force_bead_<i>``, ``sensor_time_of_peak_bead_<i>``:
+  granchain.postprocess.sensors) with their errors (``<name>_error``), where the scene has sensors;
 * ``beads``, ``timestep``, ``steps`` (as run, after planning), ``bead_steps`` (summary.json price),
   ``wall_time`` (the run plus its error-estimate companions, s), ``warnings``, ``message``, ``job``
   (the signac job id: the directory WS/workspace/<job>).
+
+``attrs["units"]`` gives every column's unit (column_units), ``attrs["provenance"]`` the campaign's
+record of the libraries it ran on (campaign.json's provenance: dask, distributed and signac too).
 
 Written as table.csv (floats round-trip) and table.parquet; a search adds search.csv / search.parquet.
 The terminal view (format_table) prints control characters of any value escaped (``\x1b``): a
@@ -39,7 +46,10 @@ from granchain import safe_files
 from granchain.campaigns import model
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.search import read_history, static_force
-from granchain.campaigns.spec import OBSERVABLES, CampaignError
+from granchain.campaigns.spec import CampaignError
+from granchain.postprocess.observables import table_columns, units, with_error_bars
+from granchain.postprocess.sensors import SENSOR_QUANTITIES, sensor_key
+from granchain.scene import KEY_UNITS
 
 TIMING_COLUMNS = ("wall_time",)  # differ between two runs of the same point; everything else is reproducible
 
@@ -119,10 +129,14 @@ def point_row(ws: Path, record: dict, entry: dict, stale: dict) -> dict:
     summary = _dict(summary)
     obs = _dict(summary.get("observables"))
     errs = _dict(_dict(summary.get("errors")).get("observables"))
-    for name in OBSERVABLES:
+    barred = with_error_bars()  # each registered observable's column, and its error bar's beside it
+    for name in table_columns():
         row[name] = _number(obs.get(name))
-        if name in ("leading_peak_force", "leading_peak_force_nondim", "wave_speed", "max_peak_force"):
+        if name in barred:
             row[f"{name}_error"] = _number(_dict(errs.get(name)).get("error"))
+    missing = wsp.measurable_missing(summary)
+    row["unmeasured"] = "; ".join(f"{k}: {v}" for k, v in missing.items()) or None
+    row.update(_sensor_columns(summary))
     row["error_estimate"] = _number(summary.get("error_estimate"))
     price = _dict(summary.get("price"))
     row["beads"] = _number(summary.get("beads"))
@@ -146,6 +160,25 @@ def point_row(ws: Path, record: dict, entry: dict, stale: dict) -> dict:
     return row
 
 
+def _sensor_columns(summary: dict) -> dict:
+    """A row's sensor bead columns (postprocess.sensors): each sensor's quantities, named by sensor_key,
+    with their error bars beside them (summary.json's ``sensors`` and errors.end_peaks); a damaged
+    file's values blank."""
+    sensors = _dict(summary.get("sensors"))
+    errs = _dict(_dict(summary.get("errors")).get("end_peaks"))
+    beads = sensors.get("beads") if isinstance(sensors.get("beads"), list) else []
+    out: dict = {}
+    for k, bead in enumerate(beads):
+        if isinstance(bead, bool) or not isinstance(bead, int):
+            continue
+        for quantity in SENSOR_QUANTITIES:
+            values = sensors.get(quantity) if isinstance(sensors.get(quantity), list) else []
+            key = sensor_key(quantity, bead)
+            out[key] = _number(values[k]) if k < len(values) else None
+            out[f"{key}_error"] = _number(_dict(errs.get(key)).get("error"))
+    return out
+
+
 def _dict(x) -> dict:
     return x if isinstance(x, dict) else {}
 
@@ -164,7 +197,47 @@ def build_table(ws: str | Path, record: dict | None = None):
     stale = wsp.stale_versions(project, record["code"])
     rows = [point_row(ws, record, e, stale) for e in record["points"]]
     keys = {k for e in record["points"] for k in e["params"]}
-    return storable(pd.DataFrame(rows), keys)
+    df = storable(pd.DataFrame(rows), keys)
+    df.attrs["units"] = column_units(df.columns)
+    df.attrs["provenance"] = _dict(record.get("provenance"))
+    return df
+
+
+#: units of the table's own columns ("1": dimensionless; "text" and "bool": not numbers)
+TABLE_UNITS = {
+    "status": "text",
+    "pulses": "1",
+    "regime": "text",
+    "unmeasured": "text",
+    "error_estimate": "1",
+    "beads": "1",
+    "timestep": "s",
+    "steps": "1",
+    "bead_steps": "1",
+    "wall_time": "s",
+    "warnings": "text",
+    "message": "text",
+    "job": "text",
+}
+
+
+def column_units(columns) -> dict[str, str]:
+    """The unit of every column of a campaign table (its attrs["units"]): a parameter's the scene
+    key's (granchain.scene.KEY_UNITS; "" where the key's unit is its law's, a [contact] key), an
+    observable's and its error's the registry's (observables.units()), ``<key>_auto`` "bool"."""
+    obs = units()
+    out = {}
+    for col in columns:
+        base = col.removesuffix("_error")
+        if col in TABLE_UNITS:
+            out[col] = TABLE_UNITS[col]
+        elif base in obs:
+            out[col] = obs[base]
+        elif col.endswith("_auto"):
+            out[col] = "bool"
+        else:
+            out[col] = KEY_UNITS.get(col, "")
+    return out
 
 
 def build_search_table(ws: str | Path, record: dict | None = None):

@@ -423,3 +423,15 @@ def stale_versions(project, code: dict) -> dict[str, dict]:
 def code_text(code: dict) -> str:
     """A code record (code_version) for messages: 'granchain 1.0, source 0123abcd..., plugin ...'."""
     return ", ".join(f"{k} {v}" for k, v in code.items())
+
+
+def measurable_missing(summary) -> dict[str, str]:
+    """summary.json's observables_missing without those its scene never measures
+    (observables_inapplicable: a wall's on a free chain), name -> reason: what a point could measure and
+    did not (the campaign's ``unmeasured``)."""
+    summary = summary if isinstance(summary, dict) else {}
+    never = summary.get("observables_inapplicable")
+    never = set(never) if isinstance(never, list) else set()
+    missing = summary.get("observables_missing")
+    missing = missing if isinstance(missing, dict) else {}
+    return {str(k): str(v) for k, v in missing.items() if k not in never}

@@ -49,7 +49,7 @@ def add_plan_parser(sub) -> None:
         default=None,
         choices=list(METHODS),
         help="integrator the plan is for (default: the one `granchain run` uses on the reference: rk4, or verlet on "
-        "a scene with a dashpot)",
+        "a scene with velocity-dependent damping)",
     )
     pp.add_argument(
         "--error-estimate",

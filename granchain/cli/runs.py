@@ -36,7 +36,8 @@ def add_run_parser(sub) -> None:
         "--method",
         default=None,
         choices=list(METHODS),
-        help="integrator: reference rk4 (default; verlet on a scene with a dashpot, where rk4's peak is the elastic "
+        help="integrator: reference rk4 (default; verlet on a scene with velocity-dependent damping, where rk4's peak "
+        "is the elastic "
         "force where the overlap turns and it gives no error bars) or verlet; LAMMPS is always verlet",
     )
     r.add_argument(
@@ -115,7 +116,8 @@ def add_compare_parser(sub) -> None:
         "--method",
         default=None,
         choices=list(REFERENCE.methods),
-        help="reference integrator (default rk4; verlet on a scene with a dashpot, where rk4's peak is the elastic "
+        help="reference integrator (default rk4; verlet on a scene with velocity-dependent damping, where rk4's peak "
+        "is the elastic "
         "force where the overlap turns, not the total force's maximum that LAMMPS reports)",
     )
     c.add_argument("--np", type=np_arg, default=1, help="MPI ranks for LAMMPS (default 1; auto: as many as pay)")

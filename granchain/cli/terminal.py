@@ -16,7 +16,9 @@ from granchain.exceptions import UsageError
 from granchain.peaks import REACHED_FRACTION, end_contact_reached, reflection_pending
 from granchain.physics.effects import unbalanced_forces
 from granchain.postprocess.comparison_table import dynamic_name
-from granchain.results import OBSERVABLE_UNITS, printable
+from granchain.postprocess.observables import END_PEAKS, units
+from granchain.postprocess.sensors import SENSOR_QUANTITIES, sensor_key
+from granchain.results import printable
 from granchain.scene import Scene, load_scene
 
 DEFAULT_SCENE = "default"
@@ -77,7 +79,7 @@ DYNAMIC, TOTAL = "above F0", "total"
 def force_unit(name: str, f0: float) -> str:
     """The unit an observable is printed with; on a precompressed chain (f0 > 0) a force's says whether
     it is dynamic (the peaks, F - F0, docs/observables.md) or total (static_force, F0 itself)."""
-    unit = OBSERVABLE_UNITS.get(name, "?")
+    unit = units().get(name, "?")  # the registry's (granchain.postprocess.observables)
     if not f0 or not (unit == "N" or name.endswith("_force_nondim")):
         return unit
     return f"{unit}, {TOTAL if name == 'static_force' else DYNAMIC}"
@@ -174,7 +176,10 @@ def print_end_peaks(result, s: dict, f0: float) -> None:
     """The striker's and the wall's contact lines of print_result (s: the run's summary, f0: the
     precompression): a peak, the largest force so far, or "not reached"."""
     end_errors = (s.get("errors") or {}).get("end_peaks", {})
-    ends = (("striker_peak_force", "striker's contact", 0.0), ("wall_peak_force", "wall's contact", f0))
+    # the end peaks (postprocess.observables.END_PEAKS), each with the static force its contact carries
+    ends = [
+        (o.name, f"{o.label.removeprefix('the ')} contact", o.static_force(result.scene)) for o in END_PEAKS.values()
+    ]
     rises = [*(np.asarray(result.solution.peak_force, dtype=float) - f0)]
     rises += [s[name] - static for name, _, static in ends if s.get(name) is not None]
     for name, label, static in ends:
@@ -184,7 +189,8 @@ def print_end_peaks(result, s: dict, f0: float) -> None:
         # the wall's contact carries F0 at rest: shown dynamic, as compare names it (dynamic_name)
         shown_name, shown_value = (dynamic_name(name), value - static) if static else (name, value)
         row = f"{shown_name} (N{f', {DYNAMIC}' if static else ''})"
-        if s.get(name.replace("_force", "_complete")) is False and not end_contact_reached(value, static, rises):
+        complete = s.get(END_PEAKS[name].complete_field)
+        if complete is False and not end_contact_reached(value, static, rises):
             print(
                 f"  {row:38s} -   not reached: the wave had not reached the {label} when the run "
                 f"ended (t = {result.solution.end_time:g} s)"
@@ -203,7 +209,7 @@ def print_end_peaks(result, s: dict, f0: float) -> None:
             else (f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})")
         )
         what = f"the {label} peak"
-        if s.get(name.replace("_force", "_complete")) is False:  # a running maximum (ChainSolution)
+        if complete is False:  # a running maximum (ChainSolution)
             what = f"the {label} largest force so far, not a peak"
             what += (
                 ": the wave had not reached it, or its force had not fallen to half of it, when the run ended"
@@ -213,6 +219,24 @@ def print_end_peaks(result, s: dict, f0: float) -> None:
         if static:
             what += f"; total {fmt(value)} N"
         print(f"  {row:38s} {fmt(shown_value)}{bar}   ({what})")
+
+
+def print_sensors(s: dict) -> None:
+    """print_result's sensor bead lines (summary.json's ``sensors``: postprocess.sensors), bead by bead:
+    each quantity with its error bar, or why it is not measured."""
+    sensors = s.get("sensors")
+    if not sensors:
+        return
+    errors = (s.get("errors") or {}).get("end_peaks", {})
+    for k, bead in enumerate(sensors["beads"]):
+        for quantity, (unit, _) in SENSOR_QUANTITIES.items():
+            key, v = sensor_key(quantity, bead), sensors[quantity][k]
+            e = errors.get(key)
+            bar = ""
+            if e is not None and v is not None:  # the measured error bar, or why there is none
+                bar = f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})"
+            why = f"   not measured: {shown(sensors['missing'].get(key, ''))}" if v is None else ""
+            print(f"  {key + f' ({unit})':38s} {fmt(v)}{bar}{why}")
 
 
 def print_incomplete_peaks(result) -> None:
@@ -271,6 +295,7 @@ def print_result(result, out) -> None:
             f"  {'forces (precompressed)':38s} '{DYNAMIC}': dynamic, F - F0 over the static force F0 = {f0:g} N; "
             f"'{TOTAL}': F (peaks.csv's peak_force and peak_force_nondim are total, its dynamic_peak_force F - F0)"
         )
+    said = None  # the last reason printed: a companion that shares it says "as above" (shares_reason)
     for k, v in s["observables"].items():
         if k == "wave_speed_sections":  # one line per uniform stretch of the window
             for sec in v:
@@ -279,7 +304,10 @@ def print_result(result, out) -> None:
                 print(f"  {row:38s} {fmt(sec['speed'])} +- {sec['stderr']:.2g}   (fit over {sec['arrivals']} arrivals)")
             continue
         label = f"{k} ({force_unit(k, f0)})"
-        why = f"   not measured: {shown(missing[k])}" if v is None and k in missing else ""
+        why = ""
+        if v is None and k in missing:
+            why = "   not measured: " + ("as above" if missing[k] == said else shown(missing[k]))
+            said = missing[k]
         bar = ""
         if v is not None and k in errors:  # the measured error bar, or why there is none
             e = errors[k]
@@ -287,6 +315,7 @@ def print_result(result, out) -> None:
         note = f"   note: {shown(notes[k])}" if v is not None and k in notes else ""
         print(f"  {label:38s} {fmt(v)}{bar}{why}{note}")
     print_end_peaks(result, s, f0)
+    print_sensors(s)
     print_incomplete_peaks(result)
     outside = "beyond first yield"
     for line in s.get("outside_domain") or ():  # an elastic law beyond first yield (postprocess.domains)

@@ -38,17 +38,24 @@ class CacheError(PluginError):
 def _fix(where: str) -> str:
     return (
         f"{where}; granchain loads a LAMMPS plugin only from a directory nobody else can change: set "
-        f"{CACHE_VARIABLE} to an absolute path of a private directory (e.g. ~/.cache/granchain), or unset it"
+        f"{CACHE_VARIABLE} to an absolute path of a private directory (e.g. ~/.cache/granchain), or unset it "
+        "(then $XDG_CACHE_HOME/granchain or ~/.cache/granchain)"
     )
 
 
 def cache_root(environ=None) -> Path:
-    """The cache directory: $GRANCHAIN_CACHE (an absolute path) or ~/.cache/granchain.
+    """The cache directory: $GRANCHAIN_CACHE (an absolute path), else by the XDG base directory rule
+    $XDG_CACHE_HOME/granchain, else ~/.cache/granchain.
 
     An empty or relative GRANCHAIN_CACHE is refused (CacheError): it would name the current directory
-    or one below it, wherever the command runs, and a plugin planted there would be loaded."""
+    or one below it, wherever the command runs, and a plugin planted there would be loaded. An empty or
+    relative XDG_CACHE_HOME is ignored, as the XDG specification says. Whichever it is, the plugin is
+    loaded from it only when trusted_root finds nobody else can change it."""
     env = os.environ if environ is None else environ
     raw = env.get(CACHE_VARIABLE)
+    xdg = env.get("XDG_CACHE_HOME") or ""
+    if raw is None and os.path.isabs(xdg):
+        return Path(xdg) / "granchain"
     if raw is None:
         home = Path.home()
         if not home.is_absolute():

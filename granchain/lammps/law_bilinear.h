@@ -35,8 +35,8 @@ struct LawBilinear {
   }
 
   // the constants force() takes, derived once per type pair (init_one): beta, k_u = k / (1 - beta),
-  // k_u / 2, beta k / 2 (the same expressions as before, so the same doubles)
-  static constexpr int nconst = 4;
+  // k_u / 2, beta k / 2 (the same expressions as before, so the same doubles), k (the loading tangent)
+  static constexpr int nconst = 5;
   static void derive(const double *c, double *d)
   {
     const double k = c[0], b = c[1];
@@ -44,6 +44,7 @@ struct LawBilinear {
     d[1] = k / (1.0 - b);
     d[2] = 0.5 * d[1];
     d[3] = 0.5 * b * k;
+    d[4] = k;
   }
 
   static inline double force(double alpha, double am, const double *c, double *energy, double *dissipated)
@@ -53,6 +54,15 @@ struct LawBilinear {
     if (energy) *energy = d > 0.0 ? c[2] * d * d : 0.0;
     if (dissipated) *dissipated = c[3] * am * am;
     return d > 0.0 ? ku * d : 0.0;
+  }
+
+  // dF/dalpha of the branch in force (the numpy twin's overlap_tangent): k on the loading line
+  // (alpha = am), k_u while un/reloading with a force, 0 apart
+  static inline double tangent(double alpha, double am, const double *c)
+  {
+    if (!(alpha > 0.0)) return 0.0;
+    if (alpha >= am) return c[4];
+    return alpha - c[0] * am > 0.0 ? c[1] : 0.0;
   }
 };
 

@@ -48,6 +48,9 @@ struct LawHertz {
     if (dissipated) *dissipated = 0.0;
     return k * alpha * sa;
   }
+
+  // dF/dalpha at overlap alpha >= 0 (the damping parts' tangent; the numpy twin's overlap_tangent)
+  static inline double tangent(double alpha, double /*am*/, const double *d) { return 1.5 * d[0] * sqrt(alpha); }
 };
 
 }    // namespace LAMMPS_NS

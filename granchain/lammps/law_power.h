@@ -36,14 +36,29 @@ struct LawPower {
   }
 
   // the constants force() takes, derived once per type pair from the coefficients (init_one):
-  // k, n, n + 1, k / (n + 1)
-  static constexpr int nconst = 4;
+  // k, n, n + 1, k / (n + 1), and m, h where n = m + h/2 is a whole or half-whole exponent (the
+  // common ones: 1, 3/2, 2, 5/2, 3), m = -1 otherwise: alpha^n is then m products and one sqrt,
+  // not a pow, which is what a contact in force costs (benchmarks/RESULTS.md, issue 41)
+  static constexpr int nconst = 6;
   static void derive(const double *c, double *d)
   {
     d[0] = c[0];
     d[1] = c[1];
     d[2] = c[1] + 1.0;
     d[3] = c[0] / (c[1] + 1.0);
+    const double twice = 2.0 * c[1];
+    const bool halves = twice == std::floor(twice);
+    d[4] = halves ? std::floor(c[1]) : -1.0;
+    d[5] = halves ? twice - 2.0 * std::floor(c[1]) : 0.0;
+  }
+
+  // alpha^n: products and a sqrt where n is whole or half-whole (d[4] >= 0), else pow
+  static inline double power(double alpha, const double *d)
+  {
+    if (d[4] < 0.0) return pow(alpha, d[1]);
+    double p = d[5] > 0.0 ? sqrt(alpha) : 1.0;
+    for (int i = 0; i < static_cast<int>(d[4]); i++) p *= alpha;
+    return p;
   }
 
   // alpha >= 0 the overlap, am (unused) the largest overlap including this one, d from derive()
@@ -51,7 +66,13 @@ struct LawPower {
   {
     if (energy) *energy = d[3] * pow(alpha, d[2]);    // k alpha^(n+1) / (n+1)
     if (dissipated) *dissipated = 0.0;
-    return d[0] * pow(alpha, d[1]);
+    return d[0] * power(alpha, d);
+  }
+
+  // dF/dalpha = n k alpha^(n-1) at overlap alpha >= 0, 0 apart (the numpy twin's overlap_tangent)
+  static inline double tangent(double alpha, double /*am*/, const double *d)
+  {
+    return alpha > 0.0 ? d[1] * d[0] * pow(alpha, d[1] - 1.0) : 0.0;
   }
 };
 

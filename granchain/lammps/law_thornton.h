@@ -90,6 +90,23 @@ struct LawThornton {
     if (dissipated) *dissipated = c[W0] + fy * da + c[HSLOPE] * da * da - 0.4 * fmax * (am - dp);
     return f;
   }
+
+  // dF/dalpha of the branch in force (the numpy twin's overlap_tangent): the plastic slope S on the
+  // virgin plastic line (alpha = am > d_y), else the un/reloading Hertz curve's 3/2 k_p sqrt(alpha - d_p)
+  static inline double tangent(double alpha, double am, const double *c)
+  {
+    const double k = c[K], dy = c[DY];
+    if (am <= dy) return 1.5 * k * sqrt(alpha);
+    if (alpha >= am && alpha > 0.0) return c[SLOPE];
+    const double fy = c[FY];
+    const double fmax = fy + c[SLOPE] * (am - dy);
+    const double x = (2.0 * fmax + fy) / c[FY3];
+    const double kp = k * sqrt((fy / fmax) * (x * sqrt(x)));
+    const double y = fmax / kp;
+    const double dp0 = am - cbrt(y * y);
+    const double s = alpha - (dp0 > 0.0 ? dp0 : 0.0);
+    return s > 0.0 ? 1.5 * kp * sqrt(s) : 0.0;
+  }
 };
 
 }    // namespace LAMMPS_NS

@@ -22,10 +22,19 @@
 
 using namespace LAMMPS_NS;
 
+// the damping parts' pair_style words, in the registry's order (chain_laws.h: GRANCHAIN_DAMPING; the
+// first, "none", is never on a pair_style line): PairChainBase::damping indexes them
+static const char *const damping_words[] = {
+#define GRANCHAIN_WORD(D) D::word,
+    GRANCHAIN_DAMPING(GRANCHAIN_WORD)
+#undef GRANCHAIN_WORD
+};
+static constexpr int ndamping = sizeof(damping_words) / sizeof(damping_words[0]);
+
 /* ---------------------------------------------------------------------- the shared machinery */
 
 PairChainBase::PairChainBase(LAMMPS *lmp, bool has_history, const char *law_vectors) :
-    Pair(lmp), history(has_history), vectors(law_vectors), gamma(0.0), lead(false), d0(nullptr),
+    Pair(lmp), history(has_history), vectors(law_vectors), damping(0), damping_coeff(0.0), lead(false), d0(nullptr),
     t_fc(-std::numeric_limits<double>::infinity()), t_fprev(-std::numeric_limits<double>::infinity()),
     t_fprev2(-std::numeric_limits<double>::infinity()), amax_comm(nullptr)
 {
@@ -57,16 +66,27 @@ void PairChainBase::allocate_base()
 
 void PairChainBase::settings(int narg, char **arg)
 {
-  gamma = 0.0;
+  damping = 0;
+  damping_coeff = 0.0;
   lead = false;
   lead_fall = 0.0;
   peaks_all = false;
+  sensors.clear();
   ladder_per_octave = 0;
   int i = 0;
   while (i < narg) {
-    if (strcmp(arg[i], "dashpot") == 0 && i + 1 < narg) {
-      gamma = utils::numeric(FLERR, arg[i + 1], false, lmp);
-      if (gamma < 0.0) error->all(FLERR, "pair_style {} dashpot gamma must be >= 0, got {}", force->pair_style, gamma);
+    int part = 0;    // a damping part's word: its index in damping_words
+    for (int k = 1; k < ndamping; k++)
+      if (strcmp(arg[i], damping_words[k]) == 0) part = k;
+    if (part && i + 1 < narg) {
+      if (damping && damping != part)
+        error->all(FLERR, "pair_style {}: {} and {} together: give one damping part", force->pair_style,
+                   damping_words[damping], damping_words[part]);
+      damping = part;
+      damping_coeff = utils::numeric(FLERR, arg[i + 1], false, lmp);
+      if (damping_coeff < 0.0)
+        error->all(FLERR, "pair_style {} {} coefficient must be >= 0, got {}", force->pair_style, arg[i],
+                   damping_coeff);
       i += 2;
     } else if (strcmp(arg[i], "lead") == 0 && i + 2 < narg) {
       lead = true;
@@ -85,13 +105,19 @@ void PairChainBase::settings(int narg, char **arg)
       if (ladder_per_octave < 1 || ladder_slots < 1)
         error->all(FLERR, "pair_style {} ladder needs rungs per octave >= 1 and slots >= 1", force->pair_style);
       i += 3;
+    } else if (strcmp(arg[i], "sensors") == 0 && i + 1 < narg) {
+      const int k = utils::inumeric(FLERR, arg[i + 1], false, lmp);
+      if (k < 1 || i + 1 + k >= narg)
+        error->all(FLERR, "pair_style {} sensors needs a count K >= 1 and K atom IDs", force->pair_style);
+      for (int m = 0; m < k; m++) sensors.push_back(utils::tnumeric(FLERR, arg[i + 2 + m], false, lmp));
+      i += 2 + k;
     } else if (strcmp(arg[i], "peaks") == 0 && i + 1 < narg && strcmp(arg[i + 1], "all") == 0) {
       peaks_all = true;
       i += 2;
     } else {
       error->all(FLERR,
-                 "Illegal pair_style {} command: expected [dashpot gamma] [lead floor F0] [fall R] "
-                 "[ladder per_octave slots] [peaks all]",
+                 "Illegal pair_style {} command: expected [dashpot gamma | kuwabara_kono A] [lead floor F0] [fall R] "
+                 "[ladder per_octave slots] [sensors K id..] [peaks all]",
                  force->pair_style);
     }
   }
@@ -146,6 +172,12 @@ void PairChainBase::init_style()
                  "property/atom d2_ladder {}' before the run (granchain's decks do)",
                  force->pair_style, ladder_per_octave, ladder_slots, ladder_slots + 1, ladder_slots + 1);
   }
+  if (!sensors.empty()) {
+    if (!atom->map_style)
+      error->all(FLERR, "pair {} sensors needs an atom map (atom_modify map array)", force->pair_style);
+    const char *names[] = {"sfc", "sprev", "sprev2", "speak", "stpeak", "sfmin"};
+    for (int k = 0; k < 6; k++) idx[SFC + k] = index_of(names[k]);
+  }
   if (history) {
     idx[AMAX] = index_of("amax");
     idx[EDIS] = index_of("edis");
@@ -155,10 +187,11 @@ void PairChainBase::init_style()
   if ((neighbor->every > 1 || neighbor->delay > 0) && !neighbor->dist_check)
     error->all(FLERR, "pair {} with neigh_modify every {} delay {} needs 'check yes'", force->pair_style,
                neighbor->every, neighbor->delay);
-  if (gamma > 0.0) {
+  if (damped()) {
     idx[EDASH] = index_of("edash");
     if (!comm->ghost_velocity)
-      error->all(FLERR, "pair {} dashpot needs 'comm_modify vel yes' (velocities of ghost beads)", force->pair_style);
+      error->all(FLERR, "pair {} {} needs 'comm_modify vel yes' (velocities of ghost beads)", force->pair_style,
+                 damping_words[damping]);
   }
   neighbor->add_request(this);
 }
@@ -228,6 +261,42 @@ void PairChainBase::climb(const PeakStep &ps, int i, const double *fc, const dou
   }
 }
 
+// the sensors' samples at the start of a force evaluation: a new sample shifts each owned sensor's
+// (sfc -> sprev -> sprev2, as shift_all the contacts'); sfc restarts at 0 on every owned atom, the pair
+// loop adds half of each contact's force to both its beads
+void PairChainBase::start_sensors(bool new_sample)
+{
+  double *sfc = vec(SFC), *sprev = vec(SPREV), *sprev2 = vec(SPREV2);
+  const int nlocal = atom->nlocal;
+  if (new_sample)
+    for (const tagint id : sensors) {
+      const int i = atom->map(id);
+      if (i < 0 || i >= nlocal) continue;
+      sprev2[i] = sprev[i];
+      sprev[i] = sfc[i];
+    }
+  if (nlocal > 0) memset(sfc, 0, sizeof(double) * nlocal);
+}
+
+// each owned sensor's running peak, smallest force since it and refinement: track_one on the sensors'
+// vectors at the contacts' sample times (no leading pulse, no ladder)
+void PairChainBase::track_sensors(const PeakStep &contacts)
+{
+  PeakStep ps = contacts;
+  ps.lead = false;
+  ps.fpeak = vec(SPEAK);
+  ps.tpeak = vec(STPEAK);
+  ps.fmin = vec(SFMIN);
+  ps.flead = ps.tlead = nullptr;
+  ps.ladder = nullptr;
+  const double *sfc = vec(SFC), *sprev = vec(SPREV), *sprev2 = vec(SPREV2);
+  const int nlocal = atom->nlocal;
+  for (const tagint id : sensors) {
+    const int i = atom->map(id);
+    if (i >= 0 && i < nlocal) track_one(ps, i, sfc, sprev, sprev2);
+  }
+}
+
 // a new sample makes this sample's written contacts the previous one's; a force evaluation that is not
 // a new sample (a run's setup recomputing the state it starts in) writes fc again, fprev stays
 void PairChainBase::start_active(bool new_sample)
@@ -259,6 +328,7 @@ PairChainBase::PeakStep PairChainBase::peak_step(double t, bool new_sample)
   PeakStep ps;
   ps.t = t;
   ps.refine = new_sample && std::isfinite(t_fprev2);
+  ps.lead = lead;
   ps.a = t_fprev2 - t_fprev;    // sample times relative to the middle one
   ps.b = t_fc - t_fprev;
   ps.det = ps.a * ps.b * (ps.b - ps.a);
@@ -341,10 +411,14 @@ template <class Law> double PairChain<Law>::init_one(int i, int j)
   d0[j][i] = d0[i][j];
   // the pair's constants as one record for compute(); cutsq as Pair::init computes it from the cutoff
   const int nt = atom->ntypes + 1;
-  if ((int) table.size() != nt * nt) table.assign(nt * nt, Coef{});
+  if ((int) table.size() != nt * nt) {
+    table.assign(nt * nt, Coef{});
+    cutsq_max = 0.0;
+  }
   Coef cf;
   cf.d0 = d0[i][j];
   cf.cutsq = cf.d0 * cf.d0;
+  cutsq_max = MAX(cutsq_max, cf.cutsq);
   double c[Law::ncoeff];
   for (int m = 0; m < Law::ncoeff; m++) c[m] = coeffs[m][i][j];
   Law::derive(c, cf.c);
@@ -382,7 +456,7 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
   double *fprev2 = vec(FPREV2);
   double *amax = Law::history ? vec(AMAX) : nullptr;
   double *edis = Law::history ? vec(EDIS) : nullptr;
-  double *edash = gamma > 0.0 ? vec(EDASH) : nullptr;
+  double *edash = damped() ? vec(EDASH) : nullptr;
   double **v = atom->v;
 
   if constexpr (Law::history) {
@@ -396,6 +470,8 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
   shift_all(new_sample, fc, fprev, fprev2);
   const PeakStep ps = peak_step(t, new_sample);
   start_active(new_sample);
+  if (!sensors.empty()) start_sensors(new_sample);
+  double *const sfc = sensors.empty() ? nullptr : vec(SFC);
   // every contact is tracked where the lists may not name them all: a neighbour list built this step
   // (atoms may have been sorted or exchanged: act_fprev's local indices are stale), a recomputed sample,
   // the first evaluation
@@ -408,6 +484,7 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
   int **firstneigh = list->firstneigh;
   if (inum == 0) {
     track_peaks(ps, fc, fprev, fprev2);
+    if (sfc) track_sensors(ps);
     return;
   }
   // the list's pairs in its order as one flat array (the same force sums, in the same order), made
@@ -435,23 +512,29 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
   // r = |delx| (sqrt(x * x) == |x| in IEEE arithmetic) and the force is +-F along x. Each type pair's
   // constants are one record (init_one); with one atom type, one record for the whole loop
   const double dt = update->dt;
-  const double gam = gamma;
-  // the dashpot's energy of a step: its power at the step's end (half-step velocities) times dt, as
+  const double coef = damping_coeff;
+  // the damping's energy of a step: its power at the step's end (half-step velocities) times dt, as
   // the reference books it; the evaluation at t = 0 ends no step (a precompressed contact closing
   // at t = 0 has power there, which belongs to no step)
   const bool dash_tally = new_sample && t > 0.0;
-  // the loop is instantiated for (one atom type or several) x (dashpot or not) x (energy/virial tallied
-  // this step or not): none of the three is tested per pair, and a step without tallies computes no
-  // energy (the tallies come every energy sample, 1% of the steps)
-  auto loop = [&](auto one_type, auto dashpot, auto tally) {
+  // the loop is instantiated for (one atom type or several) x (each damping part: damping_<name>.h) x
+  // (energy/virial tallied this step or not): none of the three is tested per pair, and a step without
+  // tallies computes no energy (the tallies come every energy sample, 1% of the steps)
+  auto loop = [&](auto one_type, auto damping_part, auto tally) {
     constexpr bool ONE = decltype(one_type)::value;
-    constexpr bool DASH = decltype(dashpot)::value;
+    using Damping = decltype(damping_part);
     constexpr bool EV = decltype(tally)::value;
     const double(*const __restrict xq)[3] = xx;
     double(*const __restrict fq)[3] = ff;
     double *const __restrict fcq = fc;
-    const Coef &cf1 = tab[nt + 1];    // types 1 1
+    double *const __restrict sfq = sfc;    // (a local: a branch on a register, not on the capture)
+    const Coef &cf1 = tab[nt + 1];         // types 1 1
     const double cutsq1 = cf1.cutsq;
+    // the apart pairs' test before the type pair's record is looked up: no pair's cutsq is above
+    // cutsq_max, so a pair it skips is one its own cutsq skips (the same decisions); with several atom
+    // types (per-contact values: one type per value and residue) the lookup cost 1.4x in loop time
+    // (benchmarks/bench_pair.py parts, the disorder list)
+    const double cutsq_skip = ONE ? cutsq1 : cutsq_max;
     const int npairs = (int) pairs.size();
     const IJ *const pq = pairs.data();
     // the contacts written, into a buffer with room for every pair (a push_back here made the compiler
@@ -461,13 +544,13 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
     int nact = 0;
     for (int p = 0; p < npairs; p++) {
       const int i = pq[p].i, j = pq[p].j;
-      const Coef &cf = ONE ? cf1 : tab[type[i] * nt + type[j]];
-      const double cutsq = ONE ? cutsq1 : cf.cutsq;
       const double delx = xq[i][0] - xq[j][0];
       // most pairs of a chain are apart or just touching: decided on x alone, the same decision as on
       // rsq (rsq = fl(fl(delx^2 + dely^2) + delz^2) >= fl(delx^2): rounding is monotone), with a
       // third of the loads and arithmetic
-      if (delx * delx >= cutsq) continue;
+      if (delx * delx >= cutsq_skip) continue;
+      const Coef &cf = ONE ? cf1 : tab[type[i] * nt + type[j]];
+      const double cutsq = ONE ? cutsq1 : cf.cutsq;
       const double dely = xq[i][1] - xq[j][1];
       const double delz = xq[i][2] - xq[j][2];
       const double rsq = delx * delx + dely * dely + delz * delz;
@@ -485,8 +568,9 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
       double energy = 0.0;
       double *const eptr = (EV && eflag) ? &energy : nullptr;
       double fmag;
+      double am = alpha;    // the largest overlap including this one (laws with history)
       if constexpr (Law::history) {
-        const double am = MAX(amax[left], alpha);
+        am = MAX(amax[left], alpha);
         if (left < nlocal) {
           fmag = Law::force(alpha, am, cf.c, eptr, &edis[left]);
           amax[left] = am;
@@ -496,17 +580,21 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
       } else {
         fmag = Law::force(alpha, alpha, cf.c, EV ? eptr : nullptr, nullptr);
       }
-      if constexpr (DASH) {
-        // dashpot on the overlap rate: d(alpha)/dt = -dr/dt; the total force never pulls
+      if constexpr (Damping::velocity) {
+        // the damping part on the overlap rate: d(alpha)/dt = -dr/dt; the total force never pulls
         const double rate =
             -(delx * (vv[i][0] - vv[j][0]) + dely * (vv[i][1] - vv[j][1]) + delz * (vv[i][2] - vv[j][2])) / r;
         const double felastic = fmag;
-        fmag = MAX(felastic + gam * rate, 0.0);
+        fmag = Damping::template force<Law>(felastic, alpha, am, cf.c, rate, coef);
         if (dash_tally && left < nlocal) edash[left] += (fmag - felastic) * rate * dt;
       }
       if (left < nlocal) {
         fcq[left] = fmag;
         actq[nact++] = left;
+      }
+      if (sfq) {    // each sensor bead reads half of each of its contacts (0.5 F: exact, so the sum is 0.5 (F_l + F_r))
+        if (i < nlocal) sfq[i] += 0.5 * fmag;
+        if (j < nlocal) sfq[j] += 0.5 * fmag;
       }
       // repulsive: pushes i away from j (newton_pair is off: init_style)
       if (collinear) {
@@ -528,33 +616,37 @@ template <class Law> void PairChain<Law>::compute(int eflag, int vflag)
     }
     nact_fc = nact;
   };
-  auto with_tally = [&](auto one_type, auto dashpot) {
+  auto with_tally = [&](auto one_type, auto damping_part) {
     if (evflag)
-      loop(one_type, dashpot, std::true_type{});
+      loop(one_type, damping_part, std::true_type{});
     else
-      loop(one_type, dashpot, std::false_type{});
+      loop(one_type, damping_part, std::false_type{});
   };
-  auto with_dashpot = [&](auto one_type) {
-    if (gam > 0.0)
-      with_tally(one_type, std::true_type{});
-    else
-      with_tally(one_type, std::false_type{});
+  // the damping part of the pair_style line (0, "none", where it names none or a coefficient of 0)
+  const int part = damped() ? damping : 0;
+  auto with_damping = [&](auto one_type) {
+    int k = 0;
+#define GRANCHAIN_DISPATCH(D) \
+  if (k++ == part) with_tally(one_type, D{});
+    GRANCHAIN_DAMPING(GRANCHAIN_DISPATCH)
+#undef GRANCHAIN_DISPATCH
   };
   if (atom->ntypes == 1)
-    with_dashpot(std::true_type{});
+    with_damping(std::true_type{});
   else
-    with_dashpot(std::false_type{});
+    with_damping(std::false_type{});
 
   // (where most contacts carry a force, the contiguous pass over all of them is the cheaper one)
   if (track_all || 2 * (nact_fc + nact_fprev) > nlocal)
     track_peaks(ps, fc, fprev, fprev2);
   else
     track_active(ps, fc, fprev, fprev2);
+  if (sfc) track_sensors(ps);
   if (vflag_fdotr) virial_fdotr_compute();
 }
 
 // the stored energy of the pair and fforce = F / r, for its current overlap and the history of its left
-// bead (lower ID); no dashpot (no velocities here); nothing is written. compute() refuses beads that
+// bead (lower ID); no damping (no velocities here); nothing is written. compute() refuses beads that
 // overlap without being neighbours; single() does not look (pair_write calls it for atoms 0 and 1)
 template <class Law>
 double PairChain<Law>::single(int i, int j, int itype, int jtype, double rsq, double, double, double &fforce)

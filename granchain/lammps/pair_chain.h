@@ -9,11 +9,17 @@
  *                                history alpha_max and yield overlap d_y
  *   pair_style chain/<law> dashpot gamma   adds gamma * d(alpha)/dt while beads overlap (the total
  *                                never pulls); needs 'comm_modify vel yes' and the vector d_edash,
- *                                the dashpot energy of each contact so far
+ *                                the damping energy of each contact so far (damping_dashpot.h)
+ *   pair_style chain/<law> kuwabara_kono A   adds A * dF/dalpha * d(alpha)/dt (Kuwabara-Kono), the same
+ *                                way (damping_kuwabara_kono.h); one damping part at a time
  *   pair_style chain/<law> lead floor F0 [fall R]   tracks the leading pulse (d_flead, d_tlead); fall R: a
  *                                maximum counts once the force has fallen R below it (default 0)
  *   pair_style chain/<law> lead floor F0 ladder P S   also records each contact's crossing-time ladder
  *                                (d2_ladder: P rungs per octave above F0 + floor, the last S kept)
+ *   pair_style chain/<law> sensors K id1 .. idK   tracks the sensor beads' (atom IDs) average force
+ *                                (F_left + F_right) / 2 of their two contacts (a striker's and a wall's
+ *                                count; a missing one is 0) in d_sfc and its running peak like a contact's:
+ *                                d_sprev d_sprev2 d_speak d_stpeak d_sfmin (postprocess.sensors)
  *   pair_style chain/<law> peaks all   runs every contact's peak bookkeeping every step instead of only the
  *                                contacts written at this sample or the previous one (the same numbers,
  *                                slower: a check of the shortcut, tests/test_peak_tracking.py)
@@ -33,8 +39,12 @@
  *   force(alpha, am, d, energy, dissipated)   the force at overlap alpha >= 0 (d from derive) with am = max(alpha_max
  *                                before this step, alpha), the history after it; writes the stored
  *                                energy and the energy dissipated so far where the pointers are not null
- * PairChain<Law> does the rest (neighbour loop, history, dashpot, peaks, communication); the kernel is
- * inlined into its loop. pair_chain.cpp instantiates it for every law and plugin.cpp registers them.
+ *   tangent(alpha, am, d)        dF/dalpha of the branch in force (the damping parts read it)
+ * Each damping part is a header (damping_<name>.h) with a struct: word (its pair_style word), velocity
+ * (its force needs the overlap rate) and force<Law>(felastic, alpha, am, d, rate, coeff), the damped
+ * total, never negative. PairChain<Law> does the rest (neighbour loop, history, damping, peaks,
+ * communication); the kernels are inlined into its loop, which is instantiated for each <Law, Damping>.
+ * pair_chain.cpp instantiates it for every law and plugin.cpp registers them.
  *
  * Contact i joins the beads with IDs i and i+1; its per-contact data live on bead i in per-atom
  * custom vectors created by  fix ID all property/atom d_fc d_fprev d_fprev2 d_fpeak d_tpeak
@@ -61,7 +71,7 @@
  * single() (compute pair/local, pair_write) returns the pair's stored energy and F / r for the pair's
  * current overlap and the history of its left bead (lower ID), am = max(d_amax, alpha) (d_amax as it
  * is on this rank: the owner's value, or a ghost copy from the last forward comm, which lags by at most
- * the step whose alpha the max restores). It has no velocities, so it leaves out the dashpot, and it
+ * the step whose alpha the max restores). It has no velocities, so it leaves out the damping, and it
  * changes no per-atom data.
  */
 
@@ -87,11 +97,14 @@ class PairChainBase : public Pair {
   void unpack_forward_comm(int, int, double *) override;
 
  protected:
-  const bool history;     // the law keeps alpha_max (d_amax, d_edis)
-  const char *vectors;    // the law's per-atom vectors, for the error messages
-  double gamma;           // dashpot coefficient, 0: none
-  bool lead;              // track the leading pulse (d_flead, d_tlead): pair_style ... lead floor F0
-  bool peaks_all;         // 'peaks all': every contact's peak bookkeeping every step (a check of track_active)
+  const bool history;      // the law keeps alpha_max (d_amax, d_edis)
+  const char *vectors;     // the law's per-atom vectors, for the error messages
+  int damping;             // the damping part: its index in GRANCHAIN_DAMPING (0: none)
+  double damping_coeff;    // its coefficient (dashpot gamma N s/m, Kuwabara-Kono A s), 0: none
+  bool damped() const { return damping > 0 && damping_coeff > 0.0; }
+  bool lead;                      // track the leading pulse (d_flead, d_tlead): pair_style ... lead floor F0
+  bool peaks_all;                 // 'peaks all': every contact's peak bookkeeping every step (a check of track_active)
+  std::vector<tagint> sensors;    // 'sensors K id..': the sensor beads' atom IDs
   double lead_floor = 0.0, lead_f0 = 0.0;
   double lead_fall = 0.0;    // the fall below a maximum that makes it the leading pulse: pair_style ... fall R
   int ladder_per_octave = 0, ladder_slots = 0;    // the crossing-time ladder: pair_style ... ladder P S
@@ -100,7 +113,26 @@ class PairChainBase : public Pair {
   double t_fc, t_fprev, t_fprev2;    // times of the current and the two previous samples
   double *amax_comm;                 // the d_amax vector during forward comm
   // the per-atom vectors, by their indices in atom->dvector (looked up once per run in init_style)
-  enum { FC, FPREV, FPREV2, FPEAK, TPEAK, FMIN, FLEAD, TLEAD, AMAX, EDIS, EDASH, NVEC };
+  enum {
+    FC,
+    FPREV,
+    FPREV2,
+    FPEAK,
+    TPEAK,
+    FMIN,
+    FLEAD,
+    TLEAD,
+    AMAX,
+    EDIS,
+    EDASH,
+    SFC,
+    SPREV,
+    SPREV2,
+    SPEAK,
+    STPEAK,
+    SFMIN,
+    NVEC
+  };
   int idx[NVEC];
   double *vec(int k) const { return atom->dvector[idx[k]]; }
   void allocate_base();
@@ -113,11 +145,14 @@ class PairChainBase : public Pair {
   struct PeakStep {
     double t, a, b, det;
     bool refine;
+    bool lead;    // the leading pulse's bookkeeping (flead, tlead): contacts with 'lead', never sensors
     double *fpeak, *tpeak, *fmin, *flead, *tlead;
     double **ladder;    // d2_ladder rows, or null without 'ladder'
   };
   PeakStep peak_step(double t, bool new_sample);
   void track_peaks(const PeakStep &ps, const double *fc, const double *fprev, const double *fprev2);
+  void start_sensors(bool new_sample);
+  void track_sensors(const PeakStep &contacts);
   void climb(const PeakStep &ps, int i, const double *fc, const double *fprev) const;
   // the owned contacts the pair loop wrote a force for at this sample (act_fc) and at the previous one
   // (act_fprev), by local index: every other contact has fc = fprev = 0 and nothing to track
@@ -172,14 +207,14 @@ __attribute__((always_inline)) inline void PairChainBase::track_one(const PeakSt
     // a maximum that rises more than lead_floor above F0 is the leading pulse's candidate
     // (flead = -1: waiting for the fall). At the first one the running peak is that maximum (before
     // it the force only rose), refined as above
-    if (lead && ps.flead[i] == 0.0 && fpeak[i] - lead_f0 > lead_floor) ps.flead[i] = -1.0;
+    if (ps.lead && ps.flead[i] == 0.0 && fpeak[i] - lead_f0 > lead_floor) ps.flead[i] = -1.0;
   }
   // the leading pulse (granchain.peaks.leading_pulse): the candidate is the running peak (a later
   // rise above it moves it on), frozen once the force has fallen lead_fall below it (the force
   // resolution: round-off on a slow rise makes no maximum that counts); flead = 0 until a candidate,
   // -1 while it waits, then the frozen value (> F0 + floor > 0). lead_fall = 0: frozen at the maximum
   // itself (fc <= fpeak always)
-  if (lead && ps.flead[i] < 0.0 && fc[i] <= fpeak[i] - lead_fall) {
+  if (ps.lead && ps.flead[i] < 0.0 && fc[i] <= fpeak[i] - lead_fall) {
     ps.flead[i] = fpeak[i];
     ps.tlead[i] = tpeak[i];
   }
@@ -201,6 +236,7 @@ template <class Law> class PairChain : public PairChainBase {
     double cutsq, d0, c[Law::nconst];    // c: the law's constants (Law::derive)
   };
   std::vector<Coef> table;    // per type pair (itype * (ntypes + 1) + jtype), filled by init_one
+  double cutsq_max = 0.0;     // the largest cutsq in table (init_one): no pair at or beyond it is in contact
   void allocate();
 };
 

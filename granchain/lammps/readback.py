@@ -20,13 +20,16 @@ from granchain.exceptions import GranchainError
 from granchain.peaks import complete_peaks, every_contact_complete, lead_floor, leading_pulse, unreached_as_nan
 from granchain.physics.effects import active_effects
 from granchain.physics.effects import work as effects_work
+from granchain.physics.event import EVENT_FIELDS
 from granchain.postprocess.dumps import read_dump
 from granchain.postprocess.fronts import front_times
 from granchain.postprocess.histories import read_histories
-from granchain.problem import ChainProblem, precompressed_displacements
+from granchain.postprocess.sensors import finish_sensors
+from granchain.problem import ChainProblem, precompressed_displacements, scene_static_forces, scene_static_load
 from granchain.results import ChainSolution
 from granchain.schedule import scene_step_plan, step_times
 from granchain.templates import RESULT_COLUMNS, RESULTS_DUMP, RUN_END_FILE, AtomLayout, atom_layout
+from granchain.templates.run_control import initial_mass_x
 
 #: the most of a results file read (a 10^7-bead chain's peaks.dump is about 2.5 GB)
 RESULTS_LIMIT = 8 * 1024**3
@@ -64,6 +67,28 @@ def read_run_end(work: Path) -> tuple[int, float]:
             "damaged or edited (not what the deck writes): run the deck again"
         )
     return step, t
+
+
+#: the deck's event file ([outputs] event: templates/event.lmp.j2, fix chain/event's vector)
+EVENT_FILE = "event.txt"
+
+
+def event_fields(scene, work: Path) -> dict:
+    """The wall's event (physics.event.EVENT_FIELDS) from the deck's event.txt; {} without [outputs] event."""
+    if not scene.wall_event:
+        return {}
+    p = Path(work) / EVENT_FILE
+    try:
+        ended, end, *values = (float(x) for x in _result_text(p, 4096).split())
+    except ValueError as e:
+        raise ResultsError(f"{p}: not the seven numbers the deck writes at the end of the run ({e})") from None
+    if len(values) != 5 or ended not in (0.0, 1.0) or not np.isfinite([end, *values]).all():
+        raise ResultsError(
+            f"{p}: not the deck's event line (ended 0 or 1, its end time, five finite sums): damaged or edited; "
+            "run the deck again"
+        )
+    out = dict(zip(EVENT_FIELDS[1:], values, strict=True))
+    return {"event_end_time": end if ended else None, **out}
 
 
 def read_results(work: Path) -> dict[str, np.ndarray]:
@@ -131,9 +156,15 @@ def step_times_of(scene) -> np.ndarray:
     return step_times(scene_step_plan(scene), scene.run.timestep)
 
 
+def x0_static(scene) -> np.ndarray:
+    """The beads' x at t = 0: the data file's positions plus any static displacement."""
+    u0 = precompressed_displacements(scene)[0] if scene_static_load(scene) else 0.0
+    return np.asarray(scene.bead_positions, dtype=float) + u0
+
+
 def x1_static(scene) -> float:
-    """x of bead 1 at t = 0 (its static precompression displacement)."""
-    if not scene.effects.precompression:
+    """x of bead 1 at t = 0 (its static displacement under a precompression or gravity)."""
+    if not scene_static_load(scene):
         return 0.0
     return float(precompressed_displacements(scene)[0][0])
 
@@ -169,8 +200,9 @@ def read_solution(
     times = step_times_of(scene)
     # the extra atoms' results (Effect.end_fields: the wall's contact lives on bead N's atom; a striker
     # touches bead 1 unloaded, every other contact starts at F0)
-    static = np.full(res["fpeak"].shape, float(scene.effects.precompression))
-    static[:o] = 0.0
+    static = np.zeros(res["fpeak"].shape)
+    forces = scene_static_forces(scene)  # each contact's own (F0 plus the weight above it)
+    static[o : o + forces.size] = forces
     fmin = res["fmin"] if "fmin" in res else res["fpeak"]  # a deck without d_fmin: nothing is complete
     every = every_contact_complete(res["fpeak"], fmin, res["tpeak"], static)
     ends = {
@@ -178,7 +210,7 @@ def read_solution(
         for effect in active_effects(scene)
         for k, x in effect.end_fields(res["fpeak"], res["tpeak"], res["vx"], o + n - 1, every).items()
     }
-    return ChainSolution(
+    sol = ChainSolution(
         method="verlet",
         timestep=scene.run.timestep,
         steps=total_steps,
@@ -194,7 +226,33 @@ def read_solution(
         impulse_delivered=ld.amplitude * min(ld.duration, end) if ld.is_force else 0.0,
         momentum=float(np.sum(masses * v)) + (scene.striker_mass * float(res["vx"][0]) if o else 0.0),
         **ends,
+        **event_fields(scene, work),
+        **sensor_fields(scene, work, res, o, times),
     )
+    if scene.outputs.sensors:
+        finish_sensors(scene, sol)  # reached and complete, by the contacts' rules
+    return sol
+
+
+#: the sensor beads' d_sfc at the histories' steps (templates/sensors.lmp.j2 writes it)
+SENSORS_DUMP = "sensors.dump"
+
+
+def sensor_fields(scene, work: Path, res: dict[str, np.ndarray], o: int, times: np.ndarray) -> dict:
+    """The sensor beads' running peaks from the results dump (res: d_speak, d_stpeak, d_sfmin on each
+    sensor's atom) and their history (sensors.dump, d_sfc at the histories' steps); {} without sensors."""
+    if not scene.outputs.sensors:
+        return {}
+    atoms = np.asarray(scene.outputs.sensors, dtype=int) - 1 + o  # bead b is atom b + o (0-based: b - 1 + o)
+    out = {
+        "sensor_peak_force": res["speak"][atoms],
+        "sensor_time_of_peak": res["stpeak"][atoms],
+        "sensor_force_min_after_peak": res["sfmin"][atoms],
+    }
+    if scene.outputs.history_interval is not None:  # the deck dumps d_sfc only then (a companion run: not)
+        dd = read_dump(Path(work) / SENSORS_DUMP, times, columns=("d_sfc",))
+        out.update(sensor_history_time=dd.time, sensor_history_force=dd.columns["d_sfc"])
+    return out
 
 
 def peak_fields(scene, work: Path, res: dict[str, np.ndarray], o: int) -> dict[str, np.ndarray]:
@@ -204,7 +262,7 @@ def peak_fields(scene, work: Path, res: dict[str, np.ndarray], o: int) -> dict[s
     n, f0 = scene.chain.beads, scene.effects.precompression
     _check_finite_peaks(work, res)
     fpeak = res["fpeak"][o : o + n - 1]
-    tpeak = unreached_as_nan(fpeak, res["tpeak"][o : o + n - 1], f0)
+    tpeak = unreached_as_nan(fpeak, res["tpeak"][o : o + n - 1], scene_static_forces(scene)[: n - 1])
     # the smallest force since each peak (a deck without d_fmin: no peak counts as complete)
     fmin = res["fmin"][o : o + n - 1] if "fmin" in res else fpeak
     if "flead" in res:
@@ -214,7 +272,10 @@ def peak_fields(scene, work: Path, res: dict[str, np.ndarray], o: int) -> dict[s
     ladder, front = read_ladder(work), np.full(n - 1, np.nan)
     if ladder is not None:  # a precompressed chain's deck
         ladder = ladder[o : o + n - 1]
-        front = front_times(ladder, flead, f0, lead_floor(scene))
+        # the pair style's ladder climbs from its one static force (the deck's lead_static: F0, under
+        # gravity the largest, the wall's)
+        lead_static = float(np.max(scene_static_forces(scene), initial=0.0))
+        front = front_times(ladder, flead, lead_static, lead_floor(scene))
     else:
         ladder = np.zeros((0, 0))
     return {
@@ -269,7 +330,9 @@ def energy_fields(scene, work: Path) -> dict[str, np.ndarray]:
             dx = np.where(et > ld.duration, x1_end - x1_0, dx)
         work_done = work_done + ld.amplitude * dx
     xn = col.get("xN", x1)  # bead N's x where an effect needs it (energy_columns)
-    work_done = work_done + effects_work(ChainProblem.from_scene(scene), x1 - x1_0, xn - xn[0])
+    mx = col.get("mx")  # the moving atoms' sum of m_i x_i where a body force needs it
+    dx_mass = 0.0 if mx is None else mx - (mx[0] if et[0] == 0.0 else initial_mass_x(scene, x0_static(scene)))
+    work_done = work_done + effects_work(ChainProblem.from_scene(scene), x1 - x1_0, xn - xn[0], dx_mass)
     return {"energy_time": et, "kinetic": ke, "potential": pe, "dissipated": ed, "work": work_done}
 
 
@@ -291,7 +354,7 @@ def snapshot_fields(scene, work: Path, times: np.ndarray, o: int) -> dict[str, n
     n, snaps = scene.chain.beads, scene.outputs.snapshots
     s_u, s_v, s_f = [], [], []
     u_static = np.zeros(n)
-    if scene.effects.precompression:
+    if scene_static_load(scene):
         u_static = precompressed_displacements(scene)[0]
     for k in range(len(snaps)):
         dd = read_dump(work / f"snapshot_{k}.dump", times)

@@ -1,6 +1,6 @@
 """Estimates from the paper's models that the planner, the deck, the peak floors and the regimes need
 before anything runs: the step load a loading acts like, the largest contact force to expect, the
-stiffest tangent of a contact and the highest frequency (and dashpot decay rate) of the chain.
+stiffest tangent of a contact and the highest frequency (and damping decay rate) of the chain.
 
 Every function reads a scene (granchain.scene.Scene) for its numbers; none imports the scene.
 linearised_first_maximum solves the precompressed chain's small-amplitude equations exactly (its modes)
@@ -31,8 +31,13 @@ def step_equivalent(scene) -> tuple[float, float] | None:
         return ld.amplitude, ld.duration
     if ld.kind != "striker":
         return None
-    linear = scene.contact.law_class.loading_is_linear()  # the bilinear loading line
-    a = models.piston_step_amplitude(ld.velocity, scene.stiffness, scene.mass, scene.diameter, linear=linear)
+    # the front's F = k alpha^n onset (ContactLaw.loading_exponent: Hertz 3/2, a loading line 1); with
+    # per-contact values (a power law's lists) the largest A over the contacts': the planner's
+    # estimates bound the force from above, and the striker's front meets each contact's law
+    laws = {(scene.stiffness, float(scene.law.loading_exponent()))}
+    if scene.contact.coefficients.varies:
+        laws = {(float(law.k), float(law.loading_exponent())) for law in scene.contact_laws}
+    a = max(models.piston_step_amplitude(ld.velocity, k, scene.mass, scene.diameter, n) for k, n in laws)
     return a, scene.striker_mass * ld.velocity / a
 
 
@@ -61,9 +66,9 @@ def _tangent(law, force: float) -> np.ndarray:
 
 
 def damping_rate(scene) -> float:
-    """The fastest decay rate (1/s) a dashpot gives any mode: the Gershgorin bound of M^-1/2 C M^-1/2
-    (see highest_frequency); 0 without a dashpot."""
-    return highest_frequency(scene, return_damping=True) if scene.effects.dashpot else 0.0
+    """The fastest decay rate (1/s) the scene's damping gives any mode: the Gershgorin bound of
+    M^-1/2 C M^-1/2 (see highest_frequency); 0 without a damping part that depends on velocity."""
+    return highest_frequency(scene, return_damping=True) if scene.damping.velocity_dependent else 0.0
 
 
 def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
@@ -76,7 +81,7 @@ def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
     exactly omega_max = 2 sqrt(k_t / m) (the linear chain's cut-off). Every effect enters where it acts:
     per-bead masses and pair stiffnesses (taper, materials), the wall (an infinite mass; its contact is
     stiffer, k_w, and sees the reflected wave, up to twice the force), a striker (its mass and pair
-    stiffness on bead 1), precompression (every contact carries F0 on top of the wave), a dashpot (the
+    stiffness on bead 1), precompression (every contact carries F0 on top of the wave), damping (the
     overdamped modes decay at up to the Gershgorin bound of M^-1/2 C M^-1/2, and an explicit integrator
     must resolve that rate like a frequency). Each effect says what it changes
     (granchain.physics.effects: chain_bounds along the chain, end_bounds at its ends). No contact's
@@ -94,7 +99,7 @@ def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
         law=scene.law.per_contact(n - 1),
     )
     active = active_effects(scene)
-    for effect in active:  # along the chain: masses, radii, laws, the force level, the dashpot
+    for effect in active:  # along the chain: masses, radii, laws, the force level, the damping
         effect.chain_bounds(scene, b)
     m = b.mass
     # no contact carries more than the run watch lets it (watched_force): on a taper's micron beads the
@@ -105,8 +110,10 @@ def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
     # neighbours as (stiffness, neighbour mass) on each side; a missing neighbour adds nothing
     b.kl, b.ml = np.concatenate(([0.0], kt)), np.concatenate(([np.inf], m[:-1]))
     b.kr, b.mr = np.concatenate((kt, [0.0])), np.concatenate((m[1:], [np.inf]))
-    b.gl = np.where(np.arange(n) > 0, b.gamma, 0.0)
-    b.gr = np.where(np.arange(n) < n - 1, b.gamma, 0.0)
+    # the damping matrix's entries: each contact's viscous coefficient (a dashpot's gamma, Kuwabara-Kono's
+    # A k_t), none on a missing neighbour
+    c = np.broadcast_to(np.asarray(b.viscous(kt), dtype=float), (n - 1,))
+    b.gl, b.gr = np.concatenate(([0.0], c)), np.concatenate((c, [0.0]))
     for effect in active:  # the ends: a wall's contact, a striker's mass and contact
         effect.end_bounds(scene, b)
     kl, ml, kr, mr, gl, gr, extra = b.kl, b.ml, b.kr, b.mr, b.gl, b.gr, b.extra
@@ -122,7 +129,7 @@ def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
     if "striker" in extra and max(math.sqrt(extra["striker"]), 0.0) > omega:
         omega, where, held_here = math.sqrt(extra["striker"]), "the striker", False
     if damp[i] > np.sqrt(rows[i]):
-        where += f" (the dashpot's decay rate {damp[i]:.3g} 1/s)"
+        where += f" (the {b.damping.noun}'s decay rate {damp[i]:.3g} 1/s)"
     elif "wall" in extra and i == n - 1:
         where += " (on the wall)"
     if held_here:

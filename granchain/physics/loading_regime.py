@@ -7,8 +7,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from granchain.physics import models
 from granchain.physics.estimates import step_equivalent  # the one striker-as-a-step rule
+from granchain.physics.laws.power import power_impact
 
 #: Hertz chains: a load is short below this fraction of the crossover time T_c and long above the
 #: multiple. T_c is the corner of Fig. 3's master curve, the loading time at which Eq. 8's peak
@@ -30,7 +33,7 @@ class LoadingRegime:
     """Which of the paper's loading regimes a scene is in, expected from the scene alone."""
 
     regime: str  # "short", "long" or "transition"
-    ratio: float  # T / T_c (Hertz) or T / t_c (bilinear); 0 for a velocity kick
+    ratio: float  # T / T_c (a Hertz onset) or T / t_c (a loading line, a power law); 0 for a velocity kick
     text: str  # how it was decided, with the numbers
 
 
@@ -61,7 +64,7 @@ def loading_regime(scene) -> LoadingRegime:
     load = ""
     if ld.kind == "striker":
         load = f"the striker (M = {scene.striker_mass / scene.mass:.3g} m) pushes like a step A = {amp:.3g} N, "
-    if not scene.contact.law_class.loading_is_linear():  # Hertz; Thornton by its elastic (Hertz) onset
+    if scene.contact.law_class.hertz_onset:  # Hertz; Thornton by its elastic (Hertz) onset
         m, d, k = scene.mass, scene.diameter, scene.stiffness
         f_short = models.short_load_peak_force(amp * dur, m, scene.e_star, scene.r_star)
         f_long = models.solitary_wave_peak_force(models.front_speed_upper(amp, k, m, d), k, m, d)
@@ -72,8 +75,29 @@ def loading_regime(scene) -> LoadingRegime:
             f"T_c = {dur / ratio / scene.tau:.3g} tau, where Eq. 8 meets Eq. 15)"
         )
         return LoadingRegime(regime, ratio, text)
-    t_c = bilinear_contact_time(scene)
+    if scene.contact.law_class.loading_is_linear():
+        t_c = bilinear_contact_time(scene)
+        how = "pi sqrt(m/2k)"
+    else:
+        t_c = power_contact_time(scene, amp)
+        how = "two beads' F = K alpha^n impact at the front's bead speed v = D A / (m c), c of Eq. 19"
     ratio = dur / t_c
     regime, rule = _regime_of(ratio, BILINEAR_SHORT_BELOW, BILINEAR_LONG_ABOVE, "t_c")
-    text = f"{regime} load: {load}T = {ratio:.3g} t_c ({rule}; t_c = pi sqrt(m/2k) = {t_c:.3g} s)"
+    text = f"{regime} load: {load}T = {ratio:.3g} t_c ({rule}; t_c = {how} = {t_c:.3g} s)"
     return LoadingRegime(regime, ratio, text)
+
+
+def power_contact_time(scene, amplitude: float) -> float:
+    """t_c of a law without a Hertz onset (the power law F = K alpha^n): the two-body contact time
+    (power_impact, m* = m/2) at the bead speed behind a long load's front, v = D A / (m c) (Eq. 12)
+    with c the front speed of Eq. 19 on that law (models.power_front_speed). The contact time depends
+    on v unless n = 1, where it is the loading line's pi sqrt(m/2k). With per-contact n the smallest
+    over the contacts: the shortest contact time is the first a load outlasts (long sooner)."""
+    laws = scene.contact_laws if scene.contact.coefficients.varies else [scene.law]
+    m, d = scene.mass, scene.diameter
+    times = []
+    for law in laws:
+        k, n = float(law.k), float(np.max(law.loading_exponent()))
+        v = d * amplitude / (m * models.power_front_speed(amplitude, k, n, m, d))
+        times.append(power_impact(k, n, m / 2.0, v)["duration"])
+    return min(times)

@@ -80,6 +80,20 @@ def solitary_wave_speed(peak_force: float, k: float, mass: float, diameter: floa
     return NESTERENKO_SPEED_CONSTANT * diameter * k ** (1 / 3) * peak_force ** (1 / 6) / math.sqrt(mass)
 
 
+def power_solitary_wave_speed(peak_force: float, k: float, exponent: float, mass: float, diameter: float) -> float:
+    """Nesterenko's solitary wave on an uncompressed chain of F = k alpha^n (n > 1; Nesterenko 2001,
+    Sec. 1.2): V_s = sqrt(2/(n+1)) D k^(1/(2n)) F_m^((n-1)/(2n)) / sqrt(m), the long-wavelength
+    approximation (its largest overlap alpha_m = (F_m/k)^(1/n): V_s^2 = 2/(n+1) D^2 (k/m) alpha_m^(n-1);
+    Hertz's 2/sqrt(5) at n = 3/2). The scaling V ~ F^((n-1)/(2n)) holds for the discrete chain
+    exactly (the equations of motion scale), the constant approximately. At n = 1 the chain is linear:
+    no solitary wave, and the speed is the sound speed D sqrt(k/m), which the formula gives there
+    (the exponent of F is 0, nothing divides by n - 1)."""
+    n = float(exponent)
+    return (
+        math.sqrt(2.0 / (n + 1.0)) * diameter * k ** (0.5 / n) * peak_force ** ((n - 1.0) / (2.0 * n)) / math.sqrt(mass)
+    )
+
+
 def solitary_wave_peak_force(speed: float, k: float, mass: float, diameter: float) -> float:
     """Inverse of :func:`solitary_wave_speed`: F_m = m^3 V_s^6 / ((2/sqrt5)^6 D^6 k^2)."""
     return mass**3 * speed**6 / (NESTERENKO_SPEED_CONSTANT**6 * diameter**6 * k**2)
@@ -272,16 +286,26 @@ def linear_sound_speed(k: float, mass: float, diameter: float) -> float:
     return diameter * math.sqrt(k / mass)
 
 
-def piston_step_amplitude(velocity: float, k: float, mass: float, diameter: float, linear: bool = False) -> float:
-    """The step load A a piston at speed V acts like: behind a long-load front the beads move at
-    v = D A / (m c) (Eq. 12); with v = V and the front speed c of Eq. 19 (Hertz,
-    c^2 = A^(1/3) k^(2/3) D^2 / m, so c = ((m V / D)^(1/3) k^(2/3) D^2 / m)^(3/5)) or c = D sqrt(k/m)
-    (linear loading line), A = m V c / D."""
-    if linear:
+def piston_step_amplitude(velocity: float, k: float, mass: float, diameter: float, exponent: float = 1.5) -> float:
+    """The step load A a piston at speed V acts like on a chain of F = k alpha^n (n = `exponent`):
+    behind a long-load front the beads move at v = D A / (m c) (Eq. 12); with v = V and the front
+    speed of Eq. 19, c^2 = D^2 (A / alpha_A) / m with alpha_A = (A / k)^(1/n) the static overlap under
+    A (Hertz: c^2 = A^(1/3) k^(2/3) D^2 / m), so c = ((m V / D)^((n-1)/n) k^(1/n) D^2 / m)^(n/(n+1))
+    (Hertz: ((m V / D)^(1/3) k^(2/3) D^2 / m)^(3/5); n = 1, a linear loading line: D sqrt(k/m)),
+    A = m V c / D."""
+    n = float(exponent)
+    if n == 1.0:
         c = linear_sound_speed(k, mass, diameter)
     else:
-        c = ((mass * velocity / diameter) ** (1 / 3) * k ** (2 / 3) * diameter**2 / mass) ** 0.6
+        c = ((mass * velocity / diameter) ** ((n - 1.0) / n) * k ** (1.0 / n) * diameter**2 / mass) ** (n / (n + 1.0))
     return mass * velocity * c / diameter
+
+
+def power_front_speed(amplitude: float, k: float, exponent: float, mass: float, diameter: float) -> float:
+    """Eq. 19 on a chain of F = k alpha^n: c = D sqrt((A / alpha_A) / m), alpha_A = (A / k)^(1/n) the
+    static overlap under A (the secant stiffness; Hertz's c^l, D sqrt(k/m) at n = 1)."""
+    n = float(exponent)
+    return diameter * math.sqrt(amplitude ** ((n - 1.0) / n) * k ** (1.0 / n) / mass)
 
 
 def long_load_bilinear(

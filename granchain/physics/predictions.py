@@ -9,12 +9,15 @@ from typing import NamedTuple
 
 from granchain.physics import materials as mat
 from granchain.physics import models
+from granchain.physics.damping import DAMPING
+from granchain.physics.effects.gravity import scene_static_forces
 from granchain.physics.laws import LAWS
-from granchain.physics.laws.base import EFFECT_DOMAINS
+from granchain.physics.laws.base import EFFECT_DOMAINS, two_bodies
 from granchain.physics.loading_regime import loading_regime
 from granchain.physics.models import leading_peaks_exponential, transition_contact
 
 __all__ = [
+    "DAMPING_MODEL_DOMAINS",
     "EFFECT_DOMAINS",
     "MODEL_DOMAINS",
     "SCENE_QUANTITIES",
@@ -61,9 +64,18 @@ class Applicability(NamedTuple):
 #: Quantities of the scene itself (not models): they always apply.
 SCENE_QUANTITIES = frozenset({"tau", "impulse", "loading_time_over_tau", "amplitude"})
 
+#: A vertical chain's local sound speed c0(i) at its top and bottom contacts ([gravity]): each
+#: contact's static force differs, so the linearised chain's speed does (local_sound_speeds)
+LOCAL_SPEEDS = {"local_sound_speed_top": 0, "local_sound_speed_bottom": -1}
+
 #: Every model: (contact law, what it needs: ContactLaw.model_domains, from the law registry).
 MODEL_DOMAINS: dict[str, tuple[str, str]] = {
     n: (name, needs) for name, cls in LAWS.items() for n, needs in cls.model_domains.items()
+}
+
+#: Every damping part's two-body model: (damping part, its two-body setup: DampingPart.model_domains)
+DAMPING_MODEL_DOMAINS: dict[str, tuple[str, str]] = {
+    n: (name, needs) for name, cls in DAMPING.items() for n, needs in cls.model_domains.items()
 }
 
 #: Models whose value is a contact within the chain, so needs its length: on a chain of beads = "auto"
@@ -101,8 +113,13 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
     """
     if name in SCENE_QUANTITIES:
         return Applicability(True, "a quantity of the scene itself, not a model")
+    if name in DAMPING_MODEL_DOMAINS:
+        return _damping_model_applies(name, scene)
+    if name in LOCAL_SPEEDS:
+        return _local_speed_applies(scene, LOCAL_SPEEDS[name])
     if name not in MODEL_DOMAINS:
-        raise ValueError(f"{name!r}: no such model; known: {', '.join([*SCENE_QUANTITIES, *MODEL_DOMAINS])}")
+        known = [*SCENE_QUANTITIES, *MODEL_DOMAINS, *DAMPING_MODEL_DOMAINS]
+        raise ValueError(f"{name!r}: no such model; known: {', '.join(known)}")
     law, needs = MODEL_DOMAINS[name]
     if name in NEEDS_THE_LENGTH and scene.chain.beads is None:
         return Applicability(
@@ -154,10 +171,11 @@ def _contact_model_applies(law: str, scene) -> Applicability:
         why_not.append(f"a {law} model; this chain's contact law is {scene.contact.law}")
     if scene.per_bead:
         why_not.append("the beads differ: a closed form of the nominal bead pair (bead 1's radius and material)")
-    if scene.effects.dashpot:
-        why_not.append(f"viscous dashpot (gamma = {scene.effects.dashpot:g} N s/m)")
+    if scene.damping.velocity_dependent:
+        why_not.append(scene.damping.words(scene.damping_coefficient))
     if scene.effects.precompression:
         why_not.append(f"static precompression F0 = {scene.effects.precompression:g} N")
+    why_not += _under_gravity(scene)
     if why_not:
         return Applicability(False, "; ".join(why_not))
     return Applicability(True, "the nominal bead pair's contact")
@@ -170,8 +188,9 @@ def _effect_model_applies(law: str, needs: str, scene) -> Applicability:
     why_not = []
     if scene.contact.law != law:
         why_not.append(f"a {law} model; this chain's contact law is {scene.contact.law}")
-    if scene.effects.dashpot:
-        why_not.append(f"viscous dashpot (gamma = {scene.effects.dashpot:g} N s/m)")
+    if scene.damping.velocity_dependent:
+        why_not.append(scene.damping.words(scene.damping_coefficient))
+    why_not += _under_gravity(scene)
     if needs in ("precompressed", "weakly_nonlinear"):
         inside = _precompressed_chain(law, needs, scene, why_not)
         if inside and not why_not:
@@ -183,6 +202,25 @@ def _effect_model_applies(law: str, needs: str, scene) -> Applicability:
     if why_not:
         return Applicability(False, "; ".join(why_not))
     return Applicability(True, "the scene is inside the model's domain")
+
+
+def _damping_model_applies(name: str, scene) -> Applicability:
+    """Applicability of a damping part's two-body model (DAMPING_MODEL_DOMAINS): the scene has that part,
+    the model's two-body setup and no precompression, and the impact is inside the model's own domain
+    (DampingPart.model_domain, with its numbers: Kuwabara-Kono's small damping)."""
+    part, needs = DAMPING_MODEL_DOMAINS[name]
+    why_not = []
+    if scene.damping.name != part:
+        has = scene.damping.words(scene.damping_coefficient)
+        why_not.append(f"a model of {DAMPING[part].description}; this scene has {has}")
+    if scene.effects.precompression:
+        why_not.append(f"static precompression F0 = {scene.effects.precompression:g} N")
+    why_not += _two_body_setup(needs, scene)
+    if why_not:
+        return Applicability(False, "; ".join(why_not))
+    impact = two_bodies(scene)
+    applies, reason = scene.damping.model_domain(name, scene.damping_coefficient, impact, scene.loading.velocity)
+    return Applicability(applies, reason or "the scene is inside the model's domain")
 
 
 #: what each two-body impact needs of the scene: (beads, loading kind, a far-end wall), and in words
@@ -274,15 +312,16 @@ def _outside_the_papers_chain(scene) -> list[str]:
             labels = dict.fromkeys(mat.material_label(e) for e in scene.chain.materials)
             differ.append(f"materials {', '.join(sorted(labels))}")
         why_not.append(f"the beads differ ({'; '.join(differ)}): the paper's models are for a monodisperse chain")
-    if scene.effects.dashpot:
+    if scene.damping.velocity_dependent:
         why_not.append(
-            f"viscous dashpot (gamma = {scene.effects.dashpot:g} N s/m): the paper's models have no viscous dissipation"
+            f"{scene.damping.words(scene.damping_coefficient)}: the paper's models have no viscous dissipation"
         )
     if scene.effects.precompression:
         why_not.append(
             f"static precompression F0 = {scene.effects.precompression:g} N: the paper's models are for an "
             "uncompressed chain (a precompressed chain carries other waves, ref. 9)"
         )
+    why_not += _under_gravity(scene)
     ld = scene.loading
     if ld.kind == "striker":
         ratio = scene.striker_mass / scene.mass
@@ -297,6 +336,69 @@ def _outside_the_papers_chain(scene) -> list[str]:
     return why_not
 
 
+def _under_gravity(scene) -> list[str]:
+    """Why a model of a chain of one static force (none, or F0 on every contact) is outside its domain
+    on a vertical chain: each contact carries the weight above it."""
+    if not scene.effects.gravity:
+        return []
+    forces = scene_static_forces(scene)
+    return [
+        f"gravity g = {scene.effects.gravity:g} m/s^2: each contact carries its own static force, the weight "
+        f"above it{' plus F0' if scene.effects.precompression else ''} ({forces[0]:.3g} N at contact 1 to "
+        f"{forces[-1]:.3g} N on the wall); the model is for one static force on every contact"
+    ]
+
+
+def local_sound_speeds(scene):
+    """c0(i) = a_i sqrt(k_lin(i) / m_i) of each bead-bead contact of a vertical chain: k_lin(i) the
+    slope of its law's virgin curve at its static force F_i (Hertz n K^(1/n) F^((n-1)/n), n = 3/2),
+    a_i the centres' distance there, m_i the mean of its two beads' masses (Nesterenko 2001, Sec. 1.1,
+    contact by contact: the long-wave speed of the chain linearised about each contact's load)."""
+    import numpy as np
+
+    forces = scene_static_forces(scene)[:-1]
+    law = scene.law.per_contact(scene.n_contacts) if scene.n_contacts else scene.law
+    k_lin = np.asarray(law.loading_stiffness(forces), dtype=float)
+    r = np.asarray(scene.bead_radii, dtype=float)
+    m = np.asarray(scene.bead_masses if scene.per_bead else np.full(r.size, scene.mass), dtype=float)
+    spacing = r[:-1] + r[1:] - np.asarray(law.static_overlap(forces), dtype=float)
+    return spacing * np.sqrt(k_lin / (0.5 * (m[:-1] + m[1:])))
+
+
+def _local_speed_applies(scene, contact: int) -> Applicability:
+    """c0(i) holds for a perturbation small against the contact's static force (weakly_nonlinear_ratio
+    of it, as c0 under precompression): the expected dynamic force against it, with the numbers."""
+    from granchain.physics.estimates import expected_peak_force
+
+    if not scene.effects.gravity or not scene.n_contacts:
+        return Applicability(False, "no gravity: a chain of one static force (precompressed_sound_speed)")
+    f_static = float(scene_static_forces(scene)[:-1][contact])
+    force = expected_peak_force(scene)
+    ratio, limit = force / f_static, models.weakly_nonlinear_ratio()
+    numbers = (
+        f"the expected dynamic force {force:.3g} N is {ratio:.3g} times the contact's static force {f_static:.3g} N"
+    )
+    if ratio <= limit:
+        return Applicability(
+            True, f"{numbers}: a weakly nonlinear wave (c0 within {models.SOUND_SPEED_RTOL:g} below {limit:.3g})"
+        )
+    return Applicability(
+        False,
+        f"outside the model's domain: {numbers}, not small against it (c0(i) is the speed of a perturbation "
+        f"small against the contact's static force, within {models.SOUND_SPEED_RTOL:g} below {limit:.3g} of it)",
+    )
+
+
+def _gravity_predictions(scene) -> list[Prediction]:
+    """A vertical chain's local sound speed at its top and bottom contacts (local_sound_speeds)."""
+    if not scene.effects.gravity or not scene.n_contacts:
+        return []
+    c0 = local_sound_speeds(scene)
+    equation = "c0(i) = a_i sqrt(k_lin(F_i)/m), k_lin = n K^(1/n) F_i^((n-1)/n), F_i = F0 + g sum_(j<=i) m_j"
+    valid = "a perturbation small against the contact's static force (the weight above it, plus F0)"
+    return [Prediction(name, float(c0[i]), "m/s", equation, valid) for name, i in LOCAL_SPEEDS.items()]
+
+
 def predict(scene) -> list[Prediction]:
     """Predictions for this scene (SI), nondimensional forms where the paper gives them, each with
     whether it applies to the scene (applies, applies_reason: see applicability)."""
@@ -308,7 +410,8 @@ def predict(scene) -> list[Prediction]:
 
 
 def _predict(scene) -> list[Prediction]:
-    """The scene's own quantities (Eqs. 4, 7), then the models of its contact law (ContactLaw.predictions)."""
+    """The scene's own quantities (Eqs. 4, 7), then the models of its contact law (ContactLaw.predictions)
+    and of its damping part's two-body impact (DampingPart.predictions)."""
     ld = scene.loading
     impulse = scene.input_impulse
     out: list[Prediction] = [
@@ -323,8 +426,14 @@ def _predict(scene) -> list[Prediction]:
         ),
     ]
     if ld.is_force:
-        out.append(Prediction("loading_time_over_tau", ld.duration / scene.tau, "-", "T / tau (Eq. 7)", "always"))
+        out.append(Prediction("loading_time_over_tau", ld.duration / scene.tau, "1", "T / tau (Eq. 7)", "always"))
         out.append(
             Prediction("amplitude", ld.amplitude, "N", "Eq. 4", "always", nondim=ld.amplitude / scene.force_scale)
         )
-    return out + [Prediction(**fields) for fields in scene.contact.law_class.predictions(scene)]
+    out += [Prediction(**fields) for fields in scene.contact.law_class.predictions(scene)]
+    out += _gravity_predictions(scene)
+    impact = two_bodies(scene)
+    if impact is None:
+        return out
+    damping = scene.damping.predictions(scene.damping_coefficient, impact, scene.loading.velocity)
+    return out + [Prediction(**fields) for fields in damping]

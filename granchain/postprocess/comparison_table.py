@@ -11,7 +11,10 @@ import numpy as np
 from granchain.integrators import integrator
 from granchain.peaks import REACHED_FRACTION
 from granchain.physics.effects import unbalanced_forces
+from granchain.physics.effects.gravity import scene_static_forces
 from granchain.physics.predictions import applicability, predict
+from granchain.postprocess.observables import END_PEAKS, OBSERVABLES
+from granchain.postprocess.sensors import SENSOR_QUANTITIES, sensor_key, sensor_values
 
 
 @dataclass(frozen=True)
@@ -115,8 +118,7 @@ def _not_measured(sol, obs: dict) -> dict[str, str]:
         f"arrival_time_contact_{w1}": f"the leading pulse did not pass contact {w1} {ended}",
         f"peak_force_contact_{w0}": f"the peak at contact {w0} is not complete {ended}",
         "peak_force_contact_1": f"the peak at contact 1 is not complete {ended}",
-        "wall_peak_force": f"the wave did not reach or pass the wall (its force falling to half its peak) {ended}",
-        "striker_peak_force": f"the striker's contact force did not fall to half its peak {ended}",
+        **{name: f"{e.not_measured} {ended}" for name, e in END_PEAKS.items()},
     }
     out["leading_peak_force_nondim"] = out["leading_peak_force"]
     out["wave_speed"] = (
@@ -128,29 +130,41 @@ def _not_measured(sol, obs: dict) -> dict[str, str]:
     return out
 
 
-def _end_peak(scene, sol, who: str) -> float | None:
-    """A striker's or a wall's contact peak (who: "striker", "wall") where it is complete, else None:
-    a contact the wave has not reached holds round-off (1e-218 N), one it has not passed its running
-    maximum; neither is a peak."""
-    value, done = getattr(sol, f"{who}_peak_force"), getattr(sol, f"{who}_peak_complete")
+def _end_peak(scene, sol, name: str) -> float | None:
+    """An end contact's peak (name: an END_PEAKS row) where it is complete, else None: a contact the
+    wave has not reached holds round-off (1e-218 N), one it has not passed its running maximum;
+    neither is a peak."""
+    obs = END_PEAKS[name]
+    value, done = getattr(sol, name), getattr(sol, obs.complete_field)
     if done is None and value is not None:  # a run directory without the flag: reached, at least
         floor = REACHED_FRACTION * float(np.max(sol.peak_force, initial=0.0))
-        static = scene.effects.precompression if who == "wall" else 0.0
+        static = float(scene_static_forces(scene)[-1]) if name == "wall_peak_force" else 0.0  # F0 (+ the weight)
         done = value - static > floor
     return float(value) if done else None
 
 
-#: the rows that are peaks or are measured from peaks' times: each run's peak definition (peak_definition)
+def _end_row(scene, sa, sb, name: str) -> tuple:
+    """compare's row of an end peak (END_PEAKS): its name, unit and the two runs' peaks."""
+    return (name, END_PEAKS[name].unit, _end_peak(scene, sa, name), _end_peak(scene, sb, name))
+
+
+#: what an observable reads that makes it a peak row (Observable.needs)
+_FROM_PEAKS = {"peaks", "leading_pulses", "fronts"}
+
+#: the rows that are peaks or are measured from peaks' times: each run's peak definition (peak_definition);
+#: the registered observables' that read peaks, leading pulses or fronts (peak_rows, at call time)
 PEAK_ROWS = (
-    "leading_peak_force",
-    "leading_peak_force_nondim",
-    "wave_speed",
-    "max_peak_force",
     "peak_force_contact_",
     "arrival_time_contact_",
-    "striker_peak_force",
-    "wall_peak_force",
+    *END_PEAKS,
+    "sensor_",
 )
+
+
+def peak_rows() -> tuple[str, ...]:
+    """The compare rows whose values are peaks or peaks' times (PEAK_ROWS and the registered
+    observables that read them, granchain.postprocess.observables.OBSERVABLES)."""
+    return tuple(name for name, obs in OBSERVABLES.items() if obs.needs & _FROM_PEAKS) + PEAK_ROWS
 
 
 def peak_definition(method: str, scene) -> str:
@@ -177,7 +191,7 @@ def peak_definition(method: str, scene) -> str:
     str
         The definition, in words.
     """
-    if scene.effects.dashpot and integrator(method).peaks_by_overlap:  # the integrator matters only then
+    if scene.damping.velocity_dependent and integrator(method).peaks_by_overlap:  # the integrator matters only then
         return "the elastic force where the overlap turns"
     return "the total force's maximum"
 
@@ -186,7 +200,7 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
     """Rows comparing two RunResults of the same scene (a: e.g. LAMMPS, b: e.g. reference).
 
     Two runs whose peaks are different quantities (peak_definition: RK4 and Verlet on a scene with a
-    dashpot) have their peak rows (PEAK_ROWS) marked "not comparable" with the reason, never compared."""
+    dashpot) have their peak rows (peak_rows) marked "not comparable" with the reason, never compared."""
     scene = b.scene
     oa, ob = a.observables(), b.observables()
     modl = _model_rows(scene, ob)
@@ -201,11 +215,12 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
 
     rows: list[tuple[str, str, float | None, float | None]] = []
     if scene.n_contacts:
+        rows += [  # the registered observables', then the contacts'
+            (name, obs.unit, oa.get(name), ob.get(name))  # dimensionless: "1", as everywhere
+            for name, obs in OBSERVABLES.items()
+            if obs.compared
+        ]
         rows += [
-            ("leading_peak_force", "N", oa["leading_peak_force"], ob["leading_peak_force"]),
-            ("leading_peak_force_nondim", "-", oa["leading_peak_force_nondim"], ob["leading_peak_force_nondim"]),
-            ("wave_speed", "m/s", oa["wave_speed"], ob["wave_speed"]),
-            ("max_peak_force", "N", oa["max_peak_force"], ob["max_peak_force"]),
             ("peak_force_contact_1", "N", peak(sa, 1), peak(sb, 1)),
             (f"peak_force_contact_{w0}", "N", peak(sa, w0), peak(sb, w0)),
             # the front's arrival: the leading pulse's time (peaks.leading_pulse), not the largest peak's
@@ -216,16 +231,17 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
                 _finite(sb.leading_pulse_time[w1 - 1]),
             ),
         ]
-    if scene.loading.kind == "striker":
-        rows.append(("striker_peak_force", "N", _end_peak(scene, sa, "striker"), _end_peak(scene, sb, "striker")))
+    if END_PEAKS["striker_peak_force"].applies(scene) is None:
+        rows.append(_end_row(scene, sa, sb, "striker_peak_force"))
     rows += [
         ("final_kinetic_energy", "J", float(sa.kinetic[-1]), float(sb.kinetic[-1])),
         ("momentum", "N s", sa.momentum, sb.momentum),
     ]
-    if scene.contact.law_class.history or scene.effects.dashpot:
+    if scene.contact.law_class.history or scene.damping.dissipated_vectors:
         rows.append(("dissipated_energy", "J", float(sa.dissipated[-1]), float(sb.dissipated[-1])))
-    if scene.effects.far_end == "wall":
-        rows.append(("wall_peak_force", "N", _end_peak(scene, sa, "wall"), _end_peak(scene, sb, "wall")))
+    if END_PEAKS["wall_peak_force"].applies(scene) is None:
+        rows.append(_end_row(scene, sa, sb, "wall_peak_force"))
+    rows += _sensor_rows(scene, sa, sb)
     why = _missing_reasons(b, sb, ob)
     why_a = _missing_reasons(a, sa, oa)  # a row only the first run lacks says why the first lacks it
     if not np.isclose(sa.end_time, sb.end_time, rtol=1e-9, atol=0.0):
@@ -249,10 +265,11 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
     da, db = peak_definition(sa.method, scene), peak_definition(sb.method, scene)
     if da != db:
         unlike = (
-            f"not comparable: the runs' peaks are different quantities on a scene with a dashpot ({sa.method}: {da}; "
+            f"not comparable: the runs' peaks are different quantities on a scene with a {scene.damping.noun} "
+            f"({sa.method}: {da}; "
             f"{sb.method}: {db}); Verlet on both compares them"
         )
-        peaks = {q for q, *_ in rows if q.startswith(PEAK_ROWS)}
+        peaks = {q for q, *_ in rows if q.startswith(peak_rows())}
         why.update(dict.fromkeys(peaks, unlike))
         why_a.update(dict.fromkeys(peaks, unlike))
         rows = [(q, u, None, None) if q in peaks else (q, u, va, vb) for q, u, va, vb in rows]
@@ -283,7 +300,15 @@ def _missing_reasons(result, sol, obs: dict) -> dict[str, str]:
     why = _not_measured(sol, obs)
     if hasattr(result, "observables_missing"):
         why.update(result.observables_missing())
+    why.update(sensor_values(result.scene, sol)[1])
     return why
+
+
+def _sensor_rows(scene, sa, sb) -> list[tuple[str, str, float | None, float | None]]:
+    """The sensor beads' rows (postprocess.sensors: each sensor's peak and its time), bead by bead."""
+    va, vb = sensor_values(scene, sa)[0], sensor_values(scene, sb)[0]
+    keys = [(sensor_key(q, b), unit) for b in scene.outputs.sensors for q, (unit, _) in SENSOR_QUANTITIES.items()]
+    return [(key, unit, va[key], vb[key]) for key, unit in keys]
 
 
 #: rows whose force is a contact's total force, F0 included on a precompressed chain (peaks.csv's

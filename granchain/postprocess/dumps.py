@@ -18,7 +18,10 @@ MDAnalysis's LAMMPSDUMP reader has quirks; how each is handled here:
   needs ``type`` and keeps only prefixed columns, hence ``v_radius``. read_dump reads columns by
   name, so the extra ones change nothing here (tests/test_dump_readers.py).
 - ``dump_modify format float %.17g`` makes the text exact; ``sort id`` orders atoms by ID.
-- MDAnalysis cannot parse the optional ``ITEM: TIME`` header, so decks do not write it.
+- MDAnalysis cannot parse the optional ``ITEM: TIME`` header (2.11 counts n_atoms + 9 lines a frame
+  and reads the step from the second), so decks do not write it: chain.dump carries each frame's
+  time as a column, ``v_time``, and ``element`` X. Dumps written before those columns read as before
+  (columns by name); granchain.postprocess.chain_dump takes ``v_time`` where it is there.
 """
 
 from __future__ import annotations
@@ -44,10 +47,21 @@ class DumpData:
     columns: dict[str, np.ndarray]  # name -> (frames, atoms), float64
 
 
+def _mdanalysis():
+    """MDAnalysis, imported without the TqdmWarning "IProgress not found" it gives in a notebook
+    without ipywidgets (its progress bars import tqdm.auto; granchain shows none of them): that one
+    warning, only while MDAnalysis is imported; every other warning, and tqdm's elsewhere, stays."""
+    from tqdm import TqdmWarning
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="IProgress not found", category=TqdmWarning)
+        import MDAnalysis
+    return MDAnalysis
+
+
 def read_dump(path: str | Path, times: np.ndarray | None = None, columns=DUMP_COLUMNS) -> DumpData:
     """Read a LAMMPS text dump with MDAnalysis; times[step] gives each frame's time."""
-    import MDAnalysis as mda
-
+    mda = _mdanalysis()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # "Guessed all Masses to 1.0" and friends: see module doc
         u = mda.Universe(str(path), format="LAMMPSDUMP", additional_columns=list(columns), dt=1.0)

@@ -7,7 +7,7 @@ history alpha_max once per accepted step:
 * Verlet raises alpha_max to alpha at the step's end, which is what a LAMMPS pair style does at each
   force evaluation, so the two agree step for step.
 * RK4 freezes alpha_max over its stages (trial points, not states of the trajectory) and raises it
-  after each accepted piece to the maximum of the cubic Hermite interpolant of alpha over the piece,
+  after each accepted piece to the maximum of the quartic interpolant of alpha over the piece,
   so the history misses the true maximum by O(h^4), not O(h^2). With event location a step that
   crosses a kink of the contact law (law.kinks, law.turn_level) is split there, so that no piece
   integrates across a jump in the force's derivatives.

@@ -47,7 +47,7 @@ class LeadingPulse(Observer):
         # a precompressed chain's crossing-time ladder (its wave speed reads the fronts' arrivals off
         # it), as the pair styles: its rungs are multiples of the floor, none without one; it climbs
         # until the leading pulse freezes
-        self.ladder = CrossingLadder(state, lead_floor) if lead_floor > 0.0 and state.f0 else None
+        self.ladder = CrossingLadder(state, lead_floor) if lead_floor > 0.0 and state.problem.precompression else None
         peaks.ladder = self.ladder
         peaks.listeners.append(self.at_maximum)
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from operator import attrgetter
 from typing import Any
 
 import numpy as np
@@ -82,7 +83,7 @@ class PeakTracker(Observer):
     every = 1
 
     def __init__(self, state: ChainState) -> None:
-        self.f0 = state.f0
+        self.static = state.static_force  # each contact's force at rest
         # the chain's own contacts, between a striker's in front (which starts unloaded) and a wall's
         self.chain = slice(state.problem.front, state.n - 1 - (0 if state.free_end else 1))
         self.amax = state.overlap()  # the running peak overlap: the static overlap at t = 0
@@ -110,9 +111,8 @@ class PeakTracker(Observer):
         does with the pair styles' times; complete: every_contact_complete of every contact."""
         chain = self.chain
         self.time_of_peak = np.array(tmax, dtype=float)
-        self.time_of_peak[chain] = unreached_as_nan(peak_force[chain], tmax[chain], self.f0)
-        static = np.full(peak_force.shape, self.f0)
-        static[: chain.start] = 0.0  # a striker touches bead 1 unloaded; a wall carries F0
+        self.time_of_peak[chain] = unreached_as_nan(peak_force[chain], tmax[chain], self.static[chain])
+        static = self.static  # a striker touches bead 1 unloaded; a wall carries F0 and the weight
         return {
             "peak_overlap": self.amax,
             "peak_force": peak_force,
@@ -208,18 +208,19 @@ class ForceSamplePeaks(PeakTracker):
     step: the running maximum of the force samples at step ends, refined by the vertex of the parabola
     through three consecutive samples where the middle one is a local maximum."""
 
+    _samples = staticmethod(attrgetter("fc"))  # the forces tracked: every contact's (reference.sensors: beads')
+
     def __init__(self, state: ChainState) -> None:
         super().__init__(state)
-        n = state.n
-        self.f_now = state.fc.copy()  # the t = 0 sample (nonzero only with precompression)
-        self.f_prev, self.f_prev2 = np.zeros(n - 1), np.zeros(n - 1)
+        self.f_now = self._samples(state).copy()  # the t = 0 sample (nonzero only with precompression)
+        self.f_prev, self.f_prev2 = np.zeros_like(self.f_now), np.zeros_like(self.f_now)
         self.t_now, self.t_prev, self.t_prev2 = 0.0, -math.inf, -math.inf
         self.fpk = self.f_now.copy()
         self.tpk = np.where(self.fpk > 0.0, 0.0, np.nan)
         self.fmin = self.fpk.copy()  # smallest force sample since the peak, as the pair styles
-        self.alpha = np.empty(n - 1)  # work arrays of after_step
+        self.alpha = np.empty(state.n - 1)  # work arrays of after_step
         self.u_left, self.u_right = state.u[:-1], state.u[1:]  # (u changes in place)
-        self.rising = np.empty(n - 1, dtype=bool)
+        self.rising = np.empty(self.f_now.shape, dtype=bool)
 
     @override
     def start(self, state: ChainState) -> None:
@@ -230,12 +231,11 @@ class ForceSamplePeaks(PeakTracker):
 
     @override
     def after_setup(self, state: ChainState) -> None:
-        # the pair styles' setup evaluation: it overwrites the current sample (fc) and tracks it without
-        # refining a maximum (no new sample: the middle sample's neighbours are unchanged)
+        # the pair styles' setup evaluation: overwrites the current sample (fc), tracks it unrefined (no new sample)
         f_now = self.f_now
         if self.ladder is not None:
             self.ladder.climb_samples(self.f_prev, state.fc, self.t_prev, self.t_now)
-        np.copyto(f_now, state.fc)
+        np.copyto(f_now, self._samples(state))
         np.minimum(self.fmin, f_now, out=self.fmin)
         rising = np.greater(f_now, self.fpk, out=self.rising)
         np.copyto(self.fpk, f_now, where=rising)
@@ -246,7 +246,7 @@ class ForceSamplePeaks(PeakTracker):
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
         # the three samples rotate through three arrays (the oldest is overwritten with the new one)
         f_now = self.f_prev2
-        np.copyto(f_now, state.fc)
+        np.copyto(f_now, self._samples(state))
         self.f_prev2, self.f_prev, self.f_now = self.f_prev, self.f_now, f_now
         self.t_prev2, self.t_prev, self.t_now = self.t_prev, self.t_now, t1
         if self.ladder is not None:
@@ -256,10 +256,10 @@ class ForceSamplePeaks(PeakTracker):
         np.maximum(self.amax, self.alpha, out=self.amax)
         np.minimum(self.fmin, f_now, out=self.fmin)
         rising = np.greater(f_now, fpk, out=self.rising)
-        # where the sample rises above the running peak (copyto with where=: no temporaries)
-        np.copyto(fpk, f_now, where=rising)
-        np.copyto(self.tpk, t1, where=rising)
-        np.copyto(self.fmin, f_now, where=rising)
+        if rising.any():  # above the running peak (rare once the front passed: 3 copies of nothing cost more)
+            np.copyto(fpk, f_now, where=rising)
+            np.copyto(self.tpk, t1, where=rising)
+            np.copyto(self.fmin, f_now, where=rising)
         if not math.isfinite(self.t_prev2):
             return False
         # a local maximum in the middle sample: screened on the fall to the last sample first
@@ -405,8 +405,9 @@ class EnergyLedger(Observer):
         if p.amplitude:
             u0 = u[s0] if self.u0_at_load_end is None else self.u0_at_load_end
             w += p.amplitude * (u0 - self.u_init[s0])
+        dx_mass = float(np.dot(state.mass_ke, u - self.u_init))  # (a body force does m_i g dx_i)
         for effect in EFFECTS.values():  # the effects' external forces (precompression's static ones)
-            w += effect.work(p, u[s0] - self.u_init[s0], u[-1] - self.u_init[-1])
+            w += effect.work(p, u[s0] - self.u_init[s0], u[-1] - self.u_init[-1], dx_mass)
         return w
 
     def row(self, state: ChainState, t: float) -> None:
@@ -415,7 +416,7 @@ class EnergyLedger(Observer):
         law, v = state.law, state.v
         ke = 0.5 * float(np.dot(state.mass_ke, v * v))
         pe = float(np.sum(law.energy(state.overlap(), state.alpha_hist)))
-        de = (float(np.sum(law.dissipated(state.alpha_hist))) if law.history else 0.0) + state.dash_energy
+        de = (float(np.sum(law.dissipated(state.alpha_hist))) if law.history else 0.0) + state.damping_energy
         row = (t, ke, pe, de, self.work(state))
         self.rows.append(row)
         for listener in self.listeners:
@@ -441,8 +442,7 @@ class EnergyLedger(Observer):
     @override
     def finish(self, state: ChainState) -> dict[str, Any]:
         e = np.asarray(self.rows)
-        # remove duplicate times (a breakpoint may coincide with a periodic sample)
-        _, keep = np.unique(e[:, 0], return_index=True)
+        _, keep = np.unique(e[:, 0], return_index=True)  # duplicate times: a breakpoint on a periodic sample
         e = e[np.sort(keep)]
         names = ("energy_time", "kinetic", "potential", "dissipated", "work")
         return {name: e[:, i] for i, name in enumerate(names)}
@@ -579,7 +579,7 @@ class EarlyStop(Observer):
         self.every = every
         self.stop_floor = stop_floor
         self.lead_fall = lead_fall
-        self.f0 = state.f0
+        self.static = state.static_force  # each contact's force at rest
         self.back = back
         self.back_max = -math.inf  # the largest sample so far (the deck's max(f_back))
 
@@ -588,13 +588,13 @@ class EarlyStop(Observer):
         passed = [self.passed(state, c) for c in self.contacts]
         if self.back is None:
             return all(passed)
-        now = self.peaks.now_and_peak(state, self.back)[0] - self.f0
+        f0 = self.static[self.back]
+        now = self.peaks.now_and_peak(state, self.back)[0] - f0
         self.back_max = max(self.back_max, now if passed[-1] else 0.0)
-        returned = self.back_max > self.stop_floor - self.f0 and now < PEAK_PASSED_FRACTION * self.back_max
-        return all(passed) and returned
+        return all(passed) and self.back_max > self.stop_floor - f0 and now < PEAK_PASSED_FRACTION * self.back_max
 
     def passed(self, state: ChainState, c: int) -> bool:
         """Whether the wave has passed contact c."""
         now, peak = self.peaks.now_and_peak(state, c)
-        passed = peak > self.stop_floor and now - self.f0 < PEAK_PASSED_FRACTION * (peak - self.f0)
+        passed = peak > self.stop_floor and now - self.static[c] < PEAK_PASSED_FRACTION * (peak - self.static[c])
         return passed and (self.lead_fall <= 0.0 or now <= peak - self.lead_fall)

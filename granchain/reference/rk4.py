@@ -11,11 +11,11 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from granchain.physics.effects.dashpot import dashpot_accel
+from granchain.physics.effects.damping import damped_accel
 from granchain.reference import events
 from granchain.reference.events import Piece, first_kink_crossing
-from granchain.reference.hermite import hermite_max, max1
-from granchain.reference.state import ChainState
+from granchain.reference.hermite import hermite_max_quartic, max1_quartic
+from granchain.reference.state import ChainState, with_body_force
 from granchain.reference.stepping import (
     _ZERO,
     Integrator,
@@ -27,7 +27,7 @@ from granchain.reference.stepping import (
     _subtract,
 )
 
-#: RK4 with event location and no dashpot steps between two stacked (u; v) buffers instead of saving
+#: RK4 with event location and no damping steps between two stacked (u; v) buffers instead of saving
 #: and restoring the state (RK4Integrator._lean_step); False: the plain save-and-restore step (the
 #: tests compare the two bit for bit)
 _LEAN = True
@@ -45,7 +45,7 @@ class RK4Integrator(Integrator):
     Parameters
     ----------
     state : ChainState
-        The run's state (sizes, dashpot).
+        The run's state (sizes, damping).
     timestep : float
         The plan's step: a crossing closer than 1e-6 of it to a piece's start is not split off.
     event_location : bool
@@ -76,12 +76,25 @@ class RK4Integrator(Integrator):
         # handful of values a few ulps apart (the times are sums of steps), each thousands of times
         self.consts: dict[float, tuple[np.ndarray, ...]] = {}
         self.scratch = tuple(np.zeros(()) for _ in range(6))
-        self.vt = np.empty(n) if state.gamma else None  # stage velocities, needed only by the dashpot
-        # the dashpot's forces at the stages: a contact touching and closing counts as closed (the
-        # force just after the touch: dashpot_accel's closing_at_touch)
+        self.vt = np.empty(n) if state.damped else None  # stage velocities, needed only by damping
+        # the damping's forces at the stages: a contact touching and closing counts as closed (the
+        # force just after the touch: damped_accel's closing_at_touch)
+        p = state.problem
         self.dash_accel = (
-            dashpot_accel(state.law, state.inv_m, state.gamma, state.fp, state.alpha_hist, closing_at_touch=True)
-            if state.gamma
+            with_body_force(  # (gravity's weight on every bead too)
+                damped_accel(
+                    p.damping_part,
+                    float(p.damping_coefficient),
+                    state.law,
+                    state.inv_m,
+                    state.fp,
+                    state.alpha_hist,
+                    closing_at_touch=True,
+                ),
+                p,
+                state.inv_m,
+            )
+            if state.damped
             else None
         )
         self.u_save, self.v_save = np.empty(n), np.empty(n)
@@ -89,21 +102,21 @@ class RK4Integrator(Integrator):
         self.history = state.law.history
         self.history_floor: np.ndarray | None = None
         # equal masses (ChainState.net_force): the stages' k are net forces and 1/m is in the factors
-        self.net_force = None if state.gamma else state.net_force
+        self.net_force = None if state.damped else state.net_force
         self.inv_m = state.uniform_inv_m if self.net_force is not None else 1.0
         # a law without history has the same kinks all run (its alpha_max is never written): ask once
         # stages 2-4 evaluate the forces inline (make_accel's parts) at the stage positions ut, ut2
         accel = self.net_force or state.accel
-        self.parts = None if state.gamma else getattr(accel, "parts", None)
+        self.parts = None if state.damped else getattr(accel, "parts", None)
         self.stage_views = ((self.ut[:-1], self.ut[1:]), (self.ut2[:-1], self.ut2[1:]))
         law = state.law
         self.fixed_kinks = None if law.history else (law.kinks(state.alpha_hist), law.turn_level(state.alpha_hist))
         # the lean step (lean_step): (u, v) lives in one of two pairs of buffers, the state's own and a
         # second; a try writes the other pair, which becomes the state's when the try is accepted (a
-        # rejected try leaves the state as it was: nothing to save or restore). Not with a dashpot (its
+        # rejected try leaves the state as it was: nothing to save or restore). Not with damping (its
         # stages update u and v in place). (Stacking u and v as the rows of one (2, N) array to take
         # overlaps and rates in one call costs more: numpy walks the strided views slower than two calls.)
-        self.lean = _LEAN and event_location and not state.gamma
+        self.lean = _LEAN and event_location and not state.damped
         if self.lean:
             self.pairs = ((state.u, state.v), (np.empty(n), np.empty(n)))
             self.pair_views = tuple((u[:-1], u[1:], v[:-1], v[1:]) for u, v in self.pairs)
@@ -143,7 +156,7 @@ class RK4Integrator(Integrator):
             h_sub = t1 - t
             np.copyto(self.u_save, u)
             np.copyto(self.v_save, v)
-            e_save = state.dash_energy
+            e_save = state.damping_energy
             self.rk4(state, h_sub, a_ext)
             a_new, adot_new = np.subtract(u_left, u_right), np.subtract(v_left, v_right)
             piece = Piece(state.alpha_now, state.adot_now, a_new, adot_new, self.u_save, u, h_sub)
@@ -156,7 +169,7 @@ class RK4Integrator(Integrator):
                 raise self.too_many_splits(state, t, h_sub, crossing)
             np.copyto(u, self.u_save)
             np.copyto(v, self.v_save)
-            state.dash_energy = e_save
+            state.damping_energy = e_save
             # the piece starts where the rejected try did, with the same history: its first stage too
             self.rk4(state, s_ev * h_sub, a_ext, same_start=True)
             self.extra_steps += 2  # the rejected try and the split piece
@@ -237,10 +250,10 @@ class RK4Integrator(Integrator):
         """Classical RK4 on (u, v) in place; the external load is constant over the step.
 
         same_start: (u, v) and alpha_max are those of the last call's start (a step split by event
-        location), so its first stage k1v, still in its buffer, is this one's (without a dashpot,
+        location), so its first stage k1v, still in its buffer, is this one's (without damping,
         whose first stage also gives a power): the same numbers without the force evaluation.
         out: (u, v) of the step's end go there instead of into the state's u and v (lean_step; not
-        with a dashpot). overlaps: u[:-1] - u[1:] of the state (its alpha_now, lean_step), which the
+        with damping). overlaps: u[:-1] - u[1:] of the state (its alpha_now, lean_step), which the
         first stage's force evaluation then takes instead of subtracting again (the same numbers).
         once: h is a length seen once (a split piece, the rest of a split step): its factors go into
         scratch 0-d arrays instead of the cache (consts).
@@ -252,7 +265,7 @@ class RK4Integrator(Integrator):
         The step's scalar factors are 0-d arrays, made once per step length (consts): numpy takes a
         Python float operand at about half again the cost of the whole call on a short chain.
         """
-        u, v, gamma = state.u, state.v, state.gamma
+        u, v, damped = state.u, state.v, state.damped
         accel = self.net_force or state.accel
         k1v, k2v, k3v, k4v, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.hv
         consts = None if once else self.consts.get(h)
@@ -260,8 +273,8 @@ class RK4Integrator(Integrator):
             consts = self.factors(h, once)
         half_h, quarter_h2, h_, half_h2, h2_6, h_6 = consts
         add, mul = _add, _multiply
-        if gamma:
-            self.rk4_dashpot(state, h, a_ext, consts)
+        if damped:
+            self.rk4_damped(state, h, a_ext, consts)
             return
         if a_ext and self.net_force is not None:
             a_ext = a_ext / self.inv_m  # the load's force (the k are forces)
@@ -377,8 +390,8 @@ class RK4Integrator(Integrator):
         if a_ext:
             k4v[self.load_bead] += a_ext
 
-    def rk4_dashpot(self, state: ChainState, h: float, a_ext: float, consts: tuple[np.ndarray, ...]) -> None:
-        """rk4 with a dashpot: the stage velocities too (the dashpot force), and its energy."""
+    def rk4_damped(self, state: ChainState, h: float, a_ext: float, consts: tuple[np.ndarray, ...]) -> None:
+        """rk4 with damping: the stage velocities too (the damping force), and its energy."""
         u, v, accel = state.u, state.v, self.dash_accel
         k1v, k2v, k3v, k4v, ut, vt, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.ut, self.vt, self.hv
         half_h, quarter_h2, h_, half_h2, h2_6, h_6 = consts
@@ -408,7 +421,7 @@ class RK4Integrator(Integrator):
         vt += v
         power += accel(ut, k4v, vt)
         k4v[self.load_bead] += a_ext
-        state.dash_energy += h / 6.0 * power  # dashpot energy with the method's own weights
+        state.damping_energy += h / 6.0 * power  # damping energy with the method's own weights
         np.add(k1v, k2v, out=ut)
         ut += k3v
         u += hv
@@ -430,7 +443,9 @@ class RK4Integrator(Integrator):
         turning: np.ndarray | None = None,
     ) -> None:
         """Accept the piece [t0, t1]: its dense output into the state (overlaps and rates at its end,
-        the contacts that turned inside it and their Hermite maxima), and the history raised to them.
+        the contacts that turned inside it and their maxima: the quartic through the ends' overlaps and
+        rates and the start's second derivative, which the first stage k1v still holds: reference
+        .hermite), and the history raised to them.
         turning: the contacts whose rate went from > 0 to <= 0, if the caller screened them already."""
         alpha_old, adot_old = state.alpha_now, state.adot_now
         if turning is None:
@@ -443,10 +458,12 @@ class RK4Integrator(Integrator):
             # arithmetic), the same operations as below: hermite_max's _max_scalar, np.maximum
             h = t1 - t0
             kept, ps, ts = [], [], []
+            k1, inv_m = self.k1v, self.inv_m
             for i in turning.tolist():
                 x1 = alpha_new.item(i)
                 if x1 > 0.0:  # in contact
-                    pk, sk = max1(h, alpha_old.item(i), x1, adot_old.item(i), adot_new.item(i))
+                    z0 = (k1.item(i) - k1.item(i + 1)) * inv_m
+                    pk, sk = max1_quartic(h, alpha_old.item(i), x1, adot_old.item(i), adot_new.item(i), z0)
                     kept.append(i)
                     ps.append(pk)
                     ts.append(t0 + sk * h)
@@ -459,8 +476,9 @@ class RK4Integrator(Integrator):
         else:
             turning = turning[alpha_new[turning] > 0.0]  # in contact
             if turning.size:
-                p, tp = hermite_max(
-                    t0, t1, alpha_old[turning], alpha_new[turning], adot_old[turning], adot_new[turning]
+                dd0 = (self.k1v[turning] - self.k1v[turning + 1]) * self.inv_m
+                p, tp = hermite_max_quartic(
+                    t0, t1, alpha_old[turning], alpha_new[turning], adot_old[turning], adot_new[turning], dd0
                 )
                 if self.history:
                     peak = alpha_new.copy()
@@ -480,10 +498,14 @@ class RK4Integrator(Integrator):
             self.history_floor = None
 
     def contact_forces(self, state: ChainState) -> np.ndarray:
-        """Each contact's force at the state's overlaps and velocities (the dashpot clipped at zero)."""
+        """Each contact's force at the state's overlaps and velocities (damping clipped at zero)."""
         law, u, v = state.law, state.u, state.v
         alpha = u[:-1] - u[1:]
         f = law.force(alpha, state.alpha_hist)
-        if state.gamma:
-            f = np.where(alpha > 0.0, np.maximum(f + state.gamma * (v[:-1] - v[1:]), 0.0), f)
+        if state.damped:
+            p = state.problem
+            total = p.damping_part.damped_force(
+                float(p.damping_coefficient), law, alpha, state.alpha_hist, v[:-1] - v[1:], f
+            )
+            f = np.where(alpha > 0.0, total, f)
         return f

@@ -24,13 +24,13 @@ Design choices (each tested in tests/test_reference.py):
   letting them raise alpha_max would write non-physical history. Freezing costs nothing at
   loading (the loading curve does not depend on alpha_max) and only perturbs the step
   in which a contact turns from loading to unloading.
-  - RK4: after the step alpha_max is raised to the maximum of the cubic Hermite interpolant of
-    alpha over the step (alpha and d(alpha)/dt at both ends), so the history misses the true
-    maximum by O(h^4), not O(h^2).
+  - RK4: after the step alpha_max is raised to the maximum of the quartic interpolant of alpha
+    over the step (alpha and d(alpha)/dt at both ends, d2(alpha)/dt2 at the start: reference.hermite
+    says why not the cubic), so the history misses the true maximum by O(h^4), not O(h^2).
   - Verlet: alpha_max is raised to alpha at the step's end, which is what a LAMMPS pair style
     does at each force evaluation, so the two agree step for step.
 * Peaks are tracked while running: a running maximum of every contact's overlap with its time,
-  refined inside a step by the same Hermite interpolant. Every law is monotone in alpha on the
+  refined inside a step by the same interpolant. Every law is monotone in alpha on the
   loading path, so the peak force is F(alpha_peak). No step is stored for this.
 * Energies: kinetic, stored (elastic), dissipated (the law's and the dashpot's) and the work of
   f(t), which for a step load is exactly A times the displacement of bead 1 while the load acts.
@@ -46,8 +46,9 @@ from granchain.integrators import INTEGRATORS
 from granchain.invariants import InvariantError
 from granchain.peaks import complete_peaks, unreached_as_nan
 from granchain.physics.effects import EFFECTS
-from granchain.problem import ChainProblem
+from granchain.problem import ChainProblem, static_contact_forces
 from granchain.progress import Progress
+from granchain.reference.event import EventTracker
 from granchain.reference.hermite import hermite_max
 from granchain.reference.integrators import (
     EPS,
@@ -67,6 +68,7 @@ from granchain.reference.observers import (
     Recorder,
     RunWatch,
 )
+from granchain.reference.sensors import sensor_observers
 from granchain.reference.state import ChainState
 from granchain.results import ChainSolution
 from granchain.schedule import STOP_CHECK_EVERY, Segment, step_plan
@@ -117,8 +119,9 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
     n = problem.beads
     carried = [e for e in EFFECTS.values() if e.in_problem(problem)]
     s0 = sum(e.beads_in_front for e in carried)  # index of bead 1 inside
-    if "histories" in kw:
-        kw["histories"] = tuple(i + s0 for i in kw["histories"])
+    for key in ("histories", "sensors"):  # contacts and beads inside count the beads in front first
+        if key in kw:
+            kw[key] = tuple(i + s0 for i in kw[key])
     if kw.get("stop_after") is not None:
         kw["stop_after"] += s0  # contact numbers inside count the striker's contact first
     sol = _solve(inner, end_time, timestep, method, **kw)
@@ -136,8 +139,9 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
         "leading_pulse_time",
     ):
         setattr(sol, name, getattr(sol, name)[s0 : s0 + n - 1])
-    sol.time_of_peak = unreached_as_nan(sol.peak_force, sol.time_of_peak, problem.precompression)
-    sol.complete = complete_peaks(sol.peak_force, sol.force_min_after_peak, sol.time_of_peak, problem.precompression)
+    static = static_contact_forces(np.append(problem.mass, np.inf), problem.precompression, problem.gravity)[: n - 1]
+    sol.time_of_peak = unreached_as_nan(sol.peak_force, sol.time_of_peak, static)
+    sol.complete = complete_peaks(sol.peak_force, sol.force_min_after_peak, sol.time_of_peak, static)
     unreached = ~np.isfinite(sol.time_of_peak)
     sol.leading_pulse_force[unreached] = sol.leading_pulse_time[unreached] = np.nan
     sol.history_contacts = tuple(i - s0 for i in sol.history_contacts)
@@ -155,6 +159,8 @@ def _solve(
     method: str = "rk4",
     *,
     histories: tuple[int, ...] = (),
+    sensors: tuple[int, ...] = (),
+    sensor_stride: int = 0,
     history_stride: int = 1,
     snapshots: tuple[float, ...] = (),
     energy_samples: int = 200,
@@ -163,6 +169,7 @@ def _solve(
     stop_at_wall: bool = False,
     stop_at_reflection: bool = False,
     stop_floor: float = 0.0,
+    event_floor: float | None = None,
     lead_floor: float = 0.0,
     lead_fall: float = 0.0,
     max_overlap: float | np.ndarray | None = None,
@@ -173,14 +180,15 @@ def _solve(
 ) -> ChainSolution:
     """Integrate the chain from rest (bead 1 possibly moving) to end_time.
 
-    histories: 0-based contacts whose force (and the velocity of their left bead) is recorded
-    every history_stride steps. snapshots: times (exact step boundaries) of whole-chain profiles.
-    event_location (RK4 only): split steps where a contact's force law has a kink (see module doc).
-    stop_after: 0-based contact; stop (checked every STOP_CHECK_EVERY steps, as LAMMPS's fix halt
-    does) once its force has fallen below half its peak: the leading wave has passed it. Only a
-    peak above stop_floor counts (round-off forces ahead of the wave must not stop the run).
-    stop_at_wall, stop_at_reflection: it also waits for the wall's contact, then its reflection (EarlyStop).
-    lead_floor, lead_fall: a leading pulse's least rise above F0, and its fall that makes it one (peaks).
+    histories: 0-based contacts whose force (and the velocity of their left bead) is recorded every history_stride
+    steps. sensors: 0-based beads (reference.sensors), every sensor_stride steps (0: none). snapshots: times
+    (exact step boundaries) of whole-chain profiles. event_location (RK4 only): split steps where a contact's
+    force law has a kink (see module doc). stop_after: 0-based contact; stop (checked every
+    STOP_CHECK_EVERY steps, as LAMMPS's fix halt does) once its force has fallen below half its peak: the leading
+    wave has passed it. Only a peak above stop_floor counts (round-off forces ahead of the wave must not stop the
+    run). stop_at_wall, stop_at_reflection: it also waits for the wall's contact, then its reflection (EarlyStop);
+    event_floor: the wall's event tracked (physics.event), begun above this rise (N), and waited for. lead_floor,
+    lead_fall: a leading pulse's least rise above F0, and its fall that makes it one (peaks).
     max_overlap, energy_watch, momentum_watch: the run watch (granchain.invariants); None = off.
     max_overlap: one bound in m for every contact, or one per contact of the problem's chain with its
     ends (ChainProblem.with_ends: a striker's contact first, a wall's last; contact_overlap_bounds).
@@ -188,10 +196,7 @@ def _solve(
     balance and the momentum of a free chain at every energy sample (~200 per run, as LAMMPS).
     progress: told the step count every ~0.1 s of steps (its update() names the next step to call it at).
     """
-    if method not in METHODS:
-        raise ValueError(f"method = {method!r} is not known; choose one of {', '.join(METHODS)}")
-    if not (timestep > 0 and end_time > 0):
-        raise ValueError("timestep and end_time must be positive")
+    _check_arguments(method, timestep, end_time)
     t_wall = time.perf_counter()
     state = ChainState(problem)
     plan = step_plan(end_time, timestep, problem.duration if problem.amplitude else 0.0, snapshots)
@@ -207,12 +212,11 @@ def _solve(
         ledger,
         RunWatch(state, ledger, watch_every, max_overlap, energy_watch, momentum_watch),
     ]
-    if stop_after is not None:
-        observers.append(_early_stop(state, peaks, stop_after, stop_at_wall, stop_at_reflection, stop_floor, lead_fall))
+    observers += sensor_observers(state, integrator.contact_forces, sensors, sensor_stride, total_steps)
+    stop = (stop_after, stop_at_wall, stop_at_reflection, stop_floor, lead_fall)
+    observers += _event_and_stop(state, peaks, integrator, stop, event_floor)
     _drive(state, integrator, plan, observers, timestep, progress)
-    fields = {}
-    for observer in observers:  # in list order: the leading pulse reads the peak tracker's result
-        fields.update(observer.finish(state))
+    fields = {k: v for o in observers for k, v in o.finish(state).items()}  # in list order: leading pulse after peaks
     return ChainSolution(
         method=method,
         timestep=timestep,
@@ -229,10 +233,30 @@ def _solve(
     )
 
 
+def _check_arguments(method: str, timestep: float, end_time: float) -> None:
+    """A caller's bug (the scene reader refuses a user's bad values first): an unknown method, a step
+    or an end time that is not positive."""
+    if method not in METHODS:
+        raise ValueError(f"method = {method!r} is not known; choose one of {', '.join(METHODS)}")
+    if not (timestep > 0 and end_time > 0):
+        raise ValueError("timestep and end_time must be positive")
+
+
+def _event_and_stop(state, peaks, integrator, stop: tuple, event_floor: float | None) -> list[Observer]:
+    """The stop check (stop: _early_stop's arguments after the peaks; none where its contact is None)
+    and the wall's event tracker (event_floor given), which asks the stop check itself (both must
+    have come to stop the run)."""
+    early = None if stop[0] is None else _early_stop(state, peaks, *stop)
+    if event_floor is not None:
+        return [EventTracker(state, integrator.contact_forces, event_floor, STOP_CHECK_EVERY, early)]
+    return [] if early is None else [early]
+
+
 def _early_stop(state, peaks, stop_after: int, at_wall: bool, at_reflection: bool, floor: float, fall: float):
-    """The stop check's observer: contact stop_after, then the wall's (the last), then its reflection's (the first)."""
+    """The stop check's observer: contact stop_after, then the wall's (the last), then its reflection's
+    through contact 1 (beads 1 and 2: inside, the contact after bead 1, past a striker's contact)."""
     contacts = (stop_after, state.n - 2) if at_wall else (stop_after,)
-    back = 0 if at_wall and at_reflection else None
+    back = state.load_bead if at_wall and at_reflection else None
     return EarlyStop(state, peaks, contacts, STOP_CHECK_EVERY, floor, fall, back)
 
 

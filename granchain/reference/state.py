@@ -2,7 +2,7 @@
 
 One object per run holds the chain's displacements u, velocities v and the law's history alpha_max,
 the padded contact-force buffer and the work arrays the force evaluation writes into (allocated once:
-the inner loop allocates as little as numpy lets it), the dashpot's energy, the time and step count,
+the inner loop allocates as little as numpy lets it), the damping's energy, the time and step count,
 and the last accepted piece's overlaps, rates and turning contacts (RK4's dense output, which the
 peak tracking reads instead of computing it again).
 """
@@ -13,11 +13,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from granchain.physics.effects import EFFECTS
+from granchain.physics.effects import EFFECTS, body_acceleration
 from granchain.physics.laws import ContactLaw
-from granchain.problem import ChainProblem, initial_state, moving_mass
+from granchain.problem import ChainProblem, initial_state, moving_mass, static_contact_forces
 
-#: accel(u, out, v) -> dashpot power: the accelerations of the state (u, v) into out; also leaves the
+#: accel(u, out, v) -> damping power: the accelerations of the state (u, v) into out; also leaves the
 #: contact forces in the state's force buffer. make_accel's own also take overlaps = u[:-1] - u[1:]
 #: where the caller has them already (RK4Integrator.lean_step: the state's alpha_now)
 Accel = Callable[..., float]
@@ -32,6 +32,8 @@ class ChainState:
         Displacements and velocities, updated in place (observers may hold references).
     alpha_hist : ndarray (N-1,)
         The law's history alpha_max, frozen within a step and raised once per accepted step.
+    static_force : ndarray (N-1,)
+        Each contact's static force at t = 0 (precompression's F0 plus gravity's weight above it).
     fp, fc : ndarray
         The padded force buffer: fp[0] the static push on bead 1, fc = fp[1:N] the contact forces of
         the last force evaluation, fp[N] the pull on a free bead N; a = (fp[:-1] - fp[1:]) / m.
@@ -39,8 +41,10 @@ class ChainState:
         Accelerations of the last full-step evaluation (velocity Verlet's second half-kick).
     accel : Accel
         The force evaluation over these buffers.
-    dash_energy : float
-        Energy the dashpot has taken out so far.
+    damped : bool
+        The problem's damping part depends on velocity: the force evaluation takes the velocities.
+    damping_energy : float
+        Energy the damping has taken out so far.
     t, step, seg_end : float, int, float
         Time and steps taken (set by the driver after each step), and the end of the current segment.
     alpha_now, adot_now : ndarray (N-1,)
@@ -57,15 +61,21 @@ class ChainState:
         self.n = n
         self.inv_m = 1.0 / problem.mass  # 0 for an immovable wall bead
         self.mass_ke = moving_mass(problem.mass)  # the wall neither moves nor counts
-        self.gamma = float(problem.dashpot)
-        self.f0 = float(problem.precompression)
+        self.damped = problem.damping_part.velocity_dependent
+        # each contact's force at rest: F0 plus the weight above it (a striker's in front: unloaded)
+        self.static_force = np.zeros(n - 1)
+        f0 = float(problem.precompression)
+        self.static_force[problem.front :] = static_contact_forces(problem.mass[problem.front :], f0, problem.gravity)
+        # the static force the leading pulse and its ladder rise above: F0, or under gravity the largest
+        # (the wall's, F0 + the chain's weight: the deck's pair style takes one value for every contact)
+        self.f0 = float(np.max(self.static_force, initial=0.0))
         self.free_end = bool(np.isfinite(problem.mass[-1]))
         # at rest (bead 1 possibly moving), or precompressed in static equilibrium
         self.u, self.v, self.alpha_hist = initial_state(problem)
         self.t = 0.0
         self.step = 0
         self.seg_end = 0.0
-        self.dash_energy = 0.0
+        self.damping_energy = 0.0
         self.fp = np.zeros(n + 1)
         self.fc = self.fp[1:n]
         # the static push on bead 1 and pull on a free bead N (precompression): the push is fp[0] when
@@ -78,7 +88,7 @@ class ChainState:
         self.accel = make_accel(problem, self.law, self.inv_m, self.fp, self.alpha_hist)
         # a chain of equal masses: RK4 takes the net forces and folds 1/m into its step's factors
         # (one numpy call fewer per force evaluation); None with unequal masses (a striker, a wall,
-        # a taper) or an effect's own force evaluation (the dashpot)
+        # a taper) or an effect's own force evaluation (damping)
         inv_m0 = float(self.inv_m[0])
         self.uniform_inv_m = inv_m0 if inv_m0 > 0.0 and bool((self.inv_m == inv_m0).all()) else None
         self.net_force = None
@@ -104,11 +114,42 @@ def make_accel(
     A closure rather than a method: the inner loop calls it four times per RK4 step, and reading the
     buffers from cells costs less than from attributes. The contact forces land in fc = fp[1:-1]
     (with alpha_max frozen: the history is the caller's, see ChainState); the returned float is the
-    dashpot's power at this evaluation (0 without one), which the integrator weights into its energy.
-    An effect that changes the contact forces supplies its own (Effect.reference_accel: the dashpot).
+    damping's power at this evaluation (0 without one), which the integrator weights into its energy.
+    An effect that changes the contact forces supplies its own (Effect.reference_accel: damping).
     inv_m None: the net contact force on each bead instead of its acceleration (a chain of equal
     masses, whose RK4 divides by the mass in its step's factors), or None where an effect has its own.
+    A body force (gravity: Effect.body_acceleration) is added to every moving bead after the contacts.
     """
+    return with_body_force(_contact_accel(problem, law, inv_m, fp, alpha_hist), problem, inv_m)
+
+
+def with_body_force(accel: Accel | None, problem: ChainProblem, inv_m: np.ndarray | None) -> Accel | None:
+    """accel plus the effects' body force (Effect.body_acceleration: gravity's g) on every moving bead
+    (its force m g where accel gives net forces, inv_m None); accel itself without one. Without
+    make_accel's parts: RK4 calls it at every stage rather than writing the contact forces out (a
+    vertical chain's run is that much slower, every other run unchanged)."""
+    g = body_acceleration(problem)
+    if accel is None or not g:
+        return accel
+    mass = problem.mass
+    moving = np.isfinite(mass)
+    body = np.where(moving, g, 0.0) if inv_m is not None else np.where(moving, g * np.where(moving, mass, 0.0), 0.0)
+    add = np.add
+
+    def with_body(
+        uu: np.ndarray, out: np.ndarray, vv: np.ndarray | None = None, overlaps: np.ndarray | None = None
+    ) -> float:
+        power = accel(uu, out, vv, overlaps) if overlaps is not None else accel(uu, out, vv)
+        add(out, body, out)
+        return power
+
+    return with_body
+
+
+def _contact_accel(
+    problem: ChainProblem, law: ContactLaw, inv_m: np.ndarray | None, fp: np.ndarray, alpha_hist: np.ndarray
+) -> Accel | None:
+    """make_accel's contact forces alone."""
     for effect in EFFECTS.values():
         if inv_m is None:
             if effect.reference_accel(problem, law, np.ones(fp.size - 1), fp, alpha_hist) is not None:

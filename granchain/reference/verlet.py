@@ -24,9 +24,9 @@ class VerletIntegrator(Integrator):
         self.consts: dict[float, tuple[np.ndarray, np.ndarray]] = {}
 
     def start_segment(self, state: ChainState, seg_start: float) -> bool:
-        """Start a LAMMPS run at seg_start (the dashpot's forces again at full-step velocities, as LAMMPS)."""
-        if state.gamma and seg_start > 0.0:
-            # LAMMPS starts each run by recomputing forces with the full-step velocities; the dashpot
+        """Start a LAMMPS run at seg_start (the damping's forces again at full-step velocities, as LAMMPS)."""
+        if state.damped and seg_start > 0.0:
+            # LAMMPS starts each run by recomputing forces with the full-step velocities; damping
             # is the only force that notices, and the reference does the same to stay step for step
             state.accel(state.u, state.a_int, state.v)
             return True
@@ -49,9 +49,9 @@ class VerletIntegrator(Integrator):
             v[self.load_bead] += half * a_ext
         mul(v, h_, kick)
         add(u, kick, u)
-        power = state.accel(u, a_int, v)  # the dashpot sees the half-step velocity, as in LAMMPS
+        power = state.accel(u, a_int, v)  # damping sees the half-step velocity, as in LAMMPS
         if power:
-            state.dash_energy += h * power
+            state.damping_energy += h * power
         mul(a_int, half_h, kick)
         add(v, kick, v)
         if a_ext:

@@ -26,8 +26,8 @@ The directory is written under a hidden temporary name and renamed into place at
 interrupted run never leaves a directory that looks complete.
 
 The package's modules: solution (ChainSolution), run (RunResult, its summary, tables, display, plot
-and price), tables (peaks.csv's columns and units, printable text), provenance (where a run came
-from). Every name is importable from granchain.results itself.
+and price), tables (peaks.csv's columns and units), provenance (where a run came from); printable
+text is granchain.scene.display's. Every name is importable from granchain.results itself.
 """
 
 from __future__ import annotations
@@ -45,7 +45,8 @@ from granchain.results.provenance import (
 )
 from granchain.results.run import RunResult, StoredRun, Summary, register_plotter
 from granchain.results.solution import ChainSolution
-from granchain.results.tables import OBSERVABLE_UNITS, PEAK_UNITS, peak_columns, printable
+from granchain.results.tables import OBSERVABLE_UNITS, PEAK_UNITS, peak_columns
+from granchain.scene.display import printable
 
 __all__ = [
     "CAMPAIGN_PACKAGES",

@@ -9,11 +9,14 @@ from pathlib import Path
 
 import numpy as np
 
+from granchain.physics.event import EVENT_FIELDS
 from granchain.postprocess.domains import beyond_yield
-from granchain.postprocess.observables import measure_observables
+from granchain.postprocess.observables import end_summary, measure
+from granchain.postprocess.sensors import sensor_summary
 from granchain.results.provenance import _PROVENANCE_EXTRA, provenance
 from granchain.results.solution import ChainSolution
-from granchain.results.tables import PEAK_UNITS, _key_observables, _num, peak_columns, printable
+from granchain.results.tables import PEAK_UNITS, _key_observables, _num, peak_columns
+from granchain.scene.display import html_table, printable
 
 
 def _now_utc() -> datetime:
@@ -31,7 +34,7 @@ class RunResult:
     this Python process's sys.argv when the summary is written). errors: the run's measured error
     estimates (granchain.workflows.error_estimates.ErrorReport), None when none were made.
     method_reason: why the run's integrator was chosen for its scene when none was asked for
-    (workflows.run.method_choice: the reference's Verlet on a scene with a dashpot), else None;
+    (workflows.run.method_choice: the reference's Verlet on a scene with velocity-dependent damping), else None;
     summary.json's "method_reason".
     """
 
@@ -61,7 +64,7 @@ class RunResult:
         """The observables (leading peak, wave speed, ...; docs/observables.md); a loaded run's as written."""
         if self.stored is not None:
             return copy.deepcopy(self.stored.summary.get("observables") or {})
-        return measure_observables(self.scene, self.solution)
+        return measure(self.scene, self.solution).values
 
     @property
     def peak_table(self) -> np.ndarray:
@@ -82,18 +85,14 @@ class RunResult:
         """Why each observable that is None could not be measured (name -> reason)."""
         if self.stored is not None:
             return dict(self.stored.summary.get("observables_missing") or {})
-        missing: dict[str, str] = {}
-        measure_observables(self.scene, self.solution, missing)
-        return missing
+        return measure(self.scene, self.solution).missing
 
     def observables_notes(self) -> dict[str, str]:
         """What each measured observable that is not what its name says is (name -> note): a wave
         speed averaged over a window whose contacts differ."""
         if self.stored is not None:
             return dict(self.stored.summary.get("observables_notes") or {})
-        notes: dict[str, str] = {}
-        measure_observables(self.scene, self.solution, None, notes)
-        return notes
+        return measure(self.scene, self.solution).notes
 
     def peak_status(self) -> dict:
         """How many of the measured contacts (those of peaks.csv) have a complete peak, one that is not
@@ -122,9 +121,7 @@ class RunResult:
         s, sc = self.solution, self.scene
         eb = s.energy_balance_error
         work_scale = float(np.max(np.abs(s.work))) if s.work.size else 0.0
-        missing: dict[str, str] = {}
-        notes: dict[str, str] = {}
-        observables = measure_observables(sc, s, missing, notes)
+        observables, missing, notes, inapplicable = measure(sc, s)  # every registered observable, in one pass
         extra = {k: v for k, v in self.extra.items() if k not in _PROVENANCE_EXTRA}  # the rest: provenance
         outside = beyond_yield(sc, s)
         return {
@@ -142,6 +139,9 @@ class RunResult:
             "wall_time": s.wall_time,
             "observables": observables,
             "observables_missing": missing,
+            # those of observables_missing the scene never measures, whatever the run (a wall's on a
+            # free chain): a campaign's `unmeasured` column leaves them out
+            "observables_inapplicable": list(inapplicable),
             # what a measured value is where it is not what its name says (a wave speed averaged over
             # a window whose contacts differ); only where there is one
             **({"observables_notes": notes} if notes else {}),
@@ -161,20 +161,11 @@ class RunResult:
                 "energy_balance_error_relative": (float(np.max(np.abs(eb))) / work_scale) if work_scale else 0.0,
             },
             "scales": {"force_scale": sc.force_scale, "impulse_scale": sc.impulse_scale, "tau": sc.tau},
-            **(
-                {"wall_peak_force": s.wall_peak_force, "wall_peak_complete": s.wall_peak_complete}
-                if s.wall_peak_force is not None
-                else {}
-            ),
-            **(
-                {
-                    "striker_peak_force": s.striker_peak_force,
-                    "striker_peak_complete": s.striker_peak_complete,
-                    "striker_velocity": s.striker_velocity,
-                }
-                if s.striker_peak_force is not None
-                else {}
-            ),
+            **end_summary(s),  # the end contacts' peaks (postprocess.observables.ends)
+            # the far-end wall's event as the run tracked it (physics.event; [outputs] event)
+            **({"event": {k: getattr(s, k) for k in EVENT_FIELDS}} if s.wall_impulse is not None else {}),
+            # the sensor beads' peaks and times, bead by bead (granchain.postprocess.sensors)
+            **({"sensors": sensor_summary(sc, s)} if sc.outputs.sensors else {}),
             **({"extra": extra} if extra else {}),
             # the largest relative error of a measured peak, and every number's error and how it
             # was obtained (granchain.workflows.error_estimates); none without companion runs
@@ -301,6 +292,26 @@ class RunResult:
         )
 
     @property
+    def dump(self):
+        """The whole-chain dump (chain.dump: a LAMMPS run with ``[outputs] dump_interval`` and ``out``)
+        as an xarray Dataset over time (s) x bead, or None when the run directory has none.
+
+        Variables: position (the bead's centre x) and displacement (m), velocity (m/s) over time x
+        bead; contact_force (N) over time x contact. Units in ``attrs["units"]``; a symbolic link in
+        place of the file is refused (granchain.postprocess.chain_dump).
+        """
+        from granchain.postprocess.chain_dump import CHAIN_DUMP, chain_dump_dataset
+        from granchain.safe_files import check_not_link
+
+        if self.path is None:
+            return None
+        path = Path(self.path) / CHAIN_DUMP
+        check_not_link(path)
+        if not path.is_file():
+            return None
+        return chain_dump_dataset(path, self.scene, self._array_attrs(f"the whole-chain dump {CHAIN_DUMP}"))
+
+    @property
     def energy(self):
         """energy.csv as a pandas DataFrame indexed by time (s): kinetic, potential (stored in the
         contacts), dissipated and work (done on the chain by the load), all in J
@@ -368,31 +379,25 @@ class RunResult:
 
     def _repr_html_(self) -> str:
         """A small HTML table for notebooks: the run, then each key observable with its error and unit."""
-        import html
-
         sm = self.summary
-        esc = lambda x: html.escape(printable(str(x), 300))  # noqa: E731
         rows = [
-            ("scene", esc(self.scene.title or self.scene.source or "untitled scene"), ""),
-            ("backend", esc(f"{sm['backend']} ({sm['method']})"), ""),
-            ("time step", esc(f"{sm['timestep']:.4g}"), "s"),
-            ("steps", esc(sm["steps"]), ""),
-            ("end time", esc(f"{sm['end_time']:.4g}"), "s"),
-            ("wall time", esc(f"{sm['wall_time']:.3g}"), "s"),
-            ("beads", esc(sm.get("beads", "?")), ""),
-            ("contact law, load", esc(f"{sm.get('contact_law', '?')}, {sm.get('loading', '?')}"), ""),
+            ("scene", self.scene.title or self.scene.source or "untitled scene", ""),
+            ("backend", f"{sm['backend']} ({sm['method']})", ""),
+            ("time step", f"{sm['timestep']:.4g}", "s"),
+            ("steps", sm["steps"], ""),
+            ("end time", f"{sm['end_time']:.4g}", "s"),
+            ("wall time", f"{sm['wall_time']:.3g}", "s"),
+            ("beads", sm.get("beads", "?"), ""),
+            ("contact law, load", f"{sm.get('contact_law', '?')}, {sm.get('loading', '?')}", ""),
         ]
         for name, value, unit, err in _key_observables(sm):
-            rows.append(
-                (esc(name), esc(_num(value)) + (f" &plusmn; {esc(f'{err:.2g}')}" if err is not None else ""), esc(unit))
-            )
+            rows.append((name, _num(value) + (f" \u00b1 {err:.2g}" if err is not None else ""), unit))
         pk = sm.get("peaks") or {}
         if pk:
-            rows.append(("peaks", esc(", ".join(f"{v} {k}" for k, v in pk.items())), ""))
+            rows.append(("peaks", ", ".join(f"{v} {k}" for k, v in pk.items()), ""))
         if self.path is not None:
-            rows.append(("run directory", esc(self.path), ""))
-        body = "".join(f"<tr><th style='text-align:left'>{a}</th><td>{b}</td><td>{c}</td></tr>" for a, b, c in rows)
-        return f"<table><caption>granchain {esc(type(self).__name__)}</caption>{body}</table>"
+            rows.append(("run directory", self.path, ""))
+        return html_table(rows, f"granchain {type(self).__name__}")
 
     def plot(self, kind: str = "peaks", **kw):
         """A figure of this run: ``kind`` one of "peaks", "histories", "snapshots", "heatmap".

@@ -46,6 +46,15 @@ class ChainSolution:
     striker_time_of_peak: float | None = None
     striker_peak_complete: bool | None = None  # as wall_peak_complete, for the striker's contact
     striker_velocity: float | None = None  # at the end
+    # the far-end wall's event (granchain.physics.event; None: not tracked, [outputs] event = false):
+    # its end (None while it has not ended), the largest dynamic wall force and its time, the impulse
+    # (total and dynamic) and the energy into the wall's contact, summed to the end or the run's end
+    event_end_time: float | None = None
+    wall_max_force: float | None = None
+    wall_time_of_max: float | None = None
+    wall_impulse: float | None = None
+    wall_dynamic_impulse: float | None = None
+    wall_energy: float | None = None
     # smallest force sample of each contact since its peak (N-1,), N; and which peaks are complete
     # (peaks.complete_peaks). A backend that does not track them leaves them empty: no peak is complete.
     force_min_after_peak: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -61,6 +70,16 @@ class ChainSolution:
     # off it (N-1,) s (granchain.postprocess.fronts); empty / nan from a backend without the ladder
     front_ladder: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     front_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    # sensor beads ([outputs] sensors, 1-based; granchain.postprocess.sensors): each one's average force
+    # (F_left + F_right) / 2, its running peak (total, N), time (nan: not reached), smallest force since
+    # and completeness (S,), and its history (samples, S) at the contact histories' steps
+    sensor_beads: tuple[int, ...] = ()
+    sensor_peak_force: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    sensor_time_of_peak: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    sensor_force_min_after_peak: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    sensor_complete: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    sensor_history_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    sensor_history_force: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     def __post_init__(self):
         """Fill the per-contact fields a backend left empty with nan (not measured)."""

@@ -1,8 +1,11 @@
-"""The tables and displays of a run: peaks.csv's columns and units, the observables' units, printable text."""
+"""The tables of a run: peaks.csv's columns and units, the observables' units."""
 
 from __future__ import annotations
 
 import numpy as np
+
+from granchain.physics.effects.gravity import scene_static_forces
+from granchain.postprocess.observables import shown_keys, units
 
 #: units of peaks.csv's columns (RunResult.peaks' attrs["units"]); "1": dimensionless
 PEAK_UNITS = {
@@ -23,35 +26,22 @@ PEAK_UNITS = {
     "error_status": "text",
 }
 
-#: units of the observables of summary.json ("1": dimensionless)
-OBSERVABLE_UNITS = {
-    "window": "contacts",
-    "leading_peak_contact": "contact",
-    "leading_peak_force": "N",
-    "leading_peak_force_nondim": "1",  # F / (E* R*^2), Eq. 5
-    "wave_speed": "m/s",
-    "wave_speed_stderr": "m/s",
-    "wave_speed_contacts": "contacts fitted",
-    # a window whose contacts differ: the speed over each uniform stretch, {contacts, speed, stderr, arrivals}
-    "wave_speed_sections": "m/s per stretch",
-    "max_peak_force": "N",
-    "max_peak_contact": "contact",
-    "static_force": "N",  # a precompression's F0: the forces above are dynamic, F - F0
-}
-
-#: the observables a result's short display shows
-_SHOWN = ("leading_peak_force", "leading_peak_contact", "wave_speed", "max_peak_force", "max_peak_contact")
+#: units of the observables of summary.json ("1": dimensionless), the registry's
+#: (granchain.postprocess.observables.units) as it was when this module was imported
+OBSERVABLE_UNITS = units()
 
 
 def _key_observables(summary: dict):
-    """(name, value, unit, error or None) of the shown observables that the summary has."""
+    """(name, value, unit, error or None) of the shown observables (the registry's shown_keys) that the
+    summary has."""
     obs = summary.get("observables") or {}
     errs = (summary.get("errors") or {}).get("observables") or {}
-    for name in _SHOWN:
+    unit = units()
+    for name in shown_keys():
         if name in obs:
             e = errs.get(name) or {}
             err = e.get("error") if obs[name] is not None else None
-            yield name, obs[name], OBSERVABLE_UNITS.get(name, ""), err
+            yield name, obs[name], unit.get(name, ""), err
 
 
 def _num(v) -> str:
@@ -60,21 +50,6 @@ def _num(v) -> str:
     if isinstance(v, float):
         return f"{v:.6g}"
     return str(v)
-
-
-def printable(text: str, limit: int | None = None, keep: str = "") -> str:
-    r"""text with its control characters escaped (ESC as \x1b, a newline as \n ...): scene text
-    shown on a terminal can neither move the cursor nor retitle the window. Cut to limit characters;
-    the characters in keep (e.g. "\n" for a message of several lines) stay as they are."""
-    out = "".join(
-        ch
-        if ch.isprintable() or ch in keep
-        else (ch.encode("unicode_escape").decode("ascii") if ord(ch) < 0x10000 else repr(ch)[1:-1])
-        for ch in str(text)
-    )
-    if limit is not None and len(out) > limit:
-        out = out[: limit - 3] + "..."
-    return out
 
 
 def peak_columns(result) -> dict[str, np.ndarray]:
@@ -93,10 +68,11 @@ def peak_columns(result) -> dict[str, np.ndarray]:
         "arrival_time": s.leading_pulse_time[idx],
     }
     f0 = float(sc.effects.precompression)
-    if f0:  # a precompressed contact carries F0 at rest: the wave is the dynamic force F - F0
-        cols["dynamic_peak_force"] = s.peak_force[idx] - f0
-        cols["dynamic_leading_pulse_force"] = s.leading_pulse_force[idx] - f0
-        # the front's arrival there: the half-amplitude arrival (postprocess.fronts.front_times)
+    if f0 or sc.effects.gravity:  # a contact carries F0 (+ the weight above it) at rest: the wave is F - F_static
+        static = scene_static_forces(sc)[idx]
+        cols["dynamic_peak_force"] = s.peak_force[idx] - static
+        cols["dynamic_leading_pulse_force"] = s.leading_pulse_force[idx] - static
+    if f0:  # the front's arrival there: the half-amplitude arrival (postprocess.fronts.front_times)
         cols["front_time"] = s.front_time[idx]
     e = result.errors
     if e is not None and e.peak_force is not None:

@@ -6,13 +6,15 @@ and bead i+1 (the paper's F_{i,i+1}); beads and contacts are numbered from 1 in 
 and output tables.
 
 The package's modules, bottom up: ``limits`` (the values a scene may take), ``section`` (reading
-one TOML table with clear errors), ``writer`` (a scene as a dict and as TOML text), ``model`` (the
+one TOML table with clear errors), ``writer`` (a scene as a dict and as TOML text), ``display`` (how
+objects show themselves: printable text, numbers, the HTML table, a scene's facts), ``model`` (the
 dataclasses and the quantities derived from them), ``read_sections`` (one reader per section) and
-``reader`` (a file, text or dict to a validated :class:`Scene`).
+``reader`` (a file, text or dict to a validated :class:`Scene`; Scene.replace's keys set and read).
 """
 
 from __future__ import annotations
 
+from granchain.scene.display import KEY_UNITS
 from granchain.scene.limits import (
     AUTO,
     DURATION_TEXT,
@@ -30,7 +32,7 @@ from granchain.scene.limits import (
     TIME_TEXT,
 )
 from granchain.scene.model import Chain, Contact, Effects, Loading, Outputs, Run, Scene, UnplannedChainError
-from granchain.scene.reader import SECTIONS, bundled_scenes, load_scene, parse_scene, scene_from_dict
+from granchain.scene.reader import SECTIONS, bundled_scenes, load_scene, parse_scene, scene_from_dict, set_key
 from granchain.scene.section import SceneError, _did_you_mean, _Section, _shown
 from granchain.scene.writer import dump_toml, scene_to_dict
 
@@ -38,6 +40,7 @@ __all__ = [
     "AUTO",
     "DURATION_TEXT",
     "FAR_ENDS",
+    "KEY_UNITS",
     "LAWS",
     "LOADING_KINDS",
     "MAX_BEADS",
@@ -68,4 +71,5 @@ __all__ = [
     "parse_scene",
     "scene_from_dict",
     "scene_to_dict",
+    "set_key",
 ]

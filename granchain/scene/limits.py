@@ -1,5 +1,6 @@
-"""The values a scene may take: the laws and loads it may name, "auto", and the bounds on its numbers,
-each with the reason it is where it is."""
+"""The values a scene may take: the laws and loads it may name, "auto", the bounds on its numbers,
+each with the reason it is where it is, and each numeric key's unit (SCENE_KEY_UNITS, scene_key_unit:
+what a campaign's axes and columns print beside a key)."""
 
 from __future__ import annotations
 
@@ -42,3 +43,45 @@ DURATION_TEXT = "loading time T in s; no mechanical load acts over less than an 
 #: makes step counts that overflow LAMMPS's and granchain's integers (5e-324 s overflows the planner's)
 MIN_TIMESTEP = 1e-24
 TIME_TEXT = f"at most {MAX_TIME:g} s: about 3 hours, far beyond any stress wave in a chain"
+
+
+#: dotted scene key -> its unit (SI; "1": dimensionless), as the scene reader reads it
+SCENE_KEY_UNITS = {
+    "chain.beads": "beads",
+    "chain.radius": "m",
+    "chain.taper": "1",
+    "loading.amplitude": "N",
+    "loading.duration": "s",
+    "loading.impulse": "N s",
+    "loading.velocity": "m/s",
+    "loading.radius": "m",
+    "loading.mass": "kg",
+    "contact.unloading_coeff": "1",
+    "contact.plastic_stiffness": "N/m",
+    "contact.yield_pressure": "Pa",
+    "contact.exponent": "1",
+    "contact.stiffness": "N/m^n",
+    "precompression.force": "N",
+    "gravity.g": "m/s^2",
+    "damping.dashpot": "N s/m",
+    "damping.kuwabara_kono": "s",
+    "boundary.wall_radius": "m",
+    "run.end_time": "s",
+    "run.timestep": "s",
+    "run.stop_after_contact": "contact",
+    "outputs.history_interval": "s",
+    "outputs.dump_interval": "s",
+}
+
+#: a material's properties (``chain.material.density``, ``boundary.wall_material.youngs_modulus``)
+MATERIAL_UNITS = {"density": "kg/m^3", "youngs_modulus": "Pa", "poisson_ratio": "1", "yield_strength": "Pa"}
+
+
+def scene_key_unit(key: str) -> str | None:
+    """The unit of a dotted scene key, or None for a key without one (text, a switch, a free parameter)."""
+    if key in SCENE_KEY_UNITS:
+        return SCENE_KEY_UNITS[key]
+    head, _, last = key.rpartition(".")
+    if head.endswith(("material", "wall_material")) and last in MATERIAL_UNITS:
+        return MATERIAL_UNITS[last]
+    return None

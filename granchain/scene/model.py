@@ -13,11 +13,19 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 
 from granchain.physics import materials as mat
+from granchain.physics.damping import DampingPart, damping_of
 from granchain.physics.effects import effect_fields
 from granchain.physics.laws import ContactLaw, LawCoefficients, contact_keys, law_class
 from granchain.physics.positions import contact_quantum
+from granchain.scene.display import html_table, scene_facts, scene_line
 from granchain.scene.limits import AUTO
+from granchain.scene.run_outputs import Outputs, Run
 from granchain.scene.writer import dump_toml, scene_to_dict
+
+#: Scene.replace's default for its value: none given (None is a value a caller may mean)
+_NO_VALUE = object()
+#: granchain.scene.reader.replaced, set when the reader is imported (the reader is above the model)
+_REPLACED = None
 
 
 class UnplannedChainError(RuntimeError):
@@ -132,83 +140,6 @@ class Loading:
 
 
 @dataclass(frozen=True)
-class Run:
-    """The [run] section: end time and time step (None where the planner chooses), and an early stop.
-
-    Attributes
-    ----------
-    end_time : float or None
-        The simulated time in s; None: "auto".
-    timestep : float or None
-        The time step dt in s; None: "auto".
-    stop_after_contact : int or None
-        The stop check: stop once the leading wave has passed this contact (1-based), or None.
-    stop_after_wall : bool
-        The stop check also waits for the wall's contact (bead N on the flat) to pass: its force back
-        below half its peak after the reflection (only on a chain with a wall).
-    stop_after_reflection : bool
-        The stop check also waits for the wall's reflection to pass back through contact 1: after the
-        wall's contact has passed, contact 1's force rose above the stop floor and fell back below half
-        of its largest since (only with stop_after_wall). Then every contact's peak has seen the
-        reflection (peaks.reflection_pending).
-    """
-
-    end_time: float | None  # s; None: "auto"
-    timestep: float | None  # s; None: "auto"
-    stop_after_contact: int | None = None  # stop once the leading wave has passed this contact
-    stop_after_wall: bool = False  # ... and the wall's contact (a walled chain)
-    stop_after_reflection: bool = False  # ... and the wall's reflection back through contact 1
-
-    def stop_check(self) -> dict:
-        """The stop check's fields (every field but end_time and timestep) that differ from "no stop".
-
-        Returns
-        -------
-        dict
-            Field name -> value, as [run] writes them: what a run rebuilt from this one (another
-            time step, another end) carries over so that it stops where this one does.
-        """
-        return {f.name: getattr(self, f.name) for f in stop_fields() if getattr(self, f.name) != f.default}
-
-    def without_stop(self) -> Run:
-        """The run without a stop check: it lasts to its end time."""
-        return replace(self, **{f.name: f.default for f in stop_fields()})
-
-
-def stop_fields() -> tuple:
-    """The dataclass fields of Run that make up its stop check: all but end_time and timestep."""
-    return tuple(f for f in fields(Run) if f.name not in ("end_time", "timestep"))
-
-
-@dataclass(frozen=True)
-class Outputs:
-    """The [outputs] section: which contacts' peaks and histories are kept, snapshots, the window.
-
-    Attributes
-    ----------
-    peak_force : bool or tuple of int
-        True: every contact's peak force; False: none; or the contacts (1-based) to tabulate.
-    histories : tuple of int
-        Contacts whose force (and bead velocity) against time is kept.
-    snapshots : tuple of float
-        Times in s of force and velocity profiles along the chain.
-    window : tuple of int or None
-        The first and last contact of the window, or None for the default (``Scene.window``).
-    history_interval : float, str or None
-        s between history samples, "auto" (the default with histories) or None.
-    dump_interval : float, str or None
-        s between whole-chain LAMMPS dump frames, "auto", or None (the default: no dump).
-    """
-
-    peak_force: bool | tuple[int, ...] = True  # True: every contact; or a tuple of contacts
-    histories: tuple[int, ...] = ()  # contacts whose force (and bead velocity) vs time is kept
-    snapshots: tuple[float, ...] = ()  # times of force/velocity profiles along the chain
-    window: tuple[int, int] | None = None  # contacts used for leading peak and wave speed
-    history_interval: float | str | None = None  # s between history samples ("auto", the default with histories)
-    dump_interval: float | str | None = None  # s between whole-chain LAMMPS dump frames (default: none; "auto")
-
-
-@dataclass(frozen=True)
 class Effects:
     """Effects beyond the paper's bare chain; each is absent unless the scene declares it.
 
@@ -227,15 +158,23 @@ class Effects:
         The wall's radius of curvature, m; None: a flat ([boundary] wall_radius).
     dashpot : float
         gamma in N s/m, a linear dashpot on every closing contact; 0: none ([damping] dashpot).
+    kuwabara_kono : float
+        A in s, Kuwabara-Kono damping A dF/dalpha d(alpha)/dt; 0: none ([damping] kuwabara_kono). One
+        damping key per scene (Scene.damping: the part they declare, granchain.physics.damping).
     precompression : float
         The static force F0 in N holding the chain together; 0: none ([precompression] force).
+    gravity : float
+        g in m/s^2 along the chain toward the wall (a vertical chain, bead 1 on top); 0: none
+        ([gravity] g).
     """
 
     far_end: str = "free"
     wall_material: str | mat.Material | None = None
     wall_radius: float | None = None
     dashpot: float = 0.0
+    kuwabara_kono: float = 0.0
     precompression: float = 0.0
+    gravity: float = 0.0
 
 
 def _check_effects_match_the_registry() -> None:
@@ -293,6 +232,17 @@ class Scene:
         )
 
     # ---- derived quantities (definitions live in granchain.physics) ----
+    @property
+    def damping(self) -> type[DampingPart]:
+        """The scene's damping part (granchain.physics.damping; the part "none" without [damping]): the
+        facts the planner, the integrators and the checks ask it."""
+        return damping_of(self.effects)[0]
+
+    @property
+    def damping_coefficient(self) -> float:
+        """The damping part's coefficient (a dashpot's gamma in N s/m, Kuwabara-Kono's A in s), 0: none."""
+        return damping_of(self.effects)[1]
+
     def planned_beads(self, what: str) -> int:
         """N, the number of beads, for a quantity that needs it (`what`, named in the error).
 
@@ -371,10 +321,12 @@ class Scene:
         """E* R*^2 tau, the impulse scale of the nondimensional impulse I~ (Eq. 6), N s."""
         return mat.impulse_scale(self.chain.material, self.chain.radius)
 
-    def pair_law(self, e_star: float, r_star: float, materials: tuple = ()) -> ContactLaw:
+    def pair_law(self, e_star: float, r_star: float, materials: tuple = (), contact: int = 0) -> ContactLaw:
         """The contact law of two bodies of effective modulus E* and radius R* and their materials (a
-        flat has none): the law's for_pair, its mixing rules included."""
-        return self.contact.law_class.for_pair(self.contact.coefficients, e_star, r_star, self.r_star, materials)
+        flat has none), with the [contact] values of bead-bead contact `contact` (0-based, -1 the last:
+        LawCoefficients.of_contact): the law's for_pair, its mixing rules included."""
+        c = self.contact.coefficients.of_contact(contact)
+        return self.contact.law_class.for_pair(c, e_star, r_star, self.r_star, materials)
 
     @property
     def law(self) -> ContactLaw:
@@ -388,8 +340,9 @@ class Scene:
 
     @property
     def per_bead(self) -> bool:
-        """Beads differ in radius or material (tapered, decorated, impurity)."""
-        return self.chain.radii is not None or self.chain.materials is not None
+        """Beads differ in radius or material (tapered, decorated, impurity), or contacts in their
+        [contact] values (a power law's per-contact exponent or stiffness): each contact has its own law."""
+        return self.chain.radii is not None or self.chain.materials is not None or self.contact.coefficients.varies
 
     @property
     def bead_radii(self) -> np.ndarray:
@@ -431,23 +384,35 @@ class Scene:
         rc = np.ceil(self.bead_radii / q) * q
         return np.concatenate(([0.0], np.cumsum(rc[:-1] + rc[1:])))
 
-    def bead_pair_law(self, r1: float, m1, r2: float, m2) -> ContactLaw:
-        """The law of two beads (radius, material each): Hertz 4/3 E*_pair sqrt(R*_pair) (Johnson);
-        the plastic laws' mixing rules for two materials are the law's (ContactLaw.for_pair)."""
-        return self.pair_law(mat.pair_effective_modulus(m1, m2), mat.pair_effective_radius(r1, r2), (m1, m2))
+    def bead_pair_law(self, r1: float, m1, r2: float, m2, contact: int = 0) -> ContactLaw:
+        """The law of two beads (radius, material each) at bead-bead contact `contact` (its [contact]
+        values: pair_law): Hertz 4/3 E*_pair sqrt(R*_pair) (Johnson); the plastic laws' mixing rules
+        for two materials are the law's (ContactLaw.for_pair)."""
+        e_star, r_star = mat.pair_effective_modulus(m1, m2), mat.pair_effective_radius(r1, r2)
+        return self.pair_law(e_star, r_star, (m1, m2), contact)
 
     @property
     def bead_kinds(self) -> tuple[list[tuple[float, object]], list[int]]:
-        """Distinct (radius, material) kinds of the chain's beads, in order of first appearance, and
-        each bead's kind (one kind for a uniform chain)."""
+        """Distinct kinds of the chain's beads (one LAMMPS atom type each), each as its (radius,
+        material), in order of first appearance, and each bead's kind (one kind for a uniform chain).
+
+        A kind is a distinct (radius, material), unless the [contact] values vary per contact
+        (LawCoefficients.varies): then it is (radius, material, i mod 3, the values of bead i's contact
+        to its right), so that a pair of kinds tells its contact's values (the pair's two residues
+        mod 3 tell which bead is on the left), with at most 3 x the distinct values kinds, not one a
+        bead; such kinds may share a (radius, material)."""
         kinds: list[tuple[float, object]] = []
         index: dict = {}
         kind_of = []
-        for r, m in zip(self.bead_radii.tolist(), self.bead_materials, strict=True):
-            key = (float(r), m)
+        c = self.contact.coefficients
+        n = len(self.bead_radii)
+        for i, (r, m) in enumerate(zip(self.bead_radii.tolist(), self.bead_materials, strict=True)):
+            key: tuple = (float(r), m)
+            if c.varies:
+                key += (i % 3, c.of_contact(i) if i < n - 1 else None)
             if key not in index:
                 index[key] = len(kinds)
-                kinds.append(key)
+                kinds.append(key[:2])
             kind_of.append(index[key])
         return kinds, kind_of
 
@@ -459,7 +424,7 @@ class Scene:
     def contact_laws(self) -> list[ContactLaw]:
         """The law of every bead-bead contact, in chain order."""
         r, m = self.bead_radii, self.bead_materials
-        return [self.bead_pair_law(r[i], m[i], r[i + 1], m[i + 1]) for i in range(len(r) - 1)]
+        return [self.bead_pair_law(r[i], m[i], r[i + 1], m[i + 1], i) for i in range(len(r) - 1)]
 
     @property
     def contact_stiffnesses(self) -> np.ndarray:
@@ -492,7 +457,8 @@ class Scene:
 
     @property
     def striker_law(self) -> ContactLaw:
-        """Striker on bead 1: the law of the striker and bead 1 (see bead_pair_law)."""
+        """Striker on bead 1: the law of the striker and bead 1 (see bead_pair_law), with contact 1's
+        [contact] values (a per-contact list's first)."""
         ld = self.loading
         return self.bead_pair_law(ld.striker_radius, ld.striker_material, self.chain.radius, self.chain.material)
 
@@ -515,8 +481,8 @@ class Scene:
         (yield_strength_key: the bilinear k) is left to the pair's mixing rule."""
         e_star, r_star, materials = self.wall_pair(r, m)
         if self.effects.wall_material is None or self.contact.law_class.yield_strength_key is None:
-            return self.pair_law(e_star, r_star, materials)
-        c = replace(self.contact.coefficients, **{self.contact.law_class.yield_strength_key: None})
+            return self.pair_law(e_star, r_star, materials, -1)  # (a per-contact list: the last contact's)
+        c = replace(self.contact.coefficients.of_contact(-1), **{self.contact.law_class.yield_strength_key: None})
         return self.contact.law_class.for_pair(c, e_star, r_star, self.r_star, materials)
 
     @property
@@ -534,6 +500,12 @@ class Scene:
         """k_u of the nominal contact (bilinear), else None."""
         ku = getattr(self.law, "k_unloading", None)
         return None if ku is None else float(ku)
+
+    @property
+    def wall_event(self) -> bool:
+        """Whether the run tracks the far-end wall's event at every step ([outputs] event on a walled
+        chain; on a free far end the event's quantities are read from the end state)."""
+        return bool(self.outputs.event) and self.effects.far_end == "wall"
 
     @property
     def peak_contacts(self) -> tuple[int, ...]:
@@ -564,3 +536,43 @@ class Scene:
     def to_toml(self) -> str:
         """The scene as TOML text; read back by :func:`parse_scene` to an equal scene."""
         return dump_toml(scene_to_dict(self))
+
+    def replace(self, changes: str | dict, value=_NO_VALUE, /) -> Scene:
+        """A new scene with scene keys changed, validated as the scene reader validates a file.
+
+        Parameters
+        ----------
+        changes : str or dict
+            A dotted scene key (``"loading.amplitude"``, ``"chain.material.density"``) with `value`,
+            or a dict of such keys -> values, set together (keys that only go together, such as a
+            loading's kind and its values, are validated at once).
+        value
+            The new value of the key `changes` names, as a scene file writes it (a number, a string,
+            a list, ``"auto"``).
+
+        Returns
+        -------
+        Scene
+            The scene :meth:`to_toml`'s text with those keys changed would read as, with this scene's
+            ``source`` and the changed text as ``source_text``; this scene is left as it is.
+
+        Raises
+        ------
+        SceneError
+            A key or value is invalid: the reader's message, naming the key and the fix.
+        """
+        if isinstance(changes, str):
+            if value is _NO_VALUE:
+                raise TypeError(f"Scene.replace({changes!r}) needs the key's new value: replace({changes!r}, value)")
+            changes = {changes: value}
+        elif value is not _NO_VALUE:
+            raise TypeError("Scene.replace(dict) takes the keys' values in the dict, not a second argument")
+        return _REPLACED(self, dict(changes))
+
+    def __repr__(self) -> str:
+        """The scene in one line: source, beads, law, loading, run and effects (scene_line)."""
+        return scene_line(self)
+
+    def _repr_html_(self) -> str:
+        """A small table for notebooks: the scene's facts with their units (scene_facts)."""
+        return html_table(scene_facts(self), "granchain Scene")

@@ -401,13 +401,22 @@ def _read_outputs(s: _Section, chain: Chain, run: Run, wall: bool = False) -> Ou
         return v
 
     interval = interval_or_auto("history_interval", "s between history samples, at least the time step")
-    if interval is None and histories:
+    sensors = _read_sensors(s, chain) if s.has("sensors") else ()
+    if interval is None and (histories or sensors):  # a sensor's history is sampled as the contacts' are
         # a sample every step makes a 245 MB dump of 454k steps x 3 contacts: by default the planner's largest
         # interval whose dump-derived peaks stay within rtol (granchain.workflows.plan)
         interval = AUTO
     dump = interval_or_auto("dump_interval", "s between whole-chain dump frames (LAMMPS), at least the time step")
     _check_stop(s, run, nc, snapshots, wall)
-    s.finish(("peak_force", "histories", "snapshots", "window", "history_interval", "dump_interval"))
+    event = _read_flag(
+        s,
+        "event",
+        "true tracks the far-end wall's largest force, impulse and energy over the event (a walled chain), or "
+        "what bead N carries off a free far end",
+    )
+    s.finish(
+        ("peak_force", "histories", "snapshots", "window", "history_interval", "dump_interval", "event", "sensors")
+    )
     return Outputs(
         peak_force=peak,
         histories=histories,
@@ -415,4 +424,17 @@ def _read_outputs(s: _Section, chain: Chain, run: Run, wall: bool = False) -> Ou
         window=window,
         history_interval=interval,
         dump_interval=dump,
+        event=event,
+        sensors=sensors,
     )
+
+
+def _read_sensors(s: _Section, chain: Chain) -> tuple[int, ...]:
+    """[outputs] sensors: sensor beads, 1-based, each once, on a chain of a given length."""
+    if chain.beads is None:
+        raise s.fail(
+            "sensors",
+            s.raw("sensors"),
+            'sensor beads need a chain of a given length: set [chain] beads = N (not "auto"), then beads 1..N',
+        )
+    return _int_list(s, "sensors", 1, chain.beads, f"sensor beads, 1-based: this chain has beads 1..{chain.beads}")

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from granchain.physics import materials as mat
 from granchain.physics.effects import OVERLAP_WATCH, PrecompressionEffect, active_effects, refusal, sections
+from granchain.scene import model
 from granchain.scene.limits import MAX_FORCE, MAX_SCENE_BYTES, MIN_TAU
 from granchain.scene.model import Chain, Scene
 from granchain.scene.read_sections import (
@@ -21,6 +22,7 @@ from granchain.scene.read_sections import (
     _read_run,
 )
 from granchain.scene.section import SceneError, _did_you_mean, _Section, _shown
+from granchain.scene.writer import scene_to_dict
 
 
 def bundled_scenes() -> dict[str, str]:
@@ -123,7 +125,59 @@ def _with_source(scene: Scene, source: str, text: str) -> Scene:
     return replace(scene, source=source, source_text=text)
 
 
+def set_key(data: dict, key: str, value, source: str) -> None:
+    """Set one dotted scene key (``loading.amplitude``, ``chain.material.density``) in a scene's dict
+    (as TOML reads it), making the tables it names; the reader validates the value afterwards.
+
+    Raises
+    ------
+    SceneError
+        A part of the key names a value that is not a table (``title.x``, ``chain.radius.x``).
+    """
+    parts = key.split(".")
+    node = data
+    for i, part in enumerate(parts[:-1]):
+        nxt = node.setdefault(part, {})
+        if not isinstance(nxt, dict):
+            head = ".".join(parts[: i + 1])
+            raise SceneError(
+                f"{source}: cannot set {_shown(key)}: {head} is {_shown(nxt)}, not a table (set {_shown(head)} itself)"
+            )
+        node = nxt
+    node[parts[-1]] = value
+
+
+def replaced(scene: Scene, changes: dict) -> Scene:
+    """Scene.replace: the scene's canonical dict (scene_to_dict, what to_toml writes) with each dotted
+    key of changes set (set_key), read by scene_from_dict as a file of that text would be, under the
+    scene's source; its source_text the changed text (run directories copy it)."""
+    source = scene.source or "<scene>"
+    data = scene_to_dict(scene)
+    for key, value in changes.items():
+        if not isinstance(key, str):
+            raise SceneError(f"{source}: scene key {_shown(key)} is invalid: a dotted name such as 'loading.amplitude'")
+        set_key(data, key, value, source)
+    new = scene_from_dict(data, source=source)
+    return _with_source(new, scene.source, new.to_toml())
+
+
+model._REPLACED = replaced  # Scene.replace's reader (the model is below it: granchain.scene's layers)
+
+
 SECTIONS = ("title", "chain", "contact", "loading", "run", "outputs", *sections())
+
+
+def _check_scene(scene: Scene, source: str) -> None:
+    """Refuse a scene whose sections, each valid, do not go together: its scales (_check_scales), and
+    sensor beads ([outputs] sensors) on bead 1 under a force loading, whose loaded face carries the
+    applied force, not a contact a sensor averages (postprocess.sensors)."""
+    _check_scales(scene, source)
+    if 1 in scene.outputs.sensors and scene.loading.is_force:
+        raise SceneError(
+            f"{source}: [outputs] sensors = {list(scene.outputs.sensors)} is invalid with [loading] kind = "
+            f"{scene.loading.kind!r}: bead 1's loaded face carries the applied force, not a contact a sensor "
+            'averages; put the sensors on beads 2 and beyond, or strike bead 1 (kind = "striker": its contact counts)'
+        )
 
 
 def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
@@ -184,8 +238,10 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
             "made long enough that no reflection from its far end reaches the measured contacts, so a wall "
             'there is never felt; give [chain] beads = N for a wall N beads away, or far_end = "free"'
         )
-    _check_scales(scene, source)
-    why = refusal(active_effects(scene))
+    _check_scene(scene, source)
+    why = refusal(active_effects(scene)) or next(
+        filter(None, (e.requirement(scene) for e in active_effects(scene))), None
+    )
     if why:
         raise SceneError(f"{source}: {why}")
     why = contact.law_class.unsupported(chain) if scene.per_bead else None
@@ -248,18 +304,13 @@ def _check_scales(scene: Scene, source: str) -> None:
                     f"bring the {' and '.join(law.scene_keys) or 'material values'} closer to those of real beads "
                     f"(e.g. {law.example_contact or 'brass: E = 115e9 Pa'})"
                 )
-    gamma = float(scene.effects.dashpot)
-    if gamma > 0.0:
+    if scene.damping.velocity_dependent:
         m_min = float(min(mat.bead_mass(m, radii[0]) for m in materials))
         if scene.loading.kind == "striker":
             m_min = min(m_min, float(scene.striker_mass))
-        if m_min / gamma < MIN_TAU:
-            raise SceneError(
-                f"{source}: [damping] dashpot = {gamma:g} N s/m is invalid: it damps the lightest body "
-                f"({m_min:.3g} kg) in m/gamma = {m_min / gamma:.3g} s, under {MIN_TAU:g} s; a dashpot of at most "
-                f"{m_min / MIN_TAU:.3g} N s/m (a viscous contact is damped over microseconds: gamma of "
-                "about 1 to 100 N s/m for millimetre beads)"
-            )
+        why = scene.damping.scale_refusal(scene.damping_coefficient, m_min, MIN_TAU)
+        if why:
+            raise SceneError(f"{source}: {why}")
     f0 = float(scene.effects.precompression)
     if f0 > MAX_FORCE:
         raise SceneError(

@@ -30,7 +30,6 @@ from granchain.templates.atoms import (
     bead_kinds,
     largest_radius,
     pair_coeffs,
-    precompression_overlaps,
     render_data,
 )
 from granchain.templates.columns import (
@@ -88,7 +87,6 @@ __all__ = [
     "law_parameters",
     "lead_floor",
     "pair_coeffs",
-    "precompression_overlaps",
     "render_data",
     "render_deck",
     "result_columns",

@@ -9,7 +9,7 @@ import numpy as np
 
 from granchain.physics.effects import active_effects
 from granchain.physics.laws import ContactLaw
-from granchain.problem import precompressed_displacements
+from granchain.problem import precompressed_displacements, scene_static_load
 from granchain.scene import SceneError
 from granchain.templates.filters import float_repr
 
@@ -93,6 +93,11 @@ class AtomLayout:
         return {"bead": 1, **{name: first + i for i, name in enumerate(self.extra_types)}}
 
     @property
+    def atom_types(self) -> int:
+        """The deck's atom types: the bead kinds and one per effect atom (chain.data's "atom types")."""
+        return self.bead_types + len(self.extra_types)
+
+    @property
     def natoms(self) -> int:
         """The deck's atoms: the beads and the effects' atoms."""
         return self.beads + len(self.extra_types)
@@ -123,22 +128,6 @@ def atom_layout(scene) -> dict:
     return {"offset": lay.offset, "striker": lay.striker, "wall": lay.wall, "types": lay.types, "natoms": lay.natoms}
 
 
-def precompression_overlaps(scene) -> dict:
-    """Static overlaps for the deck: bead-bead contacts ("beads": one value on a chain of one bead
-    kind; "per_contact": (atom, overlap) of each bead-bead contact on a per-bead chain, on its left
-    bead's atom), and the wall's (0 without precompression). A striker's contact starts unloaded."""
-    if not scene.effects.precompression:
-        return {"beads": 0.0, "wall": 0.0, "per_contact": []}
-    alpha0 = precompressed_displacements(scene)[1]
-    wall = scene.effects.far_end == "wall"
-    layout = AtomLayout.of(scene)
-    per_contact = []
-    if scene.per_bead:
-        per_contact = [(layout.first_id + i, float(alpha0[i])) for i in range(scene.n_contacts)]
-    beads = float(alpha0[0]) if scene.n_contacts else 0.0  # (one bead: only the wall's contact)
-    return {"beads": beads, "wall": float(alpha0[-1]) if wall else 0.0, "per_contact": per_contact}
-
-
 MAX_BEAD_KINDS = 200  # pair_coeff lines grow as kinds^2 / 2
 
 
@@ -147,8 +136,9 @@ def bead_kinds(scene) -> tuple[list[tuple[float, object]], list[int]]:
     kinds, kind_of = scene.bead_kinds
     if len(kinds) > MAX_BEAD_KINDS:
         raise SceneError(
-            f"{scene.source}: the chain has {len(kinds)} distinct bead kinds (radius, material); the LAMMPS "
-            f"backend takes at most {MAX_BEAD_KINDS} (one atom type each); use the reference backend"
+            f"{scene.source}: the chain has {len(kinds)} distinct bead kinds (radius, material"
+            + (", and the [contact] values of the bead's contacts" if scene.contact.coefficients.varies else "")
+            + f"); the LAMMPS backend takes at most {MAX_BEAD_KINDS} (one atom type each); use the reference backend"
         )
     return kinds, kind_of
 
@@ -169,7 +159,7 @@ def render_data(scene) -> str:
     w = 4.0 * rmax  # periodic y/z sides wider than cutoff + skin, so no body sees its own image
     rho = scene.chain.material.density
     u0 = np.zeros(n)
-    if scene.effects.precompression:
+    if scene_static_load(scene):
         u0 = precompressed_displacements(scene)[0]
     # touching with zero force, overlaps exactly 0 in LAMMPS's arithmetic; displaced by a precompression
     x = scene.bead_positions + u0
@@ -241,12 +231,31 @@ def pair_coeffs(scene, layout: AtomLayout) -> list[PairCoeff]:
     rc = scene.contact_radius  # contact distances on the positions' grid: at-rest overlaps exactly 0
     pairs = [PairCoeff(1, 1, scene.law, 2.0 * rc(scene.chain.radius))]
     if scene.per_bead:
-        kinds, _ = bead_kinds(scene)
+        kinds, kind_of = bead_kinds(scene)
+        met = _contacts_of_kind_pairs(scene, kind_of)
         pairs = [
-            PairCoeff(a + 1, b + 1, scene.bead_pair_law(*kinds[a], *kinds[b]), rc(kinds[a][0]) + rc(kinds[b][0]))
+            PairCoeff(
+                a + 1,
+                b + 1,
+                scene.bead_pair_law(*kinds[a], *kinds[b], met.get((a, b), 0)),
+                rc(kinds[a][0]) + rc(kinds[b][0]),
+            )
             for a in range(len(kinds))
             for b in range(a, len(kinds))
         ]
     for effect in active_effects(scene):  # the effects' atom types (Effect.pair_coeffs)
         pairs += [PairCoeff(*c) for c in effect.pair_coeffs(scene, layout.types)]
     return pairs
+
+
+def _contacts_of_kind_pairs(scene, kind_of: list[int]) -> dict[tuple[int, int], int]:
+    """(kind a, kind b), a <= b -> the first bead-bead contact between beads of those kinds, whose
+    [contact] values the pair's line carries; {} where the values do not vary per contact (every
+    pair then has one law: Scene.bead_kinds says why a pair of kinds meets at one contact's values)."""
+    if not scene.contact.coefficients.varies:
+        return {}
+    first: dict[tuple[int, int], int] = {}
+    for i in range(len(kind_of) - 1):
+        a, b = sorted((kind_of[i], kind_of[i + 1]))
+        first.setdefault((a, b), i)
+    return first

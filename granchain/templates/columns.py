@@ -25,7 +25,14 @@ RESULT_COLUMNS = (
     "d_flead",  # the leading pulse: the contact's first maximum above the floor (N)
     "d_tlead",  # its time (s)
     "d_amax",  # a law with history: the largest overlap so far (m)
+    "d_speak",  # a sensor bead ([outputs] sensors): the running peak of its average force (N)
+    "d_stpeak",  # its time (s)
+    "d_sfmin",  # the smallest average force since that peak
 )
+
+#: a deck with sensor beads' per-atom vectors (pair_style ... sensors): the average force, its two
+#: previous samples, its running peak, the peak's time, the smallest since
+SENSOR_VECTORS = ("d_sfc", "d_sprev", "d_sprev2", "d_speak", "d_stpeak", "d_sfmin")
 
 #: the deck's results dump (RESULT_COLUMNS) and the run's last step and time ("step time"); the
 #: dump is the last file a deck writes, so its presence marks a finished run
@@ -62,7 +69,8 @@ class PerAtom:
         history = scene.contact.law_class.history
         dissipated = (["d_edis"] if history else []) + [v for e in active_effects(scene) for v in e.dissipated_vectors]
         vectors = ["d_fc", "d_fprev", "d_fprev2", "d_fpeak", "d_tpeak"] + (["d_amax"] if history else [])
-        return cls((*vectors, *dissipated, "d_fmin", "d_flead", "d_tlead"), tuple(dissipated))
+        sensors = SENSOR_VECTORS if scene.outputs.sensors else ()
+        return cls((*vectors, *dissipated, "d_fmin", "d_flead", "d_tlead", *sensors), tuple(dissipated))
 
     @property
     def results(self) -> list[str]:

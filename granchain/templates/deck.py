@@ -9,17 +9,19 @@ from dataclasses import dataclass
 from importlib import resources
 
 import jinja2
+import numpy as np
 
 from granchain._version import __version__
 from granchain.exceptions import UsageError
 from granchain.peaks import lead_fall, lead_floor, stop_force_floor
 from granchain.physics.effects import active_effects
+from granchain.problem import scene_static_forces
 from granchain.results import scene_hash
 from granchain.scene import SceneError
-from granchain.templates.atoms import AtomLayout, pair_coeffs, precompression_overlaps, render_data
+from granchain.templates.atoms import AtomLayout, pair_coeffs, render_data
 from granchain.templates.columns import BUILTIN_GRANULAR_PER_ATOM, RESULTS_DUMP, RUN_END_FILE, PerAtom
 from granchain.templates.filters import comment, float_repr, is_atom_x, law_parameters, one_line
-from granchain.templates.run_control import Schedule, StopCheck, Watch
+from granchain.templates.run_control import EventCheck, Schedule, StopCheck, Watch
 
 
 @dataclass(frozen=True)
@@ -115,7 +117,7 @@ def builtin_granular_refusal(scene) -> str | None:
         materials.add(scene.loading.striker_material)
     why = {
         f"the {scene.contact.law} law (the yardstick is Hertz)": scene.contact.law != "hertz",
-        **{e.yardstick: True for e in active_effects(scene) if e.yardstick},
+        **{y: True for e in active_effects(scene) if (y := e.yardstick_refusal(scene))},
         "beads or a striker of another material (the yardstick takes one E and nu)": len(materials) > 1,
     }
     refused = [k for k, v in why.items() if v]
@@ -145,9 +147,23 @@ def effect_blocks(scene) -> dict[str, list[str]]:
     return {slot: [e.deck_blocks[slot] for e in active if slot in e.deck_blocks] for slot in DECK_SLOTS}
 
 
+def stop_statics(scene, stop: int | None) -> dict[str, float]:
+    """StopCheck's static forces of the stop contact, the wall's contact and contact 1."""
+    if not stop:
+        return {}
+    forces = scene_static_forces(scene)
+    return {"static": float(forces[stop - 1]), "wall_static": float(forces[-1]), "back_static": float(forces[0])}
+
+
 def energy_columns(scene, layout: AtomLayout) -> dict[str, tuple[str, str]]:
     """The energy samples' columns after x1 that the effects add: name -> (LAMMPS expression, words)."""
     return {k: v for e in active_effects(scene) for k, v in e.energy_columns(layout).items()}
+
+
+def sensor_args(scene, layout: AtomLayout) -> str:
+    """The pair style's sensor beads (postprocess.sensors): ' sensors K' and their atom IDs, or ''."""
+    beads = scene.outputs.sensors
+    return f" sensors {len(beads)} " + " ".join(str(b + layout.offset) for b in beads) if beads else ""
 
 
 def render_deck(scene, yardstick: str | None = None, options: DeckOptions = DECK_OPTIONS) -> Deck:
@@ -194,14 +210,18 @@ def render_deck(scene, yardstick: str | None = None, options: DeckOptions = DECK
             pair_coeffs=pairs,
             # the leading pulse (peaks.leading_pulse): above the static force plus the reached floor
             lead_floor=lead_floor(scene),
+            # the static force the leading pulse rises above: F0, or under gravity the largest (the
+            # wall's: F0 + the chain's weight), a floor above every contact's own (ChainState.f0)
+            lead_static=float(np.max(scene_static_forces(scene), initial=0.0)),
             # ... counted once the force has fallen by LAMMPS's force resolution below it (0: at once)
             lead_fall=lead_fall(scene),
             per_atom=per_atom,
-            static_overlaps=precompression_overlaps(scene),
             watch=watch,
             effect_blocks=effect_blocks(scene),
-            pair_style_args="".join(e.pair_style_args(scene) for e in active_effects(scene)),
+            pair_style_args="".join(e.pair_style_args(scene) for e in active_effects(scene))
+            + sensor_args(scene, layout),
             energy_columns=energy_columns(scene, layout),
+            event=EventCheck.of(scene) if scene.wall_event else None,
             stop=(
                 StopCheck(
                     stop,
@@ -212,6 +232,7 @@ def render_deck(scene, yardstick: str | None = None, options: DeckOptions = DECK
                     wall_atom=scene.chain.beads + layout.offset if scene.run.stop_after_wall else 0,
                     # ... and contact 1's, for the wall's reflection coming back
                     back_atom=1 + layout.offset if scene.run.stop_after_reflection else 0,
+                    **stop_statics(scene, stop),
                 )
                 if stop
                 else None

@@ -8,9 +8,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from granchain.invariants import ENERGY_WATCH, MOMENTUM_WATCH, contact_overlap_bounds
-from granchain.peaks import PEAK_PASSED_FRACTION
+from granchain.peaks import PEAK_PASSED_FRACTION, event_floor
 from granchain.physics.effects import active_effects, external_forces
-from granchain.problem import ChainProblem, initial_energy, precompressed_displacements
+from granchain.problem import (
+    ChainProblem,
+    initial_energy,
+    precompressed_displacements,
+    scene_static_forces,
+    scene_static_load,
+)
 from granchain.schedule import STOP_CHECK_EVERY, dump_stride, history_stride, scene_step_plan
 from granchain.templates.atoms import AtomLayout, bead_kinds
 from granchain.templates.filters import float_repr
@@ -82,12 +88,13 @@ class Watch:
     def of(cls, scene, pairs) -> Watch:
         """The watch of a scene's deck, whose pair coefficients (PairCoeff) give the laws to bound."""
         e0 = initial_energy(ChainProblem.from_scene(scene))
-        u0 = precompressed_displacements(scene)[0] if scene.effects.precompression else np.zeros(scene.chain.beads)
+        u0 = precompressed_displacements(scene)[0] if scene_static_load(scene) else np.zeros(scene.chain.beads)
         x0 = scene.bead_positions  # as render_data writes them
         problem, layout = ChainProblem.from_scene(scene), AtomLayout.of(scene)
         force, bounds = contact_force_bounds(scene, pairs, layout)
         x1_0, xn_0 = float(x0[0] + u0[0]), float(x0[-1] + u0[-1])
         x_first, x_last = f"x[{layout.first_id}] - {x1_0!r}", f"x[{layout.last_id}] - {xn_0!r}"
+        x_mass = f"{moving_mass_x(layout)} - {initial_mass_x(scene, x0 + u0)!r}"
         return cls(
             force=force,
             bounds=bounds,
@@ -96,8 +103,25 @@ class Watch:
             xn_0=xn_0,
             p0=scene.initial_momentum,
             momentum=not external_forces(scene),
-            effects_work="".join(e.watch_work(problem, x_first, x_last) for e in active_effects(scene)),
+            effects_work="".join(e.watch_work(problem, x_first, x_last, x_mass) for e in active_effects(scene)),
         )
+
+
+def moving_mass_x(layout: AtomLayout) -> str:
+    """The moving atoms' sum of m_i x_i as a LAMMPS expression (a wall's atom left out)."""
+    group = "mobile" if layout.wall else "all"
+    return f"mass({group})*xcm({group},x)"
+
+
+def initial_mass_x(scene, x: np.ndarray) -> float:
+    """The moving atoms' sum of m_i x_i at t = 0 (x: the beads' positions there; a striker touches
+    bead 1), moving_mass_x's value at t = 0 as granchain's masses give it."""
+    masses = np.asarray(scene.bead_masses if scene.per_bead else np.full(scene.chain.beads, scene.mass), dtype=float)
+    total = float(np.dot(masses, x))
+    if scene.loading.kind == "striker":
+        xs = float(x[0]) - (float(scene.loading.striker_radius) + float(scene.bead_radii[0]))
+        total += float(scene.striker_mass) * xs
+    return total
 
 
 #: contact force bounds this close (relative) are one bound: a uniform chain's contacts, whose laws a
@@ -221,6 +245,9 @@ class StopCheck:
         [run] stop_after_reflection: the atom contact 1 lives on (bead 1's), through which the wall's
         reflection must have passed back: its force, sampled at the checks after the wall's contact
         has passed, risen above the floor and back below the fraction of its largest; 0: no wait.
+    static, wall_static, back_static : float
+        The force at rest of the stop contact, the wall's contact and contact 1 (precompression's F0
+        plus gravity's weight above each: problem.scene_static_forces), N.
     """
 
     contact: int
@@ -231,3 +258,47 @@ class StopCheck:
     fall: float = 0.0
     wall_atom: int = 0
     back_atom: int = 0
+    static: float = 0.0
+    wall_static: float = 0.0
+    back_static: float = 0.0
+
+
+@dataclass(frozen=True)
+class EventCheck:
+    """[outputs] event: fix chain/event's arguments (templates/event.lmp.j2; granchain.physics.event).
+
+    Attributes
+    ----------
+    wall_atom : int
+        The atom the wall's contact lives on (bead N's).
+    static : float
+        The wall's static force, N (problem.scene_static_forces: F0 plus the chain's weight).
+    floor : float
+        The rise above it at which the event has begun (peaks.event_floor), N.
+    held : bool
+        The chain is pressed on the wall (precompression or gravity): the event ends at its first
+        return; else once it moves away from the wall.
+    load_end : float
+        The time after which no load acts (a force load's duration; 0 otherwise), s.
+    every : int
+        Steps between two checks of the event's end (the stop check's).
+    """
+
+    wall_atom: int
+    static: float
+    floor: float
+    held: bool
+    load_end: float
+    every: int = STOP_CHECK_EVERY
+
+    @classmethod
+    def of(cls, scene) -> EventCheck:
+        """The event check of a planned walled scene."""
+        ld = scene.loading
+        return cls(
+            wall_atom=scene.chain.beads + AtomLayout.of(scene).offset,
+            static=float(scene_static_forces(scene)[-1]),
+            floor=event_floor(scene),
+            held=bool(scene.effects.precompression or scene.effects.gravity),
+            load_end=float(ld.duration) if ld.is_force else 0.0,
+        )

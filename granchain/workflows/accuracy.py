@@ -4,7 +4,7 @@ Methods: LAMMPS velocity Verlet (granchain's pair styles), reference RK4, refere
 SciPy's DOP853 (a free elastic Hertz chain only) as an outside yardstick. For each, a range of time
 steps (tolerances for DOP853); for each run, the error of the scene's observables (peak force of the
 measured contacts, wave speed) against a converged run whose peak is the same quantity (RK4; Verlet
-for Verlet and LAMMPS on a scene with a dashpot, where RK4's peak is another: reference_method),
+for Verlet and LAMMPS on a scene with velocity-dependent damping, where RK4's peak is another: reference_method),
 whose own error is estimated by Richardson extrapolation, and the wall time (median of repeats;
 LAMMPS's start-up and the plugin build are one-time costs, reported apart). Also the error of
 dump-derived peaks against the dump interval.
@@ -69,7 +69,7 @@ def check_study_options(methods, levels: int, repeats: int) -> tuple[str, ...]:
 def study_method(scene, methods=METHODS) -> tuple[str, str | None]:
     """The integrator a study of these methods plans the scene's "auto" values with, and why where the
     scene chose it: the reference's default for the scene (workflows.run.method_choice: Verlet on a
-    scene with a dashpot), unless no method the study measures runs it; then the one they run (RK4 for
+    scene with velocity-dependent damping), unless no method the study measures runs it; then the one they run (RK4 for
     rk4 and dop853 alone, Verlet for lammps and verlet alone)."""
     from granchain.backends import REFERENCE
     from granchain.workflows.run import method_choice
@@ -103,7 +103,7 @@ def dop853_skipped_because(scene, problem: ChainProblem) -> str | None:
     missing = [
         name
         for name, on in (
-            ("a dashpot", problem.dashpot),
+            (problem.damping_part.words(problem.damping_coefficient), problem.damping_part.velocity_dependent),
             ("a wall", problem.wall_law is not None),
             ("a striker", problem.striker_mass is not None),
             ("precompression", problem.precompression),
@@ -153,7 +153,7 @@ def _converged(problem, scene, end: float, h: float, method: str) -> _Converged:
         a, b = solve_chain(problem, end, h, method), solve_chain(problem, end, h / 2, method)
         unordered = withheld_because(method, scene) is not None
         how = "the finer of runs at dt and 2 dt, its error " + (
-            f"their difference ({facts.label}'s error follows no order with a dashpot)"
+            f"their difference ({facts.label}'s error follows no order with {scene.damping.phrase})"
             if unordered
             else f"their difference / {2**facts.order - 1} (order {facts.order})"
         )
@@ -187,7 +187,7 @@ def accuracy_study(
 ) -> AccuracyStudy:
     """Run the scene with each method at `levels` settings (``repeats`` timings each) against a
     converged run of an integrator whose peak is the same quantity (reference_method: RK4, but Verlet
-    for Verlet and LAMMPS on a scene with a dashpot): errors, orders and prices for the work-precision
+    for Verlet and LAMMPS on a scene with velocity-dependent damping): errors, orders and prices for the work-precision
     diagram.
 
     The study measures the peak forces of bead-bead contacts (a striker's or a wall's contact is

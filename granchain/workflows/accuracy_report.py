@@ -131,7 +131,7 @@ def reference_lines(study: AccuracyStudy) -> list[str]:
     if study.definition_gap is not None:
         lines.append(
             f"- the two converged runs' peaks differ by {study.definition_gap:.1e}: different quantities (the "
-            "dashpot's force), not step error; a method's error is of its own peak, not the other's"
+            f"{study.scene.damping.noun}'s force), not step error; a method's error is of its own peak, not the other's"
         )
     lines += [f"- not run: {m} ({why})" for m, why in study.skipped.items()]
     return lines

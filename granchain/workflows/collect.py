@@ -423,6 +423,7 @@ def _read_plan(d: Path, scene):
 def _damaged_message(d: Path, scene, err: Exception) -> str:
     """The message of a result file its reader could not take: each file read alone, the first that
     fails named (only on this error path: a good directory is read once)."""
+    from granchain.lammps.readback import SENSORS_DUMP
     from granchain.lammps.runner import read_results
     from granchain.postprocess.dumps import read_dump
     from granchain.postprocess.histories import HISTORY_NPY, read_history_table
@@ -442,6 +443,7 @@ def _damaged_message(d: Path, scene, err: Exception) -> str:
         ("load_end.txt", load_end),
         (HISTORY_NPY, read_history_table),
         *((f"snapshot_{k}.dump", read_dump) for k in range(len(scene.outputs.snapshots))),
+        (SENSORS_DUMP, lambda p: read_dump(p, columns=("d_sfc",))),
     ]
     for name, probe in probes:
         if not (d / name).exists():

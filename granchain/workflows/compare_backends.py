@@ -26,7 +26,7 @@ def reference_method(scene, method: str | None = None) -> tuple[str, str | None]
     """The reference's integrator in a compare of this scene, and why where the scene chose it.
 
     method: the user's choice, kept; None: the reference's default for the scene
-    (workflows.run.method_choice: RK4, but Verlet on a scene with a dashpot, whose peaks RK4 reads
+    (workflows.run.method_choice: RK4, but Verlet on a scene with velocity-dependent damping, whose peaks RK4 reads
     as a different quantity from LAMMPS's Verlet, comparison_table.peak_definition; the reference's
     Verlet is still the independent numpy solver, and defines a peak as LAMMPS does).
 
@@ -62,7 +62,7 @@ def compare_scene(
     Verlet; the reference: method), the time step for rtol / 2 each; lam.scene and ref.scene are
     the scenes each one ran.
 
-    method: the reference's integrator; None: RK4, or Verlet on a scene with a dashpot
+    method: the reference's integrator; None: RK4, or Verlet on a scene with velocity-dependent damping
     (reference_method: the same definition of a peak as LAMMPS's).
 
     error_estimate: give each run its measured error bars (companions at 2 dt and 4 dt; "checked": RK4's

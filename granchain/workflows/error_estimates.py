@@ -25,9 +25,10 @@ bounds from the companion at 2 dt alone (one_companion_because, richardson.one_c
 overstate the error many times, and error_estimate="checked" gives the checked estimate (2 dt, 4 dt,
 dt / 2).
 
-Orders: each integrator's (granchain.integrators: IntegratorFacts.order, dashpot_order): RK4 4,
-velocity Verlet (reference and LAMMPS) 2, but 1 for Verlet with a dashpot: the dashpot sees half-step
-velocities and is first order (Verlet.dashpot_error). Measured on effect-dashpot (LAMMPS, planned step,
+Orders: each integrator's (granchain.integrators: IntegratorFacts.order, damping_order): RK4 4,
+velocity Verlet (reference and LAMMPS) 2, but 1 for Verlet with velocity-dependent damping (a damping
+part's velocity_dependent: the dashpot, Kuwabara-Kono): the damping force sees half-step velocities and
+is first order (Verlet.damping_error). Measured on effect-dashpot (LAMMPS, planned step,
 against dt / 16): with order 2 every estimate was 0.37-0.43 of the true error, an underestimate by the
 factor (2^2 - 1) / (2^1 - 1) = 3 the first order predicts. No function here asks which integrator a run
 has: each reads the integrator's facts (integrator(method)).
@@ -87,7 +88,7 @@ from granchain.workflows.errorbars.reasons import (
     unchecked_because,
     withheld_because,
 )
-from granchain.workflows.errorbars.report import ESTIMATED_OBSERVABLES, Companion, ErrorReport
+from granchain.workflows.errorbars.report import Companion, ErrorReport
 from granchain.workflows.errorbars.runs import kept_lammps
 from granchain.workflows.errorbars.strategies import STRATEGIES, ErrorBarStrategy, Request, strategy
 
@@ -96,7 +97,6 @@ __all__ = [
     "END_PEAKS",
     "END_PEAK_COMPANION_INCOMPLETE",
     "END_PEAK_INCOMPLETE",
-    "ESTIMATED_OBSERVABLES",
     "FIT_DOMINATES",
     "ONE_COMPANION_BY_DEFAULT",
     "ONSET_ORDER",

@@ -237,7 +237,7 @@ def check_run(
             f"{est.beads} beads): shorten [run] end_time (or stop after a contact: [run] stop_after_contact), "
             + (
                 "soften what makes the planner's step this short (`granchain plan` names it: the stiffest contact "
-                "or the dashpot's rate), "
+                f"or the {scene.damping.noun}'s rate), "
                 if planned_step
                 else 'set [run] timestep = "auto" or a larger one, '
             )

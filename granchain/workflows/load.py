@@ -36,7 +36,11 @@ import numpy as np
 from granchain import safe_files
 from granchain.backends import BACKENDS, LAMMPS, REFERENCE, FileIOBackend
 from granchain.exceptions import GranchainError
+from granchain.physics.event import EVENT_FIELDS
+from granchain.postprocess.observables import end_summary_keys
+from granchain.postprocess.sensors import solution_sensor_fields
 from granchain.results import ChainSolution, RunResult, StoredRun, printable
+from granchain.rundir import SENSORS_CSV
 from granchain.workflows.summary_check import SummaryFieldError, check_summary
 
 #: a campaign point's run directory inside its job directory (granchain.campaigns.workspace.RUN_DIR)
@@ -205,6 +209,7 @@ def _solution(d: Path, scene, summary: dict, peaks: dict) -> ChainSolution:
         kw["snapshot_displacement"] = s["displacement"].to_numpy(np.float64).reshape(times.size, n)
         kw["snapshot_velocity"] = s["velocity"].to_numpy(np.float64).reshape(times.size, n)
         kw["snapshot_force"] = s["contact_force"].to_numpy(np.float64).reshape(times.size, n)[:, : n - 1]
+    kw.update(_sensors(d, scene, summary))
     steps = int(summary["steps"])
     return ChainSolution(
         method=summary["method"],
@@ -220,13 +225,27 @@ def _solution(d: Path, scene, summary: dict, peaks: dict) -> ChainSolution:
         impulse_delivered=float(c.get("impulse_delivered", 0.0)),
         momentum=float(c.get("momentum", 0.0)),
         extra_steps=max(int(price.get("steps", steps)) - steps, 0),
-        wall_peak_force=summary.get("wall_peak_force"),
-        wall_peak_complete=summary.get("wall_peak_complete"),
-        striker_peak_force=summary.get("striker_peak_force"),
-        striker_peak_complete=summary.get("striker_peak_complete"),
-        striker_velocity=summary.get("striker_velocity"),
+        **{k: summary.get(k) for k in end_summary_keys()},  # the end contacts' peaks
+        **{k: v for k, v in (summary.get("event") or {}).items() if k in EVENT_FIELDS},
         **kw,
     )
+
+
+def _sensors(d: Path, scene, summary: dict) -> dict:
+    """A run directory's sensor beads as the solution holds them: their peaks from summary.json's
+    ``sensors`` (postprocess.sensors.solution_sensor_fields) and their histories from sensors.csv."""
+    kw = solution_sensor_fields(scene, summary.get("sensors"))
+    if kw and ((d / SENSORS_CSV).exists() or (d / SENSORS_CSV).is_symlink()):
+        h = _csv(d, SENSORS_CSV)
+        cols = [f"force_bead_{b}" for b in kw["sensor_beads"]]
+        if list(h.columns) != ["time", *cols]:
+            raise LoadRunError(
+                f"{d / SENSORS_CSV}: columns {', '.join(map(str, h.columns))}; granchain writes time, "
+                f"{', '.join(cols)} (damaged: run the scene again)"
+            )
+        kw["sensor_history_time"] = h["time"].to_numpy(np.float64)
+        kw["sensor_history_force"] = h[cols].to_numpy(np.float64)
+    return kw
 
 
 #: how many times load_run reads a directory that another process is replacing meanwhile

@@ -54,6 +54,7 @@ from granchain.physics.estimates import (
     max_stiffness,
 )
 from granchain.scene import AUTO, Scene, SceneError, scene_from_dict, scene_to_dict
+from granchain.scene.display import html_table, key_unit, number, printable, with_unit
 from granchain.schedule import output_stride
 from granchain.workflows.planning.choice import (
     PlanChoice,
@@ -105,15 +106,34 @@ class Plan:
     omega_max: float = 0.0
     stable_timestep: float = 0.0
 
+    def __repr__(self) -> str:
+        """One line: the integrator, rtol and scene, each choice with its unit, omega_max and the stable step."""
+        title = printable(self.scene.title or self.scene.source or "untitled scene", 60)
+        chosen = ", ".join(f"{c.name} = {with_unit(number(c.value), key_unit(c.name))}" for c in self.choices)
+        return (
+            f"<Plan {self.method} for rtol {self.rtol:g} of {title}: {chosen or 'nothing chosen'}; omega_max = "
+            f"{self.omega_max:.4g} rad/s, stable step {self.stable_timestep:.4g} s (.choices: each with its reason)>"
+        )
+
+    def _repr_html_(self) -> str:
+        """A small table for notebooks: each choice, its unit and its reason, under the integrator and rtol."""
+        rows = [(c.name, number(c.value), key_unit(c.name), c.reason) for c in self.choices]
+        rows += [
+            ("omega_max", f"{self.omega_max:.4g}", "rad/s", ""),
+            ("stable step", f"{self.stable_timestep:.4g}", "s", ""),
+        ]
+        caption = f"granchain Plan: {self.method} for rtol {self.rtol:g}, {self.scene.title or self.scene.source or ''}"
+        return html_table(rows, caption, ("choice", "value", "unit", "reason"))
+
 
 def predicted_error(method: str, omega_max: float, rate: float, dt: float) -> float:
     """The planner's error model for the relative error of peak forces at a time step dt: C (omega_max
-    dt)^p, plus D x rate x dt for an integrator whose dashpot force is first-order accurate (velocity
-    Verlet and LAMMPS evaluate it with the half-step velocities; IntegratorFacts.dashpot_error)."""
+    dt)^p, plus D x rate x dt for an integrator whose velocity-dependent damping force is first-order accurate
+    (velocity Verlet and LAMMPS evaluate it with the half-step velocities; IntegratorFacts.damping_error)."""
     facts = integrator(method)
     err = facts.calibration * (omega_max * dt) ** facts.order
-    if facts.dashpot_error:
-        err += facts.dashpot_error * rate * dt
+    if facts.damping_error:
+        err += facts.damping_error * rate * dt
     return err
 
 
@@ -285,12 +305,12 @@ def _extended_stop(scene: Scene, names: list[str]) -> int:
 
 def accurate_timestep(method: str, omega_max: float, rate: float, rtol: float) -> float:
     """The largest dt whose predicted_error is at most rtol (each term gets half of rtol when a
-    dashpot's first-order term enters: IntegratorFacts.dashpot_error)."""
+    damping force's first-order term enters: IntegratorFacts.damping_error)."""
     facts = integrator(method)
     c, p = facts.calibration, facts.order
-    if not facts.dashpot_error or rate <= 0.0:
+    if not facts.damping_error or rate <= 0.0:
         return (rtol / c) ** (1.0 / p) / omega_max
-    return min((rtol / 2 / c) ** (1.0 / p) / omega_max, rtol / 2 / (facts.dashpot_error * rate))
+    return min((rtol / 2 / c) ** (1.0 / p) / omega_max, rtol / 2 / (facts.damping_error * rate))
 
 
 #: the smallest --rtol: below it round-off, not the time step, limits every number (and the planned
@@ -318,8 +338,11 @@ def _timestep_choice(scene, method: str, rtol_plan: float, omega: float, stiffes
         f"{omega:.4g} rad/s at {stiffest} (nominal contact's tangent stiffness {k_t:.4g} N/m{at}); "
         f"stability limit {stable:.3g} s"
     )
-    if facts.dashpot_error and rate > 0:
-        why += f"; the dashpot's first-order error {facts.dashpot_error:g} x rate {rate:.3g} 1/s x dt ({facts.label})"
+    if facts.damping_error and rate > 0:
+        why += (
+            f"; the {scene.damping.noun}'s first-order error {facts.damping_error:g} x rate {rate:.3g} 1/s x dt "
+            f"({facts.label})"
+        )
     ld = scene.loading
     if ld.is_force and ld.duration < dt_new:
         # the step plan ends a step at T exactly and f is constant within it: one step is the

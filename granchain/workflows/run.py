@@ -83,7 +83,7 @@ def method_choice(backend: str | Backend, method: str | None, scene) -> tuple[st
         The backend, or its name.
     method : str or None
         The integrator asked for (kept), or None: the backend's default for this scene
-        (Backend.default_method: the reference's RK4, or Verlet on a scene with a dashpot).
+        (Backend.default_method: the reference's RK4, or Verlet on a scene with velocity-dependent damping).
     scene : granchain.scene.Scene
         The scene to run.
 
@@ -108,7 +108,7 @@ def method_choice(backend: str | Backend, method: str | None, scene) -> tuple[st
 
 def integrator(backend: str | Backend, method: str | None, scene) -> str:
     """The integrator a run of this scene uses on a backend (method_choice without its reason):
-    reference rk4 (default; verlet on a scene with a dashpot) or verlet; LAMMPS velocity Verlet."""
+    reference rk4 (default; verlet on a scene with velocity-dependent damping) or verlet; LAMMPS velocity Verlet."""
     return method_choice(backend, method, scene)[0]
 
 
@@ -408,7 +408,7 @@ def run_scene(
 ) -> RunResult:
     """Run a scene on a backend; if out is given, write the run directory (checked before the run).
 
-    reference: method rk4 (default; verlet on a scene with a dashpot, method_choice) or verlet.
+    reference: method rk4 (default; verlet on a scene with velocity-dependent damping, method_choice) or verlet.
     lammps: velocity Verlet with granchain's pair styles, np_ MPI ranks; the run directory also gets
     the deck, data file, log and dumps (the backend's work files, removed once copied). The other
     arguments are calculate_scene's.

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from datetime import datetime
 
+from granchain.postprocess.observables import END_PEAKS
+
 #: the deepest nesting granchain writes is about 5 (errors.observables.<name>.<field>); far deeper is
 #: not granchain's and would exhaust the stack of whatever walks it (copy.deepcopy, repr)
 MAX_DEPTH = 64
@@ -125,14 +127,13 @@ SUMMARY = Record(
         "wall_time": NUMBER,
         "observables": MapOf(ANY),
         "observables_missing": MapOf(TEXT),
+        "observables_inapplicable": ListOf(TEXT),
         "observables_notes": MapOf(TEXT),
         "peaks": MapOf(INTEGER),
         "conservation": MapOf(opt(NUMBER)),
-        "wall_peak_force": opt(NUMBER),
-        "wall_peak_complete": opt(FLAG),
-        "striker_peak_force": opt(NUMBER),
-        "striker_peak_complete": opt(FLAG),
-        "striker_velocity": opt(NUMBER),
+        # the end contacts' peaks (postprocess.observables.ends): whether each is a peak, and numbers
+        **{k: opt(FLAG if k == o.complete_field else NUMBER) for o in END_PEAKS.values() for k in o.summary_keys},
+        "event": MapOf(opt(NUMBER)),
         "extra": Record({}),
         "error_estimate": opt(NUMBER),
         "errors": opt(_ERRORS),

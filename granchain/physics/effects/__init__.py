@@ -7,7 +7,8 @@ See granchain.physics.effects.base for what an effect supplies and the rules for
 from __future__ import annotations
 
 from granchain.physics.effects.base import OVERLAP_WATCH, REGISTRY, Bounds, Effect, watched_force
-from granchain.physics.effects.dashpot import DashpotEffect
+from granchain.physics.effects.damping import DampingEffect
+from granchain.physics.effects.gravity import GravityEffect
 from granchain.physics.effects.per_bead import PerBeadEffect
 from granchain.physics.effects.precompression import PrecompressionEffect
 from granchain.physics.effects.striker import StrikerEffect
@@ -16,7 +17,10 @@ from granchain.physics.effects.wall import FAR_ENDS, WallEffect
 #: name -> effect class, in the order every hook runs
 EFFECTS: dict[str, type[Effect]] = REGISTRY
 EFFECTS.update(
-    {cls.name: cls for cls in (WallEffect, DashpotEffect, PrecompressionEffect, StrikerEffect, PerBeadEffect)}
+    {
+        cls.name: cls
+        for cls in (WallEffect, DampingEffect, PrecompressionEffect, GravityEffect, StrikerEffect, PerBeadEffect)
+    }
 )
 
 __all__ = [
@@ -26,6 +30,7 @@ __all__ = [
     "Bounds",
     "Effect",
     "active_effects",
+    "body_acceleration",
     "effect_fields",
     "momentum_kept",
     "refusal",
@@ -70,13 +75,18 @@ def momentum_kept(problem) -> bool:
     return all(e.momentum_kept(problem) for e in EFFECTS.values())
 
 
-def work(problem, dx_first, dx_last):
+def work(problem, dx_first, dx_last, dx_mass=0.0):
     """The work of the effects' forces since t = 0 (dx: bead 1's and bead N's displacement since;
-    floats or arrays)."""
+    dx_mass: the moving beads' sum of m_i dx_i; floats or arrays)."""
     w = 0.0
     for e in EFFECTS.values():
-        w = w + e.work(problem, dx_first, dx_last)
+        w = w + e.work(problem, dx_first, dx_last, dx_mass)
     return w
+
+
+def body_acceleration(problem) -> float:
+    """The effects' body forces' acceleration on every moving bead toward the far end (gravity), m/s^2."""
+    return sum(e.body_acceleration(problem) for e in EFFECTS.values())
 
 
 def refusal(active: list[type[Effect]]) -> str | None:

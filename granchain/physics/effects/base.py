@@ -1,7 +1,7 @@
 """The base class of an effect, and the rules for writing a new one.
 
 An effect is something beyond the paper's bare chain (a free chain of equal beads with a load on
-bead 1) that a scene declares: a far-end wall, a dashpot, a static precompression, a striker, per-bead
+bead 1) that a scene declares: a far-end wall, damping, a static precompression, a striker, per-bead
 radii or materials. Each is one module of this package, a subclass of Effect whose class methods the
 rest of granchain calls for every registered effect, in registry order; none of them names an effect.
 An effect a scene does not declare leaves no trace: ``active(scene)`` is False and nothing of it runs.
@@ -9,7 +9,7 @@ An effect a scene does not declare leaves no trace: ``active(scene)`` is False a
 Rules for writing a new effect (tests/test_effects.py checks them for every registered effect):
 
 1. Subclass Effect and set ``name`` (the registry's key) and ``label`` (how a message names it, e.g.
-   ``"[damping] dashpot"``). An effect with a section of its own sets ``section`` (the scene's
+   ``"[boundary]"``). An effect with a section of its own sets ``section`` (the scene's
    ``[section]``), ``scene_keys`` (its keys), ``fields`` (the ``scene.Effects`` attributes it owns,
    name -> the value that means absent: ``scene.Effects`` is built from the registry's fields) and
    ``example`` / ``invalid`` (a valid section, and per key values the scene must refuse, with a
@@ -27,21 +27,24 @@ Rules for writing a new effect (tests/test_effects.py checks them for every regi
    physical reason this effect's refusal gives, or None where the other effect words it. Both sides list
    the pair (the relation is symmetric) and exactly one side words it.
 4. The problem (granchain.problem.ChainProblem): ``problem_fields(scene, fields)`` updates the fields
-   the chain is built from (mass, law, wall_law, dashpot, ...); ``ends(problem, parts, mass)`` adds
+   the chain is built from (mass, law, wall_law, damping, ...); ``ends(problem, parts, mass)`` adds
    the extra beads a solver integrates (a striker in front, an immovable wall at the end; those in
    front counted by ``beads_in_front``), and ``end_fields`` what the results report of them;
    ``static_forces(problem, fp)`` the constant external forces on the end beads (precompression:
    the push on bead 1 returned, the pull on bead N in fp[-1]);
-   ``reference_accel(...)`` the reference's force evaluation when it changes the contact force law
-   (the dashpot: a closure over preallocated buffers, as fast as the plain one).
+   ``body_acceleration(problem)`` a body force's acceleration on every moving bead (gravity);
+   ``requirement(scene)`` what else the scene must declare for it (gravity: a wall), refused by the
+   scene reader; ``reference_accel(...)`` the reference's force evaluation when it changes the contact force law
+   (damping: a closure over preallocated buffers, as fast as the plain one).
 5. The planner's and the stability check's bounds (granchain.physics.estimates.highest_frequency):
    ``chain_bounds(scene, b)`` changes what holds along the chain (masses, contact laws, the force
-   level, the dashpot's gamma) before the contacts' tangents are taken; ``end_bounds(scene, b)`` the
+   level, the damping part) before the contacts' tangents are taken; ``end_bounds(scene, b)`` the
    nodes at the chain's ends (a wall's contact, a striker's mass and contact).
-6. Energy: the work of its forces since t = 0, ``work(problem, dx_first, dx_last)`` (numpy arrays or
-   floats: the reference's ledger and the LAMMPS read-back call the same function), the same as a
-   LAMMPS expression for the deck's run watch, ``watch_work(problem, x_first, x_last)`` (x_first,
-   x_last: expressions of bead 1's and bead N's displacement since t = 0), and the energy columns
+6. Energy: the work of its forces since t = 0, ``work(problem, dx_first, dx_last, dx_mass)`` (numpy
+   arrays or floats: the reference's ledger and the LAMMPS read-back call the same function; dx_mass:
+   the moving beads' sum of m_i dx_i, for a body force), the same as a LAMMPS expression for the
+   deck's run watch, ``watch_work(problem, x_first, x_last, x_mass)`` (x_first, x_last, x_mass:
+   expressions of bead 1's and bead N's displacement since t = 0 and of dx_mass), and the energy columns
    its deck adds (``energy_columns(layout)``: name -> (LAMMPS expression, words);
    granchain.lammps.runner reads them back by name). ``conserves_momentum`` False: its forces are
    external (the run watches skip the momentum check where ``in_problem(problem)``: the problem
@@ -52,7 +55,7 @@ Rules for writing a new effect (tests/test_effects.py checks them for every regi
    load) to its template in granchain/templates; ``pair_style_args`` what it adds to the
    pair_style line; ``pair_coeffs(scene, types)`` the pair_coeff lines of its atom types (i, j,
    law, contact distance); ``yardstick`` why LAMMPS's built-in granular pair style
-   cannot run it (None: it can).
+   cannot run it (None: it can; ``yardstick_refusal(scene)`` where the reason depends on the scene).
 8. Register the class in granchain/physics/effects/__init__.py (EFFECTS, the only list of effects).
 """
 
@@ -93,17 +96,19 @@ def watched_force(law, smaller_radius) -> np.ndarray:
 class Bounds:
     """What highest_frequency bounds over: the Gershgorin rows of the linearised chain.
 
-    Set along the chain by the effects' chain_bounds (mass, law, force, static_force, gamma), then
-    the neighbours of each node (k: contact tangent; m: neighbour mass; g: dashpot) on the left (l)
-    and right (r), which end_bounds changes at the ends; extra: effects' own nodes (the striker).
+    Set along the chain by the effects' chain_bounds (mass, law, force, static_force, damping), then
+    the neighbours of each node (k: contact tangent; m: neighbour mass; g: the damping's viscous
+    coefficient, viscous) on the left (l) and right (r), which end_bounds changes at the ends; extra:
+    effects' own nodes (the striker).
     """
 
     force: float  # the largest force a bead-bead contact is expected to carry (N)
     mass: np.ndarray  # (n,) kg
     radius: np.ndarray  # (n,) m: each contact's force is held to watched_force of its smaller bead
     law: Any  # ContactLaw over the n-1 contacts
-    static_force: float = 0.0  # F0 on every contact (precompression)
-    gamma: float = 0.0  # the dashpot's N s/m
+    static_force: float = 0.0  # the largest static force on a contact (precompression's F0, gravity's weight)
+    damping: Any = None  # the damping part (granchain.physics.damping), None: none
+    damping_coefficient: float = 0.0
     kl: np.ndarray = field(default_factory=lambda: np.zeros(0))
     ml: np.ndarray = field(default_factory=lambda: np.zeros(0))
     kr: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -111,6 +116,13 @@ class Bounds:
     gl: np.ndarray = field(default_factory=lambda: np.zeros(0))
     gr: np.ndarray = field(default_factory=lambda: np.zeros(0))
     extra: dict[str, float] = field(default_factory=dict)
+
+    def viscous(self, tangent):
+        """The damping's viscous coefficient (N s/m) of a contact of stiffest tangent `tangent`: the
+        part's contact_damping (a dashpot's gamma, Kuwabara-Kono's A x tangent), 0 without damping."""
+        if self.damping is None:
+            return 0.0
+        return self.damping.contact_damping(self.damping_coefficient, tangent)
 
 
 class Effect:
@@ -120,6 +132,8 @@ class Effect:
     label: ClassVar[str] = ""
     section: ClassVar[str | None] = None
     scene_keys: ClassVar[tuple[str, ...]] = ()
+    #: the scene keys a section may leave out (each has a default: the wall's material and radius)
+    optional_keys: ClassVar[tuple[str, ...]] = ()
     #: scene.Effects attributes this effect owns -> the value that means absent
     fields: ClassVar[dict[str, Any]] = {}
     #: a valid section (tests), and per key values the scene refuses
@@ -129,6 +143,9 @@ class Effect:
     invalid: ClassVar[dict[str, tuple[Any, ...]]] = {}
     #: other effect's name -> the fix this effect's refusal suggests ("" none), None: the other words it
     incompatible: ClassVar[dict[str, str | None]] = {}
+    #: other effects it needs (their names; its declaration declares them, requirement() refuses a
+    #: scene without them): gravity a wall to stand on
+    requires: ClassVar[tuple[str, ...]] = ()
     conserves_momentum: ClassVar[bool] = True
     #: extra beads a solver puts in front of bead 1 (a striker: 1; Effect.ends)
     beads_in_front: ClassVar[int] = 0
@@ -153,6 +170,12 @@ class Effect:
     @classmethod
     def to_dict(cls, effects) -> dict[str, Any] | None:
         """Its section of a scene file, or None when absent."""
+        return None
+
+    @classmethod
+    def requirement(cls, scene) -> str | None:
+        """Why the scene, declaring this effect, lacks what the effect needs (the fix in words), or None
+        (gravity: a wall to stand on). The scene reader refuses it with this message."""
         return None
 
     # ---- the problem
@@ -182,15 +205,21 @@ class Effect:
         return 0.0
 
     @classmethod
+    def body_acceleration(cls, problem) -> float:
+        """A body force's acceleration on every moving bead toward the far end, m/s^2 (gravity's g;
+        0: none): the reference adds it to every force evaluation, the deck has its own fix."""
+        return 0.0
+
+    @classmethod
     def reference_accel(cls, problem, law, inv_m: np.ndarray, fp: np.ndarray, alpha_hist: np.ndarray):
         """The reference's force evaluation when this effect changes the contact forces (the
-        dashpot; see granchain.reference.state.make_accel), else None."""
+        damping; see granchain.reference.state.make_accel), else None."""
         return None
 
     # ---- planner bounds
     @classmethod
     def chain_bounds(cls, scene, b: Bounds) -> None:
-        """Change masses, laws, force level or gamma along the chain (before the tangents)."""
+        """Change masses, laws, force level or damping along the chain (before the tangents)."""
 
     @classmethod
     def end_bounds(cls, scene, b: Bounds) -> None:
@@ -209,13 +238,14 @@ class Effect:
         return cls.conserves_momentum or not cls.in_problem(problem)
 
     @classmethod
-    def work(cls, problem, dx_first, dx_last):
-        """The work its forces did since t = 0 (dx: bead 1's and bead N's displacement since)."""
+    def work(cls, problem, dx_first, dx_last, dx_mass=0.0):
+        """The work its forces did since t = 0 (dx: bead 1's and bead N's displacement since; dx_mass:
+        the moving beads' sum of m_i dx_i, a striker's included, for a body force)."""
         return 0.0
 
     @classmethod
-    def watch_work(cls, problem, x_first: str, x_last: str) -> str:
-        """work() as a LAMMPS expression (" + ..." terms; "" none)."""
+    def watch_work(cls, problem, x_first: str, x_last: str, x_mass: str = "") -> str:
+        """work() as a LAMMPS expression (" + ..." terms; "" none); x_mass: dx_mass's expression."""
         return ""
 
     @classmethod
@@ -224,6 +254,11 @@ class Effect:
         return {}
 
     # ---- the deck
+    @classmethod
+    def yardstick_refusal(cls, scene) -> str | None:
+        """Why LAMMPS's built-in granular pair style cannot run the scene's effect (None: it can)."""
+        return cls.yardstick
+
     @classmethod
     def pair_style_args(cls, scene) -> str:
         """Words it adds to the pair_style line ("" none)."""

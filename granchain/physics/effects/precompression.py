@@ -87,7 +87,7 @@ class PrecompressionEffect(Effect):
             for (a, b), i in first.items():
                 (ra, ma), (rb, mb) = kinds[a], kinds[b]
                 which = f"contact {i + 1} (beads {i + 1} and {i + 2})"
-                held.append((which, scene.bead_pair_law(ra, ma, rb, mb), min(ra, rb)))
+                held.append((which, scene.bead_pair_law(ra, ma, rb, mb, i), min(ra, rb)))
         if scene.effects.far_end == "wall":
             held.append((f"bead {scene.chain.beads} on the wall", scene.wall_law, float(scene.bead_radii[-1])))
         return held
@@ -131,7 +131,7 @@ class PrecompressionEffect(Effect):
 
     @classmethod
     @override
-    def work(cls, problem, dx_first, dx_last):
+    def work(cls, problem, dx_first, dx_last, dx_mass=0.0):
         f0 = problem.precompression
         if not f0:
             return 0.0
@@ -139,7 +139,7 @@ class PrecompressionEffect(Effect):
 
     @classmethod
     @override
-    def watch_work(cls, problem, x_first: str, x_last: str) -> str:
+    def watch_work(cls, problem, x_first: str, x_last: str, x_mass: str = "") -> str:
         f0 = problem.precompression
         if not f0:
             return ""

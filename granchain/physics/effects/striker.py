@@ -85,8 +85,9 @@ class StrikerEffect(Effect):
         smaller = min(float(scene.loading.striker_radius), float(b.radius[0]))
         f = min(b.force, float(watched_force(scene.striker_law, smaller)))  # (the run watch's bound)
         ks = float(np.asarray(scene.striker_law.tangent_stiffness(f), dtype=float))
-        b.kl[0], b.ml[0], b.gl[0] = ks, ms, b.gamma
-        m0, gamma = b.mass[0], b.gamma
+        gamma = b.viscous(ks)
+        b.kl[0], b.ml[0], b.gl[0] = ks, ms, gamma
+        m0 = b.mass[0]
         b.extra["striker"] = ks / ms + ks / math.sqrt(ms * m0)
         b.extra["striker_damp"] = gamma / ms + gamma / math.sqrt(ms * m0)
 

@@ -33,7 +33,7 @@ class WallEffect(Effect):
     The paper's chain is semi-infinite (its far end free and never reached); with a wall, bead N
     presses on an immovable wall with the wall's law (``scene.wall_law``: the chain's law for a bead
     on the wall, with the pair's E* and R*; on a rigid flat R* = R and E* = E/(1-nu^2), for the
-    bilinear law twice the bead-bead k; the dashpot, where the scene has one, on it too). The
+    bilinear law twice the bead-bead k; the damping, where the scene has one, on it too). The
     solvers integrate it as an extra bead of zero inverse mass after bead N; the results report its
     contact's peak force and time (``wall_peak_force``, ``wall_time_of_peak``). The wall takes
     momentum: a walled chain does not conserve it.
@@ -51,6 +51,7 @@ class WallEffect(Effect):
     declaration = {"boundary": {"far_end": "wall"}}
     section = "boundary"
     scene_keys = ("far_end", "wall_material", "wall_radius")
+    optional_keys = ("wall_material", "wall_radius")  # a rigid flat when left out
     fields = {"far_end": "free", "wall_material": None, "wall_radius": None}
     example = {"far_end": "wall", "wall_material": "aluminium-6061-t6", "wall_radius": 0.05}
     invalid = {"far_end": ("rigid", 1, True)}
@@ -138,19 +139,23 @@ class WallEffect(Effect):
         kw = float(np.asarray(scene.wall_law.tangent_stiffness(f), dtype=float))
         if f == held:
             b.extra["wall_held"] = held
-        b.kr[-1], b.mr[-1], b.gr[-1] = kw, np.inf, b.gamma
+        b.kr[-1], b.mr[-1], b.gr[-1] = kw, np.inf, b.viscous(kw)
         b.extra["wall"] = kw
 
     @classmethod
     @override
     def data_atoms(cls, scene, types: dict[str, int], x: np.ndarray) -> list[tuple[int, float, float, float]]:
         # the rigid flat: an atom at bead N's surface, never integrated; touching it with zero force and no
-        # overlap in LAMMPS's arithmetic (touching_positions), unless precompression presses bead N into it
+        # overlap in LAMMPS's arithmetic (touching_positions), unless precompression or gravity presses bead N into it
         from granchain.physics.positions import touching_positions
 
         r = float(scene.bead_radii[-1])
         xn = float(scene.bead_positions[-1])
-        x = xn + r if scene.effects.precompression else float(touching_positions([r], start=xn)[-1])
+        x = (
+            xn + r
+            if scene.effects.precompression or scene.effects.gravity
+            else float(touching_positions([r], start=xn)[-1])
+        )
         return [(types["wall"], 2.0 * r, scene.bead_materials[-1].density, x)]
 
     @classmethod

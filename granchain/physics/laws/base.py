@@ -31,6 +31,10 @@ on them; tests/test_laws.py and tests/test_kernels.py check them for every regis
    ``loading_stiffness(force)``: the virgin curve's own dF/dalpha where it carries that force, the
    stiffness a further compression meets from a static force (a precompressed chain's linearised
    fronts). Each law defines both: a plastic law's virgin curve is softer than its unloading.
+   ``overlap_tangent(alpha, alpha_max)``: dF/dalpha of the branch in force at overlap alpha (the
+   loading branch where alpha >= the history, else the unloading one), the damping parts' tangent
+   (granchain.physics.damping: Kuwabara-Kono's A dF/dalpha d(alpha)/dt); its C++ twin is the
+   kernel's ``tangent(alpha, am, d)``, the same expression.
 4. ``kinks(alpha_max)``: where dF/dalpha (or a higher derivative) jumps, for RK4's event location:
    overlaps (one per contact) with where they apply; ``turn_level(alpha_max)``: a contact whose
    overlap turns (from rising to falling) above this level starts unloading on another curve (None:
@@ -40,7 +44,10 @@ on them; tests/test_laws.py and tests/test_kernels.py check them for every regis
 6. ``read_contact(section, chain)`` reads and validates its scene keys (section: scene's Section) and
    returns its Coefficients; ``for_pair(coefficients, e_star, r_star, nominal_r_star)`` the law of one
    pair of bodies (bead-bead, bead-wall with the flat's E* and R* = R, striker-bead);
-   ``contact_to_dict(contact)`` the ``[contact]`` table a scene file writes back.
+   ``contact_to_dict(contact)`` the ``[contact]`` table a scene file writes back. A key may hold one
+   value per bead-bead contact (the power law's lists): its Coefficients then say so (``varies``) and
+   give each contact's (``of_contact(i)``), and for_pair gets one contact's values (the striker's the
+   first contact's, the wall's the last's: Scene.pair_law).
 7. Register the class in granchain/physics/laws/__init__.py (LAWS, the only list of laws); the C++
    kernel, struct Law<Name> in granchain/lammps/law_<name>.h, is compiled and registered from LAWS
    (granchain.lammps.build). The planner's estimates (expected_peak_force, wave speeds) are class
@@ -81,6 +88,17 @@ class LawCoefficients:
     """A law's ``[contact]`` values as a scene gives them (ContactLaw.Coefficients): one field per key,
     None where the scene leaves the value to the materials. This base has none (the Hertz law's)."""
 
+    @property
+    def varies(self) -> bool:
+        """Whether a key holds one value per bead-bead contact (the power law's lists): the scene's
+        contacts then differ by more than their beads (Scene.per_bead, Scene.bead_kinds)."""
+        return False
+
+    def of_contact(self, i: int) -> LawCoefficients:
+        """The values of bead-bead contact i (0-based; -1 the last), each one number: these, where
+        no key varies."""
+        return self
+
 
 @dataclass(frozen=True)
 class ContactLaw:
@@ -98,6 +116,10 @@ class ContactLaw:
     #: back keeps the yield strength in the table and leaves the key to it (a table's yield strength
     #: and the key together are refused)
     yield_strength_key: ClassVar[str | None] = None
+    #: k is Hertz's 4/3 E* sqrt(R*) of the pair's E* and R* and the virgin curve starts as k alpha^(3/2):
+    #: the paper's Hertz-chain models (Eqs. 8, 15, 19) hold for its onset (the loading regime's T_c);
+    #: False: the regime is told from the law's own two-body contact time (physics.loading_regime)
+    hertz_onset: ClassVar[bool] = False
     #: dF/dalpha jumps at a kink that a contact's overlap crosses while it moves (bilinear: closing at
     #: alpha = 0 and reaching zero force; Thornton: reloading past d_max): fixed-step Verlet's error
     #: then depends on where in a step that happens and follows no order in dt, so its error bars come
@@ -179,6 +201,11 @@ class ContactLaw:
         ``tangent_stiffness``, may be stiffer)."""
         raise NotImplementedError
 
+    def overlap_tangent(self, alpha: ArrayLike, alpha_max: ArrayLike | None = None) -> np.ndarray:
+        """dF/dalpha of the branch in force at overlap alpha >= 0 (rule 3): the loading branch where
+        alpha >= alpha_max (before this step, as force takes it), else the unloading one; 0 apart."""
+        raise NotImplementedError
+
     def max_stiffness(self, force: ArrayLike) -> np.ndarray:
         """The stiffest dF/dalpha of a contact loaded up to `force`: ``tangent_stiffness`` unless a law
         says otherwise."""
@@ -234,6 +261,33 @@ class ContactLaw:
     def pair_coefficients(self) -> list[float]:
         """pair_coeff numbers after d0 in the C++ kernel's order (k first; the deck inserts d0)."""
         return [float(getattr(self, f.name)) for f in dataclasses.fields(self)]
+
+    # ---- the planner's estimates (rule 7; granchain.physics.estimates and workflows.planning ask the law)
+    @classmethod
+    def wave_speeds(cls, scene, expected_force: float, step) -> tuple[float, float]:
+        """(slowest leading-wave speed, fastest wave speed) the planner expects of the scene, m/s.
+
+        Parameters
+        ----------
+        scene : granchain.scene.Scene
+            A scene whose contact law is this one.
+        expected_force : float
+            The planner's expected peak force (N: physics.estimates.expected_peak_force).
+        step : tuple or None
+            The load's step equivalent (amplitude, duration), None for an impulse.
+
+        Returns
+        -------
+        tuple of float
+            The slowest and the fastest speed, m/s.
+        """
+        raise NotImplementedError
+
+    @classmethod
+    def leading_edge_speed(cls, scene, expected_force: float, step) -> float:
+        """The fastest a disturbance can enter the undisturbed chain, m/s: the fastest of ``wave_speeds``
+        unless a law knows a tighter bound (the bilinear loading line's sound speed)."""
+        return cls.wave_speeds(scene, expected_force, step)[1]
 
     # ---- the law's analytic models (rule 8; granchain.physics.predictions, postprocess.comparison_table and the
     # peak plot ask every law for its own)
@@ -389,6 +443,36 @@ EFFECT_DOMAINS = {
 
 #: every value a law's model_domains may hold
 MODEL_NEEDS = (*CHAIN_NEEDS, *EFFECT_DOMAINS)
+
+
+class TwoBodies(NamedTuple):
+    """A scene's two-body impact (two_bodies): the setup's name (a key of EFFECT_DOMAINS), the
+    contact's law, the reduced mass m* (kg) and the bodies in words."""
+
+    setup: str
+    law: ContactLaw
+    reduced_mass: float
+    words: str
+
+
+def two_bodies(scene) -> TwoBodies | None:
+    """The scene's two-body impact (bead 1 on bead 2, a striker on one bead, one bead on the wall),
+    or None where it is not one (the laws' and the damping parts' two-body models)."""
+    if scene.chain.beads not in (1, 2):
+        return None
+    ld, m1 = scene.loading, float(scene.bead_masses[0])
+    if scene.chain.beads == 2 and ld.kind == "velocity" and scene.effects.far_end == "free":
+        m2 = float(scene.bead_masses[1])
+        return TwoBodies("pair_impact", scene.contact_laws[0], m1 * m2 / (m1 + m2), "bead 1 on bead 2")
+    if scene.chain.beads != 1:
+        return None
+    if ld.kind == "striker":
+        ms = scene.striker_mass
+        return TwoBodies("striker_impact", scene.striker_law, ms * m1 / (ms + m1), "the striker on bead 1")
+    if ld.kind == "velocity" and scene.effects.far_end == "wall":
+        return TwoBodies("wall_impact", scene.wall_law, m1, "the bead on the flat")
+    return None
+
 
 #: the registered laws, name -> class (granchain.physics.laws.LAWS fills it: the only list of laws)
 REGISTRY: dict[str, type[ContactLaw]] = {}

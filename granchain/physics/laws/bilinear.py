@@ -195,6 +195,15 @@ class BilinearLaw(ContactLaw):
         return np.asarray(self.k_unloading)
 
     @override
+    def overlap_tangent(self, alpha, alpha_max=None):
+        """k on the loading line (alpha >= alpha_max), k_u while un/reloading with a force, else 0."""
+        a = np.asarray(alpha, dtype=float)
+        am = a if alpha_max is None else np.maximum(alpha_max, a)
+        k, ku = np.asarray(self.k, dtype=float), np.asarray(self.k_unloading, dtype=float)
+        unloading = np.where(a - np.asarray(self.beta, dtype=float) * am > 0.0, ku, 0.0)
+        return np.where(a > 0.0, np.where(a >= am, k, unloading), 0.0)
+
+    @override
     def kinks(self, alpha_max):
         beta, _, zero = self._operands  # (0-d operands: the RK4 event location asks at every piece)
         return [
@@ -388,12 +397,12 @@ def _short_load_predictions(scene) -> list[dict]:
     lam = models.exponential_decay_rate(k, m, beta)
     out += [
         short("gamma", coeffs.gamma, "m/(s N)", "Eq. 22 via A1, A2"),
-        short("eta", coeffs.eta, "-", "Eq. 22 via A2, A3"),
+        short("eta", coeffs.eta, "1", "Eq. 22 via A2, A3"),
         short("omega", coeffs.omega, "m/(s N)", "Eq. 22 via A1, A2, A4"),
         dict(
             name="exponential_decay_per_contact",
             value=lam,
-            unit="-",
+            unit="1",
             equation="Eqs. 26-27 (F_{i+1} = F_i exp(-lambda); Eq. 27 as derived from Eq. 26)",
             valid="exponential regime: contacts before the transition",
         ),
@@ -407,7 +416,7 @@ def _short_load_predictions(scene) -> list[dict]:
             dict(
                 name="transition_contact",
                 value=float(tc),
-                unit="-",
+                unit="1",
                 equation="Eq. 27 meets Eq. 30",
                 valid="first contact where the secondary-wave peak exceeds the leading peak",
             )
@@ -416,7 +425,7 @@ def _short_load_predictions(scene) -> list[dict]:
         dict(
             name="inverse_decay_exponent",
             value=models.inverse_decay_exponent(beta),
-            unit="-",
+            unit="1",
             equation="Eq. 34",
             valid="inverse regime, beyond the transition contact",
         )

@@ -46,6 +46,7 @@ class HertzLaw(ContactLaw):
 
     name: ClassVar[str] = "hertz"
     pair_style: ClassVar[str] = "chain/hertz"
+    hertz_onset: ClassVar[bool] = True
     history: ClassVar[bool] = False
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12)}
     example_contact: ClassVar[dict[str, float]] = {}
@@ -130,6 +131,10 @@ class HertzLaw(ContactLaw):
         return hertz_tangent_stiffness(force, self.k)
 
     @override
+    def overlap_tangent(self, alpha, alpha_max=None):
+        return 1.5 * np.asarray(self.k, dtype=float) * np.sqrt(np.maximum(alpha, 0.0))
+
+    @override
     def kinks(self, alpha_max):
         # F'' is infinite at zero overlap: the contact opens or closes
         return [Kink(np.zeros(np.shape(alpha_max)), "zero overlap")]
@@ -169,11 +174,6 @@ class HertzLaw(ContactLaw):
             slow = min(models.front_speed_lower(step[0], k, m, d), slow)
         # leading waves decay while they form; allow the slower speed of a wave at a tenth the force
         return slow * 0.1 ** (1 / 6), fast
-
-    @classmethod
-    def leading_edge_speed(cls, scene, expected_force: float, step) -> float:
-        """The fastest a disturbance can enter the undisturbed chain: the fastest solitary wave."""
-        return cls.wave_speeds(scene, expected_force, step)[1]
 
     # ---- the law's models (ContactLaw rule 8)
     @classmethod

@@ -3,9 +3,10 @@
 ``[contact] law = "power"`` with ``exponent = n`` (1 <= n <= 3) and ``stiffness = K`` (N/m^n): a
 contact of any elastic exponent (n = 1 a linear spring that opens, n = 3/2 Hertz, n > 3/2 conical or
 rough contacts; interfaces and disorder in n: Kekic and Van Gorder, Physica D 2018). K and n are the
-scene's and hold for every contact of the scene, bead-bead, bead-wall and striker-bead alike (they are
-not derived from the bodies' E* and R*). The law's model is the elastic two-body impact
-(power_impact). The C++ twin is granchain/lammps/law_power.h.
+scene's, not derived from the bodies' E* and R*: each one number for every contact or a list of one
+per bead-bead contact (PER_CONTACT_RULE: the striker's contact takes contact 1's, the wall's the last
+contact's; docs/laws.md). The law's model is the elastic two-body impact (power_impact). The C++
+twin is granchain/lammps/law_power.h.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import numpy as np
 from typing_extensions import override
 
 from granchain.physics import models
-from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, LawCoefficients, forbid_others
+from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, LawCoefficients, forbid_others, two_bodies
 
 #: the exponents the law takes (1: a linear spring; 3: the stiffest the planner's estimates are made for)
 EXPONENT_RANGE = (1.0, 3.0)
@@ -39,10 +40,23 @@ def power_impact(k: float, n: float, reduced_mass: float, velocity: float) -> di
 
 @dataclass(frozen=True)
 class PowerCoefficients(LawCoefficients):
-    """The power law's [contact] values: its exponent n and stiffness K (N/m^n)."""
+    """The power law's [contact] values: its exponent n and stiffness K (N/m^n), each one number or a
+    tuple of one per bead-bead contact (contact 1 between beads 1 and 2 first)."""
 
-    exponent: float
-    stiffness: float
+    exponent: float | tuple[float, ...]
+    stiffness: float | tuple[float, ...]
+
+    @property
+    @override
+    def varies(self) -> bool:
+        return isinstance(self.exponent, tuple) or isinstance(self.stiffness, tuple)
+
+    @override
+    def of_contact(self, i: int) -> PowerCoefficients:
+        def pick(v):
+            return v[i] if isinstance(v, tuple) else v
+
+        return PowerCoefficients(exponent=pick(self.exponent), stiffness=pick(self.stiffness))
 
 
 @dataclass(frozen=True)
@@ -63,11 +77,14 @@ class PowerLaw(ContactLaw):
         **dict.fromkeys(("power_pair_impact_peak_force", "power_pair_impact_duration"), "pair_impact"),
         **dict.fromkeys(("power_striker_impact_peak_force", "power_striker_impact_duration"), "striker_impact"),
         **dict.fromkeys(("power_wall_impact_peak_force", "power_wall_impact_duration"), "wall_impact"),
+        # Nesterenko's V ~ F^((n-1)/(2n)) on a uniform uncompressed chain, at a force (WAVE_SPEED_DOMAIN)
+        **dict.fromkeys(("power_wave_speed", "power_wave_speed_at_impact"), "any"),
     }
     compare_models: ClassVar[dict[str, tuple[tuple[str, str], ...]]] = {
         "leading_peak_force": (("power_pair_impact_peak_force", "power-law impact (two beads)"),),
         "striker_peak_force": (("power_striker_impact_peak_force", "power-law impact (two bodies)"),),
         "wall_peak_force": (("power_wall_impact_peak_force", "power-law impact (bead on the flat)"),),
+        "wave_speed": (("power_wave_speed", "Nesterenko's V(F) on F = K alpha^n at the reference's leading peak"),),
     }
 
     exponent: ArrayLike = 1.5
@@ -117,6 +134,13 @@ class PowerLaw(ContactLaw):
         return self.tangent_stiffness(force)
 
     @override
+    def overlap_tangent(self, alpha, alpha_max=None):
+        # n k alpha^(n-1) (the C++ kernel's order); apart 0, also where n = 1
+        k, n = self._operands
+        a = np.asarray(alpha, dtype=float)
+        return np.where(a > 0.0, n * k * np.maximum(a, 0.0) ** (n - 1.0), 0.0)
+
+    @override
     def kinks(self, alpha_max):
         # a derivative of F jumps (or is infinite) at zero overlap unless n is an integer: open or close
         return [Kink(np.zeros(np.shape(alpha_max)), "zero overlap")]
@@ -125,16 +149,20 @@ class PowerLaw(ContactLaw):
     @classmethod
     @override
     def read_contact(cls, s, chain) -> PowerCoefficients:
-        forbid_others(s, cls)
         low, high = EXPONENT_RANGE
-        n = s.number(
-            "exponent", low=low, low_open=False, high=high, high_open=False, what="the exponent n of F = K alpha^n"
-        )
-        k = s.number(
-            "stiffness", low=0.0, high=1e30, what="K of F = K alpha^n in N/m^n (up to 1e30: n = 3 takes ~1e19)"
+        forbid_others(s, cls)
+        n = _number_or_list(s, chain, "exponent", dict(low=low, low_open=False, high=high, high_open=False), "n")
+        k = _number_or_list(
+            s, chain, "stiffness", dict(low=0.0, high=1e30), "K in N/m^n (up to 1e30: n = 3 takes ~1e19)"
         )
         s.finish(("law", *cls.scene_keys))
         return PowerCoefficients(exponent=n, stiffness=k)
+
+    @classmethod
+    @override
+    def contact_to_dict(cls, contact) -> dict:
+        values = {k: getattr(contact.coefficients, k) for k in cls.scene_keys}
+        return {"law": cls.name, **{k: list(v) if isinstance(v, tuple) else v for k, v in values.items()}}
 
     @classmethod
     @override
@@ -166,19 +194,15 @@ class PowerLaw(ContactLaw):
         slow = 0.5 * models.linear_sound_speed(float(law.tangent_stiffness(0.01 * expected_force)), m, d)
         return min(slow, fast), fast
 
-    @classmethod
-    def leading_edge_speed(cls, scene, expected_force: float, step) -> float:
-        """The fastest a disturbance can enter the undisturbed chain: the fastest of ``wave_speeds``."""
-        return cls.wave_speeds(scene, expected_force, step)[1]
-
     # ---- the law's models (ContactLaw rule 8)
     @classmethod
     @override
     def predictions(cls, scene) -> list[dict]:
-        """The elastic two-body impact (power_impact) of the scene's two bodies, where it is one."""
-        hit = _two_bodies(scene)
+        """The elastic two-body impact (power_impact) of the scene's two bodies, where it is one, and
+        Nesterenko's wave speed at the first contact's two-body peak of a kicked chain (_wave_speed)."""
+        hit = two_bodies(scene)
         if hit is None:
-            return []
+            return _wave_speed(scene)
         name, law, m_star, words = hit
         out = power_impact(float(law.k), float(law.exponent), m_star, scene.loading.velocity)
         valid = f"a two-body impact of {words}, power-law contact, no dashpot or precompression"
@@ -200,20 +224,69 @@ class PowerLaw(ContactLaw):
             ),
         ]
 
+    @classmethod
+    @override
+    def measured_models(cls, scene, values, observables):
+        """Nesterenko's wave speed (models.power_solitary_wave_speed) at the run's leading peak."""
+        f = observables.get("leading_peak_force")
+        if not f:
+            return {}
+        law = scene.law
+        n = float(law.exponent)
+        return {"power_wave_speed": models.power_solitary_wave_speed(f, float(law.k), n, scene.mass, scene.diameter)}
 
-def _two_bodies(scene) -> tuple[str, PowerLaw, float, str] | None:
-    """The scene's two-body impact: (its domain's name, the contact's law, m*, in words), or None."""
-    if scene.chain.beads not in (1, 2):
-        return None
-    ld, m1 = scene.loading, float(scene.bead_masses[0])
-    if scene.chain.beads == 2 and ld.kind == "velocity" and scene.effects.far_end == "free":
-        m2 = float(scene.bead_masses[1])
-        return "pair_impact", scene.contact_laws[0], m1 * m2 / (m1 + m2), "bead 1 on bead 2"
-    if scene.chain.beads != 1:
-        return None
-    if ld.kind == "striker":
-        ms = scene.striker_mass
-        return "striker_impact", scene.striker_law, ms * m1 / (ms + m1), "the striker on bead 1"
-    if ld.kind == "velocity" and scene.effects.far_end == "wall":
-        return "wall_impact", scene.wall_law, m1, "the bead on the flat"
-    return None
+
+#: where Nesterenko's wave speed on F = K alpha^n holds, in words (predict's "valid")
+WAVE_SPEED_DOMAIN = (
+    "a solitary wave on a uniform uncompressed chain, n > 1 (V ~ F^((n-1)/(2n)), the constant the long-wave "
+    "approximation's); at n = 1 the chain is linear: no solitary wave, the front moves at the sound speed "
+    "D sqrt(K/m), which the formula gives there"
+)
+
+
+def _wave_speed(scene) -> list[dict]:
+    """Nesterenko's speed at the force of the first contact's two-body impact (bead 1 on bead 2 at the
+    load's velocity, an impulse's I / m: its zero-duration limit; an estimate: the formed wave's force
+    is lower, and `compare` takes the measured leading peak's, measured_models) on a chain of three
+    beads or more given a velocity or an impulse."""
+    if scene.loading.kind not in ("velocity", "impulse") or scene.chain.beads is not None and scene.chain.beads < 3:
+        return []
+    law, m = scene.law, scene.mass
+    k, n = float(law.k), float(law.exponent)
+    f = power_impact(k, n, m / 2.0, scene.input_impulse / m)["peak_force"]
+    equation = "sqrt(2/(n+1)) D K^(1/(2n)) F^((n-1)/(2n)) / sqrt(m), F the two-body impact's peak at v = I / m"
+    if n == 1.0:
+        equation = "D sqrt(K/m): n = 1, a linear chain's sound speed (no solitary wave)"
+    value = models.power_solitary_wave_speed(f, k, n, m, scene.diameter)
+    return [
+        dict(name="power_wave_speed_at_impact", value=value, unit="m/s", equation=equation, valid=WAVE_SPEED_DOMAIN)
+    ]
+
+
+#: what the per-contact lists mean, for their messages and docs/laws.md
+PER_CONTACT_RULE = (
+    "one value per bead-bead contact, contact 1 (beads 1 and 2) first; a striker's contact takes contact 1's "
+    "value, a wall's contact (bead N on the wall) the last contact's"
+)
+
+
+def _number_or_list(s, chain, key: str, bounds: dict, what: str) -> float | tuple[float, ...]:
+    """[contact] `key`: a number, or a list of one number per bead-bead contact (PER_CONTACT_RULE),
+    each inside `bounds` (Section.number's); a list of one value throughout is that number."""
+    what = f"{what} of F = K alpha^n, or a list of {PER_CONTACT_RULE}"
+    v = s.table.get(key)
+    if not isinstance(v, list):
+        return s.number(key, **bounds, what=what)
+    s.raw(key)  # (read)
+    contacts = None if chain.beads is None else chain.beads - 1
+    if not contacts:
+        need = 'a given [chain] beads = N (not "auto")' if contacts is None else "a chain of two beads or more"
+        raise s.fail(key, v, f"a number: a list ({PER_CONTACT_RULE}) needs {need}")
+    if len(v) != contacts:
+        raise s.fail(key, v, f"a list of {contacts} values for the {chain.beads} beads' {contacts} contacts ({what})")
+    one = type(s)(s.file, s.name, {})
+    values = []
+    for i, x in enumerate(v):
+        one.table = {f"{key}[{i + 1}]": x}
+        values.append(one.number(f"{key}[{i + 1}]", **bounds, what=what))
+    return values[0] if len(set(values)) == 1 else tuple(values)

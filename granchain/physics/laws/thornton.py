@@ -215,12 +215,16 @@ class ThorntonLaw(ContactLaw):
 
     name: ClassVar[str] = "thornton"
     pair_style: ClassVar[str] = "chain/thornton"
+    hertz_onset: ClassVar[bool] = True  # (elastic up to d_y)
     history: ClassVar[bool] = True
     # reloading meets the plastic line at d_max with another slope: Verlet's error follows no order
     # there (generated scenes, Richardson: 94 of 125 peaks estimated, one 17x off; against RK4: 172 of
     # 179, 0.97-1.54; docs/error-bars.md)
     slope_kinks: ClassVar[bool] = True
     Coefficients: ClassVar[type[LawCoefficients]] = ThorntonCoefficients
+    #: p_y = 1.61 sigma_y of the softer body when the scene gives none (for_pair): on a wall of a
+    #: material, as between beads of several
+    yield_strength_key: ClassVar[str | None] = "yield_pressure"
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "yield_overlap": (1e-9, 1e-4)}
     #: brass beads of R = 4.76 mm: p_y = k / (pi R*) makes the plastic slope S = pi p_y R* equal the
     #: paper's bilinear plastic stiffness k = 2.43e7 N/m (the bilinear example), so the two laws load alike
@@ -390,6 +394,17 @@ class ThorntonLaw(ContactLaw):
         return 1.5 * np.cbrt(kp * kp * f)
 
     @override
+    def overlap_tangent(self, alpha, alpha_max=None):
+        """The plastic slope S on the virgin plastic line (alpha >= alpha_max > d_y), else the Hertz
+        un/reloading curve's 3/2 k_p sqrt(alpha - d_p) (below d_y k_p = k, d_p = 0: Hertz's own)."""
+        a = np.maximum(np.asarray(alpha, dtype=float), 0.0)
+        am = a if alpha_max is None else np.maximum(alpha_max, a)
+        plastic, _, kp, dp = self.unloading(am)
+        s = np.maximum(a - dp, 0.0)
+        slope = np.broadcast_to(self.plastic_slope, np.shape(am))
+        return np.where(plastic & (a >= am) & (a > 0.0), slope, 1.5 * kp * np.sqrt(s))
+
+    @override
     def kinks(self, alpha_max):
         am = np.asarray(alpha_max, dtype=float)
         dy = np.broadcast_to(np.asarray(self.yield_overlap, dtype=float), am.shape)
@@ -476,7 +491,7 @@ class ThorntonLaw(ContactLaw):
                 dict(
                     name="restitution_coefficient",
                     value=restitution_coefficient(ld.velocity, vy),
-                    unit="-",
+                    unit="1",
                     equation="Thornton 1997 (e = 1 below v_y)",
                     valid="a two-body impact of equal beads at the relative velocity v0 of bead 1",
                 )
@@ -505,6 +520,12 @@ class ThorntonLaw(ContactLaw):
             mat.YIELD_PRESSURE_RANGE,
             what="Thornton's limiting contact pressure p_y in Pa (not the yield strength)",
         )
+        ys = chain.material.yield_strength if chain.materials is None else None
+        if ys is not None and chain.material_name is None:  # a built-in's yield gives way, as bilinear's
+            raise s.error(
+                f"[contact] yield_pressure = {p_y!r} and [chain.material] yield_strength = {ys!r} both set p_y "
+                f"(p_y = {mat.YIELD_PRESSURE_FACTOR} sigma_y without yield_pressure); give only one"
+            )
         s.finish(("law", *cls.scene_keys))
         return ThorntonCoefficients(yield_pressure=p_y)
 
@@ -547,8 +568,3 @@ class ThorntonLaw(ContactLaw):
             slow = min(slow, 0.6 * models.linear_sound_speed(float(law.plastic_slope), m, d))
             fast = max(fast, models.linear_sound_speed(float(law.tangent_stiffness(expected_force)), m, d))
         return slow, fast
-
-    @classmethod
-    def leading_edge_speed(cls, scene, expected_force: float, step) -> float:
-        """The fastest a disturbance can enter the undisturbed chain: the fastest of ``wave_speeds``."""
-        return cls.wave_speeds(scene, expected_force, step)[1]

@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from granchain.postprocess.observables import measure_observables
+from granchain.postprocess.observables import END_PEAKS as _END_OBSERVABLES
+from granchain.postprocess.observables import OBSERVABLES, measure, with_error_bars
+from granchain.postprocess.sensors import sensor_key, sensor_static_forces
+from granchain.problem import scene_static_forces
 from granchain.richardson import ErrorBars, against_reference, checked
 from granchain.workflows.errorbars.facts import expected_orders, onset_order
 from granchain.workflows.errorbars.observables import (
@@ -19,7 +22,7 @@ from granchain.workflows.errorbars.observables import (
     _withheld_step_bound,
     roundoff_floor,
 )
-from granchain.workflows.errorbars.report import ESTIMATED_OBSERVABLES, ErrorReport
+from granchain.workflows.errorbars.report import ErrorReport
 
 
 def measured_contacts(scene, solution) -> np.ndarray:
@@ -67,12 +70,12 @@ def extrapolated_bars(
 
     orders = expected_orders(method, scene)
 
-    def bars(v, t, order=p, floor=None) -> ErrorBars:
+    def bars(v, t, order=p, floor=None, span=orders) -> ErrorBars:
         # Richardson over dt, 2 dt, 4 dt; checked against dt / 2 where that run was made
-        b = extrapolate(*v[:3], order, times=tuple(t[:3]), jump_time=jump, orders=orders, floor=floor)
+        b = extrapolate(*v[:3], order, times=tuple(t[:3]), jump_time=jump, orders=span, floor=floor)
         if finer is None:
             return b
-        return checked(b, v[3], v[0], v[1], order, times=(t[3], t[0], t[1]), jump_time=jump, orders=orders, floor=floor)
+        return checked(b, v[3], v[0], v[1], order, times=(t[3], t[0], t[1]), jump_time=jump, orders=span, floor=floor)
 
     pf, tp = values("peak_force", True), values("time_of_peak", True)
     lf, lt = values("leading_pulse_force"), values("leading_pulse_time")
@@ -106,25 +109,31 @@ def extrapolated_bars(
         return checked(b, [h], [v[0]], [v[1]], p_end, times=t, jump_time=jump, orders=orders)
 
     report.end_peaks = _end_peaks((sol, *runs) + (() if finer is None else (finer,)), bars_of)
+    # the sensor beads' peaks by the contacts' own route (their order and check at dt / 2); a sensor's time
+    # is the vertex of the parabola through step-end samples, an error of order 2 in dt whatever the
+    # integrator's (RK4 with order 4 gave bars 0.1-0.23 of the true error on effect-sensors)
+    span = None if orders is None else (min(2.0, orders[0]), orders[1])
+    sensor_times = (lambda v, t: bars(v, t, order=min(p, 2), span=span)) if p > 2 else bars
+    report.end_peaks.update(_sensor_bars(scene, (sol, coarse, coarser, finer), bars, sensor_times))
     _observable_bars(report, scene, (sol, coarse, coarser, finer), extrapolate, (p, jump, orders), floor)
 
 
 def _observable_bars(report: ErrorReport, scene, sols: tuple, extrapolate, rule: tuple, floor) -> None:
-    """The scalar observables' bars (ESTIMATED_OBSERVABLES) for extrapolated_bars: measured on each of
-    sols = (the run, 2 dt, 4 dt or None, dt / 2 or None), extrapolated with the run's rule (order,
+    """The scalar observables' bars (those registered with one: with_error_bars) for extrapolated_bars:
+    measured on each of sols = (the run, 2 dt, 4 dt or None, dt / 2 or None), extrapolated with the run's rule (order,
     jump_time, orders) and checked against dt / 2 where that run was made."""
     sol, coarse, coarser, finer = sols
     p, jump, orders = rule
-    missing: dict[str, str] = {}  # why the run itself lacks a value: that, not its companions', is said
-    obs = [measure_observables(scene, sol, missing)]
-    obs += [measure_observables(scene, s) for s in (coarse,) + ((coarser,) if coarser is not None else ())]
-    obs_h = None if finer is None else measure_observables(scene, finer)
+    run = measure(scene, sol)  # why the run itself lacks a value: that, not its companions', is said
+    missing = run.missing
+    obs = [run.values] + [measure(scene, s).values for s in (coarse,) + ((coarser,) if coarser is not None else ())]
+    obs_h = None if finer is None else measure(scene, finer).values
     b = max(scene.window[1] - 1, 0)
-    for name in ESTIMATED_OBSERVABLES:
+    for name in with_error_bars():
         vals = [o.get(name) for o in obs]
         v = [np.nan if x is None else float(x) for x in vals] + ([None] if coarser is None else [])
         times = None
-        if name.startswith("leading_peak_force") and scene.n_contacts:
+        if OBSERVABLES[name].at_leading_pulse and scene.n_contacts:  # the same pulse in every run
             times = tuple(None if s is None else float(s.leading_pulse_time[b]) for s in (sol, coarse, coarser))
         # max_peak_force: the largest over contacts is continuous in the runs even where its contact
         # changes (a steady wave peaks alike everywhere), so no pulse check; wave_speed: a fit
@@ -183,20 +192,23 @@ def against_rk4_bars(report: ErrorReport, result, runs: list) -> None:
         return against_reference([v[0]], [v[1]], [v[2]], times=t, jump_time=jump)
 
     report.end_peaks = _end_peaks((sol, *runs), bars_of)
-    obs = [measure_observables(scene, s) for s in (sol, *runs)]
+    report.end_peaks.update(
+        _sensor_bars(scene, (sol, *runs), lambda v, t: against_reference(*v, times=(t[0], t[1]), jump_time=jump))
+    )
+    obs = [measure(scene, s).values for s in (sol, *runs)]
     b = max(scene.window[1] - 1, 0)
-    for name in ESTIMATED_OBSERVABLES:
+    for name in with_error_bars():
         vals = [o.get(name) for o in obs]
         v = [np.nan if x is None else float(x) for x in vals]
         times = None
-        if name.startswith("leading_peak_force") and scene.n_contacts:
+        if OBSERVABLES[name].at_leading_pulse and scene.n_contacts:  # the same pulse in every run
             times = tuple([float(s.leading_pulse_time[b])] for s in (sol, runs[0]))
         bars = against_reference([v[0]], [v[1]], [v[2]], times=times, jump_time=jump)
         report.observables[name] = _observable_error(name, vals[0], bars, obs[0])
 
 
 #: the effects' own contacts that get error bars: peak force -> its time (ChainSolution fields)
-END_PEAKS = {"striker_peak_force": "striker_time_of_peak", "wall_peak_force": "wall_time_of_peak"}
+END_PEAKS = {name: obs.time_field for name, obs in _END_OBSERVABLES.items()}
 #: why an end peak has no bar: the run's own peak, or a companion's, had not passed when it ended
 END_PEAK_INCOMPLETE = (
     "incomplete: the wave had not reached it, or its force had not fallen to half its peak, when the run ended"
@@ -214,7 +226,7 @@ def _end_peaks(solutions, bars_of) -> dict[str, dict]:
             continue
         times = [getattr(s, when) for s in solutions]
         # a running maximum is not a peak (ChainSolution.wall_peak_complete); None: not tracked
-        done = [getattr(s, force.replace("_peak_force", "_peak_complete")) is not False for s in solutions]
+        done = [getattr(s, _END_OBSERVABLES[force].complete_field) is not False for s in solutions]
         if not all(done):
             why = END_PEAK_INCOMPLETE if not done[0] else END_PEAK_COMPANION_INCOMPLETE
             for name, values in ((force, vals), (when, times)):
@@ -231,13 +243,50 @@ def _end_peaks(solutions, bars_of) -> dict[str, dict]:
     return out
 
 
+def _sensor_bars(scene, solutions, bars, time_bars=None) -> dict[str, dict]:
+    """Error bars of each sensor bead's dynamic peak and its time (postprocess.sensors), from the run
+    and its companions (solutions: None where a companion was not made) by the contacts' estimator
+    (bars(values, times) -> ErrorBars over the sensors; a value nan where that run's peak is not
+    complete; time_bars the times', default bars), keyed as sensor_key names them."""
+    if not scene.outputs.sensors or not np.size(solutions[0].sensor_peak_force):
+        return {}
+    static = sensor_static_forces(scene)
+
+    def values(name: str) -> list:
+        out = []
+        for s in solutions:
+            v = None if s is None else np.asarray(getattr(s, name), dtype=float).copy()
+            if v is not None:
+                v[~np.asarray(s.sensor_complete, dtype=bool)] = np.nan
+            out.append(v)
+        return out
+
+    force, time = values("sensor_peak_force"), values("sensor_time_of_peak")
+    force = [None if v is None else v - static for v in force]
+    out: dict[str, dict] = {}
+    timed = (time_bars or bars)(time, time)
+    for quantity, b in (("sensor_peak_force", bars(force, time)), ("sensor_time_of_peak", timed)):
+        for k, bead in enumerate(scene.outputs.sensors):
+            own = (force if quantity == "sensor_peak_force" else time)[0][k]
+            if not np.isfinite(own):  # the run's own peak is not complete: unmeasured (summary.json says why)
+                continue
+            err = float(b.error[k])
+            out[sensor_key(quantity, bead)] = {
+                "value": float(own),
+                "error": err if np.isfinite(err) else None,
+                "status": str(b.status[k]),
+            }
+    return out
+
+
 def _largest(report: ErrorReport, scene, sol) -> None:
     """The largest relative peak-force error over the measured contacts, and the contacts without one."""
     n = len(sol.peak_force)
     measured = measured_contacts(scene, sol)
     rel = np.full(n, np.nan)
-    # relative to the wave's force: above the static force F0 a precompressed contact carries at rest
-    dynamic = np.abs(np.asarray(sol.peak_force, dtype=float) - float(scene.effects.precompression))
+    # relative to the wave's force: above the static force a contact carries at rest (F0, and under
+    # gravity the weight above it)
+    dynamic = np.abs(np.asarray(sol.peak_force, dtype=float) - scene_static_forces(scene)[:n])
     ok = report.peak_force.reliable & (dynamic > 0)
     rel[ok] = report.peak_force.error[ok] / dynamic[ok]
     m = measured[np.isfinite(rel[measured])]

@@ -32,16 +32,18 @@ def onset_order(scene) -> float:
 
 def expected_orders(method: str, scene) -> tuple[float, float]:
     """The lowest and highest order the integrator's error can show on this scene (richardson): from
-    the lower of its order on the scene (integrator_order: Verlet's 1 with a dashpot, its first-order
+    the lower of its order on the scene (integrator_order: Verlet's 1 with a velocity-dependent
+    damping force, its first-order
     term mixing with Verlet's second) and the onset's (onset_order), to its order."""
     return float(min(onset_order(scene), integrator_order(method, scene))), float(integrator(method).order)
 
 
 def integrator_order(method: str, scene) -> int:
     """The order the error estimate assumes (see granchain.workflows.error_estimates' docstring): the
-    integrator's, or its order with a dashpot (IntegratorFacts.dashpot_order)."""
+    integrator's, or its order with a velocity-dependent damping force
+    (IntegratorFacts.damping_order)."""
     facts = integrator(method)
-    return facts.dashpot_order if scene.effects.dashpot else facts.order
+    return facts.damping_order if scene.damping.velocity_dependent else facts.order
 
 
 def companion_scene(scene, factor: float):
@@ -57,11 +59,11 @@ def companion_scene(scene, factor: float):
 def kinked_law(method: str, scene) -> bool:
     """Whether this is a run of an integrator that does not locate kinks (IntegratorFacts.locates_kinks:
     Verlet) on a law whose slope jumps at kinks the contacts cross (ContactLaw.slope_kinks: bilinear,
-    Thornton), without a dashpot: its error in dt is erratic in sign."""
+    Thornton), without velocity-dependent damping: its error in dt is erratic in sign."""
     from granchain.physics.laws import law_class
 
     locates = integrator(method).locates_kinks
-    return not locates and not scene.effects.dashpot and bool(law_class(scene.contact.law).slope_kinks)
+    return not locates and not scene.damping.velocity_dependent and bool(law_class(scene.contact.law).slope_kinks)
 
 
 def companion_steps(scene, factor: float) -> int:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from granchain.postprocess.observables import OBSERVABLES
+
 #: a withheld step error the fit's standard error outweighs this many times over is left out of the
 #: wave speed's error: in quadrature it would add under 0.5% of the fit's
 FIT_DOMINATES = 10.0
@@ -24,21 +26,13 @@ def _withheld_step_bound(finer, fine, coarse, lo: float) -> float | None:
 
 
 def _observable_floor(name: str, measured: dict, floor: np.ndarray | None, b: int) -> float | None:
-    """The round-off floor of a scalar observable (N, or its nondimensional form): the leading peak's
-    is its contact's (b, 0-based), the largest peak's its contact's; a wave speed, a fit of arrival
-    times, has none."""
+    """The round-off floor of a scalar observable (N, or its nondimensional form; b: the window's last
+    contact, 0-based): the registered observable's (Observable.roundoff_floor; the leading peak's is its
+    contact's, the largest peak's its contact's, a wave speed, a fit of arrival times, has none)."""
     if floor is None:
         return None
-    if name.startswith("leading_peak_force") and b < floor.size:
-        fl = float(floor[b])
-        if name.endswith("_nondim"):  # the nondimensional form scales the force
-            force, nondim = measured.get("leading_peak_force"), measured.get(name)
-            fl = fl * float(nondim) / float(force) if force and nondim is not None else np.nan
-    elif name == "max_peak_force" and measured.get("max_peak_contact") is not None:
-        fl = float(floor[int(measured["max_peak_contact"]) - 1])
-    else:
-        return None
-    return fl if np.isfinite(fl) else None
+    fl = OBSERVABLES[name].roundoff_floor(measured, floor, b)
+    return fl if fl is not None and np.isfinite(fl) else None
 
 
 def roundoff_floor(scene, sol, absolute_positions: bool = False) -> np.ndarray | None:
@@ -65,9 +59,9 @@ def roundoff_floor(scene, sol, absolute_positions: bool = False) -> np.ndarray |
     if u.size == 0 or not sol.steps:
         return None
     f = np.asarray(sol.peak_force, dtype=float)
-    if absolute_positions:
-        from granchain.peaks import chain_laws
+    from granchain.peaks import chain_laws
 
+    if absolute_positions:
         size = float(np.max(np.abs(scene.bead_positions[: u.size] + u)))
         force = np.nan_to_num(np.abs(f))
         slope = np.max(
@@ -80,8 +74,11 @@ def roundoff_floor(scene, sol, absolute_positions: bool = False) -> np.ndarray |
             return None
         size = float(np.max(np.abs(u)))
         a = np.asarray(overlap, dtype=float)
+        # dF/dalpha = n F / alpha on the onset's F = k alpha^n, at least Hertz's 3/2 (above a loading
+        # line's F / alpha), the largest n of a power law's contacts: the round-off bound is an upper one
+        n = max(1.5, *(float(np.max(law.loading_exponent())) for law in chain_laws(scene)))
         with np.errstate(divide="ignore", invalid="ignore"):
-            slope = np.where(a > 0, 1.5 * np.abs(f) / a, np.nan)
+            slope = np.where(a > 0, n * np.abs(f) / a, np.nan)
     return np.sqrt(float(sol.steps)) * np.finfo(float).eps * size * slope
 
 
@@ -97,7 +94,8 @@ def _observable_error(name: str, value, bars, measured: dict, withheld_bound: fl
     """
     step = float(bars.error[0])
     out = {"value": value, "error": step if np.isfinite(step) else None, "status": str(bars.status[0])}
-    fit = measured.get("wave_speed_stderr") if name == "wave_speed" else None
+    fit_stderr = OBSERVABLES[name].fit_stderr  # a fit's standard error beside the value (the wave speed's)
+    fit = measured.get(fit_stderr) if fit_stderr else None
     if fit is not None and value is not None:
         out["step_error"] = out["error"]
         out["fit_stderr"] = float(fit)

@@ -13,16 +13,17 @@ from granchain.workflows.errorbars.facts import kinked_law, rk4_companions_cost
 def withheld_because(method: str, scene) -> str | None:
     """Why no error bar is given for this integrator on this scene, or None.
 
-    An integrator whose error follows no order with a dashpot (IntegratorFacts.unordered_with_dashpot;
-    RK4: the dashpot force is clipped where it would pull, a kink in time RK4 does not locate, so its
-    runs converge at no definite order). Measured on 14 generated Hertz chains planned for rtol 1e-3
-    (/tmp experiment recorded in docs/error-bars.md): on the 9 with a dashpot 14 of 55 estimates were
-    outside 1/3-3 of the true error (0.013-12x), although the three runs' differences looked like orders
-    1-5; on the 5 without, none of 51 (another sample of 12 chains had 4 of about 100 outside, 0.21-3.5:
+    An integrator whose error follows no order with a velocity-dependent damping force
+    (IntegratorFacts.unordered_with_damping; RK4: the damped force is clipped where it would pull, a
+    kink in time RK4 does not locate, so its runs converge at no definite order). Measured on 14
+    generated Hertz chains planned for rtol 1e-3 (/tmp experiment recorded in docs/error-bars.md): on
+    the 9 with a dashpot 14 of 55 estimates were outside 1/3-3 of the true error (0.013-12x), although
+    the three runs' differences looked like orders 1-5; on the 5 without, none of 51 (another sample of
+    12 chains had 4 of about 100 outside, 0.21-3.5:
     RK4's Hertz onsets, docs/error-bars.md).
     """
-    if scene.effects.dashpot:
-        return integrator(method).unordered_with_dashpot
+    if scene.damping.velocity_dependent:
+        return integrator(method).unordered_with_damping
     return None
 
 
@@ -102,7 +103,7 @@ def one_companion_because(method: str, scene, checked: bool = False) -> str | No
     true error on 0.2-1.3% of the numbers of each sample, and overstates the error about 10-15 times at
     the median, as Verlet's kinked bounds (bounded_because) about 6 times.
     """
-    if checked or not integrator(method).locates_kinks or scene.effects.dashpot:
+    if checked or not integrator(method).locates_kinks or scene.damping.velocity_dependent:
         return None
     from granchain.physics.laws import law_class
 

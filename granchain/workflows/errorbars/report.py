@@ -6,10 +6,6 @@ from dataclasses import dataclass, field
 
 from granchain.richardson import BOUND_ORDER, ErrorBars
 
-#: scalar observables that get an error estimate, and the time each is measured at (for the check
-#: that a companion measured the same pulse)
-ESTIMATED_OBSERVABLES = ("leading_peak_force", "leading_peak_force_nondim", "wave_speed", "max_peak_force")
-
 
 @dataclass
 class ErrorReport:

@@ -237,6 +237,18 @@ def _reflection_end_time(scene, choice: PlanChoice, slow: float) -> PlanChoice:
 
 
 def _stop_choice(scene, last: int) -> PlanChoice:
+    """The stop check (_contact_stop_choice), which with [outputs] event also waits for the wall's event's end."""
+    choice = _contact_stop_choice(scene, last)
+    if not scene.wall_event:
+        return choice
+    return PlanChoice(
+        choice.name,
+        choice.value,
+        f"{choice.reason}; and the wall's event to its end ([outputs] event: the chain has left the wall for good)",
+    )
+
+
+def _contact_stop_choice(scene, last: int) -> PlanChoice:
     """The stop check at the last measured contact, and at the wall's contact (stop_after_wall) where
     the wall's peak is measured (wall_peak_planned), and the reflection's return through contact 1
     (stop_after_reflection) where reflection_planned."""
@@ -265,6 +277,37 @@ def _stop_choice(scene, last: int) -> PlanChoice:
     )
 
 
+#: the planned end's time for the wall's event to end (granchain.physics.event), in crossings of the
+#: chain by the slowest expected front, after the wall's end and a load's or a striker's push: the
+#: reflected wave must come back through the chain until every body moves away from the wall (a heavy
+#: striker turned back). A cap only: the stop check ends the run at the event's end. Measured (reference
+#: Verlet, tests/test_event.py's generated walled chains of 4-10 beads, kicks and strikers up to 8x a
+#: bead's mass, tapers, precompression): the event ended 1.0 to 3.5 crossings after t = 0
+EVENT_CROSSINGS = 10.0
+
+
+def event_planned(scene) -> bool:
+    """Whether "auto" plans the run to the wall's event's end: [outputs] event on a walled chain of
+    given length whose wall's peak is planned (wall_peak_planned: a load that ends)."""
+    return scene.wall_event and wall_peak_planned(scene)
+
+
+def _event_end_time(scene, choice: PlanChoice, slow: float) -> PlanChoice:
+    """The end time that also covers the wall's event (event_planned): the wall's end (choice), a load's
+    or a striker's push (step_equivalent), and EVENT_CROSSINGS x the slowest front's crossing."""
+    step = step_equivalent(scene)
+    push = step[1] if step is not None else 0.0
+    crossing = front_travel_time(scene, scene.n_contacts, slow)
+    back = push + EVENT_CROSSINGS * crossing
+    return PlanChoice(
+        "end_time",
+        choice.value + back,
+        f"{choice.reason}; and the wall's event to its end ([outputs] event: the chain has left the wall for good): "
+        f"the push ({push:.3g} s) and {EVENT_CROSSINGS:g} x the slowest front's crossing of the chain "
+        f"({EVENT_CROSSINGS * crossing:.3g} s), a cap: the stop check ends the run at the event's end",
+    )
+
+
 def end_time_choice(scene, last: int | None, slow: float, omega_max: float) -> PlanChoice:
     """The planned end time: one bead's (or two free beads') impacts, else the front past the last
     measured contact, then the wall's pulse and the reflection where they are planned."""
@@ -279,4 +322,6 @@ def end_time_choice(scene, last: int | None, slow: float, omega_max: float) -> P
         choice = _wall_end_time(scene, choice, last, slow, omega_max)
     if reflection_planned(scene):
         choice = _reflection_end_time(scene, choice, slow)
+    if waits and event_planned(scene):
+        choice = _event_end_time(scene, choice, slow)
     return choice

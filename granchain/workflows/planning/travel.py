@@ -122,12 +122,12 @@ def front_travel_time(scene, last: int, slow: float) -> float:
     d0 = scene.diameter
     per_contact = np.full(last, d0 / slow)
     if scene.per_bead and scene.n_contacts:
-        # 1/(1 + n) of the onset F ~ alpha^n: 0.4 Hertz, 0.5 a loading line (the impact's force ~ k^(1/(1+n)))
-        e = 0.5 if scene.contact.law_class.loading_is_linear() else 1.0 / (1.0 + float(scene.law.loading_exponent()))
-        k = scene.contact_stiffnesses[:last]
+        # 1/(1 + n) of the onset F ~ alpha^n (ContactLaw.loading_exponent): 0.4 Hertz, 0.5 a loading line
+        # (the impact's force ~ k^(1/(1+n)))
+        e = 1.0 / (1.0 + float(np.max(scene.law.loading_exponent())))
         m = scene.bead_masses
         heavier = np.maximum(m[:-1], m[1:])[:last]
-        per_contact = per_contact * (float(scene.stiffness) / k) ** e * np.sqrt(heavier / scene.mass)
+        per_contact = per_contact * _stiffness_scaling(scene, last, e) * np.sqrt(heavier / scene.mass)
     travel = float(np.sum(per_contact))
     if scene.effects.precompression and scene.has_contacts:  # an "auto" chain: the asymptotic front
         travel = min(travel, precompressed_front_time(scene, last))
@@ -155,3 +155,15 @@ def last_measured_contact(scene) -> int | None:
     elif o.peak_force is True and scene.chain.beads is not None and scene.n_contacts:
         cands.append(scene.window[1])
     return max(cands) if cands else None
+
+
+def _stiffness_scaling(scene, last: int, e: float) -> np.ndarray:
+    """Each of the first `last` contacts' time per diameter over the nominal one's, from its stiffness:
+    (k_nominal / k)^e; with per-contact n (a power law's lists, whose K differ in units) the ratio of
+    the linearised speeds instead, sqrt(k_t,nominal / k_t) of the tangents at the expected force: a
+    contact of larger n is softer below a force and stiffer above, and the wave's force sets which."""
+    if not scene.contact.coefficients.varies:
+        return (float(scene.stiffness) / scene.contact_stiffnesses[:last]) ** e
+    f = expected_peak_force(scene)
+    kt = np.array([float(law.tangent_stiffness(f)) for law in scene.contact_laws[:last]])
+    return np.sqrt(float(scene.law.tangent_stiffness(f)) / kt)

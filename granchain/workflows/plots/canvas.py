@@ -13,7 +13,7 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.ticker import FuncFormatter
+from matplotlib.ticker import FixedLocator, FuncFormatter, LogLocator, MaxNLocator, NullFormatter, NullLocator
 
 from granchain import safe_files
 from granchain.exceptions import GranchainError, UsageError
@@ -142,6 +142,10 @@ def _time_unit(t_max: float) -> tuple[float, str]:
     return 1e9, "ns"
 
 
+#: the contact axis's label: a contact's index (the unit every axis label ends with, in parentheses)
+CONTACT_LABEL = r"contact $i$ between bead $i$ and $i+1$ (index)"
+
+
 #: marker size (points) of the peak-force markers; an error bar is drawn where it reaches beyond one
 MARKER_SIZE = 3.0
 
@@ -165,13 +169,63 @@ def _error_bars(ax, x: np.ndarray, y: np.ndarray, err: np.ndarray | None, color,
     return int(big.sum())
 
 
-def _plain_log_ticks(*axes) -> None:
-    """Plain numbers on log y axes spanning less than a decade (not 4.2 x 10^4 on every minor tick)."""
-    lo, hi = axes[0].get_ylim()
-    if lo > 0 and hi / lo < 10.0:
-        for ax in axes:
-            for set_fmt in (ax.yaxis.set_major_formatter, ax.yaxis.set_minor_formatter):
-                set_fmt(FuncFormatter(lambda v, _: f"{v:.6g}"))
+#: a log axis spanning fewer decades than this gets evenly spaced ticks in plain numbers (7500, 8000, ...),
+#: one spanning fewer than LOG_SUBS_DECADES ticks at 1, 2 and 5 of each decade; a wider one a tick per
+#: decade: every log axis has tick labels across its data, not one at 100 N below points at 179 N
+LOG_PLAIN_DECADES = 1.0
+LOG_SUBS_DECADES = 3.0
+
+
+def _plain_number(v, _pos=None) -> str:
+    return f"{v:.6g}"
+
+
+def log_ticks(axis, lo: float, hi: float) -> None:
+    """Tick labels across a log axis's range lo..hi (> 0): evenly spaced plain numbers where it spans less
+    than LOG_PLAIN_DECADES, 1, 2 and 5 of each decade below LOG_SUBS_DECADES, matplotlib's decades above."""
+    if not (lo > 0 and hi > lo):
+        return
+    decades = float(np.log10(hi / lo))
+    if decades >= LOG_SUBS_DECADES:
+        return
+    if decades < LOG_PLAIN_DECADES:
+        axis.set_major_locator(FixedLocator(_plain_log_ticks(lo, hi)))
+        axis.set_minor_locator(NullLocator())
+    else:
+        axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+        axis.set_minor_locator(LogLocator(subs=np.arange(2.0, 10.0)))
+    axis.set_major_formatter(FuncFormatter(_plain_number))
+    axis.set_minor_formatter(NullFormatter())
+
+
+def _two_digits(x: float, up: bool) -> float:
+    """x rounded to two significant digits, up or down."""
+    scale = 10.0 ** (np.floor(np.log10(x)) - 1)
+    return float((np.ceil if up else np.floor)(x / scale * (1 - 1e-12 if up else 1 + 1e-12)) * scale)
+
+
+def _plain_log_ticks(lo: float, hi: float) -> list[float]:
+    """Evenly spaced plain numbers across lo..hi (less than a decade), and the two-digit numbers just
+    inside each end where the even ones leave it bare: on a log axis even steps crowd the top and leave
+    the bottom wide (1..7 got 2, 4, 6: no label within a third of the span of 1)."""
+    ticks = [t for t in MaxNLocator(nbins=6, steps=[1, 2, 2.5, 5, 10]).tick_values(lo, hi) if lo <= t <= hi]
+    span = np.log10(hi / lo)
+    for end in (_two_digits(lo, up=True), _two_digits(hi, up=False)):
+        if lo <= end <= hi and all(abs(np.log10(end / t)) > 0.1 * span for t in ticks):
+            ticks.append(end)
+    return sorted(ticks)
+
+
+def log_axes_ticks(ax, *secondary) -> None:
+    """log_ticks on each log axis of ax at its view limits, and on the secondary y axes drawn beside it
+    (each (axes, factor): its values are ax's divided by factor)."""
+    if ax.get_xscale() == "log":
+        log_ticks(ax.xaxis, *sorted(ax.get_xlim()))
+    if ax.get_yscale() == "log":
+        lo, hi = sorted(ax.get_ylim())
+        log_ticks(ax.yaxis, lo, hi)
+        for sec, factor in secondary:
+            log_ticks(sec.yaxis, lo / factor, hi / factor)
 
 
 def _legend_label(model_label: str) -> str:

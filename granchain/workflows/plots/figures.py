@@ -14,8 +14,10 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from granchain.physics.predictions import applicability
+from granchain.postprocess.observables import END_PEAKS
 from granchain.results import RunResult
 from granchain.workflows.plots.canvas import (
+    CONTACT_LABEL,
     LEGEND_MAX,
     PlotError,
     _cmap,
@@ -25,11 +27,11 @@ from granchain.workflows.plots.canvas import (
     _new_figure,
     _peak_markers,
     _plain,
-    _plain_log_ticks,
     _save,
     _time_unit,
     _write_csv,
     check_formats,
+    log_axes_ticks,
 )
 from granchain.workflows.plots.spacetime import (
     _draw_heatmap,
@@ -41,17 +43,20 @@ from granchain.workflows.plots.tables import (
     _histories_table,
     _snapshots_table,
     as_result,
+    dynamic_peaks,
     load_peaks,
 )
 
 
 def _draw_histories(r: RunResult):
-    """(Figure, CSV header, CSV columns) of the histories, or None without any."""
-    if not r.solution.history_contacts:
+    """(Figure, CSV header, CSV columns) of the histories (the contacts' and the sensor beads'), or None
+    without any."""
+    sensed = r.solution.sensor_history_time
+    if not r.solution.history_contacts and not sensed.size:
         return None
     summary = r.summary
     header, data = _histories_table(r)
-    factor, unit = _time_unit(float(np.max(data[:, 0])) if data.size else 0.0)
+    factor, unit = _time_unit(float(np.max(data[:, 0])) if data.size else float(np.max(sensed, initial=0.0)))
     t = data[:, 0] * factor
     fcols = [i for i, h in enumerate(header) if h.startswith("force_")]
     vcols = [i for i, h in enumerate(header) if h.startswith("velocity_")]
@@ -65,24 +70,45 @@ def _draw_histories(r: RunResult):
         c = int(header[i].split("_")[1])
         kw = {"color": cmap(norm(c))} if many else {"label": rf"$F_{{{c},{c + 1}}}$"}
         ax1.plot(t, data[:, i], lw=1, **kw)
+    sensor_header, sensor_cols = _sensor_lines(r, ax1, factor, data[:, 0])
     for i in vcols:
         c = int(header[i].split("_")[1])
         kw = {"color": cmap(norm(c))} if many else {"label": rf"$v_{{{c}}}$"}
         ax2.plot(t, data[:, i], lw=1, **kw)
-    ax1.set_ylabel(r"contact force $F_{i,i+1}$ (N)")
+    ax1.set_ylabel(
+        r"contact force $F_{i,i+1}$" + (r", sensor $(F_{i-1,i} + F_{i,i+1})/2$" if sensed.size else "") + " (N)"
+    )
     ax2.set_ylabel(r"bead velocity $v_i$ (m/s)")
     ax2.set_xlabel(rf"time $t$ ({unit})")
     ax1.set_title(f"Contact force and bead velocity histories — {_label(summary)}", fontsize=10)
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
     if many:
-        cb = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=r"contact / bead $i$")
+        cb = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=r"contact / bead $i$ (index)")
         cb.ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     else:
         ax1.legend(fontsize=8)
         ax2.legend(fontsize=8)
         fig.tight_layout()
-    return fig, [header[0], *[header[i] for i in fcols + vcols]], [data[:, 0], *[data[:, i] for i in fcols + vcols]]
+    names = [header[0], *[header[i] for i in fcols + vcols], *sensor_header]
+    return fig, names, [data[:, 0] if fcols else sensed, *[data[:, i] for i in fcols + vcols], *sensor_cols]
+
+
+def _sensor_lines(r: RunResult, ax, factor: float, times: np.ndarray) -> tuple[list[str], list[np.ndarray]]:
+    """Each sensor bead's average force history (postprocess.sensors) on ax, dashed beside the contacts',
+    and its CSV columns where its samples are the contact histories' (times; without contact histories,
+    its own)."""
+    s = r.solution
+    if not s.sensor_history_time.size:
+        return [], []
+    header, cols = [], []
+    for k, bead in enumerate(s.sensor_beads):
+        f = s.sensor_history_force[:, k]
+        ax.plot(s.sensor_history_time * factor, f, lw=1.2, ls="--", color=f"C{k % 10}", label=f"sensor bead {bead}")
+        header.append(f"sensor_force_bead_{bead}")
+        cols.append(f)
+    same = not times.size or np.array_equal(times, s.sensor_history_time)
+    return (header, cols) if same else ([], [])
 
 
 def figure_histories(run) -> Figure:
@@ -124,17 +150,17 @@ def model_curves(scene, contacts: np.ndarray, skipped: dict[str, str] | None = N
     return scene.contact.law_class.model_curves(scene, contacts, applies)
 
 
-def _end_peaks_text(summary: dict, f0: float) -> str:
-    """The striker's and the wall's contact peaks of a run's summary, as a sentence ("" without them)."""
+def _end_peaks_text(summary: dict, scene) -> str:
+    """The end contacts' peaks of a run's summary (END_PEAKS), as a sentence ("" without them)."""
     out = []
-    for name, label, static in (("striker_peak_force", "the striker's", 0.0), ("wall_peak_force", "the wall's", f0)):
-        value = summary.get(name)
+    for obs in END_PEAKS.values():
+        value, static = summary.get(obs.name), obs.static_force(scene)
         if value is None or not np.isfinite(value):
             continue
-        what = "peak" if summary.get(name.replace("_force", "_complete")) is not False else "largest force so far"
+        what = "peak" if summary.get(obs.complete_field) is not False else "largest force so far"
         nb = "\N{NO-BREAK SPACE}"  # a number and its unit on one line of the wrapped panel text
         total = f" above F0 (total {value:.4g}{nb}N)" if static else ""
-        out.append(f"{label} contact {what} {value - static:.4g}{nb}N{total}")
+        out.append(f"{obs.label} contact {what} {value - static:.4g}{nb}N{total}")
     return "; ".join(out)
 
 
@@ -145,14 +171,34 @@ def _no_peaks_text(r: RunResult) -> str:
         why = "one bead: no bead-bead contact to plot"
     else:
         why = f"no contact reached by the wave when the run ended (t = {float(r.summary['end_time']):.4g} s)"
-    ends = _end_peaks_text(r.summary, float(r.scene.effects.precompression))
+    ends = _end_peaks_text(r.summary, r.scene)
     return why + (f"; {ends} (summary.json)" if ends else "")
+
+
+#: the footnotes' font size (points) and the characters a line of it holds across the peaks figure's
+#: 8 inches (about 0.55 of the size per character: 175; wrapped shorter to keep clear of the edges)
+FOOTNOTE_SIZE = 6.0
+FOOTNOTE_WIDTH = 150
+
+
+def _footnote(fig: Figure, skipped: dict[str, str]) -> None:
+    """The models not drawn and why, under the axes: one line per reason (the models it holds for
+    named together), wrapped whole, never cut, with the axes laid out above it."""
+    by_reason: dict[str, list[str]] = {}
+    for label, reason in skipped.items():
+        by_reason.setdefault(reason, []).append(label)
+    lines = []
+    for reason, labels in by_reason.items():
+        lines += textwrap.wrap(_plain(f"not drawn, {'; '.join(labels)}: {reason}"), width=FOOTNOTE_WIDTH)
+    fig.text(0.01, 0.01, "\n".join(lines), fontsize=FOOTNOTE_SIZE, va="bottom", ha="left", color="0.3")
+    height = 72.0 * fig.get_figheight()  # points
+    fig.tight_layout(rect=(0, (1.25 * FOOTNOTE_SIZE * len(lines) + 8.0) / height, 1, 1))
 
 
 def _draw_peaks(r: RunResult, log: bool = True):
     summary = r.summary
     scene = r.scene
-    pk = load_peaks(r)
+    pk, ylabel, nondim_label, column, what = dynamic_peaks(r, load_peaks(r))
     contacts, peak = pk.contact, pk.peak_force
     skipped: dict[str, str] = {}
     curves = model_curves(scene, contacts, skipped)
@@ -185,7 +231,7 @@ def _draw_peaks(r: RunResult, log: bool = True):
             note = f"; {below} below the axis"
         else:
             floor = None
-    label = f"peak force — {_label(summary)}"
+    label = f"{what} — {_label(summary)}"
     _peak_markers(ax, contacts, peak, pk.reached, pk.complete, pk.has_complete, label, open_note=note)
     for name, y in curves.items():
         ax.plot(contacts, y, "-", lw=1.2, label=_legend_label(name))
@@ -195,39 +241,34 @@ def _draw_peaks(r: RunResult, log: bool = True):
     if floor is not None:
         tops = [float(peak[pk.reached].max()), *(float(np.nanmax(y)) for y in curves.values() if np.isfinite(y).any())]
         ax.set_ylim(floor, 1.3 * max(tops))
-    ax.set_xlabel(r"contact $i$ (between bead $i$ and $i+1$)")
-    ax.set_ylabel(r"peak contact force $F_p$ (N)")
+    ax.set_xlabel(CONTACT_LABEL)
+    ax.set_ylabel(ylabel)
     # the nondimensional force F / (E* R*^2) as a right axis where one scale holds for every contact: on a
     # chain whose beads differ each contact has its own pair's E* R*^2 (peaks.csv's peak_force_nondim), and
     # one axis in bead 1's would read the others' wrong, so there is none
-    axes = [ax]
+    secondary = []
     if not positive:  # nothing drawn: no scale to read (the panel text says why)
         ax.set_xticks([])
         ax.set_yticks([])
     elif not scene.per_bead:
         fs = scene.force_scale
         sec = ax.secondary_yaxis("right", functions=(lambda f: f / fs, lambda g: g * fs))
-        sec.set_ylabel(r"$F_p \,/\, (E^* R^{*2})$")
-        axes.append(sec)
+        sec.set_ylabel(nondim_label)
+        secondary.append((sec, fs))
     if log:
-        _plain_log_ticks(*axes)
+        log_axes_ticks(ax, *secondary)
     ax.set_title(_plain(scene.title or "peak force along the chain"), fontsize=9)
     ax.grid(alpha=0.3, which="both")
     if positive:  # (a legend of nothing drawn: none)
         ax.legend(fontsize=8)
     if skipped:  # say which models are left out, and why
-        note = "\n".join(
-            _plain(textwrap.shorten(f"not drawn, {label}: {reason}", width=160, placeholder=" ..."))
-            for label, reason in skipped.items()
-        )
-        fig.text(0.01, 0.01, note, fontsize=6, va="bottom", ha="left", color="0.3")
-        fig.tight_layout(rect=(0, 0.025 * (len(skipped) + 1), 1, 1))
+        _footnote(fig, skipped)
     else:
         fig.tight_layout()
     err = None if pk.error is None else np.where(pk.reached, pk.error, np.nan)
     if _error_bars(ax, contacts, peak, err, "0.25", "measured error (dt, 2 dt, 4 dt), where beyond the marker"):
         ax.legend(fontsize=8)
-    header, cols = ["contact", "peak_force"], [contacts, peak]
+    header, cols = ["contact", column], [contacts, peak]
     if pk.error is not None:
         header, cols = [*header, "peak_force_error"], [*cols, pk.error]
     if pk.has_complete:
@@ -274,7 +315,7 @@ def _draw_snapshots(r: RunResult):
     ax1.plot(pk.contact, pk.peak_force, "k--", lw=1, label="peak-force envelope (whole run)")
     ax1.set_ylabel(r"contact force $F_{i,i+1}$ (N)")
     ax2.set_ylabel(r"bead velocity $v_i$ (m/s)")
-    ax2.set_xlabel(r"bead / contact index $i$")
+    ax2.set_xlabel(r"bead / contact $i$ (index)")
     ax1.set_title(f"Force and velocity along the chain — {_label(summary)}", fontsize=10)
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)

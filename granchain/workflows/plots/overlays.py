@@ -11,10 +11,12 @@ from pathlib import Path
 import numpy as np
 from matplotlib.cm import ScalarMappable
 from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from granchain.results import RunResult
 from granchain.workflows.plots.canvas import (
+    CONTACT_LABEL,
     LEGEND_MAX,
     PlotError,
     _cmap,
@@ -27,10 +29,12 @@ from granchain.workflows.plots.canvas import (
     _time_unit,
     _write_csv,
     check_formats,
+    log_axes_ticks,
 )
 from granchain.workflows.plots.tables import (
     _histories_table,
     as_result,
+    dynamic_peaks,
     load_peaks,
 )
 
@@ -67,6 +71,8 @@ class PeakOverlay:
     complete: np.ndarray  # complete in both runs (all True without the complete column)
     has_complete: bool  # either peaks.csv has a complete column
     lammps_error: np.ndarray | None = None  # LAMMPS's measured peak-force errors (None: not estimated)
+    #: which force the profiles are (tables.dynamic_peaks: above each contact's static force where it has one)
+    label: str = r"peak contact force $F_p$ (N)"
 
 
 def _spline(t: np.ndarray, f: np.ndarray, at: np.ndarray) -> np.ndarray:
@@ -129,7 +135,8 @@ def compare_histories(compare_dir: str | Path) -> tuple[list[HistoryOverlay], st
 
 def compare_peaks(compare_dir: str | Path) -> PeakOverlay:
     """The peak-force profiles of both runs of a compare directory, over their common contacts."""
-    a, b = (load_peaks(r) for r in _compare_runs(Path(compare_dir)))
+    # the dynamic force above each contact's static force where it has one, as compare's rows are
+    (a, label, *_), (b, *_) = (dynamic_peaks(r, load_peaks(r)) for r in _compare_runs(Path(compare_dir)))
     contacts, ia, ib = np.intersect1d(a.contact, b.contact, return_indices=True)
     fa, fb = a.peak_force[ia], b.peak_force[ib]
     reached = a.reached[ia] & b.reached[ib]
@@ -144,16 +151,12 @@ def compare_peaks(compare_dir: str | Path) -> PeakOverlay:
         a.complete[ia] & b.complete[ib],
         a.has_complete or b.has_complete,
         None if a.error is None else a.error[ia],
+        label,
     )
 
 
-def _plot_compare_histories(d: Path, la: str, lr: str, formats, skipped) -> list[Path]:
-    overlays, why = compare_histories(d)
-    if not overlays:
-        if skipped is not None:
-            skipped["compare_histories"] = why
-        (logger.info if skipped is not None else logger.warning)("%s: history overlay not drawn: %s", d, why)
-        return []
+def _draw_compare_histories(overlays: list[HistoryOverlay], la: str, lr: str) -> Figure:
+    """The force histories of a compare directory's two runs overlaid, their difference below."""
     t_max = max(float(np.max(o.time)) for o in overlays)
     factor, unit = _time_unit(t_max)
     many = len(overlays) > LEGEND_MAX  # then coloured by contact (a colour bar), line styles in the legend
@@ -171,7 +174,7 @@ def _plot_compare_histories(d: Path, la: str, lr: str, formats, skipped) -> list
     if many:
         ax1.plot([], [], "-", color="0.4", lw=2.2, alpha=0.45, label="LAMMPS")
         ax1.plot([], [], "--", color="0.4", lw=1.0, label="reference")
-        cb = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=r"contact $i$")
+        cb = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=r"contact $i$ (index)")
         cb.ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax2.axhline(0.0, color="0.5", lw=0.6)
     ax1.set_ylabel(r"contact force $F_{i,i+1}$ (N)")
@@ -179,7 +182,7 @@ def _plot_compare_histories(d: Path, la: str, lr: str, formats, skipped) -> list
     ax2.set_xlabel(rf"time $t$ ({unit})")
     peak = max(float(np.max(np.abs(o.reference))) for o in overlays) or 1.0
     sec = ax2.secondary_yaxis("right", functions=(lambda x: x / peak, lambda y: y * peak))
-    sec.set_ylabel(r"$/\ \max\,|F^{\mathrm{ref}}|$", fontsize=9)
+    sec.set_ylabel(r"$/\ \max\,|F^{\mathrm{ref}}|$ (1)", fontsize=9)
     ax1.set_title(f"Force histories: LAMMPS {la}, wide pale lines; reference {lr}, dashed", fontsize=9)
     ax2.set_title(f"difference, LAMMPS − reference; {_plain(overlays[0].grid)}", fontsize=8)
     ax1.legend(fontsize=7, ncol=1 if many else min(3, len(overlays)))
@@ -188,7 +191,17 @@ def _plot_compare_histories(d: Path, la: str, lr: str, formats, skipped) -> list
         fig.tight_layout()
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
-    made = _save(fig, d / "compare_histories", formats)
+    return fig
+
+
+def _plot_compare_histories(d: Path, la: str, lr: str, formats, skipped) -> list[Path]:
+    overlays, why = compare_histories(d)
+    if not overlays:
+        if skipped is not None:
+            skipped["compare_histories"] = why
+        (logger.info if skipped is not None else logger.warning)("%s: history overlay not drawn: %s", d, why)
+        return []
+    made = _save(_draw_compare_histories(overlays, la, lr), d / "compare_histories", formats)
     rows = [
         (o.contact, t, fa, fb, df)
         for o in overlays
@@ -202,7 +215,8 @@ def _plot_compare_histories(d: Path, la: str, lr: str, formats, skipped) -> list
     return made
 
 
-def _plot_compare_peaks(d: Path, la: str, lr: str, formats) -> list[Path]:
+def _draw_compare_peaks(d: Path, la: str, lr: str):
+    """(Figure, CSV header, CSV columns) of the peak profiles of a compare directory's two runs."""
     p = compare_peaks(d)
     fig = _new_figure(figsize=(9, 7.5))
     ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2.2, 1]})
@@ -232,9 +246,9 @@ def _plot_compare_peaks(d: Path, la: str, lr: str, formats) -> list[Path]:
     ok = reached & p.complete if (reached & p.complete).any() else reached
     if ok.any() and p.reference[ok].max() / p.reference[ok].min() > 10.0:
         ax1.set_yscale("log")
-    ax1.set_ylabel(r"peak contact force $F_p$ (N)")
-    ax2.set_ylabel(r"$|F_p^{\mathrm{LAMMPS}} - F_p^{\mathrm{ref}}|\,/\,F_p^{\mathrm{ref}}$")
-    ax2.set_xlabel(r"contact $i$ (between bead $i$ and $i+1$)")
+    ax1.set_ylabel(p.label)
+    ax2.set_ylabel(r"$|F_p^{\mathrm{LAMMPS}} - F_p^{\mathrm{ref}}|\,/\,F_p^{\mathrm{ref}}$ (1)")
+    ax2.set_xlabel(CONTACT_LABEL)
     ax1.set_title("Peak force along the chain: LAMMPS vs reference", fontsize=9)
     ax2.set_title("relative difference of the peak force (log scale; colour: its sign)", fontsize=8)
     ax1.legend(fontsize=8)
@@ -242,15 +256,21 @@ def _plot_compare_peaks(d: Path, la: str, lr: str, formats) -> list[Path]:
         ax2.legend(fontsize=7)
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3, which="both")
+        log_axes_ticks(ax)
     fig.tight_layout()
     err = None if p.lammps_error is None else np.where(reached, p.lammps_error, np.nan)
     if _error_bars(ax1, p.contact, p.lammps, err, "C0", "LAMMPS measured error, where beyond the marker"):
         ax1.legend(fontsize=8)
-    made = _save(fig, d / "compare_peaks", formats)
     header = ["contact", "lammps", "reference", "relative_difference"]
     cols = [p.contact, p.lammps, p.reference, p.relative_difference]
     if p.has_complete:
         header, cols = [*header, "complete"], [*cols, p.complete.astype(float)]
+    return fig, header, cols
+
+
+def _plot_compare_peaks(d: Path, la: str, lr: str, formats) -> list[Path]:
+    fig, header, cols = _draw_compare_peaks(d, la, lr)
+    made = _save(fig, d / "compare_peaks", formats)
     _write_csv(d / "compare_peaks_plot.csv", header, cols)
     return made
 

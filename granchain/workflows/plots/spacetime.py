@@ -14,6 +14,7 @@ from matplotlib.figure import Figure
 
 from granchain.results import RunResult
 from granchain.workflows.plots.canvas import (
+    CONTACT_LABEL,
     PlotError,
     _cmap,
     _label,
@@ -182,8 +183,8 @@ def _draw_heatmap(r: RunResult, st: SpaceTime):
     ax = fig.subplots()
     mesh = ax.pcolormesh(st.contacts, st.time * factor, f, shading="nearest", cmap=cmap, norm=norm, rasterized=True)
     cb = fig.colorbar(mesh, ax=ax, extend="min" if log_scale else "neither")
-    cb.set_label(r"contact force $F_{i,i+1}$ (N)" + (", log scale" if log_scale else ""))
-    ax.set_xlabel(r"contact $i$ (between bead $i$ and $i+1$)")
+    cb.set_label(r"contact force $F_{i,i+1}$ (N" + (", log scale" if log_scale else "") + ")")
+    ax.set_xlabel(CONTACT_LABEL)
     ax.set_ylabel(rf"time $t$ ({unit})")
     ax.set_title(f"Contact force over the chain and time — {_label(summary)}\nfrom {_plain(st.source)}", fontsize=9)
     fig.tight_layout()

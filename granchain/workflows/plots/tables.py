@@ -3,11 +3,13 @@ have them, and a RunResult from a result or a run directory."""
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from granchain.physics.effects.gravity import scene_static_forces
 from granchain.results import RunResult
 from granchain.workflows.load import LoadRunError, load_run
 from granchain.workflows.plots.canvas import (
@@ -40,6 +42,25 @@ def load_peaks(run) -> Peaks:
     complete = df["complete"].to_numpy(bool) if has else np.ones(contact.shape, bool)
     error = df["peak_force_error"].to_numpy(float) if "peak_force_error" in df.columns else None
     return Peaks(contact, df["peak_force"].to_numpy(float), df["time_of_peak"].to_numpy(float), complete, has, error)
+
+
+def dynamic_peaks(r: RunResult, pk: Peaks) -> tuple[Peaks, str, str, str, str]:
+    """The peaks the run reports (above each contact's own static force under precompression or gravity,
+    as leading_peak_force is; else the contact force), the y axes' labels saying which force they are, the
+    CSV column's name and the markers' legend."""
+    static = scene_static_forces(r.scene)
+    if not np.any(static):
+        return pk, r"peak contact force $F_p$ (N)", r"$F_p \,/\, (E^* R^{*2})$ (1)", "peak_force", "peak force"
+    index = np.clip(pk.contact.astype(int) - 1, 0, static.size - 1)
+    dynamic = dataclasses.replace(pk, peak_force=pk.peak_force - static[index])
+    if np.allclose(static, static[0], rtol=1e-12, atol=0.0):
+        label = rf"dynamic peak force $F_p - F_0$ (N, $F_0$ = {float(static[0]):g} N)"
+        what = "peak force above F0"
+    else:  # gravity: the weight above each contact, with any precompression (the legend says so)
+        label = r"dynamic peak force $F_p - F_{0,i}$ (N)"
+        what = r"peak force above $F_{0,i}$, each contact's static force"
+    f0 = "F_0" if "F_0" in label else "F_{0,i}"
+    return dynamic, label, rf"$(F_p - {f0}) \,/\, (E^* R^{{*2}})$ (1)", "dynamic_peak_force", what
 
 
 def as_result(run) -> RunResult:
