@@ -65,8 +65,9 @@ class IntegratorFacts:
         damping_order.
     peaks_by_overlap : bool
         True: a peak is located where the overlap turns (the maximum of the quartic interpolant of the
-        overlap over a step: its value and rate at both ends, its second derivative at the start), so its force is the elastic force there; False: the contact force's
-        samples at step ends are tracked, so its peak is the total force's maximum. The two are one
+        overlap over a step: its value and rate at both ends, its second derivative at the start), so
+        its force is the elastic force there; False: the contact force's samples at step ends are
+        tracked, so its peak is the total force's maximum. The two are one
         quantity unless the damping part adds a velocity-dependent force (postprocess.comparison_table
         .peak_definition).
     locates_kinks : bool
