@@ -44,11 +44,26 @@ def achieved_error(scene, backend, method, rtol):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("integrator", list(INTEGRATORS))
-@pytest.mark.parametrize("rtol", [1e-2, 1e-3])
+@pytest.mark.parametrize(
+    ("integrator", "rtol"), [(i, r) for i in INTEGRATORS for r in (1e-2, 1e-3) if (i, r) != ("verlet", 1e-3)]
+)
 @settings(max_examples=8, deadline=None, derandomize=True)
 @given(scene=scenes(max_beads=40))
 def test_planned_step_meets_rtol_on_any_scene(scene, rtol, integrator):
+    check_planned_step(scene, rtol, integrator)
+
+
+# the reference's Verlet at rtol 1e-3 is the slow set's longest case (250 s of CI's 30 minutes at 8
+# draws, its steps a tenth of rtol 1e-2's): 4 draws
+@pytest.mark.slow
+@settings(max_examples=4, deadline=None, derandomize=True)
+@given(scene=scenes(max_beads=40))
+def test_planned_verlet_step_meets_rtol_1e_3_on_any_scene(scene):
+    check_planned_step(scene, 1e-3, "verlet")
+
+
+def check_planned_step(scene, rtol, integrator):
+    """The planned run's complete peaks within rtol of a run at a quarter of its step."""
     backend, method = INTEGRATORS[integrator]
     err, n = achieved_error(scene, backend, method, rtol)
     log = os.environ.get("GRANCHAIN_PROPERTY_LOG")

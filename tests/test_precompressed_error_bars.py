@@ -86,11 +86,15 @@ def hertz_impact_force(material: str, radius: float, velocity: float) -> float:
 def test_dynamic_peaks_get_truthful_error_bars(integ, sc):
     """Every complete dynamic peak has an error bar or a status that says why not ("not measured"
     is not a reason on a complete peak), at least one per chain has a number, and every number is
-    within [1/3, 3] of the distance to a run at a sixteenth of the step."""
+    within [1/3, 3] of the distance to a run at a sixteenth of the step. RK4's bars are the checked
+    ones (docs/error-bars.md, "RK4's check at dt / 2"): its default bars miss about 5% of the time,
+    and say so in errors.why_unchecked; CI's draw of a 15-bead aluminium dimer (4.76 / 2.16 mm), F0 =
+    1 N, kicked at 0.0172 m/s, had one such, 4.19x at contact 7 (observed order 1.8 from dt, 2 dt,
+    4 dt), which the check withholds with its reason."""
     backend, method = ("lammps", None) if integ == "lammps" else ("reference", integ)
     sc, _ = plan_for(sc, backend, method, 1e-3)
     sc = replace(sc, outputs=replace(sc.outputs, histories=(), snapshots=(), history_interval=None, dump_interval=None))
-    got = run_scene(sc, backend=backend, method=method, error_estimate=True)
+    got = run_scene(sc, backend=backend, method=method, error_estimate="checked" if integ == "rk4" else True)
     fine = run_scene(replace(sc, run=replace(sc.run, timestep=sc.run.timestep / 16)), backend=backend, method=method)
     a, b = got.solution, fine.solution
     est = got.errors.peak_force
