@@ -41,18 +41,30 @@ def hermite_max(
         # a few contacts turn in a step: Python floats, as in hermite_root (the same numbers)
         return _max_scalar(t0, t1, a0, a1, d0, d1)
     h = t1 - t0
-    c = h * d0
-    b = 3.0 * (a1 - a0) - 2.0 * h * d0 - h * d1
-    a = 2.0 * (a0 - a1) + h * d0 + h * d1
+    a, b, c = _coefficients(h, a0, a1, d0, d1)
+    s = _cubic_argmax(a, b, c)
+    p = ((a * s + b) * s + c) * s + a0
+    return p, t0 + s * h
+
+
+def _coefficients(h, x0, x1, y0, y1):
+    """The cubic Hermite interpolant's coefficients (a, b, c) in p(s) = a s^3 + b s^2 + c s + x0 on
+    s in [0, 1], from the ends' values x0, x1 and rates y0, y1 over a step h (arrays or floats)."""
+    c = h * y0
+    b = 3.0 * (x1 - x0) - 2.0 * h * y0 - h * y1
+    a = 2.0 * (x0 - x1) + h * y0 + h * y1
+    return a, b, c
+
+
+def _cubic_argmax(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Where in [0, 1] the cubic of _coefficients is largest, where c > 0 (it rises at s = 0)."""
     # p'(s) = 3a s^2 + 2b s + c falls through zero at s = (-b - sqrt(b^2 - 3ac)) / (3a), written
     # as c / (sqrt(b^2 - 3ac) - b), which also holds for a -> 0 (no cancellation, p'' = -2 disc).
     disc = np.sqrt(np.maximum(b * b - 3.0 * a * c, 0.0))
     with np.errstate(divide="ignore", invalid="ignore"):
         s = c / (disc - b)
     # nan (0/0) and +inf -> 1, -inf -> 0, the rest clipped to [0, 1]: fmin takes 1 over a nan
-    s = np.maximum(np.fmin(s, 1.0), 0.0)
-    p = ((a * s + b) * s + c) * s + a0
-    return p, t0 + s * h
+    return np.maximum(np.fmin(s, 1.0), 0.0)
 
 
 def _max_scalar(
@@ -71,9 +83,7 @@ def _max_scalar(
 def max1(h: float, x0: float, x1: float, y0: float, y1: float) -> tuple[float, float]:
     """hermite_max of one contact on Python floats over a step of length h: (the maximum, its
     fraction s of the step). The same operations in the same order as the numpy path."""
-    c = h * y0
-    b = 3.0 * (x1 - x0) - 2.0 * h * y0 - h * y1
-    a = 2.0 * (x0 - x1) + h * y0 + h * y1
+    a, b, c = _coefficients(h, x0, x1, y0, y1)
     q = b * b - 3.0 * a * c
     disc = math.sqrt(q if not q < 0.0 else 0.0)  # np.maximum(q, 0.0): a nan stays nan
     den = disc - b
@@ -209,13 +219,8 @@ def hermite_max_quartic(
         rows = zip(a0.tolist(), a1.tolist(), d0.tolist(), d1.tolist(), dd0.tolist(), strict=True)
         out = [max1_quartic(h, *row) for row in rows]
         return np.array([p for p, _ in out]), np.array([t0 + s * h for _, s in out])
-    c = h * d0
-    b = 3.0 * (a1 - a0) - 2.0 * h * d0 - h * d1
-    a = 2.0 * (a0 - a1) + h * d0 + h * d1
-    disc = np.sqrt(np.maximum(b * b - 3.0 * a * c, 0.0))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = c / (disc - b)
-    s = np.maximum(np.fmin(s, 1.0), 0.0)
+    a, b, c = _coefficients(h, a0, a1, d0, d1)
+    s = _cubic_argmax(a, b, c)
     e = 0.5 * (h * h * dd0) - b
     for _ in range(2):
         w = s * (1.0 - s)
@@ -232,9 +237,7 @@ def max1_quartic(h: float, x0: float, x1: float, y0: float, y1: float, z0: float
     """hermite_max_quartic of one contact on Python floats over a step of length h: (the maximum,
     its fraction s of the step). The same operations in the same order as the numpy path."""
     _, s = max1(h, x0, x1, y0, y1)
-    c = h * y0
-    b = 3.0 * (x1 - x0) - 2.0 * h * y0 - h * y1
-    a = 2.0 * (x0 - x1) + h * y0 + h * y1
+    a, b, c = _coefficients(h, x0, x1, y0, y1)
     e = 0.5 * (h * h * z0) - b
     for _ in range(2):
         w = s * (1.0 - s)
