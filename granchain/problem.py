@@ -14,6 +14,7 @@ from granchain.physics.damping import DAMPING, DampingPart
 from granchain.physics.effects import EFFECTS, active_effects
 from granchain.physics.effects.gravity import scene_static_forces
 from granchain.physics.effects.gravity import static_profile as static_contact_forces
+from granchain.physics.harmonic import drive_force, drive_impulse
 from granchain.physics.laws import ContactLaw
 
 __all__ = ["scene_static_forces", "static_contact_forces"]  # (re-exported: the problem's static load)
@@ -30,6 +31,8 @@ class ChainProblem:
     law: ContactLaw  # over the N-1 contacts (parameters scalar or one per contact)
     amplitude: float = 0.0  # A, N
     duration: float = 0.0  # T, s
+    frequency: float = 0.0  # f, Hz: a harmonic drive A sin(2 pi f t) r(t) on (0, T] (0: the step A)
+    ramp_time: float = 0.0  # t_r, s: the drive's sin^2 switch-on (granchain.physics.harmonic)
     initial_velocity: float = 0.0  # m/s of bead 1 at t = 0
     wall_law: ContactLaw | None = None  # far end: None free, else bead N on a rigid flat (scene.wall_law)
     striker_mass: float | None = None  # a striker before bead 1 (moving at initial_velocity), or None
@@ -48,6 +51,24 @@ class ChainProblem:
         return DAMPING[self.damping]
 
     @property
+    def driven(self) -> bool:
+        """The load on bead 1 is a harmonic drive, whose force changes within a step (load_force)."""
+        return bool(self.frequency) and bool(self.amplitude)
+
+    def load_force(self, t: float) -> float:
+        """The load's force on bead 1 at t inside its loaded time (0, T], N: A (a step), or the drive's
+        A sin(2 pi f t) r(t) (granchain.physics.harmonic.drive_force)."""
+        if not self.frequency:
+            return self.amplitude
+        return drive_force(t, self.amplitude, self.frequency, self.ramp_time, self.duration)
+
+    def load_impulse(self, t: float) -> float:
+        """The load's impulse delivered by t, N s: A min(t, T), or the drive's closed form."""
+        if not self.frequency:
+            return self.amplitude * min(self.duration, t)
+        return drive_impulse(t, self.amplitude, self.frequency, self.ramp_time, self.duration)
+
+    @property
     def beads(self) -> int:
         """Number of beads the problem integrates (with_ends: the effects' extra beads included)."""
         return int(self.mass.shape[0])
@@ -61,7 +82,8 @@ class ChainProblem:
             effect.problem_fields(scene, fields)
         ld = scene.loading
         if ld.is_force:
-            return cls(amplitude=ld.amplitude, duration=ld.duration, **fields)
+            drive = {"frequency": ld.frequency, "ramp_time": ld.ramp_time} if ld.is_harmonic else {}
+            return cls(amplitude=ld.amplitude, duration=ld.duration, **drive, **fields)
         return cls(initial_velocity=ld.velocity, **fields)
 
     def with_ends(self) -> ChainProblem:
@@ -79,6 +101,8 @@ class ChainProblem:
             law=type(self.law).join(parts),
             amplitude=self.amplitude,
             duration=self.duration,
+            frequency=self.frequency,
+            ramp_time=self.ramp_time,
             initial_velocity=self.initial_velocity,
             damping=self.damping,
             damping_coefficient=self.damping_coefficient,

@@ -127,7 +127,7 @@ RULES = [
     ("timestep over end", ("run", "timestep"), 1.0, "timestep", "no longer than end_time"),
     ("nan amplitude", ("loading", "amplitude"), float("nan"), "amplitude", "finite"),
     ("loading key of other kind", ("loading", "velocity"), 3.0, "velocity", "amplitude (N) and duration"),
-    ("unknown loading kind", ("loading", "kind"), "ramp", "kind", "'step', 'impulse', 'velocity'"),
+    ("unknown loading kind", ("loading", "kind"), "ramp", "kind", "'step', 'impulse', 'harmonic', 'velocity'"),
     ("missing amplitude", ("loading", "amplitude"), DELETE, "amplitude", "force A"),
     ("history out of range", ("outputs", "histories"), [0, 3], "histories", "contacts 1..199"),
     ("history beyond chain", ("outputs", "histories"), [200], "histories", "out of range"),

@@ -332,7 +332,7 @@ def _print_conservation(scene, s: dict) -> None:
     if ld.is_force:  # A min(T, t_end): the load delivers A T only if it ended before the run
         end = float(c.get("time", s["end_time"]))
         how = (
-            "A T delivered by the force"
+            ("the drive's closed-form integral" if ld.is_harmonic else "A T delivered by the force")
             if end >= ld.duration
             else f"A t_end: delivered up to the end, t_end = {end:.4g} s; the load lasts T = {ld.duration:.4g} s"
         )

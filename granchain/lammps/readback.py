@@ -29,6 +29,7 @@ from granchain.problem import ChainProblem, precompressed_displacements, scene_s
 from granchain.results import ChainSolution
 from granchain.schedule import scene_step_plan, step_times
 from granchain.templates import RESULT_COLUMNS, RESULTS_DUMP, RUN_END_FILE, AtomLayout, atom_layout
+from granchain.templates.drive import DRIVE_WORK_COLUMN
 from granchain.templates.run_control import initial_mass_x
 
 #: the most of a results file read (a 10^7-bead chain's peaks.dump is about 2.5 GB)
@@ -223,7 +224,7 @@ def read_solution(
         displacement=res["x"][o : o + n] - scene.bead_positions,  # the data file's positions (render_data)
         velocity=v,
         alpha_max=res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1),
-        impulse_delivered=ld.amplitude * min(ld.duration, end) if ld.is_force else 0.0,
+        impulse_delivered=float(ld.impulse_until(end)),
         momentum=float(np.sum(masses * v)) + (scene.striker_mass * float(res["vx"][0]) if o else 0.0),
         **ends,
         **event_fields(scene, work),
@@ -323,7 +324,9 @@ def energy_fields(scene, work: Path) -> dict[str, np.ndarray]:
     et, ke, pe, ed, x1 = (col[k] for k in ("time", "kinetic", "potential", "dissipated", "x1"))
     x1_0 = x1[0] if et[0] == 0.0 else float(x1_static(scene))
     work_done = np.full(et.shape, ke[0] + pe[0] + ed[0]) if et[0] == 0.0 else np.zeros(et.shape)
-    if ld.is_force:
+    if ld.is_harmonic:  # its work summed step by step in the deck (templates/loading_harmonic.lmp.j2)
+        work_done = work_done + col[DRIVE_WORK_COLUMN]
+    elif ld.is_step:
         dx = x1 - x1_0
         if (work / "load_end.txt").exists():
             x1_end = float(np.loadtxt(io.StringIO(_result_text(work / "load_end.txt", 4096)), ndmin=1)[1])

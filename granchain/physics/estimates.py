@@ -41,8 +41,18 @@ def step_equivalent(scene) -> tuple[float, float] | None:
     return a, scene.striker_mass * ld.velocity / a
 
 
+#: a harmonic drive's expected dynamic force, in drive amplitudes: a driven chain below its cutoff
+#: carries about A on its first contacts (the static response of a spring chain to a slow force), more
+#: near a resonance of the finite chain and where a reflection adds to the incoming wave; the planner
+#: bounds the peak with 3 A above F0
+HARMONIC_PEAK_AMPLITUDES = 3.0
+
+
 def expected_peak_force(scene) -> float:
-    """An upper estimate of the largest contact force of the run (N), from the paper's models."""
+    """An upper estimate of the largest contact force of the run above its static force (N), from the
+    paper's models; a harmonic drive's HARMONIC_PEAK_AMPLITUDES x its amplitude."""
+    if scene.loading.is_harmonic:
+        return HARMONIC_PEAK_AMPLITUDES * scene.loading.amplitude
     return scene.contact.law_class.expected_peak_force(scene, scene.input_impulse, step_equivalent(scene))
 
 
@@ -128,6 +138,8 @@ def highest_frequency(scene, return_damping: bool = False) -> tuple[float, str]:
     held_here = bool(np.any(force[beside] < b.force)) or (i == n - 1 and "wall_held" in extra)
     if "striker" in extra and max(math.sqrt(extra["striker"]), 0.0) > omega:
         omega, where, held_here = math.sqrt(extra["striker"]), "the striker", False
+    if scene.loading.is_harmonic and 2.0 * math.pi * scene.loading.frequency > omega:  # a drive above the chain's
+        return 2.0 * math.pi * scene.loading.frequency, "the harmonic drive's frequency (above the chain's)"
     if damp[i] > np.sqrt(rows[i]):
         where += f" (the {b.damping.noun}'s decay rate {damp[i]:.3g} 1/s)"
     elif "wall" in extra and i == n - 1:

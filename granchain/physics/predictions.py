@@ -321,6 +321,11 @@ def _outside_the_papers_chain(scene) -> list[str]:
             f"static precompression F0 = {scene.effects.precompression:g} N: the paper's models are for an "
             "uncompressed chain (a precompressed chain carries other waves, ref. 9)"
         )
+    if scene.loading.is_harmonic:
+        why_not.append(
+            "a harmonic drive: the paper's models are for a step f(t) = A on 0 < t <= T (Eq. 4), a kick or a "
+            "striker, not a driven chain's steady wave train"
+        )
     why_not += _under_gravity(scene)
     ld = scene.loading
     if ld.kind == "striker":
@@ -425,7 +430,7 @@ def _predict(scene) -> list[Prediction]:
             nondim=impulse / scene.impulse_scale,
         ),
     ]
-    if ld.is_force:
+    if ld.is_step:
         out.append(Prediction("loading_time_over_tau", ld.duration / scene.tau, "1", "T / tau (Eq. 7)", "always"))
         out.append(
             Prediction("amplitude", ld.amplitude, "N", "Eq. 4", "always", nondim=ld.amplitude / scene.force_scale)

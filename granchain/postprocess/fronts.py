@@ -127,7 +127,7 @@ def _middle(lo: int, hi: int) -> slice:
 
 def long_load_fronts(scene, sol) -> dict[str, float]:
     """Measured F_1, v_1, v_t, F_2, v_2 (N, m/s) and x_t (m, from bead 1's centre); see the module doc."""
-    if scene.contact.law != "bilinear" or not scene.loading.is_force:
+    if scene.contact.law != "bilinear" or not scene.loading.is_step:
         raise ValueError("long_load_fronts measures a bilinear chain under a step load (Sec. III B)")
     a, t_load, d = scene.loading.amplitude, scene.loading.duration, scene.diameter
     out = dict.fromkeys(("F_1", "v_1", "v_t", "F_2", "v_2", "x_t"), float("nan"))

@@ -402,7 +402,7 @@ class EnergyLedger(Observer):
         """Energy put in: the initial energy, the work of f(t) and of the static forces."""
         p, u, s0 = self.problem, state.u, self.problem.front  # bead 1: behind the beads in front
         w = self.e_initial
-        if p.amplitude:
+        if p.amplitude and not p.driven:  # (a drive's work: reference.drive.DrivenEnergyLedger)
             u0 = u[s0] if self.u0_at_load_end is None else self.u0_at_load_end
             w += p.amplitude * (u0 - self.u_init[s0])
         dx_mass = float(np.dot(state.mass_ke, u - self.u_init))  # (a body force does m_i g dx_i)
@@ -480,7 +480,7 @@ class RunWatch(Observer):
             self.max_overlap = float(bounds[0]) if bool((bounds == bounds[0]).all()) else bounds.copy()
         self.front = state.problem.front  # bodies in front of bead 1 (a striker): contact i + 1 - front
         self.energy_watch = energy_watch
-        self.momentum_watch = momentum_watch if momentum_kept(state.problem) else None
+        self.momentum_watch = momentum_watch if momentum_kept(state.problem) and not state.problem.driven else None
         self.p_initial = float(np.dot(state.mass_ke, state.v))  # (a striker's or bead 1's initial momentum)
         self.put_in = 0.0  # the largest energy put in so far (the energy watch's scale)
         if self.energy_watch is not None or self.momentum_watch is not None:
@@ -544,7 +544,7 @@ class RunWatch(Observer):
                 raise InvariantError("energy balance", t, state.step, busiest, detail)
         if self.momentum_watch is not None:
             p = state.problem
-            delivered = p.amplitude * min(p.duration, t)
+            delivered = float(p.load_impulse(t))
             momentum = float(np.dot(state.mass_ke, state.v))
             detail = momentum_violation(momentum, self.p_initial + delivered, self.momentum_watch)
             if detail:

@@ -136,7 +136,7 @@ class RK4Integrator(Integrator):
 
         Returns the time the step started from (a split step's last piece starts later)."""
         if not self.event_location:
-            self.rk4(state, h, a_ext)
+            self.rk4(state, h, a_ext, t0=t0)
             self.end_piece(state, t0, t1, state.u[:-1] - state.u[1:], state.v[:-1] - state.v[1:])
             return t0
         if self.lean:
@@ -157,7 +157,7 @@ class RK4Integrator(Integrator):
             np.copyto(self.u_save, u)
             np.copyto(self.v_save, v)
             e_save = state.damping_energy
-            self.rk4(state, h_sub, a_ext)
+            self.rk4(state, h_sub, a_ext, t0=t)
             a_new, adot_new = np.subtract(u_left, u_right), np.subtract(v_left, v_right)
             piece = Piece(state.alpha_now, state.adot_now, a_new, adot_new, self.u_save, u, h_sub)
             crossing = first_kink_crossing(state.law, state.alpha_hist, piece, self.timestep, self.fixed_kinks)
@@ -171,7 +171,7 @@ class RK4Integrator(Integrator):
             np.copyto(v, self.v_save)
             state.damping_energy = e_save
             # the piece starts where the rejected try did, with the same history: its first stage too
-            self.rk4(state, s_ev * h_sub, a_ext, same_start=True)
+            self.rk4(state, s_ev * h_sub, a_ext, same_start=True, t0=t)
             self.extra_steps += 2  # the rejected try and the split piece
             t_split = t + s_ev * h_sub
             self.end_piece(state, t, t_split, np.subtract(u_left, u_right), np.subtract(v_left, v_right))
@@ -209,7 +209,7 @@ class RK4Integrator(Integrator):
             nxt = 1 - cur
             out = self.pairs[nxt]
             # (alpha_now: the overlaps of the state's u, from the last piece's end or from t = 0)
-            self.rk4(state, h_sub, a_ext, False, out, state.alpha_now, t != t0)
+            self.rk4(state, h_sub, a_ext, False, out, state.alpha_now, t != t0, t)
             u_left, u_right, v_left, v_right = self.pair_views[nxt]
             a_new, adot_new = _subtract(u_left, u_right), _subtract(v_left, v_right)
             adot_old = state.adot_now
@@ -223,7 +223,7 @@ class RK4Integrator(Integrator):
                 raise self.too_many_splits(state, t, h_sub, crossing)
             s_ev = crossing[0]
             # the piece starts where the rejected try did, with the same history: its first stage too
-            self.rk4(state, s_ev * h_sub, a_ext, True, out, None, True)
+            self.rk4(state, s_ev * h_sub, a_ext, True, out, None, True, t)
             self.extra_steps += 2  # the rejected try and the split piece
             t_split = t + s_ev * h_sub
             state.u, state.v = out
@@ -246,8 +246,11 @@ class RK4Integrator(Integrator):
         out: tuple[np.ndarray, np.ndarray] | None = None,
         overlaps: np.ndarray | None = None,
         once: bool = False,
+        t0: float = 0.0,
     ) -> None:
-        """Classical RK4 on (u, v) in place; the external load is constant over the step.
+        """Classical RK4 on (u, v) in place from t0; the external load a_ext is constant over the step,
+        and a drive (Integrator.drive, a harmonic load) adds its value at each stage's time: t0 (k1),
+        t0 + h/2 (k2, k3), t0 + h (k4), the classical tableau's nodes.
 
         same_start: (u, v) and alpha_max are those of the last call's start (a step split by event
         location), so its first stage k1v, still in its buffer, is this one's (without damping,
@@ -273,23 +276,27 @@ class RK4Integrator(Integrator):
             consts = self.factors(h, once)
         half_h, quarter_h2, h_, half_h2, h2_6, h_6 = consts
         add, mul = _add, _multiply
+        a1 = a2 = a4 = a_ext
+        if self.drive is not None:
+            drive = self.drive
+            a1, a2, a4 = a_ext + drive(t0), a_ext + drive(t0 + 0.5 * h), a_ext + drive(t0 + h)
         if damped:
-            self.rk4_damped(state, h, a_ext, consts)
+            self.rk4_damped(state, h, (a1, a2, a4), consts)
             return
-        if a_ext and self.net_force is not None:
-            a_ext = a_ext / self.inv_m  # the load's force (the k are forces)
+        if self.net_force is not None and (a1 or a2 or a4):
+            a1, a2, a4 = a1 / self.inv_m, a2 / self.inv_m, a4 / self.inv_m  # the load's force (the k are forces)
         if not same_start:
             if overlaps is None:
                 accel(u, k1v, v)
             else:
                 accel(u, k1v, v, overlaps)
-            if a_ext:  # (x + 0.0 is x: an unloaded segment skips the four)
-                k1v[self.load_bead] += a_ext
+            if a1:  # (x + 0.0 is x: an unloaded segment skips the four)
+                k1v[self.load_bead] += a1
         b2, t = self.ut2, self.tmp
         if self.parts is None:
-            self.stages_by_calls(accel, u, v, a_ext, consts)
+            self.stages_by_calls(accel, u, v, (a2, a4), consts)
         else:
-            self.stages_written_out(u, v, a_ext, consts)
+            self.stages_written_out(u, v, (a2, a4), consts)
         # u += h/6 (k1u + 2 k2u + 2 k3u + k4u) with k1u = v, k2u = v + h/2 k1v, k3u = v + h/2 k2v,
         # k4u = v + h k3v  =>  u = Q + h^2/6 S, S = k1v + k2v + k3v; v += h/6 (S + (k2v + k3v) + k4v)
         add(k2v, k3v, t)
@@ -316,9 +323,13 @@ class RK4Integrator(Integrator):
         consts = self.consts[h] = tuple(np.array(x) for x in values)
         return consts
 
-    def stages_written_out(self, u: np.ndarray, v: np.ndarray, a_ext: float, consts: tuple[np.ndarray, ...]) -> None:
+    def stages_written_out(
+        self, u: np.ndarray, v: np.ndarray, a_ext: tuple[float, float], consts: tuple[np.ndarray, ...]
+    ) -> None:
         """rk4's stages 2-4 with the force evaluations written out: accel's steps (make_accel's parts),
-        the same calls on the same buffers, without a Python call and the views lookup each."""
+        the same calls on the same buffers, without a Python call and the views lookup each. a_ext: the
+        load at the stages' times, (t0 + h/2: stages 2 and 3, t0 + h: stage 4)."""
+        a_mid, a_end = a_ext
         alpha, ftmp, fc, fp_left, fp_right, force_into, clip, zero, inv_m, hist = self.parts
         (b1_left, b1_right), (b2_left, b2_right) = self.stage_views
         k1v, k2v, k3v, k4v, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.hv
@@ -334,8 +345,8 @@ class RK4Integrator(Integrator):
         sub(fp_left, fp_right, k2v)
         if inv_m is not None:
             mul(k2v, inv_m, k2v)
-        if a_ext:
-            k2v[self.load_bead] += a_ext
+        if a_mid:
+            k2v[self.load_bead] += a_mid
         mul(k1v, quarter_h2, t)
         add(b1, t, b2)  # stage 3: u + h/2 (v + h/2 k1v) = P + h^2/4 k1v
         sub(b2_left, b2_right, alpha)
@@ -345,8 +356,8 @@ class RK4Integrator(Integrator):
         sub(fp_left, fp_right, k3v)
         if inv_m is not None:
             mul(k3v, inv_m, k3v)
-        if a_ext:
-            k3v[self.load_bead] += a_ext
+        if a_mid:
+            k3v[self.load_bead] += a_mid
         add(b1, hv, b2)  # Q = u + h v
         mul(k2v, half_h2, t)
         add(b2, t, b1)  # stage 4: u + h (v + h/2 k2v) = Q + h^2/2 k2v
@@ -357,18 +368,20 @@ class RK4Integrator(Integrator):
         sub(fp_left, fp_right, k4v)
         if inv_m is not None:
             mul(k4v, inv_m, k4v)
-        if a_ext:
-            k4v[self.load_bead] += a_ext
+        if a_end:
+            k4v[self.load_bead] += a_end
 
     def stages_by_calls(
         self,
         accel: Callable[..., float],
         state_u: np.ndarray,
         v: np.ndarray,
-        a_ext: float,
+        a_ext: tuple[float, float],
         consts: tuple[np.ndarray, ...],
     ) -> None:
-        """rk4's stages 2-4 with a force evaluation that has no parts to write out: by calls."""
+        """rk4's stages 2-4 with a force evaluation that has no parts to write out: by calls (a_ext:
+        the load at t0 + h/2 and at t0 + h, as stages_written_out)."""
+        a_mid, a_end = a_ext
         k1v, k2v, k3v, k4v, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.hv
         b1, b2, t = self.ut, self.ut2, self.tmp
         half_h, quarter_h2, _, half_h2, _, _ = consts
@@ -376,34 +389,38 @@ class RK4Integrator(Integrator):
         mul(v, half_h, hv)
         add(state_u, hv, b1)  # stage 2 position P = u + h/2 v
         accel(b1, k2v, None)
-        if a_ext:
-            k2v[self.load_bead] += a_ext
+        if a_mid:
+            k2v[self.load_bead] += a_mid
         mul(k1v, quarter_h2, t)
         add(b1, t, b2)  # stage 3: u + h/2 (v + h/2 k1v) = P + h^2/4 k1v
         accel(b2, k3v, None)
-        if a_ext:
-            k3v[self.load_bead] += a_ext
+        if a_mid:
+            k3v[self.load_bead] += a_mid
         add(b1, hv, b2)  # Q = u + h v
         mul(k2v, half_h2, t)
         add(b2, t, b1)  # stage 4: u + h (v + h/2 k2v) = Q + h^2/2 k2v
         accel(b1, k4v, None)
-        if a_ext:
-            k4v[self.load_bead] += a_ext
+        if a_end:
+            k4v[self.load_bead] += a_end
 
-    def rk4_damped(self, state: ChainState, h: float, a_ext: float, consts: tuple[np.ndarray, ...]) -> None:
-        """rk4 with damping: the stage velocities too (the damping force), and its energy."""
+    def rk4_damped(
+        self, state: ChainState, h: float, a_ext: tuple[float, float, float], consts: tuple[np.ndarray, ...]
+    ) -> None:
+        """rk4 with damping: the stage velocities too (the damping force), and its energy (a_ext: the
+        load at t0, t0 + h/2 and t0 + h)."""
+        a1, a_mid, a_end = a_ext
         u, v, accel = state.u, state.v, self.dash_accel
         k1v, k2v, k3v, k4v, ut, vt, hv = self.k1v, self.k2v, self.k3v, self.k4v, self.ut, self.vt, self.hv
         half_h, quarter_h2, h_, half_h2, h2_6, h_6 = consts
         power = 0.0
         power += accel(u, k1v, v)
-        k1v[self.load_bead] += a_ext
+        k1v[self.load_bead] += a1
         np.multiply(v, half_h, out=hv)
         np.add(hv, u, out=ut)
         np.multiply(k1v, half_h, out=vt)
         vt += v
         power += 2.0 * accel(ut, k2v, vt)
-        k2v[self.load_bead] += a_ext
+        k2v[self.load_bead] += a_mid
         # stage 3 position: u + h/2 (v + h/2 k1v)
         np.multiply(k1v, quarter_h2, out=ut)
         ut += u
@@ -411,7 +428,7 @@ class RK4Integrator(Integrator):
         np.multiply(k2v, half_h, out=vt)
         vt += v
         power += 2.0 * accel(ut, k3v, vt)
-        k3v[self.load_bead] += a_ext
+        k3v[self.load_bead] += a_mid
         # stage 4 position: u + h (v + h/2 k2v)
         np.multiply(v, h_, out=hv)
         np.multiply(k2v, half_h2, out=ut)
@@ -420,7 +437,7 @@ class RK4Integrator(Integrator):
         np.multiply(k3v, h_, out=vt)
         vt += v
         power += accel(ut, k4v, vt)
-        k4v[self.load_bead] += a_ext
+        k4v[self.load_bead] += a_end
         state.damping_energy += h / 6.0 * power  # damping energy with the method's own weights
         np.add(k1v, k2v, out=ut)
         ut += k3v

@@ -37,16 +37,16 @@ def solve_chain_dop853(problem: ChainProblem, end_time: float, rtol: float, atol
     scale_u = max(problem.initial_velocity, problem.amplitude * problem.duration * inv_m[0]) * end_time
     atol = atol if atol is not None else rtol * max(scale_u, 1e-300)
     for g in plan:
-        f_ext = problem.amplitude if g.loaded else 0.0
+        loaded = g.loaded
 
-        def rhs(_t, yy, f_ext=f_ext):
+        def rhs(_t, yy, loaded=loaded):
             u, v = yy[:n], yy[n:]
             a = np.maximum(u[:-1] - u[1:], 0.0)
             fc = k * a * np.sqrt(a)
             acc = np.zeros(n)
             acc[:-1] -= fc
             acc[1:] += fc
-            acc[0] += f_ext
+            acc[0] += problem.load_force(_t) if loaded else 0.0  # (a drive's changes within the segment)
             return np.concatenate((v, acc * inv_m))
 
         sol = solve_ivp(rhs, (g.start, g.end), y, method="DOP853", rtol=rtol, atol=atol)
@@ -81,7 +81,7 @@ def solve_chain_dop853(problem: ChainProblem, end_time: float, rtol: float, atol
         displacement=y[:n],
         velocity=y[n:],
         momentum=float(np.dot(problem.mass, y[n:])),
-        impulse_delivered=problem.amplitude * min(problem.duration, end_time),
+        impulse_delivered=float(problem.load_impulse(end_time)),
         energy_time=np.zeros(1),
         kinetic=np.zeros(1),
         potential=np.zeros(1),

@@ -46,8 +46,10 @@ from granchain.integrators import INTEGRATORS
 from granchain.invariants import InvariantError
 from granchain.peaks import complete_peaks, unreached_as_nan
 from granchain.physics.effects import EFFECTS
+from granchain.physics.harmonic import drive_function
 from granchain.problem import ChainProblem, static_contact_forces
 from granchain.progress import Progress
+from granchain.reference.drive import energy_ledger
 from granchain.reference.event import EventTracker
 from granchain.reference.hermite import hermite_max
 from granchain.reference.integrators import (
@@ -61,7 +63,6 @@ from granchain.reference.integrators import (
 from granchain.reference.leading import LeadingPulse
 from granchain.reference.observers import (
     EarlyStop,
-    EnergyLedger,
     ForceSamplePeaks,
     HermitePeaks,
     Observer,
@@ -204,7 +205,7 @@ def _solve(
     integrator = _integrator(method, state, timestep, event_location)
     # where the overlap turns (Hermite), or the force sampled at step ends (IntegratorFacts.peaks_by_overlap)
     peaks = HermitePeaks(state) if INTEGRATORS[method].peaks_by_overlap else ForceSamplePeaks(state)
-    ledger = EnergyLedger(state, max(1, total_steps // max(1, energy_samples)))
+    ledger = energy_ledger(state, max(1, total_steps // max(1, energy_samples)))  # (a drive's: DrivenEnergyLedger)
     observers: list[Observer] = [
         peaks,
         LeadingPulse(state, peaks, lead_floor, lead_fall),
@@ -227,7 +228,7 @@ def _solve(
         displacement=state.u,
         velocity=state.v,
         alpha_max=state.alpha_hist,
-        impulse_delivered=problem.amplitude * min(problem.duration, state.t),
+        impulse_delivered=float(problem.load_impulse(state.t)),
         momentum=float(np.dot(state.mass_ke, state.v)),
         **fields,
     )
@@ -292,13 +293,17 @@ def _drive(
     progress_at = -1 if progress is None else progress.start(sum(g.steps for g in plan))  # one int comparison per step
     inv_m1 = float(state.inv_m[state.load_bead])  # the load (and a striker's F0 push) act on bead 1
     push = state.static_push
-    amplitude = state.problem.amplitude
+    p = state.problem
+    # a harmonic drive changes within a step: the integrator adds it at each stage's time (Integrator.drive)
+    drive = drive_function(p.amplitude, p.frequency, p.ramp_time, inv_m1) if p.driven else None
+    amplitude = 0.0 if p.driven else p.amplitude
     integrator.start(state)
     for observer in observers:
         observer.start(state)
     step, t = 0, 0.0
     for g in plan:
         a_ext = ((amplitude if g.loaded else 0.0) + push) * inv_m1
+        integrator.drive = drive if g.loaded else None
         _start_run(integrator, state, g.start, observers)
         state.seg_end = g.end
         stopped = False

@@ -32,6 +32,9 @@ class Integrator:
 
     name = ""  # the integrator's name in granchain.integrators.INTEGRATORS, whose facts it implements
     extra_steps = 0  # steps beyond the plan's: rejected and split steps (RK4 event location)
+    #: a load that changes within a step (a harmonic drive): t -> its acceleration of bead 1, added to
+    #: a_ext at each stage's time; None: the load is constant over the step (the driver sets it per segment)
+    drive: Callable[[float], float] | None = None
 
     @classmethod
     def for_run(cls, state: ChainState, timestep: float, event_location: bool, max_splits: int) -> Integrator:

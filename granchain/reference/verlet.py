@@ -45,7 +45,10 @@ class VerletIntegrator(Integrator):
         add, mul = _add, _multiply  # outputs by position (RK4Integrator.rk4)
         mul(a_int, half_h, kick)
         add(v, kick, v)
-        if a_ext:  # (x + 0.0 is x: an unloaded segment skips it)
+        drive = self.drive  # a harmonic drive: the force at each half-kick's time, as LAMMPS's addforce
+        if drive is not None:
+            v[self.load_bead] += half * (a_ext + drive(t0))
+        elif a_ext:  # (x + 0.0 is x: an unloaded segment skips it)
             v[self.load_bead] += half * a_ext
         mul(v, h_, kick)
         add(u, kick, u)
@@ -54,7 +57,9 @@ class VerletIntegrator(Integrator):
             state.damping_energy += h * power
         mul(a_int, half_h, kick)
         add(v, kick, v)
-        if a_ext:
+        if drive is not None:
+            v[self.load_bead] += half * (a_ext + drive(t1))
+        elif a_ext:
             v[self.load_bead] += half * a_ext
         if self.history:
             _subtract(self.u_left, self.u_right, self.alpha)

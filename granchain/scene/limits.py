@@ -9,7 +9,7 @@ from granchain.physics.laws import LAWS as LAW_REGISTRY
 
 LAWS = tuple(LAW_REGISTRY)  # the registered laws' names (granchain.physics.laws.LAWS)
 
-LOADING_KINDS = ("step", "impulse", "velocity", "striker")
+LOADING_KINDS = ("step", "impulse", "harmonic", "velocity", "striker")
 
 AUTO = "auto"  # a value the planner chooses (granchain.workflows.plan)
 
@@ -54,6 +54,9 @@ SCENE_KEY_UNITS = {
     "loading.duration": "s",
     "loading.impulse": "N s",
     "loading.velocity": "m/s",
+    "loading.frequency": "Hz",
+    "loading.cycles": "1",
+    "loading.ramp": "1",
     "loading.radius": "m",
     "loading.mass": "kg",
     "contact.unloading_coeff": "1",

@@ -19,6 +19,7 @@ from granchain.physics.laws import ContactLaw, LawCoefficients, contact_keys, la
 from granchain.physics.positions import contact_quantum
 from granchain.scene.display import html_table, scene_facts, scene_line
 from granchain.scene.limits import AUTO
+from granchain.scene.loading import Loading
 from granchain.scene.run_outputs import Outputs, Run
 from granchain.scene.writer import dump_toml, scene_to_dict
 
@@ -91,52 +92,6 @@ class Contact:
         if not name.startswith("_") and name in contact_keys():
             return getattr(self.coefficients, name, None)
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
-
-
-@dataclass(frozen=True)
-class Loading:
-    """The [loading] section: f(t) = A for 0 < t <= T on bead 1 (Eq. 4), or a velocity at t = 0.
-
-    Attributes
-    ----------
-    kind : str
-        "step" (amplitude and duration given), "impulse" (I and T given, A = I / T), "velocity"
-        (bead 1 moves at t = 0) or "striker" (a sphere hits bead 1).
-    amplitude : float
-        A in N (step, impulse; else 0).
-    duration : float
-        T, the loading time in s (step, impulse; else 0).
-    velocity : float
-        In m/s: bead 1's at t = 0 (velocity) or the striker's (striker); else 0.
-    striker_radius : float
-        The striker's radius in m (striker; default bead 1's).
-    striker_material : Material or None
-        The striker's material (striker; default the chain's).
-    striker_material_name : str or None
-        Its built-in name, or None for an inline table.
-    striker_mass : float or None
-        The striker's mass in kg if the scene gives it; None: from its radius and density.
-    """
-
-    kind: str  # "step" | "impulse" | "velocity" | "striker"
-    amplitude: float = 0.0  # N (step, impulse)
-    duration: float = 0.0  # s (step, impulse)
-    velocity: float = 0.0  # m/s (velocity: of bead 1; striker: of the striker)
-    striker_radius: float = 0.0  # m (striker)
-    striker_material: mat.Material | None = None  # (striker) default: the chain's
-    striker_material_name: str | None = None
-    striker_mass: float | None = None  # kg (striker) default: from radius and density
-
-    @property
-    def impulse(self) -> float:
-        """The force load's impulse I = A T (Eq. 4), N s; 0 for a velocity or striker load (their
-        momentum is Scene.input_impulse)."""
-        return self.amplitude * self.duration
-
-    @property
-    def is_force(self) -> bool:
-        """The load is a force f(t) on bead 1 (step or impulse), not an initial velocity."""
-        return self.kind in ("step", "impulse")
 
 
 @dataclass(frozen=True)

@@ -168,8 +168,10 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
         return Loading(kind=kind, amplitude=i / t, duration=t)
     if kind == "striker":
         return _read_striker(s, chain, source)
+    if kind == "harmonic":
+        return _read_harmonic(s)
     s.forbid(
-        ("amplitude", "duration", "impulse", "radius", "material", "mass"),
+        ("amplitude", "duration", "impulse", "radius", "material", "mass", "frequency", "cycles", "ramp"),
         "a velocity load is given by velocity (m/s) of bead 1 at t = 0",
     )
     v = s.number(
@@ -184,10 +186,66 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
     return Loading(kind=kind, velocity=v)
 
 
+#: the harmonic drive's ramp when [loading] ramp is not given: two periods (granchain.physics.harmonic)
+DEFAULT_RAMP_CYCLES = 2.0
+#: the shortest ramp but none, in periods: a shorter switch-on is an abrupt start (write ramp = 0), and
+#: one of a few ulps of a period overflows the ramp's pi / t_r
+MIN_RAMP_CYCLES = 1e-3
+HARMONIC_KEYS = ("kind", "amplitude", "frequency", "cycles", "duration", "ramp")
+
+
+def _read_harmonic(s: _Section) -> Loading:
+    """A harmonic drive: amplitude (N), frequency (Hz), its length as cycles or as duration (s), exactly
+    one, and ramp (periods of the sin^2 switch-on, default DEFAULT_RAMP_CYCLES, within the length)."""
+    s.forbid(
+        ("impulse", "velocity", "radius", "material", "mass"),
+        "a harmonic drive is given by amplitude (N), frequency (Hz), cycles or duration (s), and ramp (periods)",
+    )
+    a = s.number(
+        "amplitude", low=0.0, high=1e12, high_open=False, what="the drive's force amplitude A in N, > 0 and <= 1e12"
+    )
+    f = s.number("frequency", low=0.0, high=1e15, high_open=False, what="the drive's frequency f in Hz, > 0")
+    if s.has("cycles") == s.has("duration"):
+        raise s.error(
+            "[loading] a harmonic drive needs exactly one of cycles (its length in periods) and duration (its "
+            f"length T in s, the ramp included); it has {'both: remove one' if s.has('cycles') else 'neither: add one'}"
+        )
+    if s.has("cycles"):
+        n = s.number("cycles", low=0.0, high=1e9, high_open=False, what="the drive's length in periods, > 0")
+        t = n / f
+    else:
+        t = s.number(
+            "duration", low=0.0, high=MAX_TIME, high_open=False, what=f"the drive's length T in s, > 0, {TIME_TEXT}"
+        )
+        n = t * f
+    if not (t >= MIN_DURATION):
+        raise s.fail("cycles" if s.has("cycles") else "duration", n if s.has("cycles") else t, DURATION_TEXT)
+    ramp = s.number(
+        "ramp",
+        required=False,
+        default=DEFAULT_RAMP_CYCLES,
+        low=0.0,
+        low_open=False,
+        what=f"the switch-on's length in periods, >= 0 (default {DEFAULT_RAMP_CYCLES:g})",
+    )
+    if 0.0 < ramp < MIN_RAMP_CYCLES:
+        why = f"0 (no ramp) or at least {MIN_RAMP_CYCLES:g} periods: a shorter one is no ramp, write 0"
+        raise s.fail("ramp", ramp, why)
+    if ramp > n * (1.0 + 1e-12):
+        raise s.fail(
+            "ramp",
+            ramp,
+            f"at most the drive's length, {n:g} periods (the ramp is part of it): lengthen the drive or "
+            "shorten the ramp",
+        )
+    s.finish(HARMONIC_KEYS)
+    return Loading(kind="harmonic", amplitude=a, duration=t, frequency=f, ramp=ramp)
+
+
 def _read_striker(s: _Section, chain: Chain, source: str) -> Loading:
     """A striker load: its speed, radius, material and mass (radius and material default to bead 1's)."""
     s.forbid(
-        ("amplitude", "duration", "impulse"),
+        ("amplitude", "duration", "impulse", "frequency", "cycles", "ramp"),
         "a striker is given by velocity (m/s), radius (m), material and mass (kg, optional)",
     )
     v = s.number(
@@ -268,6 +326,13 @@ def _read_run(s: _Section, loading: Loading) -> Run:
                 stop,
                 "a contact number >= 1: the run stops once its force has "
                 "fallen below half its peak (the leading wave has passed it)",
+            )
+        if loading.is_harmonic:
+            raise s.fail(
+                "stop_after_contact",
+                stop,
+                "not with a harmonic drive, whose contact forces rise and fall every period: remove it (the run "
+                "lasts end_time)",
             )
     wall = _read_flag(
         s,

@@ -20,6 +20,7 @@ from granchain.results import scene_hash
 from granchain.scene import SceneError
 from granchain.templates.atoms import AtomLayout, pair_coeffs, render_data
 from granchain.templates.columns import BUILTIN_GRANULAR_PER_ATOM, RESULTS_DUMP, RUN_END_FILE, PerAtom
+from granchain.templates.drive import DRIVE_WORK_COLUMN, drive_force_expression
 from granchain.templates.filters import comment, float_repr, is_atom_x, law_parameters, one_line
 from granchain.templates.run_control import EventCheck, Schedule, StopCheck, Watch
 
@@ -156,8 +157,12 @@ def stop_statics(scene, stop: int | None) -> dict[str, float]:
 
 
 def energy_columns(scene, layout: AtomLayout) -> dict[str, tuple[str, str]]:
-    """The energy samples' columns after x1 that the effects add: name -> (LAMMPS expression, words)."""
-    return {k: v for e in active_effects(scene) for k, v in e.energy_columns(layout).items()}
+    """The energy samples' columns after x1 that the effects add, and a harmonic drive's summed work
+    (templates/loading_harmonic.lmp.j2): name -> (LAMMPS expression, words)."""
+    columns = {k: v for e in active_effects(scene) for k, v in e.energy_columns(layout).items()}
+    if scene.loading.is_harmonic:
+        columns[DRIVE_WORK_COLUMN] = ("v_drive_work", "the harmonic drive's work")
+    return columns
 
 
 def sensor_args(scene, layout: AtomLayout) -> str:
@@ -221,6 +226,7 @@ def render_deck(scene, yardstick: str | None = None, options: DeckOptions = DECK
             pair_style_args="".join(e.pair_style_args(scene) for e in active_effects(scene))
             + sensor_args(scene, layout),
             energy_columns=energy_columns(scene, layout),
+            drive_force=drive_force_expression(scene.loading) if scene.loading.is_harmonic else "",
             event=EventCheck.of(scene) if scene.wall_event else None,
             stop=(
                 StopCheck(

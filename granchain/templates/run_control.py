@@ -102,7 +102,8 @@ class Watch:
             x1_0=x1_0,
             xn_0=xn_0,
             p0=scene.initial_momentum,
-            momentum=not external_forces(scene),
+            # (a drive's impulse is delivered by the integrator's quadrature: invariants.DRIVE_MOMENTUM)
+            momentum=not external_forces(scene) and not scene.loading.is_harmonic,
             effects_work="".join(e.watch_work(problem, x_first, x_last, x_mass) for e in active_effects(scene)),
         )
 

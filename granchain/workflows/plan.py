@@ -177,6 +177,8 @@ def peak_ratio(scene, solution) -> tuple[float, float, int] | None:
     i = int(idx[np.argmin(rise[idx])])
     smallest = float(rise[i])
     lead = np.asarray(solution.leading_pulse_force, dtype=float)
+    if scene.loading.is_harmonic:  # a drive's wave train has no leading pulse (observables.base.HARMONIC_DRIVE)
+        lead = np.zeros(0)
     if last <= lead.size and np.isfinite(lead[last - 1]) and lead[last - 1] - f0 > 0 and lead[last - 1] - f0 < smallest:
         i, smallest = last - 1, float(lead[last - 1] - f0)
     scale = float(np.max(rise[complete]))
@@ -460,7 +462,8 @@ def plan_scene(scene: Scene, rtol: float | None = None, method: str = "rk4", pea
     # the given stop check travels with the planned run (scene_to_dict writes every stop field)
     d["run"].update(end_time=end, timestep=step)
     stop = scene.run.stop_after_contact
-    if scene.run.end_time is None and stop is None and last is not None and not scene.outputs.snapshots:
+    drive = scene.loading.is_harmonic  # a drive's forces rise and fall for its whole length: no stop check
+    if scene.run.end_time is None and stop is None and last is not None and not scene.outputs.snapshots and not drive:
         choices.append(_stop_choice(scene, last))
         stop = last
         if wall_peak_planned(scene):

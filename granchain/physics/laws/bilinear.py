@@ -338,7 +338,7 @@ class BilinearLaw(ContactLaw):
         regimes (Eqs. A1-A4, 20-34), and under a force load the steady fronts (Eqs. 35-38)."""
         out = _short_load_predictions(scene)
         ld = scene.loading
-        if ld.is_force:
+        if ld.is_step:
             out += _long_load_predictions(scene, ld.amplitude, ld.duration)
         return out
 

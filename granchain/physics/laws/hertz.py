@@ -217,7 +217,7 @@ class HertzLaw(ContactLaw):
             ("long_load_peak_force_upper", "Eq. 15", models.front_speed_upper),
         ):
             label = f"{eq} + Nesterenko (long load)"
-            if applies(name, label) and ld.is_force:
+            if applies(name, label) and ld.is_step:
                 curves[label] = np.full(
                     contacts.shape, models.solitary_wave_peak_force(fn(ld.amplitude, k, m, d), k, m, d)
                 )
@@ -249,7 +249,7 @@ def _chain_predictions(scene) -> list[dict]:
             valid="as Eq. 8; the long-wave relation is approximate for a discrete chain",
         ),
     ]
-    if not ld.is_force:
+    if not ld.is_step:
         return out
     a = ld.amplitude
     cl = models.front_speed_lower(a, k, m, d)

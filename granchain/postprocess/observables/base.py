@@ -59,6 +59,11 @@ NEEDS = frozenset({"peaks", "leading_pulses", "fronts", "histories", "end_state"
 
 #: why no observable of a bead-bead contact applies to one bead
 ONE_BEAD = "one bead has no bead-bead contact: its contact's peak is the striker's or the wall's"
+#: why no observable of the leading pulse (Observable.needs "leading_pulses") applies under a harmonic drive
+HARMONIC_DRIVE = (
+    "a harmonic drive makes a steady wave train, not a leading pulse: read the contacts' peak forces and "
+    "histories (the leading-pulse observables are those of a step, an impulse, a kick or a striker)"
+)
 
 
 class Measurement(NamedTuple):
@@ -93,8 +98,11 @@ class Observable:
     fit_stderr: ClassVar[str | None] = None
 
     def applies(self, scene) -> str | None:
-        """None where the scene can measure the observable, else why it never can (one bead)."""
-        return None if scene.n_contacts else ONE_BEAD
+        """None where the scene can measure the observable, else why it never can (one bead; a
+        leading pulse's observable under a harmonic drive)."""
+        if not scene.n_contacts:
+            return ONE_BEAD
+        return HARMONIC_DRIVE if "leading_pulses" in self.needs and scene.loading.is_harmonic else None
 
     def measure(self, scene, solution) -> Measurement:
         """The value in this run, or None and why (applies(scene) is None here)."""

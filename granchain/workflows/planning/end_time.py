@@ -308,9 +308,30 @@ def _event_end_time(scene, choice: PlanChoice, slow: float) -> PlanChoice:
     )
 
 
+def _harmonic_end_time(scene, last: int | None, slow: float, omega_max: float) -> PlanChoice:
+    """A harmonic drive's end time: the drive's length T, then the slowest front's transit of the chain
+    (to its last contact; to the last measured one on an "auto" chain), so that the last of the drive
+    reaches its end; under precompression also PEAK_DETECTION_STEPS of the largest stable steps."""
+    ld = scene.loading
+    to = scene.n_contacts if scene.chain.beads is not None and scene.has_contacts else last
+    transit = front_travel_time(scene, to, slow) if to else 0.0
+    seen = PEAK_DETECTION_STEPS * max(f.stability for f in INTEGRATORS.values()) / omega_max
+    end = ld.duration + transit + seen
+    return PlanChoice(
+        "end_time",
+        end,
+        f"a harmonic drive of {ld.duration:.3g} s ({ld.cycles:.4g} cycles at {ld.frequency:.4g} Hz), then its "
+        f"last part's transit to contact {to} on the slowest expected front ({slow:.4g} m/s: {transit:.3g} s), and "
+        f"{seen:.3g} s to see it ({PEAK_DETECTION_STEPS} of the largest stable steps): t_end = {end:.3g} s",
+    )
+
+
 def end_time_choice(scene, last: int | None, slow: float, omega_max: float) -> PlanChoice:
-    """The planned end time: one bead's (or two free beads') impacts, else the front past the last
-    measured contact, then the wall's pulse and the reflection where they are planned."""
+    """The planned end time: one bead's (or two free beads') impacts, a harmonic drive's length and the
+    chain's transit, else the front past the last measured contact, then the wall's pulse and the
+    reflection where they are planned."""
+    if scene.loading.is_harmonic:
+        return _harmonic_end_time(scene, last, slow, omega_max)
     impacts = one_bead_impacts(scene)
     if impacts:
         return _one_bead_end_time(scene, impacts)
