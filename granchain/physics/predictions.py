@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, replace
 from typing import NamedTuple
 
+from granchain.physics import bands as band_structure
 from granchain.physics import materials as mat
 from granchain.physics import models
 from granchain.physics.damping import DAMPING
@@ -21,6 +22,7 @@ __all__ = [
     "EFFECT_DOMAINS",
     "MODEL_DOMAINS",
     "SCENE_QUANTITIES",
+    "BAND_ROWS",
     "Applicability",
     "Prediction",
     "applicability",
@@ -68,6 +70,10 @@ SCENE_QUANTITIES = frozenset({"tau", "impulse", "loading_time_over_tau", "amplit
 #: contact's static force differs, so the linearised chain's speed does (local_sound_speeds)
 LOCAL_SPEEDS = {"local_sound_speed_top": 0, "local_sound_speed_bottom": -1}
 
+#: The linear band structure of a precompressed periodic chain (granchain.physics.bands): the top of
+#: its highest pass band and the edges of its first gap (a cell of two beads or more), Hz
+BAND_ROWS = ("band_cutoff", "band_gap_lower", "band_gap_upper")
+
 #: Every model: (contact law, what it needs: ContactLaw.model_domains, from the law registry).
 MODEL_DOMAINS: dict[str, tuple[str, str]] = {
     n: (name, needs) for name, cls in LAWS.items() for n, needs in cls.model_domains.items()
@@ -111,12 +117,9 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
     the incident wave, before the reflection reaches a contact. Given the measured `quantity` it is
     compared with, also whether the run measures what the model predicts (MEASURES_OTHER).
     """
-    if name in SCENE_QUANTITIES:
-        return Applicability(True, "a quantity of the scene itself, not a model")
-    if name in DAMPING_MODEL_DOMAINS:
-        return _damping_model_applies(name, scene)
-    if name in LOCAL_SPEEDS:
-        return _local_speed_applies(scene, LOCAL_SPEEDS[name])
+    beyond_the_laws = _beyond_the_laws(name, scene)
+    if beyond_the_laws is not None:
+        return beyond_the_laws
     if name not in MODEL_DOMAINS:
         known = [*SCENE_QUANTITIES, *MODEL_DOMAINS, *DAMPING_MODEL_DOMAINS]
         raise ValueError(f"{name!r}: no such model; known: {', '.join(known)}")
@@ -160,6 +163,20 @@ def applicability(name: str, scene, quantity: str | None = None) -> Applicabilit
     if needs == "any":
         return Applicability(True, f"{chain}, any loading time{wall}")
     return Applicability(True, f"{regime.text}; {chain}{wall}")
+
+
+def _beyond_the_laws(name: str, scene) -> Applicability | None:
+    """Applicability of what is not a contact law's model (the scene's own quantities, a damping part's
+    two-body model, gravity's local speeds, the band structure), or None for a law's model."""
+    if name in SCENE_QUANTITIES:
+        return Applicability(True, "a quantity of the scene itself, not a model")
+    if name in DAMPING_MODEL_DOMAINS:
+        return _damping_model_applies(name, scene)
+    if name in LOCAL_SPEEDS:
+        return _local_speed_applies(scene, LOCAL_SPEEDS[name])
+    if name in BAND_ROWS:
+        return _band_applies(scene)
+    return None
 
 
 def _contact_model_applies(law: str, scene) -> Applicability:
@@ -404,6 +421,46 @@ def _gravity_predictions(scene) -> list[Prediction]:
     return [Prediction(name, float(c0[i]), "m/s", equation, valid) for name, i in LOCAL_SPEEDS.items()]
 
 
+def _band_applies(scene) -> Applicability:
+    """The band structure holds for an undamped precompressed periodic chain carrying a motion small
+    against F0 (granchain.physics.bands.DOMAIN), checked as c0's: the expected dynamic force against F0."""
+    try:
+        band_structure.linearised_cell(scene)
+    except band_structure.BandError as exc:
+        return Applicability(False, str(exc))
+    why_not = []
+    if scene.damping.velocity_dependent:
+        why_not.append(f"{scene.damping.words(scene.damping_coefficient)}: the bands are the undamped chain's")
+    small, text = _small_against_static_force(scene)
+    if not small:
+        why_not.append(text)
+    if why_not:
+        return Applicability(False, "; ".join(why_not))
+    return Applicability(True, f"{text}; {band_structure.DOMAIN}")
+
+
+def _band_predictions(scene) -> list[Prediction]:
+    """A precompressed periodic chain's band edges (granchain.physics.bands): its cutoff, and its first
+    gap where the cell has one; none where the chain has no band structure."""
+    if not scene.effects.precompression or scene.effects.gravity:
+        return []
+    try:
+        bands = band_structure.band_structure(scene)
+    except band_structure.BandError:
+        return []
+    equation = "Bloch eigenproblem K(q) U = w^2 M U of the cell, k_j = dF/dalpha at F0 (physics/bands.py)"
+    p = bands.cell.masses.size
+    top = {1: "; monoatomic: (1/pi) sqrt(k/m)", 2: "; dimer: sqrt(2k (1/m1 + 1/m2)) / (2 pi)"}.get(p, "")
+    out = [Prediction("band_cutoff", bands.cutoff, "Hz", equation + top, bands.domain)]
+    if len(bands.gaps) > 1:
+        lower, upper = bands.gaps[0]
+        words = f"{equation}; dimer: sqrt(2k/m_heavy) / (2 pi)" if p == 2 else equation
+        out.append(Prediction("band_gap_lower", lower, "Hz", words, bands.domain))
+        words = f"{equation}; dimer: sqrt(2k/m_light) / (2 pi)" if p == 2 else equation
+        out.append(Prediction("band_gap_upper", upper, "Hz", words, bands.domain))
+    return out
+
+
 def predict(scene) -> list[Prediction]:
     """Predictions for this scene (SI), nondimensional forms where the paper gives them, each with
     whether it applies to the scene (applies, applies_reason: see applicability)."""
@@ -437,6 +494,7 @@ def _predict(scene) -> list[Prediction]:
         )
     out += [Prediction(**fields) for fields in scene.contact.law_class.predictions(scene)]
     out += _gravity_predictions(scene)
+    out += _band_predictions(scene)
     impact = two_bodies(scene)
     if impact is None:
         return out
