@@ -218,7 +218,7 @@ class Campaign:
     error_estimate : bool
         Every observable gets its measured error (the 2 dt and 4 dt companions).
     kind : str
-        "grid" or "search".
+        "grid", "search" or "optimize".
     axes : tuple of Axis
         The grid's axes ([vary] keys, and [zip] as one); a search's outer points.
     derive : tuple of Derived
@@ -232,6 +232,8 @@ class Campaign:
         The campaign's title, or "".
     ranks : int or str
         MPI ranks per point, or "auto" (granchain.campaigns.execute.point_ranks).
+    optimize : Optimize or None
+        The [optimize] table (kind "optimize"; granchain.campaigns.optimize_spec.Optimize).
     cluster : dict or None
         The [cluster] table's values (granchain.campaigns.cluster_settings), or None.
     """
@@ -253,6 +255,7 @@ class Campaign:
     ranks: int | str = 1  # MPI ranks per point, or "auto" (granchain.campaigns.execute.point_ranks)
     cluster: dict | None = None  # the [cluster] table's values (granchain.campaigns.cluster)
     base_table: dict | None = None  # the base scene as written: what the points' keys are set on
+    optimize: Any = None  # the [optimize] table (optimize_spec.Optimize), for kind "optimize"
 
     @property
     def varied_keys(self) -> tuple[str, ...]:
@@ -260,6 +263,8 @@ class Campaign:
         keys = [k for a in self.axes for k in a.keys]
         if self.search is not None:
             keys.append(self.search.key)
+        if self.optimize is not None:
+            keys.extend(self.optimize.keys)
         return (*keys, *(d.key for d in self.derive))
 
     @property

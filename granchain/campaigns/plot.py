@@ -20,7 +20,7 @@ from pathlib import Path
 from granchain import safe_files
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.model import CampaignError
-from granchain.campaigns.table import build_search_table, build_table, printable, read_record
+from granchain.campaigns.table import build_search_table, build_table, build_trials_table, printable, read_record
 from granchain.postprocess.observables import units as observable_units
 from granchain.scene.limits import scene_key_unit
 
@@ -45,6 +45,11 @@ def column_unit(column: str, record: dict | None = None) -> str | None:
     """The unit of a campaign table's column, or None where it has none that is known (a free parameter
     of [derive], a column of text). record: the workspace's (campaign.json), for a search's columns."""
     search = (record or {}).get("search") or {}
+    objective = ((record or {}).get("optimize") or {}).get("objective")
+    if objective and column in ("objective", "objective_error", "best_so_far"):
+        return observable_units().get(objective)
+    if column == "trial":
+        return "trial"
     key = search.get("key")
     if key and column in ("transition", "transition_error", f"{key}_low", f"{key}_high"):
         return scene_key_unit(key)
@@ -154,6 +159,10 @@ def campaign_figure(ws, x: str, y: str, hue: str | None = None, map_key: str | N
         df = build_search_table(ws)
         df["status"] = df["status"].replace({"found": "done"})
         varied = [k for k in varied if k in df.columns]
+    if y not in df.columns and record.get("kind") == "optimize":  # an optimize campaign's objective over its trials
+        df = build_trials_table(ws)
+        df["status"] = df["state"].replace({"complete": "done"})
+        varied = [k for k in varied if k in df.columns]
     _check_columns(df, ws, x=x, y=y, hue=hue, map=map_key)
     done = df[(df["status"] == "done") & df[y].notna()]
     if done.empty:
@@ -216,3 +225,65 @@ def _save(fig, base: str, formats) -> list[Path]:
             raise _write_failed(p, e) from None
         paths.append(p)
     return paths
+
+
+def convergence_figure(ws):
+    """An optimize campaign's convergence: each trial's objective against its number (with its error
+    bar; a failed or infeasible trial as a mark on the lower axis), and the best so far as a step line;
+    and the table of its plotted points."""
+    from matplotlib.figure import Figure
+
+    ws = Path(ws)
+    record = read_record(ws)
+    if record.get("kind") != "optimize":
+        raise CampaignError(f"{ws}: is a {record.get('kind')} campaign; --convergence is an optimize campaign's")
+    df = build_trials_table(ws)
+    if df.empty or df["objective"].isna().all():
+        raise CampaignError(f"{ws}: no trial has a measured objective yet; nothing to plot")
+    done = df[df["state"] == "complete"]
+    fig = Figure(figsize=(6.4, 4.6), layout="constrained")
+    ax = fig.subplots()
+    yerr = done["objective_error"].to_numpy(dtype=float)
+    ax.errorbar(
+        done["trial"],
+        done["objective"],
+        yerr=None if all(yerr != yerr) else yerr,
+        fmt="o",
+        ms=4,
+        capsize=3,
+        label="trial",
+    )
+    ax.step(df["trial"], df["best_so_far"], where="post", color="C3", label="best so far")
+    other = df[df["state"] != "complete"]
+    if not other.empty:
+        ax.plot(
+            other["trial"],
+            [0.0] * len(other),
+            "x",
+            color="0.4",
+            transform=ax.get_xaxis_transform(),
+            clip_on=False,
+            label="failed or infeasible",
+        )
+    objective = str((record.get("optimize") or {}).get("objective", "objective"))
+    ax.set_xlabel("trial (evaluation)")
+    ax.set_ylabel(printable(axis_label("objective", record).replace("objective", objective, 1)), parse_math=False)
+    for text in ax.legend(fontsize="small").get_texts():
+        text.set_parse_math(False)
+    if record.get("title"):
+        ax.set_title(printable(str(record["title"])), fontsize="medium", parse_math=False)
+    return fig, df[["trial", "state", "objective", "objective_error", "best_so_far"]]
+
+
+def plot_convergence(ws, out=None, formats=("png",)) -> list[Path]:
+    """Draw an optimize campaign's convergence (convergence_figure) into WS/plots/convergence.*
+    (or out), its numbers beside it as .csv; returns the paths written."""
+    ws = Path(ws)
+    for f in formats:
+        if f not in FORMATS:
+            raise CampaignError(f"--format {f!r}: one of {', '.join(FORMATS)}")
+    fig, data = convergence_figure(ws)
+    base = str(out) if out is not None else str(ws / "plots" / "convergence")
+    _make_dir(Path(base).parent)
+    _write_csv(data, Path(base + ".csv"))
+    return _save(fig, base, formats)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import shutil
 import sys
 import time
@@ -15,6 +16,7 @@ from granchain.campaigns.cluster_settings import SUBMIT, ClusterError, ClusterSe
 from granchain.campaigns.cluster_settings import check as check_cluster
 from granchain.campaigns.execute import Executor, Runner, preflight, run_grid
 from granchain.campaigns.model import CampaignInterrupted
+from granchain.campaigns.optimize import run_optimize
 from granchain.campaigns.search import run_search
 from granchain.campaigns.spec import (
     Campaign,
@@ -24,7 +26,13 @@ from granchain.campaigns.spec import (
     load_campaign_file,
     params_text,
 )
-from granchain.campaigns.table import build_search_table, build_table, write_tables
+from granchain.campaigns.table import (
+    build_best_table,
+    build_search_table,
+    build_table,
+    build_trials_table,
+    write_tables,
+)
 from granchain.results import CAMPAIGN_PACKAGES, RUN_PACKAGES, package_versions
 
 #: a workspace's folder for the batch jobs' output (stdout and stderr of each worker job)
@@ -50,6 +58,9 @@ def validate(campaign: Campaign) -> list:
         points = campaign.points()
         preflight(campaign, points)
         return points
+    if campaign.kind == "optimize":
+        preflight(campaign, optimize_ends(campaign))
+        return []
     s = campaign.search
     grid = campaign.grid()
     ends = [campaign.point({**outer, s.key: v}, i, len(grid)) for i, outer in enumerate(grid) for v in (s.low, s.high)]
@@ -65,7 +76,34 @@ def validate(campaign: Campaign) -> list:
     return []
 
 
-def write_record(ws: Path, campaign: Campaign, runner: Runner, entries: list[dict], search_rows=None) -> None:
+def optimize_ends(campaign: Campaign) -> list:
+    """The designs checked before an optimize campaign runs: every combination of the variables' ends
+    (each range's low and high, every choice) when there are at most 64, else each variable's ends with
+    the others at their first; a design a constraint that reads no observable excludes is left out (it
+    never runs)."""
+    import itertools
+
+    from granchain.campaigns.optimize import _reads_observable, _violated
+
+    opt = campaign.optimize
+    ends = [v.ends() for v in opt.variables]
+    if math.prod(len(e) for e in ends) <= 64:
+        combos = list(itertools.product(*ends))
+    else:
+        first = [e[0] for e in ends]
+        combos = [tuple(x if j == i else first[j] for j in range(len(ends))) for i, e in enumerate(ends) for x in e]
+    design = [c for c in opt.constraints if not _reads_observable(c)]
+    points = []
+    for i, combo in enumerate(combos):
+        p = campaign.point(dict(zip(opt.keys, combo, strict=True)), i, len(combos))
+        if _violated(design, campaign._values(p.params)) is None:
+            points.append(p)
+    return points
+
+
+def write_record(
+    ws: Path, campaign: Campaign, runner: Runner, entries: list[dict], search_rows=None, trial_rows=None
+) -> None:
     """Write campaign.json, the workspace's record of this campaign run: its settings, the code, the
     varied keys, the search, the points in order (entries: {"params", "job", "key"}) and a search's
     rows. Written before the points run and kept current, so that the table can be read meanwhile
@@ -96,11 +134,33 @@ def write_record(ws: Path, campaign: Campaign, runner: Runner, entries: list[dic
             "tolerance": campaign.search.tolerance,
             "predicate": campaign.search.predicate.text,
         },
+        "optimize": _optimize_record(campaign),
         "points": entries,
         "search_results": search_rows,
+        "optimize_results": trial_rows,
     }
     runner.record = json.loads(json.dumps(record, default=wsp.plain))
     wsp.write_json(ws / wsp.RECORD, record)
+
+
+def _optimize_record(campaign: Campaign) -> dict | None:
+    """An [optimize] table as the record keeps it (with the optuna version its designs depend on)."""
+    opt = campaign.optimize
+    if opt is None:
+        return None
+    return {
+        "objective": opt.objective,
+        "direction": opt.direction,
+        "trials": opt.trials,
+        "seed": opt.seed,
+        "batch": opt.batch,
+        "startup": opt.startup,
+        "variables": [v.text for v in opt.variables],
+        "keys": list(opt.keys),
+        "constraints": [c.text for c in opt.constraints],
+        "sampler": f"optuna TPESampler(seed={opt.seed}, n_startup_trials={opt.startup})",
+        "optuna": package_versions(("optuna",)).get("optuna"),
+    }
 
 
 def cluster_settings(campaign: Campaign, cluster=None, ranks: int = 1) -> ClusterSettings | None:
@@ -207,6 +267,9 @@ def _run_points(campaign: Campaign, runner: Runner, ws: Path, points: list) -> N
         return
     write_record(ws, campaign, runner, [])
     last = [time.monotonic()]
+    if campaign.kind == "optimize":
+        _run_optimize(campaign, runner, ws, last)
+        return
 
     def search_entries(evaluated):
         ordered = sorted(evaluated, key=lambda e: (e[2], e[0].params[campaign.search.key]))
@@ -219,6 +282,24 @@ def _run_points(campaign: Campaign, runner: Runner, ws: Path, points: list) -> N
 
     evaluated, search_rows = run_search(campaign, runner, on_progress=save)
     write_record(ws, campaign, runner, search_entries(evaluated), search_rows)
+
+
+def _run_optimize(campaign: Campaign, runner: Runner, ws: Path, last: list) -> None:
+    """Run an optimize campaign, keeping the record current (every batch, at most every 2 s)."""
+
+    def entries(evaluated):  # each point once, in the order first asked
+        seen: dict = {}
+        for p, job, key in evaluated:
+            seen.setdefault(job, {"params": p.params, "job": job, "key": key})
+        return list(seen.values())
+
+    def save(evaluated, rows):
+        if time.monotonic() - last[0] >= 2.0:
+            write_record(ws, campaign, runner, entries(evaluated), trial_rows=rows)
+            last[0] = time.monotonic()
+
+    evaluated, rows = run_optimize(campaign, runner, on_progress=save)
+    write_record(ws, campaign, runner, entries(evaluated), trial_rows=rows)
 
 
 def _stop_interrupted(campaign: Campaign, runner: Runner, ex: Executor, ws: Path) -> bool:
@@ -268,14 +349,18 @@ def _job_ranks(campaign: Campaign, settings: ClusterSettings | None, points: lis
 
 def load_campaign(ws, table: str | None = None):
     """A workspace's table as a pandas DataFrame: table="points" (one row per point), "search" (one
-    row per outer point of a search, its transition), or None: a search's transitions, a grid's points."""
+    row per outer point of a search, its transition), "trials" (one row per trial of an optimize
+    campaign), "best" (its best design, one row: objective, error bar, runner-up, verdict), or None: a
+    search's transitions, an optimize campaign's trials, a grid's points."""
     from granchain.campaigns.table import read_record
 
     kind = read_record(Path(ws)).get("kind")
     if table is None:
-        table = "search" if kind == "search" else "points"
+        table = {"search": "search", "optimize": "trials"}.get(kind, "points")
     if table == "points":
         return build_table(ws)
     if table == "search":
         return build_search_table(ws)
-    raise CampaignError(f"table = {table!r}: 'points' or 'search'")
+    if table in ("trials", "best"):
+        return build_trials_table(ws) if table == "trials" else build_best_table(ws)
+    raise CampaignError(f"table = {table!r}: 'points', 'search', 'trials' or 'best' (an optimize campaign's)")

@@ -78,6 +78,7 @@ from granchain.campaigns.model import (
     scene_numbers,
     whole,
 )
+from granchain.campaigns.optimize_spec import check_names, read_kind, read_optimize
 from granchain.postprocess.observables import table_columns
 from granchain.scene import (
     MAX_SCENE_BYTES,
@@ -91,9 +92,9 @@ from granchain.scene import (
     scene_to_dict,
 )
 
-KINDS = ("grid", "search")
+KINDS = ("grid", "search", "optimize")
 CAMPAIGN_KEYS = ("base", "backend", "method", "rtol", "error_estimate", "regime_contact", "title", "kind", "ranks")
-TABLES = ("campaign", "scene", "vary", "zip", "derive", "search", "cluster")
+TABLES = ("campaign", "scene", "vary", "zip", "derive", "search", "optimize", "cluster")
 SEARCH_KEYS = ("key", "range", "scale", "tolerance", "predicate")
 PREDICATE_KEYS = ("quantity", "contact", "op", "value")
 OPS = (">", ">=", "<", "<=", "==", "!=")
@@ -192,14 +193,9 @@ def campaign_from_dict(
             raise CampaignError(str(e)) from None
     axes = _read_axes(data, source)
     base, base_source, base_table = _read_base(c, data.get("scene"), source, base_dir)
-    kind = c.get("kind", "search" if "search" in data else "grid")
-    if kind not in KINDS:
-        raise CampaignError(f"{source}: [campaign] kind = {kind!r} is invalid: 'grid' or 'search'")
-    if kind == "search" and "search" not in data:
-        raise CampaignError(f"{source}: [campaign] kind = 'search' needs a [search] table (key, range, predicate)")
-    if kind == "grid" and "search" in data:
-        raise CampaignError(f"{source}: a [search] table with kind = 'grid': drop kind (or set kind = 'search')")
+    kind = read_kind(c, data, source, axes, KINDS)
     search = _read_search(data["search"], source) if kind == "search" else None
+    optimize = read_optimize(data["optimize"], source, _did_you_mean) if kind == "optimize" else None
     if kind == "grid" and not axes:
         raise CampaignError(
             f'{source}: nothing varies: the grid is empty; add a [vary] table, e.g. "loading.amplitude" = [10.0, 100.0]'
@@ -207,9 +203,14 @@ def campaign_from_dict(
     grid_keys = [k for a in axes for k in a.keys]
     if search is not None and search.key in grid_keys:
         raise CampaignError(f"{source}: [search] key {search.key!r} is also varied in [vary]/[zip]; drop it there")
-    derive = _read_derive(
-        data.get("derive", {}), grid_keys + ([search.key] if search else []), (base, base_table), source
-    )
+    searched = [search.key] if search else list(optimize.keys) if optimize else []
+    derive = _read_derive(data.get("derive", {}), grid_keys + searched, (base, base_table), source)
+    if optimize is not None:
+        for k in optimize.keys:
+            _check_key(k, "optimize.variables", source)
+        readable = set(searched) | {d.key for d in derive} | set(scene_numbers(base)) | set(scene_numbers(base_table))
+        readable |= {k.rsplit(".", 1)[-1] for k in searched}
+        check_names(optimize, readable, table_columns(), source, _did_you_mean)
     return Campaign(
         source=source,
         text=text if text is not None else "",
@@ -220,6 +221,7 @@ def campaign_from_dict(
         axes=tuple(axes),
         derive=tuple(derive),
         search=search,
+        optimize=optimize,
         cluster=cluster,
         **settings,
     )

@@ -253,6 +253,46 @@ def build_search_table(ws: str | Path, record: dict | None = None):
     return storable(pd.DataFrame([{str(k): _scalar(v) for k, v in r.items()} for r in rows]), set())
 
 
+def _trial_rows(ws, record: dict | None) -> tuple[dict, list[dict]]:
+    record = read_record(Path(ws)) if record is None else record
+    if record.get("kind") != "optimize":
+        raise CampaignError(f"{ws}: is a {record.get('kind')} campaign; only an optimize campaign has trials")
+    return record, [r for r in record.get("optimize_results") or [] if isinstance(r, dict)]
+
+
+def build_trials_table(ws: str | Path, record: dict | None = None):
+    """The trials table of an optimize campaign as a pandas DataFrame: one row per trial (its design,
+    state, objective, objective_error, best_so_far, job, message: optimize.trial_row), as the record
+    keeps it; a CampaignError for another kind."""
+    import pandas as pd
+
+    record, rows = _trial_rows(ws, record)
+    df = storable(pd.DataFrame([{str(k): _scalar(v) for k, v in r.items()} for r in rows]), set())
+    objective = _dict(record.get("optimize")).get("objective")
+    df.attrs["units"] = {**column_units(df.columns), **_objective_units(objective)}
+    return df
+
+
+def _objective_units(objective) -> dict:
+    """The objective's unit where it is one observable's, for its columns."""
+    unit = units().get(objective) if isinstance(objective, str) else None
+    return {} if unit is None else {c: unit for c in ("objective", "objective_error", "best_so_far")}
+
+
+def build_best_table(ws: str | Path, record: dict | None = None):
+    """An optimize campaign's best design as a one-row DataFrame (optimize.best_design: the design,
+    objective, objective_error, the runner-up's and the verdict); empty when no trial is complete."""
+    import pandas as pd
+
+    from granchain.campaigns.optimize import best_design
+
+    record, rows = _trial_rows(ws, record)
+    opt = _dict(record.get("optimize"))
+    keys = tuple(k for k in opt.get("keys") or [] if isinstance(k, str))
+    best = best_design(rows, opt.get("direction", "minimize"), keys)
+    return pd.DataFrame([best] if best is not None else [])
+
+
 def _kind(v) -> str | None:
     """What a table cell holds, for its column's type: None (blank), bool, number, auto or text."""
     if v is None or (isinstance(v, float) and math.isnan(v)):
@@ -324,7 +364,7 @@ def read_record(ws: Path) -> dict:
             raise CampaignError(damaged.format(f"point {k + 1}'s key is not a string"))
     if not isinstance(rec.get("code"), dict):
         raise CampaignError(damaged.format("no code record"))
-    for key in ("varied", "search_results"):
+    for key in ("varied", "search_results", "optimize_results"):
         if rec.get(key) is not None and not isinstance(rec[key], list):
             raise CampaignError(damaged.format(f"{key} is not a list"))
     if rec.get("title") is not None and not isinstance(rec["title"], str):
@@ -340,11 +380,14 @@ def campaign_tables(ws: str | Path, record: dict | None = None) -> dict:
     tables = {"table": build_table(ws, record)}
     if record.get("kind") == "search":
         tables["search"] = build_search_table(ws, record)
+    if record.get("kind") == "optimize":
+        tables["trials"] = build_trials_table(ws, record)
     return tables
 
 
 def save_tables(ws: str | Path, tables: dict) -> None:
-    """Write the tables (campaign_tables) as table.csv and table.parquet (search.csv / search.parquet)."""
+    """Write the tables (campaign_tables) as table.csv and table.parquet (search.csv / search.parquet,
+    trials.csv / trials.parquet)."""
     for name, df in tables.items():
         _write_atomic(df, Path(ws) / f"{name}.csv", "csv")
         _write_atomic(df, Path(ws) / f"{name}.parquet", "parquet")

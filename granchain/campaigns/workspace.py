@@ -12,6 +12,7 @@
       campaign.json                  the points of the last campaign run here, in order, with their job ids
       table.csv, table.parquet       one row per point (granchain.campaigns.table)
       search.csv, search.parquet     a search campaign: one row per outer point, its transition
+      trials.csv, trials.parquet     an optimize campaign: one row per trial, its design and objective
 
 The state point is what computes the point: the canonical scene (granchain.scene.scene_to_dict of the
 validated scene), the backend, the method, rtol, whether errors are estimated, and the code, which is
@@ -63,6 +64,8 @@ WORKSPACE_NAMES = (
     "table.parquet",
     "search.csv",
     "search.parquet",
+    "trials.csv",
+    "trials.parquet",
     "plots",
     "workspace",
     ".signac",

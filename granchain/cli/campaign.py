@@ -48,7 +48,7 @@ def cmd_campaign_run(args) -> int:
                 file=sys.stderr,
             )
         return 130
-    main_table = tables.get("search", tables["table"])
+    main_table = tables.get("search", tables.get("trials", tables["table"]))
     print(format_table(main_table))
     r = report
     print(
@@ -57,7 +57,10 @@ def cmd_campaign_run(args) -> int:
         + (f", {r.lost} lost" if r.lost else "")
         + (f", {r.stale} stale run again" if r.stale else "")
     )
-    print(f"workspace  {out} (table.csv, table.parquet" + (", search.csv" if "search" in tables else "") + ")")
+    extra = ", search.csv" if "search" in tables else ", trials.csv" if "trials" in tables else ""
+    print(f"workspace  {out} (table.csv, table.parquet{extra})")
+    if "trials" in tables:
+        _print_best(out, tables)
     unfound = []
     if "search" in tables:
         unfound = [
@@ -84,7 +87,9 @@ def cmd_campaign_table(args) -> int:
             save_tables(args.workspace, tables)
         except WorkspaceWriteError as e:
             warnings.warn(f"{e}; the table is printed, not saved", stacklevel=1)
-    df = tables["search"] if args.search else tables["table"]
+    if args.best:
+        return _print_best(args.workspace, tables)
+    df = tables["search"] if args.search else tables.get("trials", tables["table"])
     if args.search and "search" not in tables:
         raise UsageError(f"{args.workspace}: is a grid campaign; --search is for a search campaign's transitions")
     if args.csv:
@@ -98,10 +103,32 @@ def cmd_campaign_table(args) -> int:
     return 0
 
 
+def _print_best(ws, tables) -> int:
+    """``campaign table --best``: an optimize campaign's best design, objective, error bar, verdict."""
+    from granchain.campaigns.optimize import best_design, best_text
+    from granchain.campaigns.table import printable, read_record
+
+    if "trials" not in tables:
+        raise UsageError(f"{ws}: is not an optimize campaign; --best is for an optimize campaign's best design")
+    opt = read_record(Path(ws)).get("optimize") or {}
+    keys = tuple(opt.get("keys") or ())
+    best = best_design(tables["trials"].to_dict("records"), opt.get("direction", "minimize"), keys)
+    for line in best_text(best, str(opt.get("objective")), keys).split("\n"):
+        print(printable(line))
+    return 0 if best is not None else 1
+
+
 def cmd_campaign_plot(args) -> int:
     """``granchain campaign plot``: an observable against a varied key, with its error bars."""
-    from granchain.campaigns.plot import plot_campaign
+    from granchain.campaigns.plot import plot_campaign, plot_convergence
 
+    formats = tuple(f.strip() for f in args.format.split(",") if f.strip())
+    if args.convergence:
+        for path in plot_convergence(args.workspace, out=args.out, formats=formats):
+            print(path)
+        return 0
+    if args.x is None or args.y is None:
+        raise UsageError("campaign plot: give --x and --y (or --convergence for an optimize campaign)")
     paths = plot_campaign(
         args.workspace,
         x=args.x,
@@ -109,7 +136,7 @@ def cmd_campaign_plot(args) -> int:
         hue=args.hue,
         map_key=args.map,
         out=args.out,
-        formats=tuple(f.strip() for f in args.format.split(",") if f.strip()),
+        formats=formats,
     )
     for path in paths:
         print(path)
@@ -162,11 +189,17 @@ def add_campaign_parser(sub) -> None:
     ct.add_argument("workspace", help="a campaign workspace (granchain campaign run --out)")
     ct.add_argument("--csv", action="store_true", help="print the whole table as CSV")
     ct.add_argument("--search", action="store_true", help="a search campaign's transitions (one row per outer point)")
+    ct.add_argument(
+        "--best", action="store_true", help="an optimize campaign's best design and whether it is distinguished"
+    )
     ct.set_defaults(func=cmd_campaign_table)
     cpl = csub.add_parser("plot", help="an observable against a key, with error bars (or a 2D map)")
     cpl.add_argument("workspace", help="a campaign workspace")
-    cpl.add_argument("--x", required=True, help="the key on the x axis (a column of the table)")
-    cpl.add_argument("--y", required=True, help="the observable (a column: leading_peak_force, wave_speed, ...)")
+    cpl.add_argument("--x", default=None, help="the key on the x axis (a column of the table)")
+    cpl.add_argument("--y", default=None, help="the observable (a column: leading_peak_force, wave_speed, ...)")
+    cpl.add_argument(
+        "--convergence", action="store_true", help="an optimize campaign: objective and best so far per trial"
+    )
     cpl.add_argument("--hue", default=None, help="one line per value of this key (the other varied keys follow)")
     cpl.add_argument("--map", default=None, help="a 2D map of --y over --x and this key instead of lines")
     cpl.add_argument("--out", default=None, help="figure path without suffix (default WS/plots/<y>-vs-<x>...)")

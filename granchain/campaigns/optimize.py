@@ -1,0 +1,280 @@
+"""The optimize kind: an optimiser (optuna) proposes designs, each runs as an ordinary workspace point.
+
+Why optuna (issue 45): its ask-and-tell interface lets granchain run each proposed design as a
+campaign point on the Dask workers (cached, resumable) instead of inside the optimiser's own loop; one
+search space mixes floats (linear or log), whole numbers and categorical choices (a material); its
+samplers are seeded (TPESampler(seed=...): the same seed and the same results give the same
+designs); and it has NSGA-II for two objectives (a later slice). nevergrad and cma are continuous
+first; deap is a toolkit for writing a genetic algorithm; scipy.optimize has no categorical variables.
+
+The loop: ask `batch` trials of a study whose sampler is TPESampler(seed, n_startup_trials=startup),
+make each trial's design a point (its [derive] keys computed, its scene validated), check the
+constraints that read no observable (a violating design is not run), run the points not complete in the
+workspace side by side, then tell the study every trial of the batch in trial order: COMPLETE with the
+objective, FAIL where the run failed or its objective is unmeasured (never a value), PRUNED where a
+constraint does not hold (TPE ranks pruned trials below the complete ones: it learns to avoid them).
+
+Resumable without a journal: the study lives in memory, and a rerun asks and tells the same sequence
+again. With the same seed the sampler proposes the same designs, whose points are complete in the
+workspace: they are told their cached results without running, so the study reaches the state the
+killed driver had, and goes on from there. A rerun with a larger ``trials`` continues the shorter
+search exactly as an uninterrupted longer one would have. This relies on the sampler's determinism for
+one optuna version (the record keeps the version).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from granchain.campaigns import expr
+from granchain.campaigns import workspace as wsp
+from granchain.campaigns.model import Campaign, CampaignError, params_text
+from granchain.postprocess.observables import table_columns
+
+COMPLETE, FAILED, INFEASIBLE = "complete", "failed", "infeasible"
+
+
+def make_study(opt):
+    """A fresh in-memory optuna study for the [optimize] table: TPE seeded with opt.seed."""
+    import optuna
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    sampler = optuna.samplers.TPESampler(seed=opt.seed, n_startup_trials=opt.startup)
+    return optuna.create_study(direction=opt.direction, sampler=sampler)
+
+
+def _reads_observable(constraint) -> bool:
+    return bool(constraint.names & set(table_columns()))
+
+
+def objective_of(job_dir, opt, values: dict) -> tuple[float | None, float | None, str | None]:
+    """(objective, its error bar or None, None) of a complete point, or (None, None, why not).
+
+    values: the names the expression may read besides the observables (Campaign._values of the
+    point's parameters). An expression's error bar is the first-order propagation of its observables'
+    bars, summed in magnitude (they share the run's time step, so they are not independent):
+    sum_i |f(o + e_i) - f(o - e_i)| / 2; none where an observable it reads has no bar."""
+    run = Path(job_dir) / wsp.RUN_DIR
+    summary = wsp.read_json(run / "summary.json") or {}
+    obs = summary.get("observables") if isinstance(summary.get("observables"), dict) else {}
+    errs = ((summary.get("errors") or {}).get("observables") or {}) if isinstance(summary.get("errors"), dict) else {}
+    missing = summary.get("observables_missing") if isinstance(summary.get("observables_missing"), dict) else {}
+    names = sorted(expr.names(opt.tree) & set(table_columns()))
+    vals = dict(values)
+    bars = {}
+    for name in names:
+        v = obs.get(name)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            return None, None, f"{name} was not measured: {missing.get(name, 'no value in summary.json')}"
+        vals[name] = float(v)
+        e = (errs.get(name) or {}).get("error") if isinstance(errs.get(name), dict) else None
+        bars[name] = float(e) if isinstance(e, (int, float)) and not isinstance(e, bool) and math.isfinite(e) else None
+    try:
+        f = expr.evaluate(opt.tree, vals, opt.objective)
+        if any(b is None for b in bars.values()):
+            return f, None, None
+        bar = 0.0
+        for name, e in bars.items():
+            hi = expr.evaluate(opt.tree, {**vals, name: vals[name] + e}, opt.objective)
+            lo = expr.evaluate(opt.tree, {**vals, name: vals[name] - e}, opt.objective)
+            bar += abs(hi - lo) / 2
+    except expr.ExpressionError as e:
+        return None, None, f"the objective cannot be computed: {e}"
+    return f, bar, None
+
+
+def _violated(constraints, values: dict) -> str | None:
+    """The first constraint that does not hold (or cannot be computed) for these values, as a message."""
+    for c in constraints:
+        try:
+            if not c.holds(values):
+                return f"infeasible: {c.text} does not hold"
+        except expr.ExpressionError as e:
+            return f"infeasible: {c.text} cannot be computed: {e}"
+    return None
+
+
+class _Trial:
+    """One trial of a batch: its optuna trial, design, point, job and outcome."""
+
+    def __init__(self, trial, params: dict):
+        self.trial, self.params = trial, params
+        self.point = self.job = self.future = None
+        self.state, self.value, self.error, self.message = None, None, None, None
+
+
+def _design(campaign: Campaign, runner, t: _Trial, evaluated: list) -> None:
+    """Make the trial's point, check the constraints that read no observable, open its job."""
+    opt = campaign.optimize
+    try:
+        t.point = campaign.point(t.params, t.trial.number, opt.trials)
+    except CampaignError as e:
+        t.state, t.message = FAILED, str(e)
+        return
+    values = campaign._values(t.point.params)
+    why = _violated([c for c in opt.constraints if not _reads_observable(c)], values)
+    if why is not None:
+        t.state, t.message = INFEASIBLE, why
+        return
+    t.job = runner.job(t.point)
+    evaluated.append((t.point, t.job.id, wsp.point_key(t.job.cached_statepoint)))
+
+
+def _outcome(campaign: Campaign, t: _Trial, status: dict | None) -> None:
+    """The trial's state, objective and message once its point is complete (or failed)."""
+    opt = campaign.optimize
+    state = wsp.job_state(t.job.path)
+    if state == wsp.FAILED or (status is not None and status.get("status") != "done"):
+        rec = wsp.read_json(Path(t.job.path) / wsp.FAILURE) or {}
+        t.state = FAILED
+        t.message = f"the run failed: {rec.get('message') or (status or {}).get('message', '?')}"
+        return
+    if state != wsp.DONE:
+        t.state, t.message = FAILED, "the run did not complete"
+        return
+    values = campaign._values(t.point.params)
+    t.value, t.error, why = objective_of(t.job.path, opt, values)
+    if t.value is None:
+        t.state, t.message = FAILED, f"objective {opt.objective!r} unmeasured: {why}"
+        return
+    observed = dict(values)
+    summary = wsp.read_json(Path(t.job.path) / wsp.RUN_DIR / "summary.json") or {}
+    observed.update({k: v for k, v in (summary.get("observables") or {}).items() if isinstance(v, (int, float))})
+    why = _violated([c for c in opt.constraints if _reads_observable(c)], observed)
+    t.state, t.message = (INFEASIBLE, why) if why is not None else (COMPLETE, None)
+
+
+def _tell(study, t: _Trial) -> None:
+    from optuna.trial import TrialState
+
+    if t.state == COMPLETE:
+        study.tell(t.trial, t.value)
+    else:
+        study.tell(t.trial, state=TrialState.FAIL if t.state == FAILED else TrialState.PRUNED)
+
+
+def _run_batch(campaign: Campaign, runner, batch: list[_Trial], prog, started: list) -> None:
+    """Run the batch's points that are not complete (each job once), collect them."""
+    from distributed import as_completed
+
+    futures: dict = {}  # job id -> future (a design asked twice in one batch runs once)
+    for t in batch:
+        if t.job is None or t.job.id in futures:
+            continue
+        if not runner.needs_run(t.job):
+            continue
+        if not started[0]:
+            runner.prepare()
+            started[0] = True
+        futures[t.job.id] = runner.submit(t.job, t.point)
+        runner.report.ran += 1
+    prog.update(pending=len(futures))
+    status = {}
+    by_future = {f: jid for jid, f in futures.items()}
+    for fut in as_completed(list(futures.values())) if futures else ():  # (no client until a first submission)
+        jid = by_future[fut]
+        params = next(t.point.params for t in batch if t.job is not None and t.job.id == jid)
+        status[jid] = runner.collect(fut, params, prog)
+    for t in batch:
+        if t.job is not None:
+            if t.job.id not in futures:
+                prog.update(wsp.DONE)
+            _outcome(campaign, t, status.get(t.job.id))
+        else:
+            prog.update(wsp.DONE if t.state == INFEASIBLE else wsp.FAILED)
+
+
+def run_optimize(campaign: Campaign, runner, on_progress=None) -> tuple[list, list[dict]]:
+    """Run an optimize campaign; returns (the evaluated points as (point, job id, point key), one row
+    per trial: trial_row). on_progress(evaluated, rows) after each batch (the caller keeps the
+    workspace's record current, so a killed driver leaves a readable table)."""
+    from granchain.campaigns.campaign_progress import CampaignProgress
+
+    opt = campaign.optimize
+    study = make_study(opt)
+    prog = CampaignProgress(opt.trials, "optimize", runner.stream, workers=runner.ex.nworkers)
+    evaluated: list = []
+    rows: list[dict] = []
+    started = [False]
+    try:
+        while len(rows) < opt.trials:
+            asked = [study.ask() for _ in range(min(opt.batch, opt.trials - len(rows)))]
+            batch = [_Trial(tr, {v.key: v.suggest(tr) for v in opt.variables}) for tr in asked]
+            for t in batch:
+                _design(campaign, runner, t, evaluated)
+            _run_batch(campaign, runner, batch, prog, started)
+            for t in batch:  # in trial order: the study's state does not depend on which finished first
+                _tell(study, t)
+                rows.append(trial_row(t, opt, rows))
+            runner.report.points = len({e[1] for e in evaluated})
+            if on_progress is not None:
+                on_progress(evaluated, rows)
+    finally:
+        prog.close()
+    return evaluated, rows
+
+
+def trial_row(t: _Trial, opt, before: list[dict]) -> dict:
+    """A trial's row of the trials table: trial, the design (variables and derived keys), state,
+    objective, objective_error, best_so_far (the best complete objective up to it), job, message."""
+    row = {"trial": t.trial.number}
+    row.update(t.point.params if t.point is not None else t.params)
+    row.update(state=t.state, objective=t.value, objective_error=t.error)
+    prev = before[-1]["best_so_far"] if before else None
+    best = [x for x in (prev, t.value if t.state == COMPLETE else None) if x is not None]
+    row["best_so_far"] = min(best, key=opt.sign) if best else None
+    row["job"] = t.job.id if t.job is not None else None
+    row["message"] = t.message
+    return row
+
+
+def best_design(rows: list[dict], direction: str, keys: tuple[str, ...]) -> dict | None:
+    """The best complete trial's design, objective and error bar, and whether the runner-up (the best
+    other design: another job) is distinguished from it: their objectives differ by more than the sum
+    of their error bars. None when no trial is complete."""
+    sign = (lambda v: v) if direction == "minimize" else (lambda v: -v)
+    done = sorted((r for r in rows if r.get("state") == COMPLETE), key=lambda r: (sign(r["objective"]), r["trial"]))
+    if not done:
+        return None
+    best = done[0]
+    out = {"trial": best["trial"], **{k: best.get(k) for k in keys}}
+    out.update(objective=best["objective"], objective_error=best.get("objective_error"), job=best["job"])
+    other = next((r for r in done[1:] if r["job"] != best["job"]), None)
+    out["runner_up_trial"] = None if other is None else other["trial"]
+    out["runner_up_objective"] = None if other is None else other["objective"]
+    out["runner_up_error"] = None if other is None else other.get("objective_error")
+    out["verdict"] = _verdict(best, other, keys)
+    out["trials"] = len(rows)
+    out["designs_run"] = len({r["job"] for r in rows if isinstance(r.get("job"), str)})
+    return out
+
+
+def _verdict(best: dict, other: dict | None, keys) -> str:
+    if other is None:
+        return "the only design measured"
+    eb, eo = best.get("objective_error"), other.get("objective_error")
+    gap = abs(other["objective"] - best["objective"])
+    design = params_text({k: other.get(k) for k in keys})
+    if eb is None or eo is None:
+        return f"no error bar on the best or the runner-up ({design}): their difference {gap:.4g} cannot be judged"
+    if gap <= eb + eo:
+        return f"not distinguished from the runner-up ({design}): they differ by {gap:.4g}, within their error bars"
+    times = f"{gap / (eb + eo):.3g} times their error bars" if eb + eo > 0 else "their error bars both 0"
+    return f"distinguished from the runner-up ({design}) by {gap:.4g}, {times}"
+
+
+def best_text(best: dict | None, objective: str, keys) -> str:
+    """The best design as `campaign table --best` prints it."""
+    if best is None:
+        return f"no trial has a measured objective {objective!r} yet (campaign table WS shows why)"
+    bar = best["objective_error"]
+    value = f"{best['objective']:.6g}" + (f" +- {bar:.2g}" if bar is not None else " (no error bar)")
+    return "\n".join(
+        [
+            f"best design (trial {best['trial']}): {params_text({k: best[k] for k in keys})}",
+            f"{objective} = {value}",
+            best["verdict"],
+            f"{best['trials']} trials, {best['designs_run']} distinct designs run; job {best['job']}",
+        ]
+    )

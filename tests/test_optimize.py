@@ -1,0 +1,248 @@
+"""The optimize campaign kind (issue 45): its [optimize] table's validation, an optimum a dense grid of
+the same runs confirms, a categorical optimum an enumeration confirms, resumption that replays the
+cached trials and runs no point twice, and the best design's verdict against its error bars.
+
+Real reference runs on the cheapest chains that still have an interior optimum (6 beads, a struck
+chain, auto end time)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from granchain.campaigns.model import CampaignError
+from granchain.campaigns.optimize import best_design
+from granchain.campaigns.run import load_campaign, run_campaign
+from granchain.campaigns.spec import campaign_from_dict
+
+BEADS = 6
+
+
+@pytest.fixture(scope="module")
+def sched():
+    """One Dask worker for the module's campaigns (a local cluster's start costs seconds per campaign;
+    the points run the same way on it: granchain campaign run --scheduler)."""
+    import logging
+
+    from distributed import LocalCluster
+
+    with LocalCluster(
+        n_workers=1,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,
+        scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},  # the default 8787 may be taken
+        silence_logs=logging.ERROR,
+    ) as cluster:
+        yield cluster.scheduler_address
+
+
+def scene(material: str = "chrome-steel-52100") -> dict:
+    """A 6-bead chain struck at bead 1 by a bead of its own size; the window ends at its last contact."""
+    return {
+        "chain": {"beads": BEADS, "radius": 4.76e-3, "taper": 1.0, "material": material},
+        "contact": {"law": "hertz"},
+        "loading": {"kind": "striker", "velocity": 1.0},
+        "run": {"end_time": "auto", "timestep": "auto"},
+        "outputs": {"peak_force": True, "window": [1, BEADS - 1]},
+    }
+
+
+def optimize_campaign(optimize: dict, error_estimate: bool = False, **scene_args) -> dict:
+    return {
+        "campaign": {"backend": "reference", "rtol": 1e-3, "error_estimate": error_estimate},
+        "scene": scene(**scene_args),
+        "optimize": optimize,
+    }
+
+
+TAPER = {
+    "objective": "leading_peak_force",
+    "direction": "maximize",
+    "variables": {"chain.taper": {"low": 1.0, "high": 1.4}},
+}
+
+
+@pytest.mark.parametrize(
+    ("change", "field", "fix"),
+    [
+        ({"bogus": 1}, "'bogus'", "allowed keys"),
+        ({"direction": "down"}, "direction", "'minimize' or 'maximize'"),
+        ({"trials": 0}, "trials", "whole number from 1"),
+        ({"variables": {"chain.taper": {"low": 1.2, "high": 1.0}}}, "'chain.taper'", "give low < high"),
+        ({"variables": {"chain.material": {"choices": []}}}, "'chain.material'", "non-empty list"),
+        ({"variables": {"chain.taper": {"low": 1.0, "hgh": 1.4}}}, "'hgh'", "did you mean 'high'"),
+        ({"variables": {"chian.taper": {"low": 1.0, "high": 1.4}}}, "'chian.taper'", "did you mean 'chain'"),
+        ({"objective": "leading_peak_forse"}, "objective", "did you mean 'leading_peak_force'"),
+        ({"objective": "chain.taper * 2"}, "objective", "reads no observable"),
+        ({"constraints": ["chain.taper"]}, "constraint", "one comparison"),
+        ({"variables": {"chain.taper": {"low": 0.0, "high": 1.0, "log": True}}}, "log = true", "low > 0"),
+    ],
+)
+def test_bad_optimize_tables_name_the_field_and_the_fix(change, field, fix):
+    with pytest.raises(CampaignError) as e:
+        campaign_from_dict(optimize_campaign({**TAPER, **change}))
+    assert field in str(e.value), str(e.value)
+    assert fix in str(e.value), str(e.value)
+
+
+def test_an_invalid_design_at_a_range_end_is_refused_before_anything_runs(tmp_path, sched):
+    ws = tmp_path / "ws"
+    bad = {**TAPER, "variables": {"chain.taper": {"low": -0.5, "high": 1.0}}}  # a taper must be > 0
+    with pytest.raises(CampaignError, match="taper"):
+        run_campaign(optimize_campaign(bad), ws, scheduler=sched)
+    assert not ws.exists()
+
+
+def _grid(tmp_path, name: str, vary: dict, sched):
+    c = {"campaign": {"backend": "reference", "rtol": 1e-3, "error_estimate": False}, "scene": scene(), "vary": vary}
+    df, _ = run_campaign(c, tmp_path / name, scheduler=sched)
+    return df["table"]
+
+
+def test_a_continuous_optimum_the_grid_confirms(tmp_path, sched):
+    """Maximise the last contact's leading pulse over the taper R_i = R t^(i-1), t in [1, 1.4]: a
+    dense grid of the same runs (13 points) has its best inside the range; within 12 trials the search's
+    best is at least as good as the grid's best's neighbours (the grid's resolution) and within two grid
+    steps of it."""
+    num = 13
+    grid = _grid(tmp_path, "grid", {"chain.taper": {"linear": [1.0, 1.4], "num": num}}, sched)
+    f = grid["leading_peak_force"].to_numpy()
+    k = int(f.argmax())
+    assert 0 < k < num - 1, "the grid's best is at an end of the range: no interior optimum to find"
+    step = 0.4 / (num - 1)
+    tables, _ = run_campaign(optimize_campaign({**TAPER, "trials": 12, "seed": 3}), tmp_path / "opt", scheduler=sched)
+    best = load_campaign(tmp_path / "opt", "best").iloc[0]
+    assert best["objective"] >= min(f[k - 1], f[k + 1])
+    assert abs(best["chain.taper"] - grid["chain.taper"][k]) <= 2 * step
+    trials = tables["trials"]
+    assert list(trials["trial"]) == list(range(12))
+    assert (trials["best_so_far"].diff().dropna() >= 0).all()  # maximising: the best so far never falls
+
+
+def test_a_categorical_optimum_the_enumeration_confirms(tmp_path, sched):
+    """The chain's material, one of four: 8 trials find the enumeration's best (its very point)."""
+    materials = ["brass", "stainless-steel-316", "chrome-steel-52100", "aluminium-6061-t6"]
+    enum = _grid(tmp_path, "enum", {"chain.material": materials}, sched)
+    truth = enum.loc[enum["leading_peak_force"].idxmin()]
+    opt = {
+        "objective": "leading_peak_force",
+        "trials": 8,
+        "seed": 0,
+        "variables": {"chain.material": {"choices": materials}},
+    }
+    run_campaign(optimize_campaign(opt), tmp_path / "enum", scheduler=sched)  # the same workspace: shared points
+    best = load_campaign(tmp_path / "enum", "best").iloc[0]
+    assert best["chain.material"] == truth["chain.material"]
+    assert best["job"] == truth["job"]
+
+
+def _summary_times(ws: Path) -> dict:
+    return {p.parent.parent.name: p.stat().st_mtime_ns for p in ws.glob("workspace/*/run/summary.json")}
+
+
+def test_a_longer_rerun_continues_the_search_and_runs_no_point_twice(tmp_path, sched):
+    """4 trials, then the same campaign with 8: equal to an uninterrupted 8-trial search of the same
+    seed, and the second run runs only the designs the first had not."""
+    opt = {**TAPER, "seed": 5}
+    _, r4 = run_campaign(optimize_campaign({**opt, "trials": 4}), tmp_path / "a", scheduler=sched)
+    before = _summary_times(tmp_path / "a")
+    assert r4.ran == len(before)
+    tables, r8 = run_campaign(optimize_campaign({**opt, "trials": 8}), tmp_path / "a", scheduler=sched)
+    after = _summary_times(tmp_path / "a")
+    assert all(after[j] == t for j, t in before.items())  # no point of the first run ran again
+    assert r8.ran == len(after) - len(before)
+    whole, _ = run_campaign(optimize_campaign({**opt, "trials": 8}), tmp_path / "b", scheduler=sched)
+    assert tables["trials"].equals(whole["trials"])
+
+
+def _row(trial, value, error, job=None):
+    return {
+        "trial": trial,
+        "x": float(trial),
+        "state": "complete",
+        "objective": value,
+        "objective_error": error,
+        "job": job or f"{trial:032x}",
+    }
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    a=st.floats(-1e3, 1e3),
+    b=st.floats(-1e3, 1e3),
+    ea=st.floats(0, 10),
+    eb=st.floats(0, 10),
+    direction=st.sampled_from(["minimize", "maximize"]),
+)
+def test_the_best_and_its_verdict(a, b, ea, eb, direction):
+    """The best is the better objective; 'not distinguished' exactly where the two differ by no more
+    than the sum of their error bars; a repeated design (the same job) is no runner-up."""
+    rows = [_row(0, a, ea), _row(1, b, eb), {**_row(2, a, ea), "job": _row(0, a, ea)["job"]}]
+    best = best_design(rows, direction, ("x",))
+    better = (a <= b) if direction == "minimize" else (a >= b)
+    assert best["objective"] == (a if better else b)
+    assert best["runner_up_objective"] == (b if better else a)
+    assert ("not distinguished" in best["verdict"]) == (abs(a - b) <= ea + eb)
+    assert best["designs_run"] == 2
+
+
+def test_unmeasured_and_infeasible_trials_are_never_values(tmp_path, sched):
+    """A constraint no design of half the range meets: those trials are infeasible (not run, no
+    objective), the others complete; an objective the run cannot measure fails its trial."""
+    opt = {**TAPER, "trials": 6, "seed": 1, "constraints": ["chain.taper <= 1.2"]}
+    tables, report = run_campaign(optimize_campaign(opt), tmp_path / "c", scheduler=sched)
+    t = tables["trials"]
+    bad = t[t["chain.taper"] > 1.2]
+    assert (bad["state"] == "infeasible").all()
+    assert bad["objective"].isna().all()
+    assert bad["job"].isna().all()
+    assert (t[t["chain.taper"] <= 1.2]["state"] == "complete").all()
+    unmeasurable = {**TAPER, "objective": "wall_max_force", "trials": 2, "seed": 1}  # no wall in this scene
+    t2 = run_campaign(optimize_campaign(unmeasurable), tmp_path / "c", scheduler=sched)[0]["trials"]
+    assert (t2["state"] == "failed").all()
+    assert t2["objective"].isna().all()
+    assert t2["message"].str.contains("unmeasured").all()
+
+
+KILL_SCRIPT = """
+import sys
+from granchain.campaigns.run import run_campaign
+from tests.test_optimize import TAPER, optimize_campaign
+if __name__ == "__main__":
+    run_campaign(optimize_campaign({**TAPER, "trials": 14, "seed": 11}), sys.argv[1], workers=1)
+"""
+
+
+@pytest.mark.slow
+def test_kill_9_mid_search_then_rerun_equals_an_uninterrupted_search(tmp_path, sched):
+    """kill -9 of the driver after a few points are complete; the rerun runs only the rest and gives
+    the uninterrupted search's trials (the same seed), best design included."""
+    root = Path(__file__).resolve().parent.parent
+    script = tmp_path / "drive.py"
+    script.write_text(KILL_SCRIPT)
+    ws = tmp_path / "killed"
+    env = {**os.environ, "PYTHONPATH": str(root), "GRANCHAIN_QUIET": "1"}
+    proc = subprocess.Popen([sys.executable, str(script), str(ws)], env=env, cwd=root, start_new_session=True)
+    deadline = time.monotonic() + 60
+    while len(_summary_times(ws)) < 4 and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    before = _summary_times(ws)
+    assert 4 <= len(before) < 14, "the driver was not killed mid-search"
+    tables, report = run_campaign(optimize_campaign({**TAPER, "trials": 14, "seed": 11}), ws, scheduler=sched)
+    after = _summary_times(ws)
+    assert all(after[j] == t for j, t in before.items())
+    assert report.ran == len(after) - len(before)
+    whole, _ = run_campaign(optimize_campaign({**TAPER, "trials": 14, "seed": 11}), tmp_path / "whole", scheduler=sched)
+    assert tables["trials"].equals(whole["trials"])
+    assert load_campaign(ws, "best").equals(load_campaign(tmp_path / "whole", "best"))
