@@ -72,12 +72,12 @@ def test_the_striker_on_a_wall_extended_for_contact_14_is_measured():
     check_extended_for_the_window(parse_scene(STRIKER_ON_WALL, source="generated.toml"), assume=_must)
 
 
-# 8 generated draws beside the tester's scene: each valid draw costs about 4 rejected ones (their first
-# run already measured contact b, which no plan alone tells: benchmarks/RESULTS.md), and at 20 this
-# property was the slow set's longest test (277 s of CI's 30 minutes)
+# 5 generated draws beside the tester's scene: each valid draw costs about 4 rejected ones (their first
+# run already measured contact b, which no plan alone tells: benchmarks/RESULTS.md); at 20 this
+# property was the slow set's longest test (277 s of CI's 30 minutes), at 8 still its second (122 s)
 @pytest.mark.slow
 @settings(
-    max_examples=8,
+    max_examples=5,
     deadline=None,
     derandomize=True,
     phases=[Phase.explicit, Phase.generate],

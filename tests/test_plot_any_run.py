@@ -76,8 +76,10 @@ def _small_texts(draw):
     text = draw(scene_texts(max_beads=14))
     uniform = "material = [" not in text and "taper" not in text
     if uniform and draw(st.booleans()):
-        # one bead needs a striker or a wall to touch (the scene reader refuses it otherwise)
-        touches = 'kind = "striker"' in text or 'far_end = "wall"' in text
+        # one bead needs a striker or a wall to touch, and a precompressed one a wall to carry its push
+        # (the scene reader refuses either otherwise)
+        struck = 'kind = "striker"' in text and "[precompression]" not in text
+        touches = struck or 'far_end = "wall"' in text
         text = _few_beads(draw(st.sampled_from([1, 2])) if touches else 2, text)
     return text
 

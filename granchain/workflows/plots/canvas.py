@@ -199,9 +199,14 @@ def log_ticks(axis, lo: float, hi: float) -> None:
 
 
 def _two_digits(x: float, up: bool) -> float:
-    """x rounded to two significant digits, up or down."""
+    """x rounded to two significant digits, up or down: never past x the other way (x = 1e-9 (1 + 3e-16)
+    rounds up to 10 x 1e-10, which is 1e-9, below x: the next two-digit number, 1.1e-9, is taken)."""
     scale = 10.0 ** (np.floor(np.log10(x)) - 1)
-    return float((np.ceil if up else np.floor)(x / scale * (1 - 1e-12 if up else 1 + 1e-12)) * scale)
+    k = (np.ceil if up else np.floor)(x / scale * (1 - 1e-12 if up else 1 + 1e-12))
+    value = float(k * scale)
+    if value < x if up else value > x:
+        value = float((k + 1 if up else k - 1) * scale)
+    return value
 
 
 def _plain_log_ticks(lo: float, hi: float) -> list[float]:
