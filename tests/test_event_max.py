@@ -88,23 +88,27 @@ def test_the_largest_force_over_the_event_is_the_dense_history_s_and_outgrows_th
 @given(scene=walled_event_scenes(max_beads=7), pick=st.randoms(use_true_random=False))
 def test_on_generated_walled_chains_the_largest_force_is_the_dense_history_s(scene, pick):
     """A property on small generated walled chains (strikers, kicks, tapers, precompression, gravity):
-    the chosen contacts' largest force over the event is their dense history's maximum."""
+    the chosen contacts' and sensor beads' largest force over the event is their dense history's maximum."""
     from dataclasses import replace
 
-    nc = scene.chain.beads - 1
-    chosen = tuple(sorted(pick.sample(range(1, nc + 1), min(3, nc))))
-    scene = replace(scene, outputs=replace(scene.outputs, event_max_contacts=chosen))
-    planned, sol = planned_run(scene)
+    n = scene.chain.beads
+    chosen = tuple(sorted(pick.sample(range(1, n), min(3, n - 1))))
+    # sensor beads 2..N (bead 1's left contact, a striker's, is not in the dense history's contacts)
+    sensors = tuple(sorted(pick.sample(range(2, n + 1), 2)))
+    outputs = replace(scene.outputs, event_max_contacts=chosen, sensors=sensors, event_max_sensors=sensors)
+    planned, sol = planned_run(replace(scene, outputs=outputs))
     assert sol.event_end_time is not None
-    check_against_dense(planned, sol, sensors=False)
+    check_against_dense(planned, sol)
 
 
-def test_lammps_is_the_reference_verlet_on_the_largest_forces_over_the_event():
-    """Both backends track the chosen contacts and sensors alike, under gravity (static forces that
-    grow with depth): every largest force to 1e-9, its time to 1e-12 of the event."""
+@pytest.mark.parametrize("held", ["[gravity]\ng = 9.81\n", "[precompression]\nforce = 2.0\n"], ids=["gravity", "F0"])
+def test_lammps_is_the_reference_verlet_on_the_largest_forces_over_the_event(held):
+    """Both backends track the chosen contacts and sensors alike on a chain held on the wall (under
+    gravity static forces grow with depth; the event ends at its first return, cut in the step): every
+    largest force to 1e-9, its time to 1e-12 of the event."""
     from granchain.backends.builtin import LammpsBackend
 
-    planned = plan_scene(parse_scene(CHOSEN + "[gravity]\ng = 9.81\n"), method="verlet").scene
+    planned = plan_scene(parse_scene(CHOSEN + held), method="verlet").scene
     ref = ReferenceBackend().calculate(planned, "verlet").result
     backend = LammpsBackend()
     backend.prepare()
