@@ -75,7 +75,12 @@ def scene():
 
 
 #: the short chain on a wall with its event asked for: where the wall's event quantities apply
-WALLED_EVENT = SCENE.replace("[outputs]", '[boundary]\nfar_end = "wall"\n[outputs]\nevent = true')
+WALLED_EVENT = SCENE.replace(
+    "[outputs]",
+    '[boundary]\nfar_end = "wall"\n[outputs]\nevent = true\n'
+    # the largest force over the event at chosen contacts and sensors (event_max_contact_force, ...)
+    "sensors = [3]\nevent_max_contacts = [2, 5]\nevent_max_sensors = [3]",
+)
 
 
 def test_every_registered_observable_keeps_the_rules(scene):

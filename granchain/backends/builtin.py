@@ -65,6 +65,9 @@ class ReferenceBackend(Backend):
                 stop_at_reflection=scene.run.stop_after_reflection,
                 stop_floor=stop_force_floor(scene),
                 event_floor=event_floor(scene) if scene.wall_event else None,
+                event_maxima=tuple(
+                    tuple(i - 1 for i in x) for x in (scene.outputs.event_max_contacts, scene.outputs.event_max_sensors)
+                ),
                 lead_floor=lead_floor(scene),
                 lead_fall=lead_fall(scene),
                 # blow-up and garbage detectors (granchain.invariants), not accuracy targets; each

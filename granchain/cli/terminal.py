@@ -86,11 +86,14 @@ def force_unit(name: str, f0: float) -> str:
 
 
 def fmt(v) -> str:
-    """A number as the result lines print it (6 significant digits; "-" for None)."""
+    """A number as the result lines print it (6 significant digits; "-" for None; a list, as the chosen
+    contacts' largest forces over the event, item by item)."""
     if v is None:
         return "-"
     if isinstance(v, float):
         return f"{v:.6g}"
+    if isinstance(v, list):
+        return "[" + ", ".join(fmt(x) for x in v) + "]"
     return str(v)
 
 

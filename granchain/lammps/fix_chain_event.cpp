@@ -10,6 +10,7 @@
 #include "utils.h"
 
 #include <cmath>
+#include <cstring>
 #include <mpi.h>
 #include <vector>
 
@@ -18,11 +19,23 @@ using namespace FixConst;
 
 FixChainEvent::FixChainEvent(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), index(-1), pe(nullptr), started(false), ended(false), g(0.0), fmax(0.0), tmax(0.0),
-    impulse(0.0), dynamic(0.0), energy(0.0), end_time(0.0)
+    impulse(0.0), dynamic(0.0), energy(0.0), end_time(0.0), sfc_index(-1)
 {
-  if (narg != 9)
-    error->all(FLERR,
-               "Illegal fix chain/event command: fix ID group chain/event CHECK WALL_ATOM FS FLOOR HELD LOAD_END");
+  const char *usage =
+      "Illegal fix chain/event command: fix ID group chain/event CHECK WALL_ATOM FS FLOOR HELD LOAD_END [track K ID1 "
+      "KIND1 ..]";
+  if (narg < 9) error->all(FLERR, usage);
+  if (narg > 9) {
+    if (narg < 11 || strcmp(arg[9], "track") != 0) error->all(FLERR, usage);
+    const int k = utils::inumeric(FLERR, arg[10], false, lmp);
+    if (k < 0 || narg != 11 + 2 * k) error->all(FLERR, usage);
+    for (int i = 0; i < k; i++) {
+      track_id.push_back(utils::tnumeric(FLERR, arg[11 + 2 * i], false, lmp));
+      track_kind.push_back(utils::inumeric(FLERR, arg[12 + 2 * i], false, lmp));
+      if (track_kind.back() != 0 && track_kind.back() != 1)
+        error->all(FLERR, "fix chain/event track KIND must be 0 (d_fc) or 1 (d_sfc), got {}", track_kind.back());
+    }
+  }
   check = utils::inumeric(FLERR, arg[3], false, lmp);
   wall_atom = utils::tnumeric(FLERR, arg[4], false, lmp);
   fs = utils::numeric(FLERR, arg[5], false, lmp);
@@ -33,7 +46,7 @@ FixChainEvent::FixChainEvent(LAMMPS *lmp, int narg, char **arg) :
   if (atom->map_style == Atom::MAP_NONE) error->all(FLERR, "fix chain/event needs an atom map (atom_modify map array)");
   nevery = 1;
   vector_flag = 1;
-  size_vector = 7;
+  size_vector = 7 + 2 * (int) track_id.size();
   global_freq = 1;
   extvector = 0;
   for (int k = 0; k < 3; k++) t[k] = f[k] = 0.0;
@@ -52,6 +65,55 @@ void FixChainEvent::init()
     error->all(FLERR, "fix chain/event needs the per-atom vector d_fc (fix property/atom d_fc ...)");
   pe = modify->get_compute_by_id("thermo_pe");
   if (!pe) error->all(FLERR, "fix chain/event needs the compute thermo_pe");
+  for (const int kind : track_kind) {
+    if (kind != 1) continue;
+    sfc_index = atom->find_custom("sfc", flag, cols);
+    if (sfc_index < 0 || flag != 1 || cols != 0)
+      error->all(FLERR,
+                 "fix chain/event track KIND 1 needs the per-atom vector d_sfc (pair_style chain/<law> sensors)");
+  }
+}
+
+// the tracked forces now, by the ranks that own their atoms
+void FixChainEvent::track_sample(std::vector<double> &out) const
+{
+  const int k = (int) track_id.size();
+  std::vector<double> mine(k, 0.0);
+  out.assign(k, 0.0);
+  for (int j = 0; j < k; j++) {
+    const int i = atom->map(track_id[j]);
+    if (i >= 0 && i < atom->nlocal) mine[j] = atom->dvector[track_kind[j] ? sfc_index : index][i];
+  }
+  if (k) MPI_Allreduce(mine.data(), out.data(), k, MPI_DOUBLE, MPI_SUM, world);
+}
+
+// a new sample of the tracked forces at t[2] (add has shifted the times): the running maximum, refined
+// by the vertex of the parabola through three samples around a local maximum (EventMaxima.add)
+void FixChainEvent::track_add(const std::vector<double> &fk)
+{
+  tf[0].swap(tf[1]);
+  tf[1].swap(tf[2]);
+  tf[2] = fk;
+  const double a = t[0] - t[1], b = t[2] - t[1], det = a * b * (b - a);
+  for (size_t j = 0; j < fk.size(); j++) {
+    if (fk[j] > tfmax[j]) {
+      tfmax[j] = fk[j];
+      ttmax[j] = t[2];
+    }
+    const double f0 = tf[0][j], f1 = tf[1][j], f2 = fk[j];
+    if (!(std::isfinite(t[0]) && f1 > f2 && f1 >= f0 && f1 > 0.0)) continue;
+    const double fa = f0 - f1, fb = f2 - f1;
+    const double c1 = (fa * b * b - fb * a * a) / det;
+    const double c2 = (a * fb - b * fa) / det;
+    if (c2 < 0.0) {
+      const double s = std::fmin(std::fmax(-c1 / (2.0 * c2), a), b);
+      const double val = f1 + (c1 + c2 * s) * s;
+      if (val > tfmax[j]) {
+        tfmax[j] = val;
+        ttmax[j] = t[1] + s;
+      }
+    }
+  }
 }
 
 bigint FixChainEvent::next_check() const
@@ -92,6 +154,13 @@ void FixChainEvent::setup(int)
   g = (fw - fs) * std::fmax(vw, 0.0);
   fmax = fw;
   tmax = t[2];
+  std::vector<double> fk;
+  track_sample(fk);
+  tf[0].assign(fk.size(), 0.0);
+  tf[1].assign(fk.size(), 0.0);
+  tf[2] = fk;
+  tfmax = fk;
+  ttmax.assign(fk.size(), t[2]);
 }
 
 void FixChainEvent::add(double time, double fw, double vw)
@@ -221,6 +290,11 @@ void FixChainEvent::end_of_step()
   wall_sample(fw, vw);
   const double time = now();
   add(time, fw, vw);
+  if (!track_id.empty()) {
+    std::vector<double> fk;
+    track_sample(fk);
+    track_add(fk);
+  }
   if (held) {
     cross(vw);
     return;
@@ -249,7 +323,11 @@ double FixChainEvent::compute_vector(int k)
       return impulse;
     case 5:
       return dynamic;
-    default:
+    case 6:
       return energy;
+    default: {
+      const int j = (k - 7) / 2;
+      return (k - 7) % 2 ? ttmax[j] : tfmax[j];
+    }
   }
 }

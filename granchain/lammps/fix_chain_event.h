@@ -1,6 +1,6 @@
 /* granchain: fix chain/event, the far-end wall's event quantities at every step (LAMMPS plugin).
  *
- *   fix ID all chain/event CHECK WALL_ATOM FS FLOOR HELD LOAD_END
+ *   fix ID all chain/event CHECK WALL_ATOM FS FLOOR HELD LOAD_END [track K ID1 KIND1 .. IDK KINDK]
  *
  * After every step (end_of_step) the wall's contact force F (d_fc of WALL_ATOM, bead N's atom: the
  * wall's contact lives on it) and bead N's vx v, summed as granchain.physics.event.EventSums does, in
@@ -17,14 +17,22 @@
  * step's trapezoids cut there. From then on nothing changes. The first run's setup takes the t = 0 sample;
  * a later run's setup (the same state) takes none.
  *
+ * track: K more forces whose running maximum over the event is kept as the wall's is (the same samples,
+ * the same parabola; granchain.physics.event.EventMaxima, [outputs] event_max_contacts and
+ * event_max_sensors): atom IDk's d_fc (KINDk = 0, the contact it carries) or d_sfc (KINDk = 1, a sensor
+ * bead's average force, pair_style chain/<law> sensors).
+ *
  * Global vector (every step): [1] 1 once the event has ended, else 0; [2] its end time (0 before);
- * [3] the largest F - FS; [4] its time; [5] the impulse; [6] the dynamic impulse; [7] the energy.
+ * [3] the largest F - FS; [4] its time; [5] the impulse; [6] the dynamic impulse; [7] the energy;
+ * [8 + 2k], [9 + 2k] the k-th tracked force's largest value (total, not less a static force) and its time.
  */
 
 #ifndef GRANCHAIN_FIX_CHAIN_EVENT_H
 #define GRANCHAIN_FIX_CHAIN_EVENT_H
 
 #include "fix.h"
+
+#include <vector>
 
 namespace LAMMPS_NS {
 
@@ -47,6 +55,13 @@ class FixChainEvent : public Fix {
   double t[3], f[3], g;
   double fmax, tmax, impulse, dynamic, energy, end_time;
   class Compute *pe;
+  // the tracked forces (track): atom IDs, 0 d_fc / 1 d_sfc, the last three samples, the running maxima
+  std::vector<tagint> track_id;
+  std::vector<int> track_kind;
+  std::vector<double> tf[3], tfmax, ttmax;
+  int sfc_index;
+  void track_sample(std::vector<double> &out) const;
+  void track_add(const std::vector<double> &fk);
   bigint next_check() const;
   static bool left_for_good(const double *vel, const double *m, const double *fcon, int n, double stored);
   double now() const;

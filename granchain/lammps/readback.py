@@ -20,7 +20,7 @@ from granchain.exceptions import GranchainError
 from granchain.peaks import complete_peaks, every_contact_complete, lead_floor, leading_pulse, unreached_as_nan
 from granchain.physics.effects import active_effects
 from granchain.physics.effects import work as effects_work
-from granchain.physics.event import EVENT_FIELDS
+from granchain.physics.event import EVENT_FIELDS, EVENT_MAXIMA_FIELDS
 from granchain.postprocess.dumps import read_dump
 from granchain.postprocess.fronts import front_times
 from granchain.postprocess.histories import read_histories
@@ -83,12 +83,16 @@ def event_fields(scene, work: Path) -> dict:
         ended, end, *values = (float(x) for x in _result_text(p, 4096).split())
     except ValueError as e:
         raise ResultsError(f"{p}: not the seven numbers the deck writes at the end of the run ({e})") from None
-    if len(values) != 5 or ended not in (0.0, 1.0) or not np.isfinite([end, *values]).all():
+    nc, ns = len(scene.outputs.event_max_contacts), len(scene.outputs.event_max_sensors)
+    if len(values) != 5 + 2 * (nc + ns) or ended not in (0.0, 1.0) or not np.isfinite([end, *values]).all():
         raise ResultsError(
-            f"{p}: not the deck's event line (ended 0 or 1, its end time, five finite sums): damaged or edited; "
-            "run the deck again"
+            f"{p}: not the deck's event line (ended 0 or 1, its end time, five finite sums, then a largest force "
+            f"and its time for each of the {nc + ns} tracked ones): damaged or edited; run the deck again"
         )
-    out = dict(zip(EVENT_FIELDS[1:], values, strict=True))
+    out = dict(zip(EVENT_FIELDS[1:], values[:5], strict=True))
+    maxima = np.asarray(values[5:], dtype=float).reshape(-1, 2)
+    force, time = maxima[:, 0], maxima[:, 1]
+    out |= dict(zip(EVENT_MAXIMA_FIELDS, (force[:nc], time[:nc], force[nc:], time[nc:]), strict=True))
     return {"event_end_time": end if ended else None, **out}
 
 

@@ -143,6 +143,62 @@ class EventSums:
         }
 
 
+#: the ChainSolution fields of the chosen contacts' and sensor beads' largest force over the event
+#: ([outputs] event_max_contacts, event_max_sensors; EventMaxima): the total force's maximum (N) and
+#: its time (s), one per chosen contact or sensor in the scene's order (empty where none was chosen)
+EVENT_MAXIMA_FIELDS = (
+    "event_contact_max_force",
+    "event_contact_time_of_max",
+    "event_sensor_max_force",
+    "event_sensor_time_of_max",
+)
+
+
+class EventMaxima:
+    """The running maximum of chosen forces over the event ([outputs] event_max_contacts: contact
+    forces; event_max_sensors: sensor beads' average forces), as EventSums keeps the wall's: every
+    step's sample, and the vertex of the parabola through three samples around a local maximum where
+    it opens downwards. Fed the same steps as the event's sums, until the event ends (fix chain/event
+    does the same per tracked atom, in the same order)."""
+
+    def __init__(self, f_start: np.ndarray) -> None:
+        f = np.asarray(f_start, dtype=float)
+        self.t = [-math.inf, -math.inf, 0.0]
+        self.f = [np.zeros_like(f), np.zeros_like(f), f.copy()]
+        self.fmax, self.tmax = f.copy(), np.zeros_like(f)
+
+    def add(self, t: float, f: np.ndarray) -> None:
+        """A new sample of every tracked force at time t (after the step)."""
+        f = np.asarray(f, dtype=float)
+        self.t = [self.t[1], self.t[2], t]
+        self.f = [self.f[1], self.f[2], f.copy()]
+        up = f > self.fmax
+        self.fmax[up], self.tmax[up] = f[up], t
+        f2, f1 = self.f[0], self.f[1]
+        if not math.isfinite(self.t[0]):
+            return
+        peak = (f1 > f) & (f1 >= f2) & (f1 > 0.0)
+        if not peak.any():
+            return
+        t1 = self.t[1]
+        a, b = self.t[0] - t1, t - t1
+        det = a * b * (b - a)
+        fa, fb = f2 - f1, f - f1
+        c1 = (fa * b * b - fb * a * a) / det
+        c2 = (a * fb - b * fa) / det
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sv = np.minimum(np.maximum(-c1 / (2.0 * c2), a), b)
+            val = f1 + (c1 + c2 * sv) * sv
+        better = peak & (c2 < 0.0) & (val > self.fmax)
+        self.fmax[better], self.tmax[better] = val[better], t1 + sv[better]
+
+
+def maxima_summary(solution) -> dict[str, list]:
+    """summary.json's ``event_maxima`` (EVENT_MAXIMA_FIELDS as lists; {} where none was tracked)."""
+    out = {k: [float(x) for x in getattr(solution, k)] for k in EVENT_MAXIMA_FIELDS}
+    return out if any(out.values()) else {}
+
+
 def left_for_good(v: np.ndarray, m: np.ndarray, f: np.ndarray, stored: float) -> bool:
     """Whether an unloaded chain whose load is over will never touch the wall again (the module's rule).
 

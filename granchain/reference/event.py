@@ -10,7 +10,8 @@ from typing import Any
 import numpy as np
 from typing_extensions import override
 
-from granchain.physics.event import EventSums, left_for_good
+from granchain.physics.event import EventMaxima, EventSums, left_for_good
+from granchain.postprocess.sensors import bead_average
 from granchain.reference.observers import EarlyStop, Observer
 from granchain.reference.state import ChainState
 
@@ -31,8 +32,12 @@ class EventTracker(Observer):
         floor: float,
         check_every: int,
         early: EarlyStop | None = None,
+        maxima: tuple = ((), ()),
     ) -> None:
         self.forces = forces
+        # the chosen contacts and sensor beads (0-based, of the state's chain) whose largest force is tracked
+        self.contacts, self.sensors = (np.asarray(x, dtype=int) for x in maxima)
+        self.maxima = EventMaxima(np.zeros(self.contacts.size + self.sensors.size))
         self.check_every = check_every
         self.early = early
         self.floor = floor
@@ -47,12 +52,20 @@ class EventTracker(Observer):
         # the t = 0 sample, once the integrator has its forces (the wall's contact is the state's last)
         f0 = float(self.forces(state)[-1])
         self.sums = EventSums(float(state.static_force[-1]), self.floor, f0, float(state.v[-2]))
+        self.maxima = EventMaxima(self.chosen(state))
+
+    def chosen(self, state: ChainState) -> np.ndarray:
+        """The chosen contacts' forces, then the chosen sensor beads' average forces, now."""
+        f = self.forces(state)
+        return np.concatenate((f[self.contacts], bead_average(f)[self.sensors]))
 
     @override
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
         sums = self.sums
         if not sums.ended:
             sums.add(t1, float(self.forces(state)[-1]), float(state.v[-2]))
+            if self.maxima.fmax.size:
+                self.maxima.add(t1, self.chosen(state))
             if self.held:
                 sums.cross(float(state.v[-2]), lambda: float(np.dot(state.mass_ke, state.v)))
             elif state.step % self.check_every == 0:
@@ -72,4 +85,11 @@ class EventTracker(Observer):
 
     @override
     def finish(self, state: ChainState) -> dict[str, Any]:
-        return self.sums.fields()
+        k, m = self.contacts.size, self.maxima
+        return {
+            **self.sums.fields(),
+            "event_contact_max_force": m.fmax[:k].copy(),
+            "event_contact_time_of_max": m.tmax[:k].copy(),
+            "event_sensor_max_force": m.fmax[k:].copy(),
+            "event_sensor_time_of_max": m.tmax[k:].copy(),
+        }

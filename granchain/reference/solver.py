@@ -123,6 +123,8 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
     for key in ("histories", "sensors"):  # contacts and beads inside count the beads in front first
         if key in kw:
             kw[key] = tuple(i + s0 for i in kw[key])
+    if "event_maxima" in kw:
+        kw["event_maxima"] = tuple(tuple(i + s0 for i in x) for x in kw["event_maxima"])
     if kw.get("stop_after") is not None:
         kw["stop_after"] += s0  # contact numbers inside count the striker's contact first
     sol = _solve(inner, end_time, timestep, method, **kw)
@@ -171,6 +173,7 @@ def _solve(
     stop_at_reflection: bool = False,
     stop_floor: float = 0.0,
     event_floor: float | None = None,
+    event_maxima: tuple = ((), ()),
     lead_floor: float = 0.0,
     lead_fall: float = 0.0,
     max_overlap: float | np.ndarray | None = None,
@@ -182,19 +185,19 @@ def _solve(
     """Integrate the chain from rest (bead 1 possibly moving) to end_time.
 
     histories: 0-based contacts whose force (and the velocity of their left bead) is recorded every history_stride
-    steps. sensors: 0-based beads (reference.sensors), every sensor_stride steps (0: none). snapshots: times
-    (exact step boundaries) of whole-chain profiles. event_location (RK4 only): split steps where a contact's
-    force law has a kink (see module doc). stop_after: 0-based contact; stop (checked every
-    STOP_CHECK_EVERY steps, as LAMMPS's fix halt does) once its force has fallen below half its peak: the leading
-    wave has passed it. Only a peak above stop_floor counts (round-off forces ahead of the wave must not stop the
-    run). stop_at_wall, stop_at_reflection: it also waits for the wall's contact, then its reflection (EarlyStop);
-    event_floor: the wall's event tracked (physics.event), begun above this rise (N), and waited for. lead_floor,
-    lead_fall: a leading pulse's least rise above F0, and its fall that makes it one (peaks).
-    max_overlap, energy_watch, momentum_watch: the run watch (granchain.invariants); None = off.
-    max_overlap: one bound in m for every contact, or one per contact of the problem's chain with its
-    ends (ChainProblem.with_ends: a striker's contact first, a wall's last; contact_overlap_bounds).
-    Overlaps and a finite state are checked every watch_every steps and at breakpoints, the energy
-    balance and the momentum of a free chain at every energy sample (~200 per run, as LAMMPS).
+    steps. sensors: 0-based beads (reference.sensors), every sensor_stride steps (0: none). snapshots: times (exact step
+    boundaries) of whole-chain profiles. event_location (RK4 only): split steps where a contact's force law has a kink
+    (see module doc). stop_after: 0-based contact; stop (checked every STOP_CHECK_EVERY steps, as LAMMPS's fix halt
+    does) once its force has fallen below half its peak: the leading wave has passed it. Only a peak above stop_floor
+    counts (round-off forces ahead of the wave must not stop the run). stop_at_wall, stop_at_reflection: it also waits
+    for the wall's contact, then its reflection (EarlyStop); event_floor: the wall's event tracked (physics.event),
+    begun above this rise (N), and waited for; event_maxima: the 0-based contacts and sensor beads whose largest force
+    over it is tracked. lead_floor, lead_fall: a leading pulse's least rise above F0, and its fall that makes it one
+    (peaks). max_overlap, energy_watch, momentum_watch: the run watch (granchain.invariants); None = off. max_overlap:
+    one bound in m for every contact, or one per contact of the problem's chain with its ends (ChainProblem.with_ends: a
+    striker's contact first, a wall's last; contact_overlap_bounds). Overlaps and a finite state are checked every
+    watch_every steps and at breakpoints, the energy balance and the momentum of a free chain at every energy sample
+    (~200 per run, as LAMMPS).
     progress: told the step count every ~0.1 s of steps (its update() names the next step to call it at).
     """
     _check_arguments(method, timestep, end_time)
@@ -214,8 +217,8 @@ def _solve(
         RunWatch(state, ledger, watch_every, max_overlap, energy_watch, momentum_watch),
     ]
     observers += sensor_observers(state, integrator.contact_forces, sensors, sensor_stride, total_steps)
-    stop = (stop_after, stop_at_wall, stop_at_reflection, stop_floor, lead_fall)
-    observers += _event_and_stop(state, peaks, integrator, stop, event_floor)
+    stop = (stop_after, stop_at_wall, stop_at_reflection, stop_floor, lead_fall, event_floor, event_maxima)
+    observers += _event_and_stop(state, peaks, integrator, stop)
     _drive(state, integrator, plan, observers, timestep, progress)
     fields = {k: v for o in observers for k, v in o.finish(state).items()}  # in list order: leading pulse after peaks
     return ChainSolution(
@@ -243,13 +246,15 @@ def _check_arguments(method: str, timestep: float, end_time: float) -> None:
         raise ValueError("timestep and end_time must be positive")
 
 
-def _event_and_stop(state, peaks, integrator, stop: tuple, event_floor: float | None) -> list[Observer]:
-    """The stop check (stop: _early_stop's arguments after the peaks; none where its contact is None)
-    and the wall's event tracker (event_floor given), which asks the stop check itself (both must
-    have come to stop the run)."""
+def _event_and_stop(state, peaks, integrator, stop: tuple) -> list[Observer]:
+    """The stop check (stop: _early_stop's arguments after the peaks, then the event's floor and maxima;
+    none where its contact is None) and the wall's event tracker (event_floor not None), which asks the
+    stop check itself (both must have come to stop the run); maxima: the 0-based contacts and sensor
+    beads whose largest force over the event it tracks."""
+    *stop, event_floor, maxima = stop
     early = None if stop[0] is None else _early_stop(state, peaks, *stop)
     if event_floor is not None:
-        return [EventTracker(state, integrator.contact_forces, event_floor, STOP_CHECK_EVERY, early)]
+        return [EventTracker(state, integrator.contact_forces, event_floor, STOP_CHECK_EVERY, early, maxima)]
     return [] if early is None else [early]
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from granchain.physics.event import EVENT_FIELDS
+from granchain.physics.event import EVENT_FIELDS, maxima_summary
 from granchain.postprocess.domains import beyond_yield
 from granchain.postprocess.observables import end_summary, measure
 from granchain.postprocess.sensors import sensor_summary
@@ -164,6 +164,8 @@ class RunResult:
             **end_summary(s),  # the end contacts' peaks (postprocess.observables.ends)
             # the far-end wall's event as the run tracked it (physics.event; [outputs] event)
             **({"event": {k: getattr(s, k) for k in EVENT_FIELDS}} if s.wall_impulse is not None else {}),
+            # the chosen contacts' and sensors' largest total force over it ([outputs] event_max_contacts, ...)
+            **({"event_maxima": m} if (m := maxima_summary(s)) else {}),
             # the sensor beads' peaks and times, bead by bead (granchain.postprocess.sensors)
             **({"sensors": sensor_summary(sc, s)} if sc.outputs.sensors else {}),
             **({"extra": extra} if extra else {}),

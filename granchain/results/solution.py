@@ -55,6 +55,12 @@ class ChainSolution:
     wall_impulse: float | None = None
     wall_dynamic_impulse: float | None = None
     wall_energy: float | None = None
+    # the chosen contacts' and sensor beads' largest total force over the event and its time
+    # ([outputs] event_max_contacts, event_max_sensors; physics.event.EventMaxima), in the scene's order
+    event_contact_max_force: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    event_contact_time_of_max: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    event_sensor_max_force: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    event_sensor_time_of_max: np.ndarray = field(default_factory=lambda: np.zeros(0))
     # smallest force sample of each contact since its peak (N-1,), N; and which peaks are complete
     # (peaks.complete_peaks). A backend that does not track them leaves them empty: no peak is complete.
     force_min_after_peak: np.ndarray = field(default_factory=lambda: np.zeros(0))

@@ -479,8 +479,10 @@ def _read_outputs(s: _Section, chain: Chain, run: Run, wall: bool = False) -> Ou
         "true tracks the far-end wall's largest force, impulse and energy over the event (a walled chain), or "
         "what bead N carries off a free far end",
     )
+    maxima = _read_event_maxima(s, chain, nc, sensors, event and wall)
     s.finish(
         ("peak_force", "histories", "snapshots", "window", "history_interval", "dump_interval", "event", "sensors")
+        + EVENT_MAXIMA_KEYS
     )
     return Outputs(
         peak_force=peak,
@@ -491,7 +493,48 @@ def _read_outputs(s: _Section, chain: Chain, run: Run, wall: bool = False) -> Ou
         dump_interval=dump,
         event=event,
         sensors=sensors,
+        event_max_contacts=maxima[0],
+        event_max_sensors=maxima[1],
     )
+
+
+#: [outputs]' keys choosing the contacts and sensor beads whose largest force over the wall's event is
+#: tracked (granchain.physics.event.EventMaxima)
+EVENT_MAXIMA_KEYS = ("event_max_contacts", "event_max_sensors")
+
+
+def _read_event_maxima(s: _Section, chain: Chain, nc: int, sensors, walled_event: bool):
+    """[outputs] event_max_contacts and event_max_sensors: contacts (1..N-1) and sensor beads (of
+    [outputs] sensors, whose average force the run tracks) whose largest force over the far-end wall's
+    event is tracked; they need the event itself ([outputs] event = true on a walled chain)."""
+    out: list[tuple[int, ...]] = []
+    for key in EVENT_MAXIMA_KEYS:
+        if not s.has(key):
+            out.append(())
+            continue
+        if not walled_event:
+            raise s.fail(
+                key,
+                s.raw(key),
+                "a list that needs the wall's event: [outputs] event = true on a chain with "
+                '[boundary] far_end = "wall" (the event is what the largest force is taken over)',
+            )
+        if key == "event_max_contacts":
+            what = f"contact i is between bead i and i+1; this chain has contacts 1..{nc}"
+            out.append(_int_list(s, key, 1, nc, what))
+            continue
+        beads = chain.beads if chain.beads is not None else 10**9
+        chosen = _int_list(s, key, 1, beads, "sensor beads, 1-based, each one of [outputs] sensors")
+        extra = [b for b in chosen if b not in sensors]
+        if extra:
+            raise s.fail(
+                key,
+                s.raw(key),
+                f"sensor beads of [outputs] sensors = {list(sensors)} (the run tracks only their average "
+                f"force); bead {extra[0]} is not one: add it to [outputs] sensors",
+            )
+        out.append(chosen)
+    return tuple(out)
 
 
 def _read_sensors(s: _Section, chain: Chain) -> tuple[int, ...]:

@@ -81,6 +81,10 @@ class Outputs:
     sensors : tuple of int
         Sensor beads (1-based): each reports its average force (F_{i-1,i} + F_{i,i+1}) / 2, the reading
         of a piezo embedded in the bead (docs/observables.md, "Sensor beads").
+    event_max_contacts, event_max_sensors : tuple of int
+        Contacts (1-based) and sensor beads (of ``sensors``) whose largest dynamic force over the far-end
+        wall's event, and its time, is tracked at every step (granchain.physics.event.EventMaxima; the
+        observables event_max_contact_force and event_max_sensor_force).
     """
 
     peak_force: bool | tuple[int, ...] = True  # True: every contact; or a tuple of contacts
@@ -91,3 +95,5 @@ class Outputs:
     dump_interval: float | str | None = None  # s between whole-chain LAMMPS dump frames (default: none; "auto")
     event: bool = False  # the wall's event quantities tracked; a stop check waits for the event's end
     sensors: tuple[int, ...] = ()  # sensor beads (1-based): their average force (F_{i-1,i} + F_{i,i+1}) / 2
+    event_max_contacts: tuple[int, ...] = ()  # contacts (1-based) whose largest force over the event is tracked
+    event_max_sensors: tuple[int, ...] = ()  # sensor beads (of sensors) whose largest force over the event is tracked

@@ -34,6 +34,7 @@ def _outputs_to_dict(o) -> dict[str, Any]:
     """The [outputs] table of an Outputs: the keys it sets."""
     out: dict[str, Any] = {"peak_force": o.peak_force if isinstance(o.peak_force, bool) else list(o.peak_force)}
     lists = (("histories", o.histories), ("snapshots", o.snapshots), ("window", o.window), ("sensors", o.sensors))
+    lists += (("event_max_contacts", o.event_max_contacts), ("event_max_sensors", o.event_max_sensors))
     out.update({k: list(v) for k, v in lists if v})
     scalars = (("history_interval", o.history_interval), ("dump_interval", o.dump_interval))
     out.update({k: v for k, v in scalars if v is not None})

@@ -283,6 +283,10 @@ class EventCheck:
         The time after which no load acts (a force load's duration; 0 otherwise), s.
     every : int
         Steps between two checks of the event's end (the stop check's).
+    track : tuple of (int, int)
+        The forces whose largest value over the event is tracked ([outputs] event_max_contacts, then
+        event_max_sensors): (atom ID, 0 for its d_fc, the contact it carries, or 1 for its d_sfc, a
+        sensor bead's average force).
     """
 
     wall_atom: int
@@ -291,15 +295,18 @@ class EventCheck:
     held: bool
     load_end: float
     every: int = STOP_CHECK_EVERY
+    track: tuple[tuple[int, int], ...] = ()
 
     @classmethod
     def of(cls, scene) -> EventCheck:
         """The event check of a planned walled scene."""
-        ld = scene.loading
+        ld, out, lay = scene.loading, scene.outputs, AtomLayout.of(scene)
         return cls(
-            wall_atom=scene.chain.beads + AtomLayout.of(scene).offset,
+            wall_atom=scene.chain.beads + lay.offset,
             static=float(scene_static_forces(scene)[-1]),
             floor=event_floor(scene),
             held=bool(scene.effects.precompression or scene.effects.gravity),
             load_end=float(ld.duration) if ld.is_force else 0.0,
+            track=tuple((i + lay.offset, 0) for i in out.event_max_contacts)
+            + tuple((b + lay.offset, 1) for b in out.event_max_sensors),
         )

@@ -37,6 +37,7 @@ from granchain import safe_files
 from granchain.backends import BACKENDS, LAMMPS, REFERENCE, FileIOBackend
 from granchain.exceptions import GranchainError
 from granchain.physics.event import EVENT_FIELDS
+from granchain.physics.event import EVENT_MAXIMA_FIELDS as MAXIMA
 from granchain.postprocess.observables import end_summary_keys
 from granchain.postprocess.sensors import solution_sensor_fields
 from granchain.results import ChainSolution, RunResult, StoredRun, printable
@@ -227,6 +228,7 @@ def _solution(d: Path, scene, summary: dict, peaks: dict) -> ChainSolution:
         extra_steps=max(int(price.get("steps", steps)) - steps, 0),
         **{k: summary.get(k) for k in end_summary_keys()},  # the end contacts' peaks
         **{k: v for k, v in (summary.get("event") or {}).items() if k in EVENT_FIELDS},
+        **{k: np.asarray(v, dtype=float) for k, v in (summary.get("event_maxima") or {}).items() if k in MAXIMA},
         **kw,
     )
 

@@ -134,6 +134,7 @@ SUMMARY = Record(
         # the end contacts' peaks (postprocess.observables.ends): whether each is a peak, and numbers
         **{k: opt(FLAG if k == o.complete_field else NUMBER) for o in END_PEAKS.values() for k in o.summary_keys},
         "event": MapOf(opt(NUMBER)),
+        "event_maxima": MapOf(ListOf(NUMBER)),
         "extra": Record({}),
         "error_estimate": opt(NUMBER),
         "errors": opt(_ERRORS),

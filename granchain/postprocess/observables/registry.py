@@ -15,6 +15,7 @@ from typing import NamedTuple
 from granchain.postprocess.observables.base import ONE_BEAD, Observable
 from granchain.postprocess.observables.decay import LeadingPulseDecayExponent, LeadingPulseDecayLength
 from granchain.postprocess.observables.event import WallEnergy, WallImpulse, WallMaxForce
+from granchain.postprocess.observables.event_max import EventMaxContactForce, EventMaxSensorForce
 from granchain.postprocess.observables.far_end import FarEndEnergy
 from granchain.postprocess.observables.leading import LeadingPeakForce, LeadingPeakForceNondim
 from granchain.postprocess.observables.max_peak import MaxPeakForce
@@ -34,6 +35,8 @@ OBSERVABLES: dict[str, Observable] = {
         WallImpulse(),
         WallEnergy(),
         FarEndEnergy(),
+        EventMaxContactForce(),
+        EventMaxSensorForce(),
     )
 }
 
