@@ -181,9 +181,22 @@ class PowerLaw(ContactLaw):
         return 1.5 * f
 
     @classmethod
-    def loading_is_linear(cls) -> bool:
-        """False: the estimates that have only a linear and a Hertz form read ``loading_exponent``."""
-        return False
+    @override
+    def two_body_contact_time(cls, scene, amplitude: float) -> tuple[float, str]:
+        """t_c: the two-body contact time (power_impact, m* = m/2) at the bead speed behind a long load's
+        front, v = D A / (m c) (Eq. 12) with c the front speed of Eq. 19 on this law
+        (models.power_front_speed). It depends on v unless n = 1, where it is the loading line's pi
+        sqrt(m/2k). With per-contact n the smallest over the contacts: the shortest contact time is the
+        first a load outlasts (long sooner)."""
+        laws = scene.contact_laws if scene.contact.coefficients.varies else [scene.law]
+        m, d = scene.mass, scene.diameter
+        times = []
+        for law in laws:
+            k, n = float(law.k), float(np.max(law.loading_exponent()))
+            v = d * amplitude / (m * models.power_front_speed(amplitude, k, n, m, d))
+            times.append(power_impact(k, n, m / 2.0, v)["duration"])
+        how = "two beads' F = K alpha^n impact at the front's bead speed v = D A / (m c), c of Eq. 19"
+        return min(times), how
 
     @classmethod
     def wave_speeds(cls, scene, expected_force: float, step) -> tuple[float, float]:

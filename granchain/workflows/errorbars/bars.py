@@ -91,8 +91,9 @@ def extrapolated_bars(
 
     # a striker's or a wall's contact is one impact from zero overlap: an integrator's error there is its
     # onset's, order 1 + n (Hertz: 1 + 3/2), where its own is higher (RK4, two spheres, planned step: with
-    # order 4 the bar was 1/2.9 of the true error); not on a loading line, nor for one companion's bounds
-    onset = report.one_companion is None and not scene.contact.law_class.loading_is_linear()
+    # order 4 the bar was 1/2.9 of the true error); not where the law says its closing does not limit it (a
+    # loading line: ContactLaw.closing_limits_order), nor for one companion's bounds
+    onset = report.one_companion is None and scene.contact.law_class.closing_limits_order
     p_end = onset_order(scene) if onset and onset_order(scene) < p else p
 
     def bars_of(values, times):
