@@ -20,6 +20,13 @@ def onset_order(scene) -> float:
     return scene.law.onset_order()
 
 
+def reference_order(scene) -> float:
+    """The lowest order of RK4's error on the scene, at which a Verlet run's RK4 references take their
+    own error (richardson.against_reference): its onset's (onset_order: 1 + n, 2.5 on the kinked
+    Hertzian-onset laws and the bilinear loading line), at most RK4's order."""
+    return float(min(onset_order(scene), RK4.order))
+
+
 def expected_orders(method: str, scene) -> tuple[float, float]:
     """The lowest and highest order the integrator's error can show on this scene (richardson): from
     the lower of its order on the scene (integrator_order: Verlet's 1 with a velocity-dependent
