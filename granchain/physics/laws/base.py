@@ -16,8 +16,9 @@ on them; tests/test_laws.py and tests/test_kernels.py check them for every regis
    history a law may keep; the backends store it per contact, d_amax in LAMMPS, and update it as
    alpha_max = max(alpha_max, alpha) after every step), ``Coefficients`` (a frozen dataclass
    subclassing LawCoefficients, one field per ``[contact]`` key the law reads besides ``law``: a
-   scene's Contact holds one, and ``scene_keys`` lists its fields), ``parameter_ranges`` (valid values
-   of each parameter, for the tests).
+   scene's Contact holds one, and ``scene_keys`` lists its fields), ``key_units`` (each key's unit: a
+   law that leaves one out cannot be declared), ``parameter_ranges`` (valid values of each parameter,
+   for the tests).
 2. ``force(alpha, alpha_max)`` with alpha_max the history *before* this step: the law takes
    max(alpha_max, alpha) itself, so a stale history below alpha gives the loading curve. The force
    is never negative. ``force_into`` is the same into preallocated arrays (the solver's inner loop;
@@ -119,6 +120,9 @@ class ContactLaw:
     Coefficients: ClassVar[type[LawCoefficients]] = LawCoefficients
     #: the [contact] keys the law reads besides law: its Coefficients' fields, in their order
     scene_keys: ClassVar[tuple[str, ...]] = ()
+    #: each of scene_keys -> its unit (SI; "1": dimensionless): what a campaign's axes and columns print
+    #: beside ``contact.<key>`` (granchain.scene.limits.SCENE_KEY_UNITS is made of them)
+    key_units: ClassVar[dict[str, str]] = {}
     #: the [contact] key read_contact derives from a [chain.material] table's yield_strength when the
     #: scene gives none (the bilinear plastic_stiffness = 18.5 sigma_y R*), or None: a scene written
     #: back keeps the yield strength in the table and leaves the key to it (a table's yield strength
@@ -156,6 +160,8 @@ class ContactLaw:
         """Derive a subclass's ``scene_keys`` from its Coefficients' fields (rule 1), so the two never differ."""
         super().__init_subclass__(**kwargs)
         cls.scene_keys = tuple(f.name for f in dataclasses.fields(cls.Coefficients))
+        if set(cls.key_units) != set(cls.scene_keys):
+            raise TypeError(f"{cls.__name__}.key_units must give the unit of each of its keys {cls.scene_keys}")
 
     # ---- the law itself
     def force(self, alpha: ArrayLike, alpha_max: ArrayLike | None = None) -> np.ndarray:

@@ -114,6 +114,7 @@ class BilinearLaw(ContactLaw):
     # RK4 locates the closing kink and the loading line is smooth after it
     closing_limits_order: ClassVar[bool] = False
     Coefficients: ClassVar[type[LawCoefficients]] = BilinearCoefficients
+    key_units: ClassVar[dict[str, str]] = {"unloading_coeff": "1", "plastic_stiffness": "N/m"}
     yield_strength_key: ClassVar[str | None] = "plastic_stiffness"
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "beta": (0.0, 0.99)}
     example_contact: ClassVar[dict[str, float]] = {"unloading_coeff": 0.8, "plastic_stiffness": 2.43e7}

@@ -67,6 +67,7 @@ class PowerLaw(ContactLaw):
     pair_style: ClassVar[str] = "chain/power"
     history: ClassVar[bool] = False
     Coefficients: ClassVar[type[LawCoefficients]] = PowerCoefficients
+    key_units: ClassVar[dict[str, str]] = {"exponent": "1", "stiffness": "N/m^n"}
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "exponent": EXPONENT_RANGE}
     #: brass beads of R = 4.76 mm: Hertz's own K and n (k = 4/3 E* sqrt(R*))
     example_contact: ClassVar[dict[str, float]] = {"exponent": 1.5, "stiffness": 4.11e9}

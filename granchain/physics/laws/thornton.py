@@ -221,6 +221,7 @@ class ThorntonLaw(ContactLaw):
     # 179, 0.97-1.54; docs/error-bars.md)
     slope_kinks: ClassVar[bool] = True
     Coefficients: ClassVar[type[LawCoefficients]] = ThorntonCoefficients
+    key_units: ClassVar[dict[str, str]] = {"yield_pressure": "Pa"}
     #: p_y = 1.61 sigma_y of the softer body when the scene gives none (for_pair): on a wall of a
     #: material, as between beads of several
     yield_strength_key: ClassVar[str | None] = "yield_pressure"
