@@ -10,7 +10,7 @@ solver read these facts, ``integrator(method).order`` and so on; none of them as
 where a fact answers the question (tests/test_integrator_facts.py holds this).
 
 The facts are the integrator's alone. What the contact law adds is the law's: the order 1 + 3/2 of
-the error where a Hertzian contact closes (workflows.error_estimates.ONSET_ORDER) lowers any
+the error where a Hertzian contact closes (ContactLaw.onset_order, 1 + n of its onset) lowers any
 integrator's order above it (RK4's 4) and none below it (Verlet's 2).
 
 The implementations are granchain.reference.verlet and granchain.reference.rk4 (the reference

@@ -448,10 +448,10 @@ def checked(
     return ErrorBars(err, status, used)
 
 
-#: RK4's own error, from its runs at h and 2 h, taken at its lowest order on a chain (1 + 3/2 at a
-#: Hertzian onset; workflows.error_estimates.ONSET_ORDER): the larger, conservative bound. RK4 references
-#: are made for the laws whose slope jumps at kinks (ContactLaw.slope_kinks: bilinear, Thornton), both of
-#: whose onsets give 2.5 (workflows.error_estimates.onset_order); no power law is one
+#: RK4's own error, from its runs at h and 2 h, is taken at its lowest order on the scene's chain: the
+#: order of its onset, 1 + n (ContactLaw.onset_order; workflows.errorbars.facts.reference_order passes
+#: it), the larger, conservative bound. This is that order at a Hertzian onset (1 + 3/2), the default of
+#: against_reference's ``order`` for a caller with no scene (the tests of the rule itself)
 REFERENCE_ORDER = 2.5
 #: the reference's error may be at most this fraction of the distance it measures: the estimate
 #: (distance + reference error) is then within 1 - 3 times a true error in distance +- reference error
@@ -464,6 +464,7 @@ def against_reference(
     reference_coarse: np.ndarray,
     times: tuple[np.ndarray, np.ndarray] | None = None,
     jump_time: float | None = None,
+    order: float = REFERENCE_ORDER,
 ) -> ErrorBars:
     """Error estimates of `values` (a Verlet run at dt) from RK4 runs at h and 2 h (module docstring).
 
@@ -478,12 +479,15 @@ def against_reference(
         than jump_time is another pulse in one of them, and has no estimate.
     jump_time : float, optional
         Half the shortest period of the chain (pi / omega_max).
+    order : float, optional
+        The reference's lowest order on the scene (workflows.errorbars.facts.reference_order: its
+        law's onset order 1 + n, at most RK4's 4); REFERENCE_ORDER, a Hertzian onset's, by default.
 
     Returns
     -------
     ErrorBars
         error = |value - reference| + the reference's own error |reference - reference_coarse| /
-        (2^REFERENCE_ORDER - 1), where that is at most REFERENCE_SHARE of the distance; else none.
+        (2^order - 1), where that is at most REFERENCE_SHARE of the distance; else none.
     """
     v = np.atleast_1d(np.asarray(values, dtype=float))
     r = np.atleast_1d(np.asarray(reference, dtype=float))
@@ -493,12 +497,12 @@ def against_reference(
     status = np.empty(n, dtype=object)
     for i in range(n):
         err[i], status[i] = _against_one(
-            v[i], r[i], rc[i], None if times is None else (float(times[0][i]), float(times[1][i])), jump_time
+            v[i], r[i], rc[i], None if times is None else (float(times[0][i]), float(times[1][i])), jump_time, order
         )
     return ErrorBars(err, status, np.full(n, np.nan))
 
 
-def _against_one(v, r, rc, times, jump_time):
+def _against_one(v, r, rc, times, jump_time, order):
     if not (np.isfinite(v) and np.isfinite(r) and np.isfinite(rc)):
         return math.nan, NOT_COMPLETE + " in the run or an RK4 companion" + NOT_PASSED
     if times is not None and jump_time is not None:
@@ -511,7 +515,7 @@ def _against_one(v, r, rc, times, jump_time):
             )
     distance = abs(v - r)
     ulp = ROUNDOFF_ULPS * np.spacing(max(abs(v), abs(r)))
-    own = abs(r - rc) / (2.0**REFERENCE_ORDER - 1.0)
+    own = abs(r - rc) / (2.0**order - 1.0)
     if distance <= ulp and own <= ulp:
         return float(ulp), "round-off"
     if own > REFERENCE_SHARE * distance:

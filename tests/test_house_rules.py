@@ -20,15 +20,7 @@ MAX_MODULE_LINES = 600
 
 #: "path" (a module) or "path::qualified.name" (a function) -> why it is over its limit, and the issue
 #: that removes it
-EXCEPTIONS = {
-    "granchain/campaigns/dask_executor.py::Executor.start": "the cluster's start-up and its fallbacks "
-    "(issue 41 item 6)",
-    "granchain/postprocess/comparison_table.py::compare_runs": "the table's rows per quantity (issue 41 item 6)",
-    "granchain/workflows/compare_backends.py::compare_scene": "both backends' runs and their shared companions "
-    "(issue 41 item 6)",
-    "granchain/workflows/guards.py::check_run": "every run guard in one pass (issue 41 item 6)",
-    "granchain/workflows/law_comparison.py::contact_and_sources": "each law's model and its sources (issue 41 item 6)",
-}
+EXCEPTIONS: dict[str, str] = {}
 
 
 def modules():

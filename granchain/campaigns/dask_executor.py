@@ -182,36 +182,50 @@ class Executor:
         """
         if self.client is not None:
             return self.client
+        if self.batch is not None:
+            return self._start_batch()
+        if self.scheduler is not None:
+            return self._connect_scheduler()
+        return self._start_local()
+
+    def _start_batch(self):
+        """The batch jobs' client, their upkeep thread started (PersistentLammps for single-rank points)."""
+        self.jobs = JobCluster(self.batch, self.ranks, self.log_directory)
+        self.client = self.jobs.start()
+        if self.reuse_lammps and self.ranks == 1:
+            self.client.register_plugin(PersistentLammps())
+        self._upkeep = threading.Thread(target=self._keep_jobs, name="granchain-jobs", daemon=True)
+        self._upkeep.start()
+        return self.client
+
+    def _connect_scheduler(self):
+        """A client of the scheduler at --scheduler, its workers checked to load this granchain's plugin."""
+        from distributed import Client
+
+        try:
+            self.client = Client(self.scheduler, timeout="20s")
+        except (OSError, TimeoutError) as e:
+            raise CampaignError(
+                f"--scheduler {self.scheduler}: cannot connect ({e}); is the scheduler running "
+                "(dask scheduler, or a dask-jobqueue cluster's scheduler_address)?"
+            ) from None
+        if self.reuse_lammps:
+            try:
+                self.client.register_plugin(PersistentLammps())
+            except Exception as e:  # distributed re-raises a worker's failure as a bare Exception
+                if "PersistentLammps" not in str(e) and "granchain" not in str(e):
+                    raise
+                self.close()
+                raise CampaignError(
+                    f"--scheduler {self.scheduler}: a worker cannot load this granchain's worker plugin "
+                    f"({e}): it runs another granchain; install the same granchain on every worker"
+                ) from None
+        return self.client
+
+    def _start_local(self):
+        """A LocalCluster of one-thread worker processes over TLS, made in a thread of its own (below)."""
         from distributed import Client, LocalCluster
 
-        if self.batch is not None:
-            self.jobs = JobCluster(self.batch, self.ranks, self.log_directory)
-            self.client = self.jobs.start()
-            if self.reuse_lammps and self.ranks == 1:
-                self.client.register_plugin(PersistentLammps())
-            self._upkeep = threading.Thread(target=self._keep_jobs, name="granchain-jobs", daemon=True)
-            self._upkeep.start()
-            return self.client
-        if self.scheduler is not None:
-            try:
-                self.client = Client(self.scheduler, timeout="20s")
-            except (OSError, TimeoutError) as e:
-                raise CampaignError(
-                    f"--scheduler {self.scheduler}: cannot connect ({e}); is the scheduler running "
-                    "(dask scheduler, or a dask-jobqueue cluster's scheduler_address)?"
-                ) from None
-            if self.reuse_lammps:
-                try:
-                    self.client.register_plugin(PersistentLammps())
-                except Exception as e:  # distributed re-raises a worker's failure as a bare Exception
-                    if "PersistentLammps" not in str(e) and "granchain" not in str(e):
-                        raise
-                    self.close()
-                    raise CampaignError(
-                        f"--scheduler {self.scheduler}: a worker cannot load this granchain's worker plugin "
-                        f"({e}): it runs another granchain; install the same granchain on every worker"
-                    ) from None
-            return self.client
         self._loop = _loop_blocking_sigint()
         made: dict = {}
         # TLS with this run's own certificate: a plain tcp:// scheduler on a shared machine runs the code

@@ -206,6 +206,39 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
     modl = _model_rows(scene, ob)
     sa, sb = a.solution, b.solution
     w0, w1 = ob["window"] or (0, 0)  # (one bead: no bead-bead contact, no contact rows)
+    rows = _measured_rows(scene, sa, sb, oa, ob, w0, w1)
+    why = _missing_reasons(b, sb, ob)
+    why_a = _missing_reasons(a, sa, oa)  # a row only the first run lacks says why the first lacks it
+    rows = _apart_at_the_end(scene, sa, sb, rows, why, why_a)
+    ea, eb = _errors(a, w0, w1), _errors(b, w0, w1)
+    rows, ea, eb = _unlike_peaks(scene, sa, sb, rows, why, why_a, ea, eb)
+    f0 = float(scene.effects.precompression)
+    out = []
+    seen: set[str] = set()
+    for q, unit, va, vb in rows:
+        if q in seen:  # each quantity once (on two beads the window's first contact is contact 1)
+            continue
+        seen.add(q)
+        # no model of a total force applies under precompression (the paper's and the two-body impacts'
+        # need an uncompressed chain): a renamed row keeps its n/a
+        mv, msrc, applies = modl.get(q, (None, "", None))
+        # a reason only where a value is missing: the second run's where it lacks it, else the first's
+        reason = why.get(q) if vb is None else why_a.get(q) if va is None else None
+        label = dynamic_name(q) if f0 else q
+        if label != q:  # the dynamic force F - F0, as the observables are (docs/observables.md)
+            va, vb = (None if v is None else v - f0 for v in (va, vb))
+        out.append(CompareRow(label, unit, va, vb, mv, msrc, rtol, applies, reason, ea.get(q), eb.get(q)))
+    return out
+
+
+#: a compare row before its model and errors: (quantity, unit, first run's value, second run's)
+Row = tuple[str, str, float | None, float | None]
+
+
+def _measured_rows(scene, sa, sb, oa: dict, ob: dict, w0: int, w1: int) -> list[Row]:
+    """The quantities both runs measured, in the table's order: the registered observables', the
+    contacts' (contact 1, the window's first, the front's arrival at its last), the striker's, the end
+    state's, the dissipated energy, the wall's and the sensors'."""
 
     def complete(sol, contact: int) -> bool:  # only a complete peak is a number to compare
         return bool(np.isfinite(sol.time_of_peak[contact - 1]) and sol.complete[contact - 1])
@@ -213,7 +246,7 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
     def peak(sol, contact: int) -> float | None:
         return float(sol.peak_force[contact - 1]) if complete(sol, contact) else None
 
-    rows: list[tuple[str, str, float | None, float | None]] = []
+    rows: list[Row] = []
     if scene.n_contacts:
         rows += [  # the registered observables', then the contacts'
             (name, obs.unit, oa.get(name), ob.get(name))  # dimensionless: "1", as everywhere
@@ -242,56 +275,50 @@ def compare_runs(a, b, rtol: float = 1e-3) -> list[CompareRow]:
     if END_PEAKS["wall_peak_force"].applies(scene) is None:
         rows.append(_end_row(scene, sa, sb, "wall_peak_force"))
     rows += _sensor_rows(scene, sa, sb)
-    why = _missing_reasons(b, sb, ob)
-    why_a = _missing_reasons(a, sa, oa)  # a row only the first run lacks says why the first lacks it
-    if not np.isclose(sa.end_time, sb.end_time, rtol=1e-9, atol=0.0):
-        # each backend ran its own step and stopped on its own check (stop_after_contact, every
-        # STOP_CHECK_EVERY steps): the end states are at different times and not the same quantity
-        ended = f"the runs ended at different times ({sa.end_time:.6g} s and {sb.end_time:.6g} s)"
-        apart = ["final_kinetic_energy", "dissipated_energy"]
-        for q in apart:
-            why[q] = why_a[q] = f"not comparable: {ended}"
-        # the momentum too while it still changes: an effect's external force (a wall, precompression's
-        # static forces) or a load still acting at the earlier end; a free chain's is the impulse, kept
-        pushed = [e.name for e in unbalanced_forces(scene)]
-        if scene.loading.is_force and min(sa.end_time, sb.end_time) < scene.loading.duration:
-            pushed.append("the load")
-        if pushed:
-            apart.append("momentum")
-            why["momentum"] = f"not comparable: {ended}, and the momentum changes then ({', '.join(pushed)})"
-            why_a["momentum"] = why["momentum"]
-        rows = [(q, u, None, None) if q in apart else (q, u, va, vb) for q, u, va, vb in rows]
-    ea, eb = _errors(a, w0, w1), _errors(b, w0, w1)
+    return rows
+
+
+def _apart_at_the_end(scene, sa, sb, rows: list[Row], why: dict, why_a: dict) -> list[Row]:
+    """The rows with the end states blanked, and why (into why, why_a), where the runs ended at different
+    times: each backend ran its own step and stopped on its own check (stop_after_contact, every
+    STOP_CHECK_EVERY steps), so their end states are not the same quantity."""
+    if np.isclose(sa.end_time, sb.end_time, rtol=1e-9, atol=0.0):
+        return rows
+    ended = f"the runs ended at different times ({sa.end_time:.6g} s and {sb.end_time:.6g} s)"
+    apart = ["final_kinetic_energy", "dissipated_energy"]
+    for q in apart:
+        why[q] = why_a[q] = f"not comparable: {ended}"
+    # the momentum too while it still changes: an effect's external force (a wall, precompression's
+    # static forces) or a load still acting at the earlier end; a free chain's is the impulse, kept
+    pushed = [e.name for e in unbalanced_forces(scene)]
+    if scene.loading.is_force and min(sa.end_time, sb.end_time) < scene.loading.duration:
+        pushed.append("the load")
+    if pushed:
+        apart.append("momentum")
+        why["momentum"] = f"not comparable: {ended}, and the momentum changes then ({', '.join(pushed)})"
+        why_a["momentum"] = why["momentum"]
+    return [(q, u, None, None) if q in apart else (q, u, va, vb) for q, u, va, vb in rows]
+
+
+def _unlike_peaks(scene, sa, sb, rows: list[Row], why: dict, why_a: dict, ea: dict, eb: dict):
+    """(rows, ea, eb) with the peak rows (peak_rows) blanked and their errors dropped, and why, where the
+    runs' peaks are different quantities (peak_definition: RK4 and Verlet with a velocity-dependent
+    damping force)."""
     da, db = peak_definition(sa.method, scene), peak_definition(sb.method, scene)
-    if da != db:
-        unlike = (
-            f"not comparable: the runs' peaks are different quantities on a scene with a {scene.damping.noun} "
-            f"({sa.method}: {da}; "
-            f"{sb.method}: {db}); Verlet on both compares them"
-        )
-        peaks = {q for q, *_ in rows if q.startswith(peak_rows())}
-        why.update(dict.fromkeys(peaks, unlike))
-        why_a.update(dict.fromkeys(peaks, unlike))
-        rows = [(q, u, None, None) if q in peaks else (q, u, va, vb) for q, u, va, vb in rows]
-        ea = {q: e for q, e in ea.items() if q not in peaks}
-        eb = {q: e for q, e in eb.items() if q not in peaks}
-    f0 = float(scene.effects.precompression)
-    out = []
-    seen: set[str] = set()
-    for q, unit, va, vb in rows:
-        if q in seen:  # each quantity once (on two beads the window's first contact is contact 1)
-            continue
-        seen.add(q)
-        # no model of a total force applies under precompression (the paper's and the two-body impacts'
-        # need an uncompressed chain): a renamed row keeps its n/a
-        mv, msrc, applies = modl.get(q, (None, "", None))
-        # a reason only where a value is missing: the second run's where it lacks it, else the first's
-        reason = why.get(q) if vb is None else why_a.get(q) if va is None else None
-        label = dynamic_name(q) if f0 else q
-        if label != q:  # the dynamic force F - F0, as the observables are (docs/observables.md)
-            va, vb = (None if v is None else v - f0 for v in (va, vb))
-        out.append(CompareRow(label, unit, va, vb, mv, msrc, rtol, applies, reason, ea.get(q), eb.get(q)))
-    return out
+    if da == db:
+        return rows, ea, eb
+    unlike = (
+        f"not comparable: the runs' peaks are different quantities on a scene with a {scene.damping.noun} "
+        f"({sa.method}: {da}; "
+        f"{sb.method}: {db}); Verlet on both compares them"
+    )
+    peaks = {q for q, *_ in rows if q.startswith(peak_rows())}
+    why.update(dict.fromkeys(peaks, unlike))
+    why_a.update(dict.fromkeys(peaks, unlike))
+    rows = [(q, u, None, None) if q in peaks else (q, u, va, vb) for q, u, va, vb in rows]
+    ea = {q: e for q, e in ea.items() if q not in peaks}
+    eb = {q: e for q, e in eb.items() if q not in peaks}
+    return rows, ea, eb
 
 
 def _missing_reasons(result, sol, obs: dict) -> dict[str, str]:

@@ -93,6 +93,7 @@ def error_bars(ctx: Context, res: SectionResult, got: dict) -> dict[str, float |
     """Each measured plateau's error: against the RK4 runs at 2 dt and 4 dt (richardson.against_reference)."""
     from granchain.reproduce.sections import cost_of, points
     from granchain.richardson import against_reference
+    from granchain.workflows.errorbars.facts import reference_order
 
     ws = ctx.campaign("table1-rk4", rk4_campaign(ctx.quick))
     res.campaigns.append(ws.name)
@@ -104,9 +105,10 @@ def error_bars(ctx: Context, res: SectionResult, got: dict) -> dict[str, float |
         return {}
     ref = [long_load_fronts(scene_of(r), _solution(r)) for r in df["run"]]
     errors: dict[str, float | None] = {}
-    d = scene_of(df["run"].iloc[0]).diameter
+    sc = scene_of(df["run"].iloc[0])
+    d, order = sc.diameter, reference_order(sc)  # (the bilinear loading line's 2.5)
     for name in got:
-        bars = against_reference([got[name]], [ref[0][name]], [ref[1][name]])
+        bars = against_reference([got[name]], [ref[0][name]], [ref[1][name]], order=order)
         e = float(bars.error[0]) if bars.reliable[0] else None
         if name == "x_t" and e is not None:
             e = max(e, 0.5 * d)  # one contact's resolution

@@ -4,6 +4,7 @@ what a campaign's axes and columns print beside a key)."""
 
 from __future__ import annotations
 
+from granchain.physics.damping import DAMPING
 from granchain.physics.effects import FAR_ENDS as FAR_ENDS  # the [boundary] far_end choices
 from granchain.physics.laws import LAWS as LAW_REGISTRY
 
@@ -45,7 +46,17 @@ MIN_TIMESTEP = 1e-24
 TIME_TEXT = f"at most {MAX_TIME:g} s: about 3 hours, far beyond any stress wave in a chain"
 
 
-#: dotted scene key -> its unit (SI; "1": dimensionless), as the scene reader reads it
+def _part_units() -> tuple[dict[str, str], dict[str, str]]:
+    """The units of the keys the registered parts read: each law's [contact] keys (ContactLaw.key_units),
+    in the registry's order, and each damping part's [damping] key (DampingPart.unit)."""
+    law_keys = {f"contact.{k}": cls.key_units[k] for cls in LAW_REGISTRY.values() for k in cls.scene_keys}
+    return law_keys, {f"damping.{cls.key}": cls.unit for cls in DAMPING.values() if cls.key}
+
+
+_LAW_KEY_UNITS, _DAMPING_KEY_UNITS = _part_units()
+
+#: dotted scene key -> its unit (SI; "1": dimensionless), as the scene reader reads it; the laws' and the
+#: damping parts' keys from the parts themselves
 SCENE_KEY_UNITS = {
     "chain.beads": "beads",
     "chain.radius": "m",
@@ -59,15 +70,10 @@ SCENE_KEY_UNITS = {
     "loading.ramp": "1",
     "loading.radius": "m",
     "loading.mass": "kg",
-    "contact.unloading_coeff": "1",
-    "contact.plastic_stiffness": "N/m",
-    "contact.yield_pressure": "Pa",
-    "contact.exponent": "1",
-    "contact.stiffness": "N/m^n",
+    **_LAW_KEY_UNITS,
     "precompression.force": "N",
     "gravity.g": "m/s^2",
-    "damping.dashpot": "N s/m",
-    "damping.kuwabara_kono": "s",
+    **_DAMPING_KEY_UNITS,
     "boundary.wall_radius": "m",
     "run.end_time": "s",
     "run.timestep": "s",

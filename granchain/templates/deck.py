@@ -116,8 +116,9 @@ def builtin_granular_refusal(scene) -> str | None:
     materials = set(scene.bead_materials)
     if scene.loading.kind == "striker":
         materials.add(scene.loading.striker_material)
+    normal = scene.contact.law_class.builtin_granular_normal  # (Hertz's hertz/material)
     why = {
-        f"the {scene.contact.law} law (the yardstick is Hertz)": scene.contact.law != "hertz",
+        f"the {scene.contact.law} law (the yardstick is Hertz)": normal is None,
         **{y: True for e in active_effects(scene) if (y := e.yardstick_refusal(scene))},
         "beads or a striker of another material (the yardstick takes one E and nu)": len(materials) > 1,
     }

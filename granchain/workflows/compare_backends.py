@@ -88,14 +88,7 @@ def compare_scene(
     # LAMMPS's plugin is built or found now, so that a missing compiler or a failed build is said
     # before any run (the reference's starts first, below)
     LAMMPS.prepare()
-    # the RK4 error-bar companions at 2 dt and 4 dt: LAMMPS's are the reference's own when both run
-    # the same step (a bilinear or Thornton scene with a fixed step), each made once; and they are
-    # started at once in a worker process on a second core (shared_reference_runs), while this one
-    # runs the reference and LAMMPS
-    prefetch = []
-    if error_estimate:
-        for sc, m, backend in ((ref_scene, method, REFERENCE), (lam_scene, "verlet", LAMMPS)):
-            prefetch += [(c, "rk4") for c in rk4_companions(sc, m, error_estimate == "checked", backend.numpy_speed)]
+    prefetch = _shared_companions(ref_scene, method, lam_scene, error_estimate)
     ref_kw = dict(backend=REFERENCE, method=method, rtol=plan_rtol, error_estimate=error_estimate)
     lam_kw = dict(backend=LAMMPS, np_=np_, rtol=plan_rtol, error_estimate=error_estimate)
     with shared_reference_runs(prefetch) as shared:
@@ -115,18 +108,35 @@ def compare_scene(
     try:
         rows = compare_runs(lam, ref, rtol)
         if out is not None:
-            # written aside and renamed into place with granchain's marker; an existing directory is
-            # replaced only when granchain wrote it (safe_files.atomic_directory)
-            try:
-                with atomic_directory(out, "compare", overwrite=overwrite, owned=owned_by_granchain) as tmp:
-                    write_run_dir(lam, tmp / LAMMPS.name, extra_files=lam_calc.files)
-                    write_run_dir(ref, tmp / REFERENCE.name)
-                    write_compare(rows, tmp)
-            except UnsafeFileError as e:
-                raise RunDirError(str(e)) from None
+            _write_compare_dir(out, overwrite, rows, lam_calc, ref)
     finally:
         lam_calc.discard()
     return rows, lam, ref
+
+
+def _shared_companions(ref_scene, method: str, lam_scene, error_estimate: bool | str) -> list:
+    """The RK4 error-bar companions at 2 dt and 4 dt of both runs, (scene, "rk4") each: LAMMPS's are the
+    reference's own when both run the same step (a bilinear or Thornton scene with a fixed step), each
+    made once; they are started at once in a worker process on a second core (shared_reference_runs),
+    while this one runs the reference and LAMMPS. None without error bars."""
+    prefetch = []
+    if error_estimate:
+        for sc, m, backend in ((ref_scene, method, REFERENCE), (lam_scene, "verlet", LAMMPS)):
+            prefetch += [(c, "rk4") for c in rk4_companions(sc, m, error_estimate == "checked", backend.numpy_speed)]
+    return prefetch
+
+
+def _write_compare_dir(out, overwrite: bool, rows, lam_calc, ref) -> None:
+    """lammps/, reference/, compare.csv and compare.md into `out`: written aside and renamed into place
+    with granchain's marker; an existing directory is replaced only when granchain wrote it
+    (safe_files.atomic_directory)."""
+    try:
+        with atomic_directory(out, "compare", overwrite=overwrite, owned=owned_by_granchain) as tmp:
+            write_run_dir(lam_calc.result, tmp / LAMMPS.name, extra_files=lam_calc.files)
+            write_run_dir(ref, tmp / REFERENCE.name)
+            write_compare(rows, tmp)
+    except UnsafeFileError as e:
+        raise RunDirError(str(e)) from None
 
 
 def _alongside(shared, ref_scene, ref_kw: dict, lam_scene, lam_kw: dict, after_ref_run: bool):

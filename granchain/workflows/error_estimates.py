@@ -57,7 +57,6 @@ from granchain.workflows.errorbars.bars import (
     per_contact,
 )
 from granchain.workflows.errorbars.facts import (
-    ONSET_ORDER,
     RK4_COMPANION_SHARE,
     RK4_STEP_COST,
     SHARED_BELOW,
@@ -99,7 +98,6 @@ __all__ = [
     "END_PEAK_INCOMPLETE",
     "FIT_DOMINATES",
     "ONE_COMPANION_BY_DEFAULT",
-    "ONSET_ORDER",
     "RK4_COMPANION_SHARE",
     "RK4_STEP_COST",
     "SHARED_BELOW",

@@ -188,6 +188,39 @@ def _check_disk(est: Estimate, source, places) -> None:
             )
 
 
+def _check_steps(est: Estimate, scene, planned_step: bool) -> None:
+    """Refuse a run of more steps than max_steps(), naming what to shorten (planned_step: the planner's
+    step, so the fix is not a larger [run] timestep)."""
+    source = scene.source
+    run = scene.run
+    limit = max_steps()
+    if est.steps > limit:
+        raise ResourceError(
+            f"{source}: this run is {est.steps:.3g} steps (end time {run.end_time:g} s, "
+            f"time step {run.timestep:.3g} s), "
+            f"more than the limit of {limit:.3g} (about {_duration(est.seconds)} of the reference solver on "
+            f"{est.beads} beads): shorten [run] end_time (or stop after a contact: [run] stop_after_contact), "
+            + (
+                "soften what makes the planner's step this short (`granchain plan` names it: the stiffest contact "
+                f"or the {scene.damping.noun}'s rate), "
+                if planned_step
+                else 'set [run] timestep = "auto" or a larger one, '
+            )
+            + "or raise the limit with GRANCHAIN_MAX_STEPS if you mean it"
+        )
+
+
+def _check_memory(est: Estimate, source, memory: float | None) -> None:
+    """Refuse a run that needs more memory than is available (None: not checked, a cluster job)."""
+    if memory is not None and est.memory > memory:
+        raise ResourceError(
+            f"{source}: this run needs about {_size(est.memory)} of memory ({est.beads} beads"
+            + (", the histories kept until written" if est.memory > 2 * BYTES_PER_BEAD * est.beads else "")
+            + f"), more than the {_size(memory)} this machine has available: use fewer [chain] beads, fewer "
+            "[outputs] histories or a larger history_interval/dump_interval, or a machine with more memory"
+        )
+
+
 def check_run(
     scene,
     backend: str | Backend = "reference",
@@ -227,30 +260,9 @@ def check_run(
     backend = backend_named(backend)
     est = estimate(scene, backend)
     source = scene.source
-    run = scene.run
-    limit = max_steps()
-    if est.steps > limit:
-        raise ResourceError(
-            f"{source}: this run is {est.steps:.3g} steps (end time {run.end_time:g} s, "
-            f"time step {run.timestep:.3g} s), "
-            f"more than the limit of {limit:.3g} (about {_duration(est.seconds)} of the reference solver on "
-            f"{est.beads} beads): shorten [run] end_time (or stop after a contact: [run] stop_after_contact), "
-            + (
-                "soften what makes the planner's step this short (`granchain plan` names it: the stiffest contact "
-                f"or the {scene.damping.noun}'s rate), "
-                if planned_step
-                else 'set [run] timestep = "auto" or a larger one, '
-            )
-            + "or raise the limit with GRANCHAIN_MAX_STEPS if you mean it"
-        )
+    _check_steps(est, scene, planned_step)
     memory = available_memory() if machine else None
-    if memory is not None and est.memory > memory:
-        raise ResourceError(
-            f"{source}: this run needs about {_size(est.memory)} of memory ({est.beads} beads"
-            + (", the histories kept until written" if est.memory > 2 * BYTES_PER_BEAD * est.beads else "")
-            + f"), more than the {_size(memory)} this machine has available: use fewer [chain] beads, fewer "
-            "[outputs] histories or a larger history_interval/dump_interval, or a machine with more memory"
-        )
+    _check_memory(est, source, memory)
     places = [out] if out is not None and machine else []
     if backend.work_in_tmp and machine:
         places.append(tempfile.gettempdir())

@@ -62,12 +62,16 @@ class MissingCoefficientError(UsageError):
     its coefficient from, and the chain is not the paper's brass."""
 
 
+#: a law's [contact] table and where each coefficient comes from (contact_and_sources)
+Sourced = tuple[dict, dict[str, tuple[float, str]]]
+
+
 def equivalent_contact(scene, law: str, given: dict | None = None) -> dict:
     """The [contact] table of `scene` under `law` (see the module docstring for the rule)."""
     return contact_and_sources(scene, law, given)[0]
 
 
-def contact_and_sources(scene, law: str, given: dict | None = None) -> tuple[dict, dict[str, tuple[float, str]]]:
+def contact_and_sources(scene, law: str, given: dict | None = None) -> Sourced:
     """The [contact] table of `scene` under `law` and where each of its coefficients comes from.
 
     Parameters
@@ -97,16 +101,32 @@ def contact_and_sources(scene, law: str, given: dict | None = None) -> tuple[dic
         raise UsageError(f"--laws: {law!r} is not a contact law; choose from {', '.join(LAWS)}")
     if given:
         return {"law": law, **given}, {k: (float(v), "given (contacts=)") for k, v in given.items()}
-    c = scene.contact
-    r_star = scene.r_star
-    if c.law == law:
-        contact = LAWS[law].contact_to_dict(c)
-        sources = {k: (float(v), "the scene's [contact]") for k, v in contact.items() if k != "law"}
-        if law == "thornton" and "yield_pressure" not in contact:
-            sources["yield_pressure"] = (p_y(scene), _from_yield(scene, "p_y = 1.61 sigma_y"))
-        if law == "bilinear" and _is_from_yield(scene, contact.get("plastic_stiffness")):
-            sources["plastic_stiffness"] = (float(scene.law.k), _from_yield(scene, "k = 18.5 sigma_y R*"))
-        return contact, sources
+    if scene.contact.law == law:
+        return _scene_contact(scene, law)
+    converted = _equal_plastic_slope(scene, law)
+    if converted is not None:
+        return converted
+    if law not in ("thornton", "bilinear"):
+        example = LAWS[law].example_contact
+        return {"law": law, **example}, {k: (float(v), f"the {law} law's example") for k, v in example.items()}
+    return _plastic_from_material(scene, law)
+
+
+def _scene_contact(scene, law: str) -> Sourced:
+    """The scene's own [contact] table (its law is `law`), with the coefficients derived from the yield."""
+    contact = LAWS[law].contact_to_dict(scene.contact)
+    sources = {k: (float(v), "the scene's [contact]") for k, v in contact.items() if k != "law"}
+    if law == "thornton" and "yield_pressure" not in contact:
+        sources["yield_pressure"] = (p_y(scene), _from_yield(scene, "p_y = 1.61 sigma_y"))
+    if law == "bilinear" and _is_from_yield(scene, contact.get("plastic_stiffness")):
+        sources["plastic_stiffness"] = (float(scene.law.k), _from_yield(scene, "k = 18.5 sigma_y R*"))
+    return contact, sources
+
+
+def _equal_plastic_slope(scene, law: str) -> Sourced | None:
+    """Thornton from the scene's bilinear law or the bilinear law from its Thornton law, by equal plastic
+    slopes (k = pi p_y R*, Sec. III); None for any other pair of laws."""
+    c, r_star = scene.contact, scene.r_star
     if law == "thornton" and c.law == "bilinear":
         k = float(scene.law.k)
         v = k / (math.pi * r_star)
@@ -120,9 +140,12 @@ def contact_and_sources(scene, law: str, given: dict | None = None) -> tuple[dic
             "unloading_coeff": (DEFAULT_BETA, "the paper's beta (default)"),
             "plastic_stiffness": (v, f"pi p_y R*: the plastic slope of the scene's Thornton law, p_y = {py:.4g} Pa"),
         }
-    if law not in ("thornton", "bilinear"):
-        example = LAWS[law].example_contact
-        return {"law": law, **example}, {k: (float(v), f"the {law} law's example") for k, v in example.items()}
+    return None
+
+
+def _plastic_from_material(scene, law: str) -> Sourced:
+    """A plastic law's coefficient from the chain's yield strength, or the paper's brass values on the
+    paper's chain; else MissingCoefficientError (the module docstring)."""
     sources: dict[str, tuple[float, str]] = {}
     contact: dict = {"law": law}
     if law == "bilinear":

@@ -328,7 +328,7 @@ def _timestep_choice(scene, method: str, rtol_plan: float, omega: float, stiffes
     rate = damping_rate(scene)
     dt_acc = accurate_timestep(method, omega, rate, rtol_plan)
     dt_new = min(dt_acc, 0.5 * stable)
-    if scene.contact.law_class.loading_is_linear():  # k_u: the same at any force
+    if scene.contact.law_class.constant_tangent:  # (the bilinear law's k_u)
         at = ""
     elif scene.effects.precompression:
         f0 = scene.effects.precompression

@@ -16,8 +16,9 @@ on them; tests/test_laws.py and tests/test_kernels.py check them for every regis
    history a law may keep; the backends store it per contact, d_amax in LAMMPS, and update it as
    alpha_max = max(alpha_max, alpha) after every step), ``Coefficients`` (a frozen dataclass
    subclassing LawCoefficients, one field per ``[contact]`` key the law reads besides ``law``: a
-   scene's Contact holds one, and ``scene_keys`` lists its fields), ``parameter_ranges`` (valid values
-   of each parameter, for the tests).
+   scene's Contact holds one, and ``scene_keys`` lists its fields), ``key_units`` (each key's unit: a
+   law that leaves one out cannot be declared), ``parameter_ranges`` (valid values of each parameter,
+   for the tests).
 2. ``force(alpha, alpha_max)`` with alpha_max the history *before* this step: the law takes
    max(alpha_max, alpha) itself, so a stale history below alpha gives the loading curve. The force
    is never negative. ``force_into`` is the same into preallocated arrays (the solver's inner loop;
@@ -52,6 +53,14 @@ on them; tests/test_laws.py and tests/test_kernels.py check them for every regis
    kernel, struct Law<Name> in granchain/lammps/law_<name>.h, is compiled and registered from LAWS
    (granchain.lammps.build). The planner's estimates (expected_peak_force, wave speeds) are class
    methods over a scene.
+9. The facts the rest of the code reads instead of asking which law it is (no module outside this
+   package compares a law's name: tests/test_law_facts.py): ``loading_exponent()`` (the onset
+   F ~ alpha^n) and ``onset_order()`` (1 + n unless the law measured better), ``closing_limits_order``,
+   ``constant_tangent``, ``builtin_granular_normal``; ``loading_time_scale(scene, A, T)`` (the loading
+   regime's T against the law's time scale), from ``two_body_contact_time(scene, A)``, which a law
+   gives unless it overrides loading_time_scale (Hertz's crossover T_c). A model of the law that a
+   module measures (the bilinear chain's long-load fronts, postprocess.fronts) is one of its
+   ``model_domains``: the module asks for the model, not the law.
 8. The law's analytic models (optional: a law without any has empty tables), which `granchain
    predict`, `compare` and the peak plot take from the law and nowhere else:
    ``model_domains`` names every model the law predicts and what it needs (a loading regime, "any",
@@ -111,15 +120,25 @@ class ContactLaw:
     Coefficients: ClassVar[type[LawCoefficients]] = LawCoefficients
     #: the [contact] keys the law reads besides law: its Coefficients' fields, in their order
     scene_keys: ClassVar[tuple[str, ...]] = ()
+    #: each of scene_keys -> its unit (SI; "1": dimensionless): what a campaign's axes and columns print
+    #: beside ``contact.<key>`` (granchain.scene.limits.SCENE_KEY_UNITS is made of them)
+    key_units: ClassVar[dict[str, str]] = {}
     #: the [contact] key read_contact derives from a [chain.material] table's yield_strength when the
     #: scene gives none (the bilinear plastic_stiffness = 18.5 sigma_y R*), or None: a scene written
     #: back keeps the yield strength in the table and leaves the key to it (a table's yield strength
     #: and the key together are refused)
     yield_strength_key: ClassVar[str | None] = None
-    #: k is Hertz's 4/3 E* sqrt(R*) of the pair's E* and R* and the virgin curve starts as k alpha^(3/2):
-    #: the paper's Hertz-chain models (Eqs. 8, 15, 19) hold for its onset (the loading regime's T_c);
-    #: False: the regime is told from the law's own two-body contact time (physics.loading_regime)
-    hertz_onset: ClassVar[bool] = False
+    #: tangent_stiffness is the same at every force (the bilinear law's unloading slope k_u): the
+    #: planner's step then names no force it was taken at (workflows.plan)
+    constant_tangent: ClassVar[bool] = False
+    #: an integrator's error where a contact closes from zero overlap is limited to onset_order (a
+    #: striker's or a wall's contact, one impact: workflows.errorbars); False where the closing is a
+    #: kink RK4 locates and the force is smooth after it (the bilinear loading line)
+    closing_limits_order: ClassVar[bool] = True
+    #: the normal model of LAMMPS's built-in pair_style granular that gives this law
+    #: (``hertz/material``; templates/builtin_granular.lmp.j2), or None: the built-in yardstick cannot
+    #: run it (templates.deck.builtin_granular_refusal)
+    builtin_granular_normal: ClassVar[str | None] = None
     #: dF/dalpha jumps at a kink that a contact's overlap crosses while it moves (bilinear: closing at
     #: alpha = 0 and reaching zero force; Thornton: reloading past d_max): fixed-step Verlet's error
     #: then depends on where in a step that happens and follows no order in dt, so its error bars come
@@ -141,6 +160,8 @@ class ContactLaw:
         """Derive a subclass's ``scene_keys`` from its Coefficients' fields (rule 1), so the two never differ."""
         super().__init_subclass__(**kwargs)
         cls.scene_keys = tuple(f.name for f in dataclasses.fields(cls.Coefficients))
+        if set(cls.key_units) != set(cls.scene_keys):
+            raise TypeError(f"{cls.__name__}.key_units must give the unit of each of its keys {cls.scene_keys}")
 
     # ---- the law itself
     def force(self, alpha: ArrayLike, alpha_max: ArrayLike | None = None) -> np.ndarray:
@@ -218,6 +239,13 @@ class ContactLaw:
         error as dt^(1 + n) there (granchain.richardson, workflows.error_estimates read it)."""
         raise NotImplementedError
 
+    def onset_order(self) -> float:
+        """The lowest order of a smooth-force integrator's error where a contact closes: 1 + n of the
+        onset F ~ alpha^n (loading_exponent; the smallest over the contacts), unless the law knows
+        better (the bilinear loading line's measured order). granchain.richardson and
+        workflows.errorbars read it."""
+        return 1.0 + float(np.min(self.loading_exponent()))
+
     def plastic_onset_force(self) -> np.ndarray:
         """The force above which a contact deforms plastically, per contact (N): infinite for a law
         that never yields (Hertz)."""
@@ -288,6 +316,29 @@ class ContactLaw:
         """The fastest a disturbance can enter the undisturbed chain, m/s: the fastest of ``wave_speeds``
         unless a law knows a tighter bound (the bilinear loading line's sound speed)."""
         return cls.wave_speeds(scene, expected_force, step)[1]
+
+    @classmethod
+    def loading_time_scale(cls, scene, amplitude: float, duration: float) -> TimeScale:
+        """A load of amplitude A (N) and duration T (s) against the law's time scale, from which
+        granchain.physics.loading_regime tells short from long loads: here T / t_c with t_c the law's
+        two-body contact time (two_body_contact_time) and CONTACT_TIME_SHORT_BELOW/LONG_ABOVE; a law
+        whose chain has another time scale says so (Hertz: the crossover time T_c of Fig. 3)."""
+        t_c, how = cls.two_body_contact_time(scene, amplitude)
+        ratio = duration / t_c
+        return TimeScale(
+            ratio,
+            CONTACT_TIME_SHORT_BELOW,
+            CONTACT_TIME_LONG_ABOVE,
+            "t_c",
+            f"T = {ratio:.3g} t_c",
+            f"t_c = {how} = {t_c:.3g} s",
+        )
+
+    @classmethod
+    def two_body_contact_time(cls, scene, amplitude: float) -> tuple[float, str]:
+        """(t_c in s, how it was found in words): the contact time of two of the scene's beads under a
+        load of amplitude A (N) behind a long load's front (loading_time_scale reads it)."""
+        raise NotImplementedError(f"the {cls.name} law gives no two-body contact time")
 
     # ---- the law's analytic models (rule 8; granchain.physics.predictions, postprocess.comparison_table and the
     # peak plot ask every law for its own)
@@ -443,6 +494,27 @@ EFFECT_DOMAINS = {
 
 #: every value a law's model_domains may hold
 MODEL_NEEDS = (*CHAIN_NEEDS, *EFFECT_DOMAINS)
+
+
+#: a load is short below this fraction of a law's two-body contact time t_c and long above this
+#: multiple (ContactLaw.loading_time_scale). Measured on bilinear chains, t_c = pi sqrt(m / 2k) of the
+#: plastic loading line k (Sec. III): contact 1's peak is within 0.5% of Eq. A2 at T = 0.1 t_c and 5% at
+#: 0.36 t_c; the steady fronts of Sec. III B need many contact times.
+CONTACT_TIME_SHORT_BELOW = 0.1
+CONTACT_TIME_LONG_ABOVE = 10.0
+
+
+class TimeScale(NamedTuple):
+    """A load's duration T against a law's time scale (ContactLaw.loading_time_scale): T over it, the
+    ratios below which the load is short and above which long, the scale's name, and in words T
+    against it and how the scale was found (the loading regime's text)."""
+
+    ratio: float
+    short_below: float
+    long_above: float
+    unit: str
+    ratio_text: str
+    definition: str
 
 
 class TwoBodies(NamedTuple):

@@ -67,6 +67,7 @@ class PowerLaw(ContactLaw):
     pair_style: ClassVar[str] = "chain/power"
     history: ClassVar[bool] = False
     Coefficients: ClassVar[type[LawCoefficients]] = PowerCoefficients
+    key_units: ClassVar[dict[str, str]] = {"exponent": "1", "stiffness": "N/m^n"}
     parameter_ranges: ClassVar[dict[str, tuple[float, float]]] = {"k": (1e3, 1e12), "exponent": EXPONENT_RANGE}
     #: brass beads of R = 4.76 mm: Hertz's own K and n (k = 4/3 E* sqrt(R*))
     example_contact: ClassVar[dict[str, float]] = {"exponent": 1.5, "stiffness": 4.11e9}
@@ -181,9 +182,22 @@ class PowerLaw(ContactLaw):
         return 1.5 * f
 
     @classmethod
-    def loading_is_linear(cls) -> bool:
-        """False: the estimates that have only a linear and a Hertz form read ``loading_exponent``."""
-        return False
+    @override
+    def two_body_contact_time(cls, scene, amplitude: float) -> tuple[float, str]:
+        """t_c: the two-body contact time (power_impact, m* = m/2) at the bead speed behind a long load's
+        front, v = D A / (m c) (Eq. 12) with c the front speed of Eq. 19 on this law
+        (models.power_front_speed). It depends on v unless n = 1, where it is the loading line's pi
+        sqrt(m/2k). With per-contact n the smallest over the contacts: the shortest contact time is the
+        first a load outlasts (long sooner)."""
+        laws = scene.contact_laws if scene.contact.coefficients.varies else [scene.law]
+        m, d = scene.mass, scene.diameter
+        times = []
+        for law in laws:
+            k, n = float(law.k), float(np.max(law.loading_exponent()))
+            v = d * amplitude / (m * models.power_front_speed(amplitude, k, n, m, d))
+            times.append(power_impact(k, n, m / 2.0, v)["duration"])
+        how = "two beads' F = K alpha^n impact at the front's bead speed v = D A / (m c), c of Eq. 19"
+        return min(times), how
 
     @classmethod
     def wave_speeds(cls, scene, expected_force: float, step) -> tuple[float, float]:

@@ -34,7 +34,7 @@ from typing_extensions import override
 
 from granchain.physics import materials as mat
 from granchain.physics import models
-from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, LawCoefficients, forbid_others
+from granchain.physics.laws.base import ArrayLike, ContactLaw, Kink, LawCoefficients, TimeScale, forbid_others
 from granchain.physics.laws.hertz import HertzLaw, hertz_force, hertz_tangent_stiffness
 
 
@@ -215,13 +215,13 @@ class ThorntonLaw(ContactLaw):
 
     name: ClassVar[str] = "thornton"
     pair_style: ClassVar[str] = "chain/thornton"
-    hertz_onset: ClassVar[bool] = True  # (elastic up to d_y)
     history: ClassVar[bool] = True
     # reloading meets the plastic line at d_max with another slope: Verlet's error follows no order
     # there (generated scenes, Richardson: 94 of 125 peaks estimated, one 17x off; against RK4: 172 of
     # 179, 0.97-1.54; docs/error-bars.md)
     slope_kinks: ClassVar[bool] = True
     Coefficients: ClassVar[type[LawCoefficients]] = ThorntonCoefficients
+    key_units: ClassVar[dict[str, str]] = {"yield_pressure": "Pa"}
     #: p_y = 1.61 sigma_y of the softer body when the scene gives none (for_pair): on a wall of a
     #: material, as between beads of several
     yield_strength_key: ClassVar[str | None] = "yield_pressure"
@@ -552,10 +552,10 @@ class ThorntonLaw(ContactLaw):
         return HertzLaw.expected_peak_force(scene, impulse, step)
 
     @classmethod
-    def loading_is_linear(cls) -> bool:
-        """False: the virgin curve starts Hertzian (k d^(3/2) up to d_y), so the estimates take their
-        Hertz forms."""
-        return False
+    @override
+    def loading_time_scale(cls, scene, amplitude: float, duration: float) -> TimeScale:
+        """Hertz's crossover time T_c: the virgin curve starts Hertzian (k d^(3/2) up to d_y)."""
+        return HertzLaw.loading_time_scale(scene, amplitude, duration)
 
     @classmethod
     def wave_speeds(cls, scene, expected_force: float, step) -> tuple[float, float]:

@@ -8,6 +8,8 @@ runs (against_rk4_bars), for the contacts' peaks and leading pulses, the effects
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from granchain.postprocess.observables import END_PEAKS as _END_OBSERVABLES
@@ -15,7 +17,7 @@ from granchain.postprocess.observables import OBSERVABLES, measure, with_error_b
 from granchain.postprocess.sensors import sensor_key, sensor_static_forces
 from granchain.problem import scene_static_forces
 from granchain.richardson import ErrorBars, against_reference, checked
-from granchain.workflows.errorbars.facts import expected_orders, onset_order
+from granchain.workflows.errorbars.facts import expected_orders, onset_order, reference_order
 from granchain.workflows.errorbars.observables import (
     _observable_error,
     _observable_floor,
@@ -91,8 +93,9 @@ def extrapolated_bars(
 
     # a striker's or a wall's contact is one impact from zero overlap: an integrator's error there is its
     # onset's, order 1 + n (Hertz: 1 + 3/2), where its own is higher (RK4, two spheres, planned step: with
-    # order 4 the bar was 1/2.9 of the true error); not on a loading line, nor for one companion's bounds
-    onset = report.one_companion is None and not scene.contact.law_class.loading_is_linear()
+    # order 4 the bar was 1/2.9 of the true error); not where the law says its closing does not limit it (a
+    # loading line: ContactLaw.closing_limits_order), nor for one companion's bounds
+    onset = report.one_companion is None and scene.contact.law_class.closing_limits_order
     p_end = onset_order(scene) if onset and onset_order(scene) < p else p
 
     def bars_of(values, times):
@@ -172,7 +175,10 @@ def against_rk4_bars(report: ErrorReport, result, runs: list) -> None:
     from granchain.workflows.plan import highest_frequency
 
     scene, sol = result.scene, result.solution
-    jump = np.pi / highest_frequency(scene)[0]
+    # the references' own error at their onset's order, 1 + n of the scene's law (reference_order)
+    against = functools.partial(
+        against_reference, jump_time=np.pi / highest_frequency(scene)[0], order=reference_order(scene)
+    )
     n = len(sol.peak_force)
 
     def values(name: str, complete_only: bool = False) -> list:
@@ -180,21 +186,19 @@ def against_rk4_bars(report: ErrorReport, result, runs: list) -> None:
 
     pf, tp = values("peak_force", True), values("time_of_peak", True)
     lf, lt = values("leading_pulse_force"), values("leading_pulse_time")
-    report.peak_force = against_reference(*pf, times=(tp[0], tp[1]), jump_time=jump)
-    report.time_of_peak = against_reference(*tp, times=(tp[0], tp[1]), jump_time=jump)
-    report.leading_pulse_force = against_reference(*lf, times=(lt[0], lt[1]), jump_time=jump)
-    report.arrival_time = against_reference(*lt, times=(lt[0], lt[1]), jump_time=jump)
+    report.peak_force = against(*pf, times=(tp[0], tp[1]))
+    report.time_of_peak = against(*tp, times=(tp[0], tp[1]))
+    report.leading_pulse_force = against(*lf, times=(lt[0], lt[1]))
+    report.arrival_time = against(*lt, times=(lt[0], lt[1]))
     _largest(report, scene, sol)
 
     def bars_of(values, times):
         v = [float(x) for x in values]
         t = None if times is None else ([float(times[0])], [float(times[1])])
-        return against_reference([v[0]], [v[1]], [v[2]], times=t, jump_time=jump)
+        return against([v[0]], [v[1]], [v[2]], times=t)
 
     report.end_peaks = _end_peaks((sol, *runs), bars_of)
-    report.end_peaks.update(
-        _sensor_bars(scene, (sol, *runs), lambda v, t: against_reference(*v, times=(t[0], t[1]), jump_time=jump))
-    )
+    report.end_peaks.update(_sensor_bars(scene, (sol, *runs), lambda v, t: against(*v, times=(t[0], t[1]))))
     obs = [measure(scene, s).values for s in (sol, *runs)]
     b = max(scene.window[1] - 1, 0)
     for name in with_error_bars():
@@ -203,7 +207,7 @@ def against_rk4_bars(report: ErrorReport, result, runs: list) -> None:
         times = None
         if OBSERVABLES[name].at_leading_pulse and scene.n_contacts:  # the same pulse in every run
             times = tuple([float(s.leading_pulse_time[b])] for s in (sol, runs[0]))
-        bars = against_reference([v[0]], [v[1]], [v[2]], times=times, jump_time=jump)
+        bars = against([v[0]], [v[1]], [v[2]], times=times)
         report.observables[name] = _observable_error(name, vals[0], bars, obs[0])
 
 

@@ -1,6 +1,6 @@
 """What the error bars read of the integrator and the law, and the companions' steps and price.
 
-The orders an integrator's error can show on a scene (ONSET_ORDER, expected_orders, integrator_order),
+The orders an integrator's error can show on a scene (onset_order, expected_orders, integrator_order),
 whether its law's kinks make the error erratic (kinked_law), the companion scenes and their steps, and
 the steps and price of the RK4 runs a Verlet run is measured against (against_rk4_factors,
 rk4_companions_cost).
@@ -10,24 +10,21 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import numpy as np
-
 from granchain.integrators import RK4, integrator
-
-#: The lowest order of an integrator's error on a chain of a Hertzian onset: 1 + 3/2 where a contact
-#: closes (F ~ t^(3/2) is not smooth at the onset; docs/laws.md), the bilinear peaks at the turn measured
-#: 2.5-3.2 alike; it lowers an integrator of higher order (RK4's 4), not one below it (Verlet's 2). Of
-#: any other law it is 1 + its declared loading exponent (onset_order).
-ONSET_ORDER = 2.5
 
 
 def onset_order(scene) -> float:
-    """The order of an integrator's error where a contact of the scene closes: 1 + n of its onset F ~
-    alpha^n (ContactLaw.loading_exponent, the smallest over the nominal law's contacts: 2.5 for Hertz and
-    Thornton, 1 + n for the power law); ONSET_ORDER on a loading line (the bilinear law's measured 2.5-3.2)."""
-    if scene.contact.law_class.loading_is_linear():
-        return ONSET_ORDER
-    return 1.0 + float(np.min(scene.law.loading_exponent()))
+    """The order of an integrator's error where a contact of the scene closes: the nominal law's
+    declared ContactLaw.onset_order (1 + n of its onset F ~ alpha^n, the smallest over its contacts:
+    2.5 for Hertz and Thornton, 1 + n for the power law, the bilinear loading line's measured 2.5)."""
+    return scene.law.onset_order()
+
+
+def reference_order(scene) -> float:
+    """The lowest order of RK4's error on the scene, at which a Verlet run's RK4 references take their
+    own error (richardson.against_reference): its onset's (onset_order: 1 + n, 2.5 on the kinked
+    Hertzian-onset laws and the bilinear loading line), at most RK4's order."""
+    return float(min(onset_order(scene), RK4.order))
 
 
 def expected_orders(method: str, scene) -> tuple[float, float]:
