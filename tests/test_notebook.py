@@ -47,7 +47,7 @@ def test_the_notebook_runs_in_a_jupyter_kernel(tmp_path, monkeypatch):
         for o in c.outputs
         if o.output_type in ("execute_result", "display_data") and "image/png" in o.data
     ]
-    # granchain's own figures (histories, peaks, heat map) and the notebook's (comparison, campaign)
+    # granchain's own figures (histories, peaks, comparison, heat map) and the notebook's (campaign)
     assert len(images) >= 5
     assert all(i.startswith(b"\x89PNG") and len(i) > 10_000 for i in images)
     texts = "\n".join(
@@ -72,10 +72,11 @@ def test_the_notebook_runs_in_a_jupyter_kernel(tmp_path, monkeypatch):
 
 def test_the_notebook_uses_the_documented_readers_and_views():
     """Issue 43: the tour reads the dump with ASE as docs/notebook.md does (units="si", without which
-    velocities are 98x too small), and uses scene.replace and the dump view."""
+    velocities are 98x too small), and uses scene.replace, the dump view and Comparison.plot."""
     code = "\n".join(c.source for c in nbformat.read(NOTEBOOK, as_version=4).cells if c.cell_type == "code")
     reads = re.findall(r"ase\.io\.read\((.*?)\)\n", code, flags=re.S)
     assert reads
     assert all('units="si"' in r for r in reads), reads
     assert ".replace(" in code
     assert ".dump" in code
+    assert "cmp.plot()" in code  # Comparison.plot, not a comparison drawn by hand
