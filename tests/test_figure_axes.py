@@ -131,3 +131,24 @@ def test_a_log_axis_under_a_decade_has_a_label_near_each_end(lo, decades):
     assert ticks.size
     assert np.min(np.abs(np.log10(ticks / lo))) <= reach
     assert np.min(np.abs(np.log10(ticks / hi))) <= reach
+
+
+def test_the_models_note_is_whole_under_axes_the_caller_gave():
+    """Drawn into a caller's axes (ax=), the peaks figure writes no figure-wide footnote and lays
+    nothing out: the note on the models left out is under those axes, every reason whole."""
+    from matplotlib.figure import Figure
+
+    result = _bundled("effect-precompression")
+    host = Figure(figsize=(6, 4))
+    ax = host.subplots()
+    position = ax.get_position().bounds
+    assert plots.figure(result, "peaks", ax=ax) is host
+    assert not host.texts  # nothing across the caller's figure
+    assert ax.get_position().bounds == position  # no tight_layout of the caller's figure
+    note = " ".join(" ".join(t.get_text() for t in ax.texts).split())
+    skipped: dict[str, str] = {}
+    model_curves(result.scene, plots.load_peaks(result).contact, skipped)
+    assert skipped
+    for label, reason in skipped.items():
+        assert label in note
+        assert " ".join(reason.split()) in note

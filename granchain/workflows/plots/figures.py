@@ -182,15 +182,21 @@ FOOTNOTE_SIZE = 6.0
 FOOTNOTE_WIDTH = 150
 
 
-def _footnote(fig: Figure, skipped: dict[str, str]) -> None:
-    """The models not drawn and why, under the axes: one line per reason (the models it holds for
-    named together), wrapped whole, never cut, with the axes laid out above it."""
+def _footnote_lines(skipped: dict[str, str], width: int = FOOTNOTE_WIDTH) -> list[str]:
+    """The models not drawn and why: one line per reason (the models it holds for named together),
+    wrapped whole at width characters, never cut."""
     by_reason: dict[str, list[str]] = {}
     for label, reason in skipped.items():
         by_reason.setdefault(reason, []).append(label)
     lines = []
     for reason, labels in by_reason.items():
-        lines += textwrap.wrap(_plain(f"not drawn, {'; '.join(labels)}: {reason}"), width=FOOTNOTE_WIDTH)
+        lines += textwrap.wrap(_plain(f"not drawn, {'; '.join(labels)}: {reason}"), width=width)
+    return lines
+
+
+def _footnote(fig: Figure, skipped: dict[str, str]) -> None:
+    """The models not drawn and why, under the axes (_footnote_lines), with the axes laid out above it."""
+    lines = _footnote_lines(skipped)
     fig.text(0.01, 0.01, "\n".join(lines), fontsize=FOOTNOTE_SIZE, va="bottom", ha="left", color="0.3")
     height = 72.0 * fig.get_figheight()  # points
     fig.tight_layout(rect=(0, (1.25 * FOOTNOTE_SIZE * len(lines) + 8.0) / height, 1, 1))
@@ -198,23 +204,24 @@ def _footnote(fig: Figure, skipped: dict[str, str]) -> None:
 
 def _lay_out(fig, ax, skipped: dict[str, str], given: bool) -> None:
     """The peaks figure's layout: the models not drawn and why in a footnote under the axes; on axes
-    the caller gave, the same note under their x label and the caller's layout left alone."""
-    if given:
-        if skipped:
-            lines = [_plain(f"not drawn, {label}: {reason}") for label, reason in skipped.items()]
-            ax.annotate(
-                "\n".join(textwrap.fill(line, FOOTNOTE_WIDTH // 2) for line in lines),
-                xy=(0.0, 0.0),
-                xycoords="axes fraction",
-                xytext=(0.0, -36.0),
-                textcoords="offset points",
-                va="top",
-                fontsize=FOOTNOTE_SIZE,
-                color="0.3",
-            )
+    the caller gave, the same note under their x label, wrapped to their width, and the caller's
+    layout left alone."""
+    if given and skipped:
+        # characters across the axes at the footnote's size (a character about 0.55 em wide)
+        width = ax.get_position().width * fig.get_figwidth() * 72.0 / (0.55 * FOOTNOTE_SIZE)
+        ax.annotate(
+            "\n".join(_footnote_lines(skipped, max(40, int(width)))),
+            xy=(0.0, 0.0),
+            xycoords="axes fraction",
+            xytext=(0.0, -36.0),
+            textcoords="offset points",
+            va="top",
+            fontsize=FOOTNOTE_SIZE,
+            color="0.3",
+        )
     elif skipped:  # say which models are left out, and why
         _footnote(fig, skipped)
-    else:
+    elif not given:
         fig.tight_layout()
 
 
