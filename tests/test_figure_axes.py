@@ -97,12 +97,7 @@ def test_the_models_footnote_is_whole_and_inside_the_canvas():
 def test_compare_figures_of_a_precompressed_chain(tmp_path):
     """A compare directory (two reference runs here: the figures read run directories alike): the peak
     profiles are the dynamic forces compare reports, and both figures keep the three rules."""
-    from granchain.workflows.plots.overlays import (
-        _draw_compare_histories,
-        _draw_compare_peaks,
-        compare_histories,
-        compare_peaks,
-    )
+    from granchain.workflows.plots.overlays import compare_peaks, figure_compare
 
     text = brass_text(20, 'kind = "velocity"\nvelocity = 0.5\n', PEAKS + "histories = [1, 5, 10]\n")
     text += "[precompression]\nforce = 20.0\n"
@@ -112,8 +107,8 @@ def test_compare_figures_of_a_precompressed_chain(tmp_path):
     total = plots.load_peaks(tmp_path / "reference").peak_force
     assert np.array_equal(p.reference, total[p.contact - 1] - 20.0)
     assert "dynamic" in p.label
-    check_figure(_draw_compare_peaks(tmp_path, "a", "b")[0])
-    check_figure(_draw_compare_histories(compare_histories(tmp_path)[0], "a", "b"))
+    check_figure(figure_compare(tmp_path, "peaks"))
+    check_figure(figure_compare(tmp_path, "histories"))
 
 
 @settings(max_examples=200, deadline=None)
@@ -137,3 +132,24 @@ def test_a_log_axis_under_a_decade_has_a_label_near_each_end(lo, decades):
     assert ticks.size
     assert np.min(np.abs(np.log10(ticks / lo))) <= reach
     assert np.min(np.abs(np.log10(ticks / hi))) <= reach
+
+
+def test_the_models_note_is_whole_under_axes_the_caller_gave():
+    """Drawn into a caller's axes (ax=), the peaks figure writes no figure-wide footnote and lays
+    nothing out: the note on the models left out is under those axes, every reason whole."""
+    from matplotlib.figure import Figure
+
+    result = _bundled("effect-precompression")
+    host = Figure(figsize=(6, 4))
+    ax = host.subplots()
+    position = ax.get_position().bounds
+    assert plots.figure(result, "peaks", ax=ax) is host
+    assert not host.texts  # nothing across the caller's figure
+    assert ax.get_position().bounds == position  # no tight_layout of the caller's figure
+    note = " ".join(" ".join(t.get_text() for t in ax.texts).split())
+    skipped: dict[str, str] = {}
+    model_curves(result.scene, plots.load_peaks(result).contact, skipped)
+    assert skipped
+    for label, reason in skipped.items():
+        assert label in note
+        assert " ".join(reason.split()) in note

@@ -1,9 +1,11 @@
 """The command line for scripts and shared scenes: ``python -m granchain``, ``--version``, strict JSON
-from run, plan, compare and predict (``--json``), and scene text printed with its control characters
-escaped (a shared scene's title cannot retitle the terminal or clear it)."""
+from every command with ``--json`` (found in the parser), each with its schema version, and scene text
+printed with its control characters escaped (a shared scene's title cannot retitle the terminal or
+clear it)."""
 
 from __future__ import annotations
 
+import argparse
 import json
 import subprocess
 import sys
@@ -13,7 +15,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import granchain
-from granchain.cli import main
+from granchain.cli import JSON_SCHEMA_VERSION, build_parser, main
+from granchain.cli.terminal import SCHEMA_KEY, versioned
 
 #: a title with an OSC (window title), a bell and a clear-screen sequence, as TOML escapes
 EVIL_TITLE = r"evil \u001b]0;owned\u0007\u001b[2J end"
@@ -70,40 +73,92 @@ def test_scene_text_is_printed_escaped(command, scene_file, tmp_path, capfd):
         assert r"evil \x1b]0;owned\x07\x1b[2J end" in out
 
 
-@pytest.mark.parametrize("command", ["run", "plan", "compare", "predict"])
+def json_commands(parser=None) -> dict[str, set[str]]:
+    """Every subcommand (nested ones as "campaign table") whose parser takes --json, with its options:
+    read from the CLI's parser, so a new command with --json is tested without editing this file."""
+    found = {}
+
+    def walk(p, name):
+        options = {o for a in p._actions for o in a.option_strings}
+        if "--json" in options:
+            found[name] = options
+        for a in p._actions:
+            if isinstance(a, argparse._SubParsersAction):
+                for sub, sp in a.choices.items():
+                    walk(sp, f"{name} {sub}".strip())
+
+    walk(parser or build_parser(), "")
+    return found
+
+
+def _check_run(data, tmp_path):
+    assert data["run_dir"] == str(tmp_path / "out")
+    assert data["backend"] == "reference"
+    assert data["title"] == "evil \x1b]0;owned\x07\x1b[2J end"
+    assert data["observables"]["wave_speed"] > 0
+    assert "provenance" in data
+    data.pop("run_dir")
+    data.pop(SCHEMA_KEY)
+    kept = json.loads(json.dumps(granchain.load_run(tmp_path / "out").summary), parse_constant=lambda c: None)
+    assert data == kept  # summary.json, NaN as null
+
+
+def _check_plan(data, tmp_path):
+    assert data["method"] == "rk4"
+    assert data["timestep"] > 0
+    assert data["steps"] * 16 == data["bead_steps"]
+    assert "timestep" in {c["name"] for c in data["choices"]}
+    assert data["units"]["timestep"] == "s"
+
+
+def _check_compare(data, tmp_path):
+    assert data["ok"] is True
+    assert data["differ"] == []
+    rows = {r["quantity"]: r for r in data["rows"]}
+    assert rows
+    assert all({"unit", "lammps", "reference", "ok"} <= set(r) for r in rows.values())
+    assert data["compare_dir"] == str(tmp_path / "out")
+
+
+def _check_predict(data, tmp_path):
+    assert isinstance(data, list)  # still a list: the version is in each row (docs/notebook.md)
+    assert {"name", "value", "unit"} <= set(data[0])
+
+
+#: what each command's JSON holds beyond the schema version every one carries
+JSON_CHECKS = {"run": _check_run, "plan": _check_plan, "compare": _check_compare, "predict": _check_predict}
+
+
+def test_the_json_checks_name_commands_that_take_json():
+    assert set(JSON_CHECKS) <= set(json_commands())
+
+
+@pytest.mark.parametrize("command", sorted(json_commands()))
 def test_json_for_scripts(command, scene_file, tmp_path, capfd):
-    args = [command, str(scene_file), "--json"]
-    if command in ("run", "compare"):
-        args += ["--out", str(tmp_path / "out"), "-q"]
+    """Every --json output is strict JSON with the schema version (JSON_SCHEMA_VERSION): at the top of
+    an object, in every row of a list."""
+    options = json_commands()[command]
+    args = [*command.split(), str(scene_file), "--json"]
+    args += ["--out", str(tmp_path / "out")] if "--out" in options else []
+    args += ["-q"] if "-q" in options else []
     assert main(args) == 0
     out, err = capfd.readouterr()
     data = json.loads(out, parse_constant=lambda c: pytest.fail(f"not strict JSON: {c}"))
     no_control(out)  # JSON escapes the title's control characters itself
-    if command == "run":
-        assert data["run_dir"] == str(tmp_path / "out")
-        assert data["backend"] == "reference"
-        assert data["title"] == "evil \x1b]0;owned\x07\x1b[2J end"
-        assert data["observables"]["wave_speed"] > 0
-        assert "provenance" in data
-        data.pop("run_dir")
-        kept = json.loads(json.dumps(granchain.load_run(tmp_path / "out").summary), parse_constant=lambda c: None)
-        assert data == kept  # summary.json, NaN as null
-    elif command == "plan":
-        assert data["method"] == "rk4"
-        assert data["timestep"] > 0
-        assert data["steps"] * 16 == data["bead_steps"]
-        assert "timestep" in {c["name"] for c in data["choices"]}
-        assert data["units"]["timestep"] == "s"
-    elif command == "compare":
-        assert data["ok"] is True
-        assert data["differ"] == []
-        rows = {r["quantity"]: r for r in data["rows"]}
-        assert rows
-        assert all({"unit", "lammps", "reference", "ok"} <= set(r) for r in rows.values())
-        assert data["compare_dir"] == str(tmp_path / "out")
-    else:
-        assert isinstance(data, list)
-        assert {"name", "value", "unit"} <= set(data[0])
+    documents = data if isinstance(data, list) else [data]
+    assert documents
+    assert all(d[SCHEMA_KEY] == JSON_SCHEMA_VERSION for d in documents)
+    assert all(next(iter(d)) == SCHEMA_KEY for d in documents)  # the first key, seen first
+    JSON_CHECKS.get(command, lambda data, tmp_path: None)(data, tmp_path)
+
+
+def test_versioned_refuses_what_cannot_carry_the_version():
+    assert versioned({"a": 1}) == {SCHEMA_KEY: JSON_SCHEMA_VERSION, "a": 1}
+    assert versioned([{"a": 1}, {}]) == [{SCHEMA_KEY: JSON_SCHEMA_VERSION, "a": 1}, {SCHEMA_KEY: JSON_SCHEMA_VERSION}]
+    with pytest.raises(TypeError, match="object or a list of objects"):
+        versioned([1, 2])
+    with pytest.raises(ValueError, match="schema_version"):
+        versioned({SCHEMA_KEY: 0})
 
 
 def test_errors_and_warnings_are_printed_escaped(tmp_path, capfd):

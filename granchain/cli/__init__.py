@@ -21,6 +21,7 @@ from .directories import add_collect_parser, add_plot_parser, add_render_parser
 from .info import add_doctor_parser, add_materials_parser, add_plan_parser, add_predict_parser, add_scenes_parser
 from .runs import add_accuracy_parser, add_compare_laws_parser, add_compare_parser, add_run_parser
 from .terminal import DEFAULT_SCENE as DEFAULT_SCENE
+from .terminal import JSON_SCHEMA_VERSION as JSON_SCHEMA_VERSION
 from .terminal import auto_np as auto_np
 from .terminal import check_out, shown, tolerant_output
 from .terminal import json_safe as json_safe

@@ -62,9 +62,29 @@ def json_safe(o):
     return o
 
 
+#: the version of every ``--json`` document's layout (docs/notebook.md, "Scripts and the command line"):
+#: raised when a key is removed or renamed or its meaning changes, not when one is added
+JSON_SCHEMA_VERSION = 1
+#: the key that carries it: at the top of an object, and in every row of a list (predict's)
+SCHEMA_KEY = "schema_version"
+
+
+def versioned(data):
+    """data with the ``--json`` schema version: first key of an object; in every row of a list of
+    objects (predict's list stays a list, so scripts that loop over its rows keep working)."""
+    if isinstance(data, dict):
+        if SCHEMA_KEY in data:
+            raise ValueError(f"a --json document has its own {SCHEMA_KEY!r} key")
+        return {SCHEMA_KEY: JSON_SCHEMA_VERSION, **data}
+    if isinstance(data, list) and all(isinstance(row, dict) for row in data):
+        return [versioned(row) for row in data]
+    raise TypeError(f"a --json document is an object or a list of objects, not {type(data).__name__}")
+
+
 def print_json(data) -> None:
-    """data as strict JSON on stdout (one document; NaN and infinities as null)."""
-    print(json.dumps(json_safe(data), indent=2, allow_nan=False))
+    """data as strict JSON on stdout (one document; NaN and infinities as null), with the schema
+    version (``versioned``)."""
+    print(json.dumps(json_safe(versioned(data)), indent=2, allow_nan=False))
 
 
 def resolve_scene(arg: str | None) -> Scene:

@@ -37,6 +37,18 @@ class Comparison:
         only one run measured fails, one that neither measured does not)."""
         return all(r.ok for r in self.rows)
 
+    def plot(self, kind: str = "peaks", ax=None):
+        """The figure ``granchain plot COMPARE_DIR`` writes for this comparison, as a matplotlib Figure
+        (not shown, not saved, pyplot's state untouched), drawn from the runs in memory.
+
+        kind: "peaks" (compare_peaks.png: the peak force along the chain in both runs, their relative
+        difference below) or "histories" (compare_histories.png). ax: (top, bottom) Axes to draw into,
+        their Figure returned (granchain.workflows.plots.overlays.figure_compare).
+        """
+        from granchain.workflows.plots.overlays import figure_compare
+
+        return figure_compare(self, kind, ax=ax)
+
     def disagreements(self) -> list[str]:
         """The quantities that differ by more than rtol plus both runs' errors."""
         return [r.quantity for r in self.rows if not r.ok]

@@ -6,7 +6,9 @@ kind); RunResult.plot) take a RunResult or a run directory and return a matplotl
 not shown, and made without pyplot, so importing or calling them never changes matplotlib's backend
 or pyplot's figures (a notebook shows a returned Figure as the cell's value; ``fig.savefig`` writes it).
 plot_peaks, plot_histories, plot_snapshots and plot_heatmap return the same Figure and save it only
-when asked (``save=`` a directory, or True for the run's own, with the plotted data as CSV).
+when asked (``save=`` a directory, or True for the run's own, with the plotted data as CSV). Each
+takes ``ax=``: the matplotlib Axes to draw into (one for peaks and the heat map, (top, bottom) for the
+two-panel figures), whose Figure is returned with its layout left to the caller.
 
 plot_run and plot_compare write each figure in every requested format (``formats``: any of png,
 pdf, svg), with the CSV of its plotted data beside it (``<figure>_plot.csv``), atomically and never
@@ -28,6 +30,8 @@ Compare directory (plot_compare; ``granchain compare`` writes lammps/ and refere
 compare.csv):
 compare_histories   LAMMPS and reference force histories overlaid, their difference below
 compare_peaks       LAMMPS and reference peak force along the chain, their relative difference below
+(figure_compare(source, kind) and Comparison.plot(kind) return either as a Figure, from a Comparison
+in memory, a compare directory or a pair of runs; ``ax=``: its (top, bottom) Axes)
 
 Modules: canvas (figures, files, text, markers), tables (a run's data as the figures read it), figures
 (a run's figures), spacetime (the heat map), overlays (a compare directory's figures).
@@ -52,10 +56,13 @@ from granchain.workflows.plots.figures import (
     plot_snapshots,
 )
 from granchain.workflows.plots.overlays import (
+    COMPARE_FIGURES,
     HistoryOverlay,
     PeakOverlay,
     compare_histories,
     compare_peaks,
+    compared_runs,
+    figure_compare,
     is_compare_dir,
     plot_compare,
 )
@@ -69,6 +76,7 @@ from granchain.workflows.plots.spacetime import (
 from granchain.workflows.plots.tables import Peaks, as_result, load_peaks
 
 __all__ = [
+    "COMPARE_FIGURES",
     "FIGURES",
     "FORMATS",
     "HEATMAP_MAX_CELLS",
@@ -78,6 +86,8 @@ __all__ = [
     "PlotError",
     "SpaceTime",
     "as_result",
+    "compared_runs",
+    "figure_compare",
     "check_formats",
     "compare_histories",
     "compare_peaks",

@@ -69,6 +69,47 @@ def _new_figure(**kw) -> Figure:
     return ChainFigure(**kw)
 
 
+def canvas(ax, panels: int = 1, **figure_kw):
+    """Where a figure is drawn: (figure to draw on, its axes, the Figure to return, whether given).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes or sequence of Axes or None
+        None: a new figure outside pyplot (``_new_figure(**figure_kw)``), with ``panels`` axes stacked
+        and sharing x. Else the axes to draw into, one per panel (a single Axes for a one-panel
+        figure, (top, bottom) for a two-panel one: a list, tuple or ``fig.subplots(2, 1)``'s array),
+        left as they are shared or laid out.
+    panels : int
+        How many axes the figure draws on.
+
+    Returns
+    -------
+    tuple
+        (the figure or subfigure the axes are on, the Axes or tuple of Axes, the root Figure, given):
+        given is True when ax was given, and then the figure's layout is the caller's (no
+        tight_layout, no constrained layout, no figure-wide text).
+    """
+    from matplotlib.axes import Axes
+
+    if ax is None:
+        height = figure_kw.pop("height_ratios", None)
+        fig = _new_figure(**figure_kw)
+        if panels == 1:
+            return fig, fig.subplots(), fig, False
+        axes = fig.subplots(panels, 1, sharex=True, gridspec_kw={"height_ratios": height} if height else None)
+        return fig, tuple(axes), fig, False
+    # (a list, a tuple or the array of Axes fig.subplots returns, flattened top to bottom)
+    many = isinstance(ax, (list, tuple, np.ndarray))
+    axes = tuple(np.asarray(ax, dtype=object).ravel()) if many else (ax,)
+    if len(axes) != panels or not all(isinstance(a, Axes) for a in axes):
+        want = "one matplotlib Axes" if panels == 1 else f"a sequence of {panels} matplotlib Axes (top to bottom)"
+        raise PlotError(f"ax: this figure draws on {want}, got {ax!r}")
+    host = axes[0].get_figure(root=False)
+    if any(a.get_figure(root=False) is not host for a in axes):
+        raise PlotError("ax: the axes of one figure must all be on the same figure")
+    return host, axes[0] if panels == 1 else axes, axes[0].get_figure(root=True), True
+
+
 def _unsafe(e: OSError) -> PlotError:
     return PlotError(f"{e}; nothing was written there")
 

@@ -24,12 +24,12 @@ from granchain.workflows.plots.canvas import (
     _error_bars,
     _label,
     _legend_label,
-    _new_figure,
     _peak_markers,
     _plain,
     _save,
     _time_unit,
     _write_csv,
+    canvas,
     check_formats,
     log_axes_ticks,
 )
@@ -48,9 +48,9 @@ from granchain.workflows.plots.tables import (
 )
 
 
-def _draw_histories(r: RunResult):
+def _draw_histories(r: RunResult, ax=None):
     """(Figure, CSV header, CSV columns) of the histories (the contacts' and the sensor beads'), or None
-    without any."""
+    without any; drawn into ax (forces, velocities) when given (canvas)."""
     sensed = r.solution.sensor_history_time
     if not r.solution.history_contacts and not sensed.size:
         return None
@@ -64,8 +64,7 @@ def _draw_histories(r: RunResult):
     many = len(fcols) > LEGEND_MAX
     cmap = _cmap("viridis")
     norm = Normalize(min(contacts), max(contacts)) if many else None
-    fig = _new_figure(figsize=(8, 7), layout="constrained" if many else None)
-    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    fig, (ax1, ax2), root, given = canvas(ax, 2, figsize=(8, 7), layout="constrained" if many else None)
     for i in fcols:
         c = int(header[i].split("_")[1])
         kw = {"color": cmap(norm(c))} if many else {"label": rf"$F_{{{c},{c + 1}}}$"}
@@ -89,9 +88,10 @@ def _draw_histories(r: RunResult):
     else:
         ax1.legend(fontsize=8)
         ax2.legend(fontsize=8)
-        fig.tight_layout()
+        if not given:
+            fig.tight_layout()
     names = [header[0], *[header[i] for i in fcols + vcols], *sensor_header]
-    return fig, names, [data[:, 0] if fcols else sensed, *[data[:, i] for i in fcols + vcols], *sensor_cols]
+    return root, names, [data[:, 0] if fcols else sensed, *[data[:, i] for i in fcols + vcols], *sensor_cols]
 
 
 def _sensor_lines(r: RunResult, ax, factor: float, times: np.ndarray) -> tuple[list[str], list[np.ndarray]]:
@@ -111,10 +111,11 @@ def _sensor_lines(r: RunResult, ax, factor: float, times: np.ndarray) -> tuple[l
     return (header, cols) if same else ([], [])
 
 
-def figure_histories(run) -> Figure:
+def figure_histories(run, ax=None) -> Figure:
     """Contact force and bead velocity histories at the recorded contacts (Fig. 5a, 5b) of a RunResult
-    or run directory, as a Figure (not saved). PlotError when the run recorded none."""
-    drawn = _draw_histories(as_result(run))
+    or run directory, as a Figure (not saved); ax: (top, bottom) Axes to draw into (canvas), their
+    Figure returned. PlotError when the run recorded none."""
+    drawn = _draw_histories(as_result(run), ax)
     if drawn is None:
         raise PlotError("this run recorded no histories: set [outputs] histories = [contacts] in the scene")
     return drawn[0]
@@ -181,29 +182,57 @@ FOOTNOTE_SIZE = 6.0
 FOOTNOTE_WIDTH = 150
 
 
-def _footnote(fig: Figure, skipped: dict[str, str]) -> None:
-    """The models not drawn and why, under the axes: one line per reason (the models it holds for
-    named together), wrapped whole, never cut, with the axes laid out above it."""
+def _footnote_lines(skipped: dict[str, str], width: int = FOOTNOTE_WIDTH) -> list[str]:
+    """The models not drawn and why: one line per reason (the models it holds for named together),
+    wrapped whole at width characters, never cut."""
     by_reason: dict[str, list[str]] = {}
     for label, reason in skipped.items():
         by_reason.setdefault(reason, []).append(label)
     lines = []
     for reason, labels in by_reason.items():
-        lines += textwrap.wrap(_plain(f"not drawn, {'; '.join(labels)}: {reason}"), width=FOOTNOTE_WIDTH)
+        lines += textwrap.wrap(_plain(f"not drawn, {'; '.join(labels)}: {reason}"), width=width)
+    return lines
+
+
+def _footnote(fig: Figure, skipped: dict[str, str]) -> None:
+    """The models not drawn and why, under the axes (_footnote_lines), with the axes laid out above it."""
+    lines = _footnote_lines(skipped)
     fig.text(0.01, 0.01, "\n".join(lines), fontsize=FOOTNOTE_SIZE, va="bottom", ha="left", color="0.3")
     height = 72.0 * fig.get_figheight()  # points
     fig.tight_layout(rect=(0, (1.25 * FOOTNOTE_SIZE * len(lines) + 8.0) / height, 1, 1))
 
 
-def _draw_peaks(r: RunResult, log: bool = True):
+def _lay_out(fig, ax, skipped: dict[str, str], given: bool) -> None:
+    """The peaks figure's layout: the models not drawn and why in a footnote under the axes; on axes
+    the caller gave, the same note under their x label, wrapped to their width, and the caller's
+    layout left alone."""
+    if given and skipped:
+        # characters across the axes at the footnote's size (a character about 0.55 em wide)
+        width = ax.get_position().width * fig.get_figwidth() * 72.0 / (0.55 * FOOTNOTE_SIZE)
+        ax.annotate(
+            "\n".join(_footnote_lines(skipped, max(40, int(width)))),
+            xy=(0.0, 0.0),
+            xycoords="axes fraction",
+            xytext=(0.0, -36.0),
+            textcoords="offset points",
+            va="top",
+            fontsize=FOOTNOTE_SIZE,
+            color="0.3",
+        )
+    elif skipped:  # say which models are left out, and why
+        _footnote(fig, skipped)
+    elif not given:
+        fig.tight_layout()
+
+
+def _draw_peaks(r: RunResult, log: bool = True, ax=None):
     summary = r.summary
     scene = r.scene
     pk, ylabel, nondim_label, column, what = dynamic_peaks(r, load_peaks(r))
     contacts, peak = pk.contact, pk.peak_force
     skipped: dict[str, str] = {}
     curves = model_curves(scene, contacts, skipped)
-    fig = _new_figure(figsize=(8, 5))
-    ax = fig.subplots()
+    fig, ax, root, given = canvas(ax, 1, figsize=(8, 5))
     # a log axis needs a positive value to show: a run without a reached bead-bead peak (one bead, or a
     # run ended before the wave reached contact 1) and without a model curve gets linear axes and says why
     positive = pk.reached.any() or any(np.any(np.isfinite(y) & (y > 0)) for y in curves.values())
@@ -261,10 +290,7 @@ def _draw_peaks(r: RunResult, log: bool = True):
     ax.grid(alpha=0.3, which="both")
     if positive:  # (a legend of nothing drawn: none)
         ax.legend(fontsize=8)
-    if skipped:  # say which models are left out, and why
-        _footnote(fig, skipped)
-    else:
-        fig.tight_layout()
+    _lay_out(fig, ax, skipped, given)
     err = None if pk.error is None else np.where(pk.reached, pk.error, np.nan)
     if _error_bars(ax, contacts, peak, err, "0.25", "measured error (dt, 2 dt, 4 dt), where beyond the marker"):
         ax.legend(fontsize=8)
@@ -273,13 +299,14 @@ def _draw_peaks(r: RunResult, log: bool = True):
         header, cols = [*header, "peak_force_error"], [*cols, pk.error]
     if pk.has_complete:
         header, cols = [*header, "complete"], [*cols, pk.complete.astype(float)]
-    return fig, [*header, *curves], [*cols, *curves.values()]
+    return root, [*header, *curves], [*cols, *curves.values()]
 
 
-def figure_peaks(run, log: bool = True) -> Figure:
+def figure_peaks(run, log: bool = True, ax=None) -> Figure:
     """Peak force vs contact (log axes unless log=False) with the models that apply (Figs. 6, 7), of a
-    RunResult or run directory, as a Figure (not saved); open markers: peaks not complete."""
-    return _draw_peaks(as_result(run), log)[0]
+    RunResult or run directory, as a Figure (not saved); open markers: peaks not complete. ax: an Axes
+    to draw into (canvas), its Figure returned."""
+    return _draw_peaks(as_result(run), log, ax)[0]
 
 
 def write_peaks(run, log: bool = True, formats=("png",)) -> list[Path]:
@@ -291,7 +318,7 @@ def write_peaks(run, log: bool = True, formats=("png",)) -> list[Path]:
     return made
 
 
-def _draw_snapshots(r: RunResult):
+def _draw_snapshots(r: RunResult, ax=None):
     if not np.size(r.solution.snapshot_time):
         return None
     summary = r.summary
@@ -302,8 +329,7 @@ def _draw_snapshots(r: RunResult):
     many = times.size > LEGEND_MAX
     cmap = _cmap("viridis")
     norm = Normalize(times.min() * factor, times.max() * factor) if many else None
-    fig = _new_figure(figsize=(9, 7), layout="constrained" if many else None)
-    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    fig, (ax1, ax2), root, given = canvas(ax, 2, figsize=(9, 7), layout="constrained" if many else None)
     cols = {"time": [], "bead": [], "velocity": [], "contact_force": []}
     for t in times:
         rows = data[data[:, 0] == t]
@@ -324,15 +350,16 @@ def _draw_snapshots(r: RunResult):
         ax2.legend(fontsize=8)
     if many:
         fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=rf"snapshot time $t$ ({unit})")
-    else:
+    elif not given:
         fig.tight_layout()
-    return fig, list(cols), [np.concatenate(v) for v in cols.values()]
+    return root, list(cols), [np.concatenate(v) for v in cols.values()]
 
 
-def figure_snapshots(run) -> Figure:
+def figure_snapshots(run, ax=None) -> Figure:
     """Force and velocity along the chain at the snapshot times with the running peak-force envelope
-    (Figs. 2, 8, 9), of a RunResult or run directory, as a Figure (not saved). PlotError without any."""
-    drawn = _draw_snapshots(as_result(run))
+    (Figs. 2, 8, 9), of a RunResult or run directory, as a Figure (not saved); ax: (top, bottom) Axes to
+    draw into (canvas), their Figure returned. PlotError without any."""
+    drawn = _draw_snapshots(as_result(run), ax)
     if drawn is None:
         raise PlotError("this run took no snapshots: set [outputs] snapshots = [times] in the scene")
     return drawn[0]
@@ -362,39 +389,40 @@ def _saved(fig: Figure, r: RunResult, name: str, header, cols, save, formats) ->
     return fig
 
 
-def plot_peaks(run, log: bool = True, save=None, formats=("png",)) -> Figure:
+def plot_peaks(run, log: bool = True, save=None, formats=("png",), ax=None) -> Figure:
     """figure_peaks, written too when asked: save a directory (True: the run directory) gets
-    peaks.<format> for each format and peaks_plot.csv (the plotted data). Returns the Figure."""
+    peaks.<format> for each format and peaks_plot.csv (the plotted data). Returns the Figure (ax: as
+    figure_peaks)."""
     r = as_result(run)
-    fig, header, cols = _draw_peaks(r, log)
+    fig, header, cols = _draw_peaks(r, log, ax)
     return _saved(fig, r, "peaks", header, cols, save, formats)
 
 
-def plot_histories(run, save=None, formats=("png",)) -> Figure:
-    """figure_histories, written too when asked (save: as plot_peaks)."""
+def plot_histories(run, save=None, formats=("png",), ax=None) -> Figure:
+    """figure_histories, written too when asked (save: as plot_peaks; ax: as figure_histories)."""
     r = as_result(run)
-    drawn = _draw_histories(r)
+    drawn = _draw_histories(r, ax)
     if drawn is None:
         figure_histories(r)  # raises, with the fix
     return _saved(drawn[0], r, "histories", drawn[1], drawn[2], save, formats)
 
 
-def plot_snapshots(run, save=None, formats=("png",)) -> Figure:
-    """figure_snapshots, written too when asked (save: as plot_peaks)."""
+def plot_snapshots(run, save=None, formats=("png",), ax=None) -> Figure:
+    """figure_snapshots, written too when asked (save: as plot_peaks; ax: as figure_snapshots)."""
     r = as_result(run)
-    drawn = _draw_snapshots(r)
+    drawn = _draw_snapshots(r, ax)
     if drawn is None:
         figure_snapshots(r)  # raises, with the fix
     return _saved(drawn[0], r, "snapshots", drawn[1], drawn[2], save, formats)
 
 
-def plot_heatmap(run, save=None, formats=("png",)) -> Figure:
-    """figure_heatmap, written too when asked (save: as plot_peaks)."""
+def plot_heatmap(run, save=None, formats=("png",), ax=None) -> Figure:
+    """figure_heatmap, written too when asked (save: as plot_peaks; ax: as figure_heatmap)."""
     r = as_result(run)
     st, why = spacetime_force(r)
     if st is None:
         raise PlotError(why)
-    fig, header, cols = _draw_heatmap(r, st)
+    fig, header, cols = _draw_heatmap(r, st, ax)
     return _saved(fig, r, "heatmap", header, cols, save, formats)
 
 
@@ -417,7 +445,9 @@ def figure(run, kind: str = "peaks", **kw) -> Figure:
     kind : {"peaks", "histories", "snapshots", "heatmap"}
         Which figure (FIGURES).
     **kw
-        For "peaks": ``log`` (default True: log axes).
+        For "peaks": ``log`` (default True: log axes). For every kind: ``ax``, the matplotlib Axes to
+        draw into ("peaks", "heatmap": one; "histories", "snapshots": (top, bottom)), whose Figure is
+        returned, its layout left to the caller; without it a new Figure outside pyplot.
 
     Returns
     -------

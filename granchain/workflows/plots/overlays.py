@@ -22,12 +22,12 @@ from granchain.workflows.plots.canvas import (
     _cmap,
     _error_bars,
     _method_label,
-    _new_figure,
     _peak_markers,
     _plain,
     _save,
     _time_unit,
     _write_csv,
+    canvas,
     check_formats,
     log_axes_ticks,
 )
@@ -109,11 +109,26 @@ def _compare_runs(d: Path) -> tuple[RunResult, RunResult]:
     return as_result(d / "lammps"), as_result(d / "reference")
 
 
-def compare_histories(compare_dir: str | Path) -> tuple[list[HistoryOverlay], str]:
-    """The force histories of both runs of a compare directory, per common history contact, with their
-    difference; or [] and why not."""
-    d = Path(compare_dir)
-    ra, rb = _compare_runs(d)
+def compared_runs(source) -> tuple[RunResult, RunResult]:
+    """The (LAMMPS, reference) runs of a comparison: a Comparison (granchain.compare; its results in
+    memory), a compare directory (read back), or a pair of RunResults or run directories."""
+    if hasattr(source, "lammps") and hasattr(source, "reference"):
+        return as_result(source.lammps), as_result(source.reference)
+    if isinstance(source, (tuple, list)) and len(source) == 2:
+        return as_result(source[0]), as_result(source[1])
+    d = Path(source)
+    if not is_compare_dir(d):
+        raise PlotError(
+            f"{d}: not a compare directory (granchain compare writes lammps/ and reference/ run directories, "
+            "each with a summary.json)"
+        )
+    return _compare_runs(d)
+
+
+def compare_histories(compare_dir) -> tuple[list[HistoryOverlay], str]:
+    """The force histories of both runs of a comparison (compare_dir: anything compared_runs takes), per
+    common history contact, with their difference; or [] and why not."""
+    ra, rb = compared_runs(compare_dir)
     missing = [
         f"{name}/histories.csv" for name, r in (("lammps", ra), ("reference", rb)) if not r.solution.history_contacts
     ]
@@ -133,10 +148,11 @@ def compare_histories(compare_dir: str | Path) -> tuple[list[HistoryOverlay], st
     return out, ""
 
 
-def compare_peaks(compare_dir: str | Path) -> PeakOverlay:
-    """The peak-force profiles of both runs of a compare directory, over their common contacts."""
+def compare_peaks(compare_dir) -> PeakOverlay:
+    """The peak-force profiles of both runs of a comparison (compare_dir: anything compared_runs takes),
+    over their common contacts."""
     # the dynamic force above each contact's static force where it has one, as compare's rows are
-    (a, label, *_), (b, *_) = (dynamic_peaks(r, load_peaks(r)) for r in _compare_runs(Path(compare_dir)))
+    (a, label, *_), (b, *_) = (dynamic_peaks(r, load_peaks(r)) for r in compared_runs(compare_dir))
     contacts, ia, ib = np.intersect1d(a.contact, b.contact, return_indices=True)
     fa, fb = a.peak_force[ia], b.peak_force[ib]
     reached = a.reached[ia] & b.reached[ib]
@@ -155,15 +171,16 @@ def compare_peaks(compare_dir: str | Path) -> PeakOverlay:
     )
 
 
-def _draw_compare_histories(overlays: list[HistoryOverlay], la: str, lr: str) -> Figure:
-    """The force histories of a compare directory's two runs overlaid, their difference below."""
+def _draw_compare_histories(overlays: list[HistoryOverlay], la: str, lr: str, ax=None) -> Figure:
+    """The force histories of a compare directory's two runs overlaid, their difference below (into
+    ax, (top, bottom), when given: canvas)."""
     t_max = max(float(np.max(o.time)) for o in overlays)
     factor, unit = _time_unit(t_max)
     many = len(overlays) > LEGEND_MAX  # then coloured by contact (a colour bar), line styles in the legend
     cmap = _cmap("viridis")
     norm = Normalize(overlays[0].contact, overlays[-1].contact) if many else None
-    fig = _new_figure(figsize=(9, 7.5), layout="constrained" if many else None)
-    ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2.2, 1]})
+    layout = "constrained" if many else None
+    fig, (ax1, ax2), root, given = canvas(ax, 2, figsize=(9, 7.5), layout=layout, height_ratios=[2.2, 1])
     for k, o in enumerate(overlays):
         color = cmap(norm(o.contact)) if many else f"C{k % 10}"
         sub = f"{o.contact},{o.contact + 1}"
@@ -188,14 +205,15 @@ def _draw_compare_histories(overlays: list[HistoryOverlay], la: str, lr: str) ->
     ax1.legend(fontsize=7, ncol=1 if many else min(3, len(overlays)))
     if not many:
         ax2.legend(fontsize=7, ncol=min(3, len(overlays)))
-        fig.tight_layout()
-    for ax in (ax1, ax2):
-        ax.grid(alpha=0.3)
-    return fig
+        if not given:
+            fig.tight_layout()
+    for a in (ax1, ax2):
+        a.grid(alpha=0.3)
+    return root
 
 
-def _plot_compare_histories(d: Path, la: str, lr: str, formats, skipped) -> list[Path]:
-    overlays, why = compare_histories(d)
+def _plot_compare_histories(d: Path, pair, la: str, lr: str, formats, skipped) -> list[Path]:
+    overlays, why = compare_histories(pair)
     if not overlays:
         if skipped is not None:
             skipped["compare_histories"] = why
@@ -215,11 +233,10 @@ def _plot_compare_histories(d: Path, la: str, lr: str, formats, skipped) -> list
     return made
 
 
-def _draw_compare_peaks(d: Path, la: str, lr: str):
-    """(Figure, CSV header, CSV columns) of the peak profiles of a compare directory's two runs."""
-    p = compare_peaks(d)
-    fig = _new_figure(figsize=(9, 7.5))
-    ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2.2, 1]})
+def _draw_compare_peaks(p: PeakOverlay, la: str, lr: str, ax=None):
+    """(Figure, CSV header, CSV columns) of the peak profiles of a comparison's two runs (into ax,
+    (top, bottom), when given: canvas)."""
+    fig, (ax1, ax2), root, given = canvas(ax, 2, figsize=(9, 7.5), height_ratios=[2.2, 1])
     reached = p.reached
     ax1.plot(p.contact[reached], p.reference[reached], "-", color="C1", lw=1.2, label=f"reference {lr}")
     _peak_markers(ax1, p.contact, p.lammps, reached, p.complete, p.has_complete, f"LAMMPS {la}", color="C0")
@@ -254,10 +271,11 @@ def _draw_compare_peaks(d: Path, la: str, lr: str):
     ax1.legend(fontsize=8)
     if ax2.lines:
         ax2.legend(fontsize=7)
-    for ax in (ax1, ax2):
-        ax.grid(alpha=0.3, which="both")
-        log_axes_ticks(ax)
-    fig.tight_layout()
+    for a in (ax1, ax2):
+        a.grid(alpha=0.3, which="both")
+        log_axes_ticks(a)
+    if not given:
+        fig.tight_layout()
     err = None if p.lammps_error is None else np.where(reached, p.lammps_error, np.nan)
     if _error_bars(ax1, p.contact, p.lammps, err, "C0", "LAMMPS measured error, where beyond the marker"):
         ax1.legend(fontsize=8)
@@ -265,11 +283,11 @@ def _draw_compare_peaks(d: Path, la: str, lr: str):
     cols = [p.contact, p.lammps, p.reference, p.relative_difference]
     if p.has_complete:
         header, cols = [*header, "complete"], [*cols, p.complete.astype(float)]
-    return fig, header, cols
+    return root, header, cols
 
 
-def _plot_compare_peaks(d: Path, la: str, lr: str, formats) -> list[Path]:
-    fig, header, cols = _draw_compare_peaks(d, la, lr)
+def _plot_compare_peaks(d: Path, pair, la: str, lr: str, formats) -> list[Path]:
+    fig, header, cols = _draw_compare_peaks(compare_peaks(pair), la, lr)
     made = _save(fig, d / "compare_peaks", formats)
     _write_csv(d / "compare_peaks_plot.csv", header, cols)
     return made
@@ -280,10 +298,50 @@ def plot_compare(compare_dir: str | Path, formats=("png",), skipped: dict[str, s
     it beside compare.csv; returns the figure files. skipped: as in plot_run."""
     d = Path(compare_dir)
     formats = check_formats(formats)
-    if not is_compare_dir(d):
-        raise PlotError(
-            f"{d}: not a compare directory (granchain compare writes lammps/ and reference/ run directories, "
-            "each with a summary.json)"
-        )
-    la, lr = (_method_label(r.summary) for r in _compare_runs(d))
-    return [*_plot_compare_histories(d, la, lr, formats, skipped), *_plot_compare_peaks(d, la, lr, formats)]
+    pair = compared_runs(d)  # read once, drawn twice
+    la, lr = (_method_label(r.summary) for r in pair)
+    return [
+        *_plot_compare_histories(d, pair, la, lr, formats, skipped),
+        *_plot_compare_peaks(d, pair, la, lr, formats),
+    ]
+
+
+#: the figures of a comparison: figure_compare(source, kind) and Comparison.plot(kind)
+COMPARE_FIGURES = ("peaks", "histories")
+
+
+def figure_compare(source, kind: str = "peaks", ax=None) -> Figure:
+    """A figure of a comparison, the one ``granchain plot COMPARE_DIR`` writes, as a Figure.
+
+    Parameters
+    ----------
+    source : granchain.workflows.comparison_frame.Comparison or str or pathlib.Path or tuple
+        A Comparison (granchain.compare, its runs in memory: no directory needed), a compare
+        directory, or a (LAMMPS, reference) pair of RunResults or run directories (compared_runs).
+    kind : {"peaks", "histories"}
+        compare_peaks.png's figure (peak force along the chain, the relative difference below) or
+        compare_histories.png's (the force histories overlaid, their difference below).
+    ax : sequence of two matplotlib Axes, optional
+        (top, bottom) to draw into, their Figure returned and its layout left to the caller; without
+        it a new Figure outside pyplot (no backend chosen or changed).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    PlotError
+        kind is unknown, ax is not two Axes of one figure, or the runs recorded no common force history
+        (kind "histories"; the message says why).
+    """
+    if kind not in COMPARE_FIGURES:
+        raise PlotError(f"unknown comparison figure {kind!r}: choose one of {', '.join(COMPARE_FIGURES)}")
+    pair = compared_runs(source)
+    la, lr = (_method_label(r.summary) for r in pair)
+    if kind == "peaks":
+        return _draw_compare_peaks(compare_peaks(pair), la, lr, ax)[0]
+    overlays, why = compare_histories(pair)
+    if not overlays:
+        raise PlotError(why)
+    return _draw_compare_histories(overlays, la, lr, ax)

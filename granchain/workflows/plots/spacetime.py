@@ -18,11 +18,11 @@ from granchain.workflows.plots.canvas import (
     PlotError,
     _cmap,
     _label,
-    _new_figure,
     _plain,
     _save,
     _time_unit,
     _write_csv,
+    canvas,
     check_formats,
 )
 from granchain.workflows.plots.tables import (
@@ -164,7 +164,7 @@ def heatmap_data(st: SpaceTime, max_cells: int = HEATMAP_MAX_CELLS) -> SpaceTime
     return SpaceTime(time, contacts, force, source)
 
 
-def _draw_heatmap(r: RunResult, st: SpaceTime):
+def _draw_heatmap(r: RunResult, st: SpaceTime, ax=None):
     st = heatmap_data(st)
     summary = r.summary
     factor, unit = _time_unit(float(np.nanmax(st.time)))
@@ -179,26 +179,27 @@ def _draw_heatmap(r: RunResult, st: SpaceTime):
         f = np.where(f > 0, f, norm.vmin * 0.5)  # open contacts: the colour below the scale
     else:
         norm = Normalize(vmin=0.0, vmax=fmax if fmax > 0 else 1.0)
-    fig = _new_figure(figsize=(8, 6))
-    ax = fig.subplots()
+    fig, ax, root, given = canvas(ax, 1, figsize=(8, 6))
     mesh = ax.pcolormesh(st.contacts, st.time * factor, f, shading="nearest", cmap=cmap, norm=norm, rasterized=True)
     cb = fig.colorbar(mesh, ax=ax, extend="min" if log_scale else "neither")
     cb.set_label(r"contact force $F_{i,i+1}$ (N" + (", log scale" if log_scale else "") + ")")
     ax.set_xlabel(CONTACT_LABEL)
     ax.set_ylabel(rf"time $t$ ({unit})")
     ax.set_title(f"Contact force over the chain and time — {_label(summary)}\nfrom {_plain(st.source)}", fontsize=9)
-    fig.tight_layout()
-    return fig, ["time", *[f"force_{c}" for c in st.contacts]], [st.time, *st.force.T]
+    if not given:
+        fig.tight_layout()
+    return root, ["time", *[f"force_{c}" for c in st.contacts]], [st.time, *st.force.T]
 
 
-def figure_heatmap(run) -> Figure:
+def figure_heatmap(run, ax=None) -> Figure:
     """The x-t diagram of contact force of a RunResult or run directory, as a Figure (not saved), from
-    its whole-chain time data (spacetime_force); PlotError, with the reason, when it has none."""
+    its whole-chain time data (spacetime_force); PlotError, with the reason, when it has none. ax: an
+    Axes to draw into (canvas; its colour bar takes room from it), its Figure returned."""
     r = as_result(run)
     st, why = spacetime_force(r)
     if st is None:
         raise PlotError(why)
-    return _draw_heatmap(r, st)[0]
+    return _draw_heatmap(r, st, ax)[0]
 
 
 def write_heatmap(run_dir, formats=("png",), skipped: dict[str, str] | None = None) -> list[Path]:
