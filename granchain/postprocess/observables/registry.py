@@ -18,6 +18,7 @@ from granchain.postprocess.observables.event import WallEnergy, WallImpulse, Wal
 from granchain.postprocess.observables.far_end import FarEndEnergy
 from granchain.postprocess.observables.leading import LeadingPeakForce, LeadingPeakForceNondim
 from granchain.postprocess.observables.max_peak import MaxPeakForce
+from granchain.postprocess.observables.spectral import FarEndAmplitude, Transmission
 from granchain.postprocess.observables.wave_speed import WaveSpeed
 
 #: name -> observable, in the order summary.json writes them (see base for the rules of a new one)
@@ -34,6 +35,8 @@ OBSERVABLES: dict[str, Observable] = {
         WallImpulse(),
         WallEnergy(),
         FarEndEnergy(),
+        FarEndAmplitude(),
+        Transmission(),
     )
 }
 
