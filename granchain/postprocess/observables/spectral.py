@@ -196,7 +196,7 @@ class Transmission(_Spectral):
         "transmission_phase": "rad",
     }
     shares_reason = tuple(companions)
-    table_fields = ("transmission_db", "transmission_error")
+    table_fields = ("transmission_db", "transmission_error", "transmission_db_error")
 
     def measure(self, scene, solution) -> Measurement:
         """spectra.transmission of the far end's lock-in over the drive's."""
