@@ -14,8 +14,9 @@ transit of the chain to the far end (one bead per sqrt(m_i / k_i), the long-wave
 signal of a linear chain), and ends at the drive's end or the record's. Its first half is left to the
 transients of the switch-on to decay; the lock-in reads the whole periods of its second half, and its
 error bar is spectra.lock_in's |Z(window) - Z(window's last half)|: the finite window's share of the
-error, a transient not yet decayed or a drift. The time step's share is not estimated (the error bars'
-companion runs keep no histories, workflows.errorbars.facts.companion_scene): the note says so.
+error, a transient not yet decayed or a drift. The time step's share is the error estimate's (a run
+with error estimates: its companion runs at 2 dt and 4 dt keep the far end's history,
+workflows.errorbars.facts.companion_scene, and lock it in alike); the note says which is which.
 """
 
 from __future__ import annotations
@@ -43,8 +44,10 @@ UNCOMPRESSED = (
     "a drive on an uncompressed chain pulls its contacts open every half period: there is no steady linear "
     "response to read; give [precompression] force = F0 (the drive's amplitude well below it)"
 )
-#: the note every measured value carries: what the error bar holds
-STEP_SHARE = "the time step's share of the error is not estimated (the error bars' companion runs keep no histories)"
+#: the note every measured value carries: what the error bars hold
+STEP_SHARE = (
+    "the time step's share is the error estimate's (errors.json, from the companion runs at 2 dt and 4 dt), not in it"
+)
 
 #: the fields the far-end amplitude writes beside it (name -> unit)
 WINDOW_FIELDS: dict[str, str] = {
@@ -119,7 +122,10 @@ class _Spectral(Observable):
 
     needs = frozenset({"histories"})
     compared = True
-    error_bar = None
+    error_bar = (
+        "the time step's error from the companion runs (each keeps the far end's history and locks it in over "
+        "the same window); the window's own bar is the *_error companion"
+    )
     applies_where = 'a precompressed chain of two beads or more under [loading] kind = "harmonic"'
 
     def applies(self, scene) -> str | None:
