@@ -26,7 +26,8 @@ import math
 import numpy as np
 import pytest
 
-from granchain.postprocess.observables.spectral import HISTORY_SAMPLES_PER_PERIOD, NOT_DRIVEN
+from granchain.postprocess.observables import OBSERVABLES
+from granchain.postprocess.observables.spectral import HISTORY_SAMPLES_PER_PERIOD, NOT_DRIVEN, UNCOMPRESSED
 from granchain.scene import parse_scene
 from granchain.workflows.plan import plan_scene
 from granchain.workflows.run import run_scene
@@ -136,6 +137,14 @@ def test_a_harmonic_scene_records_its_far_end_at_32_samples_a_period():
     assert scene.outputs.histories == (8,)
     planned = plan_scene(scene).scene
     assert planned.outputs.history_interval * 40000.0 * HISTORY_SAMPLES_PER_PERIOD <= 1 + 1e-9
+
+
+def test_an_uncompressed_drive_has_no_spectral_observable_and_says_why():
+    text = driven_text(1e-7, 4).replace("[precompression]\nforce = 10.0\n", "")
+    scene = parse_scene(text)
+    assert not scene.effects.precompression
+    for name in ("far_end_amplitude", "transmission"):
+        assert OBSERVABLES[name].applies(scene) == UNCOMPRESSED
 
 
 def test_a_struck_run_has_no_spectral_observable():
