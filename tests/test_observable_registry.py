@@ -81,15 +81,35 @@ WALLED_EVENT = SCENE.replace(
     # the largest force over the event at chosen contacts and sensors (event_max_contact_force, ...)
     "sensors = [3]\nevent_max_contacts = [2, 5]\nevent_max_sensors = [3]",
 )
+#: a precompressed chain driven at 5 kHz (a third of its cutoff), for the spectral observables
+DRIVEN = """[chain]
+beads = 6
+radius = 4.76e-3
+material = "brass"
+[contact]
+law = "hertz"
+[loading]
+kind = "harmonic"
+amplitude = 0.01
+frequency = 5000.0
+cycles = 8
+ramp = 1
+[precompression]
+force = 10.0
+[run]
+end_time = 1.6e-3
+timestep = 5e-7
+"""
 
 
 def test_every_registered_observable_keeps_the_rules(scene):
     """Each declares what the rules ask (base.Observable's docstring), applies to a plain chain (the
     wall's event quantities: to it on a wall, asking for the event; the free end's: to it asking for
-    the event) and measures it there, with a value or a reason."""
+    the event; the spectral ones: to a harmonic drive) and measures it there, with a value or a reason."""
     walled = parse_scene(WALLED_EVENT)
     free_event = parse_scene(SCENE.replace("[outputs]", "[outputs]\nevent = true"))  # a free end's event
-    results = {s: run_scene(s, backend="reference") for s in (scene, walled, free_event)}
+    driven = parse_scene(DRIVEN)
+    results = {s: run_scene(s, backend="reference") for s in (scene, walled, free_event, driven)}
     for name, obs in OBSERVABLES.items():
         where = next(s for s in results if obs.applies(s) is None)
         result = results[where]

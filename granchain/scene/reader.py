@@ -6,12 +6,13 @@ from __future__ import annotations
 import math
 import os
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 
 from granchain.physics import materials as mat
 from granchain.physics.effects import OVERLAP_WATCH, PrecompressionEffect, active_effects, refusal, sections
 from granchain.scene import model
-from granchain.scene.limits import MAX_FORCE, MAX_SCENE_BYTES, MIN_TAU
+from granchain.scene.limits import AUTO, MAX_FORCE, MAX_SCENE_BYTES, MIN_TAU
 from granchain.scene.model import Chain, Scene
 from granchain.scene.read_sections import (
     _read_chain,
@@ -180,6 +181,19 @@ def _check_scene(scene: Scene, source: str) -> None:
         )
 
 
+def _driven_outputs(outputs, loading, chain):
+    """The outputs of a harmonic drive: the far end's contact (the last bead-bead one) added to the
+    histories, sampled at the planner's "auto" interval unless the scene gives one, which the spectral
+    observables read (granchain.postprocess.observables.spectral); the outputs as given otherwise, and
+    while [chain] beads is "auto" (the planned scene gets them)."""
+    if not loading.is_harmonic or chain.beads is None or chain.beads < 2:
+        return outputs
+    far = chain.beads - 1
+    histories = outputs.histories if far in outputs.histories else (*outputs.histories, far)
+    interval = AUTO if outputs.history_interval is None else outputs.history_interval
+    return replace(outputs, histories=histories, history_interval=interval)
+
+
 def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
     """Validate a scene given as a dict of sections (TOML read, or :func:`scene_to_dict`'s).
 
@@ -228,7 +242,7 @@ def scene_from_dict(data: dict, source: str = "<scene>") -> Scene:
         contact=contact,
         loading=loading,
         run=run,
-        outputs=outputs,
+        outputs=_driven_outputs(outputs, loading, chain),
         title=title,
         source=source,
     )

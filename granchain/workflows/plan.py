@@ -53,6 +53,7 @@ from granchain.physics.estimates import (
     highest_frequency,
     max_stiffness,
 )
+from granchain.postprocess.observables.spectral import HISTORY_SAMPLES_PER_PERIOD
 from granchain.scene import AUTO, Scene, SceneError, scene_from_dict, scene_to_dict
 from granchain.scene.display import html_table, key_unit, number, printable, with_unit
 from granchain.schedule import output_stride
@@ -367,16 +368,28 @@ def _output_interval_choices(scene, d: dict, omega: float, end: float, rtol_plan
         if getattr(o, key) == AUTO:
             step = d["run"]["timestep"]
             stride = min(output_stride(omega, step, rtol_plan), max(1, int(end // step)))  # within the run
-            d["outputs"][key] = stride * step
-            choices.append(
-                PlanChoice(
-                    key,
-                    stride * step,
-                    f"every {stride} steps: dump-derived peaks within rtol {rtol_plan:g} "
-                    f"((omega_max D)^4 / 16 <= rtol, D <= {(16.0 * rtol_plan) ** 0.25 / omega:.3g} s)",
-                )
+            why = (
+                f"every {stride} steps: dump-derived peaks within rtol {rtol_plan:g} "
+                f"((omega_max D)^4 / 16 <= rtol, D <= {(16.0 * rtol_plan) ** 0.25 / omega:.3g} s)"
             )
+            drive = _drive_stride(scene, step)
+            if key == "history_interval" and drive is not None and drive < stride:
+                stride = drive
+                why = (
+                    f"every {stride} steps: at least {HISTORY_SAMPLES_PER_PERIOD} samples a period of the "
+                    f"{scene.loading.frequency:g} Hz drive, for its lock-in (observables.spectral)"
+                )
+            d["outputs"][key] = stride * step
+            choices.append(PlanChoice(key, stride * step, why))
     return choices
+
+
+def _drive_stride(scene, step: float) -> int | None:
+    """The most steps between history samples that keep HISTORY_SAMPLES_PER_PERIOD samples in a period
+    of a harmonic drive (None: no drive)."""
+    if not scene.loading.is_harmonic:
+        return None
+    return max(1, int(1.0 / (HISTORY_SAMPLES_PER_PERIOD * scene.loading.frequency * step)))
 
 
 def _fitted_step(scene, choices: list[PlanChoice], dt: float, end: float) -> float:

@@ -19,6 +19,7 @@ from granchain.postprocess.observables.event_max import EventMaxContactForce, Ev
 from granchain.postprocess.observables.far_end import FarEndEnergy
 from granchain.postprocess.observables.leading import LeadingPeakForce, LeadingPeakForceNondim
 from granchain.postprocess.observables.max_peak import MaxPeakForce
+from granchain.postprocess.observables.spectral import FarEndAmplitude, Transmission
 from granchain.postprocess.observables.wave_speed import WaveSpeed
 
 #: name -> observable, in the order summary.json writes them (see base for the rules of a new one)
@@ -37,6 +38,8 @@ OBSERVABLES: dict[str, Observable] = {
         FarEndEnergy(),
         EventMaxContactForce(),
         EventMaxSensorForce(),
+        FarEndAmplitude(),
+        Transmission(),
     )
 }
 

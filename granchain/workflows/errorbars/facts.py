@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from granchain.integrators import RK4, integrator
+from granchain.postprocess.observables.spectral import far_end_contact
 
 
 def onset_order(scene) -> float:
@@ -44,12 +45,18 @@ def integrator_order(method: str, scene) -> int:
 
 
 def companion_scene(scene, factor: float):
-    """The scene at factor x its time step, with no outputs that no estimate needs."""
+    """The scene at factor x its time step, with no outputs that no estimate needs: a harmonic drive's
+    far-end history only, which its spectral observables read (postprocess.observables.spectral), at
+    the run's interval (at least the companion's step)."""
     o = scene.outputs
+    step = scene.run.timestep * factor
+    driven = scene.loading.is_harmonic and scene.n_contacts and isinstance(o.history_interval, float)
+    histories = (far_end_contact(scene),) if driven else ()
+    interval = max(o.history_interval, step) if driven else None
     return replace(
         scene,
-        run=replace(scene.run, timestep=scene.run.timestep * factor),
-        outputs=replace(o, histories=(), snapshots=(), history_interval=None, dump_interval=None),
+        run=replace(scene.run, timestep=step),
+        outputs=replace(o, histories=histories, snapshots=(), history_interval=interval, dump_interval=None),
     )
 
 
