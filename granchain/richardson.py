@@ -448,11 +448,6 @@ def checked(
     return ErrorBars(err, status, used)
 
 
-#: RK4's own error, from its runs at h and 2 h, is taken at its lowest order on the scene's chain: the
-#: order of its onset, 1 + n (ContactLaw.onset_order; workflows.errorbars.facts.reference_order passes
-#: it), the larger, conservative bound. This is that order at a Hertzian onset (1 + 3/2), the default of
-#: against_reference's ``order`` for a caller with no scene (the tests of the rule itself)
-REFERENCE_ORDER = 2.5
 #: the reference's error may be at most this fraction of the distance it measures: the estimate
 #: (distance + reference error) is then within 1 - 3 times a true error in distance +- reference error
 REFERENCE_SHARE = 0.5
@@ -464,7 +459,8 @@ def against_reference(
     reference_coarse: np.ndarray,
     times: tuple[np.ndarray, np.ndarray] | None = None,
     jump_time: float | None = None,
-    order: float = REFERENCE_ORDER,
+    *,
+    order: float,
 ) -> ErrorBars:
     """Error estimates of `values` (a Verlet run at dt) from RK4 runs at h and 2 h (module docstring).
 
@@ -479,9 +475,11 @@ def against_reference(
         than jump_time is another pulse in one of them, and has no estimate.
     jump_time : float, optional
         Half the shortest period of the chain (pi / omega_max).
-    order : float, optional
-        The reference's lowest order on the scene (workflows.errorbars.facts.reference_order: its
-        law's onset order 1 + n, at most RK4's 4); REFERENCE_ORDER, a Hertzian onset's, by default.
+    order : float
+        The reference's lowest order on the scene, at which its own error from its runs at h and 2 h
+        is taken (the larger, conservative bound): its law's onset order 1 + n, at most RK4's 4
+        (workflows.errorbars.facts.reference_order; ContactLaw.onset_order). No default: a law's
+        onset is its own fact, not Hertz's 2.5.
 
     Returns
     -------

@@ -2,7 +2,7 @@
 
 A Verlet run measured against RK4 runs at h and 2 h adds the references' own error |r - r_c| /
 (2^q - 1), q RK4's lowest order on the chain: where a contact closes under F = K alpha^n its error
-goes as dt^(1 + n) (ContactLaw.onset_order). richardson.REFERENCE_ORDER = 2.5 held that for Hertzian
+goes as dt^(1 + n) (ContactLaw.onset_order). A fixed 2.5 held that for Hertzian
 onsets only; a law of another exponent gets its own (workflows.errorbars.facts.reference_order).
 """
 
@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from granchain.integrators import RK4
-from granchain.physics.laws import LAWS
 from granchain.scene import scene_from_dict
 from granchain.workflows.errorbars.bars import against_rk4_bars, per_contact
 from granchain.workflows.errorbars.facts import companion_scene, reference_order
@@ -71,8 +70,9 @@ def test_a_power_chains_rk4_references_take_their_own_error_at_its_onset_order(n
     assert np.max(np.abs(hertz[ok] / expected[ok] - 1.0)) > 1e-6
 
 
-def test_the_default_order_is_a_hertzian_onsets():
-    """against_reference without a scene's order keeps 1 + 3/2 (its own tests; the Hertz law's order)."""
-    from granchain.richardson import REFERENCE_ORDER
+def test_against_reference_has_no_default_order():
+    """A caller must pass its scene's onset order: a default would be Hertz's 2.5 for every law."""
+    from granchain.richardson import against_reference
 
-    assert REFERENCE_ORDER == LAWS["hertz"](k=1.0).onset_order()
+    with pytest.raises(TypeError, match="order"):
+        against_reference([1.0], [1.0], [1.0])
