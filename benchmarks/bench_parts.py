@@ -86,7 +86,7 @@ PARTS = {
     "power-n2": [("power n = 2, 12 beads", chain(12, power(2.0)))],
     "power-n3": [("power n = 3, 12 beads", chain(12, power(3.0)))],
     "power-list": [
-        ("power n = 1.5 | 2.5 (interface), 11 beads", chain(11, power([1.5] * 5 + [2.5] * 5))),
+        ("power n = 1.5 / 2.5 (interface), 11 beads", chain(11, power([1.5] * 5 + [2.5] * 5))),
         ("power n = 1.2 .. 2.6 (disorder), 9 beads", chain(9, power([1.2, 2.6, 1.8, 1.4, 2.2, 1.6, 2.0, 1.3]))),
     ],
     "dashpot": [
