@@ -18,6 +18,8 @@ import granchain
 from granchain.integrators import FACTS, INTEGRATORS, IntegratorFacts, integrator
 from granchain.reference.solver import IMPLEMENTATIONS, METHODS
 
+from . import name_scan
+
 PACKAGE = Path(granchain.__file__).parent
 #: the names the scan looks for: every registered integrator's
 NAMES = frozenset(INTEGRATORS)
@@ -31,32 +33,9 @@ EXCEPTIONS = {
 }
 
 
-def _literal_names(node: ast.AST) -> set[str]:
-    """The integrator names a node is, or holds as the elements of a tuple, list or set literal."""
-    if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in NAMES:
-        return {node.value}
-    if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
-        return set().union(*(_literal_names(e) for e in node.elts)) if node.elts else set()
-    return set()
-
-
 def questions(tree: ast.AST) -> list[tuple[int, str]]:
-    """(line, what) for each place a module asks for an integrator by name: a comparison with a name
-    (==, !=, in, not in, against a name or a literal collection of names), a dict literal keyed by one,
-    a subscript by one, a dict(...) call keyed by one."""
-    found = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Compare):
-            if any(_literal_names(n) for n in (node.left, *node.comparators)):
-                found.append((node.lineno, "compares a method with a name"))
-        elif isinstance(node, ast.Dict):
-            if any(k is not None and _literal_names(k) for k in node.keys):
-                found.append((node.lineno, "a table keyed by a method's name"))
-        elif isinstance(node, ast.Subscript) and _literal_names(node.slice):
-            found.append((node.lineno, "indexes a table by a method's name"))
-        elif isinstance(node, ast.Call) and any(k.arg in NAMES for k in node.keywords):
-            found.append((node.lineno, "a table keyed by a method's name (a keyword)"))
-    return found
+    """Where a module asks for a method by name (tests/name_scan.py)."""
+    return name_scan.questions(tree, NAMES, "a method", any_call=True)
 
 
 def test_the_scan_finds_each_kind_of_question():

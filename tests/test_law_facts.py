@@ -16,6 +16,7 @@ from granchain.physics.laws import LAWS
 from granchain.physics.laws.base import TimeScale
 from granchain.physics.loading_regime import loading_regime
 
+from . import name_scan
 from .conftest import LAW_NAMES, make_scene
 from .test_integrator_facts import PACKAGE
 
@@ -31,34 +32,9 @@ EXCEPTIONS = {
 }
 
 
-def _literal_names(node: ast.AST) -> set[str]:
-    """The law names a node is, or holds as the elements of a tuple, list or set literal."""
-    if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in NAMES:
-        return {node.value}
-    if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
-        return set().union(*(_literal_names(e) for e in node.elts)) if node.elts else set()
-    return set()
-
-
 def questions(tree: ast.AST) -> list[tuple[int, str]]:
-    """(line, what) for each place a module asks for a law by name: a comparison with a name (==, !=, in,
-    not in, against a name or a literal collection of names), a dict literal keyed by one, a subscript by
-    one, a dict(...) call keyed by one. (A keyword argument of any other call is not a question: power=.)"""
-    found = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Compare):
-            names = set().union(*(_literal_names(n) for n in (node.left, *node.comparators)))
-            if names:
-                found.append((node.lineno, "compares a law with a name"))
-        elif isinstance(node, ast.Dict):
-            if any(k is not None and _literal_names(k) for k in node.keys):
-                found.append((node.lineno, "a table keyed by a law's name"))
-        elif isinstance(node, ast.Subscript) and _literal_names(node.slice):
-            found.append((node.lineno, "indexes a table by a law's name"))
-        elif isinstance(node, ast.Call) and getattr(node.func, "id", None) == "dict":
-            if any(k.arg in NAMES for k in node.keywords):
-                found.append((node.lineno, "a table keyed by a law's name (a keyword)"))
-    return found
+    """Where a module asks for a law by name (tests/name_scan.py)."""
+    return name_scan.questions(tree, NAMES, "a law", any_call=False)
 
 
 def test_the_scan_finds_each_kind_of_question():
