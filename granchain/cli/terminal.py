@@ -319,7 +319,13 @@ def print_result(result, out) -> None:
             f"'{TOTAL}': F (peaks.csv's peak_force and peak_force_nondim are total, its dynamic_peak_force F - F0)"
         )
     said = None  # the last reason printed: a companion that shares it says "as above" (shares_reason)
+    # where an observable does not apply (a wall's event on a free chain, a leading pulse under a harmonic
+    # drive) one line per reason says so, not a line each: summary.json keeps every one with its reason
+    inapplicable: dict[str, list[str]] = {}
     for k, v in s["observables"].items():
+        if v is None and k in missing and k in set(s.get("observables_inapplicable") or ()):
+            inapplicable.setdefault(missing[k], []).append(k)
+            continue
         if k == "wave_speed_sections":  # one line per uniform stretch of the window
             for sec in v:
                 first, last = sec["contacts"]
@@ -334,9 +340,14 @@ def print_result(result, out) -> None:
         bar = ""
         if v is not None and k in errors:  # the measured error bar, or why there is none
             e = errors[k]
-            bar = f" +- {e['error']:.2g}   ({e['status']})" if e["error"] is not None else f"   ({e['status']})"
+            bar = f" +- {e['error']:.2g}" if e["error"] is not None else ""
+            window = s["observables"].get(f"{k}_error")  # a lock-in's finite window's own bar (spectral)
+            if window is not None:
+                bar += f"{' (the step)' if bar else ''} +- {window:.2g} (the window)"
+            bar += f"   ({e['status']})"
         note = f"   note: {shown(notes[k])}" if v is not None and k in notes else ""
         print(f"  {label:38s} {fmt(v)}{bar}{why}{note}")
+    _print_inapplicable(inapplicable)
     print_end_peaks(result, s, f0)
     print_sensors(s)
     print_incomplete_peaks(result)
@@ -346,6 +357,15 @@ def print_result(result, out) -> None:
     _print_conservation(scene, s)
     _print_error_summary(s.get("errors"))
     print(f"run directory: {shown(out)}")
+
+
+def _print_inapplicable(inapplicable: dict[str, list[str]]) -> None:
+    """One line per reason for the observables that do not apply to the run (its scene's effects and
+    outputs): the first one's name, how many share the reason, and the reason."""
+    row = "not applicable (observables)"
+    for reason, names in inapplicable.items():
+        more = f" and {len(names) - 1} more" if len(names) > 1 else ""
+        print(f"  {row:38s} {names[0]}{more}: {shown(reason)}")
 
 
 def _print_conservation(scene, s: dict) -> None:
