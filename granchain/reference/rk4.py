@@ -34,16 +34,6 @@ _LEAN = True
 
 _EMPTY = np.empty(0)
 
-#: the first step from an impact (a contact closing at t = 0 at a rate, the struck one) is taken in
-#: GRADED_PIECES pieces whose ends shrink by GRADED_RATIO towards t = 0 (RK4Integrator.graded_step): the
-#: force grows as t^n there, and one RK4 step's quadrature of it errs as h^(1 + n) at every dt (a step
-#: boundary), a term of small constant that took over below dt from the fourth order on a chain struck
-#: at n = 1.2 (Richardson's bars 0.21-6.5x the true error). Pieces of h 2^-9 ... h / 2 cut that term's
-#: constant 25-35x (two-body impacts at n = 1.2 and 1.5 against the closed form); its order stays 1 + n
-#: (the steps after the first carry it too, each less), and 9 steps more a run (docs/error-bars.md)
-GRADED_PIECES = 10
-GRADED_RATIO = 2.0
-
 
 class EventLocationError(RuntimeError):
     """RK4 event location could not get past a kink: the step was split more than the cap allows."""
@@ -138,9 +128,6 @@ class RK4Integrator(Integrator):
         # overlap (precompressed: a few units of round-off off the static alpha_max); it joins the
         # history at the first step's end, so the first step sees the history the problem set
         self.history_floor = state.alpha_now.copy() if self.history else None
-        # a contact closing at t = 0 (the struck one): its force grows as t^n, whose quadrature by one
-        # RK4 step errs as h^(1 + n) (docs/error-bars.md, "RK4's onset at the impact")
-        self.graded_start = bool(self.event_location and np.any((state.alpha_now == 0.0) & (state.adot_now > 0.0)))
 
     def step(
         self, state: ChainState, t0: float, t1: float, h: float, a_ext: float, on_split: Sequence[SplitHook]
@@ -148,9 +135,6 @@ class RK4Integrator(Integrator):
         """Advance the state from t0 by one step h (to t1), locating the law's kinks inside it.
 
         Returns the time the step started from (a split step's last piece starts later)."""
-        if self.graded_start:
-            self.graded_start = False
-            return self.graded_step(state, t0, t1, h, a_ext, on_split)
         if not self.event_location:
             self.rk4(state, h, a_ext, t0=t0)
             self.end_piece(state, t0, t1, state.u[:-1] - state.u[1:], state.v[:-1] - state.v[1:])
@@ -158,22 +142,6 @@ class RK4Integrator(Integrator):
         if self.lean:
             return self.lean_step(state, t0, t1, a_ext, on_split)
         return self.located_step(state, t0, t1, a_ext, on_split)
-
-    def graded_step(
-        self, state: ChainState, t0: float, t1: float, h: float, a_ext: float, on_split: Sequence[SplitHook]
-    ) -> float:
-        """The first step from an impact in GRADED_PIECES pieces whose ends shrink by GRADED_RATIO
-        towards t0 (see GRADED_PIECES); each piece is a step of its own (kinks located), the peak
-        tracking told of each but the last (on_split)."""
-        t = t0
-        for j in range(GRADED_PIECES - 1, 0, -1):
-            t_end = t0 + (t1 - t0) * GRADED_RATIO**-j
-            last = self.step(state, t, t_end, t_end - t, a_ext, on_split)
-            for hook in on_split:
-                hook(state, last, t_end)
-            self.extra_steps += 1
-            t = t_end
-        return self.step(state, t, t1, t1 - t, a_ext, on_split)
 
     def located_step(
         self, state: ChainState, t0: float, t1: float, a_ext: float, on_split: Sequence[SplitHook]
