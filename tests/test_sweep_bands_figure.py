@@ -21,6 +21,7 @@ STEEL, PTFE = (193e9, 0.30, 8000.0), (1.46e9, 0.46, 2200.0)  # the scene's stain
 RADIUS, F0 = 2.38e-3, 10.0
 
 SWEEP = f"""[campaign]
+title = "Transmission spectrum of a precompressed steel/PTFE dimer through its band gap (a long title)"
 backend = "reference"
 method = "rk4"
 error_estimate = false

@@ -133,6 +133,17 @@ def _shade_bands(ax, bands, gaps, what: str) -> None:
     ax.set_xlim(lo, hi)
 
 
+#: the longest line of a figure's title, characters: a 6.4-inch figure's width at the medium font size
+TITLE_WIDTH = 70
+
+
+def _title(title) -> str:
+    """A campaign's title as drawn: printable, wrapped to TITLE_WIDTH (a long title stays on the canvas)."""
+    import textwrap
+
+    return "\n".join(textwrap.wrap(printable(str(title)), TITLE_WIDTH)) or printable(str(title))
+
+
 def _write_failed(path, e: OSError) -> CampaignError:
     return wsp.WorkspaceWriteError(
         e.errno,
@@ -253,7 +264,7 @@ def campaign_figure(ws, x: str, y: str, hue: str | None = None, map_key: str | N
         ax.set_xscale("log")
     title = record.get("title")
     if title:
-        ax.set_title(printable(str(title)), fontsize="medium", parse_math=False)
+        ax.set_title(_title(title), fontsize="medium", parse_math=False)
     left = _not_drawn(df, y)
     if left:
         fig.get_layout_engine().set(rect=(0, 0.05, 1, 0.95))  # room under the axes for the line
@@ -332,7 +343,7 @@ def convergence_figure(ws):
     for text in ax.legend(fontsize="small").get_texts():
         text.set_parse_math(False)
     if record.get("title"):
-        ax.set_title(printable(str(record["title"])), fontsize="medium", parse_math=False)
+        ax.set_title(_title(record["title"]), fontsize="medium", parse_math=False)
     return fig, df[["trial", "state", "objective", "objective_error", "best_so_far"]]
 
 
