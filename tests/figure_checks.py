@@ -10,7 +10,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 #: the units an axis label may end with, in parentheses (the first of its comma-separated words, its
 #: mathtext's $ and spaces left out)
-UNITS = {"N", "m/s", "s", "ms", r"\mus", "ns", "m", "1", "index", "Ns", "steps"}
+UNITS = {"N", "m/s", "s", "ms", r"\mus", "ns", "m", "1", "index", "Ns", "steps", "Hz", "dB"}
 #: a data extreme may lie this far (decades) beyond a log axis's nearest tick label, at least: a third of
 #: the data's span (a profile of 42-179 N labelled at 40-100 N only misses its top fifth)
 LOG_GAP = np.log10(1.5)

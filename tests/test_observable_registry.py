@@ -83,7 +83,7 @@ WALLED_EVENT = SCENE.replace(
 )
 #: a precompressed chain driven at 5 kHz (a third of its cutoff), for the spectral observables
 DRIVEN = """[chain]
-beads = 6
+beads = 8
 radius = 4.76e-3
 material = "brass"
 [contact]

@@ -7,6 +7,10 @@ SCENE_KEY_UNITS; an observable's and its error's, the observable registry's unit
 and a line under the axes counts the points left out for lacking a value, by status. The plotted
 numbers are written beside each figure (``<figure>.csv``).
 
+A frequency sweep's figure (x = FREQUENCY_KEY) shades the linear pass bands and gaps that
+granchain.physics.bands predicts for the points' chain at its precompression behind the measured
+values, with a legend entry each (predicted_bands: where the points' chains have one band structure).
+
 Every text drawn (title, axis labels, legend) is the campaign file's own text, not matplotlib
 mathtext (a title ``$\frac{1}{$`` is drawn as it is written) and with control characters escaped.
 Files are written aside and renamed, never through a symbolic link (granchain.safe_files).
@@ -77,6 +81,67 @@ def _label(key: str, value) -> str:
     unit = column_unit(key)
     text = f"{value:.4g}" if isinstance(value, float) else f"{value}"
     return printable(f"{key} = {text}" + (f" {unit}" if unit and not isinstance(value, (bool, str)) else ""))
+
+
+#: the scene key of a frequency sweep: its figure shades the predicted pass bands behind the data
+FREQUENCY_KEY = "loading.frequency"
+#: the shading of a pass band and of a gap (matplotlib colours), behind the data (zorder 0)
+BAND_COLOUR, GAP_COLOUR = "tab:green", "0.6"
+
+
+def predicted_bands(ws: Path, record: dict) -> tuple[tuple, tuple, str]:
+    """The pass bands and gaps (Hz; physics.bands.band_structure) of a campaign's points' chain and what
+    they are, in words for the legend; ((), (), why) where no point has a band structure, or the points'
+    chains have different ones (a sweep that varies more than the frequency: one band diagram per line
+    would hide the data)."""
+    from granchain.physics.bands import BandError, band_structure
+    from granchain.scene import SceneError, scene_from_dict
+
+    found: dict[tuple, object] = {}
+    why = "no point's scene was read back"
+    for entry in record.get("points", []):
+        sp = wsp.read_statepoint(ws / "workspace" / str(entry.get("job"))) or {}
+        try:
+            bands = band_structure(scene_from_dict(sp["scene"]))
+        except (KeyError, TypeError, SceneError) as e:
+            why = f"a point's scene cannot be read back ({e})"
+            continue
+        except BandError as e:
+            return (), (), str(e)
+        key = tuple(f"{v:.9g}" for band in bands.bands for v in band)
+        found[key] = bands
+    if len(found) != 1:
+        return (), (), why if not found else f"the points' chains have {len(found)} different band structures"
+    bands = next(iter(found.values()))
+    f0 = bands.cell.static_force
+    return bands.bands, bands.gaps, f"linearised at F0 = {f0:.4g} N, a cell of {bands.cell.masses.size} bead(s)"
+
+
+def _shade_bands(ax, bands, gaps, what: str) -> None:
+    """Shade the pass bands and gaps behind the data within the axis' x range (it is kept as the data
+    chose it), one legend entry each kind."""
+    lo, hi = ax.get_xlim()
+    for spans, colour, label in ((bands, BAND_COLOUR, "pass band"), (gaps, GAP_COLOUR, "band gap")):
+        labelled = False
+        for a, b in spans:
+            a, b = max(a, lo), min(b, hi)
+            if a >= b:
+                continue
+            text = None if labelled else f"{label} (predicted{', ' + what if label == 'pass band' else ''})"
+            ax.axvspan(a, b, color=colour, alpha=0.18, lw=0, zorder=0, label=text)
+            labelled = True
+    ax.set_xlim(lo, hi)
+
+
+#: the longest line of a figure's title, characters: a 6.4-inch figure's width at the medium font size
+TITLE_WIDTH = 70
+
+
+def _title(title) -> str:
+    """A campaign's title as drawn: printable, wrapped to TITLE_WIDTH (a long title stays on the canvas)."""
+    import textwrap
+
+    return "\n".join(textwrap.wrap(printable(str(title)), TITLE_WIDTH)) or printable(str(title))
 
 
 def _write_failed(path, e: OSError) -> CampaignError:
@@ -183,6 +248,13 @@ def campaign_figure(ws, x: str, y: str, hue: str | None = None, map_key: str | N
         groups = [k for k in ([hue] if hue else []) + [k for k in varied if k not in (x, hue)]]
         groups = [k for k in groups if done[k].nunique() > 1]
         _lines(ax, done, x, y, err, groups)
+        bands, gaps, what = predicted_bands(ws, record) if x == FREQUENCY_KEY else ((), (), "")
+        if bands:
+            if _log_axis(done[x]):  # the range the log axis will have, before the spans are cut to it
+                ax.set_xscale("log")
+            _shade_bands(ax, bands, gaps, what)
+            for text in ax.legend(fontsize="small").get_texts():
+                text.set_parse_math(False)
         ax.set_ylabel(printable(axis_label(y, record)), parse_math=False)
         if _log_axis(done[y]):
             ax.set_yscale("log")
@@ -192,7 +264,7 @@ def campaign_figure(ws, x: str, y: str, hue: str | None = None, map_key: str | N
         ax.set_xscale("log")
     title = record.get("title")
     if title:
-        ax.set_title(printable(str(title)), fontsize="medium", parse_math=False)
+        ax.set_title(_title(title), fontsize="medium", parse_math=False)
     left = _not_drawn(df, y)
     if left:
         fig.get_layout_engine().set(rect=(0, 0.05, 1, 0.95))  # room under the axes for the line
@@ -271,7 +343,7 @@ def convergence_figure(ws):
     for text in ax.legend(fontsize="small").get_texts():
         text.set_parse_math(False)
     if record.get("title"):
-        ax.set_title(printable(str(record["title"])), fontsize="medium", parse_math=False)
+        ax.set_title(_title(record["title"]), fontsize="medium", parse_math=False)
     return fig, df[["trial", "state", "objective", "objective_error", "best_so_far"]]
 
 

@@ -19,6 +19,7 @@ from granchain.postprocess.observables.event_max import EventMaxContactForce, Ev
 from granchain.postprocess.observables.far_end import FarEndEnergy
 from granchain.postprocess.observables.leading import LeadingPeakForce, LeadingPeakForceNondim
 from granchain.postprocess.observables.max_peak import MaxPeakForce
+from granchain.postprocess.observables.spatial import SpatialDecay
 from granchain.postprocess.observables.spectral import FarEndAmplitude, Transmission
 from granchain.postprocess.observables.wave_speed import WaveSpeed
 
@@ -40,6 +41,7 @@ OBSERVABLES: dict[str, Observable] = {
         EventMaxSensorForce(),
         FarEndAmplitude(),
         Transmission(),
+        SpatialDecay(),
     )
 }
 
