@@ -7,6 +7,7 @@ chain, auto end time)."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -56,11 +57,12 @@ def scene(material: str = "chrome-steel-52100") -> dict:
     }
 
 
-def optimize_campaign(optimize: dict, error_estimate: bool = False, **scene_args) -> dict:
+def optimize_campaign(optimize: dict, error_estimate: bool = False, confirm: bool = False, **scene_args) -> dict:
+    """The search without the winner's re-runs unless confirm (test_the_winner_is_re_run tests them)."""
     return {
         "campaign": {"backend": "reference", "rtol": 1e-3, "error_estimate": error_estimate},
         "scene": scene(**scene_args),
-        "optimize": optimize,
+        "optimize": {"confirm": confirm, **optimize},
     }
 
 
@@ -246,3 +248,43 @@ def test_kill_9_mid_search_then_rerun_equals_an_uninterrupted_search(tmp_path, s
     whole, _ = run_campaign(optimize_campaign({**TAPER, "trials": 14, "seed": 11}), tmp_path / "whole", scheduler=sched)
     assert tables["trials"].equals(whole["trials"])
     assert load_campaign(ws, "best").equals(load_campaign(tmp_path / "whole", "best"))
+
+
+@pytest.mark.slow
+def test_the_winner_is_re_run_at_a_tighter_rtol_and_on_the_other_backend(tmp_path, sched, capsys):
+    """After 3 trials the best design runs again at rtol / 10 (reference) and on LAMMPS, as points of
+    their own: the tight run's objective is run_scene's at rtol 1e-4 for that design (an independent
+    run), both re-runs are the search's value within 1e-3 relative, `--best` reports the tight value
+    first with its bar and each run's agreement with it by the bars' rule, and a rerun runs nothing."""
+    from granchain.cli import main
+    from granchain.scene import scene_from_dict
+    from granchain.workflows.run import run_scene
+
+    opt = {**TAPER, "trials": 3, "seed": 2}
+    _, report = run_campaign(optimize_campaign(opt, error_estimate=True, confirm=True), tmp_path / "w", scheduler=sched)
+    best = load_campaign(tmp_path / "w", "best").iloc[0]
+    assert (best["tight_backend"], best["other_backend"]) == ("reference", "lammps")
+    assert (best["tight_rtol"], best["other_rtol"]) == pytest.approx((1e-4, 1e-3))
+    design = scene()
+    design["chain"]["taper"] = float(best["chain.taper"])
+    run_scene(scene_from_dict(design), backend="reference", rtol=1e-4, out=tmp_path / "own")
+    own = json.loads((tmp_path / "own" / "summary.json").read_text())["observables"]
+    assert best["tight_objective"] == own["leading_peak_force"]
+    for name in ("tight", "other"):
+        assert best[f"{name}_objective"] == pytest.approx(best["objective"], rel=1e-3)
+        assert best[f"{name}_objective_error"] > 0
+    assert len({best["job"], best["tight_job"], best["other_job"]}) == 3
+    assert report.ran == len(_summary_times(tmp_path / "w"))
+    _, again = run_campaign(optimize_campaign(opt, error_estimate=True, confirm=True), tmp_path / "w", scheduler=sched)
+    assert again.ran == 0
+    assert main(["campaign", "table", str(tmp_path / "w"), "--best"]) == 0
+    out = capsys.readouterr().out
+    assert f"leading_peak_force = {best['tight_objective']:.6g} +- " in out, out
+    for name, run in (("search's", "the reference run at rtol 0.001"), ("other", "the lammps run at rtol 0.001")):
+        a, ea = (
+            (best["objective"], best["objective_error"])
+            if name == "search's"
+            else (best["other_objective"], best["other_objective_error"])
+        )
+        verdict = "agree" if abs(a - best["tight_objective"]) <= ea + best["tight_objective_error"] else "disagree"
+        assert f"{run} and the reference run at rtol 0.0001 {verdict}: they differ by" in out, out

@@ -24,15 +24,21 @@ one optuna version (the record keeps the version).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
 from granchain.campaigns import expr
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.model import Campaign, CampaignError, params_text
+from granchain.exceptions import GranchainError
 from granchain.postprocess.observables import table_columns
 
 COMPLETE, FAILED, INFEASIBLE = "complete", "failed", "infeasible"
+#: the tolerance a campaign without [campaign] rtol plans for (workflows.plan.plan_scene's default)
+DEFAULT_RTOL = 1e-3
+#: each backend's other, for the winner's check on it
+OTHER_BACKEND = {"reference": "lammps", "lammps": "reference"}
 
 
 def make_study(opt):
@@ -238,7 +244,7 @@ def best_design(rows: list[dict], direction: str, keys: tuple[str, ...]) -> dict
     if not done:
         return None
     best = done[0]
-    out = {"trial": best["trial"], **{k: best.get(k) for k in keys}}
+    out = {"trial": best["trial"], **{k: best.get(k) for k in keys}}  # (confirm_best re-runs it)
     out.update(objective=best["objective"], objective_error=best.get("objective_error"), job=best["job"])
     other = next((r for r in done[1:] if r["job"] != best["job"]), None)
     out["runner_up_trial"] = None if other is None else other["trial"]
@@ -264,17 +270,144 @@ def _verdict(best: dict, other: dict | None, keys) -> str:
     return f"distinguished from the runner-up ({design}) by {gap:.4g}, {times}"
 
 
-def best_text(best: dict | None, objective: str, keys) -> str:
-    """The best design as `campaign table --best` prints it."""
+def best_text(best: dict | None, objective: str, keys, confirm: dict | None = None) -> str:
+    """The best design as `campaign table --best` prints it: its objective from the re-run at rtol / 10
+    where that ran (confirm: confirm_best's record), the search's and the other backend's values, whether
+    they agree, and the verdict against the runner-up."""
     if best is None:
         return f"no trial has a measured objective {objective!r} yet (campaign table WS shows why)"
     bar = best["objective_error"]
     value = f"{best['objective']:.6g}" + (f" +- {bar:.2g}" if bar is not None else " (no error bar)")
+    matched = confirm is not None and confirm.get("job") == best.get("job")
+    if matched and confirm["tight"]["objective"] is not None:
+        value = f"{_value_text(confirm['tight'])} ({_run_name(confirm['tight'])})"
     return "\n".join(
         [
             f"best design (trial {best['trial']}): {params_text({k: best[k] for k in keys})}",
             f"{objective} = {value}",
+            *confirm_text(confirm, best),
             best["verdict"],
             f"{best['trials']} trials, {best['designs_run']} distinct designs run; job {best['job']}",
         ]
     )
+
+
+def _variant(campaign: Campaign, backend: str, rtol: float) -> Campaign:
+    """The campaign on another backend or at another rtol; a method the backend lacks is left to it."""
+    from granchain.backends import backend_named
+
+    method = campaign.method if campaign.method in backend_named(backend).methods else None
+    return dataclasses.replace(campaign, backend=backend, rtol=rtol, method=method)
+
+
+def _start_check(campaign: Campaign, runner, design: dict, index: int, entry: dict):
+    """Open (and submit where not complete) the winner's point on entry's backend and rtol; returns
+    (runner, job, point, future or None), or None with entry["message"] saying why it cannot run."""
+    from granchain.campaigns.execute import Runner, preflight
+
+    try:
+        variant = _variant(campaign, entry["backend"], entry["rtol"])
+        point = variant.point(design, index, campaign.optimize.trials)
+        preflight(variant, [point])
+        sub = Runner(variant, runner.ws, runner.ex, runner.rerun, runner.retry_failed, runner.stream)
+        job = sub.job(point)
+        entry["job"] = job.id
+        future = None
+        if sub.needs_run(job):
+            sub.prepare()
+            future = sub.submit(job, point)
+            runner.report.ran += 1
+        return sub, job, point, future
+    except (GranchainError, ImportError, OSError) as e:  # no LAMMPS here, or the scene is not its
+        entry["message"] = f"the {entry['backend']} backend cannot run the winner: {' '.join(str(e).split())}"
+        return None
+
+
+def confirm_best(campaign: Campaign, runner, rows: list[dict]) -> dict | None:
+    """The best design run again before it is reported (issue 45): at rtol / 10 on the search's backend
+    ("tight") and at the search's rtol on the other backend ("other"), each a workspace point of its
+    own (cached: a rerun finds them complete). Returns {"trial", "job", "design", "search", "tight",
+    "other", "agreement"}, each run as {backend, rtol, job, objective, objective_error, message}; None
+    when no trial is complete."""
+    from granchain.campaigns.campaign_progress import CampaignProgress
+
+    opt = campaign.optimize
+    best = best_design(rows, opt.direction, opt.keys)
+    if best is None:
+        return None
+    design = {k: best[k] for k in opt.keys}
+    rtol = campaign.rtol if campaign.rtol is not None else DEFAULT_RTOL
+    out = {"trial": best["trial"], "job": best["job"], "design": design}
+    out["search"] = _entry(campaign.backend, rtol, best["job"], best["objective"], best["objective_error"])
+    out["tight"] = _entry(campaign.backend, rtol / 10)
+    out["other"] = _entry(OTHER_BACKEND[campaign.backend], rtol)
+    started = {name: _start_check(campaign, runner, design, best["trial"], out[name]) for name in ("tight", "other")}
+    started = {name: s for name, s in started.items() if s is not None}
+    prog = CampaignProgress(len(started), "confirm", runner.stream, workers=runner.ex.nworkers)
+    try:
+        for name, (sub, job, point, future) in started.items():
+            status = sub.collect(future, point.params, prog) if future is not None else None
+            if future is None:
+                prog.update(wsp.DONE)
+            t = _Trial(None, design)
+            t.point, t.job = point, job
+            _outcome(sub.c, t, status)
+            out[name].update(objective=t.value, objective_error=t.error, message=t.message)
+            runner.report.done += sub.report.done
+            runner.report.failed += sub.report.failed
+            runner.report.messages += sub.report.messages
+    finally:
+        prog.close()
+    out["agreement"] = [_agrees(out["search"], out["tight"]), _agrees(out["other"], out["tight"])]
+    return out
+
+
+def _entry(backend: str, rtol: float, job=None, objective=None, error=None) -> dict:
+    return {
+        "backend": backend,
+        "rtol": rtol,
+        "job": job,
+        "objective": objective,
+        "objective_error": error,
+        "message": None,
+    }
+
+
+def _run_name(e: dict) -> str:
+    return f"the {e['backend']} run at rtol {e['rtol']:.3g}"
+
+
+def _agrees(a: dict, b: dict) -> str:
+    """Whether two runs of one design agree within their error bars (|a - b| <= e_a + e_b), as a sentence."""
+    if a["objective"] is None or b["objective"] is None:
+        missing = a if a["objective"] is None else b
+        return f"{_run_name(a)} against {_run_name(b)}: not compared ({_run_name(missing)} has no value)"
+    gap = abs(a["objective"] - b["objective"])
+    ea, eb = a["objective_error"], b["objective_error"]
+    if ea is None or eb is None:
+        return f"{_run_name(a)} and {_run_name(b)} differ by {gap:.4g}: no error bar to judge it by"
+    verdict = "agree" if gap <= ea + eb else "disagree"
+    times = f", {gap / (ea + eb):.3g} times" if ea + eb > 0 else ""
+    return f"{_run_name(a)} and {_run_name(b)} {verdict}: they differ by {gap:.4g}{times} their error bars"
+
+
+def _value_text(e: dict) -> str:
+    if e["objective"] is None:
+        return f"no value: {e['message'] or 'not run'}"
+    bar = e["objective_error"]
+    return f"{e['objective']:.6g}" + (f" +- {bar:.2g}" if bar is not None else " (no error bar)")
+
+
+def confirm_text(confirm: dict | None, best: dict | None) -> list[str]:
+    """The winner's re-runs as `campaign table --best` prints them (none where they are of another design)."""
+    if confirm is None or best is None or confirm.get("job") != best.get("job"):
+        return ["the winner has not been re-run at a tighter rtol yet (the search is incomplete, or confirm = false)"]
+    lines = [
+        f"{name}: {_value_text(confirm[key])} ({_run_name(confirm[key])})"
+        for key, name in (
+            ("tight", "re-run at rtol / 10"),
+            ("search", "the search's run"),
+            ("other", "the other backend"),
+        )
+    ]
+    return lines + list(confirm.get("agreement") or [])

@@ -7,6 +7,7 @@ variables (scene keys) and constraints, read and validated before anything runs:
     trials = 20                               # the evaluation budget
     seed = 1                                  # the sampler's seed: the same seed, the same designs
     batch = 1                                 # designs asked for, and run side by side, at a time
+    confirm = true                            # the winner re-run at rtol / 10 and on the other backend
     constraints = ["chain.radius * chain.taper ** 9 >= 2e-3"]   # must hold; a design violating one never runs
 
     [optimize.variables]
@@ -32,7 +33,7 @@ from typing import Any
 from granchain.campaigns import expr
 from granchain.campaigns.model import CampaignError
 
-OPTIMIZE_KEYS = ("objective", "direction", "trials", "seed", "variables", "constraints", "batch", "startup")
+OPTIMIZE_KEYS = ("objective", "direction", "trials", "seed", "variables", "constraints", "batch", "startup", "confirm")
 VARIABLE_KEYS = ("low", "high", "log", "integer", "choices")
 DIRECTIONS = ("minimize", "maximize")
 #: the most trials one [optimize] table may ask for (each is a run)
@@ -141,6 +142,9 @@ class Optimize:
         depend on which finishes first).
     startup : int
         Trials sampled at random before TPE models the results (optuna's n_startup_trials).
+    confirm : bool
+        The best design is run again at rtol / 10 and on the other backend before it is reported
+        (optimize.confirm_best).
     """
 
     objective: str
@@ -152,6 +156,7 @@ class Optimize:
     constraints: tuple[Constraint, ...] = ()
     batch: int = 1
     startup: int = 5
+    confirm: bool = True
 
     @property
     def keys(self) -> tuple[str, ...]:
@@ -241,7 +246,13 @@ def read_optimize(t: Any, source: str, did_you_mean) -> Optimize:
         raise CampaignError(f"{where} objective: {e}") from None
     variables = _read_variables(t["variables"], f"{where}.variables", did_you_mean)
     constraints = _read_constraints(t.get("constraints", []), where)
-    return Optimize(objective, tree, direction, trials, seed, variables, constraints, batch, startup)
+    confirm = t.get("confirm", True)
+    if not isinstance(confirm, bool):
+        raise CampaignError(
+            f"{where} confirm = {confirm!r} is invalid: true (the winner re-run at rtol / 10 and on the other "
+            "backend) or false"
+        )
+    return Optimize(objective, tree, direction, trials, seed, variables, constraints, batch, startup, confirm)
 
 
 def _read_variables(table: Any, where: str, did_you_mean) -> tuple[Variable, ...]:

@@ -281,7 +281,8 @@ def _objective_units(objective) -> dict:
 
 def build_best_table(ws: str | Path, record: dict | None = None):
     """An optimize campaign's best design as a one-row DataFrame (optimize.best_design: the design,
-    objective, objective_error, the runner-up's and the verdict); empty when no trial is complete."""
+    objective, objective_error, the runner-up's and the verdict; the winner's re-runs, tight_* at rtol /
+    10 and other_* on the other backend, and their agreement); empty when no trial is complete."""
     import pandas as pd
 
     from granchain.campaigns.optimize import best_design
@@ -290,7 +291,16 @@ def build_best_table(ws: str | Path, record: dict | None = None):
     opt = _dict(record.get("optimize"))
     keys = tuple(k for k in opt.get("keys") or [] if isinstance(k, str))
     best = best_design(rows, opt.get("direction", "minimize"), keys)
-    return pd.DataFrame([best] if best is not None else [])
+    if best is None:
+        return pd.DataFrame([])
+    confirm = _dict(record.get("optimize_confirm"))
+    if confirm.get("job") == best["job"]:  # the winner's re-runs: tight (rtol / 10) and other (backend)
+        for name in ("tight", "other"):
+            run = _dict(confirm.get(name))
+            for k in ("backend", "rtol", "objective", "objective_error", "job", "message"):
+                best[f"{name}_{k}"] = run.get(k)
+        best["agreement"] = "; ".join(str(a) for a in confirm.get("agreement") or [])
+    return pd.DataFrame([best])
 
 
 def _kind(v) -> str | None:

@@ -110,10 +110,12 @@ def _print_best(ws, tables) -> int:
 
     if "trials" not in tables:
         raise UsageError(f"{ws}: is not an optimize campaign; --best is for an optimize campaign's best design")
-    opt = read_record(Path(ws)).get("optimize") or {}
+    record = read_record(Path(ws))
+    opt = record.get("optimize") or {}
     keys = tuple(opt.get("keys") or ())
     best = best_design(tables["trials"].to_dict("records"), opt.get("direction", "minimize"), keys)
-    for line in best_text(best, str(opt.get("objective")), keys).split("\n"):
+    confirm = record.get("optimize_confirm") if isinstance(record.get("optimize_confirm"), dict) else None
+    for line in best_text(best, str(opt.get("objective")), keys, confirm).split("\n"):
         print(printable(line))
     return 0 if best is not None else 1
 
