@@ -288,3 +288,56 @@ def test_the_winner_is_re_run_at_a_tighter_rtol_and_on_the_other_backend(tmp_pat
         )
         verdict = "agree" if abs(a - best["tight_objective"]) <= ea + best["tight_objective_error"] else "disagree"
         assert f"{run} and the reference run at rtol 0.0001 {verdict}: they differ by" in out, out
+
+
+def _sectioned(sections: dict, variables: dict | None = None) -> dict:
+    c = optimize_campaign(
+        {
+            "objective": "leading_peak_force",
+            "variables": variables
+            or {"m1": {"choices": ["brass", "ptfe"]}, "n2": {"low": 1, "high": 5, "integer": True}},
+        }
+    )
+    c["derive"] = {"chain.beads": "4 + n2"}  # the window's contacts 1 to 5 need 6 beads or more
+    c["sections"] = sections
+    return c
+
+
+@settings(max_examples=10, deadline=None)
+@given(m1=st.sampled_from(["brass", "ptfe"]), n2=st.integers(2, 5))
+def test_sections_build_a_per_bead_material_list(m1, n2):
+    """[sections] makes chain.material from a categorical parameter and a bead count, in chain order,
+    with the derived chain length; the list is on the scene, not among the point's parameters."""
+    sec = {"chain.material": {"values": ["m1", "fixed"], "beads": [4, "n2"]}}
+    c = _sectioned(
+        sec,
+        {
+            "m1": {"choices": ["brass", "ptfe"]},
+            "fixed": {"choices": ["brass"]},
+            "n2": {"low": 1, "high": 5, "integer": True},
+        },
+    )
+    from granchain.scene import scene_from_dict, scene_to_dict
+
+    p = campaign_from_dict(c).point({"m1": m1, "fixed": "brass", "n2": n2})
+    assert p.scene.chain.beads == 4 + n2
+    by_hand = scene()
+    by_hand["chain"].update(beads=4 + n2, material=[m1] * 4 + ["brass"] * n2)
+    assert p.scene_dict == scene_to_dict(scene_from_dict(by_hand))  # (a uniform list reads as one material)
+    assert "chain.material" not in p.params
+
+
+@pytest.mark.parametrize(
+    ("sections", "fix"),
+    [
+        ({"chain.taper": {"values": ["m1"], "beads": [3]}}, "not a per-bead key"),
+        ({"chain.material": {"values": ["m1"]}}, "needs exactly values and beads"),
+        ({"chain.material": {"values": ["m1", "m1"], "beads": [3]}}, "equal length"),
+        ({"chain.material": {"values": ["m9"], "beads": [3]}}, "'m9' is not a varied or derived key"),
+        ({"chain.material": {"values": ["m1"], "beads": [-1]}}, "a whole number >= 0"),
+    ],
+)
+def test_bad_sections_name_the_field_and_the_fix(sections, fix):
+    with pytest.raises(CampaignError, match="sections") as e:
+        campaign_from_dict(_sectioned(sections))
+    assert fix in str(e.value), str(e.value)
