@@ -8,6 +8,7 @@ chain, auto end time)."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import signal
 import subprocess
@@ -250,7 +251,6 @@ def test_kill_9_mid_search_then_rerun_equals_an_uninterrupted_search(tmp_path, s
     assert load_campaign(ws, "best").equals(load_campaign(tmp_path / "whole", "best"))
 
 
-@pytest.mark.slow
 def test_the_winner_is_re_run_at_a_tighter_rtol_and_on_the_other_backend(tmp_path, sched, capsys):
     """After 3 trials the best design runs again at rtol / 10 (reference) and on LAMMPS, as points of
     their own: the tight run's objective is run_scene's at rtol 1e-4 for that design (an independent
@@ -341,3 +341,96 @@ def test_bad_sections_name_the_field_and_the_fix(sections, fix):
     with pytest.raises(CampaignError, match="sections") as e:
         campaign_from_dict(_sectioned(sections))
     assert fix in str(e.value), str(e.value)
+
+
+def test_a_winner_the_other_backend_cannot_run_says_why(tmp_path, sched, monkeypatch):
+    """Where the other backend refuses the winner's scene (here its preflight is made to refuse, as it
+    does a scene past its limits), --best gives the tight run's value and says why there is no other."""
+    import granchain.campaigns.execute as execute
+    from granchain.campaigns.optimize import best_text
+
+    real = execute.preflight
+
+    def refuse_lammps(campaign, points):
+        if campaign.backend == "lammps":
+            raise CampaignError("point 1 cannot run: a made-up limit of this test")
+        return real(campaign, points)
+
+    monkeypatch.setattr(execute, "preflight", refuse_lammps)
+    opt = {**TAPER, "trials": 2, "seed": 4}
+    run_campaign(optimize_campaign(opt, confirm=True), tmp_path / "w", scheduler=sched)
+    best = load_campaign(tmp_path / "w", "best").iloc[0]
+    assert best["other_objective"] is None or best["other_objective"] != best["other_objective"]  # None or NaN
+    assert "the lammps backend cannot run the winner: point 1 cannot run: a made-up limit" in best["other_message"]
+    assert best["tight_objective"] == pytest.approx(best["objective"], rel=1e-3)
+    from granchain.campaigns.table import read_record
+
+    record = read_record(tmp_path / "w")
+    text = best_text(
+        best_design(record["optimize_results"], "maximize", ("chain.taper",)),
+        "leading_peak_force",
+        ("chain.taper",),
+        record["optimize_confirm"],
+    )
+    assert "the other backend: no value: the lammps backend cannot run the winner" in text, text
+    assert "not compared" in text, text
+
+
+def test_the_bundled_protector_example_is_a_small_sectioned_wall_problem():
+    """granchain/campaigns/protector-optimize.toml (issue 45 item 5): at most 20 beads in sections of two
+    or three materials, a striker heavier than a bead, a wall, the wall's largest force over the event
+    minimised; every design at the variables' ends is a valid, planned scene."""
+    from importlib import resources
+
+    from granchain.campaigns.run import validate
+    from granchain.campaigns.spec import load_campaign_file
+    from granchain.physics.materials import MATERIALS
+
+    c = load_campaign_file(resources.files("granchain.campaigns") / "protector-optimize.toml")
+    assert (c.optimize.objective, c.optimize.direction) == ("wall_max_force", "minimize")
+    assert [s.key for s in c.sections] == ["chain.material"]
+    materials = {m for v in c.optimize.variables for m in v.choices}
+    assert 2 <= len(materials) <= 3
+    validate(c)
+    p = c.point({v.key: v.choices[0] for v in c.optimize.variables})
+    d = p.scene_dict
+    assert d["chain"]["beads"] <= 20
+    assert d["boundary"]["far_end"] == "wall"
+    assert d["outputs"]["event"] is True
+    heaviest = max(MATERIALS[m].density for m in materials) * 4 / 3 * math.pi * d["chain"]["radius"] ** 3
+    assert d["loading"]["mass"] > 2 * heaviest  # heavy: more than two of the heaviest beads
+    assert d["loading"]["material"] in materials  # the ball's own, not bead 1's (which s1 changes)
+
+
+def test_two_objectives_give_a_pareto_front_that_is_known(tmp_path, sched, capsys):
+    """Two objectives whose front is known: the last contact's pulse minimised and maximised (no design
+    dominates another: every distinct design is on the front), then minimised twice (one design
+    dominates all: the front is the least value's); --best prints the front, the figure is pareto.png."""
+    from granchain.campaigns.plot import plot_convergence
+    from granchain.cli import main
+
+    ws = tmp_path / "w"
+    two = {**TAPER, "objective": ["leading_peak_force", "leading_peak_force"], "trials": 5, "seed": 3}
+    run_campaign(optimize_campaign({**two, "direction": ["minimize", "maximize"]}), ws, scheduler=sched)
+    trials = load_campaign(ws, "trials")
+    assert (trials["objective_2"] == trials["objective"]).all()
+    front = load_campaign(ws, "best")
+    assert set(front["job"]) == set(trials["job"])  # every distinct design
+    assert list(front["objective"]) == sorted(front["objective"])
+    tables, _ = run_campaign(optimize_campaign({**two, "direction": ["minimize", "minimize"]}), ws, scheduler=sched)
+    t = tables["trials"]
+    front = load_campaign(ws, "best")
+    assert list(front["job"]) == [t.loc[t["objective"].idxmin(), "job"]]
+    assert main(["campaign", "table", str(ws), "--best"]) == 0
+    out = capsys.readouterr().out
+    assert "Pareto front of leading_peak_force and leading_peak_force: 1 designs" in out, out
+    assert [p.name for p in plot_convergence(ws)] == ["pareto.png"]
+
+
+def test_a_missing_error_bar_read_back_as_nan_is_no_bar():
+    """The trials table reads a blank error bar back as NaN: the verdict says it cannot be judged (it
+    said 'their error bars both 0': NaN compares false both ways)."""
+    nan = float("nan")
+    best = best_design([_row(0, 1.0, nan), _row(1, 2.0, 0.1)], "minimize", ("x",))
+    assert best["objective_error"] is None
+    assert "cannot be judged" in best["verdict"], best["verdict"]

@@ -161,6 +161,8 @@ def _optimize_record(campaign: Campaign) -> dict | None:
         "keys": list(opt.keys),
         "constraints": [c.text for c in opt.constraints],
         "confirm": opt.confirm,
+        "objective_2": opt.objective2,
+        "direction_2": opt.direction2,
         "sampler": f"optuna TPESampler(seed={opt.seed}, n_startup_trials={opt.startup})",
         "optuna": package_versions(("optuna",)).get("optuna"),
     }

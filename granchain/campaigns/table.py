@@ -282,14 +282,17 @@ def _objective_units(objective) -> dict:
 def build_best_table(ws: str | Path, record: dict | None = None):
     """An optimize campaign's best design as a one-row DataFrame (optimize.best_design: the design,
     objective, objective_error, the runner-up's and the verdict; the winner's re-runs, tight_* at rtol /
-    10 and other_* on the other backend, and their agreement); empty when no trial is complete."""
+    10 and other_* on the other backend, and their agreement); empty when no trial is complete. With two
+    objectives: the Pareto front (optimize.pareto_front), one row per design on it."""
     import pandas as pd
 
-    from granchain.campaigns.optimize import best_design
+    from granchain.campaigns.optimize import best_design, pareto_front
 
     record, rows = _trial_rows(ws, record)
     opt = _dict(record.get("optimize"))
     keys = tuple(k for k in opt.get("keys") or [] if isinstance(k, str))
+    if opt.get("objective_2"):  # two objectives: the Pareto front, one row per design on it
+        return pd.DataFrame(pareto_front(rows, (opt.get("direction", "minimize"), opt.get("direction_2"))))
     best = best_design(rows, opt.get("direction", "minimize"), keys)
     if best is None:
         return pd.DataFrame([])
