@@ -7,6 +7,8 @@ chain, auto end time)."""
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import signal
 import subprocess
@@ -56,11 +58,12 @@ def scene(material: str = "chrome-steel-52100") -> dict:
     }
 
 
-def optimize_campaign(optimize: dict, error_estimate: bool = False, **scene_args) -> dict:
+def optimize_campaign(optimize: dict, error_estimate: bool = False, confirm: bool = False, **scene_args) -> dict:
+    """The search without the winner's re-runs unless confirm (test_the_winner_is_re_run tests them)."""
     return {
         "campaign": {"backend": "reference", "rtol": 1e-3, "error_estimate": error_estimate},
         "scene": scene(**scene_args),
-        "optimize": optimize,
+        "optimize": {"confirm": confirm, **optimize},
     }
 
 
@@ -246,3 +249,188 @@ def test_kill_9_mid_search_then_rerun_equals_an_uninterrupted_search(tmp_path, s
     whole, _ = run_campaign(optimize_campaign({**TAPER, "trials": 14, "seed": 11}), tmp_path / "whole", scheduler=sched)
     assert tables["trials"].equals(whole["trials"])
     assert load_campaign(ws, "best").equals(load_campaign(tmp_path / "whole", "best"))
+
+
+def test_the_winner_is_re_run_at_a_tighter_rtol_and_on_the_other_backend(tmp_path, sched, capsys):
+    """After 3 trials the best design runs again at rtol / 10 (reference) and on LAMMPS, as points of
+    their own: the tight run's objective is run_scene's at rtol 1e-4 for that design (an independent
+    run), both re-runs are the search's value within 1e-3 relative, `--best` reports the tight value
+    first with its bar and each run's agreement with it by the bars' rule, and a rerun runs nothing."""
+    from granchain.cli import main
+    from granchain.scene import scene_from_dict
+    from granchain.workflows.run import run_scene
+
+    opt = {**TAPER, "trials": 3, "seed": 2}
+    _, report = run_campaign(optimize_campaign(opt, error_estimate=True, confirm=True), tmp_path / "w", scheduler=sched)
+    best = load_campaign(tmp_path / "w", "best").iloc[0]
+    assert (best["tight_backend"], best["other_backend"]) == ("reference", "lammps")
+    assert (best["tight_rtol"], best["other_rtol"]) == pytest.approx((1e-4, 1e-3))
+    design = scene()
+    design["chain"]["taper"] = float(best["chain.taper"])
+    run_scene(scene_from_dict(design), backend="reference", rtol=1e-4, out=tmp_path / "own")
+    own = json.loads((tmp_path / "own" / "summary.json").read_text())["observables"]
+    assert best["tight_objective"] == own["leading_peak_force"]
+    for name in ("tight", "other"):
+        assert best[f"{name}_objective"] == pytest.approx(best["objective"], rel=1e-3)
+        assert best[f"{name}_objective_error"] > 0
+    assert len({best["job"], best["tight_job"], best["other_job"]}) == 3
+    assert report.ran == len(_summary_times(tmp_path / "w"))
+    _, again = run_campaign(optimize_campaign(opt, error_estimate=True, confirm=True), tmp_path / "w", scheduler=sched)
+    assert again.ran == 0
+    assert main(["campaign", "table", str(tmp_path / "w"), "--best"]) == 0
+    out = capsys.readouterr().out
+    assert f"leading_peak_force = {best['tight_objective']:.6g} +- " in out, out
+    for name, run in (("search's", "the reference run at rtol 0.001"), ("other", "the lammps run at rtol 0.001")):
+        a, ea = (
+            (best["objective"], best["objective_error"])
+            if name == "search's"
+            else (best["other_objective"], best["other_objective_error"])
+        )
+        verdict = "agree" if abs(a - best["tight_objective"]) <= ea + best["tight_objective_error"] else "disagree"
+        assert f"{run} and the reference run at rtol 0.0001 {verdict}: they differ by" in out, out
+
+
+def _sectioned(sections: dict, variables: dict | None = None) -> dict:
+    c = optimize_campaign(
+        {
+            "objective": "leading_peak_force",
+            "variables": variables
+            or {"m1": {"choices": ["brass", "ptfe"]}, "n2": {"low": 1, "high": 5, "integer": True}},
+        }
+    )
+    c["derive"] = {"chain.beads": "4 + n2"}  # the window's contacts 1 to 5 need 6 beads or more
+    c["sections"] = sections
+    return c
+
+
+@settings(max_examples=10, deadline=None)
+@given(m1=st.sampled_from(["brass", "ptfe"]), n2=st.integers(2, 5))
+def test_sections_build_a_per_bead_material_list(m1, n2):
+    """[sections] makes chain.material from a categorical parameter and a bead count, in chain order,
+    with the derived chain length; the list is on the scene, not among the point's parameters."""
+    sec = {"chain.material": {"values": ["m1", "fixed"], "beads": [4, "n2"]}}
+    c = _sectioned(
+        sec,
+        {
+            "m1": {"choices": ["brass", "ptfe"]},
+            "fixed": {"choices": ["brass"]},
+            "n2": {"low": 1, "high": 5, "integer": True},
+        },
+    )
+    from granchain.scene import scene_from_dict, scene_to_dict
+
+    p = campaign_from_dict(c).point({"m1": m1, "fixed": "brass", "n2": n2})
+    assert p.scene.chain.beads == 4 + n2
+    by_hand = scene()
+    by_hand["chain"].update(beads=4 + n2, material=[m1] * 4 + ["brass"] * n2)
+    assert p.scene_dict == scene_to_dict(scene_from_dict(by_hand))  # (a uniform list reads as one material)
+    assert "chain.material" not in p.params
+
+
+@pytest.mark.parametrize(
+    ("sections", "fix"),
+    [
+        ({"chain.taper": {"values": ["m1"], "beads": [3]}}, "not a per-bead key"),
+        ({"chain.material": {"values": ["m1"]}}, "needs exactly values and beads"),
+        ({"chain.material": {"values": ["m1", "m1"], "beads": [3]}}, "equal length"),
+        ({"chain.material": {"values": ["m9"], "beads": [3]}}, "'m9' is not a varied or derived key"),
+        ({"chain.material": {"values": ["m1"], "beads": [-1]}}, "a whole number >= 0"),
+    ],
+)
+def test_bad_sections_name_the_field_and_the_fix(sections, fix):
+    with pytest.raises(CampaignError, match="sections") as e:
+        campaign_from_dict(_sectioned(sections))
+    assert fix in str(e.value), str(e.value)
+
+
+def test_a_winner_the_other_backend_cannot_run_says_why(tmp_path, sched, monkeypatch):
+    """Where the other backend refuses the winner's scene (here its preflight is made to refuse, as it
+    does a scene past its limits), --best gives the tight run's value and says why there is no other."""
+    import granchain.campaigns.execute as execute
+    from granchain.campaigns.optimize import best_text
+
+    real = execute.preflight
+
+    def refuse_lammps(campaign, points):
+        if campaign.backend == "lammps":
+            raise CampaignError("point 1 cannot run: a made-up limit of this test")
+        return real(campaign, points)
+
+    monkeypatch.setattr(execute, "preflight", refuse_lammps)
+    opt = {**TAPER, "trials": 2, "seed": 4}
+    run_campaign(optimize_campaign(opt, confirm=True), tmp_path / "w", scheduler=sched)
+    best = load_campaign(tmp_path / "w", "best").iloc[0]
+    assert best["other_objective"] is None or best["other_objective"] != best["other_objective"]  # None or NaN
+    assert "the lammps backend cannot run the winner: point 1 cannot run: a made-up limit" in best["other_message"]
+    assert best["tight_objective"] == pytest.approx(best["objective"], rel=1e-3)
+    from granchain.campaigns.table import read_record
+
+    record = read_record(tmp_path / "w")
+    text = best_text(
+        best_design(record["optimize_results"], "maximize", ("chain.taper",)),
+        "leading_peak_force",
+        ("chain.taper",),
+        record["optimize_confirm"],
+    )
+    assert "the other backend: no value: the lammps backend cannot run the winner" in text, text
+    assert "not compared" in text, text
+
+
+def test_the_bundled_protector_example_is_a_small_sectioned_wall_problem():
+    """granchain/campaigns/protector-optimize.toml (issue 45 item 5): at most 20 beads in sections of two
+    or three materials, a striker heavier than a bead, a wall, the wall's largest force over the event
+    minimised; every design at the variables' ends is a valid, planned scene."""
+    from importlib import resources
+
+    from granchain.campaigns.run import validate
+    from granchain.campaigns.spec import load_campaign_file
+    from granchain.physics.materials import MATERIALS
+
+    c = load_campaign_file(resources.files("granchain.campaigns") / "protector-optimize.toml")
+    assert (c.optimize.objective, c.optimize.direction) == ("wall_max_force", "minimize")
+    assert [s.key for s in c.sections] == ["chain.material"]
+    materials = {m for v in c.optimize.variables for m in v.choices}
+    assert 2 <= len(materials) <= 3
+    validate(c)
+    p = c.point({v.key: v.choices[0] for v in c.optimize.variables})
+    d = p.scene_dict
+    assert d["chain"]["beads"] <= 20
+    assert d["boundary"]["far_end"] == "wall"
+    assert d["outputs"]["event"] is True
+    heaviest = max(MATERIALS[m].density for m in materials) * 4 / 3 * math.pi * d["chain"]["radius"] ** 3
+    assert d["loading"]["mass"] > 2 * heaviest  # heavy: more than two of the heaviest beads
+    assert d["loading"]["material"] in materials  # the ball's own, not bead 1's (which s1 changes)
+
+
+def test_two_objectives_give_a_pareto_front_that_is_known(tmp_path, sched, capsys):
+    """Two objectives whose front is known: the last contact's pulse minimised and maximised (no design
+    dominates another: every distinct design is on the front), then minimised twice (one design
+    dominates all: the front is the least value's); --best prints the front, the figure is pareto.png."""
+    from granchain.campaigns.plot import plot_convergence
+    from granchain.cli import main
+
+    ws = tmp_path / "w"
+    two = {**TAPER, "objective": ["leading_peak_force", "leading_peak_force"], "trials": 5, "seed": 3}
+    run_campaign(optimize_campaign({**two, "direction": ["minimize", "maximize"]}), ws, scheduler=sched)
+    trials = load_campaign(ws, "trials")
+    assert (trials["objective_2"] == trials["objective"]).all()
+    front = load_campaign(ws, "best")
+    assert set(front["job"]) == set(trials["job"])  # every distinct design
+    assert list(front["objective"]) == sorted(front["objective"])
+    tables, _ = run_campaign(optimize_campaign({**two, "direction": ["minimize", "minimize"]}), ws, scheduler=sched)
+    t = tables["trials"]
+    front = load_campaign(ws, "best")
+    assert list(front["job"]) == [t.loc[t["objective"].idxmin(), "job"]]
+    assert main(["campaign", "table", str(ws), "--best"]) == 0
+    out = capsys.readouterr().out
+    assert "Pareto front of leading_peak_force and leading_peak_force: 1 designs" in out, out
+    assert [p.name for p in plot_convergence(ws)] == ["pareto.png"]
+
+
+def test_a_missing_error_bar_read_back_as_nan_is_no_bar():
+    """The trials table reads a blank error bar back as NaN: the verdict says it cannot be judged (it
+    said 'their error bars both 0': NaN compares false both ways)."""
+    nan = float("nan")
+    best = best_design([_row(0, 1.0, nan), _row(1, 2.0, 0.1)], "minimize", ("x",))
+    assert best["objective_error"] is None
+    assert "cannot be judged" in best["verdict"], best["verdict"]

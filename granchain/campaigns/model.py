@@ -236,6 +236,9 @@ class Campaign:
         The [optimize] table (kind "optimize"; granchain.campaigns.optimize_spec.Optimize).
     cluster : dict or None
         The [cluster] table's values (granchain.campaigns.cluster_settings), or None.
+    sections : tuple of Sections
+        The [sections] table: per-bead keys each point builds from its parameters
+        (granchain.campaigns.sections.Sections.build), after [derive].
     """
 
     source: str
@@ -256,6 +259,7 @@ class Campaign:
     cluster: dict | None = None  # the [cluster] table's values (granchain.campaigns.cluster)
     base_table: dict | None = None  # the base scene as written: what the points' keys are set on
     optimize: Any = None  # the [optimize] table (optimize_spec.Optimize), for kind "optimize"
+    sections: tuple = ()  # the [sections] table (sections.Sections): per-bead keys built from sections
 
     @property
     def varied_keys(self) -> tuple[str, ...]:
@@ -298,7 +302,8 @@ class Campaign:
             full[d.key] = whole(d.key, v)
             values = self._values(full)
         data = _deep_copy(self.base if self.base_table is None else self.base_table)
-        for key, value in full.items():
+        built = {s.key: s.build(full, where) for s in self.sections}  # on the scene, not among the params
+        for key, value in [*full.items(), *built.items()]:
             if "." in key:  # the keys Scene.replace sets, set as it sets them (scene.set_key)
                 try:
                     set_key(data, key, value, f"{where}: in the base scene")

@@ -4,7 +4,7 @@ Why optuna (issue 45): its ask-and-tell interface lets granchain run each propos
 campaign point on the Dask workers (cached, resumable) instead of inside the optimiser's own loop; one
 search space mixes floats (linear or log), whole numbers and categorical choices (a material); its
 samplers are seeded (TPESampler(seed=...): the same seed and the same results give the same
-designs); and it has NSGA-II for two objectives (a later slice). nevergrad and cma are continuous
+designs); and its TPE takes two objectives (a Pareto front: pareto_front). nevergrad and cma are continuous
 first; deap is a toolkit for writing a genetic algorithm; scipy.optimize has no categorical variables.
 
 The loop: ask `batch` trials of a study whose sampler is TPESampler(seed, n_startup_trials=startup),
@@ -24,15 +24,21 @@ one optuna version (the record keeps the version).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
 from granchain.campaigns import expr
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.model import Campaign, CampaignError, params_text
+from granchain.exceptions import GranchainError
 from granchain.postprocess.observables import table_columns
 
 COMPLETE, FAILED, INFEASIBLE = "complete", "failed", "infeasible"
+#: the tolerance a campaign without [campaign] rtol plans for (workflows.plan.plan_scene's default)
+DEFAULT_RTOL = 1e-3
+#: each backend's other, for the winner's check on it
+OTHER_BACKEND = {"reference": "lammps", "lammps": "reference"}
 
 
 def make_study(opt):
@@ -41,6 +47,8 @@ def make_study(opt):
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     sampler = optuna.samplers.TPESampler(seed=opt.seed, n_startup_trials=opt.startup)
+    if opt.objective2 is not None:  # two objectives: TPE's multi-objective form (a Pareto front)
+        return optuna.create_study(directions=[opt.direction, opt.direction2], sampler=sampler)
     return optuna.create_study(direction=opt.direction, sampler=sampler)
 
 
@@ -48,19 +56,21 @@ def _reads_observable(constraint) -> bool:
     return bool(constraint.names & set(table_columns()))
 
 
-def objective_of(job_dir, opt, values: dict) -> tuple[float | None, float | None, str | None]:
+def objective_of(job_dir, opt, values: dict, second: bool = False) -> tuple[float | None, float | None, str | None]:
     """(objective, its error bar or None, None) of a complete point, or (None, None, why not).
 
     values: the names the expression may read besides the observables (Campaign._values of the
     point's parameters). An expression's error bar is the first-order propagation of its observables'
     bars, summed in magnitude (they share the run's time step, so they are not independent):
-    sum_i |f(o + e_i) - f(o - e_i)| / 2; none where an observable it reads has no bar."""
+    sum_i |f(o + e_i) - f(o - e_i)| / 2; none where an observable it reads has no bar. second: the
+    second objective's."""
+    tree, text = (opt.tree2, opt.objective2) if second else (opt.tree, opt.objective)
     run = Path(job_dir) / wsp.RUN_DIR
     summary = wsp.read_json(run / "summary.json") or {}
     obs = summary.get("observables") if isinstance(summary.get("observables"), dict) else {}
     errs = ((summary.get("errors") or {}).get("observables") or {}) if isinstance(summary.get("errors"), dict) else {}
     missing = summary.get("observables_missing") if isinstance(summary.get("observables_missing"), dict) else {}
-    names = sorted(expr.names(opt.tree) & set(table_columns()))
+    names = sorted(expr.names(tree) & set(table_columns()))
     vals = dict(values)
     bars = {}
     for name in names:
@@ -71,13 +81,13 @@ def objective_of(job_dir, opt, values: dict) -> tuple[float | None, float | None
         e = (errs.get(name) or {}).get("error") if isinstance(errs.get(name), dict) else None
         bars[name] = float(e) if isinstance(e, (int, float)) and not isinstance(e, bool) and math.isfinite(e) else None
     try:
-        f = expr.evaluate(opt.tree, vals, opt.objective)
+        f = expr.evaluate(tree, vals, text)
         if any(b is None for b in bars.values()):
             return f, None, None
         bar = 0.0
         for name, e in bars.items():
-            hi = expr.evaluate(opt.tree, {**vals, name: vals[name] + e}, opt.objective)
-            lo = expr.evaluate(opt.tree, {**vals, name: vals[name] - e}, opt.objective)
+            hi = expr.evaluate(tree, {**vals, name: vals[name] + e}, text)
+            lo = expr.evaluate(tree, {**vals, name: vals[name] - e}, text)
             bar += abs(hi - lo) / 2
     except expr.ExpressionError as e:
         return None, None, f"the objective cannot be computed: {e}"
@@ -102,6 +112,7 @@ class _Trial:
         self.trial, self.params = trial, params
         self.point = self.job = self.future = None
         self.state, self.value, self.error, self.message = None, None, None, None
+        self.value2 = self.error2 = None  # the second objective's (two objectives)
 
 
 def _design(campaign: Campaign, runner, t: _Trial, evaluated: list) -> None:
@@ -138,6 +149,11 @@ def _outcome(campaign: Campaign, t: _Trial, status: dict | None) -> None:
     if t.value is None:
         t.state, t.message = FAILED, f"objective {opt.objective!r} unmeasured: {why}"
         return
+    if opt.objective2 is not None:
+        t.value2, t.error2, why = objective_of(t.job.path, opt, values, second=True)
+        if t.value2 is None:
+            t.state, t.message = FAILED, f"objective {opt.objective2!r} unmeasured: {why}"
+            return
     observed = dict(values)
     summary = wsp.read_json(Path(t.job.path) / wsp.RUN_DIR / "summary.json") or {}
     observed.update({k: v for k, v in (summary.get("observables") or {}).items() if isinstance(v, (int, float))})
@@ -149,7 +165,7 @@ def _tell(study, t: _Trial) -> None:
     from optuna.trial import TrialState
 
     if t.state == COMPLETE:
-        study.tell(t.trial, t.value)
+        study.tell(t.trial, t.value if t.value2 is None else [t.value, t.value2])
     else:
         study.tell(t.trial, state=TrialState.FAIL if t.state == FAILED else TrialState.PRUNED)
 
@@ -221,6 +237,8 @@ def trial_row(t: _Trial, opt, before: list[dict]) -> dict:
     row = {"trial": t.trial.number}
     row.update(t.point.params if t.point is not None else t.params)
     row.update(state=t.state, objective=t.value, objective_error=t.error)
+    if opt.objective2 is not None:
+        row.update(objective_2=t.value2, objective_2_error=t.error2)
     prev = before[-1]["best_so_far"] if before else None
     best = [x for x in (prev, t.value if t.state == COMPLETE else None) if x is not None]
     row["best_so_far"] = min(best, key=opt.sign) if best else None
@@ -237,8 +255,9 @@ def best_design(rows: list[dict], direction: str, keys: tuple[str, ...]) -> dict
     done = sorted((r for r in rows if r.get("state") == COMPLETE), key=lambda r: (sign(r["objective"]), r["trial"]))
     if not done:
         return None
+    done = [{**r, "objective_error": _bar(r.get("objective_error"))} for r in done]  # a table's NaN: no bar
     best = done[0]
-    out = {"trial": best["trial"], **{k: best.get(k) for k in keys}}
+    out = {"trial": best["trial"], **{k: best.get(k) for k in keys}}  # (confirm_best re-runs it)
     out.update(objective=best["objective"], objective_error=best.get("objective_error"), job=best["job"])
     other = next((r for r in done[1:] if r["job"] != best["job"]), None)
     out["runner_up_trial"] = None if other is None else other["trial"]
@@ -248,6 +267,11 @@ def best_design(rows: list[dict], direction: str, keys: tuple[str, ...]) -> dict
     out["trials"] = len(rows)
     out["designs_run"] = len({r["job"] for r in rows if isinstance(r.get("job"), str)})
     return out
+
+
+def _bar(e) -> float | None:
+    """An error bar as a number, or None where there is none (None, NaN as a DataFrame reads it back)."""
+    return float(e) if isinstance(e, (int, float)) and not isinstance(e, bool) and math.isfinite(e) else None
 
 
 def _verdict(best: dict, other: dict | None, keys) -> str:
@@ -264,17 +288,176 @@ def _verdict(best: dict, other: dict | None, keys) -> str:
     return f"distinguished from the runner-up ({design}) by {gap:.4g}, {times}"
 
 
-def best_text(best: dict | None, objective: str, keys) -> str:
-    """The best design as `campaign table --best` prints it."""
+def best_text(best: dict | None, objective: str, keys, confirm: dict | None = None) -> str:
+    """The best design as `campaign table --best` prints it: its objective from the re-run at rtol / 10
+    where that ran (confirm: confirm_best's record), the search's and the other backend's values, whether
+    they agree, and the verdict against the runner-up."""
     if best is None:
         return f"no trial has a measured objective {objective!r} yet (campaign table WS shows why)"
     bar = best["objective_error"]
     value = f"{best['objective']:.6g}" + (f" +- {bar:.2g}" if bar is not None else " (no error bar)")
+    matched = confirm is not None and confirm.get("job") == best.get("job")
+    if matched and confirm["tight"]["objective"] is not None:
+        value = f"{_value_text(confirm['tight'])} ({_run_name(confirm['tight'])})"
     return "\n".join(
         [
             f"best design (trial {best['trial']}): {params_text({k: best[k] for k in keys})}",
             f"{objective} = {value}",
+            *confirm_text(confirm, best),
             best["verdict"],
             f"{best['trials']} trials, {best['designs_run']} distinct designs run; job {best['job']}",
         ]
     )
+
+
+def _variant(campaign: Campaign, backend: str, rtol: float) -> Campaign:
+    """The campaign on another backend or at another rtol; a method the backend lacks is left to it."""
+    from granchain.backends import backend_named
+
+    method = campaign.method if campaign.method in backend_named(backend).methods else None
+    return dataclasses.replace(campaign, backend=backend, rtol=rtol, method=method)
+
+
+def _start_check(campaign: Campaign, runner, design: dict, index: int, entry: dict):
+    """Open (and submit where not complete) the winner's point on entry's backend and rtol; returns
+    (runner, job, point, future or None), or None with entry["message"] saying why it cannot run."""
+    from granchain.campaigns.execute import Runner, preflight
+
+    try:
+        variant = _variant(campaign, entry["backend"], entry["rtol"])
+        point = variant.point(design, index, campaign.optimize.trials)
+        preflight(variant, [point])
+        sub = Runner(variant, runner.ws, runner.ex, runner.rerun, runner.retry_failed, runner.stream)
+        job = sub.job(point)
+        entry["job"] = job.id
+        future = None
+        if sub.needs_run(job):
+            sub.prepare()
+            future = sub.submit(job, point)
+            runner.report.ran += 1
+        return sub, job, point, future
+    except (GranchainError, ImportError, OSError) as e:  # no LAMMPS here, or the scene is not its
+        entry["message"] = f"the {entry['backend']} backend cannot run the winner: {' '.join(str(e).split())}"
+        return None
+
+
+def confirm_best(campaign: Campaign, runner, rows: list[dict]) -> dict | None:
+    """The best design run again before it is reported (issue 45): at rtol / 10 on the search's backend
+    ("tight") and at the search's rtol on the other backend ("other"), each a workspace point of its
+    own (cached: a rerun finds them complete). Returns {"trial", "job", "design", "search", "tight",
+    "other", "agreement"}, each run as {backend, rtol, job, objective, objective_error, message}; None
+    when no trial is complete."""
+    from granchain.campaigns.campaign_progress import CampaignProgress
+
+    opt = campaign.optimize
+    best = best_design(rows, opt.direction, opt.keys)
+    if best is None:
+        return None
+    design = {k: best[k] for k in opt.keys}
+    rtol = campaign.rtol if campaign.rtol is not None else DEFAULT_RTOL
+    out = {"trial": best["trial"], "job": best["job"], "design": design}
+    out["search"] = _entry(campaign.backend, rtol, best["job"], best["objective"], best["objective_error"])
+    out["tight"] = _entry(campaign.backend, rtol / 10)
+    out["other"] = _entry(OTHER_BACKEND[campaign.backend], rtol)
+    started = {name: _start_check(campaign, runner, design, best["trial"], out[name]) for name in ("tight", "other")}
+    started = {name: s for name, s in started.items() if s is not None}
+    prog = CampaignProgress(len(started), "confirm", runner.stream, workers=runner.ex.nworkers)
+    try:
+        for name, (sub, job, point, future) in started.items():
+            status = sub.collect(future, point.params, prog) if future is not None else None
+            if future is None:
+                prog.update(wsp.DONE)
+            t = _Trial(None, design)
+            t.point, t.job = point, job
+            _outcome(sub.c, t, status)
+            out[name].update(objective=t.value, objective_error=t.error, message=t.message)
+            runner.report.done += sub.report.done
+            runner.report.failed += sub.report.failed
+            runner.report.messages += sub.report.messages
+    finally:
+        prog.close()
+    out["agreement"] = [_agrees(out["search"], out["tight"]), _agrees(out["other"], out["tight"])]
+    return out
+
+
+def _entry(backend: str, rtol: float, job=None, objective=None, error=None) -> dict:
+    return {
+        "backend": backend,
+        "rtol": rtol,
+        "job": job,
+        "objective": objective,
+        "objective_error": error,
+        "message": None,
+    }
+
+
+def _run_name(e: dict) -> str:
+    return f"the {e['backend']} run at rtol {e['rtol']:.3g}"
+
+
+def _agrees(a: dict, b: dict) -> str:
+    """Whether two runs of one design agree within their error bars (|a - b| <= e_a + e_b), as a sentence."""
+    if a["objective"] is None or b["objective"] is None:
+        missing = a if a["objective"] is None else b
+        return f"{_run_name(a)} against {_run_name(b)}: not compared ({_run_name(missing)} has no value)"
+    gap = abs(a["objective"] - b["objective"])
+    ea, eb = a["objective_error"], b["objective_error"]
+    if ea is None or eb is None:
+        return f"{_run_name(a)} and {_run_name(b)} differ by {gap:.4g}: no error bar to judge it by"
+    verdict = "agree" if gap <= ea + eb else "disagree"
+    times = f", {gap / (ea + eb):.3g} times" if ea + eb > 0 else ""
+    return f"{_run_name(a)} and {_run_name(b)} {verdict}: they differ by {gap:.4g}{times} their error bars"
+
+
+def _value_text(e: dict) -> str:
+    if e["objective"] is None:
+        return f"no value: {e['message'] or 'not run'}"
+    bar = e["objective_error"]
+    return f"{e['objective']:.6g}" + (f" +- {bar:.2g}" if bar is not None else " (no error bar)")
+
+
+def confirm_text(confirm: dict | None, best: dict | None) -> list[str]:
+    """The winner's re-runs as `campaign table --best` prints them (none where they are of another design)."""
+    if confirm is None or best is None or confirm.get("job") != best.get("job"):
+        return ["the winner has not been re-run at a tighter rtol yet (the search is incomplete, or confirm = false)"]
+    lines = [
+        f"{name}: {_value_text(confirm[key])} ({_run_name(confirm[key])})"
+        for key, name in (
+            ("tight", "re-run at rtol / 10"),
+            ("search", "the search's run"),
+            ("other", "the other backend"),
+        )
+    ]
+    return lines + list(confirm.get("agreement") or [])
+
+
+def pareto_front(rows: list[dict], directions: tuple[str, str]) -> list[dict]:
+    """The complete trials no other complete trial dominates (at least as good in both objectives,
+    better in one), each design (job) once, by the first objective; the rows as trial_row makes them
+    (objective, objective_2)."""
+    sign = [(1.0 if d == "minimize" else -1.0) for d in directions]
+    done: dict = {}
+    for r in rows:
+        if r.get("state") == COMPLETE and r.get("job") not in done:
+            done[r["job"]] = r
+    pts = [(sign[0] * r["objective"], sign[1] * r["objective_2"], r) for r in done.values()]
+    front = [r for a, b, r in pts if not any(x <= a and y <= b and (x < a or y < b) for x, y, _ in pts)]
+    return sorted(front, key=lambda r: (sign[0] * r["objective"], r["trial"]))
+
+
+def front_text(front: list[dict], objectives: tuple[str, str], keys) -> str:
+    """The Pareto front as `campaign table --best` prints it: one design per line with both objectives."""
+    if not front:
+        return f"no trial has both objectives {list(objectives)} measured yet (campaign table WS shows why)"
+
+    def value(v, e):
+        return f"{v:.6g}" + (f" +- {e:.2g}" if e is not None and e == e else "")
+
+    lines = [f"Pareto front of {objectives[0]} and {objectives[1]}: {len(front)} designs"]
+    for r in front:
+        lines.append(
+            f"trial {r['trial']}: {params_text({k: r.get(k) for k in keys})}: {objectives[0]} = "
+            f"{value(r['objective'], r.get('objective_error'))}, {objectives[1]} = "
+            f"{value(r['objective_2'], r.get('objective_2_error'))}"
+        )
+    return "\n".join(lines)

@@ -7,6 +7,7 @@ variables (scene keys) and constraints, read and validated before anything runs:
     trials = 20                               # the evaluation budget
     seed = 1                                  # the sampler's seed: the same seed, the same designs
     batch = 1                                 # designs asked for, and run side by side, at a time
+    confirm = true                            # the winner re-run at rtol / 10 and on the other backend
     constraints = ["chain.radius * chain.taper ** 9 >= 2e-3"]   # must hold; a design violating one never runs
 
     [optimize.variables]
@@ -32,7 +33,7 @@ from typing import Any
 from granchain.campaigns import expr
 from granchain.campaigns.model import CampaignError
 
-OPTIMIZE_KEYS = ("objective", "direction", "trials", "seed", "variables", "constraints", "batch", "startup")
+OPTIMIZE_KEYS = ("objective", "direction", "trials", "seed", "variables", "constraints", "batch", "startup", "confirm")
 VARIABLE_KEYS = ("low", "high", "log", "integer", "choices")
 DIRECTIONS = ("minimize", "maximize")
 #: the most trials one [optimize] table may ask for (each is a run)
@@ -141,6 +142,12 @@ class Optimize:
         depend on which finishes first).
     startup : int
         Trials sampled at random before TPE models the results (optuna's n_startup_trials).
+    confirm : bool
+        The best design is run again at rtol / 10 and on the other backend before it is reported
+        (optimize.confirm_best; not with two objectives).
+    objective2, tree2, direction2 : str, object, str or None
+        A second objective (``objective = ["a", "b"]``), its tree and direction: the search then
+        finds a Pareto front (optuna's multi-objective TPE).
     """
 
     objective: str
@@ -152,6 +159,10 @@ class Optimize:
     constraints: tuple[Constraint, ...] = ()
     batch: int = 1
     startup: int = 5
+    confirm: bool = True
+    objective2: str | None = None
+    tree2: object = None
+    direction2: str | None = None
 
     @property
     def keys(self) -> tuple[str, ...]:
@@ -212,9 +223,17 @@ def read_optimize(t: Any, source: str, did_you_mean) -> Optimize:
             raise CampaignError(
                 f"{where} is missing {key!r} (objective, variables; docs/campaigns.md 'The optimize kind')"
             )
-    direction = t.get("direction", "minimize")
-    if direction not in DIRECTIONS:
-        raise CampaignError(f"{where} direction = {direction!r} is invalid: 'minimize' or 'maximize'")
+    objectives = t["objective"] if isinstance(t["objective"], list) else [t["objective"]]
+    if not 1 <= len(objectives) <= 2:
+        raise CampaignError(f"{where} objective = {t['objective']!r} is invalid: one objective, or a list of two")
+    directions = t.get("direction", "minimize")
+    directions = directions if isinstance(directions, list) else [directions] * len(objectives)
+    if len(directions) != len(objectives) or any(d not in DIRECTIONS for d in directions):
+        raise CampaignError(
+            f"{where} direction = {t.get('direction')!r} is invalid: 'minimize' or 'maximize' (a list of one per "
+            "objective for two)"
+        )
+    direction = directions[0]
     trials = t.get("trials", 20)
     if not _whole(trials) or not 1 <= trials <= MAX_TRIALS:
         raise CampaignError(
@@ -229,19 +248,32 @@ def read_optimize(t: Any, source: str, did_you_mean) -> Optimize:
     startup = t.get("startup", min(10, max(2, trials // 3)))
     if not _whole(startup) or startup < 1:
         raise CampaignError(f"{where} startup = {startup!r} is invalid: a whole number >= 1 (random trials first)")
-    objective = t["objective"]
+    trees = [_read_objective(o, where) for o in objectives]
+    second = (objectives[1], trees[1], directions[1]) if len(objectives) == 2 else (None, None, None)
+    variables = _read_variables(t["variables"], f"{where}.variables", did_you_mean)
+    constraints = _read_constraints(t.get("constraints", []), where)
+    confirm = t.get("confirm", True)
+    if not isinstance(confirm, bool):
+        raise CampaignError(
+            f"{where} confirm = {confirm!r} is invalid: true (the winner re-run at rtol / 10 and on the other "
+            "backend) or false"
+        )
+    confirm = confirm and second[0] is None  # a front has no one winner to re-run
+    return Optimize(
+        objectives[0], trees[0], direction, trials, seed, variables, constraints, batch, startup, confirm, *second
+    )
+
+
+def _read_objective(objective: Any, where: str):
     if not isinstance(objective, str):
         raise CampaignError(
             f"{where} objective = {objective!r} is invalid: an observable or an expression as a string, "
             'e.g. "wall_max_force"'
         )
     try:
-        tree = expr.parse(objective)
+        return expr.parse(objective)
     except expr.ExpressionError as e:
         raise CampaignError(f"{where} objective: {e}") from None
-    variables = _read_variables(t["variables"], f"{where}.variables", did_you_mean)
-    constraints = _read_constraints(t.get("constraints", []), where)
-    return Optimize(objective, tree, direction, trials, seed, variables, constraints, batch, startup)
 
 
 def _read_variables(table: Any, where: str, did_you_mean) -> tuple[Variable, ...]:
@@ -323,7 +355,8 @@ def check_names(opt: Optimize, readable: set[str], observables: tuple[str, ...],
     """Every name the objective and the constraints read is an observable or one of `readable` (the
     variables, derived keys, base scene numbers); the objective reads at least one observable."""
     known = set(readable) | set(observables)
-    parts = [("objective", opt.objective, expr.names(opt.tree))] + [
+    objectives = [(opt.objective, opt.tree)] + ([(opt.objective2, opt.tree2)] if opt.objective2 else [])
+    parts = [("objective", text, expr.names(tree)) for text, tree in objectives] + [
         ("constraint", c.text, c.names) for c in opt.constraints
     ]
     for what, text, names in parts:
@@ -333,8 +366,9 @@ def check_names(opt: Optimize, readable: set[str], observables: tuple[str, ...],
                     f"{source}: [optimize] {what} {text!r} reads {name!r}: {did_you_mean(name, sorted(known))}it is "
                     "not an observable (docs/observables.md), a variable, a derived key or a number of the base scene"
                 )
-    if not expr.names(opt.tree) & set(observables):
-        raise CampaignError(
-            f"{source}: [optimize] objective {opt.objective!r} reads no observable: give an observable of the run "
-            f"({', '.join(observables[:6])}, ...) or an expression of them"
-        )
+    for text, tree in objectives:
+        if not expr.names(tree) & set(observables):
+            raise CampaignError(
+                f"{source}: [optimize] objective {text!r} reads no observable: give an observable of the run "
+                f"({', '.join(observables[:6])}, ...) or an expression of them"
+            )

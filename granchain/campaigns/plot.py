@@ -19,6 +19,7 @@ Files are written aside and renamed, never through a symbolic link (granchain.sa
 from __future__ import annotations
 
 import math
+import textwrap
 from pathlib import Path
 
 from granchain import safe_files
@@ -139,8 +140,6 @@ TITLE_WIDTH = 70
 
 def _title(title) -> str:
     """A campaign's title as drawn: printable, wrapped to TITLE_WIDTH (a long title stays on the canvas)."""
-    import textwrap
-
     return "\n".join(textwrap.wrap(printable(str(title)), TITLE_WIDTH)) or printable(str(title))
 
 
@@ -312,6 +311,8 @@ def convergence_figure(ws):
     df = build_trials_table(ws)
     if df.empty or df["objective"].isna().all():
         raise CampaignError(f"{ws}: no trial has a measured objective yet; nothing to plot")
+    if (record.get("optimize") or {}).get("objective_2"):
+        return pareto_figure(record, df)
     done = df[df["state"] == "complete"]
     fig = Figure(figsize=(6.4, 4.6), layout="constrained")
     ax = fig.subplots()
@@ -347,15 +348,53 @@ def convergence_figure(ws):
     return fig, df[["trial", "state", "objective", "objective_error", "best_so_far"]]
 
 
+def pareto_figure(record: dict, df):
+    """Two objectives: every complete trial's pair, the Pareto front (optimize.pareto_front) joined as
+    a step line, each with its error bars; and the table of the front."""
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from granchain.campaigns.optimize import pareto_front
+
+    opt = record.get("optimize") or {}
+    done = df[df["state"] == "complete"]
+    front = pd.DataFrame(pareto_front(df.to_dict("records"), (opt.get("direction", "minimize"), opt["direction_2"])))
+    fig = Figure(figsize=(6.4, 4.6), layout="constrained")
+    ax = fig.subplots()
+    bars = {c: done[f"{c}_error"].to_numpy(dtype=float) for c in ("objective", "objective_2")}
+    ax.errorbar(
+        done["objective"],
+        done["objective_2"],
+        xerr=bars["objective"],
+        yerr=bars["objective_2"],
+        fmt="o",
+        ms=4,
+        color="0.6",
+        label="trial",
+    )
+    ax.plot(
+        front["objective"], front["objective_2"], "o-", color="C3", ms=5, drawstyle="steps-post", label="Pareto front"
+    )
+    ax.set_xlabel(printable(str(opt.get("objective"))), parse_math=False)
+    ax.set_ylabel(printable(str(opt.get("objective_2"))), parse_math=False)
+    for text in ax.legend(fontsize="small").get_texts():
+        text.set_parse_math(False)
+    if record.get("title"):
+        ax.set_title(_title(record["title"]), fontsize="medium", parse_math=False)
+    return fig, front[["trial", "objective", "objective_error", "objective_2", "objective_2_error", "job"]]
+
+
 def plot_convergence(ws, out=None, formats=("png",)) -> list[Path]:
     """Draw an optimize campaign's convergence (convergence_figure) into WS/plots/convergence.*
-    (or out), its numbers beside it as .csv; returns the paths written."""
+    (or out), its numbers beside it as .csv; returns the paths written. With two objectives: the
+    Pareto figure (pareto_figure), into WS/plots/pareto.*."""
     ws = Path(ws)
     for f in formats:
         if f not in FORMATS:
             raise CampaignError(f"--format {f!r}: one of {', '.join(FORMATS)}")
     fig, data = convergence_figure(ws)
-    base = str(out) if out is not None else str(ws / "plots" / "convergence")
+    name = "pareto" if (read_record(ws).get("optimize") or {}).get("objective_2") else "convergence"
+    base = str(out) if out is not None else str(ws / "plots" / name)
     _make_dir(Path(base).parent)
     _write_csv(data, Path(base + ".csv"))
     return _save(fig, base, formats)

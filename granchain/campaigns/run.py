@@ -16,7 +16,7 @@ from granchain.campaigns.cluster_settings import SUBMIT, ClusterError, ClusterSe
 from granchain.campaigns.cluster_settings import check as check_cluster
 from granchain.campaigns.execute import Executor, Runner, preflight, run_grid
 from granchain.campaigns.model import CampaignInterrupted
-from granchain.campaigns.optimize import run_optimize
+from granchain.campaigns.optimize import confirm_best, run_optimize
 from granchain.campaigns.search import run_search
 from granchain.campaigns.spec import (
     Campaign,
@@ -102,13 +102,14 @@ def optimize_ends(campaign: Campaign) -> list:
 
 
 def write_record(
-    ws: Path, campaign: Campaign, runner: Runner, entries: list[dict], search_rows=None, trial_rows=None
+    ws: Path, campaign: Campaign, runner: Runner, entries: list[dict], search_rows=None, trial_rows=None, confirm=None
 ) -> None:
     """Write campaign.json, the workspace's record of this campaign run: its settings, the code, the
     varied keys, the search, the points in order (entries: {"params", "job", "key"}) and a search's
-    rows. Written before the points run and kept current, so that the table can be read meanwhile
-    and after a killed driver; kept as runner.record too (as campaign.json reads back), the record
-    this run's table is made from: another campaign run into the same workspace rewrites the file."""
+    rows (an optimize campaign's trials, and its winner's re-runs: confirm). Written before the points
+    run and kept current, so that the table can be read meanwhile and after a killed driver; kept as
+    runner.record too (as campaign.json reads back), the record this run's table is made from: another
+    campaign run into the same workspace rewrites the file."""
     record = {
         "schema": wsp.RECORD_SCHEMA,
         "kind": campaign.kind,
@@ -138,6 +139,7 @@ def write_record(
         "points": entries,
         "search_results": search_rows,
         "optimize_results": trial_rows,
+        "optimize_confirm": confirm,
     }
     runner.record = json.loads(json.dumps(record, default=wsp.plain))
     wsp.write_json(ws / wsp.RECORD, record)
@@ -158,6 +160,9 @@ def _optimize_record(campaign: Campaign) -> dict | None:
         "variables": [v.text for v in opt.variables],
         "keys": list(opt.keys),
         "constraints": [c.text for c in opt.constraints],
+        "confirm": opt.confirm,
+        "objective_2": opt.objective2,
+        "direction_2": opt.direction2,
         "sampler": f"optuna TPESampler(seed={opt.seed}, n_startup_trials={opt.startup})",
         "optuna": package_versions(("optuna",)).get("optuna"),
     }
@@ -300,6 +305,9 @@ def _run_optimize(campaign: Campaign, runner: Runner, ws: Path, last: list) -> N
 
     evaluated, rows = run_optimize(campaign, runner, on_progress=save)
     write_record(ws, campaign, runner, entries(evaluated), trial_rows=rows)
+    if campaign.optimize.confirm:  # the winner re-run before it is reported (its runs: points of their own)
+        confirm = confirm_best(campaign, runner, rows)
+        write_record(ws, campaign, runner, entries(evaluated), trial_rows=rows, confirm=confirm)
 
 
 def _stop_interrupted(campaign: Campaign, runner: Runner, ex: Executor, ws: Path) -> bool:

@@ -79,6 +79,7 @@ from granchain.campaigns.model import (
     whole,
 )
 from granchain.campaigns.optimize_spec import check_names, read_kind, read_optimize
+from granchain.campaigns.sections import read_sections
 from granchain.postprocess.observables import table_columns
 from granchain.scene import (
     MAX_SCENE_BYTES,
@@ -94,7 +95,7 @@ from granchain.scene import (
 
 KINDS = ("grid", "search", "optimize")
 CAMPAIGN_KEYS = ("base", "backend", "method", "rtol", "error_estimate", "regime_contact", "title", "kind", "ranks")
-TABLES = ("campaign", "scene", "vary", "zip", "derive", "search", "optimize", "cluster")
+TABLES = ("campaign", "scene", "vary", "zip", "derive", "sections", "search", "optimize", "cluster")
 SEARCH_KEYS = ("key", "range", "scale", "tolerance", "predicate")
 PREDICATE_KEYS = ("quantity", "contact", "op", "value")
 OPS = (">", ">=", "<", "<=", "==", "!=")
@@ -205,6 +206,7 @@ def campaign_from_dict(
         raise CampaignError(f"{source}: [search] key {search.key!r} is also varied in [vary]/[zip]; drop it there")
     searched = [search.key] if search else list(optimize.keys) if optimize else []
     derive = _read_derive(data.get("derive", {}), grid_keys + searched, (base, base_table), source)
+    sections = read_sections(data.get("sections", {}), {*grid_keys, *searched, *(d.key for d in derive)}, source)
     if optimize is not None:
         for k in optimize.keys:
             _check_key(k, "optimize.variables", source)
@@ -222,6 +224,7 @@ def campaign_from_dict(
         derive=tuple(derive),
         search=search,
         optimize=optimize,
+        sections=sections,
         cluster=cluster,
         **settings,
     )

@@ -281,16 +281,29 @@ def _objective_units(objective) -> dict:
 
 def build_best_table(ws: str | Path, record: dict | None = None):
     """An optimize campaign's best design as a one-row DataFrame (optimize.best_design: the design,
-    objective, objective_error, the runner-up's and the verdict); empty when no trial is complete."""
+    objective, objective_error, the runner-up's and the verdict; the winner's re-runs, tight_* at rtol /
+    10 and other_* on the other backend, and their agreement); empty when no trial is complete. With two
+    objectives: the Pareto front (optimize.pareto_front), one row per design on it."""
     import pandas as pd
 
-    from granchain.campaigns.optimize import best_design
+    from granchain.campaigns.optimize import best_design, pareto_front
 
     record, rows = _trial_rows(ws, record)
     opt = _dict(record.get("optimize"))
     keys = tuple(k for k in opt.get("keys") or [] if isinstance(k, str))
+    if opt.get("objective_2"):  # two objectives: the Pareto front, one row per design on it
+        return pd.DataFrame(pareto_front(rows, (opt.get("direction", "minimize"), opt.get("direction_2"))))
     best = best_design(rows, opt.get("direction", "minimize"), keys)
-    return pd.DataFrame([best] if best is not None else [])
+    if best is None:
+        return pd.DataFrame([])
+    confirm = _dict(record.get("optimize_confirm"))
+    if confirm.get("job") == best["job"]:  # the winner's re-runs: tight (rtol / 10) and other (backend)
+        for name in ("tight", "other"):
+            run = _dict(confirm.get(name))
+            for k in ("backend", "rtol", "objective", "objective_error", "job", "message"):
+                best[f"{name}_{k}"] = run.get(k)
+        best["agreement"] = "; ".join(str(a) for a in confirm.get("agreement") or [])
+    return pd.DataFrame([best])
 
 
 def _kind(v) -> str | None:

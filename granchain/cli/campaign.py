@@ -105,15 +105,23 @@ def cmd_campaign_table(args) -> int:
 
 def _print_best(ws, tables) -> int:
     """``campaign table --best``: an optimize campaign's best design, objective, error bar, verdict."""
-    from granchain.campaigns.optimize import best_design, best_text
+    from granchain.campaigns.optimize import best_design, best_text, front_text, pareto_front
     from granchain.campaigns.table import printable, read_record
 
     if "trials" not in tables:
         raise UsageError(f"{ws}: is not an optimize campaign; --best is for an optimize campaign's best design")
-    opt = read_record(Path(ws)).get("optimize") or {}
+    record = read_record(Path(ws))
+    opt = record.get("optimize") or {}
     keys = tuple(opt.get("keys") or ())
+    if opt.get("objective_2"):  # two objectives: the Pareto front
+        rows = tables["trials"].to_dict("records")
+        front = pareto_front(rows, (opt.get("direction", "minimize"), opt.get("direction_2")))
+        for line in front_text(front, (str(opt.get("objective")), str(opt["objective_2"])), keys).split("\n"):
+            print(printable(line))
+        return 0 if front else 1
     best = best_design(tables["trials"].to_dict("records"), opt.get("direction", "minimize"), keys)
-    for line in best_text(best, str(opt.get("objective")), keys).split("\n"):
+    confirm = record.get("optimize_confirm") if isinstance(record.get("optimize_confirm"), dict) else None
+    for line in best_text(best, str(opt.get("objective")), keys, confirm).split("\n"):
         print(printable(line))
     return 0 if best is not None else 1
 
