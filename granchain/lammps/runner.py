@@ -130,7 +130,8 @@ def _describe(dirs: list[Path]) -> str:
 def sweep_stale_work_dirs() -> list[Path]:
     """Remove work directories left by granchain processes that no longer exist (killed runs).
 
-    A killed run cannot remove its own work directory; the next LAMMPS run does, here: only the
+    A killed run cannot remove its own work directory; a later LAMMPS run does, here (a
+    process's first, then one a minute: sweep_if_due): only the
     user's own, and only one provably dead (its lock free: safe_files.owner_gone), never a live run's
     of another PID namespace or host sharing the temporary directory. Those that cannot be removed
     (a read-only directory) are named in a StaleWorkDirWarning and returned.
@@ -149,6 +150,24 @@ def sweep_stale_work_dirs() -> list[Path]:
             stacklevel=2,
         )
     return left
+
+
+#: seconds between two sweeps of the same temporary directory by one process (sweep_if_due)
+SWEEP_EVERY = 60.0
+
+#: when this process last swept each temporary directory (time.monotonic)
+_swept: dict[str, float] = {}
+
+
+def sweep_if_due() -> None:
+    """sweep_stale_work_dirs at a process's first run in its temporary directory, then at most every
+    SWEEP_EVERY s: a sweep looks at every work directory there (others' too), ~7 ms of a campaign
+    point's 3 runs on a busy /tmp, while a killed run's directory waits at most a minute for it."""
+    where, now = tempfile.gettempdir(), time.monotonic()
+    last = _swept.get(where)
+    if last is None or now - last >= SWEEP_EVERY:
+        _swept[where] = now
+        sweep_stale_work_dirs()
 
 
 def work_dirs_report() -> str:
@@ -245,7 +264,7 @@ def run_deck(
         raise ValueError(f"--np = {np_}: the number of MPI ranks must be at least 1")
     plugin = build_plugin() if plugin is None else plugin
     if work_dir is None:
-        sweep_stale_work_dirs()
+        sweep_if_due()
         work = new_work_dir()
     else:
         work = Path(work_dir)
