@@ -110,14 +110,14 @@ def check_figure(fig) -> None:
     assert not problems, problems
 
 
-def check_every_figure(result) -> None:
+def check_every_figure(result, log: bool = True) -> None:
     """check_figure on every figure the run has data for (the heat map, histories and snapshots only
-    where it has them), naming the figure that fails."""
+    where it has them; the peaks on log axes or, log=False, linear ones), naming the figure that fails."""
     from granchain.workflows import plots
 
     for kind in plots.FIGURES:
         try:
-            fig = plots.figure(result, kind)
+            fig = plots.figure(result, kind, **({"log": log} if kind == "peaks" else {}))
         except plots.PlotError:
             continue
         try:

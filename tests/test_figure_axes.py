@@ -21,8 +21,7 @@ from granchain.workflows.plots.figures import model_curves
 from granchain.workflows.run import run_scene
 
 from .figure_checks import check_every_figure, check_figure, drawn
-from .scenegen import PEAKS, brass_text
-from .test_plot_any_run import small_scene_texts
+from .scenegen import LONG_TITLE, PEAKS, brass_text, figure_scene_texts
 
 #: the bundled scenes checked in the fast set (each run and its figures drawn in 1-3 s: a uniform chain,
 #: one bead, gravity, precompression, a taper); the others's runs take 1-26 s each: checked in the slow set
@@ -49,12 +48,72 @@ def test_every_figure_of_a_bundled_scene(name):
     check_every_figure(_bundled(name))
 
 
-@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(text=small_scene_texts())
-def test_every_figure_of_a_generated_scene(text):
-    """On LAMMPS, as test_plot_any_run's generated runs: CI's derandomized draw plans a run of minutes on
-    the reference (its fixed price per step)."""
-    check_every_figure(_run(text, "generated.toml", backend="lammps"))
+#: the first failure of figure_scene_texts' draws: a title of three lines (wrapped when drawn) laid out
+#: as one, its first line above the canvas (a single bead's panel; 3 px on a longer chain)
+LONG_TITLE_ON_ONE_BEAD = (
+    f'title = "{LONG_TITLE}"\n[chain]\nbeads = 1\nradius = 0.0078125\nmaterial = "aluminium-6061-t6"\n'
+    '[contact]\nlaw = "bilinear"\nunloading_coeff = 0.0\nplastic_stiffness = 1000000.0\n[loading]\n'
+    'kind = "step"\namplitude = 1.0\nduration = 1e-06\n[boundary]\nfar_end = "wall"\n[run]\n'
+    'end_time = 0.0002457336425581325\ntimestep = "auto"\n[outputs]\npeak_force = true\n'
+)
+GENERATED = {"deadline": None, "suppress_health_check": [HealthCheck.too_slow, HealthCheck.filter_too_much]}
+
+
+#: a run with sensor beads and no contact histories: its velocity panel empty, its legend() warned
+SENSORS_ONLY = (
+    '[chain]\nbeads = 2\nradius = 0.0078125\nmaterial = "aluminium-6061-t6"\n[contact]\nlaw = "bilinear"\n'
+    'unloading_coeff = 0.0\nplastic_stiffness = 1000000.0\n[loading]\nkind = "step"\namplitude = 1.0\n'
+    'duration = 1e-06\n[run]\nend_time = 0.0001233939587222168\ntimestep = "auto"\n[outputs]\n'
+    "peak_force = true\nsensors = [2]\n"
+)
+
+#: one bead with 20 snapshots: the heat map's x-t diagram had no contact column (max() of nothing raised)
+ONE_BEAD_SNAPSHOTS = (
+    '[chain]\nbeads = 1\nradius = 0.0078125\nmaterial = "aluminium-6061-t6"\n[contact]\nlaw = "bilinear"\n'
+    'unloading_coeff = 0.0\nplastic_stiffness = 1000000.0\n[loading]\nkind = "velocity"\nvelocity = 1.0\n'
+    '[boundary]\nfar_end = "wall"\n[run]\nend_time = 0.0002447336425581325\ntimestep = "auto"\n[outputs]\n'
+    f"peak_force = true\nsnapshots = {[0.0002447336425581325 * (i + 1) / 20 for i in range(20)]!r}\n"
+)
+
+
+def _check_generated(text: str, log: bool, compare: bool) -> None:
+    """Every figure of a generated scene's reference run (the peaks on log or linear axes), and with
+    compare both compare figures of it against the same scene's reference Verlet run standing in for
+    LAMMPS (as test_compare_figures_of_a_precompressed_chain: the figures read any pair alike)."""
+    result = _run(text, "generated.toml")
+    check_every_figure(result, log=log)
+    if not compare:
+        return
+    from granchain.workflows.plots.overlays import figure_compare
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        verlet = run_scene(parse_scene(text, source="cmp.toml"), backend="reference", method="verlet")
+    for kind in plots.COMPARE_FIGURES:
+        try:
+            fig = figure_compare((verlet, result), kind)
+        except plots.PlotError:  # no common force history: no overlay to draw
+            continue
+        check_figure(fig)
+
+
+@settings(max_examples=3, **GENERATED)
+@given(text=figure_scene_texts(), log=st.booleans(), compare=st.booleans())
+def test_every_figure_of_a_generated_scene(text, log, compare):
+    """figure_scene_texts' cheap scenes (1-12 beads, at most FIGURE_STEPS steps on the reference): 3 in
+    the fast set, 30 in the slow one."""
+    _check_generated(text, log, compare)
+
+
+@pytest.mark.slow
+@settings(max_examples=30, **GENERATED)
+@given(text=figure_scene_texts(), log=st.booleans(), compare=st.booleans())
+@example(text=LONG_TITLE_ON_ONE_BEAD, log=True, compare=False)
+@example(text=SENSORS_ONLY, log=False, compare=False)
+@example(text=ONE_BEAD_SNAPSHOTS, log=False, compare=False)
+def test_every_figure_of_30_generated_scenes(text, log, compare):
+    """The acceptance's 30 generated scenes (issue 43), every figure of each."""
+    _check_generated(text, log, compare)
 
 
 @pytest.mark.parametrize("name", ["effect-precompression", "effect-gravity"])

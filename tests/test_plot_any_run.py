@@ -58,6 +58,7 @@ def test_one_bead_run_plots(tmp_path, kind, wall, f0):
     fig = load_run(out).plot("peaks")
     text = " ".join(texts_of(fig))
     assert "one bead" in text
+    assert "\\x" not in text  # a number's no-break space to its unit drawn as itself, not escaped as \xa0
     s = load_run(out).summary
     # the panel gives the end contacts' peaks the run has (the striker's, the wall's)
     for name, who in (("striker_peak_force", "striker's"), ("wall_peak_force", "wall's")):

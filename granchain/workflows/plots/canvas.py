@@ -56,11 +56,22 @@ class ChainFigure(Figure):
         self.savefig(buf, format="png", bbox_inches="tight")
         return buf.getvalue()
 
-    def draw(self, renderer) -> None:
-        """Draw the figure with every axes title wrapped inside the figure's width: a scene's title
-        is the user's text, of any length, and a title wider than the figure is cut at its edges."""
+    def _wrap_titles(self) -> None:
+        """Every axes title wrapped inside the figure's width: a scene's title is the user's text, of
+        any length, and a title wider than the figure is cut at its edges."""
         for ax in self.axes:
             ax.title.set_wrap(True)
+
+    def tight_layout(self, *args, **kw) -> None:
+        """matplotlib's tight_layout around the titles as they are drawn (wrapped): laid out on one
+        line, a wrapped title's first lines rose above the canvas (a generated scene's long title)."""
+        self._wrap_titles()
+        super().tight_layout(*args, **kw)
+
+    def draw(self, renderer) -> None:
+        """Draw the figure with every axes title wrapped (_wrap_titles; a constrained layout, made
+        while drawing, already sees them wrapped)."""
+        self._wrap_titles()
         super().draw(renderer)
 
 
@@ -163,8 +174,9 @@ def _cmap(name: str):
 
 
 def _plain(text: str) -> str:
-    """User text (a scene title) shown as is: a $ would start mathtext; control characters escaped."""
-    return printable(str(text)).replace("$", r"\$")
+    """User text (a scene title) shown as is: a $ would start mathtext; control characters escaped (a
+    no-break space kept: the figures' own texts hold a number to its unit with one)."""
+    return printable(str(text), keep="\N{NO-BREAK SPACE}").replace("$", r"\$")
 
 
 def _method_label(summary: dict) -> str:

@@ -47,6 +47,12 @@ from granchain.workflows.plots.tables import (
     load_peaks,
 )
 
+#: the velocity panel of a run whose histories are its sensor beads' only
+NO_VELOCITIES = (
+    "no bead velocity histories: they are recorded at the beads of [outputs] histories' contacts\n"
+    "(sensors record their bead's average force only)"
+)
+
 
 def _draw_histories(r: RunResult, ax=None):
     """(Figure, CSV header, CSV columns) of the histories (the contacts' and the sensor beads'), or None
@@ -78,6 +84,9 @@ def _draw_histories(r: RunResult, ax=None):
         r"contact force $F_{i,i+1}$" + (r", sensor $(F_{i-1,i} + F_{i,i+1})/2$" if sensed.size else "") + " (N)"
     )
     ax2.set_ylabel(r"bead velocity $v_i$ (m/s)")
+    if not vcols:  # sensors only: a legend of nothing drawn warned, and the empty panel said nothing
+        ax2.text(0.5, 0.5, NO_VELOCITIES, transform=ax2.transAxes, ha="center", va="center", fontsize=9, color="0.3")
+        ax2.set_yticks([])  # (no scale to read)
     ax2.set_xlabel(rf"time $t$ ({unit})")
     ax1.set_title(f"Contact force and bead velocity histories — {_label(summary)}", fontsize=10)
     for ax in (ax1, ax2):
@@ -87,7 +96,8 @@ def _draw_histories(r: RunResult, ax=None):
         cb.ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     else:
         ax1.legend(fontsize=8)
-        ax2.legend(fontsize=8)
+        if vcols:
+            ax2.legend(fontsize=8)
         if not given:
             fig.tight_layout()
     names = [header[0], *[header[i] for i in fcols + vcols], *sensor_header]

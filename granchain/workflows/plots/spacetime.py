@@ -111,6 +111,8 @@ def spacetime_force(run) -> tuple[SpaceTime | None, str]:
     contacts and HEATMAP_MIN_FRAMES samples. Nothing is interpolated between contacts or frames.
     """
     r = as_result(run)
+    if int(r.scene.chain.beads) < 2:  # (its 20 snapshots made a heat map of no column, and max() of it raised)
+        return None, "one bead: no bead-bead contact whose force a heat map could show"
     why = []
     dump = _dump_file(r)
     if dump is not None:
