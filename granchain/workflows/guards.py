@@ -83,6 +83,10 @@ class LongRunWarning(UserWarning):
     """A run is estimated to take longer than WARN_SECONDS, or to use more than half the free memory."""
 
 
+class DriveBeyondLinearWarning(UserWarning):
+    """A harmonic drive's amplitude is above the static force F0: it pulls bead 1 at its troughs."""
+
+
 @dataclass(frozen=True)
 class Estimate:
     """What a planned scene's run needs: steps, beads, bytes of memory and of disk, seconds."""
@@ -281,4 +285,23 @@ def check_run(
             LongRunWarning,
             stacklevel=stacklevel,
         )
+    _warn_drive(scene, stacklevel + 1)
     return est
+
+
+def _warn_drive(scene, stacklevel: int) -> None:
+    """Warn (DriveBeyondLinearWarning) where a harmonic drive's amplitude exceeds F0: F0 - A < 0 at its
+    troughs pulls bead 1 off the chain, far outside the linearised chain the bands and the transmission's
+    oracle describe (a dynamic force a few per cent of F0: physics/bands.py's DOMAIN). A valid scene (a
+    nonlinear drive is a study of its own), so a warning, not a refusal."""
+    f0, a = float(scene.effects.precompression or 0.0), float(scene.loading.amplitude)
+    if not scene.loading.is_harmonic or a <= f0:
+        return
+    warnings.warn(
+        f"{scene.source}: [loading] amplitude = {a:g} N is above the static force F0 = {f0:g} N: at the drive's "
+        "troughs the force on bead 1 pulls (F0 - A < 0), bead 1 leaves the chain and its contact opens and "
+        "closes; the run is the nonlinear chain's, outside the linear bands' domain (physics/bands.py). For "
+        f"the linear spectrum give amplitude <= {0.05 * f0:g} N (5% of F0) or a larger [precompression] force",
+        DriveBeyondLinearWarning,
+        stacklevel=stacklevel,
+    )
