@@ -71,21 +71,7 @@ def scene_texts(
     pre = precompressed or draw(st.booleans())
     dashpot = draw(st.one_of(st.just(0.0), st.floats(0.1, 20.0)))
 
-    chain = f"beads = {beads}\nradius = {radius!r}\n"
-    plastic = LAWS[law].history
-    # several materials under a plastic law: metals whose yield strength sets each contact's k
-    names = sorted(n for n, m in MATERIALS.items() if m.yield_strength is not None or not plastic)
-    if per_bead == "materials":
-        chain += "material = [" + ", ".join(f'"{draw(st.sampled_from(names))}"' for _ in range(beads)) + "]\n"
-    else:
-        chain += f'material = "{draw(st.sampled_from(sorted(MATERIALS)))}"\n'
-    if per_bead == "taper":
-        chain += f"taper = {draw(st.floats(0.95, 0.995))!r}\n"
-    contact = f'law = "{law}"\n'
-    for key, (lo, hi) in LAWS[law].scene_key_ranges.items():
-        if per_bead == "materials" and key == "plastic_stiffness":
-            continue  # each contact's k from its softer material's yield strength
-        contact += f"{key} = {draw(st.floats(lo, hi))!r}\n"
+    chain, contact = _chain_and_contact(draw, law, beads, radius, per_bead, taper=(0.95, 0.995))
     if kind == "step":
         loading = f"amplitude = {draw(st.floats(1.0, 1e4))!r}\nduration = {draw(st.floats(1e-6, 2e-4))!r}\n"
     elif kind == "impulse":
@@ -149,6 +135,28 @@ FIGURE_STEPS = 20_000
 LONG_TITLE = "A generated chain whose title runs on " + "and on " * 24 + "past every figure's width"
 
 
+def _chain_and_contact(draw, law: str, beads: int, radius: float, per_bead, taper: tuple) -> tuple[str, str]:
+    """The [chain] and [contact] lines of a generated scene: one material, one per bead (per_bead =
+    "materials") or a taper (per_bead = "taper", its ratio drawn in `taper`), and the law's keys drawn in
+    their ranges (scene_key_ranges)."""
+    chain = f"beads = {beads}\nradius = {radius!r}\n"
+    plastic = LAWS[law].history
+    # several materials under a plastic law: metals whose yield strength sets each contact's k
+    names = sorted(n for n, m in MATERIALS.items() if m.yield_strength is not None or not plastic)
+    if per_bead == "materials":
+        chain += "material = [" + ", ".join(f'"{draw(st.sampled_from(names))}"' for _ in range(beads)) + "]\n"
+    else:
+        chain += f'material = "{draw(st.sampled_from(sorted(MATERIALS)))}"\n'
+    if per_bead == "taper":
+        chain += f"taper = {draw(st.floats(*taper))!r}\n"
+    contact = f'law = "{law}"\n'
+    for key, (lo, hi) in LAWS[law].scene_key_ranges.items():
+        if per_bead == "materials" and key == "plastic_stiffness":
+            continue  # each contact's k from its softer material's yield strength
+        contact += f"{key} = {draw(st.floats(lo, hi))!r}\n"
+    return chain, contact
+
+
 @st.composite
 def _figure_effects(draw, beads: int, law: str) -> tuple[str, str, bool, bool]:
     """The [chain], [contact] and [loading] lines of a figure scene, whether it ends on a wall, and
@@ -159,20 +167,7 @@ def _figure_effects(draw, beads: int, law: str) -> tuple[str, str, bool, bool]:
     wall = draw(st.booleans()) or (beads == 1 and (kind != "striker" or pre)) or pre and beads == 1
     radius = draw(st.floats(2e-3, 1e-2))
     per_bead = draw(st.sampled_from([None, "taper", "materials"])) if beads >= 3 else None
-    plastic = LAWS[law].history
-    names = sorted(n for n, m in MATERIALS.items() if m.yield_strength is not None or not plastic)
-    chain = f"beads = {beads}\nradius = {radius!r}\n"
-    if per_bead == "materials":
-        chain += "material = [" + ", ".join(f'"{draw(st.sampled_from(names))}"' for _ in range(beads)) + "]\n"
-    else:
-        chain += f'material = "{draw(st.sampled_from(sorted(MATERIALS)))}"\n'
-    if per_bead == "taper":
-        chain += f"taper = {draw(st.floats(0.8, 0.99))!r}\n"
-    contact = f'law = "{law}"\n'
-    for key, (lo, hi) in LAWS[law].scene_key_ranges.items():
-        if per_bead == "materials" and key == "plastic_stiffness":
-            continue  # each contact's k from its softer material's yield strength
-        contact += f"{key} = {draw(st.floats(lo, hi))!r}\n"
+    chain, contact = _chain_and_contact(draw, law, beads, radius, per_bead, taper=(0.8, 0.99))
     loading = {
         "step": lambda: f"amplitude = {draw(st.floats(1.0, 1e3))!r}\nduration = {draw(st.floats(1e-6, 5e-5))!r}\n",
         "impulse": lambda: f"impulse = {draw(st.floats(1e-3, 0.05))!r}\nduration = {draw(st.floats(1e-7, 1e-5))!r}\n",
