@@ -50,9 +50,11 @@ def column_unit(column: str, record: dict | None = None) -> str | None:
     """The unit of a campaign table's column, or None where it has none that is known (a free parameter
     of [derive], a column of text). record: the workspace's (campaign.json), for a search's columns."""
     search = (record or {}).get("search") or {}
-    objective = ((record or {}).get("optimize") or {}).get("objective")
-    if objective and column in ("objective", "objective_error", "best_so_far"):
-        return observable_units().get(objective)
+    opt = (record or {}).get("optimize") or {}
+    if opt.get("objective") and column in ("objective", "objective_error", "best_so_far"):
+        return observable_units().get(opt["objective"])
+    if opt.get("objective_2") and column in ("objective_2", "objective_2_error"):
+        return observable_units().get(opt["objective_2"])
     if column == "trial":
         return "trial"
     key = search.get("key")
@@ -375,8 +377,8 @@ def pareto_figure(record: dict, df):
     ax.plot(
         front["objective"], front["objective_2"], "o-", color="C3", ms=5, drawstyle="steps-post", label="Pareto front"
     )
-    ax.set_xlabel(printable(str(opt.get("objective"))), parse_math=False)
-    ax.set_ylabel(printable(str(opt.get("objective_2"))), parse_math=False)
+    for set_label, column in ((ax.set_xlabel, "objective"), (ax.set_ylabel, "objective_2")):
+        set_label(printable(axis_label(column, record).replace(column, str(opt.get(column)), 1)), parse_math=False)
     for text in ax.legend(fontsize="small").get_texts():
         text.set_parse_math(False)
     if record.get("title"):
