@@ -445,7 +445,50 @@ def pareto_front(rows: list[dict], directions: tuple[str, str]) -> list[dict]:
     return sorted(front, key=lambda r: (sign[0] * r["objective"], r["trial"]))
 
 
-def front_text(front: list[dict], objectives: tuple[str, str], keys) -> str:
+def _bar(r: dict, column: str) -> float | None:
+    e = r.get(column)
+    return None if e is None or e != e else float(e)
+
+
+def near_front(rows: list[dict], directions: tuple[str, str]) -> tuple[list[dict], list[dict]]:
+    """The designs off the Pareto front (pareto_front) that its values alone rule out but its error
+    bars do not: (not distinguished, cannot be judged), each by trial.
+
+    A design r off the front is ruled out only where some front design q is better in both objectives
+    by more than the two bars' sum (q_k + e_q,k + e_r,k <= r_k, signed so that less is better): within
+    the bars, r's true values may lie on the front (the same rule best_design applies to one
+    objective). A design without a bar, or whose every dominating front design lacks one, cannot be
+    judged."""
+    sign = [(1.0 if d == "minimize" else -1.0) for d in directions]
+    front = pareto_front(rows, directions)
+    on = {r["job"] for r in front}
+    cols = (("objective", "objective_error"), ("objective_2", "objective_2_error"))
+    undistinguished, unjudged = [], []
+    seen = set(on)
+    for r in sorted((r for r in rows if r.get("state") == COMPLETE), key=lambda r: r["trial"]):
+        if r.get("job") in seen:
+            continue
+        seen.add(r["job"])
+        bars_r = [_bar(r, e) for _, e in cols]
+        verdicts = []
+        for q in front:
+            bars_q = [_bar(q, e) for _, e in cols]
+            if None in bars_r or None in bars_q:
+                verdicts.append(None)
+                continue
+            verdicts.append(
+                all(
+                    sign[k] * (r[c] - q[c]) >= bars_q[k] + bars_r[k]  # q better than r beyond both bars
+                    for k, (c, _) in enumerate(cols)
+                )
+            )
+        if True in verdicts:
+            continue
+        (unjudged if None in verdicts else undistinguished).append(r)
+    return undistinguished, unjudged
+
+
+def front_text(front: list[dict], objectives: tuple[str, str], keys, near: tuple = ((), ())) -> str:
     """The Pareto front as `campaign table --best` prints it: one design per line with both objectives."""
     if not front:
         return f"no trial has both objectives {list(objectives)} measured yet (campaign table WS shows why)"
@@ -460,4 +503,14 @@ def front_text(front: list[dict], objectives: tuple[str, str], keys) -> str:
             f"{value(r['objective'], r.get('objective_error'))}, {objectives[1]} = "
             f"{value(r['objective_2'], r.get('objective_2_error'))}"
         )
+    for rs, why in zip(
+        near,
+        (
+            "not distinguished from the front within their error bars",
+            "cannot be judged against the front (no error bar)",
+        ),
+        strict=True,
+    ):
+        if rs:
+            lines.append(f"{why}: trial {', '.join(str(r['trial']) for r in rs)}")
     return "\n".join(lines)

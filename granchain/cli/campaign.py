@@ -105,7 +105,7 @@ def cmd_campaign_table(args) -> int:
 
 def _print_best(ws, tables) -> int:
     """``campaign table --best``: an optimize campaign's best design, objective, error bar, verdict."""
-    from granchain.campaigns.optimize import best_design, best_text, front_text, pareto_front
+    from granchain.campaigns.optimize import best_design, best_text, front_text, near_front, pareto_front
     from granchain.campaigns.table import printable, read_record
 
     if "trials" not in tables:
@@ -115,8 +115,10 @@ def _print_best(ws, tables) -> int:
     keys = tuple(opt.get("keys") or ())
     if opt.get("objective_2"):  # two objectives: the Pareto front
         rows = tables["trials"].to_dict("records")
-        front = pareto_front(rows, (opt.get("direction", "minimize"), opt.get("direction_2")))
-        for line in front_text(front, (str(opt.get("objective")), str(opt["objective_2"])), keys).split("\n"):
+        directions = (opt.get("direction", "minimize"), opt.get("direction_2"))
+        front = pareto_front(rows, directions)
+        objectives = (str(opt.get("objective")), str(opt["objective_2"]))
+        for line in front_text(front, objectives, keys, near_front(rows, directions)).split("\n"):
             print(printable(line))
         return 0 if front else 1
     best = best_design(tables["trials"].to_dict("records"), opt.get("direction", "minimize"), keys)
