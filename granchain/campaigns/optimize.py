@@ -31,6 +31,7 @@ from pathlib import Path
 from granchain.campaigns import expr
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.model import Campaign, CampaignError, params_text
+from granchain.campaigns.optimize_spec import design_numbers
 from granchain.exceptions import GranchainError
 from granchain.postprocess.observables import table_columns
 
@@ -94,6 +95,12 @@ def objective_of(job_dir, opt, values: dict, second: bool = False) -> tuple[floa
     return f, bar, None
 
 
+def design_values(campaign: Campaign, point) -> dict:
+    """The names a design's objective and constraints read before its run: the point's parameters
+    and the base scene's numbers (Campaign._values) and its own chain's numbers (design_numbers)."""
+    return {**campaign._values(point.params), **design_numbers(point.scene)}
+
+
 def _violated(constraints, values: dict) -> str | None:
     """The first constraint that does not hold (or cannot be computed) for these values, as a message."""
     for c in constraints:
@@ -123,7 +130,7 @@ def _design(campaign: Campaign, runner, t: _Trial, evaluated: list) -> None:
     except CampaignError as e:
         t.state, t.message = FAILED, str(e)
         return
-    values = campaign._values(t.point.params)
+    values = design_values(campaign, t.point)
     why = _violated([c for c in opt.constraints if not _reads_observable(c)], values)
     if why is not None:
         t.state, t.message = INFEASIBLE, why
@@ -144,7 +151,7 @@ def _outcome(campaign: Campaign, t: _Trial, status: dict | None) -> None:
     if state != wsp.DONE:
         t.state, t.message = FAILED, "the run did not complete"
         return
-    values = campaign._values(t.point.params)
+    values = design_values(campaign, t.point)
     t.value, t.error, why = objective_of(t.job.path, opt, values)
     if t.value is None:
         t.state, t.message = FAILED, f"objective {opt.objective!r} unmeasured: {why}"
@@ -445,11 +452,6 @@ def pareto_front(rows: list[dict], directions: tuple[str, str]) -> list[dict]:
     return sorted(front, key=lambda r: (sign[0] * r["objective"], r["trial"]))
 
 
-def _bar(r: dict, column: str) -> float | None:
-    e = r.get(column)
-    return None if e is None or e != e else float(e)
-
-
 def near_front(rows: list[dict], directions: tuple[str, str]) -> tuple[list[dict], list[dict]]:
     """The designs off the Pareto front (pareto_front) that its values alone rule out but its error
     bars do not: (not distinguished, cannot be judged), each by trial.
@@ -469,10 +471,10 @@ def near_front(rows: list[dict], directions: tuple[str, str]) -> tuple[list[dict
         if r.get("job") in seen:
             continue
         seen.add(r["job"])
-        bars_r = [_bar(r, e) for _, e in cols]
+        bars_r = [_bar(r.get(e)) for _, e in cols]
         verdicts = []
         for q in front:
-            bars_q = [_bar(q, e) for _, e in cols]
+            bars_q = [_bar(q.get(e)) for _, e in cols]
             if None in bars_r or None in bars_q:
                 verdicts.append(None)
                 continue

@@ -351,6 +351,17 @@ def _read_constraints(items: Any, where: str) -> tuple[Constraint, ...]:
     return tuple(out)
 
 
+#: numbers of a design's own chain that the objective and the constraints may read (issue 45: a total
+#: mass or length as a bound), with their units; computed from the point's scene (design_numbers)
+DESIGN_NUMBERS = {"chain_mass": "kg", "chain_length": "m"}
+
+
+def design_numbers(scene) -> dict:
+    """The design's DESIGN_NUMBERS: chain_mass, the beads' total mass (the striker not counted), kg;
+    chain_length, the chain's length at rest, the sum of its beads' diameters, m."""
+    return {"chain_mass": float(scene.bead_masses.sum()), "chain_length": float(2.0 * scene.bead_radii.sum())}
+
+
 def check_names(opt: Optimize, readable: set[str], observables: tuple[str, ...], source: str, did_you_mean) -> None:
     """Every name the objective and the constraints read is an observable or one of `readable` (the
     variables, derived keys, base scene numbers); the objective reads at least one observable."""

@@ -83,7 +83,7 @@ def optimize_ends(campaign: Campaign) -> list:
     never runs)."""
     import itertools
 
-    from granchain.campaigns.optimize import _reads_observable, _violated
+    from granchain.campaigns.optimize import _reads_observable, _violated, design_values
 
     opt = campaign.optimize
     ends = [v.ends() for v in opt.variables]
@@ -96,7 +96,7 @@ def optimize_ends(campaign: Campaign) -> list:
     points = []
     for i, combo in enumerate(combos):
         p = campaign.point(dict(zip(opt.keys, combo, strict=True)), i, len(combos))
-        if _violated(design, campaign._values(p.params)) is None:
+        if _violated(design, design_values(campaign, p)) is None:
             points.append(p)
     return points
 

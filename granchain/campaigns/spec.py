@@ -78,7 +78,7 @@ from granchain.campaigns.model import (
     scene_numbers,
     whole,
 )
-from granchain.campaigns.optimize_spec import check_names, read_kind, read_optimize
+from granchain.campaigns.optimize_spec import DESIGN_NUMBERS, check_names, read_kind, read_optimize
 from granchain.campaigns.sections import read_sections
 from granchain.postprocess.observables import table_columns
 from granchain.scene import (
@@ -211,7 +211,7 @@ def campaign_from_dict(
         for k in optimize.keys:
             _check_key(k, "optimize.variables", source)
         readable = set(searched) | {d.key for d in derive} | set(scene_numbers(base)) | set(scene_numbers(base_table))
-        readable |= {k.rsplit(".", 1)[-1] for k in searched}
+        readable |= {k.rsplit(".", 1)[-1] for k in searched} | set(DESIGN_NUMBERS)
         check_names(optimize, readable, table_columns(), source, _did_you_mean)
     return Campaign(
         source=source,
