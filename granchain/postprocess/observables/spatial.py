@@ -19,7 +19,8 @@ amplitude is within 3 of its window error bar (a signal lost in the transients l
 or in round-off: the note says where). Its error bars: the fit's standard error (residuals over n -
 p - 1 degrees of freedom) and the window's |mu(window) - mu(window's last half)|, the lock-ins'
 finite window as spectra.lock_in's bar; spatial_decay_error is both in quadrature. The time step's
-share has no bar here (the error estimate's companion runs keep the far end's history only).
+share is the error estimate's (errors.json): its companion runs at 2 dt and 4 dt keep every contact's
+history (workflows.errorbars.facts.companion_scene) and fit the same contacts over the same window.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ import numpy as np
 from granchain.physics.bands import periodic_cell
 from granchain.physics.estimates import linearised_stiffnesses
 from granchain.postprocess.observables.base import Measurement
-from granchain.postprocess.observables.spectral import _Spectral, settled_window
+from granchain.postprocess.observables.spectral import STEP_SHARE, _Spectral, settled_window
 from granchain.postprocess.spectra import MIN_PERIODS, SpectraError, SteadyWindow, lock_in
 
 #: a contact's amplitude within this many of its window error bar ends the fit (its signal is lost)
@@ -116,7 +117,10 @@ class SpatialDecay(_Spectral):
     }
     shares_reason = tuple(companions)
     table_fields = ("spatial_decay_db", "spatial_decay_error")
-    error_bar = None  # the fit's and the window's bars are companions; the step's is not estimated
+    error_bar = (
+        "the time step's error from the companion runs (each keeps every contact's history and fits the same "
+        "window); the fit's and the window's bars are the *_error companions"
+    )
     applies_where = (
         'a precompressed chain under [loading] kind = "harmonic" whose first half holds 3 cells of its period '
         "(7 beads or more on a uniform chain, 13 on a dimer)"
@@ -173,6 +177,6 @@ class SpatialDecay(_Spectral):
             f"ln A fitted over contacts {contacts[0]}..{contacts[used - 1]} in cells of {p} bead(s){lost_note}; "
             f"lock-ins at the drive's frequency over {win.periods} whole periods, t = {win.start:.6g} to "
             f"{win.end:.6g} s; its bars: the fit's standard error and the window's |mu(window) - mu(last half)|; "
-            "the time step's share is not estimated"
+            f"{STEP_SHARE}"
         )
         return Measurement(mu, fields, note=note)

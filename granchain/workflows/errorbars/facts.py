@@ -45,13 +45,16 @@ def integrator_order(method: str, scene) -> int:
 
 
 def companion_scene(scene, factor: float):
-    """The scene at factor x its time step, with no outputs that no estimate needs: a harmonic drive's
-    far-end history only, which its spectral observables read (postprocess.observables.spectral), at
-    the run's interval (at least the companion's step)."""
+    """The scene at factor x its time step, with no outputs that no estimate needs: under a harmonic
+    drive the histories its spectral observables read (postprocess.observables.spectral: the far end's;
+    spatial: every contact's, as the run keeps them), at the run's interval (at least the companion's
+    step)."""
     o = scene.outputs
     step = scene.run.timestep * factor
     driven = scene.loading.is_harmonic and scene.n_contacts and isinstance(o.history_interval, float)
-    histories = (far_end_contact(scene),) if driven else ()
+    histories = tuple(c for c in o.histories if 1 <= c <= scene.n_contacts) if driven else ()
+    if driven and far_end_contact(scene) not in histories:
+        histories += (far_end_contact(scene),)
     interval = max(o.history_interval, step) if driven else None
     return replace(
         scene,
