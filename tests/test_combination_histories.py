@@ -17,8 +17,9 @@ coordinate is 1.4e-17 m), which after thousands of steps of the chain's dynamics
 force error of k_t x 1e-15 m whatever the force; a contact reclosing after a flight of thousands of
 steps (the bilinear law with Kuwabara-Kono damping) carries it at k_u, which is why F* is taken at the
 stiffest tangent. Measured on 12 x 4 random draws: the largest 4.1e-10 (bilinear, Kuwabara-Kono), the
-rest below 4e-11; on the derandomized ones this file runs, at most 1.8e-11 (4 min 45 s at load 8-11). It can fail: the reference's contact forces made 3e-9 too large (Hertz, no
-effects) give 1.8e-9 (1e-9 too large: 6.0e-10, under the bar). Derandomized: the same draws every run.
+rest below 4e-11; on the derandomized ones this file runs, at most 1.8e-11 (4 min 45 s at load 8-11).
+It can fail: the reference's contact forces made 3e-9 too large (Hertz, no effects) give 1.8e-9
+(1e-9 too large: 6.0e-10, under the bar). Derandomized: the same draws every run.
 """
 
 import tomllib
