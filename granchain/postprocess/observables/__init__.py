@@ -11,7 +11,7 @@ is not quite what its name says, what it is (``observables_notes``).
 
 from __future__ import annotations
 
-from granchain.postprocess.observables.base import NEEDS, ONE_BEAD, Measurement, Observable
+from granchain.postprocess.observables.base import FIELD_KINDS, NEEDS, ONE_BEAD, Measurement, Observable
 from granchain.postprocess.observables.ends import END_PEAKS, EndPeak, end_summary, end_summary_keys
 from granchain.postprocess.observables.fit import (
     FIT_CONTACTS,
@@ -26,6 +26,7 @@ from granchain.postprocess.observables.registry import (
     CONTEXT_UNITS,
     OBSERVABLES,
     Measured,
+    kinds,
     measure,
     measure_observables,
     registry_table,
@@ -55,6 +56,7 @@ __all__ = [
     "EndPeak",
     "end_summary",
     "end_summary_keys",
+    "FIELD_KINDS",
     "FIT_CONTACTS",
     "NEEDS",
     "OBSERVABLES",
@@ -75,6 +77,7 @@ __all__ = [
     "_window_contacts",
     "contact_kinds",
     "fit_wave_speed",
+    "kinds",
     "front_arrivals",
     "measure",
     "measure_observables",

@@ -116,6 +116,7 @@ class SpatialDecay(_Spectral):
     }
     shares_reason = tuple(companions)
     table_fields = ("spatial_decay_db", "spatial_decay_error")
+    field_kinds: ClassVar[dict[str, str]] = {"spatial_decay_cell": "integer", "spatial_decay_contacts": "integers"}
     error_bar = None  # the fit's and the window's bars are companions; the step's is not estimated
     applies_where = (
         'a precompressed chain under [loading] kind = "harmonic" whose first half holds 3 cells of its period '
