@@ -16,8 +16,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from granchain.postprocess.observables import OBSERVABLES, kinds
-from granchain.postprocess.sensors import SENSOR_QUANTITIES
+from granchain.postprocess.observables import OBSERVABLES, SENSOR_OBSERVABLES, kinds
 from granchain.rundir import write_run_dir
 from granchain.scene import load_scene, parse_scene
 from granchain.workflows.load import LoadRunError, load_run
@@ -115,7 +114,7 @@ def test_a_mutated_observable_field_is_refused_with_one_message_naming_it(made, 
     assert f"observables.{key}" in message, message
 
 
-SENSOR_FIELDS = ["beads", "static_force", *SENSOR_QUANTITIES, "missing", "note"]
+SENSOR_FIELDS = ["beads", "static_force", *SENSOR_OBSERVABLES, "missing", "note"]
 
 
 #: each sensors field with garbage not of its kind (text is the note's kind)

@@ -11,8 +11,7 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from granchain.postprocess.observables import END_PEAKS, FIELD_KINDS, kinds, with_error_bars
-from granchain.postprocess.sensors import SENSOR_QUANTITIES
+from granchain.postprocess.observables import END_PEAKS, FIELD_KINDS, SENSOR_OBSERVABLES, kinds, with_error_bars
 
 #: the deepest nesting granchain writes is about 5 (errors.observables.<name>.<field>); far deeper is
 #: not granchain's and would exhaust the stack of whatever walks it (copy.deepcopy, repr)
@@ -146,7 +145,7 @@ _SENSORS = Record(
     {
         "beads": ListOf(INTEGER),
         "static_force": ListOf(NUMBER),
-        **{q: ListOf(opt(NUMBER)) for q in SENSOR_QUANTITIES},
+        **{q: ListOf(opt(NUMBER)) for q in SENSOR_OBSERVABLES},
         "missing": MapOf(opt(TEXT)),
         "note": TEXT,
     }

@@ -25,6 +25,7 @@ from granchain.postprocess.observables.max_peak import MaxPeakForce
 from granchain.postprocess.observables.registry import (
     CONTEXT_UNITS,
     OBSERVABLES,
+    SENSOR_OBSERVABLES,
     Measured,
     kinds,
     measure,
@@ -62,6 +63,7 @@ __all__ = [
     "OBSERVABLES",
     "ONE_BEAD",
     "PERIODIC_CELLS",
+    "SENSOR_OBSERVABLES",
     "LeadingPeakForce",
     "LeadingPeakForceNondim",
     "MaxPeakForce",

@@ -17,7 +17,7 @@ import numpy as np
 
 from granchain.postprocess.observables.base import Measurement
 from granchain.postprocess.observables.event import _BAR, _EventObservable, _why_unended
-from granchain.postprocess.sensors import sensor_static_forces
+from granchain.postprocess.observables.sensor import sensor_static_forces
 from granchain.problem import scene_static_forces
 
 

@@ -19,6 +19,7 @@ from granchain.postprocess.observables.event_max import EventMaxContactForce, Ev
 from granchain.postprocess.observables.far_end import FarEndEnergy
 from granchain.postprocess.observables.leading import LeadingPeakForce, LeadingPeakForceNondim
 from granchain.postprocess.observables.max_peak import MaxPeakForce
+from granchain.postprocess.observables.sensor import SensorObservable, SensorPeakForce, SensorTimeOfPeak
 from granchain.postprocess.observables.spatial import SpatialDecay
 from granchain.postprocess.observables.spectral import FarEndAmplitude, Transmission
 from granchain.postprocess.observables.wave_speed import WaveSpeed
@@ -44,6 +45,10 @@ OBSERVABLES: dict[str, Observable] = {
         SpatialDecay(),
     )
 }
+
+#: name -> a sensor bead's quantity, in the order summary.json's ``sensors`` writes them: one value per
+#: sensor bead each (SensorObservable.key), written under ``sensors``, not in ``observables``
+SENSOR_OBSERVABLES: dict[str, SensorObservable] = {o.name: o for o in (SensorPeakForce(), SensorTimeOfPeak())}
 
 #: what a run's observables carry besides the observables, where they are measured: the window (its
 #: first and last contact), the contact the leading pulse is read at (the window's last) and, on a
@@ -182,4 +187,13 @@ def registry_table() -> str:
     return "\n".join(rows) + "\n"
 
 
-__all__ = ["ONE_BEAD", "OBSERVABLES", "Measured", "kinds", "measure", "measure_observables", "units"]
+__all__ = [
+    "ONE_BEAD",
+    "OBSERVABLES",
+    "SENSOR_OBSERVABLES",
+    "Measured",
+    "kinds",
+    "measure",
+    "measure_observables",
+    "units",
+]
