@@ -17,7 +17,8 @@ from granchain.exceptions import GranchainError
 from granchain.lammps.runner import run_lammps
 from granchain.postprocess.comparison_table import compare_runs
 from granchain.postprocess.dumps import peaks_from_samples
-from granchain.postprocess.sensors import SENSOR_QUANTITIES, bead_average, sensor_key, sensor_static_forces
+from granchain.postprocess.observables import SENSOR_OBSERVABLES
+from granchain.postprocess.sensors import bead_average, sensor_key, sensor_static_forces
 from granchain.problem import ChainProblem
 from granchain.reference.solver import solve_chain
 from granchain.scene import parse_scene
@@ -211,9 +212,9 @@ def test_every_sensor_quantity_is_in_summary_compare_campaign_plots_terminal_and
 
     sc = parse_scene(scene_text(6, wall=False, sensors=(2, 5), end=6e-5), source="places.toml")
     r = run_reference(sc, "verlet")
-    keys = [sensor_key(q, b) for b in sc.outputs.sensors for q in SENSOR_QUANTITIES]
+    keys = [sensor_key(q, b) for b in sc.outputs.sensors for q in SENSOR_OBSERVABLES]
     summary = r.summary
-    for q in SENSOR_QUANTITIES:
+    for q in SENSOR_OBSERVABLES:
         assert len(summary["sensors"][q]) == 2
         assert None not in summary["sensors"][q]
     rows = {row.quantity for row in compare_runs(r, r)}
@@ -223,7 +224,7 @@ def test_every_sensor_quantity_is_in_summary_compare_campaign_plots_terminal_and
     printed = capsys.readouterr().out
     assert all(k in printed for k in keys)
     text = DOCS.read_text()
-    assert all(f"`{q}_bead_<i>`" in text for q in SENSOR_QUANTITIES)
+    assert all(f"`{q}_bead_<i>`" in text for q in SENSOR_OBSERVABLES)
     d = write_run_dir(r, tmp_path / "run")
     loaded = load_run(d)
     assert np.array_equal(loaded.solution.sensor_history_force, r.solution.sensor_history_force)

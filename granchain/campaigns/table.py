@@ -47,8 +47,7 @@ from granchain.campaigns import model
 from granchain.campaigns import workspace as wsp
 from granchain.campaigns.search import read_history, static_force
 from granchain.campaigns.spec import CampaignError
-from granchain.postprocess.observables import table_columns, units, with_error_bars
-from granchain.postprocess.sensors import SENSOR_QUANTITIES, sensor_key
+from granchain.postprocess.observables import SENSOR_OBSERVABLES, table_columns, units, with_error_bars
 from granchain.scene import KEY_UNITS
 
 TIMING_COLUMNS = ("wall_time",)  # differ between two runs of the same point; everything else is reproducible
@@ -171,9 +170,9 @@ def _sensor_columns(summary: dict) -> dict:
     for k, bead in enumerate(beads):
         if isinstance(bead, bool) or not isinstance(bead, int):
             continue
-        for quantity in SENSOR_QUANTITIES:
+        for quantity, obs in SENSOR_OBSERVABLES.items():
             values = sensors.get(quantity) if isinstance(sensors.get(quantity), list) else []
-            key = sensor_key(quantity, bead)
+            key = obs.key(bead)
             out[key] = _number(values[k]) if k < len(values) else None
             out[f"{key}_error"] = _number(_dict(errs.get(key)).get("error"))
     return out

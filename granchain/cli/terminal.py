@@ -16,8 +16,7 @@ from granchain.exceptions import UsageError
 from granchain.peaks import REACHED_FRACTION, end_contact_reached, reflection_pending
 from granchain.physics.effects import unbalanced_forces
 from granchain.postprocess.comparison_table import dynamic_name
-from granchain.postprocess.observables import END_PEAKS, units
-from granchain.postprocess.sensors import SENSOR_QUANTITIES, sensor_key
+from granchain.postprocess.observables import END_PEAKS, SENSOR_OBSERVABLES, units
 from granchain.results import printable
 from granchain.scene import Scene, load_scene
 
@@ -252,8 +251,8 @@ def print_sensors(s: dict) -> None:
         return
     errors = (s.get("errors") or {}).get("end_peaks", {})
     for k, bead in enumerate(sensors["beads"]):
-        for quantity, (unit, _) in SENSOR_QUANTITIES.items():
-            key, v = sensor_key(quantity, bead), sensors[quantity][k]
+        for quantity, obs in SENSOR_OBSERVABLES.items():
+            unit, key, v = obs.unit, obs.key(bead), sensors[quantity][k]
             e = errors.get(key)
             bar = ""
             if e is not None and v is not None:  # the measured error bar, or why there is none

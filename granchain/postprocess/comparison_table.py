@@ -13,8 +13,8 @@ from granchain.peaks import REACHED_FRACTION
 from granchain.physics.effects import unbalanced_forces
 from granchain.physics.effects.gravity import scene_static_forces
 from granchain.physics.predictions import applicability, predict
-from granchain.postprocess.observables import END_PEAKS, OBSERVABLES
-from granchain.postprocess.sensors import SENSOR_QUANTITIES, sensor_key, sensor_values
+from granchain.postprocess.observables import END_PEAKS, OBSERVABLES, SENSOR_OBSERVABLES
+from granchain.postprocess.sensors import sensor_values
 
 
 @dataclass(frozen=True)
@@ -334,7 +334,7 @@ def _missing_reasons(result, sol, obs: dict) -> dict[str, str]:
 def _sensor_rows(scene, sa, sb) -> list[tuple[str, str, float | None, float | None]]:
     """The sensor beads' rows (postprocess.sensors: each sensor's peak and its time), bead by bead."""
     va, vb = sensor_values(scene, sa)[0], sensor_values(scene, sb)[0]
-    keys = [(sensor_key(q, b), unit) for b in scene.outputs.sensors for q, (unit, _) in SENSOR_QUANTITIES.items()]
+    keys = [(obs.key(b), obs.unit) for b in scene.outputs.sensors for obs in SENSOR_OBSERVABLES.values()]
     return [(key, unit, va[key], vb[key]) for key, unit in keys]
 
 

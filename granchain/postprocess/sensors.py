@@ -1,8 +1,9 @@
 """Sensor beads ([outputs] sensors): what a piezo embedded in a bead reads, in one place for both
-backends, and how the outputs report it: per sensor bead, its peak and its time, named
-SENSOR_QUANTITIES' key and the bead (sensor_key), in summary.json's ``sensors``, ``granchain
-compare``'s rows, the campaign table's columns, the error bars, the plots and docs/observables.md
-("Sensor beads"; tests/test_sensors.py checks that every one of those places has every quantity).
+backends, and how the outputs report it: per sensor bead, its peak and its time, named by the
+registry's sensor observables (observables.SENSOR_OBSERVABLES) and the bead (sensor_key), in
+summary.json's ``sensors``, ``granchain compare``'s rows, the campaign table's columns, the error
+bars, the plots and docs/observables.md ("Sensor beads"; tests/test_sensors.py checks that every one
+of those places has every quantity).
 
 A sensor bead's force is its average force (F_{i-1,i} + F_{i,i+1}) / 2; its peak is its largest
 complete peak (the force has fallen to half of it since: granchain.peaks.complete_peaks) above its own
@@ -27,16 +28,8 @@ import numpy as np
 
 from granchain.peaks import REACHED_FRACTION, complete_peaks
 from granchain.physics.effects.gravity import scene_static_forces
-
-#: a sensor bead's reported quantities: name -> (unit, definition); the key of one bead's is sensor_key
-SENSOR_QUANTITIES = {
-    "sensor_peak_force": (
-        "N",
-        "the sensor bead's largest complete peak of its average force (F_{i-1,i} + F_{i,i+1}) / 2, above "
-        "its static average force (a striker's and a wall's contact count; a missing contact is 0)",
-    ),
-    "sensor_time_of_peak": ("s", "the time of that peak: the sensor's arrival"),
-}
+from granchain.postprocess.observables.registry import SENSOR_OBSERVABLES
+from granchain.postprocess.observables.sensor import sensor_static_forces
 
 #: the note summary.json's ``sensors`` carries: what a sensor reads at the chain's ends
 SENSOR_NOTE = (
@@ -47,13 +40,14 @@ SENSOR_NOTE = (
 
 
 def sensor_key(quantity: str, bead: int) -> str:
-    """The name of one sensor bead's quantity (SENSOR_QUANTITIES), as a compare row and a column."""
-    return f"{quantity}_bead_{int(bead)}"
+    """The name of one sensor bead's quantity (a registered sensor observable's, SENSOR_OBSERVABLES), as
+    a compare row and a column."""
+    return SENSOR_OBSERVABLES[quantity].key(bead)
 
 
 def sensor_keys(scene) -> tuple[str, ...]:
     """Every sensor quantity's key of the scene's sensor beads, bead by bead."""
-    return tuple(sensor_key(q, b) for b in scene.outputs.sensors for q in SENSOR_QUANTITIES)
+    return tuple(sensor_key(q, b) for b in scene.outputs.sensors for q in SENSOR_OBSERVABLES)
 
 
 def sensor_values(scene, solution) -> tuple[dict, dict]:
@@ -93,31 +87,10 @@ def sensor_summary(scene, solution) -> dict:
     return {
         "beads": beads,
         "static_force": [float(x) for x in sensor_static_forces(scene)],
-        **{q: [values[sensor_key(q, b)] for b in beads] for q in SENSOR_QUANTITIES},
+        **{q: [values[sensor_key(q, b)] for b in beads] for q in SENSOR_OBSERVABLES},
         "missing": missing,
         "note": SENSOR_NOTE,
     }
-
-
-def sensor_static_forces(scene) -> np.ndarray:
-    """Each sensor bead's force at rest, N: the average of its two contacts' static forces.
-
-    Parameters
-    ----------
-    scene : Scene
-        The scene ([outputs] sensors, 1-based beads).
-
-    Returns
-    -------
-    ndarray
-        (S,): (F_static(left) + F_static(right)) / 2, a striker's contact (unloaded at t = 0) and a
-        missing contact counting 0, a wall's its static force (F0 plus the chain's weight).
-    """
-    n = scene.chain.beads
-    static = scene_static_forces(scene)  # the N-1 bead-bead contacts, then the wall's (with a wall)
-    padded = np.concatenate(([0.0], static[: n - 1], [static[n - 1] if static.size >= n else 0.0]))
-    beads = np.asarray(scene.outputs.sensors, dtype=int)
-    return 0.5 * (padded[beads - 1] + padded[beads])
 
 
 def bead_average(contact_force: np.ndarray) -> np.ndarray:

@@ -56,6 +56,7 @@ from granchain.workflows.errorbars.bars import (
     measured_contacts,
     per_contact,
 )
+from granchain.workflows.errorbars.cover import Covering, continued_status, unmeasured_status
 from granchain.workflows.errorbars.facts import (
     RK4_COMPANION_SHARE,
     RK4_STEP_COST,
@@ -213,4 +214,10 @@ def estimate_errors(
     the first strategy's in STRATEGIES that applies (ErrorBarStrategy.estimate).
     """
     req = Request(method, result.scene, checked, numpy_speed, rk4_runs=run_rk4 is not None)
-    return strategy(req).estimate(req, result, run_one, run_rk4, stable_timestep, absolute_positions)
+    # a companion that ends inside its own event is continued to its end (errorbars.cover)
+    own, rk4 = Covering(run_one, result.solution), Covering(run_rk4, result.solution)
+    rk4_one = rk4 if run_rk4 is not None else None
+    report = strategy(req).estimate(req, result, own, rk4_one, stable_timestep, absolute_positions)
+    unmeasured_status(report, result.scene, result.solution, own.companions + rk4.companions)
+    continued_status(report, own.continued + rk4.continued)
+    return report

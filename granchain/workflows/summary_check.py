@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from granchain.postprocess.observables import END_PEAKS
+from granchain.postprocess.observables import END_PEAKS, FIELD_KINDS, SENSOR_OBSERVABLES, kinds, with_error_bars
 
 #: the deepest nesting granchain writes is about 5 (errors.observables.<name>.<field>); far deeper is
 #: not granchain's and would exhaust the stack of whatever walks it (copy.deepcopy, repr)
@@ -108,7 +108,48 @@ _PROVENANCE = Record(
     }
 )
 
-_ERRORS = Record({"observables": MapOf(opt(Record({"error": opt(NUMBER)})))})
+#: each JSON kind an observable's field takes (postprocess.observables.FIELD_KINDS) -> its spec here
+KIND_SPECS = {
+    "number": NUMBER,
+    "integer": INTEGER,
+    "numbers": ListOf(NUMBER),
+    "integers": ListOf(INTEGER),
+    "sections": ListOf(
+        Record({"contacts": ListOf(INTEGER), "speed": NUMBER, "stderr": opt(NUMBER), "arrivals": INTEGER})
+    ),
+}
+assert set(KIND_SPECS) == set(FIELD_KINDS), "a kind of observable field without its spec here"
+
+#: summary.json's ``observables``: every key the registry declares (the context's and each observable's
+#: value and companions, postprocess.observables.kinds), of its kind or null; a key it does not declare is
+#: not checked (a newer granchain's observable loads)
+_OBSERVABLES = Record({key: opt(KIND_SPECS[kind]) for key, kind in kinds().items()})
+
+#: one number's error bar (errors.observables.<name>, errors.end_peaks.<name>)
+_BAR = Record(
+    {
+        "value": opt(NUMBER),
+        "error": opt(NUMBER),
+        "status": TEXT,
+        "step_error": opt(NUMBER),
+        "fit_stderr": opt(NUMBER),
+        "step_error_bound": opt(NUMBER),
+    }
+)
+
+_ERRORS = Record({"observables": Record({name: opt(_BAR) for name in with_error_bars()}), "end_peaks": MapOf(_BAR)})
+
+#: summary.json's ``sensors`` (postprocess.sensors.sensor_summary): the beads, their static forces, each
+#: quantity bead by bead (null where unmeasured), why each null is, the note
+_SENSORS = Record(
+    {
+        "beads": ListOf(INTEGER),
+        "static_force": ListOf(NUMBER),
+        **{q: ListOf(opt(NUMBER)) for q in SENSOR_OBSERVABLES},
+        "missing": MapOf(opt(TEXT)),
+        "note": TEXT,
+    }
+)
 
 #: the fields of summary.json that load_run, RunResult and its displays read
 SUMMARY = Record(
@@ -125,7 +166,7 @@ SUMMARY = Record(
         "contact_law": TEXT,
         "loading": TEXT,
         "wall_time": NUMBER,
-        "observables": MapOf(ANY),
+        "observables": _OBSERVABLES,
         "observables_missing": MapOf(TEXT),
         "observables_inapplicable": ListOf(TEXT),
         "observables_notes": MapOf(TEXT),
@@ -135,6 +176,7 @@ SUMMARY = Record(
         **{k: opt(FLAG if k == o.complete_field else NUMBER) for o in END_PEAKS.values() for k in o.summary_keys},
         "event": MapOf(opt(NUMBER)),
         "event_maxima": MapOf(ListOf(NUMBER)),
+        "sensors": _SENSORS,
         "extra": Record({}),
         "error_estimate": opt(NUMBER),
         "errors": opt(_ERRORS),

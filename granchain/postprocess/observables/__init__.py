@@ -11,7 +11,7 @@ is not quite what its name says, what it is (``observables_notes``).
 
 from __future__ import annotations
 
-from granchain.postprocess.observables.base import NEEDS, ONE_BEAD, Measurement, Observable
+from granchain.postprocess.observables.base import FIELD_KINDS, NEEDS, ONE_BEAD, Measurement, Observable
 from granchain.postprocess.observables.ends import END_PEAKS, EndPeak, end_summary, end_summary_keys
 from granchain.postprocess.observables.fit import (
     FIT_CONTACTS,
@@ -25,7 +25,9 @@ from granchain.postprocess.observables.max_peak import MaxPeakForce
 from granchain.postprocess.observables.registry import (
     CONTEXT_UNITS,
     OBSERVABLES,
+    SENSOR_OBSERVABLES,
     Measured,
+    kinds,
     measure,
     measure_observables,
     registry_table,
@@ -55,11 +57,13 @@ __all__ = [
     "EndPeak",
     "end_summary",
     "end_summary_keys",
+    "FIELD_KINDS",
     "FIT_CONTACTS",
     "NEEDS",
     "OBSERVABLES",
     "ONE_BEAD",
     "PERIODIC_CELLS",
+    "SENSOR_OBSERVABLES",
     "LeadingPeakForce",
     "LeadingPeakForceNondim",
     "MaxPeakForce",
@@ -75,6 +79,7 @@ __all__ = [
     "_window_contacts",
     "contact_kinds",
     "fit_wave_speed",
+    "kinds",
     "front_arrivals",
     "measure",
     "measure_observables",

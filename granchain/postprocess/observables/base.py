@@ -21,7 +21,9 @@ Rules for writing a new observable:
    companions that are None with it, with its reason, where it is unmeasured), ``table_fields`` (the
    companions a campaign table carries as columns after it), ``contact_field`` (the key naming the
    contact it is read at, if any: a context key or a companion), ``shown`` (whether a result's short
-   display shows it), ``asked`` (whether a run that ends before measuring it says so: unmeasured
+   display shows it), ``field_kinds`` (the JSON kind of each companion that is not a number or, for
+   a contact or a bead, a whole number: FIELD_KINDS, which summary.json's check reads), ``asked``
+   (whether a run that ends before measuring it says so: unmeasured
    outputs, the command line's exit 1), ``compared`` (whether ``granchain compare`` has a row for it).
 2. ``applies(scene)``: None where the scene can measure it, else the reason it never can, whatever
    the run (the base class: a chain of one bead has no bead-bead contact); ``applies_where`` says
@@ -66,6 +68,12 @@ HARMONIC_DRIVE = (
 )
 
 
+#: the JSON kinds an observable's value and companions take in summary.json (Observable.kinds): a
+#: number, a whole number, a list of numbers, a list of whole numbers (a range of contacts), a list
+#: of fitted stretches ({contacts, speed, stderr, arrivals}: the wave speed's sections)
+FIELD_KINDS = ("number", "integer", "numbers", "integers", "sections")
+
+
 class Measurement(NamedTuple):
     """What an observable measured in one run: its value (None where unmeasured), its companions'
     values (Observable.companions, in order), why the value is None, and a note on what a measured value
@@ -96,6 +104,19 @@ class Observable:
     applies_where: ClassVar[str] = "a chain of two beads or more (one bead-bead contact at least)"
     at_leading_pulse: ClassVar[bool] = False
     fit_stderr: ClassVar[str | None] = None
+    #: the JSON kind of each companion that is not a number (FIELD_KINDS), as summary.json writes it;
+    #: a companion of unit "contact" or "bead" is an "integer" unless named here (kinds())
+    field_kinds: ClassVar[dict[str, str]] = {}
+
+    def kinds(self) -> dict[str, str]:
+        """Its value's and every companion's JSON kind (FIELD_KINDS), in summary.json's order: the value
+        a number, a companion per field_kinds, else "integer" for a contact or a bead, else a number.
+        workflows.summary_check checks a loaded summary.json's ``observables`` against them (each may
+        also be null: unmeasured)."""
+        out = {self.name: "number"}
+        for key, unit in self.companions.items():
+            out[key] = self.field_kinds.get(key, "integer" if unit in ("contact", "bead") else "number")
+        return out
 
     def applies(self, scene) -> str | None:
         """None where the scene can measure the observable, else why it never can (one bead; a

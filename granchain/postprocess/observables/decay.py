@@ -15,7 +15,7 @@ that says nothing. Dissipation (a dashpot) and a taper of shrinking beads make t
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
@@ -146,6 +146,7 @@ class LeadingPulseDecayLength(_DecayFit):
     amplitude, stderr = "leading_pulse_decay_amplitude", "leading_pulse_decay_length_stderr"
     shares_reason = (amplitude, stderr)
     table_fields = (stderr, "leading_pulse_decay_contacts")
+    field_kinds: ClassVar[dict[str, str]] = {"leading_pulse_decay_contacts": "integer"}
     fit_stderr = stderr
 
     def measure(self, scene, solution) -> Measurement:

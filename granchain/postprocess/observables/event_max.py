@@ -17,7 +17,7 @@ import numpy as np
 
 from granchain.postprocess.observables.base import Measurement
 from granchain.postprocess.observables.event import _BAR, _EventObservable, _why_unended
-from granchain.postprocess.sensors import sensor_static_forces
+from granchain.postprocess.observables.sensor import sensor_static_forces
 from granchain.problem import scene_static_forces
 
 
@@ -83,6 +83,9 @@ class EventMaxContactForce(_EventMax):
     }
     shares_reason = tuple(companions)
     table_fields = ("event_max_contact", "event_contact_time_of_max")
+    field_kinds: ClassVar[dict[str, str]] = dict.fromkeys(
+        ("event_contact_max_forces", "event_contact_times_of_max"), "numbers"
+    )
     shown = True
 
     def static(self, scene) -> np.ndarray:
@@ -111,6 +114,9 @@ class EventMaxSensorForce(_EventMax):
     }
     shares_reason = tuple(companions)
     table_fields = ("event_max_sensor", "event_sensor_time_of_max")
+    field_kinds: ClassVar[dict[str, str]] = dict.fromkeys(
+        ("event_sensor_max_forces", "event_sensor_times_of_max"), "numbers"
+    )
     shown = True
 
     def static(self, scene) -> np.ndarray:

@@ -19,6 +19,7 @@ from granchain.postprocess.observables.event_max import EventMaxContactForce, Ev
 from granchain.postprocess.observables.far_end import FarEndEnergy
 from granchain.postprocess.observables.leading import LeadingPeakForce, LeadingPeakForceNondim
 from granchain.postprocess.observables.max_peak import MaxPeakForce
+from granchain.postprocess.observables.sensor import SensorObservable, SensorPeakForce, SensorTimeOfPeak
 from granchain.postprocess.observables.spatial import SpatialDecay
 from granchain.postprocess.observables.spectral import FarEndAmplitude, Transmission
 from granchain.postprocess.observables.wave_speed import WaveSpeed
@@ -45,10 +46,16 @@ OBSERVABLES: dict[str, Observable] = {
     )
 }
 
+#: name -> a sensor bead's quantity, in the order summary.json's ``sensors`` writes them: one value per
+#: sensor bead each (SensorObservable.key), written under ``sensors``, not in ``observables``
+SENSOR_OBSERVABLES: dict[str, SensorObservable] = {o.name: o for o in (SensorPeakForce(), SensorTimeOfPeak())}
+
 #: what a run's observables carry besides the observables, where they are measured: the window (its
 #: first and last contact), the contact the leading pulse is read at (the window's last) and, on a
 #: precompressed chain, the static force F0 the forces are measured above (key -> unit)
 CONTEXT_UNITS = {"window": "contacts", "leading_peak_contact": "contact", "static_force": "N"}
+#: the context's JSON kinds (base.FIELD_KINDS): the window's first and last contact, a contact, a force
+CONTEXT_KINDS = {"window": "integers", "leading_peak_contact": "integer", "static_force": "number"}
 
 #: a chain of one bead's context, after its observables (as summary.json has always written it): no
 #: window, no contact and no arrival to fit
@@ -121,6 +128,16 @@ def units() -> dict[str, str]:
     return out
 
 
+def kinds() -> dict[str, str]:
+    """Every key of a run's observables -> its JSON kind (base.FIELD_KINDS; each may also be null): the
+    context's and each registered observable's (Observable.kinds), which summary.json's check reads
+    (workflows.summary_check), so that no observable's field goes unchecked."""
+    out = dict(CONTEXT_KINDS)
+    for obs in OBSERVABLES.values():
+        out.update(obs.kinds())
+    return out
+
+
 def _with_contacts(observables: list[Observable], fields) -> tuple[str, ...]:
     """The observables' names, each followed by fields(obs), and the contact a group of observables
     read at one contact is read at (contact_field) after the last of the group."""
@@ -170,4 +187,13 @@ def registry_table() -> str:
     return "\n".join(rows) + "\n"
 
 
-__all__ = ["ONE_BEAD", "OBSERVABLES", "Measured", "measure", "measure_observables", "units"]
+__all__ = [
+    "ONE_BEAD",
+    "OBSERVABLES",
+    "SENSOR_OBSERVABLES",
+    "Measured",
+    "kinds",
+    "measure",
+    "measure_observables",
+    "units",
+]

@@ -117,6 +117,7 @@ class SpatialDecay(_Spectral):
     }
     shares_reason = tuple(companions)
     table_fields = ("spatial_decay_db", "spatial_decay_error")
+    field_kinds: ClassVar[dict[str, str]] = {"spatial_decay_cell": "integer", "spatial_decay_contacts": "integers"}
     error_bar = (
         "the time step's error from the companion runs (each keeps every contact's history and fits the same "
         "window); the fit's and the window's bars are the *_error companions"

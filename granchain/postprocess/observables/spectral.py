@@ -165,6 +165,7 @@ class FarEndAmplitude(_Spectral):
     shares_reason = tuple(companions)
     table_fields = ("far_end_amplitude_error", "drive_amplitude", "steady_window_start", "steady_window_end")
     contact_field = "far_end_contact"
+    field_kinds: ClassVar[dict[str, str]] = {"steady_window_periods": "integer"}
     shown = True
 
     def measure(self, scene, solution) -> Measurement:

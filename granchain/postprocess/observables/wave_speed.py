@@ -17,6 +17,8 @@ window of fewer than PERIODIC_CELLS cells) is noted as an average too, with no s
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 
 from granchain.postprocess.observables.base import Measurement, Observable
@@ -116,6 +118,7 @@ class WaveSpeed(Observable):
         "wave_speed_sections": "m/s per stretch",
     }
     shares_reason = ("wave_speed_stderr",)
+    field_kinds: ClassVar[dict[str, str]] = {"wave_speed_contacts": "integer", "wave_speed_sections": "sections"}
     table_fields = ("wave_speed_stderr", "wave_speed_contacts")
     shown = True
     asked = True
