@@ -84,7 +84,7 @@ def _draw_histories(r: RunResult, ax=None):
         c = int(header[i].split("_")[1])
         kw = {"color": cmap(norm(c))} if many else {"label": rf"$v_{{{c}}}$"}
         ax2.plot(t, data[:, i], lw=1, **kw)
-    ax1.set_ylabel(_histories_label(static, bool(sensed.size)))
+    ax1.set_ylabel(_histories_label(static, int(r.scene.chain.beads), bool(sensed.size)))
     ax2.set_ylabel(r"bead velocity $v_i$ (m/s)")
     if not vcols:  # sensors only: a legend of nothing drawn warned, and the empty panel said nothing
         ax2.text(0.5, 0.5, NO_VELOCITIES, transform=ax2.transAxes, ha="center", va="center", fontsize=9, color="0.3")
@@ -106,13 +106,16 @@ def _draw_histories(r: RunResult, ax=None):
     return root, names, [data[:, 0] if fcols else sensed, *[data[:, i] for i in fcols + vcols], *sensor_cols]
 
 
-def _histories_label(static: np.ndarray | None, sensed: bool) -> str:
+def _histories_label(static: np.ndarray | None, beads: int, sensed: bool) -> str:
     """The histories' force axis label: which force it shows (tables.force_label), the sensors' too."""
+    sensor = r"sensor $(F_{i-1,i} + F_{i,i+1})/2$"
     if static is None:
-        return r"contact force $F_{i,i+1}$" + (r", sensor $(F_{i-1,i} + F_{i,i+1})/2$" if sensed else "") + " (N)"
-    label = force_label(static, "contact force", "F_{i,i+1}", "")
+        return r"contact force $F_{i,i+1}$" + (f", {sensor}" if sensed else "") + " (N)"
+    if beads < 2:  # a sensor alone, on the wall's contact: no bead-bead contact's F_0 to name
+        return f"dynamic {sensor}\nless its static force (N)"
+    label = force_label(static[: beads - 1], "contact force", "F_{i,i+1}", "", split=True)
     # a sensor's static force is its own two contacts' average (bead 1's under a velocity load: F0 / 2)
-    return label.replace(" (N", r", sensor $(F_{i-1,i} + F_{i,i+1})/2$ less its static (N", 1) if sensed else label
+    return label.replace("\n(N", f",\n{sensor} less its static\n(N", 1) if sensed else label
 
 
 def _sensor_lines(
@@ -368,7 +371,8 @@ def _draw_snapshots(r: RunResult, ax=None):
         for k, c in zip(cols, (rows[:, 0], rows[:, 1], rows[:, 3], rows[:, 4]), strict=True):
             cols[k].append(c)
     ax1.plot(pk.contact, pk.peak_force, "k--", lw=1, label="peak-force envelope (whole run)")
-    ax1.set_ylabel(force_label(static, "contact force", "F_{i,i+1}", r"contact force $F_{i,i+1}$ (N)"))
+    contacts = None if static is None else static[: int(r.scene.chain.beads) - 1]  # the bead-bead ones
+    ax1.set_ylabel(force_label(contacts, "contact force", "F_{i,i+1}", r"contact force $F_{i,i+1}$ (N)", split=True))
     ax2.set_ylabel(r"bead velocity $v_i$ (m/s)")
     ax2.set_xlabel(r"bead / contact $i$ (index)")
     ax1.set_title(f"Force and velocity along the chain — {_label(summary)}", fontsize=10)

@@ -141,7 +141,9 @@ def compare_histories(compare_dir) -> tuple[list[HistoryOverlay], str]:
     # the dynamic force above each contact's static force where it has one (dynamic_histories), as the
     # runs report it; the same scene's static forces in both, so their difference is the same either way
     a, b = (dict(zip(header, data.T, strict=True)) for header, data, _ in map(dynamic_histories, (ra, rb)))
-    label = force_label(static_forces(rb), "contact force", "F_{i,i+1}", HistoryOverlay.label)
+    static = static_forces(rb)
+    contacts = None if static is None else static[: int(rb.scene.chain.beads) - 1]  # the bead-bead ones
+    label = force_label(contacts, "contact force", "F_{i,i+1}", HistoryOverlay.label, split=True)
     contacts = sorted(
         {int(k.split("_")[1]) for k in a if k.startswith("force_")}
         & {int(k.split("_")[1]) for k in b if k.startswith("force_")}

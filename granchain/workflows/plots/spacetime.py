@@ -201,7 +201,8 @@ def _draw_heatmap(r: RunResult, st: SpaceTime, ax=None):
     # below the static force) on either
     below = log_scale or bool(np.any(f < norm.vmin))
     cb = fig.colorbar(mesh, ax=ax, extend="min" if below else "neither")
-    label = force_label(static, "contact force", "F_{i,i+1}", r"contact force $F_{i,i+1}$ (N)")
+    contacts = None if static is None else static[: int(r.scene.chain.beads) - 1]  # the bead-bead ones
+    label = force_label(contacts, "contact force", "F_{i,i+1}", r"contact force $F_{i,i+1}$ (N)")
     cb.set_label(label[:-1] + (", log scale" if log_scale else "") + ")")
     ax.set_xlabel(CONTACT_LABEL)
     ax.set_ylabel(rf"time $t$ ({unit})")

@@ -57,15 +57,17 @@ def one_static_force(static: np.ndarray) -> bool:
     return bool(np.allclose(static, static[0], rtol=1e-12, atol=0.0))
 
 
-def force_label(static: np.ndarray | None, what: str, symbol: str, total: str) -> str:
-    """An axis label saying which force it shows: `total` without a static force; else the dynamic force
-    `symbol` less F_0 (one value on every contact, given in the label) or less F_{0,i} (each contact's
-    own: gravity's weight above it), in the peaks figure's words ("dynamic peak force $F_p - F_0$")."""
-    if static is None:
+def force_label(static: np.ndarray | None, what: str, symbol: str, total: str, split: bool = False) -> str:
+    """An axis label saying which force it shows: `total` without a static force (or no contact); else the
+    dynamic force `symbol` less F_0 (one value on every contact, given in the label) or less F_{0,i} (each
+    contact's own: gravity's weight above it), in the peaks figure's words ("dynamic peak force $F_p -
+    F_0$"); split: the unit on a second line (a short panel's axis holds no longer line)."""
+    if static is None or not np.size(static):
         return total
+    gap = "\n" if split else " "
     if one_static_force(static):
-        return rf"dynamic {what} ${symbol} - F_0$ (N, $F_0$ = {float(static[0]):g} N)"
-    return rf"dynamic {what} ${symbol} - F_{{0,i}}$ (N)"
+        return rf"dynamic {what} ${symbol} - F_0${gap}(N, $F_0$ = {float(static[0]):g} N)"
+    return rf"dynamic {what} ${symbol} - F_{{0,i}}${gap}(N)"
 
 
 def dynamic_peaks(r: RunResult, pk: Peaks) -> tuple[Peaks, str, str, str, str]:
