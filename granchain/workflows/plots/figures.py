@@ -15,6 +15,7 @@ from matplotlib.ticker import MaxNLocator
 
 from granchain.physics.predictions import applicability
 from granchain.postprocess.observables import END_PEAKS
+from granchain.postprocess.sensors import sensor_static_forces
 from granchain.results import RunResult
 from granchain.workflows.plots.canvas import (
     CONTACT_LABEL,
@@ -40,11 +41,14 @@ from granchain.workflows.plots.spacetime import (
     write_heatmap,
 )
 from granchain.workflows.plots.tables import (
-    _histories_table,
     _snapshots_table,
     as_result,
+    csv_name,
+    dynamic_histories,
     dynamic_peaks,
+    force_label,
     load_peaks,
+    static_forces,
 )
 
 #: the velocity panel of a run whose histories are its sensor beads' only
@@ -61,7 +65,7 @@ def _draw_histories(r: RunResult, ax=None):
     if not r.solution.history_contacts and not sensed.size:
         return None
     summary = r.summary
-    header, data = _histories_table(r)
+    header, data, static = dynamic_histories(r)  # the dynamic force under precompression or gravity
     factor, unit = _time_unit(float(np.max(data[:, 0])) if data.size else float(np.max(sensed, initial=0.0)))
     t = data[:, 0] * factor
     fcols = [i for i, h in enumerate(header) if h.startswith("force_")]
@@ -75,14 +79,12 @@ def _draw_histories(r: RunResult, ax=None):
         c = int(header[i].split("_")[1])
         kw = {"color": cmap(norm(c))} if many else {"label": rf"$F_{{{c},{c + 1}}}$"}
         ax1.plot(t, data[:, i], lw=1, **kw)
-    sensor_header, sensor_cols = _sensor_lines(r, ax1, factor, data[:, 0])
+    sensor_header, sensor_cols = _sensor_lines(r, ax1, factor, data[:, 0], static)
     for i in vcols:
         c = int(header[i].split("_")[1])
         kw = {"color": cmap(norm(c))} if many else {"label": rf"$v_{{{c}}}$"}
         ax2.plot(t, data[:, i], lw=1, **kw)
-    ax1.set_ylabel(
-        r"contact force $F_{i,i+1}$" + (r", sensor $(F_{i-1,i} + F_{i,i+1})/2$" if sensed.size else "") + " (N)"
-    )
+    ax1.set_ylabel(_histories_label(static, int(r.scene.chain.beads), bool(sensed.size)))
     ax2.set_ylabel(r"bead velocity $v_i$ (m/s)")
     if not vcols:  # sensors only: a legend of nothing drawn warned, and the empty panel said nothing
         ax2.text(0.5, 0.5, NO_VELOCITIES, transform=ax2.transAxes, ha="center", va="center", fontsize=9, color="0.3")
@@ -100,22 +102,38 @@ def _draw_histories(r: RunResult, ax=None):
             ax2.legend(fontsize=8)
         if not given:
             fig.tight_layout()
-    names = [header[0], *[header[i] for i in fcols + vcols], *sensor_header]
+    names = [header[0], *[csv_name(header[i], static) for i in fcols], *[header[i] for i in vcols], *sensor_header]
     return root, names, [data[:, 0] if fcols else sensed, *[data[:, i] for i in fcols + vcols], *sensor_cols]
 
 
-def _sensor_lines(r: RunResult, ax, factor: float, times: np.ndarray) -> tuple[list[str], list[np.ndarray]]:
+def _histories_label(static: np.ndarray | None, beads: int, sensed: bool) -> str:
+    """The histories' force axis label: which force it shows (tables.force_label), the sensors' too."""
+    sensor = r"sensor $(F_{i-1,i} + F_{i,i+1})/2$"
+    if static is None:
+        return r"contact force $F_{i,i+1}$" + (f", {sensor}" if sensed else "") + " (N)"
+    if beads < 2:  # a sensor alone, on the wall's contact: no bead-bead contact's F_0 to name
+        return f"dynamic {sensor}\nless its static force (N)"
+    label = force_label(static[: beads - 1], "contact force", "F_{i,i+1}", "", split=True)
+    # a sensor's static force is its own two contacts' average (bead 1's under a velocity load: F0 / 2)
+    return label.replace("\n(N", f",\n{sensor} less its static\n(N", 1) if sensed else label
+
+
+def _sensor_lines(
+    r: RunResult, ax, factor: float, times: np.ndarray, static: np.ndarray | None
+) -> tuple[list[str], list[np.ndarray]]:
     """Each sensor bead's average force history (postprocess.sensors) on ax, dashed beside the contacts',
-    and its CSV columns where its samples are the contact histories' (times; without contact histories,
-    its own)."""
+    less its static average force where the contacts have a static force (as sensor_peak_force is), and
+    its CSV columns where its samples are the contact histories' (times; without contact histories, its
+    own)."""
     s = r.solution
     if not s.sensor_history_time.size:
         return [], []
     header, cols = [], []
+    rest = sensor_static_forces(r.scene) if static is not None else np.zeros(len(s.sensor_beads))
     for k, bead in enumerate(s.sensor_beads):
-        f = s.sensor_history_force[:, k]
+        f = s.sensor_history_force[:, k] - rest[k]
         ax.plot(s.sensor_history_time * factor, f, lw=1.2, ls="--", color=f"C{k % 10}", label=f"sensor bead {bead}")
-        header.append(f"sensor_force_bead_{bead}")
+        header.append(f"sensor_{csv_name('force', static)}_bead_{bead}")
         cols.append(f)
     same = not times.size or np.array_equal(times, s.sensor_history_time)
     return (header, cols) if same else ([], [])
@@ -333,14 +351,18 @@ def _draw_snapshots(r: RunResult, ax=None):
         return None
     summary = r.summary
     data = _snapshots_table(r)
-    pk = load_peaks(r)
+    static = static_forces(r)
+    if static is not None:  # each contact's force above its static force, as the run reports it
+        n = int(r.scene.chain.beads)
+        data[:, 4] -= np.tile(np.append(static[: n - 1], 0.0), data.shape[0] // n)  # bead N: no contact
+    pk, *_ = dynamic_peaks(r, load_peaks(r))
     times = np.unique(data[:, 0])
     factor, unit = _time_unit(float(times.max()))
     many = times.size > LEGEND_MAX
     cmap = _cmap("viridis")
     norm = Normalize(times.min() * factor, times.max() * factor) if many else None
     fig, (ax1, ax2), root, given = canvas(ax, 2, figsize=(9, 7), layout="constrained" if many else None)
-    cols = {"time": [], "bead": [], "velocity": [], "contact_force": []}
+    cols = {"time": [], "bead": [], "velocity": [], csv_name("contact_force", static): []}
     for t in times:
         rows = data[data[:, 0] == t]
         kw = {"color": cmap(norm(t * factor))} if many else {"label": rf"$t$ = {t * factor:g} {unit}"}
@@ -349,7 +371,8 @@ def _draw_snapshots(r: RunResult, ax=None):
         for k, c in zip(cols, (rows[:, 0], rows[:, 1], rows[:, 3], rows[:, 4]), strict=True):
             cols[k].append(c)
     ax1.plot(pk.contact, pk.peak_force, "k--", lw=1, label="peak-force envelope (whole run)")
-    ax1.set_ylabel(r"contact force $F_{i,i+1}$ (N)")
+    contacts = None if static is None else static[: int(r.scene.chain.beads) - 1]  # the bead-bead ones
+    ax1.set_ylabel(force_label(contacts, "contact force", "F_{i,i+1}", r"contact force $F_{i,i+1}$ (N)", split=True))
     ax2.set_ylabel(r"bead velocity $v_i$ (m/s)")
     ax2.set_xlabel(r"bead / contact $i$ (index)")
     ax1.set_title(f"Force and velocity along the chain — {_label(summary)}", fontsize=10)

@@ -32,10 +32,12 @@ from granchain.workflows.plots.canvas import (
     log_axes_ticks,
 )
 from granchain.workflows.plots.tables import (
-    _histories_table,
     as_result,
+    dynamic_histories,
     dynamic_peaks,
+    force_label,
     load_peaks,
+    static_forces,
 )
 
 logger = logging.getLogger(__name__)
@@ -57,6 +59,8 @@ class HistoryOverlay:
     reference: np.ndarray
     difference: np.ndarray  # lammps - reference
     grid: str  # how the two runs' samples were put on one time grid
+    #: which force the histories are (tables.force_label: above each contact's static force where it has one)
+    label: str = r"contact force $F_{i,i+1}$ (N)"
 
 
 @dataclass
@@ -134,7 +138,12 @@ def compare_histories(compare_dir) -> tuple[list[HistoryOverlay], str]:
     ]
     if missing:
         return [], f"no force histories to compare ({' and '.join(missing)} missing: [outputs] histories)"
-    a, b = (dict(zip(*_histories_table(r)[0:1], _histories_table(r)[1].T, strict=True)) for r in (ra, rb))
+    # the dynamic force above each contact's static force where it has one (dynamic_histories), as the
+    # runs report it; the same scene's static forces in both, so their difference is the same either way
+    a, b = (dict(zip(header, data.T, strict=True)) for header, data, _ in map(dynamic_histories, (ra, rb)))
+    static = static_forces(rb)
+    contacts = None if static is None else static[: int(rb.scene.chain.beads) - 1]  # the bead-bead ones
+    label = force_label(contacts, "contact force", "F_{i,i+1}", HistoryOverlay.label, split=True)
     contacts = sorted(
         {int(k.split("_")[1]) for k in a if k.startswith("force_")}
         & {int(k.split("_")[1]) for k in b if k.startswith("force_")}
@@ -144,7 +153,7 @@ def compare_histories(compare_dir) -> tuple[list[HistoryOverlay], str]:
     out = []
     for c in contacts:
         t, fa, fb, grid = _on_one_grid(a["time"], a[f"force_{c}"], b["time"], b[f"force_{c}"], "LAMMPS", "reference")
-        out.append(HistoryOverlay(c, t, fa, fb, fa - fb, grid))
+        out.append(HistoryOverlay(c, t, fa, fb, fa - fb, grid, label))
     return out, ""
 
 
@@ -194,7 +203,7 @@ def _draw_compare_histories(overlays: list[HistoryOverlay], la: str, lr: str, ax
         cb = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label=r"contact $i$ (index)")
         cb.ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax2.axhline(0.0, color="0.5", lw=0.6)
-    ax1.set_ylabel(r"contact force $F_{i,i+1}$ (N)")
+    ax1.set_ylabel(overlays[0].label)
     ax2.set_ylabel(r"$F^{\mathrm{LAMMPS}} - F^{\mathrm{ref}}$ (N)")
     ax2.set_xlabel(rf"time $t$ ({unit})")
     peak = max(float(np.max(np.abs(o.reference))) for o in overlays) or 1.0

@@ -29,6 +29,9 @@ from granchain.workflows.plots.tables import (
     _histories_table,
     _snapshots_table,
     as_result,
+    csv_name,
+    force_label,
+    static_forces,
 )
 
 logger = logging.getLogger(__name__)
@@ -166,7 +169,18 @@ def heatmap_data(st: SpaceTime, max_cells: int = HEATMAP_MAX_CELLS) -> SpaceTime
     return SpaceTime(time, contacts, force, source)
 
 
+def dynamic_spacetime(r: RunResult, st: SpaceTime) -> tuple[SpaceTime, np.ndarray | None]:
+    """st with each contact's force less its static force (tables.static_forces: F0, gravity's weight
+    above it), the force the run reports, and those static forces; st itself where there are none."""
+    static = static_forces(r)
+    if static is None:
+        return st, None
+    force = st.force - static[np.asarray(st.contacts, dtype=int) - 1]
+    return SpaceTime(st.time, st.contacts, force, st.source), static
+
+
 def _draw_heatmap(r: RunResult, st: SpaceTime, ax=None):
+    st, static = dynamic_spacetime(r, st)  # before the block maxima: each contact less its own
     st = heatmap_data(st)
     summary = r.summary
     factor, unit = _time_unit(float(np.nanmax(st.time)))
@@ -183,14 +197,19 @@ def _draw_heatmap(r: RunResult, st: SpaceTime, ax=None):
         norm = Normalize(vmin=0.0, vmax=fmax if fmax > 0 else 1.0)
     fig, ax, root, given = canvas(ax, 1, figsize=(8, 6))
     mesh = ax.pcolormesh(st.contacts, st.time * factor, f, shading="nearest", cmap=cmap, norm=norm, rasterized=True)
-    cb = fig.colorbar(mesh, ax=ax, extend="min" if log_scale else "neither")
-    cb.set_label(r"contact force $F_{i,i+1}$ (N" + (", log scale" if log_scale else "") + ")")
+    # below the scale: open contacts and weak ones on a log scale, a dynamic force below zero (unloading
+    # below the static force) on either
+    below = log_scale or bool(np.any(f < norm.vmin))
+    cb = fig.colorbar(mesh, ax=ax, extend="min" if below else "neither")
+    contacts = None if static is None else static[: int(r.scene.chain.beads) - 1]  # the bead-bead ones
+    label = force_label(contacts, "contact force", "F_{i,i+1}", r"contact force $F_{i,i+1}$ (N)")
+    cb.set_label(label[:-1] + (", log scale" if log_scale else "") + ")")
     ax.set_xlabel(CONTACT_LABEL)
     ax.set_ylabel(rf"time $t$ ({unit})")
     ax.set_title(f"Contact force over the chain and time — {_label(summary)}\nfrom {_plain(st.source)}", fontsize=9)
     if not given:
         fig.tight_layout()
-    return root, ["time", *[f"force_{c}" for c in st.contacts]], [st.time, *st.force.T]
+    return root, ["time", *[csv_name(f"force_{c}", static) for c in st.contacts]], [st.time, *st.force.T]
 
 
 def figure_heatmap(run, ax=None) -> Figure:
