@@ -53,10 +53,10 @@ struct LawPower {
   }
 
   // alpha^n: where n = m + h/2 is whole or half-whole (d[4] = m >= 0, m <= 3), (sqrt(alpha) or 1) times
-  // (1, alpha, alpha^2 or alpha^2 alpha), each picked by index, not by a branch: with a different n from
-  // contact to contact (the disorder list) the branches of a loop or of conditional products were
-  // mispredicted (benchmarks/RESULTS.md, 2026-12-03; g++ -O2 made both into jumps); else pow. The numpy
-  // twin (PowerLaw.power) takes the same products in the same order
+  // (1, alpha, alpha^2 or alpha^2 alpha), each picked by index, not by a branch (g++ -O2 makes a loop or
+  // conditional products into jumps, which an n changing from contact to contact can mispredict: the
+  // indexed form took 0.95 of their loop time on the disorder list, benchmarks/RESULTS.md, 2026-12-03);
+  // else pow. The numpy twin (PowerLaw.power) takes the same products in the same order
   static inline double power(double alpha, const double *d)
   {
     if (d[4] < 0.0) return pow(alpha, d[1]);
@@ -75,7 +75,7 @@ struct LawPower {
   }
 
   // dF/dalpha = n k alpha^(n-1) = n F / alpha at overlap alpha > 0 from the force F there (felastic,
-  // force()'s), 0 apart: a division instead of a second pow (the numpy twin's tangent_given_force)
+  // force()'s), 0 apart: a division instead of a second pow (the numpy twin's damping_tangent)
   static inline double tangent(double alpha, double /*am*/, const double *d, double felastic)
   {
     return alpha > 0.0 ? d[1] * felastic / alpha : 0.0;
