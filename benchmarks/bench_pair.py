@@ -286,6 +286,9 @@ def power_lines(exponents, n: int) -> str:
 
 #: the disorder list's exponents (each contact draws one: 3 x 4 atom types, bead_kinds)
 DISORDER = (1.3, 1.5, 1.7, 2.0)
+#: the same list in whole and half-whole exponents only, which chain/power takes without pow: what the
+#: list costs besides pow (its atom types' records, an exponent changing from contact to contact)
+DISORDER_HALVES = (1.0, 1.5, 2.0, 2.5)
 
 
 def part_variants(n: int, steps: int, sections: str) -> dict[str, tuple[str, str]]:
@@ -302,6 +305,10 @@ def part_variants(n: int, steps: int, sections: str) -> dict[str, tuple[str, str
         "hertz + kuwabara_kono 1 us": ("hertz", "", "[damping]\nkuwabara_kono = 1e-6\n"),
         "power list 1.5 / 2.5": ("power", power_lines([1.5] * half + [2.5] * (n - 1 - half), n), ""),
         "power list, disorder": ("power", power_lines(rng.choice(DISORDER, n - 1).tolist(), n), ""),
+        "power list, disorder in halves": ("power", power_lines(rng.choice(DISORDER_HALVES, n - 1).tolist(), n), ""),
+        "power n = 1.3": ("power", power_lines(1.3, n), ""),
+        "power n = 1.5 + kuwabara_kono 1 us": ("power", power_lines(1.5, n), "[damping]\nkuwabara_kono = 1e-6\n"),
+        "power n = 1.3 + kuwabara_kono 1 us": ("power", power_lines(1.3, n), "[damping]\nkuwabara_kono = 1e-6\n"),
     }
     out = {}
     for name, (law, extra, damping) in parts.items():

@@ -18,7 +18,7 @@ struct DampingKuwabara_kono {
   template <class Law>
   static inline double force(double felastic, double alpha, double am, const double *d, double rate, double a)
   {
-    const double f = felastic + a * Law::tangent(alpha, am, d) * rate;    // the total never pulls
+    const double f = felastic + a * Law::tangent(alpha, am, d, felastic) * rate;    // the total never pulls
     return f > 0.0 ? f : 0.0;
   }
 };

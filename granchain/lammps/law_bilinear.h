@@ -58,7 +58,7 @@ struct LawBilinear {
 
   // dF/dalpha of the branch in force (the numpy twin's overlap_tangent): k on the loading line
   // (alpha = am), k_u while un/reloading with a force, 0 apart
-  static inline double tangent(double alpha, double am, const double *c)
+  static inline double tangent(double alpha, double am, const double *c, double /*felastic*/)
   {
     if (!(alpha > 0.0)) return 0.0;
     if (alpha >= am) return c[4];

@@ -50,7 +50,10 @@ struct LawHertz {
   }
 
   // dF/dalpha at overlap alpha >= 0 (the damping parts' tangent; the numpy twin's overlap_tangent)
-  static inline double tangent(double alpha, double /*am*/, const double *d) { return 1.5 * d[0] * sqrt(alpha); }
+  static inline double tangent(double alpha, double /*am*/, const double *d, double /*felastic*/)
+  {
+    return 1.5 * d[0] * sqrt(alpha);
+  }
 };
 
 }    // namespace LAMMPS_NS

@@ -52,13 +52,18 @@ struct LawPower {
     d[5] = halves ? twice - 2.0 * std::floor(c[1]) : 0.0;
   }
 
-  // alpha^n: products and a sqrt where n is whole or half-whole (d[4] >= 0), else pow
+  // alpha^n: where n = m + h/2 is whole or half-whole (d[4] = m >= 0, m <= 3), (sqrt(alpha) or 1) times
+  // (1, alpha, alpha^2 or alpha^2 alpha), each picked by index, not by a branch (g++ -O2 makes a loop or
+  // conditional products into jumps, which an n changing from contact to contact can mispredict: the
+  // indexed form took 0.95 of their loop time on the disorder list, benchmarks/RESULTS.md, 2026-12-03);
+  // else pow. The numpy twin (PowerLaw.power) takes the same products in the same order
   static inline double power(double alpha, const double *d)
   {
     if (d[4] < 0.0) return pow(alpha, d[1]);
-    double p = d[5] > 0.0 ? sqrt(alpha) : 1.0;
-    for (int i = 0; i < static_cast<int>(d[4]); i++) p *= alpha;
-    return p;
+    const double a2 = alpha * alpha;
+    const double whole[4] = {1.0, alpha, a2, a2 * alpha};
+    const double half[2] = {1.0, sqrt(alpha)};
+    return half[static_cast<int>(d[5])] * whole[static_cast<int>(d[4])];
   }
 
   // alpha >= 0 the overlap, am (unused) the largest overlap including this one, d from derive()
@@ -69,10 +74,11 @@ struct LawPower {
     return d[0] * power(alpha, d);
   }
 
-  // dF/dalpha = n k alpha^(n-1) at overlap alpha >= 0, 0 apart (the numpy twin's overlap_tangent)
-  static inline double tangent(double alpha, double /*am*/, const double *d)
+  // dF/dalpha = n k alpha^(n-1) = n F / alpha at overlap alpha > 0 from the force F there (felastic,
+  // force()'s), 0 apart: a division instead of a second pow (the numpy twin's damping_tangent)
+  static inline double tangent(double alpha, double /*am*/, const double *d, double felastic)
   {
-    return alpha > 0.0 ? d[1] * d[0] * pow(alpha, d[1] - 1.0) : 0.0;
+    return alpha > 0.0 ? d[1] * felastic / alpha : 0.0;
   }
 };
 

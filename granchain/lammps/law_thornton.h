@@ -93,7 +93,7 @@ struct LawThornton {
 
   // dF/dalpha of the branch in force (the numpy twin's overlap_tangent): the plastic slope S on the
   // virgin plastic line (alpha = am > d_y), else the un/reloading Hertz curve's 3/2 k_p sqrt(alpha - d_p)
-  static inline double tangent(double alpha, double am, const double *c)
+  static inline double tangent(double alpha, double am, const double *c, double /*felastic*/)
   {
     const double k = c[K], dy = c[DY];
     if (am <= dy) return 1.5 * k * sqrt(alpha);

@@ -39,7 +39,8 @@
  *   force(alpha, am, d, energy, dissipated)   the force at overlap alpha >= 0 (d from derive) with am = max(alpha_max
  *                                before this step, alpha), the history after it; writes the stored
  *                                energy and the energy dissipated so far where the pointers are not null
- *   tangent(alpha, am, d)        dF/dalpha of the branch in force (the damping parts read it)
+ *   tangent(alpha, am, d, f)     dF/dalpha of the branch in force (the damping parts read it), f the
+ *                                force() there (a law may derive the tangent from it)
  * Each damping part is a header (damping_<name>.h) with a struct: word (its pair_style word), velocity
  * (its force needs the overlap rate) and force<Law>(felastic, alpha, am, d, rate, coeff), the damped
  * total, never negative. PairChain<Law> does the rest (neighbour loop, history, damping, peaks,

@@ -3,8 +3,8 @@
 Brilliantov, Spahn, Hertzsch & Poeschel, PRE 53, 5382 (1996) derive it for viscoelastic spheres: the
 dissipative force is the dissipative constant A (a time) times the elastic force's rate,
 A (dF_el/dalpha) d(alpha)/dt, for Hertz (3/2) A K sqrt(alpha) d(alpha)/dt. Here it applies to every
-normal law through the law's tangent of the branch in force (ContactLaw.overlap_tangent: loading or
-unloading), and the total force never pulls (clipped at 0).
+normal law through the law's tangent of the branch in force (ContactLaw.damping_tangent, given the
+elastic force: loading or unloading), and the total force never pulls (clipped at 0).
 
 Its restitution (restitution; the part's declared two-body model, which `granchain predict` shows
 with its domain) is the series of Ramirez, Poeschel, Brilliantov & Schwager, PRE 60,
@@ -122,7 +122,7 @@ class KuwabaraKono(DampingPart):
     @override
     def damped_force(cls, coefficient: float, law, alpha, alpha_max, rate, elastic) -> np.ndarray:
         # A dF/dalpha (the branch in force) d(alpha)/dt; the total never pulls
-        return np.maximum(elastic + coefficient * law.overlap_tangent(alpha, alpha_max) * rate, 0.0)
+        return np.maximum(elastic + coefficient * law.damping_tangent(alpha, alpha_max, elastic) * rate, 0.0)
 
     @classmethod
     @override

@@ -34,8 +34,9 @@ on them; tests/test_laws.py and tests/test_kernels.py check them for every regis
    fronts). Each law defines both: a plastic law's virgin curve is softer than its unloading.
    ``overlap_tangent(alpha, alpha_max)``: dF/dalpha of the branch in force at overlap alpha (the
    loading branch where alpha >= the history, else the unloading one), the damping parts' tangent
-   (granchain.physics.damping: Kuwabara-Kono's A dF/dalpha d(alpha)/dt); its C++ twin is the
-   kernel's ``tangent(alpha, am, d)``, the same expression.
+   (granchain.physics.damping: Kuwabara-Kono's A dF/dalpha d(alpha)/dt, through
+   ``damping_tangent(alpha, alpha_max, force)``, which may derive it from the force there); its C++
+   twin is the kernel's ``tangent(alpha, am, d, f)``, the same expression.
 4. ``kinks(alpha_max)``: where dF/dalpha (or a higher derivative) jumps, for RK4's event location:
    overlaps (one per contact) with where they apply; ``turn_level(alpha_max)``: a contact whose
    overlap turns (from rising to falling) above this level starts unloading on another curve (None:
@@ -226,6 +227,12 @@ class ContactLaw:
         """dF/dalpha of the branch in force at overlap alpha >= 0 (rule 3): the loading branch where
         alpha >= alpha_max (before this step, as force takes it), else the unloading one; 0 apart."""
         raise NotImplementedError
+
+    def damping_tangent(self, alpha: ArrayLike, alpha_max: ArrayLike | None, force: ArrayLike) -> np.ndarray:
+        """``overlap_tangent`` at overlap alpha given ``force``, the law's force there (the damping parts'
+        tangent, rule 3; C++ ``tangent(alpha, am, d, f)``): a law may derive it from the force, as the
+        power law's n F / alpha does instead of a second power; by default the force is not read."""
+        return self.overlap_tangent(alpha, alpha_max)
 
     def max_stiffness(self, force: ArrayLike) -> np.ndarray:
         """The stiffest dF/dalpha of a contact loaded up to `force`: ``tangent_stiffness`` unless a law

@@ -99,15 +99,63 @@ class PowerLaw(ContactLaw):
     def loading_exponent(self):
         return np.asarray(self.exponent, dtype=float)
 
+    @cached_property
+    def _halves(self) -> tuple[np.ndarray, np.ndarray]:
+        """(m, h) with n = m + h/2 where n is whole or half-whole (m = -1 elsewhere), as integer arrays
+        (0-d for a scalar n): the C++ kernel's derive() d[4], d[5]."""
+        n = np.array(self.exponent, dtype=float)
+        twice = 2.0 * n
+        halves = twice == np.floor(twice)
+        m = np.where(halves, np.floor(n), -1.0)
+        h = np.where(halves, twice - 2.0 * np.floor(n), 0.0)
+        return m.astype(int), h.astype(int)
+
+    def power(self, alpha: ArrayLike) -> np.ndarray:
+        """alpha^n at overlaps alpha >= 0 in the C++ kernel's arithmetic (LawPower::power): where n = m +
+        h/2 is whole or half-whole, (sqrt(alpha) or 1) times (1, alpha, alpha^2 or alpha^2 alpha); pow
+        (np.power) for any other n. Both backends then round alike (1, 3/2, 2, 5/2 and 3 need no pow:
+        a contact in force costs a pow's time otherwise, benchmarks/RESULTS.md, 2026-12-03)."""
+        a = np.asarray(alpha, dtype=float)
+        m, h = self._halves
+        out = np.empty(np.broadcast_shapes(a.shape, m.shape))
+        self._power_into(a, out, np.empty_like(out))
+        return out
+
+    def _power_into(self, a: np.ndarray, out: np.ndarray, tmp: np.ndarray) -> None:
+        """power(a) into out (tmp: scratch of its shape)."""
+        _, n = self._operands
+        m, h = self._halves
+        if m.ndim:  # one exponent per contact: each contact's products, pow where n is neither
+            a2 = a * a
+            out[...] = np.choose(np.maximum(m, 0), (1.0, a, a2, a2 * a))
+            out *= np.where(h > 0, np.sqrt(a), 1.0)
+            if np.any(m < 0):
+                out[...] = np.where(m < 0, np.power(a, n), out)
+            return
+        if m < 0:
+            np.power(a, n, out=out)
+            return
+        if m == 0:
+            out.fill(1.0)
+        elif m == 1:
+            out[...] = a
+        else:
+            np.multiply(a, a, out=out)
+            if m == 3:
+                np.multiply(out, a, out=out)
+        if h:
+            np.sqrt(a, out=tmp)
+            np.multiply(tmp, out, out=out)
+
     @override
     def force(self, alpha, alpha_max=None):
-        k, n = self._operands
-        return k * np.maximum(alpha, 0.0) ** n
+        k, _ = self._operands
+        return k * self.power(np.maximum(alpha, 0.0))
 
     @override
     def force_into(self, alpha, alpha_max, out, tmp):
-        k, n = self._operands
-        np.power(alpha, n, out=out)
+        k, _ = self._operands
+        self._power_into(alpha, out, tmp)
         np.multiply(out, k, out=out)
 
     @override
@@ -140,6 +188,16 @@ class PowerLaw(ContactLaw):
         k, n = self._operands
         a = np.asarray(alpha, dtype=float)
         return np.where(a > 0.0, n * k * np.maximum(a, 0.0) ** (n - 1.0), 0.0)
+
+    @override
+    def damping_tangent(self, alpha, alpha_max, force):
+        # n F / alpha from the force there, as the C++ kernel's tangent (no second pow); apart 0
+        _, n = self._operands
+        a = np.asarray(alpha, dtype=float)
+        nf = n * np.asarray(force, dtype=float)
+        out = np.zeros(np.broadcast_shapes(a.shape, nf.shape))
+        np.divide(nf, a, out=out, where=a > 0.0)
+        return out
 
     @override
     def kinks(self, alpha_max):
