@@ -52,7 +52,7 @@ def expected_peak_force(scene) -> float:
     """An upper estimate of the largest contact force of the run above its static force (N), from the
     paper's models; a harmonic drive's HARMONIC_PEAK_AMPLITUDES x its amplitude."""
     if scene.loading.is_harmonic:
-        return HARMONIC_PEAK_AMPLITUDES * scene.loading.amplitude
+        return HARMONIC_PEAK_AMPLITUDES * scene.drive_amplitude  # (a shaker's: its driver's force)
     return scene.contact.law_class.expected_peak_force(scene, scene.input_impulse, step_equivalent(scene))
 
 
