@@ -27,6 +27,8 @@ class DrivenEnergyLedger(EnergyLedger):
         self.force = drive_function(p.amplitude, p.frequency, p.ramp_time)
         self.drive_work = 0.0
         self.power = 0.0  # f v_1 at the last step's end (0 at t = 0: f(0) = 0)
+        if p.shaker:  # a shaker's driver: F_c0 v_d, F0 v_d(0) at t = 0
+            self.power = float(state.fc[0]) * float(state.v[state.load_bead])
         self.t_last = 0.0
 
     @override

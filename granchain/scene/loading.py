@@ -70,6 +70,12 @@ class Loading:
         return self.kind in ("step", "impulse", "harmonic")
 
     @property
+    def timed(self) -> bool:
+        """The load acts on 0 < t <= T and stops at T, a breakpoint of the step plan: a force load, or a
+        shaker (whose driver stops there)."""
+        return self.is_force or self.is_shaker
+
+    @property
     def is_step(self) -> bool:
         """The load is the paper's constant force A on 0 < t <= T (Eq. 4: step or impulse), whose work
         is A times bead 1's displacement and whose models (Eqs. 8, 15) apply."""
