@@ -49,7 +49,11 @@ CASES = [
     # uncompressed and free, no ramp: the driver starts at A 2 pi f, pushes bead 1 and loses it
     pytest.param("hertz", "", 0.0, id="hertz-free-no-ramp"),
 ]
-TOLERANCE = {"": OPENING}
+#: a law with kinks (bilinear, Thornton): Verlet crosses a kink a step early or late with the round-off of
+#: either backend, as under the force drive (tests/test_harmonic_load.py: 1e-8; measured 4.5e-9, bilinear)
+KINKED = ("bilinear", "thornton")
+#: gravity's static state as chain.data's positions hold it is a round-off off the reference's (each
+#: contact at its own weight; measured 1.3e-9 with Kuwabara-Kono damping): 1e-8, as the force drive's
 
 
 @pytest.mark.parametrize(("law", "extra", "ramp"), CASES)
@@ -62,12 +66,13 @@ def test_lammps_and_the_reference_verlet_agree_step_for_step(law, extra, ramp):
     assert lam.history_force.shape == ref.history_force.shape
     scale = np.max(np.abs(ref.history_force))
     assert scale > 0.0
-    assert np.max(np.abs(lam.history_force - ref.history_force)) <= TOLERANCE.get(extra, STEP_FOR_STEP) * scale
+    tolerance = OPENING if (not extra or law in KINKED or "[gravity]" in extra) else STEP_FOR_STEP
+    assert np.max(np.abs(lam.history_force - ref.history_force)) <= tolerance * scale
     # the final velocities, the chain's ringing after the driver stopped, as the force drive's test has
     # them (tests/test_harmonic_load.py): each a sum of the steps' kicks (measured: 1.7e-8 of the largest)
     assert np.max(np.abs(lam.velocity - ref.velocity)) <= 1e-7 * np.max(np.abs(ref.velocity))
     # (of the largest: a far contact an uncompressed chain barely reaches peaks at round-off)
-    assert np.max(np.abs(lam.peak_force - ref.peak_force)) <= TOLERANCE.get(extra, STEP_FOR_STEP) * scale
+    assert np.max(np.abs(lam.peak_force - ref.peak_force)) <= tolerance * scale
     # the driver's work, summed the same way on both; the energy balance holds on each
     assert lam.work[-1] == pytest.approx(ref.work[-1], rel=1e-6)
     put_in = np.max(np.abs(ref.work))
