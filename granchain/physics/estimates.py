@@ -29,6 +29,8 @@ def step_equivalent(scene) -> tuple[float, float] | None:
     ld = scene.loading
     if ld.is_force:
         return ld.amplitude, ld.duration
+    if ld.is_shaker:  # as the force drive of its driver's force scale (Scene.drive_amplitude)
+        return scene.drive_amplitude, ld.duration
     if ld.kind != "striker":
         return None
     # the front's F = k alpha^n onset (ContactLaw.loading_exponent: Hertz 3/2, a loading line 1); with
