@@ -79,11 +79,17 @@ def contact_overlap_bounds(scene) -> np.ndarray:
     return OVERLAP_WATCH * np.concatenate(smaller)
 
 
-def contact_bodies(contact: int, beads: int, striker: bool, wall: bool) -> str:
+def front_body(shaker: bool, front: int) -> bool | str:
+    """contact_bodies' body in front of bead 1: "the shaker's driver", a striker (True) or none (False)."""
+    return "the shaker's driver" if shaker else front > 0
+
+
+def contact_bodies(contact: int, beads: int, striker: bool | str, wall: bool) -> str:
     """What contact number `contact` joins, as the scene numbers contacts: "beads i and i+1", "the
-    striker and bead 1" (contact 0 behind a striker), "bead N and the wall" (contact N with a wall)."""
+    striker and bead 1" (contact 0 behind a striker; striker: a str names the body in front, a shaker's
+    driver), "bead N and the wall" (contact N with a wall)."""
     if striker and contact == 0:
-        return "the striker and bead 1"
+        return f"{striker if isinstance(striker, str) else 'the striker'} and bead 1"
     if wall and contact == beads:
         return f"bead {beads} and the wall"
     return f"beads {contact} and {contact + 1}"

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from typing_extensions import override
 
-from granchain.invariants import InvariantError, contact_bodies, energy_violation, momentum_violation
+from granchain.invariants import InvariantError, contact_bodies, energy_violation, front_body, momentum_violation
 from granchain.peaks import PEAK_PASSED_FRACTION, every_contact_complete, unreached_as_nan
 from granchain.physics.effects import EFFECTS, momentum_kept
 from granchain.problem import state_energy
@@ -478,7 +478,7 @@ class RunWatch(Observer):
             bounds = np.broadcast_to(np.asarray(max_overlap, dtype=float), (state.n - 1,))
             # one bound for all (a uniform chain): the overlaps' largest against it, no division
             self.max_overlap = float(bounds[0]) if bool((bounds == bounds[0]).all()) else bounds.copy()
-        self.front = state.problem.first_bead  # bodies in front of bead 1 (a striker, a driver): contact i + 1 - front
+        self.front, self.shaken = state.problem.first_bead, state.problem.shaker  # (a striker, a driver in front)
         self.energy_watch = energy_watch
         self.momentum_watch = momentum_watch if momentum_kept(state.problem) and not state.problem.driven else None
         self.p_initial = float(np.dot(state.mass_ke, state.v))  # (a striker's or bead 1's initial momentum)
@@ -523,7 +523,7 @@ class RunWatch(Observer):
                 b = float(bound[i])
             if a[i] > b:
                 contact, wall = self.scene_contact(i), not state.free_end
-                bodies = contact_bodies(contact, state.n - self.front - wall, self.front > 0, wall)
+                bodies = contact_bodies(contact, state.n - self.front - wall, front_body(self.shaken, self.front), wall)
                 raise InvariantError(
                     "overlap far below the radius",
                     t,
