@@ -62,7 +62,8 @@ def contact_overlap_bounds(scene) -> np.ndarray:
     -------
     ndarray
         One bound per contact of the chain the solvers integrate (ChainProblem.with_ends): a
-        striker's contact with bead 1 first (the smaller of the striker's and bead 1's radii), then
+        striker's contact with bead 1 first (the smaller of the striker's and bead 1's radii; a
+        shaker's driver's flat: bead 1's), then
         contacts 1 .. N-1 (beads i and i+1), then a wall's contact with bead N (a flat: bead N's
         radius). LAMMPS's atoms are in the same order (templates.atoms.AtomLayout), each contact on
         its left body's atom.
@@ -71,16 +72,24 @@ def contact_overlap_bounds(scene) -> np.ndarray:
     smaller = [np.minimum(r[:-1], r[1:])]
     if scene.loading.kind == "striker":
         smaller.insert(0, np.array([min(float(scene.loading.striker_radius), float(r[0]))]))
+    if scene.loading.is_shaker:  # the driver's flat on bead 1: bead 1's radius
+        smaller.insert(0, r[:1])
     if scene.effects.far_end == "wall":
         smaller.append(r[-1:])
     return OVERLAP_WATCH * np.concatenate(smaller)
 
 
-def contact_bodies(contact: int, beads: int, striker: bool, wall: bool) -> str:
+def front_body(shaker: bool, front: int) -> bool | str:
+    """contact_bodies' body in front of bead 1: "the shaker's driver", a striker (True) or none (False)."""
+    return "the shaker's driver" if shaker else front > 0
+
+
+def contact_bodies(contact: int, beads: int, striker: bool | str, wall: bool) -> str:
     """What contact number `contact` joins, as the scene numbers contacts: "beads i and i+1", "the
-    striker and bead 1" (contact 0 behind a striker), "bead N and the wall" (contact N with a wall)."""
+    striker and bead 1" (contact 0 behind a striker; striker: a str names the body in front, a shaker's
+    driver), "bead N and the wall" (contact N with a wall)."""
     if striker and contact == 0:
-        return "the striker and bead 1"
+        return f"{striker if isinstance(striker, str) else 'the striker'} and bead 1"
     if wall and contact == beads:
         return f"bead {beads} and the wall"
     return f"beads {contact} and {contact + 1}"

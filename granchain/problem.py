@@ -16,6 +16,7 @@ from granchain.physics.effects.gravity import scene_static_forces
 from granchain.physics.effects.gravity import static_profile as static_contact_forces
 from granchain.physics.harmonic import drive_force, drive_impulse
 from granchain.physics.laws import ContactLaw
+from granchain.physics.shaker import shaker_velocity
 
 __all__ = ["scene_static_forces", "static_contact_forces"]  # (re-exported: the problem's static load)
 
@@ -44,6 +45,9 @@ class ChainProblem:
     gravity: float = 0.0  # g, m/s^2: every moving bead carries m_i g toward the far end (a vertical
     # chain on the wall), each contact starts in equilibrium at the weight above it (plus F0)
     front: int = 0  # beads in front of bead 1 (with_ends: a striker), whose contacts start unloaded
+    shaker: bool = False  # the load is a shaker (granchain.physics.shaker): amplitude in m, a rigid driver
+    # against bead 1 whose motion is prescribed; with_ends puts it in front as bead 0 of infinite mass
+    shaker_law: ContactLaw | None = None  # the driver's contact with bead 1 (scene.driver_law; None after with_ends)
 
     @property
     def damping_part(self) -> type[DampingPart]:
@@ -52,21 +56,34 @@ class ChainProblem:
 
     @property
     def driven(self) -> bool:
-        """The load on bead 1 is a harmonic drive, whose force changes within a step (load_force)."""
+        """The load on bead 1 is a harmonic drive, whose force changes within a step (load_force), or a
+        shaker, whose driver's acceleration does (granchain.physics.shaker)."""
         return bool(self.frequency) and bool(self.amplitude)
 
     def load_force(self, t: float) -> float:
         """The load's force on bead 1 at t inside its loaded time (0, T], N: A (a step), or the drive's
-        A sin(2 pi f t) r(t) (granchain.physics.harmonic.drive_force)."""
+        A sin(2 pi f t) r(t) (granchain.physics.harmonic.drive_force); 0 for a shaker (its force is its
+        contact's)."""
+        if self.shaker:
+            return 0.0
         if not self.frequency:
             return self.amplitude
         return drive_force(t, self.amplitude, self.frequency, self.ramp_time, self.duration)
 
     def load_impulse(self, t: float) -> float:
-        """The load's impulse delivered by t, N s: A min(t, T), or the drive's closed form."""
+        """The load's impulse delivered by t, N s: A min(t, T), or the drive's closed form; 0 for a
+        shaker (its driver's push is a contact force, counted with the chain's)."""
+        if self.shaker:
+            return 0.0
         if not self.frequency:
             return self.amplitude * min(self.duration, t)
         return drive_impulse(t, self.amplitude, self.frequency, self.ramp_time, self.duration)
+
+    @property
+    def first_bead(self) -> int:
+        """Bead 1's index in the chain a solver integrates: behind the beads in front (a striker) and a
+        shaker's driver (whose contact, unlike a striker's, starts at the static force)."""
+        return self.front + int(self.shaker and not np.isfinite(self.mass[0]))
 
     @property
     def beads(self) -> int:
@@ -81,6 +98,9 @@ class ChainProblem:
         for effect in active_effects(scene):
             effect.problem_fields(scene, fields)
         ld = scene.loading
+        if ld.is_shaker:
+            drive = {"frequency": ld.frequency, "ramp_time": ld.ramp_time, "shaker": True}
+            return cls(amplitude=ld.amplitude, duration=ld.duration, shaker_law=scene.driver_law, **drive, **fields)
         if ld.is_force:
             drive = {"frequency": ld.frequency, "ramp_time": ld.ramp_time} if ld.is_harmonic else {}
             return cls(amplitude=ld.amplitude, duration=ld.duration, **drive, **fields)
@@ -94,6 +114,11 @@ class ChainProblem:
         mass = self.mass
         for effect in EFFECTS.values():
             mass = effect.ends(self, parts, mass)
+        v0 = self.initial_velocity
+        if self.shaker_law is not None:  # the driver: a rigid flat in front, its motion prescribed
+            parts.insert(0, (self.shaker_law, 1))
+            mass = np.concatenate(([np.inf], mass))
+            v0 = float(shaker_velocity(0.0, self.amplitude, self.frequency, self.ramp_time, self.duration))
         if len(parts) == 1:
             return self
         return ChainProblem(
@@ -103,12 +128,13 @@ class ChainProblem:
             duration=self.duration,
             frequency=self.frequency,
             ramp_time=self.ramp_time,
-            initial_velocity=self.initial_velocity,
+            initial_velocity=v0,
             damping=self.damping,
             damping_coefficient=self.damping_coefficient,
             precompression=self.precompression,
             gravity=self.gravity,
             front=sum(e.beads_in_front for e in EFFECTS.values() if e.in_problem(self)),
+            shaker=self.shaker,
         )
 
 
@@ -162,7 +188,8 @@ def initial_state(problem: ChainProblem) -> tuple[np.ndarray, np.ndarray, np.nda
     alpha_hist = np.zeros(n - 1)  # the history alpha_max (laws with history)
     if has_static_load(problem):
         law = problem.law.contacts(n - 1, s0) if s0 else problem.law
-        force = static_contact_forces(problem.mass[s0:], problem.precompression, problem.gravity)
+        # (a shaker's driver, mass inf, is held by its actuator: its weight is on no contact)
+        force = static_contact_forces(moving_mass(problem.mass[s0:]), problem.precompression, problem.gravity)
         u[s0:], _ = static_state(law, force, n - s0)
         u[:s0] = u[s0]  # the striker touches bead 1 with no overlap
         if problem.law.history:

@@ -67,9 +67,7 @@ def step_times(plan: list[Segment], dt: float) -> np.ndarray:
 def scene_step_plan(scene) -> list[Segment]:
     """The step plan of a scene's run: breakpoints at the end of a force load, every snapshot and the end."""
     ld = scene.loading
-    return step_plan(
-        scene.run.end_time, scene.run.timestep, ld.duration if ld.is_force else 0.0, scene.outputs.snapshots
-    )
+    return step_plan(scene.run.end_time, scene.run.timestep, ld.duration if ld.timed else 0.0, scene.outputs.snapshots)
 
 
 def output_stride(omega_max: float, timestep: float, rtol: float = 1e-3) -> int:

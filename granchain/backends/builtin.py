@@ -16,6 +16,12 @@ from granchain.results import RunResult
 from granchain.schedule import history_stride
 
 
+def driver_history(scene) -> tuple[int, ...]:
+    """(-1,): a shaker's driver's contact with bead 1 (0-based, in front of contact 1), whose force history
+    the spectral observables take as the drive's (postprocess.observables.spectral); () otherwise."""
+    return (-1,) if scene.loading.is_shaker else ()
+
+
 class ReferenceBackend(Backend):
     """granchain's own solver (granchain.reference): RK4 with event location, or velocity Verlet, in
     this process; the yardstick the other backends and every error estimate are measured against."""
@@ -54,7 +60,7 @@ class ReferenceBackend(Backend):
                 scene.run.end_time,
                 scene.run.timestep,
                 method,
-                histories=tuple(i - 1 for i in scene.outputs.histories),
+                histories=driver_history(scene) + tuple(i - 1 for i in scene.outputs.histories),
                 sensors=tuple(b - 1 for b in scene.outputs.sensors),
                 # a sensor's history where the scene asks for one (a companion run's has no interval)
                 sensor_stride=history_stride(scene) if scene.outputs.history_interval is not None else 0,

@@ -199,6 +199,7 @@ def read_solution(
     n, ld = scene.chain.beads, scene.loading
     res = read_results(work)  # by atom ID: templates.RESULT_COLUMNS
     o = atom_layout(scene)["offset"]
+    striker = ld.kind == "striker"  # (atom 1 a striker; a shaker's driver has no momentum of its own)
     end = scene.run.end_time if end_time is None else end_time
     v = res["vx"][o : o + n]
     masses = scene.bead_masses if scene.per_bead else scene.mass
@@ -229,7 +230,7 @@ def read_solution(
         velocity=v,
         alpha_max=res["amax"][o : o + n - 1] if "amax" in res else np.zeros(n - 1),
         impulse_delivered=float(ld.impulse_until(end)),
-        momentum=float(np.sum(masses * v)) + (scene.striker_mass * float(res["vx"][0]) if o else 0.0),
+        momentum=float(np.sum(masses * v)) + (scene.striker_mass * float(res["vx"][0]) if striker else 0.0),
         **ends,
         **event_fields(scene, work),
         **sensor_fields(scene, work, res, o, times),
@@ -346,7 +347,8 @@ def energy_fields(scene, work: Path) -> dict[str, np.ndarray]:
 def history_fields(scene, work: Path, times: np.ndarray) -> dict:
     """The requested contacts' force and left-bead velocity histories (histories.npy, written by fix
     chain/history, or histories.dump); times: the time after every step."""
-    hist = tuple(i - 1 for i in scene.outputs.histories)
+    # (a shaker's driver's contact first, -1: the deck records it on atom 1)
+    hist = ((-1,) if scene.loading.is_shaker else ()) + tuple(i - 1 for i in scene.outputs.histories)
     h_t = np.zeros(0)
     h_f = h_v = np.zeros((0, len(hist)))
     if hist:

@@ -27,7 +27,7 @@ from pathlib import Path
 
 from granchain import safe_files
 from granchain.exceptions import GranchainError
-from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution, contact_bodies
+from granchain.invariants import ENERGY_WATCH, InvariantError, check_solution, contact_bodies, front_body
 from granchain.lammps import server, worker
 from granchain.lammps.build import PLUGIN_NAME, build_plugin, mpich_file, plugin_dir, plugin_env, plugin_key
 from granchain.lammps.readback import (
@@ -452,7 +452,8 @@ def invariant_from_lammps(err: LammpsError, scene) -> InvariantError | None:
             invariant, detail = "momentum", "total momentum differs from the initial momentum plus the impulse (LAMMPS)"
         else:
             lay = atom_layout(scene)
-            bodies = contact_bodies(atom - lay["offset"], scene.chain.beads, lay["striker"], lay["wall"])
+            front = front_body(scene.loading.is_shaker, int(lay["striker"]))
+            bodies = contact_bodies(atom - lay["offset"], scene.chain.beads, front, lay["wall"])
             invariant = "overlap far below the radius"
             detail = f"the force of {bodies} is beyond its law's force at half the smaller radius of the two"
         return InvariantError(invariant, step_times_of(scene)[step], step, atom - atom_layout(scene)["offset"], detail)

@@ -29,6 +29,8 @@ def step_equivalent(scene) -> tuple[float, float] | None:
     ld = scene.loading
     if ld.is_force:
         return ld.amplitude, ld.duration
+    if ld.is_shaker:  # as the force drive of its driver's force scale (Scene.drive_amplitude)
+        return scene.drive_amplitude, ld.duration
     if ld.kind != "striker":
         return None
     # the front's F = k alpha^n onset (ContactLaw.loading_exponent: Hertz 3/2, a loading line 1); with
@@ -52,7 +54,7 @@ def expected_peak_force(scene) -> float:
     """An upper estimate of the largest contact force of the run above its static force (N), from the
     paper's models; a harmonic drive's HARMONIC_PEAK_AMPLITUDES x its amplitude."""
     if scene.loading.is_harmonic:
-        return HARMONIC_PEAK_AMPLITUDES * scene.loading.amplitude
+        return HARMONIC_PEAK_AMPLITUDES * scene.drive_amplitude  # (a shaker's: its driver's force)
     return scene.contact.law_class.expected_peak_force(scene, scene.input_impulse, step_equivalent(scene))
 
 

@@ -1,4 +1,5 @@
-"""The energy ledger of a run under a harmonic drive: the drive's work, accumulated step by step.
+"""The energy ledger of a run under a harmonic drive: the drive's work, accumulated step by step
+(a shaker's: its driver's, P = F_c0 v_d through its contact with bead 1).
 
 A constant force's work is A times bead 1's displacement (reference.observers.EnergyLedger); a
 force that changes in time has no such closed form, so the drive's work W = integral of f(t) v_1 dt
@@ -26,6 +27,8 @@ class DrivenEnergyLedger(EnergyLedger):
         self.force = drive_function(p.amplitude, p.frequency, p.ramp_time)
         self.drive_work = 0.0
         self.power = 0.0  # f v_1 at the last step's end (0 at t = 0: f(0) = 0)
+        if p.shaker:  # a shaker's driver: F_c0 v_d, F0 v_d(0) at t = 0
+            self.power = float(state.fc[0]) * float(state.v[state.load_bead])
         self.t_last = 0.0
 
     @override
@@ -36,7 +39,10 @@ class DrivenEnergyLedger(EnergyLedger):
     def after_step(self, state: ChainState, t0: float, t1: float) -> bool:
         # (t0 is the step's last piece's start under RK4 event location: the step began at t_last)
         if t1 <= self.problem.duration:
-            power = self.force(t1) * float(state.v[state.load_bead])
+            # a shaker's driver (bead 0) works through its contact: P = F_c0 v_d, F_c0 of the step's
+            # last force evaluation (Verlet's at its end)
+            f = float(state.fc[0]) if self.problem.shaker else self.force(t1)
+            power = f * float(state.v[state.load_bead])
             self.drive_work += 0.5 * (self.power + power) * (t1 - self.t_last)
             self.power = power
         else:

@@ -109,7 +109,7 @@ class LeadingPulse(Observer):
         # the chain's own contacts: the solver reports the leading pulse of those only (solve_chain
         # slices the fields it knows; the ladder it does not): behind a striker's contact in front
         # (problem.front) and before a wall's (an immovable last bead)
-        chain = slice(state.problem.front, state.n - 1 - (0 if state.free_end else 1))
+        chain = slice(state.problem.first_bead, state.n - 1 - (0 if state.free_end else 1))
         out = {"leading_pulse_force": force, "leading_pulse_time": np.where(reached, self.time, np.nan)}
         if self.ladder is not None:
             rows = self.ladder.rows()[chain]

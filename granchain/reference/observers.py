@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from typing_extensions import override
 
-from granchain.invariants import InvariantError, contact_bodies, energy_violation, momentum_violation
+from granchain.invariants import InvariantError, contact_bodies, energy_violation, front_body, momentum_violation
 from granchain.peaks import PEAK_PASSED_FRACTION, every_contact_complete, unreached_as_nan
 from granchain.physics.effects import EFFECTS, momentum_kept
 from granchain.problem import state_energy
@@ -85,7 +85,7 @@ class PeakTracker(Observer):
     def __init__(self, state: ChainState) -> None:
         self.static = state.static_force  # each contact's force at rest
         # the chain's own contacts, between a striker's in front (which starts unloaded) and a wall's
-        self.chain = slice(state.problem.front, state.n - 1 - (0 if state.free_end else 1))
+        self.chain = slice(state.problem.first_bead, state.n - 1 - (0 if state.free_end else 1))
         self.amax = state.overlap()  # the running peak overlap: the static overlap at t = 0
         self.listeners: list[Callable[[ChainState, np.ndarray], None]] = []
         self.ladder: CrossingLadder | None = None  # the leading pulse's, climbed at every step before the maxima
@@ -478,7 +478,7 @@ class RunWatch(Observer):
             bounds = np.broadcast_to(np.asarray(max_overlap, dtype=float), (state.n - 1,))
             # one bound for all (a uniform chain): the overlaps' largest against it, no division
             self.max_overlap = float(bounds[0]) if bool((bounds == bounds[0]).all()) else bounds.copy()
-        self.front = state.problem.front  # bodies in front of bead 1 (a striker): contact i + 1 - front
+        self.front, self.shaken = state.problem.first_bead, state.problem.shaker  # (a striker, a driver in front)
         self.energy_watch = energy_watch
         self.momentum_watch = momentum_watch if momentum_kept(state.problem) and not state.problem.driven else None
         self.p_initial = float(np.dot(state.mass_ke, state.v))  # (a striker's or bead 1's initial momentum)
@@ -523,7 +523,7 @@ class RunWatch(Observer):
                 b = float(bound[i])
             if a[i] > b:
                 contact, wall = self.scene_contact(i), not state.free_end
-                bodies = contact_bodies(contact, state.n - self.front - wall, self.front > 0, wall)
+                bodies = contact_bodies(contact, state.n - self.front - wall, front_body(self.shaken, self.front), wall)
                 raise InvariantError(
                     "overlap far below the radius",
                     t,

@@ -47,6 +47,7 @@ from granchain.invariants import InvariantError
 from granchain.peaks import complete_peaks, unreached_as_nan
 from granchain.physics.effects import EFFECTS
 from granchain.physics.harmonic import drive_function
+from granchain.physics.shaker import shaker_acceleration
 from granchain.problem import ChainProblem, static_contact_forces
 from granchain.progress import Progress
 from granchain.reference.drive import energy_ledger
@@ -119,7 +120,8 @@ def solve_chain(problem: ChainProblem, end_time: float, timestep: float, method:
         return _solve(problem, end_time, timestep, method, **kw)
     n = problem.beads
     carried = [e for e in EFFECTS.values() if e.in_problem(problem)]
-    s0 = sum(e.beads_in_front for e in carried)  # index of bead 1 inside
+    # index of bead 1 inside: behind the effects' beads in front (a striker) and a shaker's driver
+    s0 = sum(e.beads_in_front for e in carried) + int(problem.shaker)
     for key in ("histories", "sensors"):  # contacts and beads inside count the beads in front first
         if key in kw:
             kw[key] = tuple(i + s0 for i in kw[key])
@@ -279,6 +281,16 @@ def _start_run(integrator: Integrator, state: ChainState, t: float, observers: l
             observer.after_setup(state)
 
 
+def _drive_function(p: ChainProblem, inv_m1: float):
+    """The load's acceleration as a function of the time within a step (Integrator.drive), or None: a
+    harmonic drive's on bead 1 (inv_m1: its 1 / m), a shaker's driver's own (granchain.physics.shaker)."""
+    if not p.driven:
+        return None
+    if p.shaker:
+        return shaker_acceleration(p.amplitude, p.frequency, p.ramp_time)
+    return drive_function(p.amplitude, p.frequency, p.ramp_time, inv_m1)
+
+
 def _drive(
     state: ChainState,
     integrator: Integrator,
@@ -299,8 +311,9 @@ def _drive(
     inv_m1 = float(state.inv_m[state.load_bead])  # the load (and a striker's F0 push) act on bead 1
     push = state.static_push
     p = state.problem
-    # a harmonic drive changes within a step: the integrator adds it at each stage's time (Integrator.drive)
-    drive = drive_function(p.amplitude, p.frequency, p.ramp_time, inv_m1) if p.driven else None
+    # a harmonic drive changes within a step: the integrator adds it at each stage's time (Integrator.drive);
+    # a shaker's driver (bead 0, of infinite mass) moves with its prescribed acceleration
+    drive = _drive_function(p, inv_m1)
     amplitude = 0.0 if p.driven else p.amplitude
     integrator.start(state)
     for observer in observers:
@@ -309,6 +322,8 @@ def _drive(
     for g in plan:
         a_ext = ((amplitude if g.loaded else 0.0) + push) * inv_m1
         integrator.drive = drive if g.loaded else None
+        if p.shaker and not g.loaded:  # the drive's end: the driver stops where it is, and holds
+            state.v[0] = 0.0
         _start_run(integrator, state, g.start, observers)
         state.seg_end = g.end
         stopped = False

@@ -65,7 +65,10 @@ class ChainState:
         # each contact's force at rest: F0 plus the weight above it (a striker's in front: unloaded)
         self.static_force = np.zeros(n - 1)
         f0 = float(problem.precompression)
-        self.static_force[problem.front :] = static_contact_forces(problem.mass[problem.front :], f0, problem.gravity)
+        # (a shaker's driver, mass inf, carries its weight itself: moving_mass)
+        self.static_force[problem.front :] = static_contact_forces(
+            moving_mass(problem.mass[problem.front :]), f0, problem.gravity
+        )
         # the static force the leading pulse and its ladder rise above: F0, or under gravity the largest
         # (the wall's, F0 + the chain's weight: the deck's pair style takes one value for every contact)
         self.f0 = float(np.max(self.static_force, initial=0.0))

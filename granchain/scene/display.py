@@ -75,8 +75,8 @@ def _loading_facts(ld) -> list[tuple[str, str, str]]:
         values = [("amplitude A", ld.amplitude, "N"), ("duration T", ld.duration, "s")]
     elif ld.kind == "impulse":
         values = [("impulse I", ld.impulse, "N s"), ("duration T", ld.duration, "s")]
-    elif ld.kind == "harmonic":
-        values = [("amplitude A", ld.amplitude, "N"), ("frequency f", ld.frequency, "Hz")]
+    elif ld.is_harmonic:
+        values = [("amplitude A", ld.amplitude, "m" if ld.is_shaker else "N"), ("frequency f", ld.frequency, "Hz")]
         values += [("duration T", ld.duration, "s"), ("cycles", ld.cycles, ""), ("ramp", ld.ramp, "periods")]
     elif ld.kind == "velocity":
         values = [("bead 1's velocity v", ld.velocity, "m/s")]

@@ -10,7 +10,7 @@ from granchain.physics.laws import LAWS as LAW_REGISTRY
 
 LAWS = tuple(LAW_REGISTRY)  # the registered laws' names (granchain.physics.laws.LAWS)
 
-LOADING_KINDS = ("step", "impulse", "harmonic", "velocity", "striker")
+LOADING_KINDS = ("step", "impulse", "harmonic", "velocity", "striker", "shaker")
 
 AUTO = "auto"  # a value the planner chooses (granchain.workflows.plan)
 

@@ -21,9 +21,11 @@ class Loading:
     kind : str
         "step" (amplitude and duration given), "impulse" (I and T given, A = I / T), "harmonic"
         (A sin(2 pi f t) r(t) for 0 < t <= T, r a sin^2 switch-on: granchain.physics.harmonic),
+        "shaker" (a rigid flat driver against bead 1 whose position moves by A sin(2 pi f t) r(t) from
+        where it holds the static F0: granchain.physics.effects.shaker),
         "velocity" (bead 1 moves at t = 0) or "striker" (a sphere hits bead 1).
     amplitude : float
-        A in N (step, impulse, harmonic; else 0).
+        A in N (step, impulse, harmonic), in m (shaker); else 0.
     duration : float
         T, the loading time in s (step, impulse; the drive's length, its ramp included, harmonic; else 0).
     velocity : float
@@ -37,13 +39,13 @@ class Loading:
     striker_mass : float or None
         The striker's mass in kg if the scene gives it; None: from its radius and density.
     frequency : float
-        f in Hz (harmonic; else 0).
+        f in Hz (harmonic, shaker; else 0).
     ramp : float
-        The switch-on's length in periods of the drive (harmonic; else 0).
+        The switch-on's length in periods of the drive (harmonic, shaker; else 0).
     """
 
-    kind: str  # "step" | "impulse" | "harmonic" | "velocity" | "striker"
-    amplitude: float = 0.0  # N (step, impulse, harmonic)
+    kind: str  # "step" | "impulse" | "harmonic" | "shaker" | "velocity" | "striker"
+    amplitude: float = 0.0  # N (step, impulse, harmonic); m (shaker: the driver's displacement)
     duration: float = 0.0  # s (step, impulse, harmonic)
     velocity: float = 0.0  # m/s (velocity: of bead 1; striker: of the striker)
     striker_radius: float = 0.0  # m (striker)
@@ -57,15 +59,21 @@ class Loading:
     def impulse(self) -> float:
         """The force load's impulse: I = A T (Eq. 4), the drive's closed-form integral (harmonic), N s;
         0 for a velocity or striker load (their momentum is Scene.input_impulse)."""
-        if self.is_harmonic:
+        if self.kind == "harmonic":
             return self.impulse_until(self.duration)
-        return self.amplitude * self.duration
+        return self.amplitude * self.duration if self.is_force else 0.0
 
     @property
     def is_force(self) -> bool:
         """The load is a force f(t) on bead 1 for 0 < t <= T (step, impulse or harmonic), not an
         initial velocity."""
         return self.kind in ("step", "impulse", "harmonic")
+
+    @property
+    def timed(self) -> bool:
+        """The load acts on 0 < t <= T and stops at T, a breakpoint of the step plan: a force load, or a
+        shaker (whose driver stops there)."""
+        return self.is_force or self.is_shaker
 
     @property
     def is_step(self) -> bool:
@@ -75,23 +83,29 @@ class Loading:
 
     @property
     def is_harmonic(self) -> bool:
-        """The load is the harmonic drive (granchain.physics.harmonic)."""
-        return self.kind == "harmonic"
+        """The load is a harmonic drive (granchain.physics.harmonic): of force on bead 1 (harmonic), or of
+        the position of a rigid driver against it (shaker)."""
+        return self.kind in ("harmonic", "shaker")
+
+    @property
+    def is_shaker(self) -> bool:
+        """The load is a prescribed displacement of the driver against bead 1 (granchain.physics.effects.shaker)."""
+        return self.kind == "shaker"
 
     @property
     def cycles(self) -> float:
-        """The drive's length in periods, f T (harmonic; else 0)."""
+        """The drive's length in periods, f T (harmonic, shaker; else 0)."""
         return self.frequency * self.duration
 
     @property
     def ramp_time(self) -> float:
-        """t_r, the switch-on's length in s: ramp / f (harmonic; else 0)."""
+        """t_r, the switch-on's length in s: ramp / f (harmonic, shaker; else 0)."""
         return self.ramp / self.frequency if self.frequency else 0.0
 
     def force_at(self, t):
         """The load's force on bead 1 at t (float or array), N: A on 0 < t <= T (step, impulse), the
         drive (harmonic: granchain.physics.harmonic.drive_force), 0 otherwise; the static F0 not included."""
-        if self.is_harmonic:
+        if self.kind == "harmonic":
             return drive_force(t, self.amplitude, self.frequency, self.ramp_time, self.duration)
         t = np.asarray(t, dtype=float)
         out = np.where((t > 0.0) & (t <= self.duration), self.amplitude if self.is_force else 0.0, 0.0)
@@ -100,7 +114,7 @@ class Loading:
     def impulse_until(self, t):
         """The load's impulse delivered by t (float or array), N s: A min(t, T) (step, impulse), the
         drive's closed form (harmonic: granchain.physics.harmonic.drive_impulse), 0 otherwise."""
-        if self.is_harmonic:
+        if self.kind == "harmonic":
             return drive_impulse(t, self.amplitude, self.frequency, self.ramp_time, self.duration)
         if not self.is_force:
             return 0.0 * np.asarray(t, dtype=float)

@@ -387,9 +387,24 @@ class Scene:
         return np.array([float(law.k) for law in self.contact_laws])
 
     @property
-    def input_impulse(self) -> float:
-        """Momentum put into the chain: A T (force loads), m v (bead 1), M V (striker)."""
+    def drive_amplitude(self) -> float:
+        """A harmonic drive's force amplitude, N: its A; a shaker's, the dynamic force of its driver's contact
+        pressed A beyond its static overlap against a bead 1 held still, F(alpha_0 + A) - F0 (the planner's
+        scale of a shaker's forces; the chain gives way, so the force is less); 0 for other loads."""
         ld = self.loading
+        if not ld.is_shaker:
+            return ld.amplitude if ld.is_harmonic else 0.0
+        law, f0 = self.driver_law, float(self.effects.precompression)
+        alpha0 = float(np.asarray(law.static_overlap(f0), dtype=float)) if f0 else 0.0
+        return float(np.asarray(law.loading_force(alpha0 + ld.amplitude), dtype=float)) - f0
+
+    @property
+    def input_impulse(self) -> float:
+        """Momentum put into the chain: A T (force loads), m v (bead 1), M V (striker); a shaker's, that of the
+        force drive of its drive_amplitude."""
+        ld = self.loading
+        if ld.is_shaker:
+            return replace(ld, kind="harmonic", amplitude=self.drive_amplitude).impulse
         if ld.is_force:
             return ld.impulse
         return (self.striker_mass if ld.kind == "striker" else self.mass) * ld.velocity
@@ -439,6 +454,13 @@ class Scene:
             return self.pair_law(e_star, r_star, materials, -1)  # (a per-contact list: the last contact's)
         c = replace(self.contact.coefficients.of_contact(-1), **{self.contact.law_class.yield_strength_key: None})
         return self.contact.law_class.for_pair(c, e_star, r_star, self.r_star, materials)
+
+    @property
+    def driver_law(self) -> ContactLaw:
+        """A shaker's driver on bead 1 (granchain.physics.shaker): a rigid flat, R* = R and E* = E/(1-nu^2)
+        of bead 1 as on a rigid wall, with the [contact] values of contact 1."""
+        e_star, r_star, materials = mat.wall_contact_pair(self.bead_materials[0], float(self.bead_radii[0]), None, None)
+        return self.pair_law(e_star, r_star, materials, 0)
 
     @property
     def wall_law(self) -> ContactLaw:

@@ -168,8 +168,8 @@ def _read_loading(s: _Section, chain: Chain, source: str) -> Loading:
         return Loading(kind=kind, amplitude=i / t, duration=t)
     if kind == "striker":
         return _read_striker(s, chain, source)
-    if kind == "harmonic":
-        return _read_harmonic(s)
+    if kind in ("harmonic", "shaker"):
+        return _read_harmonic(s, kind)
     s.forbid(
         ("amplitude", "duration", "impulse", "radius", "material", "mass", "frequency", "cycles", "ramp"),
         "a velocity load is given by velocity (m/s) of bead 1 at t = 0",
@@ -194,20 +194,32 @@ MIN_RAMP_CYCLES = 1e-3
 HARMONIC_KEYS = ("kind", "amplitude", "frequency", "cycles", "duration", "ramp")
 
 
-def _read_harmonic(s: _Section) -> Loading:
-    """A harmonic drive: amplitude (N), frequency (Hz), its length as cycles or as duration (s), exactly
-    one, and ramp (periods of the sin^2 switch-on, default DEFAULT_RAMP_CYCLES, within the length)."""
+#: the largest shaker amplitude, m: a driver that moves more than this is no small-signal shaker
+MAX_SHAKER_AMPLITUDE = 1e-2
+
+
+def _read_harmonic(s: _Section, kind: str = "harmonic") -> Loading:
+    """A harmonic drive: amplitude (N of force, or m of the shaker's displacement), frequency (Hz), its
+    length as cycles or as duration (s), exactly one, and ramp (periods of the sin^2 switch-on, default
+    DEFAULT_RAMP_CYCLES, within the length)."""
+    shaker = kind == "shaker"
+    name = "shaker" if shaker else "harmonic drive"
     s.forbid(
         ("impulse", "velocity", "radius", "material", "mass"),
-        "a harmonic drive is given by amplitude (N), frequency (Hz), cycles or duration (s), and ramp (periods)",
+        f"a {name} is given by amplitude ({'m' if shaker else 'N'}), frequency (Hz), cycles or duration (s), "
+        "and ramp (periods)",
     )
-    a = s.number(
-        "amplitude", low=0.0, high=1e12, high_open=False, what="the drive's force amplitude A in N, > 0 and <= 1e12"
+    high = MAX_SHAKER_AMPLITUDE if shaker else 1e12
+    what = (
+        f"the shaker's displacement amplitude A in m, > 0 and <= {MAX_SHAKER_AMPLITUDE:g}"
+        if shaker
+        else "the drive's force amplitude A in N, > 0 and <= 1e12"
     )
+    a = s.number("amplitude", low=0.0, high=high, high_open=False, what=what)
     f = s.number("frequency", low=0.0, high=1e15, high_open=False, what="the drive's frequency f in Hz, > 0")
     if s.has("cycles") == s.has("duration"):
         raise s.error(
-            "[loading] a harmonic drive needs exactly one of cycles (its length in periods) and duration (its "
+            f"[loading] a {name} needs exactly one of cycles (its length in periods) and duration (its "
             f"length T in s, the ramp included); it has {'both: remove one' if s.has('cycles') else 'neither: add one'}"
         )
     if s.has("cycles"):
@@ -239,7 +251,7 @@ def _read_harmonic(s: _Section) -> Loading:
             "shorten the ramp",
         )
     s.finish(HARMONIC_KEYS)
-    return Loading(kind="harmonic", amplitude=a, duration=t, frequency=f, ramp=ramp)
+    return Loading(kind=kind, amplitude=a, duration=t, frequency=f, ramp=ramp)
 
 
 def _read_striker(s: _Section, chain: Chain, source: str) -> Loading:

@@ -17,9 +17,9 @@ def _loading_to_dict(ld) -> dict[str, Any]:
         return {"kind": "step", "amplitude": ld.amplitude, "duration": ld.duration}
     if ld.kind == "impulse":
         return {"kind": "impulse", "impulse": ld.impulse, "duration": ld.duration}
-    if ld.kind == "harmonic":  # its length as duration: exact (cycles / f would not read back bit for bit)
+    if ld.is_harmonic:  # its length as duration: exact (cycles / f would not read back bit for bit)
         keys = ("amplitude", "frequency", "duration", "ramp")
-        return {"kind": "harmonic", **{k: getattr(ld, k) for k in keys}}
+        return {"kind": ld.kind, **{k: getattr(ld, k) for k in keys}}
     if ld.kind == "velocity":
         return {"kind": "velocity", "velocity": ld.velocity}
     st: dict[str, Any] = {"kind": "striker", "velocity": ld.velocity, "radius": ld.striker_radius}

@@ -15,12 +15,13 @@ from granchain._version import __version__
 from granchain.exceptions import UsageError
 from granchain.peaks import lead_fall, lead_floor, stop_force_floor
 from granchain.physics.effects import active_effects
+from granchain.physics.shaker import shaker_velocity
 from granchain.problem import scene_static_forces
 from granchain.results import scene_hash
 from granchain.scene import SceneError
 from granchain.templates.atoms import AtomLayout, pair_coeffs, render_data
 from granchain.templates.columns import BUILTIN_GRANULAR_PER_ATOM, RESULTS_DUMP, RUN_END_FILE, PerAtom
-from granchain.templates.drive import DRIVE_WORK_COLUMN, drive_force_expression
+from granchain.templates.drive import DRIVE_WORK_COLUMN, drive_force_expression, driver_acceleration_expression
 from granchain.templates.filters import comment, float_repr, is_atom_x, law_parameters, one_line
 from granchain.templates.run_control import EventCheck, Schedule, StopCheck, Watch
 
@@ -166,6 +167,22 @@ def energy_columns(scene, layout: AtomLayout) -> dict[str, tuple[str, str]]:
     return columns
 
 
+def drive_values(scene) -> dict[str, object]:
+    """A harmonic drive's deck values: its force's expression (drive_force; a shaker's, its driver's
+    acceleration), and a shaker's driver's velocity at t = 0 and its power there, F0 v_d(0)."""
+    ld = scene.loading
+    if not ld.is_harmonic:
+        return {"drive_force": ""}
+    if not ld.is_shaker:
+        return {"drive_force": drive_force_expression(ld)}
+    v0 = float(shaker_velocity(0.0, ld.amplitude, ld.frequency, ld.ramp_time, ld.duration))
+    return {
+        "drive_force": driver_acceleration_expression(ld),
+        "driver_velocity": v0,
+        "drive_p0": float(scene.effects.precompression) * v0,
+    }
+
+
 def sensor_args(scene, layout: AtomLayout) -> str:
     """The pair style's sensor beads (postprocess.sensors): ' sensors K' and their atom IDs, or ''."""
     beads = scene.outputs.sensors
@@ -227,7 +244,7 @@ def render_deck(scene, yardstick: str | None = None, options: DeckOptions = DECK
             pair_style_args="".join(e.pair_style_args(scene) for e in active_effects(scene))
             + sensor_args(scene, layout),
             energy_columns=energy_columns(scene, layout),
-            drive_force=drive_force_expression(scene.loading) if scene.loading.is_harmonic else "",
+            **drive_values(scene),
             event=EventCheck.of(scene) if scene.wall_event else None,
             stop=(
                 StopCheck(

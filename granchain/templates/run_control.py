@@ -306,7 +306,7 @@ class EventCheck:
             static=float(scene_static_forces(scene)[-1]),
             floor=event_floor(scene),
             held=bool(scene.effects.precompression or scene.effects.gravity),
-            load_end=float(ld.duration) if ld.is_force else 0.0,
+            load_end=float(ld.duration) if ld.timed else 0.0,
             track=tuple((i + lay.offset, 0) for i in out.event_max_contacts)
             + tuple((b + lay.offset, 1) for b in out.event_max_sensors),
         )

@@ -295,7 +295,7 @@ def _warn_drive(scene, stacklevel: int) -> None:
     oracle describe (a dynamic force a few per cent of F0: physics/bands.py's DOMAIN). A valid scene (a
     nonlinear drive is a study of its own), so a warning, not a refusal."""
     f0, a = float(scene.effects.precompression or 0.0), float(scene.loading.amplitude)
-    if not scene.loading.is_harmonic or a <= f0:
+    if not scene.loading.is_harmonic or scene.loading.is_shaker or a <= f0:  # (a shaker never pulls)
         return
     warnings.warn(
         f"{scene.source}: [loading] amplitude = {a:g} N is above the static force F0 = {f0:g} N: at the drive's "

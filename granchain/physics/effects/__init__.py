@@ -11,6 +11,7 @@ from granchain.physics.effects.damping import DampingEffect
 from granchain.physics.effects.gravity import GravityEffect
 from granchain.physics.effects.per_bead import PerBeadEffect
 from granchain.physics.effects.precompression import PrecompressionEffect
+from granchain.physics.effects.shaker import LOAD_EFFECTS
 from granchain.physics.effects.striker import StrikerEffect
 from granchain.physics.effects.wall import FAR_ENDS, WallEffect
 
@@ -41,8 +42,9 @@ __all__ = [
 
 
 def active_effects(scene) -> list[type[Effect]]:
-    """The registered effects the scene declares, in registry order."""
-    return [e for e in EFFECTS.values() if e.active(scene)]
+    """The registered effects the scene declares, in registry order, then a load's own body (a shaker's
+    driver: effects.shaker.LOAD_EFFECTS)."""
+    return [e for e in (*EFFECTS.values(), *LOAD_EFFECTS) if e.active(scene)]
 
 
 def unbalanced_forces(scene) -> list[type[Effect]]:

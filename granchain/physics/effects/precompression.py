@@ -127,7 +127,8 @@ class PrecompressionEffect(Effect):
         f0 = float(problem.precompression)
         if f0 and cls._free_end(problem):
             fp[-1] = f0  # bead N held by an equal pull when there is no wall
-        return f0  # the static push on bead 1 (the loading device)
+        # the static push on bead 1 (the loading device); a shaker's driver holds F0 through its contact
+        return 0.0 if problem.shaker else f0
 
     @classmethod
     @override
@@ -135,7 +136,9 @@ class PrecompressionEffect(Effect):
         f0 = problem.precompression
         if not f0:
             return 0.0
-        return f0 * dx_first - (f0 * dx_last if cls._free_end(problem) else 0.0)
+        # a shaker's driver holds F0 through its contact (its work is the drive's): no push on bead 1
+        push = 0.0 if problem.shaker else f0 * dx_first
+        return push - (f0 * dx_last if cls._free_end(problem) else 0.0)
 
     @classmethod
     @override
@@ -143,7 +146,7 @@ class PrecompressionEffect(Effect):
         f0 = problem.precompression
         if not f0:
             return ""
-        text = f" + {float(f0)!r}*({x_first})"
+        text = "" if problem.shaker else f" + {float(f0)!r}*({x_first})"
         if cls._free_end(problem):
             text += f" - {float(f0)!r}*({x_last})"
         return text

@@ -83,11 +83,14 @@ def settled_window(scene, t: np.ndarray) -> SteadyWindow:
     return SteadyWindow(whole.end - used / ld.frequency, whole.end, used, ld.frequency)
 
 
-def _far_force(scene, solution) -> tuple[np.ndarray, np.ndarray] | str:
-    """(times, dynamic force) of the far end's contact from the run's histories, or why not."""
-    c = far_end_contact(scene)
+def _far_force(scene, solution, c: int | None = None) -> tuple[np.ndarray, np.ndarray] | str:
+    """(times, dynamic force) of contact c (1-based; default the far end's; 0 a shaker's driver's contact
+    with bead 1) from the run's histories, or why not."""
+    c = far_end_contact(scene) if c is None else c
     contacts = [int(i) for i in solution.history_contacts]
     if (c - 1) not in contacts:
+        if c == 0:
+            return "the shaker's driver's contact history was not recorded: the backend records it by itself"
         return (
             f"contact {c}'s history was not recorded: a harmonic scene records it by itself; a scene written "
             f"without it needs [outputs] histories = [..., {c}]"
@@ -95,6 +98,15 @@ def _far_force(scene, solution) -> tuple[np.ndarray, np.ndarray] | str:
     t = np.asarray(solution.history_time, dtype=float)
     f = np.asarray(solution.history_force, dtype=float)[:, contacts.index(c - 1)]
     return t, f - float(scene.effects.precompression)
+
+
+def drive_force(scene, solution) -> tuple[np.ndarray, np.ndarray] | str:
+    """(times, the drive's dynamic force on bead 1) over the far end's record, or why not: a force drive's
+    own f(t) (Loading.force_at), a shaker's its driver's contact force less F0 (its history, contact 0)."""
+    if not scene.loading.is_shaker:
+        t = np.asarray(solution.history_time, dtype=float)
+        return t, scene.loading.force_at(t)
+    return _far_force(scene, solution, 0)
 
 
 def lock_far_end(scene, solution):
@@ -111,7 +123,10 @@ def lock_far_end(scene, solution):
         keep = (t >= win.start - 0.5 * spacing) & (t < win.end - 1e-9 * spacing)
         t, force = t[keep], force[keep]
         far = lock_in(t, force, scene.loading.frequency, window=win)
-        drive = lock_in(t, scene.loading.force_at(t), scene.loading.frequency, window=win)
+        drive = drive_force(scene, solution)
+        if isinstance(drive, str):
+            return drive
+        drive = lock_in(t, drive[1][keep], scene.loading.frequency, window=win)
     except SpectraError as e:
         return f"the far end's force history cannot be locked in: {e}"
     return far, drive
