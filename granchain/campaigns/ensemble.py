@@ -141,18 +141,24 @@ def _complete(out: Path, given, backend: Backend, method: str, plan, error_estim
     return (summary.get("errors") is not None) == bool(error_estimate)
 
 
+def _kept(backend: Backend, np_: int) -> bool:
+    """Whether the runs go to a kept LAMMPS child (server.persistent): single-rank LAMMPS runs."""
+    return backend.name == "lammps" and np_ == 1
+
+
 def run_group(points: list[Point], backend: Backend, method, rtol, error_estimate, np_, force, overwrite) -> dict:
     """Run one group's points (one integrator and time step) on their backend: index -> RunResult.
     method: the integrator asked for (None: each scene's default, its reason kept in the summary as a
     single run keeps it).
 
-    On LAMMPS every single-rank run of the group goes to one kept LAMMPS child (server.persistent)."""
+    On LAMMPS every single-rank run of the group goes to one kept LAMMPS child (server.persistent; run_many
+    holds it across the groups)."""
     from granchain.lammps import server
     from granchain.workflows.load import load_run
     from granchain.workflows.run import run_scene
 
     results = {}
-    with server.persistent() if backend.name == "lammps" and np_ == 1 else nullcontext():
+    with server.persistent() if _kept(backend, np_) else nullcontext():
         for p in points:
             if p.done:
                 results[p.index] = load_run(p.out)
@@ -227,8 +233,11 @@ def run_many(
     for p in points:
         groups.setdefault(p.group, []).append(p)
     results: dict[int, object] = {}
-    for members in groups.values():
-        results.update(run_group(members, backend, method, rtol, error_estimate, np_, force, overwrite))
+    from granchain.lammps import server
+
+    with server.persistent() if _kept(backend, np_) else nullcontext():  # one LAMMPS child for every group
+        for members in groups.values():
+            results.update(run_group(members, backend, method, rtol, error_estimate, np_, force, overwrite))
     for p in points:
         if p.out is not None:
             results[p.index].path = p.out
