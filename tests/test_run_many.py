@@ -124,6 +124,8 @@ def test_run_many_refuses_what_is_not_a_list_of_scenes(scenes, match):
 
 
 def test_run_many_refuses_out_not_one_per_scene(tmp_path):
+    with pytest.raises(UsageError, match="out = 5: a directory"):
+        granchain.run_many(plain(2), out=5)
     with pytest.raises(UsageError, match="out: 1 run directories for 2 scenes"):
         granchain.run_many(plain(2), out=[tmp_path / "a"])
     with pytest.raises(UsageError, match=r"out\[1\] = .*is out\[0\] too"):

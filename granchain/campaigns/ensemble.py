@@ -92,7 +92,12 @@ def _out_dirs(out, n: int) -> list:
         return [None] * n
     if isinstance(out, (str, os.PathLike)):
         return [Path(out) / POINT_DIR.format(i) for i in range(n)]
-    dirs = [Path(p) for p in out]
+    try:
+        dirs = [Path(p) for p in out]
+    except TypeError:
+        raise UsageError(
+            f"out = {out!r}: a directory (str or Path) or one run directory per scene (a list of them)"
+        ) from None
     if len(dirs) != n:
         raise UsageError(f"out: {len(dirs)} run directories for {n} scenes; give one per scene, or one directory")
     seen: dict[Path, int] = {}
