@@ -224,6 +224,7 @@ def run_many(
         before anything runs, also every refusal a single run makes before its run (with a note
         naming the scene's position). A run that fails raises as granchain.run does, its position noted.
     """
+    from granchain.lammps import server
     from granchain.workflows.run import check_error_estimate
 
     check_error_estimate(error_estimate)
@@ -238,8 +239,6 @@ def run_many(
     for p in points:
         groups.setdefault(p.group, []).append(p)
     results: dict[int, object] = {}
-    from granchain.lammps import server
-
     with server.persistent() if _kept(backend, np_) else nullcontext():  # one LAMMPS child for every group
         for members in groups.values():
             results.update(run_group(members, backend, method, rtol, error_estimate, np_, force, overwrite))
