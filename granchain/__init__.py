@@ -13,6 +13,7 @@ The public API is small::
     result.summary["observables"]                      # summary.json as a dict
     fig = result.plot("peaks")                         # a matplotlib Figure; nothing saved or shown
     same = granchain.load_run("runs/default-lammps")   # a run directory back as the same result
+    results = granchain.run_many(scenes, backend="lammps", out="runs/ensemble")  # each as run() runs it
     cmp = granchain.compare(scene)                     # LAMMPS vs reference: cmp.table, cmp.ok
 
 Every error a user can cause is a :class:`GranchainError`. Importing granchain (or drawing through
@@ -41,6 +42,7 @@ __all__ = [
     "plan",
     "provenance_packages",
     "run",
+    "run_many",
 ]
 
 
@@ -203,6 +205,68 @@ def run(
     if out is not None:
         result.path = Path(out)
     return _with_figures(result)
+
+
+def run_many(
+    scenes,
+    backend: str = "reference",
+    method: str | None = None,
+    rtol: float | None = None,
+    out=None,
+    error_estimate: bool | str = False,
+    overwrite: bool = False,
+    np_: int = 1,
+    force: bool = False,
+):
+    """Run many scenes (an ensemble you build): each result the one :func:`run` gives that scene alone.
+
+    Every scene is read, planned and checked before anything runs; the scenes are then run in groups
+    of what they share (backend, integrator, planned time step), the shared work done once per group
+    (on LAMMPS all runs go to one kept LAMMPS process instead of starting one per run; docs/api.md).
+
+    Parameters
+    ----------
+    scenes : iterable of Scene, str or pathlib.Path
+        Scenes from :func:`load_scene` or :func:`parse_scene` (or bundled names or .toml paths).
+    backend, method, rtol, error_estimate
+        As :func:`run`'s, for every scene.
+    out : str or pathlib.Path or sequence of them, optional
+        A directory (scene i's run directory is ``out/00000``, ``out/00001``, ...) or one run
+        directory per scene. A run directory that already holds this scene's complete run (same
+        backend, integrator, rtol, error bars) is read back, not run again: running an ensemble
+        again resumes it.
+    overwrite : bool
+        Run every scene again and replace its run directory.
+    np_, force
+        As :func:`run`'s ``np_`` (LAMMPS MPI ranks) and ``force``.
+
+    Returns
+    -------
+    list of granchain.results.RunResult
+        In the scenes' order, ``result.path`` set with ``out``.
+
+    Raises
+    ------
+    GranchainError
+        (``UsageError``) not a list of scenes, an empty one, an entry that is not a scene, ``out``
+        not one per scene; or any refusal :func:`run` makes before its run, raised before the first
+        run, with a note naming the scene's position (``scenes[i]``). A run that fails raises as in
+        :func:`run`, its position noted.
+    """
+    from granchain.campaigns.ensemble import run_many as _run_many
+
+    results = _run_many(
+        scenes,
+        backend=backend,
+        method=method,
+        rtol=rtol,
+        out=out,
+        error_estimate=error_estimate,
+        overwrite=overwrite,
+        np_=np_,
+        force=force,
+    )
+    return [_with_figures(r) for r in results]
 
 
 def load_run(path):

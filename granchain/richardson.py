@@ -165,16 +165,20 @@ def richardson(
     # highest_trusted_order (effect-striker, RK4: observed 4.8-4.9 on 65 of 94 peaks, within 1/3-3)
     accepted = (max(MIN_ORDER, lo - ORDER_SLACK), min(hi + NEXT_TERM, highest_trusted_order(order)))
     fl = np.zeros(n) if floor is None else np.nan_to_num(np.broadcast_to(np.asarray(floor, dtype=float), (n,)))
-    for i in range(n):
+    # the items as Python floats (the same doubles), each time array once: numpy's per-call cost on a
+    # scalar (isfinite, spacing, indexing) was most of a point's error bars (benchmarks/RESULTS.md)
+    columns = [f.tolist(), c.tolist(), [None] * n if cc is None else cc.tolist(), fl.tolist()]
+    when = None if times is None else [None if t is None else np.atleast_1d(t).astype(float).tolist() for t in times]
+    for i, (fi, ci, cci, fli) in enumerate(zip(*columns, strict=True)):
         err[i], used[i], status[i] = _one(
-            f[i],
-            c[i],
-            None if cc is None else cc[i],
+            fi,
+            ci,
+            cci,
             order,
-            None if times is None else tuple(None if t is None else float(np.atleast_1d(t)[i]) for t in times),
+            None if when is None else tuple(None if t is None else t[i] for t in when),
             jump_time,
             accepted,
-            fl[i],
+            fli,
         )
     return ErrorBars(err, status, used)
 
@@ -193,18 +197,20 @@ def _one(f, c, cc, p, times, jump_time, accepted, floor=0.0):
         # (an order, a sign change), the error is the round-off's, and the bound is the floor
         # (the runs at dt and 2 dt agreeing to within their round-off bound dt's step error by it too,
         # whatever the 4 dt run says)
-        if abs(f - c) <= ROUNDOFF_MARGIN * floor or (np.isfinite(e) and e <= floor):
+        if abs(f - c) <= ROUNDOFF_MARGIN * floor or (math.isfinite(e) and e <= floor):
             return float(floor), float(p), "round-off"
     return e, used, status
 
 
 def _richardson_one(f, c, cc, p, times, jump_time, accepted, floor):
-    if not (np.isfinite(f) and np.isfinite(c)):
+    # (f, c, cc, floor and the times: Python floats; math's isfinite and ulp are numpy's isfinite and
+    # spacing on them, for a non-negative argument)
+    if not (math.isfinite(f) and math.isfinite(c)):
         return math.nan, math.nan, NOT_COMPLETE + " in the run or its 2 dt companion" + NOT_PASSED
     if times is not None and jump_time is not None:
         tf, tc, tcc = times
         moved = [abs(a - b) for a, b in ((tf, tc), (tc, tcc)) if a is not None and b is not None]
-        if any(not np.isfinite(m) for m in moved):
+        if any(not math.isfinite(m) for m in moved):
             return math.nan, math.nan, NOT_COMPLETE + " in a companion run" + NOT_PASSED
         if any(m > jump_time for m in moved):
             return (
@@ -213,12 +219,12 @@ def _richardson_one(f, c, cc, p, times, jump_time, accepted, floor):
                 "unreliable: another pulse in a companion run (its time moved by more than half the shortest period)",
             )
     d1 = f - c
-    ulp = max(ROUNDOFF_ULPS * np.spacing(max(abs(f), abs(c))), floor)
+    ulp = max(ROUNDOFF_ULPS * math.ulp(max(abs(f), abs(c))), floor)
     if abs(d1) <= ulp:
         return float(ulp), float(p), "round-off"
     if cc is None:
         return abs(d1) / (2.0**p - 1.0), float(p), "order not checked"
-    if not np.isfinite(cc):
+    if not math.isfinite(cc):
         return math.nan, math.nan, NOT_COMPLETE + " in the 4 dt companion" + NOT_PASSED
     d2 = c - cc
     if abs(d2) <= ulp:

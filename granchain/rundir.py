@@ -70,7 +70,24 @@ def _write_csv(path: Path, header: list[str], rows) -> None:
         w = csv.writer(fh)
         w.writerow(header)
         for row in rows:
-            w.writerow([_fmt(x) for x in row])
+            w.writerow(_formatted(row))
+
+
+def _write_columns(path: Path, header: list[str], columns) -> None:
+    """_write_csv of the rows zip(*columns) makes, each column formatted once (_formatted)."""
+    _write_csv(path, header, zip(*(_formatted(col) for col in columns), strict=True))
+
+
+def _formatted(values) -> list:
+    """[_fmt(x) for x in values], a numpy array of floats or integers at once: its tolist() gives
+    the same doubles and integers as Python numbers, so the same text (_fmt's per-value checks were
+    a third of a small run directory's write; benchmarks/RESULTS.md, 2026-12-03)."""
+    if isinstance(values, np.ndarray) and values.ndim == 1:
+        if values.dtype.kind == "f":
+            return [repr(x) if math.isfinite(x) else "nan" for x in values.tolist()]
+        if values.dtype.kind in "iu":
+            return [str(x) for x in values.tolist()]
+    return [_fmt(x) for x in values]
 
 
 def _fmt(x) -> str:
@@ -108,7 +125,7 @@ def _write_contents(result: RunResult, d: Path, extra_files: dict) -> None:
     cols = peak_columns(result)  # the one source of peaks.csv and RunResult.peaks
     cols["complete"] = cols["complete"].astype(int)
     header, columns = list(cols), list(cols.values())
-    _write_csv(d / "peaks.csv", header, zip(*columns, strict=True))
+    _write_columns(d / "peaks.csv", header, columns)
     if s.history_contacts:
         cols = [f"force_{i + 1}" for i in s.history_contacts] + [f"velocity_{i + 1}" for i in s.history_contacts]
         _write_csv(
@@ -136,10 +153,10 @@ def _write_contents(result: RunResult, d: Path, extra_files: dict) -> None:
                     yield (t, b + 1, s.snapshot_displacement[k, b], s.snapshot_velocity[k, b], f[b])
 
         _write_csv(d / "snapshots.csv", ["time", "bead", "displacement", "velocity", "contact_force"], rows())
-    _write_csv(
+    _write_columns(
         d / "energy.csv",
         ["time", "kinetic", "potential", "dissipated", "work"],
-        zip(s.energy_time, s.kinetic, s.potential, s.dissipated, s.work, strict=True),
+        [s.energy_time, s.kinetic, s.potential, s.dissipated, s.work],
     )
     for name, content in extra_files.items():
         if Path(name).name != name or name.startswith("."):

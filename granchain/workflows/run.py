@@ -405,16 +405,30 @@ def run_scene(
     error_estimate: bool | str = False,
     before_run=None,
     after_run=None,
+    planned=None,
 ) -> RunResult:
     """Run a scene on a backend; if out is given, write the run directory (checked before the run).
 
     reference: method rk4 (default; verlet on a scene with velocity-dependent damping, method_choice) or verlet.
     lammps: velocity Verlet with granchain's pair styles, np_ MPI ranks; the run directory also gets
     the deck, data file, log and dumps (the backend's work files, removed once copied). The other
-    arguments are calculate_scene's.
+    arguments are calculate_scene's; planned: plan_for(scene, backend, method, rtol) made already
+    (granchain.campaigns.ensemble plans every point before any runs, to group them), not made again.
     """
     calc = _calculate(
-        scene, backend, method, out, overwrite, np_, force, rtol, oversubscribe, error_estimate, before_run, after_run
+        scene,
+        backend,
+        method,
+        out,
+        overwrite,
+        np_,
+        force,
+        rtol,
+        oversubscribe,
+        error_estimate,
+        before_run,
+        after_run,
+        planned,
     )
     try:
         if out is not None:
@@ -465,9 +479,22 @@ def check_error_estimate(error_estimate) -> None:
 
 
 def _calculate(
-    scene, backend, method, out, overwrite, np_, force, rtol, oversubscribe, error_estimate, before_run, after_run
+    scene,
+    backend,
+    method,
+    out,
+    overwrite,
+    np_,
+    force,
+    rtol,
+    oversubscribe,
+    error_estimate,
+    before_run,
+    after_run,
+    planned=None,
 ):
-    """calculate_scene's work (its warnings name the caller of run_scene or calculate_scene)."""
+    """calculate_scene's work (its warnings name the caller of run_scene or calculate_scene); planned:
+    plan_for's (scene, plan) of this scene, backend, method and rtol, made already."""
     started = datetime.now(UTC)
     check_error_estimate(error_estimate)
     backend = backend_named(backend)
@@ -478,7 +505,7 @@ def _calculate(
         if not is_quiet():
             print(f"granchain: the {backend.name} backend runs {why}", file=sys.stderr, flush=True)
     given = scene
-    scene, plan = plan_for(scene, backend, method, rtol)
+    scene, plan = plan_for(scene, backend, method, rtol) if planned is None else planned
     check_resources(scene, backend, np_, oversubscribe, out=out, given=given)
     if out is not None:
         check_output_dir(out, overwrite)
