@@ -107,7 +107,7 @@ def history_excess(lam, ref, scene) -> float:
 @pytest.mark.slow
 @pytest.mark.parametrize("part", sorted(DAMPING))
 @pytest.mark.parametrize("law", LAW_NAMES)
-@settings(max_examples=4, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
+@settings(max_examples=2, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
 @given(data=st.data())
 def test_lammps_and_verlet_record_the_same_contact_forces_at_every_step(law, part, data):
     sc = scene_from_dict(data.draw(history_scenes(law, part)), source="histories.toml")

@@ -96,7 +96,6 @@ def test_a_frequency_sweeps_figure_shades_the_predicted_bands_at_their_edges(swe
     assert any(t.startswith("band gap (predicted") for t in legend)
     assert len(data) == 3
     check_figure(fig)
-    fig.savefig("/tmp/t46b/sweep-bands.png")
 
 
 @pytest.mark.slow
